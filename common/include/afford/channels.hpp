@@ -1,0 +1,18 @@
+// Channel names of a run. Runs are isolated by LCM URL (one UDP port per run),
+// so names are plain. See docs/processes-and-channels.md for who publishes what.
+#pragma once
+
+namespace afford::channel {
+inline constexpr const char* kRunConfig = "RUN_CONFIG";
+inline constexpr const char* kRunControl = "RUN_CONTROL";
+inline constexpr const char* kStatus = "STATUS";
+inline constexpr const char* kScene = "SCENE";
+inline constexpr const char* kFocus = "FOCUS";
+inline constexpr const char* kPrediction = "PREDICTION";
+inline constexpr const char* kDecision = "DECISION";
+inline constexpr const char* kEffect = "EFFECT";
+inline constexpr const char* kTrained = "TRAINED";
+inline constexpr const char* kProbe = "PROBE";
+inline constexpr const char* kAffordanceTable = "AFFORDANCE_TABLE";
+inline constexpr const char* kResult = "RESULT";
+}  // namespace afford::channel

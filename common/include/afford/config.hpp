@@ -1,0 +1,127 @@
+// Typed run configuration (STYLE.md habit 5): loaded once from YAML, validated
+// strictly. Every error names the offending key, e.g.
+//   config key 'predictors.affordance.learning_rate': expected a number, got "fast"
+// The effective configuration of a run travels as YAML text in run_config_t,
+// so every process parses it with this same code.
+#pragma once
+#include <yaml-cpp/yaml.h>
+
+#include <array>
+#include <cstdint>
+#include <optional>
+#include <stdexcept>
+#include <string>
+#include <vector>
+
+#include "afford/actions.hpp"
+
+namespace afford {
+
+class ConfigError : public std::runtime_error {
+ public:
+  using std::runtime_error::runtime_error;
+};
+
+enum class Shape { Square, Circle, Rectangle };
+enum class Colour { Red, Green, Blue };
+enum class System { FIX, IGN, IMP };
+enum class SaliencyOrder { SmoothThenNoise, NoiseThenSmooth };
+enum class ImpThresholdInput { Signal, ObservedChange };
+
+const char* toString(Shape);
+const char* toString(Colour);
+const char* toString(System);
+System parseSystem(const std::string&);  // throws ConfigError
+int colourChannel(Colour);                // R=0, G=1, B=2
+
+struct ObjectSpec {
+  std::string name;                        // "red square"
+  Shape shape = Shape::Square;
+  Colour colour = Colour::Red;
+  double x = 0.5, y = 0.5;                 // start position, scene units
+  std::int64_t appears_at = 0;             // step at which the object enters the scene
+  std::array<double, kNumActions> affordance{};  // success probability per action
+};
+
+struct WorldConfig {
+  int size_px = 150;                       // scene side in pixels
+  double object_size = 0.10;               // square side / reference size, scene units
+  double table_min = 0.2, table_max = 0.8; // allowed object centres
+  int max_target_draws = 1000;             // intrinsic move: redraws for a free target
+  std::vector<ObjectSpec> objects;         // in the order of the paper's tables
+};
+
+struct EyeConfig {
+  int focus_side = 21;                     // pixels
+  double saliency_noise = 0.05;            // uniform noise half-width
+  double saliency_sigma_px = 1.0;          // Gaussian smoothing of the saliency image
+  SaliencyOrder saliency_order = SaliencyOrder::SmoothThenNoise;
+  double change_sigma_px = 1.0;            // Gaussian smoothing of the change image
+  double initial_gaze_x = 0.54, initial_gaze_y = 0.38;
+  double image_change_threshold = 1e-5;    // tau_i
+  double position_change_threshold = 0.02; // tau_p
+  int max_scan_draws = 100;                // redraws until the gaze lands on another object
+};
+
+struct PredictorsConfig {
+  double affordance_learning_rate = 0.01;
+  double learning_progress_learning_rate = 0.005;
+  double learning_progress_init = 0.00075;  // magnitude of the random-sign initial weights
+  double what_effect_learning_rate = 0.04;
+  double where_effect_learning_rate = 0.5;
+};
+
+struct MotivationConfig {
+  double fixed_threshold = 0.3;            // FIX
+  double leak = 0.1;                       // nu of equation 2 (IGN, IMP)
+  double initial_threshold = 0.0;          // th_0 (IGN, IMP)
+  double act_margin = 1e-5;                // act when motivation + margin >= threshold
+  ImpThresholdInput imp_threshold_input = ImpThresholdInput::Signal;
+};
+
+struct RunConfig {
+  std::string experiment;
+  System system = System::IMP;
+  std::int64_t seed = 0;
+  std::int64_t steps = 0;
+  std::int64_t curve_interval = 100;
+  WorldConfig world;
+  EyeConfig eye;
+  PredictorsConfig predictors;
+  MotivationConfig motivation;
+};
+
+// Parse and validate an effective configuration. Unknown keys are errors too.
+RunConfig parseRunConfig(const YAML::Node& root);
+RunConfig parseRunConfigText(const std::string& yaml_text);
+
+// Experiment files (config/experiments/<name>.yaml): the effective config of one
+// run is defaults.yaml, overlaid by the experiment's keys, overlaid by
+// systems.<S>, overlaid by command-line settings.
+struct ExperimentFile {
+  std::string name;
+  std::string description;
+  int repetitions = 1;
+  YAML::Node overlay;                      // keys merged over the defaults
+  YAML::Node systems;                      // map System -> overlay
+};
+
+std::vector<std::string> listExperiments(const std::string& config_dir);
+ExperimentFile loadExperiment(const std::string& config_dir, const std::string& name);
+
+struct RunRequest {
+  std::string experiment;
+  System system = System::IMP;
+  std::int64_t seed = 0;
+  std::optional<std::int64_t> steps;
+  std::vector<std::string> settings;       // "key.path=value"
+};
+
+// The merged YAML tree of one run (validated with parseRunConfig before returning).
+YAML::Node effectiveConfig(const std::string& config_dir, const RunRequest& request);
+std::string emitYaml(const YAML::Node& node);
+
+// Overlay `over` onto `base` (maps merged recursively, everything else replaced).
+void mergeInto(YAML::Node base, const YAML::Node& over);
+
+}  // namespace afford

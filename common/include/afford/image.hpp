@@ -1,0 +1,46 @@
+// Scene images (paper 2.2): size x size RGB, 8 bits per channel, values 0 or
+// 255, black background. A position in scene units maps to a pixel index by
+// round(u * size); a pixel index maps back by index / size.
+#pragma once
+#include <opencv2/core.hpp>
+
+#include <cstdint>
+#include <string>
+#include <vector>
+
+#include "afford/config.hpp"
+
+namespace afford {
+
+struct Pixel {
+  int col = 0, row = 0;
+  bool operator==(const Pixel& o) const { return col == o.col && row == o.row; }
+};
+
+int toPixel(double u, int size_px);
+double toUnit(int px, int size_px);
+Pixel toPixel(double x, double y, int size_px);
+
+// Pixel offsets covered by a shape centred on a pixel (PARAMETERS.md: square
+// 15 x 15 = 225 px; circle of radius 0.1/sqrt(pi) = 221 px; rectangle 10 wide
+// by 22 tall = 220 px). The bounding box of every shape has its centre at
+// offset (0, 0) with the rule centre = min + extent / 2.
+std::vector<Pixel> shapeFootprint(Shape shape, const WorldConfig& world);
+
+// A blank (black) scene.
+cv::Mat blankScene(int size_px);
+// Paint a shape of a colour centred at a pixel (clipped at the borders).
+void paintObject(cv::Mat& scene, Shape shape, Colour colour, Pixel centre, const WorldConfig& world);
+
+// Lossless scene transport: zlib of the raw RGB bytes (as Drake's lcmt_image).
+std::vector<std::uint8_t> encodeScene(const cv::Mat& scene);
+// Throws std::runtime_error naming the problem when the data does not decode to size x size x 3.
+cv::Mat decodeScene(const std::vector<std::uint8_t>& data, int width, int height);
+
+// The side x side x 3 window centred on a pixel, row-major RGB bytes; outside the scene is black.
+std::vector<std::uint8_t> cropFocus(const cv::Mat& scene, Pixel centre, int side);
+
+// L1(a - b) / n over bytes scaled to [0, 1]: the paper's image change measure.
+double imageChange(const std::vector<std::uint8_t>& a, const std::vector<std::uint8_t>& b);
+
+}  // namespace afford

@@ -1,0 +1,15 @@
+// One spdlog logger per process (STYLE.md habit 13), not registered globally so
+// that several runs can host the same cores in one process (memq).
+#pragma once
+#include <spdlog/spdlog.h>
+
+#include <memory>
+#include <string>
+
+namespace afford {
+
+std::shared_ptr<spdlog::logger> makeLogger(const std::string& name, const std::string& level = "info");
+// Parses "trace|debug|info|warn|error|off"; throws std::invalid_argument otherwise.
+spdlog::level::level_enum parseLevel(const std::string& level);
+
+}  // namespace afford

@@ -1,0 +1,369 @@
+#include "afford/config.hpp"
+
+#include <algorithm>
+#include <cmath>
+#include <filesystem>
+#include <set>
+#include <sstream>
+
+namespace afford {
+namespace {
+
+std::string join(const std::string& path, const std::string& key) {
+  return path.empty() ? key : path + "." + key;
+}
+
+[[noreturn]] void fail(const std::string& key, const std::string& what) {
+  throw ConfigError("config key '" + key + "': " + what);
+}
+
+std::string describe(const YAML::Node& n) {
+  if (!n.IsDefined() || n.IsNull()) return "nothing";
+  if (n.IsScalar()) return "\"" + n.Scalar() + "\"";
+  if (n.IsSequence()) return "a list";
+  return "a map";
+}
+
+// A view of one YAML map that remembers which keys were read, so that
+// finish() can reject the ones nobody asked for (typos).
+class Reader {
+ public:
+  Reader(YAML::Node node, std::string path) : node_(std::move(node)), path_(std::move(path)) {
+    if (!node_.IsMap()) fail(path_.empty() ? "<root>" : path_, "expected a map, got " + describe(node_));
+  }
+
+  YAML::Node raw(const std::string& key) {
+    used_.insert(key);
+    YAML::Node v = node_[key];
+    if (!v.IsDefined() || v.IsNull()) fail(join(path_, key), "missing");
+    return v;
+  }
+  bool has(const std::string& key) const { return node_[key].IsDefined() && !node_[key].IsNull(); }
+
+  double number(const std::string& key, double lo, double hi) {
+    return checkRange(join(path_, key), toNumber(join(path_, key), raw(key)), lo, hi);
+  }
+  std::int64_t integer(const std::string& key, std::int64_t lo, std::int64_t hi) {
+    const std::string k = join(path_, key);
+    YAML::Node v = raw(key);
+    std::int64_t out = 0;
+    if (!v.IsScalar() || !YAML::convert<std::int64_t>::decode(v, out))
+      fail(k, "expected an integer, got " + describe(v));
+    if (out < lo || out > hi)
+      fail(k, "value " + std::to_string(out) + " is out of range [" + std::to_string(lo) + ", " +
+                  std::to_string(hi) + "]");
+    return out;
+  }
+  std::string text(const std::string& key) {
+    YAML::Node v = raw(key);
+    if (!v.IsScalar()) fail(join(path_, key), "expected a string, got " + describe(v));
+    return v.Scalar();
+  }
+  template <typename E>
+  E choice(const std::string& key, std::initializer_list<std::pair<const char*, E>> options) {
+    const std::string s = text(key);
+    std::string names;
+    for (const auto& [name, value] : options) {
+      if (s == name) return value;
+      names += names.empty() ? name : std::string(", ") + name;
+    }
+    fail(join(path_, key), "unknown value \"" + s + "\" (expected one of: " + names + ")");
+  }
+  Reader map(const std::string& key) { return Reader(raw(key), join(path_, key)); }
+  std::string keyPath(const std::string& key) const { return join(path_, key); }
+
+  void finish() const {
+    for (const auto& kv : node_) {
+      const std::string k = kv.first.Scalar();
+      if (!used_.count(k)) fail(join(path_, k), "unknown key");
+    }
+  }
+
+  static double toNumber(const std::string& key, const YAML::Node& v) {
+    double out = 0;
+    if (!v.IsScalar() || !YAML::convert<double>::decode(v, out))
+      fail(key, "expected a number, got " + describe(v));
+    if (!std::isfinite(out)) fail(key, "expected a finite number, got " + describe(v));
+    return out;
+  }
+  static double checkRange(const std::string& key, double v, double lo, double hi) {
+    if (v < lo || v > hi) {
+      std::ostringstream s;
+      s << "value " << v << " is out of range [" << lo << ", " << hi << "]";
+      fail(key, s.str());
+    }
+    return v;
+  }
+
+ private:
+  YAML::Node node_;
+  std::string path_;
+  std::set<std::string> used_;
+};
+
+std::vector<double> numberList(Reader& r, const std::string& key, std::size_t n, double lo, double hi) {
+  YAML::Node v = r.raw(key);
+  const std::string k = r.keyPath(key);
+  if (!v.IsSequence() || v.size() != n)
+    fail(k, "expected a list of " + std::to_string(n) + " numbers, got " + describe(v) +
+                (v.IsSequence() ? " of " + std::to_string(v.size()) : ""));
+  std::vector<double> out;
+  for (std::size_t i = 0; i < n; ++i) {
+    const std::string ki = k + "[" + std::to_string(i) + "]";
+    out.push_back(Reader::checkRange(ki, Reader::toNumber(ki, v[i]), lo, hi));
+  }
+  return out;
+}
+
+ObjectSpec parseObject(const YAML::Node& node, const std::string& path, const WorldConfig& w) {
+  Reader r(node, path);
+  ObjectSpec o;
+  o.name = r.text("name");
+  o.shape = r.choice<Shape>("shape", {{"square", Shape::Square}, {"circle", Shape::Circle},
+                                       {"rectangle", Shape::Rectangle}});
+  o.colour = r.choice<Colour>("colour", {{"red", Colour::Red}, {"green", Colour::Green},
+                                          {"blue", Colour::Blue}});
+  const auto pos = numberList(r, "position", 2, w.table_min, w.table_max);
+  o.x = pos[0];
+  o.y = pos[1];
+  o.appears_at = r.integer("appears_at", 0, 1'000'000'000);
+  const auto aff = numberList(r, "affordance", kNumActions, 0.0, 1.0);
+  std::copy(aff.begin(), aff.end(), o.affordance.begin());
+  r.finish();
+  return o;
+}
+
+}  // namespace
+
+const char* toString(Shape s) {
+  switch (s) {
+    case Shape::Square: return "square";
+    case Shape::Circle: return "circle";
+    case Shape::Rectangle: return "rectangle";
+  }
+  return "?";
+}
+const char* toString(Colour c) {
+  switch (c) {
+    case Colour::Red: return "red";
+    case Colour::Green: return "green";
+    case Colour::Blue: return "blue";
+  }
+  return "?";
+}
+const char* toString(System s) {
+  switch (s) {
+    case System::FIX: return "FIX";
+    case System::IGN: return "IGN";
+    case System::IMP: return "IMP";
+  }
+  return "?";
+}
+System parseSystem(const std::string& s) {
+  if (s == "FIX") return System::FIX;
+  if (s == "IGN") return System::IGN;
+  if (s == "IMP") return System::IMP;
+  throw ConfigError("unknown system \"" + s + "\" (expected FIX, IGN or IMP)");
+}
+int colourChannel(Colour c) { return c == Colour::Red ? 0 : c == Colour::Green ? 1 : 2; }
+
+RunConfig parseRunConfig(const YAML::Node& root) {
+  Reader r(root, "");
+  RunConfig c;
+  c.experiment = r.text("experiment");
+  c.system = r.choice<System>("system", {{"FIX", System::FIX}, {"IGN", System::IGN}, {"IMP", System::IMP}});
+  c.seed = r.integer("seed", 0, INT64_MAX);
+  {
+    Reader run = r.map("run");
+    c.steps = run.integer("steps", 1, 100'000'000);
+    c.curve_interval = run.integer("curve_interval", 1, 100'000'000);
+    run.finish();
+  }
+  {
+    Reader w = r.map("world");
+    c.world.size_px = static_cast<int>(w.integer("size_px", 32, 2048));
+    c.world.object_size = w.number("object_size", 0.01, 0.3);
+    const auto table = numberList(w, "table", 2, 0.0, 1.0);
+    if (!(table[0] < table[1])) fail("world.table", "expected [min, max] with min < max");
+    c.world.table_min = table[0];
+    c.world.table_max = table[1];
+    c.world.max_target_draws = static_cast<int>(w.integer("max_target_draws", 1, 1'000'000));
+    YAML::Node objs = w.raw("objects");
+    if (!objs.IsSequence() || objs.size() == 0)
+      fail("world.objects", "expected a non-empty list of objects, got " + describe(objs));
+    for (std::size_t i = 0; i < objs.size(); ++i)
+      c.world.objects.push_back(parseObject(objs[i], "world.objects[" + std::to_string(i) + "]", c.world));
+    w.finish();
+  }
+  {
+    Reader e = r.map("eye");
+    c.eye.focus_side = static_cast<int>(e.integer("focus_side", 3, 101));
+    if (c.eye.focus_side % 2 == 0) fail("eye.focus_side", "must be odd (the gaze is the centre pixel)");
+    c.eye.saliency_noise = e.number("saliency_noise", 0.0, 1.0);
+    c.eye.saliency_sigma_px = e.number("saliency_sigma_px", 0.0, 20.0);
+    c.eye.saliency_order = e.choice<SaliencyOrder>(
+        "saliency_order",
+        {{"smooth_then_noise", SaliencyOrder::SmoothThenNoise}, {"noise_then_smooth", SaliencyOrder::NoiseThenSmooth}});
+    c.eye.change_sigma_px = e.number("change_sigma_px", 0.0, 20.0);
+    const auto gaze = numberList(e, "initial_gaze", 2, 0.0, 1.0);
+    c.eye.initial_gaze_x = gaze[0];
+    c.eye.initial_gaze_y = gaze[1];
+    c.eye.image_change_threshold = e.number("image_change_threshold", 0.0, 1.0);
+    c.eye.position_change_threshold = e.number("position_change_threshold", 0.0, 1.0);
+    c.eye.max_scan_draws = static_cast<int>(e.integer("max_scan_draws", 1, 100000));
+    e.finish();
+  }
+  {
+    Reader p = r.map("predictors");
+    Reader a = p.map("affordance");
+    c.predictors.affordance_learning_rate = a.number("learning_rate", 0.0, 10.0);
+    a.finish();
+    Reader lp = p.map("learning_progress");
+    c.predictors.learning_progress_learning_rate = lp.number("learning_rate", 0.0, 10.0);
+    c.predictors.learning_progress_init = lp.number("init_magnitude", 0.0, 1.0);
+    lp.finish();
+    Reader what = p.map("what_effect");
+    c.predictors.what_effect_learning_rate = what.number("learning_rate", 0.0, 10.0);
+    what.finish();
+    Reader where = p.map("where_effect");
+    c.predictors.where_effect_learning_rate = where.number("learning_rate", 0.0, 10.0);
+    where.finish();
+    p.finish();
+  }
+  {
+    Reader m = r.map("motivation");
+    c.motivation.fixed_threshold = m.number("fixed_threshold", 0.0, 1.0);
+    c.motivation.leak = m.number("leak", 0.0, 1.0);
+    c.motivation.initial_threshold = m.number("initial_threshold", 0.0, 1.0);
+    c.motivation.act_margin = m.number("act_margin", 0.0, 1.0);
+    c.motivation.imp_threshold_input = m.choice<ImpThresholdInput>(
+        "imp_threshold_input",
+        {{"signal", ImpThresholdInput::Signal}, {"observed_change", ImpThresholdInput::ObservedChange}});
+    m.finish();
+  }
+  r.finish();
+  return c;
+}
+
+RunConfig parseRunConfigText(const std::string& yaml_text) {
+  YAML::Node root;
+  try {
+    root = YAML::Load(yaml_text);
+  } catch (const YAML::Exception& e) {
+    throw ConfigError(std::string("config is not valid YAML: ") + e.what());
+  }
+  return parseRunConfig(root);
+}
+
+void mergeInto(YAML::Node base, const YAML::Node& over) {
+  if (!over.IsMap()) return;
+  for (const auto& kv : over) {
+    const std::string key = kv.first.Scalar();
+    if (kv.second.IsMap() && base[key].IsMap()) {
+      mergeInto(base[key], kv.second);
+    } else {
+      base[key] = YAML::Clone(kv.second);
+    }
+  }
+}
+
+std::vector<std::string> listExperiments(const std::string& config_dir) {
+  std::vector<std::string> names;
+  const std::filesystem::path dir = std::filesystem::path(config_dir) / "experiments";
+  std::error_code ec;
+  for (const auto& entry : std::filesystem::directory_iterator(dir, ec))
+    if (entry.path().extension() == ".yaml") names.push_back(entry.path().stem().string());
+  std::sort(names.begin(), names.end());
+  return names;
+}
+
+namespace {
+YAML::Node loadFile(const std::filesystem::path& file) {
+  try {
+    return YAML::LoadFile(file.string());
+  } catch (const YAML::BadFile&) {
+    throw ConfigError("cannot read config file " + file.string());
+  } catch (const YAML::Exception& e) {
+    throw ConfigError("config file " + file.string() + " is not valid YAML: " + e.what());
+  }
+}
+}  // namespace
+
+ExperimentFile loadExperiment(const std::string& config_dir, const std::string& name) {
+  const auto known = listExperiments(config_dir);
+  if (std::find(known.begin(), known.end(), name) == known.end()) {
+    std::string list;
+    for (const auto& k : known) list += (list.empty() ? "" : ", ") + k;
+    throw ConfigError("unknown experiment \"" + name + "\" (known in " + config_dir + "/experiments: " + list + ")");
+  }
+  const auto file = std::filesystem::path(config_dir) / "experiments" / (name + ".yaml");
+  YAML::Node root = loadFile(file);
+  if (!root.IsMap()) throw ConfigError("config file " + file.string() + ": expected a map");
+  ExperimentFile e;
+  e.name = name;
+  YAML::Node overlay(YAML::NodeType::Map);
+  for (const auto& kv : root) {
+    const std::string key = kv.first.Scalar();
+    if (key == "description") {
+      e.description = kv.second.Scalar();
+    } else if (key == "repetitions") {
+      Reader r(root, "");
+      e.repetitions = static_cast<int>(r.integer("repetitions", 1, 100000));
+    } else if (key == "systems") {
+      e.systems = kv.second;
+    } else {
+      overlay[key] = kv.second;
+    }
+  }
+  e.overlay = overlay;
+  return e;
+}
+
+YAML::Node effectiveConfig(const std::string& config_dir, const RunRequest& request) {
+  YAML::Node root = loadFile(std::filesystem::path(config_dir) / "defaults.yaml");
+  const ExperimentFile e = loadExperiment(config_dir, request.experiment);
+  mergeInto(root, e.overlay);
+  const std::string sys = toString(request.system);
+  if (e.systems.IsMap() && e.systems[sys].IsDefined()) {
+    if (!e.systems[sys].IsMap()) fail("systems." + sys, "expected a map of overrides");
+    mergeInto(root, e.systems[sys]);
+  }
+  root["experiment"] = request.experiment;
+  root["system"] = sys;
+  root["seed"] = request.seed;
+  if (request.steps) root["run"]["steps"] = *request.steps;
+  for (const auto& setting : request.settings) {
+    const auto eq = setting.find('=');
+    if (eq == std::string::npos || eq == 0)
+      throw ConfigError("setting \"" + setting + "\": expected key.path=value");
+    const std::string path = setting.substr(0, eq);
+    YAML::Node value;
+    try {
+      value = YAML::Load(setting.substr(eq + 1));
+    } catch (const YAML::Exception& ex) {
+      throw ConfigError("config key '" + path + "': value is not valid YAML: " + ex.what());
+    }
+    std::vector<std::string> parts;
+    std::stringstream ss(path);
+    for (std::string part; std::getline(ss, part, '.');) parts.push_back(part);
+    std::vector<YAML::Node> chain{root};
+    for (std::size_t i = 0; i + 1 < parts.size(); ++i) {
+      YAML::Node next = chain.back()[parts[i]];
+      if (!next.IsDefined() || !next.IsMap()) fail(path, "unknown key (no map '" + parts[i] + "')");
+      chain.push_back(next);
+    }
+    if (!chain.back()[parts.back()].IsDefined()) fail(path, "unknown key");
+    chain.back()[parts.back()] = value;
+  }
+  parseRunConfig(root);  // validate now, before any process starts
+  return root;
+}
+
+std::string emitYaml(const YAML::Node& node) {
+  YAML::Emitter out;
+  out.SetDoublePrecision(17);
+  out << node;
+  return std::string(out.c_str()) + "\n";
+}
+
+}  // namespace afford

@@ -1,0 +1,108 @@
+#include "afford/image.hpp"
+
+#include <zlib.h>
+
+#include <cmath>
+#include <stdexcept>
+
+namespace afford {
+
+int toPixel(double u, int size_px) { return static_cast<int>(std::lround(u * size_px)); }
+double toUnit(int px, int size_px) { return static_cast<double>(px) / size_px; }
+Pixel toPixel(double x, double y, int size_px) { return {toPixel(x, size_px), toPixel(y, size_px)}; }
+
+namespace {
+// Whole pixels in a length of scene units (floor, tolerant of 0.1 * 150 = 15.000000000000002).
+int pixels(double units, int size_px) { return static_cast<int>(std::floor(units * size_px + 1e-9)); }
+}  // namespace
+
+std::vector<Pixel> shapeFootprint(Shape shape, const WorldConfig& world) {
+  std::vector<Pixel> out;
+  auto box = [&out](int w, int h) {
+    for (int dr = -(h / 2); dr < h - h / 2; ++dr)
+      for (int dc = -(w / 2); dc < w - w / 2; ++dc) out.push_back({dc, dr});
+  };
+  switch (shape) {
+    case Shape::Square: {
+      const int side = pixels(world.object_size, world.size_px);
+      box(side, side);
+      break;
+    }
+    case Shape::Rectangle:
+      box(pixels(world.object_size * 2.0 / 3.0, world.size_px), pixels(world.object_size * 1.5, world.size_px));
+      break;
+    case Shape::Circle: {
+      const double r = world.object_size / std::sqrt(M_PI) * world.size_px;
+      const int reach = static_cast<int>(std::ceil(r));
+      for (int dr = -reach; dr <= reach; ++dr)
+        for (int dc = -reach; dc <= reach; ++dc)
+          if (dc * dc + dr * dr <= r * r) out.push_back({dc, dr});
+      break;
+    }
+  }
+  return out;
+}
+
+cv::Mat blankScene(int size_px) { return cv::Mat(size_px, size_px, CV_8UC3, cv::Scalar(0, 0, 0)); }
+
+void paintObject(cv::Mat& scene, Shape shape, Colour colour, Pixel centre, const WorldConfig& world) {
+  const int ch = colourChannel(colour);
+  for (const Pixel& o : shapeFootprint(shape, world)) {
+    const int r = centre.row + o.row, c = centre.col + o.col;
+    if (r < 0 || c < 0 || r >= scene.rows || c >= scene.cols) continue;
+    auto& px = scene.at<cv::Vec3b>(r, c);
+    px = cv::Vec3b(0, 0, 0);
+    px[ch] = 255;
+  }
+}
+
+std::vector<std::uint8_t> encodeScene(const cv::Mat& scene) {
+  CV_Assert(scene.type() == CV_8UC3 && scene.isContinuous());
+  const uLong raw = static_cast<uLong>(scene.total() * 3);
+  std::vector<std::uint8_t> out(compressBound(raw));
+  uLongf n = out.size();
+  if (compress2(out.data(), &n, scene.data, raw, Z_BEST_SPEED) != Z_OK)
+    throw std::runtime_error("zlib compression of the scene failed");
+  out.resize(n);
+  return out;
+}
+
+cv::Mat decodeScene(const std::vector<std::uint8_t>& data, int width, int height) {
+  if (width <= 0 || height <= 0 || width > 4096 || height > 4096)
+    throw std::runtime_error("scene size " + std::to_string(width) + "x" + std::to_string(height) + " is out of range");
+  cv::Mat scene(height, width, CV_8UC3);
+  uLongf n = static_cast<uLongf>(scene.total() * 3);
+  const int rc = uncompress(scene.data, &n, data.data(), static_cast<uLong>(data.size()));
+  if (rc != Z_OK) throw std::runtime_error("scene data is not a valid zlib stream of the declared size");
+  if (n != scene.total() * 3) throw std::runtime_error("scene data decodes to " + std::to_string(n) + " bytes, expected " +
+                                                       std::to_string(scene.total() * 3));
+  return scene;
+}
+
+std::vector<std::uint8_t> cropFocus(const cv::Mat& scene, Pixel centre, int side) {
+  std::vector<std::uint8_t> out(static_cast<std::size_t>(side) * side * 3, 0);
+  const int half = side / 2;
+  for (int r = 0; r < side; ++r) {
+    const int sr = centre.row - half + r;
+    if (sr < 0 || sr >= scene.rows) continue;
+    for (int c = 0; c < side; ++c) {
+      const int sc = centre.col - half + c;
+      if (sc < 0 || sc >= scene.cols) continue;
+      const auto& px = scene.at<cv::Vec3b>(sr, sc);
+      std::uint8_t* o = &out[(static_cast<std::size_t>(r) * side + c) * 3];
+      o[0] = px[0];
+      o[1] = px[1];
+      o[2] = px[2];
+    }
+  }
+  return out;
+}
+
+double imageChange(const std::vector<std::uint8_t>& a, const std::vector<std::uint8_t>& b) {
+  if (a.size() != b.size() || a.empty()) return 1.0;
+  long sum = 0;
+  for (std::size_t i = 0; i < a.size(); ++i) sum += std::abs(static_cast<int>(a[i]) - static_cast<int>(b[i]));
+  return static_cast<double>(sum) / 255.0 / static_cast<double>(a.size());
+}
+
+}  // namespace afford

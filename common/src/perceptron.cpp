@@ -1,0 +1,65 @@
+#include "afford/perceptron.hpp"
+
+#include <cassert>
+
+namespace afford {
+
+SparseInput focusInput(const std::vector<std::uint8_t>& focus_image) {
+  SparseInput x;
+  x.dim = static_cast<int>(focus_image.size()) + 1;
+  for (std::size_t i = 0; i < focus_image.size(); ++i)
+    if (focus_image[i] != 0) {
+      x.index.push_back(static_cast<int>(i));
+      x.value.push_back(focus_image[i] / 255.0);
+    }
+  x.index.push_back(x.dim - 1);
+  x.value.push_back(1.0);
+  return x;
+}
+
+SparseInput denseInput(std::initializer_list<double> values) {
+  SparseInput x;
+  x.dim = static_cast<int>(values.size()) + 1;
+  int i = 0;
+  for (double v : values) {
+    x.index.push_back(i++);
+    x.value.push_back(v);
+  }
+  x.index.push_back(x.dim - 1);
+  x.value.push_back(1.0);
+  return x;
+}
+
+double Unit::output(const SparseInput& x) const {
+  assert(x.dim == w_.size());
+  double a = 0.0;
+  for (std::size_t k = 0; k < x.index.size(); ++k) a += w_[x.index[k]] * x.value[k];
+  return sigmoid_ ? sigmoid(a) : a;
+}
+
+double Unit::train(const SparseInput& x, double target, double learning_rate) {
+  const double y = output(x);
+  double delta = target - y;
+  if (sigmoid_) delta *= y * (1.0 - y);
+  const double step = learning_rate * delta;
+  for (std::size_t k = 0; k < x.index.size(); ++k) w_[x.index[k]] += step * x.value[k];
+  return y;
+}
+
+Eigen::VectorXd Layer::output(const SparseInput& x) const {
+  assert(x.dim == w_.cols());
+  Eigen::VectorXd a = Eigen::VectorXd::Zero(w_.rows());
+  for (std::size_t k = 0; k < x.index.size(); ++k) a.noalias() += w_.col(x.index[k]) * x.value[k];
+  if (sigmoid_) a = a.unaryExpr([](double v) { return sigmoid(v); });
+  return a;
+}
+
+void Layer::train(const SparseInput& x, const Eigen::VectorXd& target, double learning_rate) {
+  const Eigen::VectorXd y = output(x);
+  Eigen::VectorXd delta = target - y;
+  if (sigmoid_) delta = delta.cwiseProduct(y.cwiseProduct(Eigen::VectorXd::Ones(y.size()) - y));
+  delta *= learning_rate;
+  for (std::size_t k = 0; k < x.index.size(); ++k) w_.col(x.index[k]).noalias() += delta * x.value[k];
+}
+
+}  // namespace afford

@@ -1,0 +1,349 @@
+#include "afford/experiment.hpp"
+
+#include <nlohmann/json.hpp>
+
+#include <atomic>
+#include <chrono>
+#include <cmath>
+#include <ctime>
+#include <filesystem>
+#include <fstream>
+#include <iomanip>
+#include <mutex>
+#include <sstream>
+#include <thread>
+
+#include "afford/actions.hpp"
+#include "afford/config.hpp"
+#include "afford/driver.hpp"
+#include "afford/group.hpp"
+#include "afford/logging.hpp"
+#include "environment/node.hpp"
+#include "eye/node.hpp"
+#include "logger/node.hpp"
+#include "motivation/node.hpp"
+#include "predictors/node.hpp"
+
+namespace afford {
+namespace fs = std::filesystem;
+using nlohmann::json;
+
+namespace {
+
+struct PlannedRun {
+  RunSpec spec;
+  std::string system;
+  bool keep_log = false;
+  std::size_t index = 0;
+};
+
+std::string defaultPrefix() {
+  const std::time_t t = std::time(nullptr);
+  char buf[32];
+  std::strftime(buf, sizeof buf, "%Y%m%d-%H%M%S", std::localtime(&t));
+  return buf;
+}
+
+// Handle what is pending (up to a batch), or wait briefly for something.
+void pumpLcm(lcm::LCM& lcm) {
+  int handled = 0;
+  while (handled < 512 && lcm.handleTimeout(0) > 0) ++handled;
+  if (handled == 0) lcm.handleTimeout(5);
+}
+
+RunOutcome runInProcess(const PlannedRun& run, const ExperimentOptions& o, int slot) {
+  lcm::LCM lcm("memq://");
+  const std::string tag = o.jobs > 1 ? "#" + std::to_string(slot) : "";
+  const std::string level = o.process_log_level == "info" ? "warn" : o.process_log_level;
+  EnvironmentNode env(lcm, makeLogger("environment" + tag, level));
+  EyeNode eye(lcm, makeLogger("eye" + tag, level));
+  PredictorsNode predictors(lcm, makeLogger("predictors" + tag, level));
+  MotivationNode motivation(lcm, makeLogger("motivation" + tag, level));
+  std::unique_ptr<LoggerNode> logger;
+  if (run.keep_log) logger = std::make_unique<LoggerNode>(lcm, makeLogger("logger" + tag, level), o.log_root);
+  RunDriver driver(lcm, makeLogger("runner" + tag, level));
+  auto pump = [&] {
+    pumpLcm(lcm);
+    env.tick();
+    eye.tick();
+    predictors.tick();
+    motivation.tick();
+    if (logger) logger->tick();
+  };
+  return driver.run(run.spec, pump, [] { return std::string(); });
+}
+
+struct Slot {
+  int index = 0;
+  std::string url;
+  std::unique_ptr<ProcessGroup> group;   // environment, eye, predictors, motivation
+};
+
+RunOutcome runOverUdpm(const PlannedRun& run, const ExperimentOptions& o, Slot& slot, const std::string& bin) {
+  const std::string out = (fs::path(o.out_dir) / "processes" / ("slot" + std::to_string(slot.index))).string();
+  if (!slot.group || !slot.group->health().empty()) {
+    slot.group.reset();
+    slot.group = std::make_unique<ProcessGroup>(bin, std::vector<std::string>{"environment", "eye", "predictors",
+                                                                              "motivation"},
+                                                slot.url, out, std::vector<std::string>{});
+  }
+  std::unique_ptr<ProcessGroup> logger;
+  if (run.keep_log)
+    logger = std::make_unique<ProcessGroup>(bin, std::vector<std::string>{"logger"}, slot.url, out,
+                                            std::vector<std::string>{"--log-dir", o.log_root});
+  lcm::LCM lcm(slot.url);
+  if (!lcm.good()) {
+    RunOutcome r;
+    r.error = "cannot open LCM at " + slot.url;
+    return r;
+  }
+  RunDriver driver(lcm, makeLogger("runner", "warn"));
+  auto health = [&]() {
+    std::string h = slot.group->health();
+    if (h.empty() && logger) h = logger->health();
+    return h;
+  };
+  RunOutcome r = driver.run(run.spec, [&] { pumpLcm(lcm); }, health);
+  if (logger) logger->stop();
+  if (!r.ok) slot.group.reset();  // a broken group is not reused
+  return r;
+}
+
+using Table = std::vector<std::vector<double>>;
+
+double meanAbsError(const Table& a, const Table& b) {
+  double sum = 0;
+  int n = 0;
+  for (std::size_t i = 0; i < a.size(); ++i)
+    for (std::size_t j = 0; j < a[i].size(); ++j, ++n) sum += std::abs(a[i][j] - b[i][j]);
+  return n ? sum / n : 0.0;
+}
+
+std::string fixed(double v, int digits) {
+  std::ostringstream s;
+  s << std::fixed << std::setprecision(digits) << v;
+  return s.str();
+}
+
+}  // namespace
+
+int runExperiment(const ExperimentOptions& o, spdlog::logger& log) {
+  const std::string config_dir = o.config_dir.empty() ? std::string(AFFORD_SOURCE_DIR) + "/config" : o.config_dir;
+
+  // Everything that can be wrong with the request is found here, before any process starts.
+  const ExperimentFile exp = loadExperiment(config_dir, o.experiment);
+  const int reps = o.reps.value_or(exp.repetitions);
+  if (reps < 1) throw ConfigError("--reps must be at least 1");
+  if (o.jobs < 1) throw ConfigError("--jobs must be at least 1");
+  if (o.transport != "udpm" && o.transport != "memq")
+    throw ConfigError("--transport must be udpm or memq, not \"" + o.transport + "\"");
+  if (o.keep_logs != "all" && o.keep_logs != "first" && o.keep_logs != "none")
+    throw ConfigError("--keep-logs must be all, first or none, not \"" + o.keep_logs + "\"");
+  const std::string prefix = o.run_prefix.empty() ? defaultPrefix() : o.run_prefix;
+  std::vector<PlannedRun> runs;
+  std::map<std::string, RunConfig> configs;
+  for (const auto& sys_name : o.systems) {
+    const System sys = parseSystem(sys_name);
+    for (int r = 0; r < reps; ++r) {
+      RunRequest req{o.experiment, sys, o.seed + r, o.steps, o.settings};
+      const YAML::Node node = effectiveConfig(config_dir, req);
+      const RunConfig cfg = parseRunConfig(node);
+      if (r == 0) configs[sys_name] = cfg;
+      PlannedRun p;
+      p.system = sys_name;
+      p.keep_log = o.keep_logs == "all" || (o.keep_logs == "first" && r == 0);
+      p.spec.run_id = prefix + "-" + o.experiment + "-" + sys_name + "-s" + std::to_string(o.seed + r);
+      p.spec.experiment = o.experiment;
+      p.spec.system = sys_name;
+      p.spec.seed = o.seed + r;
+      p.spec.steps = cfg.steps;
+      p.spec.config_yaml = emitYaml(node);
+      p.spec.processes = {"environment", "eye", "predictors", "motivation"};
+      if (p.keep_log) p.spec.processes.push_back("logger");
+      p.spec.stall_seconds = o.stall_seconds;
+      p.index = runs.size();
+      runs.push_back(std::move(p));
+    }
+  }
+
+  std::string network = "in-process memq://";
+  std::string bin;
+  if (o.transport == "udpm") {
+    network = prepareNetwork(o.netns);
+    bin = executableDir();
+  }
+  fs::create_directories(o.out_dir);
+  log.info("experiment {}: {} run(s) of {} steps, {} at a time, over {} ({})", o.experiment, runs.size(),
+           runs.front().spec.steps, o.jobs, o.transport, network);
+
+  // Run, J at a time.
+  std::vector<RunOutcome> outcomes(runs.size());
+  std::atomic<std::size_t> next{0};
+  std::atomic<int> done{0};
+  std::mutex log_mutex;
+  auto worker = [&](int slot_index) {
+    Slot slot;
+    slot.index = slot_index;
+    slot.url = "udpm://239.255.76.67:" + std::to_string(o.base_port + slot_index) + "?ttl=0";
+    for (std::size_t i; (i = next.fetch_add(1)) < runs.size();) {
+      RunOutcome r;
+      try {
+        r = o.transport == "memq" ? runInProcess(runs[i], o, slot_index) : runOverUdpm(runs[i], o, slot, bin);
+      } catch (const std::exception& e) {
+        r.ok = false;
+        r.error = "run '" + runs[i].spec.run_id + "': " + e.what();
+      }
+      outcomes[i] = std::move(r);
+      const RunOutcome& out = outcomes[i];
+      std::lock_guard<std::mutex> lock(log_mutex);
+      const int k = ++done;
+      if (out.ok)
+        log.info("[{}/{}] {} done in {:.1f} s, weights {}", k, runs.size(), runs[i].spec.run_id, out.wall_seconds,
+                 out.weights_checksum);
+      else
+        log.error("[{}/{}] {}", k, runs.size(), out.error);
+    }
+  };
+  std::vector<std::thread> threads;
+  for (int j = 0; j < std::min<int>(o.jobs, static_cast<int>(runs.size())); ++j) threads.emplace_back(worker, j);
+  for (auto& t : threads) t.join();
+
+  // Summaries.
+  const auto& any_cfg = configs.begin()->second;
+  std::vector<std::string> object_names;
+  for (const auto& ob : any_cfg.world.objects) object_names.push_back(ob.name);
+  json summary = {{"experiment", o.experiment},
+                  {"description", exp.description},
+                  {"steps", runs.front().spec.steps},
+                  {"repetitions", reps},
+                  {"seed", o.seed},
+                  {"transport", o.transport},
+                  {"network", network},
+                  {"afford_version", AFFORD_VERSION},
+                  {"objects", object_names},
+                  {"actions", {"move", "turn green", "turn red", "turn blue"}},
+                  {"systems", json::object()}};
+  YAML::Node reference;
+  try {
+    reference = YAML::LoadFile(config_dir + "/reference.yaml")[o.experiment];
+  } catch (const YAML::Exception&) {
+  }
+  int failures = 0;
+  for (const auto& sys : o.systems) {
+    const RunConfig& cfg = configs[sys];
+    Table target;
+    for (const auto& ob : cfg.world.objects) target.emplace_back(ob.affordance.begin(), ob.affordance.end());
+    json js = {{"target", target}, {"runs", json::array()}};
+    std::vector<Table> finals;
+    std::vector<double> maes;
+    std::ofstream curves_csv(fs::path(o.out_dir) / ("curves_" + sys + ".csv"));
+    curves_csv << "system,run_id,seed,step,object,action,prediction\n";
+    std::map<std::int64_t, std::pair<Table, int>> curve_sum;
+    for (const auto& p : runs) {
+      if (p.system != sys) continue;
+      const RunOutcome& r = outcomes[p.index];
+      if (!r.ok || r.curve.empty()) {
+        ++failures;
+        js["failed_runs"].push_back({{"run_id", p.spec.run_id}, {"seed", p.spec.seed}, {"error", r.error}});
+        continue;
+      }
+      const Table& fin = r.curve.back().affordance;
+      finals.push_back(fin);
+      maes.push_back(meanAbsError(fin, target));
+      js["runs"].push_back({{"run_id", p.spec.run_id},
+                            {"seed", p.spec.seed},
+                            {"log_dir", r.log_dir.empty() ? json(nullptr) : json(r.log_dir)},
+                            {"affordance", fin},
+                            {"affordance_mae", maes.back()},
+                            {"weights_checksum", r.weights_checksum},
+                            {"actions_executed", r.executed},
+                            {"successes", r.successes},
+                            {"wall_seconds", r.wall_seconds}});
+      for (const auto& snap : r.curve) {
+        auto& [sum, n] = curve_sum[snap.step];
+        if (sum.empty()) sum = Table(snap.affordance.size(), std::vector<double>(kNumActions, 0.0));
+        for (std::size_t i = 0; i < snap.affordance.size(); ++i)
+          for (int a = 0; a < kNumActions; ++a) {
+            sum[i][a] += snap.affordance[i][a];
+            curves_csv << sys << "," << p.spec.run_id << "," << p.spec.seed << "," << snap.step << ",\""
+                       << object_names[i] << "\"," << kActionNames[a] << "," << snap.affordance[i][a] << "\n";
+          }
+        ++n;
+      }
+    }
+    if (!finals.empty()) {
+      Table mean = target, mn = target, mx = target;
+      for (std::size_t i = 0; i < target.size(); ++i)
+        for (int a = 0; a < kNumActions; ++a) {
+          double s = 0, lo = 1e9, hi = -1e9;
+          for (const auto& f : finals) {
+            s += f[i][a];
+            lo = std::min(lo, f[i][a]);
+            hi = std::max(hi, f[i][a]);
+          }
+          mean[i][a] = s / finals.size();
+          mn[i][a] = lo;
+          mx[i][a] = hi;
+        }
+      double mae_sum = 0;
+      for (double m : maes) mae_sum += m;
+      js["affordance"] = mean;
+      js["affordance_min"] = mn;
+      js["affordance_max"] = mx;
+      js["affordance_mae"] = mae_sum / maes.size();
+      js["affordance_mae_of_mean"] = meanAbsError(mean, target);
+      json steps = json::array(), means = json::array();
+      for (auto& [step, sn] : curve_sum) {
+        auto& [sum, n] = sn;
+        for (auto& row : sum)
+          for (auto& v : row) v /= n;
+        steps.push_back(step);
+        means.push_back(sum);
+      }
+      js["curves"] = {{"steps", steps}, {"mean", means}};
+      std::ofstream csv(fs::path(o.out_dir) / ("affordance_" + sys + ".csv"));
+      csv << "system,object,action,target,mean,min,max\n";
+      for (std::size_t i = 0; i < target.size(); ++i)
+        for (int a = 0; a < kNumActions; ++a)
+          csv << sys << ",\"" << object_names[i] << "\"," << kActionNames[a] << "," << target[i][a] << ","
+              << mean[i][a] << "," << mn[i][a] << "," << mx[i][a] << "\n";
+    }
+    if (reference && reference["affordance_mae"] && reference["affordance_mae"][sys])
+      js["reference_affordance_mae"] = reference["affordance_mae"][sys].as<double>();
+    summary["systems"][sys] = js;
+  }
+  if (reference && reference["source"]) summary["reference_source"] = reference["source"].as<std::string>();
+  {
+    std::ofstream out(fs::path(o.out_dir) / "summary.json");
+    out << summary.dump(2) << "\n";
+  }
+
+  if (!o.quiet) {
+    std::ostringstream t;
+    t << "\nLearned affordances after " << runs.front().spec.steps << " steps (mean of " << reps
+      << " run(s)); in brackets the paper's table\n";
+    for (const auto& sys : o.systems) {
+      const json& js = summary["systems"][sys];
+      if (!js.contains("affordance")) continue;
+      t << "\n" << sys << "            move        turn green  turn red    turn blue\n";
+      for (std::size_t i = 0; i < object_names.size(); ++i) {
+        t << "  " << std::left << std::setw(17) << object_names[i];
+        for (int a = 0; a < kNumActions; ++a)
+          t << std::setw(12)
+            << (fixed(js["affordance"][i][a].get<double>(), 2) + " (" + fixed(js["target"][i][a].get<double>(), 1) + ")");
+        t << "\n";
+      }
+      t << "  mean absolute error " << fixed(js["affordance_mae"].get<double>(), 3);
+      if (js.contains("reference_affordance_mae"))
+        t << " (authors' code: " << fixed(js["reference_affordance_mae"].get<double>(), 3) << ")";
+      t << "\n";
+    }
+    t << "\nsummary: " << (fs::path(o.out_dir) / "summary.json").string() << "\n";
+    std::printf("%s", t.str().c_str());
+    std::fflush(stdout);
+  }
+  if (failures) log.error("{} run(s) failed; see summary.json failed_runs", failures);
+  return failures ? 1 : 0;
+}
+
+}  // namespace afford

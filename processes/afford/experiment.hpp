@@ -1,0 +1,40 @@
+// `afford experiment NAME ...`: runs repetitions of an experiment's intrinsic
+// phase for one or more systems, J runs at a time, each on its own LCM URL,
+// and writes DIR/summary.json plus CSV files (schema: docs/results-schema.md).
+#pragma once
+#include <spdlog/spdlog.h>
+
+#include <cstdint>
+#include <optional>
+#include <string>
+#include <vector>
+
+#include "afford/netns.hpp"
+
+namespace afford {
+
+struct ExperimentOptions {
+  std::string experiment;
+  std::vector<std::string> systems;        // FIX, IGN, IMP
+  std::optional<int> reps;                 // default: the experiment file's repetitions
+  std::optional<std::int64_t> steps;       // default: the experiment file's run.steps
+  int jobs = 1;
+  std::int64_t seed = 1;
+  std::string out_dir = "out";
+  std::string transport = "udpm";          // udpm | memq
+  std::string keep_logs = "all";           // all | first | none
+  std::string log_root = "logs";
+  std::string run_prefix;                  // default: wall-clock stamp (names only)
+  std::string config_dir;                  // default: the source tree's config/
+  std::vector<std::string> settings;       // key.path=value overrides
+  NetnsMode netns = NetnsMode::Auto;
+  int base_port = 7700;
+  std::string process_log_level = "info";  // for the processes (udpm) / in-process nodes (memq: warn)
+  double stall_seconds = 30;
+  bool quiet = false;                      // no table at the end
+};
+
+// Returns the process exit code (0 when every run succeeded).
+int runExperiment(const ExperimentOptions& options, spdlog::logger& log);
+
+}  // namespace afford

@@ -1,0 +1,109 @@
+#include "afford/group.hpp"
+
+#include <fcntl.h>
+#include <signal.h>
+#include <sys/prctl.h>
+#include <sys/wait.h>
+#include <unistd.h>
+
+#include <chrono>
+#include <cstring>
+#include <filesystem>
+#include <stdexcept>
+#include <thread>
+
+namespace afford {
+
+std::string executableDir() {
+  std::error_code ec;
+  const auto exe = std::filesystem::read_symlink("/proc/self/exe", ec);
+  if (ec) throw std::runtime_error("cannot locate the afford executable: " + ec.message());
+  return exe.parent_path().string();
+}
+
+ProcessGroup::ProcessGroup(const std::string& bin_dir, const std::vector<std::string>& names, const std::string& lcm_url,
+                           const std::string& output_dir, const std::vector<std::string>& logger_args) {
+  std::filesystem::create_directories(output_dir);
+  for (const auto& name : names) {
+    Child c;
+    c.name = name;
+    c.output = (std::filesystem::path(output_dir) / (name + ".log")).string();
+    const std::string exe = (std::filesystem::path(bin_dir) / ("afford-" + name)).string();
+    if (access(exe.c_str(), X_OK) != 0) {
+      stop(0);
+      throw std::runtime_error("process executable " + exe + " is missing (build it: cmake --build build)");
+    }
+    std::vector<std::string> args{exe, "--lcm-url", lcm_url};
+    if (name == "logger") args.insert(args.end(), logger_args.begin(), logger_args.end());
+    const pid_t parent = getpid();
+    const pid_t pid = fork();
+    if (pid < 0) {
+      stop(0);
+      throw std::runtime_error(std::string("fork: ") + std::strerror(errno));
+    }
+    if (pid == 0) {
+      prctl(PR_SET_PDEATHSIG, SIGTERM);  // never outlive the runner
+      if (getppid() != parent) _exit(1);
+      const int fd = open(c.output.c_str(), O_WRONLY | O_CREAT | O_APPEND, 0644);
+      if (fd >= 0) {
+        dup2(fd, 1);
+        dup2(fd, 2);
+        close(fd);
+      }
+      std::vector<char*> argv;
+      for (auto& a : args) argv.push_back(a.data());
+      argv.push_back(nullptr);
+      execv(argv[0], argv.data());
+      _exit(127);
+    }
+    c.pid = pid;
+    children_.push_back(c);
+  }
+}
+
+ProcessGroup::~ProcessGroup() { stop(); }
+
+std::string ProcessGroup::health() {
+  for (auto& c : children_) {
+    if (c.exited) continue;
+    int status = 0;
+    if (waitpid(c.pid, &status, WNOHANG) == c.pid) {
+      c.exited = true;
+      c.status = status;
+      std::string how = WIFEXITED(status)     ? "exited with status " + std::to_string(WEXITSTATUS(status))
+                        : WIFSIGNALED(status) ? std::string("was killed by signal ") + strsignal(WTERMSIG(status))
+                                              : "ended";
+      return "process '" + c.name + "' (pid " + std::to_string(c.pid) + ") " + how + "; its output: " + c.output;
+    }
+  }
+  for (const auto& c : children_)
+    if (c.exited) return "process '" + c.name + "' (pid " + std::to_string(c.pid) + ") is not running";
+  return "";
+}
+
+void ProcessGroup::stop(int grace_ms) {
+  for (auto& c : children_)
+    if (!c.exited) kill(c.pid, SIGTERM);
+  const auto deadline = std::chrono::steady_clock::now() + std::chrono::milliseconds(grace_ms);
+  for (auto& c : children_) {
+    while (!c.exited) {
+      int status = 0;
+      const pid_t r = waitpid(c.pid, &status, WNOHANG);
+      if (r == c.pid || r < 0) {
+        c.exited = true;
+        c.status = status;
+        break;
+      }
+      if (std::chrono::steady_clock::now() >= deadline) {
+        kill(c.pid, SIGKILL);
+        waitpid(c.pid, &status, 0);
+        c.exited = true;
+        c.status = status;
+        break;
+      }
+      std::this_thread::sleep_for(std::chrono::milliseconds(5));
+    }
+  }
+}
+
+}  // namespace afford

@@ -1,0 +1,42 @@
+// A group of afford processes started by the runner (one per process name),
+// each with its output in a file, watched for unexpected exits, and stopped
+// with SIGTERM then SIGKILL after a grace period.
+#pragma once
+#include <sys/types.h>
+
+#include <string>
+#include <vector>
+
+namespace afford {
+
+struct Child {
+  std::string name;   // "eye"
+  pid_t pid = -1;
+  std::string output; // file with its stdout and stderr
+  bool exited = false;
+  int status = 0;
+};
+
+class ProcessGroup {
+ public:
+  // Starts build/bin/afford-<name> --lcm-url URL [extra...] for each name.
+  ProcessGroup(const std::string& bin_dir, const std::vector<std::string>& names, const std::string& lcm_url,
+               const std::string& output_dir, const std::vector<std::string>& logger_args);
+  ~ProcessGroup();
+  ProcessGroup(const ProcessGroup&) = delete;
+  ProcessGroup& operator=(const ProcessGroup&) = delete;
+
+  // "" while every child runs; otherwise which one ended, and how.
+  std::string health();
+  // SIGTERM, wait up to `grace_ms`, then SIGKILL.
+  void stop(int grace_ms = 3000);
+  const std::vector<Child>& children() const { return children_; }
+
+ private:
+  std::vector<Child> children_;
+};
+
+// Directory of the running executable (where the process executables live).
+std::string executableDir();
+
+}  // namespace afford

@@ -1,0 +1,90 @@
+// afford: the front door. `afford experiment NAME ...` runs experiments over
+// real processes (udpm, default) or in one process (memq); `afford experiments`
+// lists them; `afford config NAME` prints an effective configuration.
+#include <CLI/CLI.hpp>
+
+#include <cstdio>
+
+#include "afford/config.hpp"
+#include "afford/experiment.hpp"
+#include "afford/logging.hpp"
+
+int main(int argc, char** argv) {
+  CLI::App app{"afford: an embodied agent learning affordances (intrinsic phase) and solving extrinsic tasks", "afford"};
+  app.require_subcommand(1);
+  std::string config_dir = std::string(AFFORD_SOURCE_DIR) + "/config";
+  app.add_option("--config-dir", config_dir, "folder with defaults.yaml and experiments/")->capture_default_str();
+
+  afford::ExperimentOptions o;
+  std::string system = "all", netns = "auto";
+  int reps = 0;
+  std::int64_t steps = 0;
+  auto* exp = app.add_subcommand("experiment", "run an experiment's repetitions and summarise them");
+  exp->add_option("name", o.experiment, "experiment (see `afford experiments`)")->required();
+  exp->add_option("--system", system, "FIX, IGN, IMP or all")->capture_default_str();
+  exp->add_option("--reps", reps, "repetitions per system (default: the experiment's)");
+  exp->add_option("--steps", steps, "intrinsic steps per run (default: the experiment's)");
+  exp->add_option("--jobs,-j", o.jobs, "runs at a time")->capture_default_str();
+  exp->add_option("--seed", o.seed, "seed of the first repetition (then seed+1, ...)")->capture_default_str();
+  exp->add_option("--out", o.out_dir, "folder for summary.json and CSV files")->capture_default_str();
+  exp->add_option("--transport", o.transport, "udpm (real processes) or memq (one process)")->capture_default_str();
+  exp->add_option("--keep-logs", o.keep_logs, "which runs keep an LCM log: all, first or none")->capture_default_str();
+  exp->add_option("--log-root", o.log_root, "folder of the run logs (<log-root>/<run-id>/)")->capture_default_str();
+  exp->add_option("--run-prefix", o.run_prefix, "first part of every run id (default: date-time)");
+  exp->add_option("--set", o.settings, "override a config value, e.g. --set motivation.leak=0.2 (repeatable)");
+  exp->add_option("--netns", netns, "auto, on or off: run the process group in a private network namespace")
+      ->capture_default_str();
+  exp->add_option("--base-port", o.base_port, "UDP port of the first job slot (one port per slot)")
+      ->capture_default_str();
+  exp->add_option("--process-log-level", o.process_log_level, "log level of the processes")->capture_default_str();
+  exp->add_option("--stall-seconds", o.stall_seconds, "fail a run after this long without progress")
+      ->capture_default_str();
+  exp->add_flag("--quiet", o.quiet, "do not print the table at the end");
+
+  auto* list = app.add_subcommand("experiments", "list the experiments in the config folder");
+  std::string show_name, show_system = "IMP";
+  std::vector<std::string> show_settings;
+  auto* show = app.add_subcommand("config", "print the effective configuration of one run");
+  show->add_option("name", show_name, "experiment")->required();
+  show->add_option("--system", show_system, "FIX, IGN or IMP")->capture_default_str();
+  show->add_option("--set", show_settings, "override a config value (repeatable)");
+
+  CLI11_PARSE(app, argc, argv);
+  auto log = afford::makeLogger("afford");
+  try {
+    if (list->parsed()) {
+      for (const auto& n : afford::listExperiments(config_dir)) {
+        const auto e = afford::loadExperiment(config_dir, n);
+        std::printf("%-12s %s\n", n.c_str(), e.description.c_str());
+      }
+      return 0;
+    }
+    if (show->parsed()) {
+      afford::RunRequest req{show_name, afford::parseSystem(show_system), 1, std::nullopt, show_settings};
+      std::printf("%s", afford::emitYaml(afford::effectiveConfig(config_dir, req)).c_str());
+      return 0;
+    }
+    o.config_dir = config_dir;
+    if (reps) o.reps = reps;
+    if (steps) o.steps = steps;
+    if (system == "all")
+      o.systems = {"FIX", "IGN", "IMP"};
+    else
+      o.systems = {afford::toString(afford::parseSystem(system))};
+    if (netns == "auto")
+      o.netns = afford::NetnsMode::Auto;
+    else if (netns == "on")
+      o.netns = afford::NetnsMode::On;
+    else if (netns == "off")
+      o.netns = afford::NetnsMode::Off;
+    else
+      throw afford::ConfigError("--netns must be auto, on or off, not \"" + netns + "\"");
+    return afford::runExperiment(o, *log);
+  } catch (const afford::ConfigError& e) {
+    log->error("{}", e.what());
+    return 2;
+  } catch (const std::exception& e) {
+    log->error("{}", e.what());
+    return 1;
+  }
+}

@@ -1,0 +1,68 @@
+// Environment core (paper 2.2, 2.3.2): the objects, their affordance table,
+// the rendered scene, the pre-wired action routines and stochastic success.
+// No LCM here: the node (node.hpp) wires it to channels.
+#pragma once
+#include <opencv2/core.hpp>
+
+#include <cstdint>
+#include <optional>
+#include <vector>
+
+#include "afford/config.hpp"
+#include "afford/image.hpp"
+
+namespace afford {
+
+struct WorldObject {
+  int table_index = 0;   // row of the experiment's affordance table (= probe index)
+  Shape shape = Shape::Square;
+  Colour colour = Colour::Red;
+  Pixel centre;
+  bool present = false;
+};
+
+struct ActionOutcome {
+  bool on_object = false;     // an object was under the gaze
+  bool succeeded = false;     // the action's effect happened
+  double target_x = -1.0;     // move target (scene units), -1 for colour actions
+  double target_y = -1.0;
+};
+
+class Environment {
+ public:
+  explicit Environment(const RunConfig& config);
+
+  // The scene as it is now.
+  cv::Mat render() const;
+  // Each configured object alone, centred, as the eye's focus would see it (Table order).
+  std::vector<std::vector<std::uint8_t>> probeImages() const;
+  std::vector<std::string> probeNames() const;
+
+  // Execute `action` at `step` on the object under the gaze (x, y). For move,
+  // `target` is the commanded position; without one (intrinsic phase) the
+  // routine draws a random free target.
+  ActionOutcome execute(std::int64_t step, int action, double x, double y,
+                        std::optional<std::pair<double, double>> target = std::nullopt);
+  // Put in the scene the objects that appear at `step`; true if any did.
+  bool introduceObjectsAt(std::int64_t step);
+  // True if objects are due to appear at `step`.
+  bool objectsAppearAt(std::int64_t step) const;
+
+  const std::vector<WorldObject>& objects() const { return objects_; }
+  // Index into objects() of the present object covering a pixel, or -1.
+  int objectAt(Pixel p) const;
+  // Row of the affordance table that applies to an object as it looks now.
+  int tableRow(const WorldObject& o) const;
+
+ private:
+  // True if a square of half-size `half` around `centre` holds no pixel of a
+  // present object other than `ignore`.
+  bool regionFree(Pixel centre, int half, int ignore) const;
+  int freeHalf() const;
+
+  RunConfig config_;
+  std::vector<WorldObject> objects_;
+  std::vector<std::vector<Pixel>> footprints_;  // per object (by shape)
+};
+
+}  // namespace afford

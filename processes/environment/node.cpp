@@ -1,0 +1,97 @@
+#include "environment/node.hpp"
+
+#include "afford/actions.hpp"
+#include "afford/channels.hpp"
+#include "afford/object_probe_t.hpp"
+#include "afford/scene_t.hpp"
+
+namespace afford {
+
+EnvironmentNode::EnvironmentNode(lcm::LCM& lcm, std::shared_ptr<spdlog::logger> log)
+    : NodeBase(lcm, "environment", std::move(log)) {
+  subscribe<decision_t>(channel::kDecision, [this](const decision_t& m) { onDecision(m); });
+}
+
+void EnvironmentNode::onConfigured(const RunConfig& config) {
+  env_ = std::make_unique<Environment>(config);
+  next_decision_ = 0;
+}
+
+void EnvironmentNode::onStop() { env_.reset(); }
+
+void EnvironmentNode::onStart() {
+  object_probe_t probe;
+  probe.run_id = runId();
+  probe.step = 0;
+  probe.names = env_->probeNames();
+  probe.images = env_->probeImages();
+  probe.n_objects = static_cast<int32_t>(probe.images.size());
+  probe.size = static_cast<int32_t>(probe.images.front().size());
+  publish(channel::kProbe, probe);
+  publishScene(0, scene_t::CAUSE_START, true, true, -1, -1.0, -1.0);
+}
+
+void EnvironmentNode::publishScene(std::int64_t step, int8_t cause, bool scan, bool with_image, int action, double tx,
+                                   double ty) {
+  scene_t s;
+  s.run_id = runId();
+  s.step = step;
+  s.cause = cause;
+  s.scan = scan;
+  s.action = static_cast<int8_t>(action);
+  s.action_target_x = tx;
+  s.action_target_y = ty;
+  s.width = s.height = config().world.size_px;
+  if (with_image) {
+    s.encoding = scene_t::ENCODING_ZLIB_RGB8;
+    s.data = encodeScene(env_->render());
+  } else {
+    s.encoding = scene_t::ENCODING_UNCHANGED;
+  }
+  s.size = static_cast<int32_t>(s.data.size());
+  publish(channel::kScene, s);
+}
+
+void EnvironmentNode::onDecision(const decision_t& d) {
+  const char* ch = channel::kDecision;
+  if (state() != process_status_t::RUNNING) return drop(ch, "the run has not started");
+  if (d.step < next_decision_)
+    return log_->debug("{}: step {} already handled (now at {})", ch, d.step, next_decision_);
+  if (d.step > next_decision_)
+    return drop(ch, "step " + std::to_string(d.step) + " is ahead of the scene (awaiting step " +
+                        std::to_string(next_decision_) + ")");
+  for (const std::string& why :
+       {checkRange("x", d.x, 0.0, 1.0), checkRange("y", d.y, 0.0, 1.0), checkFinite("motivation", d.motivation),
+        checkFinite("threshold", d.threshold),
+        d.target_x == -1.0 ? std::string() : checkRange("target_x", d.target_x, 0.0, 1.0),
+        d.target_y == -1.0 ? std::string() : checkRange("target_y", d.target_y, 0.0, 1.0)})
+    if (!why.empty()) return drop(ch, why);
+  if (d.acted && !validAction(d.action))
+    return drop(ch, "action id " + std::to_string(d.action) + " is out of range [0, 3]");
+
+  const std::int64_t next = d.step + 1;
+  const bool more = next < config().steps;
+  next_decision_ = next;
+  handled(d.step);
+  if (d.acted) {
+    std::optional<std::pair<double, double>> target;
+    if (d.action == kMove && d.target_x >= 0.0 && d.target_y >= 0.0) target = std::make_pair(d.target_x, d.target_y);
+    const ActionOutcome out = env_->execute(d.step, d.action, d.x, d.y, target);
+    log_->debug("step {}: action {} on object: {} succeeded: {} target ({}, {})", d.step, d.action, out.on_object,
+                out.succeeded, out.target_x, out.target_y);
+    const bool appear = more && env_->objectsAppearAt(next);
+    // The action's own scene first, so the eye sees its effect without the newcomers.
+    publishScene(next, scene_t::CAUSE_ACTION, more && !appear, true, d.action, out.target_x, out.target_y);
+    if (appear) {
+      env_->introduceObjectsAt(next);
+      publishScene(next, scene_t::CAUSE_OBJECTS_APPEARED, true, true, -1, -1.0, -1.0);
+    }
+  } else if (more) {
+    const bool appeared = env_->introduceObjectsAt(next);
+    publishScene(next, appeared ? scene_t::CAUSE_OBJECTS_APPEARED : scene_t::CAUSE_UNCHANGED, true, appeared, -1, -1.0,
+                 -1.0);
+  }
+  if (!more) setState(process_status_t::DONE);
+}
+
+}  // namespace afford

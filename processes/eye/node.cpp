@@ -1,0 +1,104 @@
+#include "eye/node.hpp"
+
+#include "afford/actions.hpp"
+#include "afford/channels.hpp"
+#include "afford/effect_t.hpp"
+#include "afford/focus_t.hpp"
+
+namespace afford {
+
+EyeNode::EyeNode(lcm::LCM& lcm, std::shared_ptr<spdlog::logger> log) : NodeBase(lcm, "eye", std::move(log)) {
+  subscribe<scene_t>(channel::kScene, [this](const scene_t& m) { onScene(m); });
+}
+
+void EyeNode::onConfigured(const RunConfig& config) {
+  eye_ = std::make_unique<Eye>(config);
+  last_scanned_ = last_effect_ = -1;
+}
+
+void EyeNode::onStop() { eye_.reset(); }
+
+void EyeNode::publishFocus(std::int64_t step, const Focus& f) {
+  focus_t m;
+  m.run_id = runId();
+  m.step = step;
+  m.x = f.x;
+  m.y = f.y;
+  m.side = config().eye.focus_side;
+  m.image = f.image;
+  m.size = static_cast<int32_t>(f.image.size());
+  publish(channel::kFocus, m);
+}
+
+void EyeNode::onScene(const scene_t& s) {
+  const char* ch = channel::kScene;
+  const int size = config().world.size_px;
+  if (s.step <= last_scanned_)
+    return drop(ch, "step " + std::to_string(s.step) + " is in the past (already scanned step " +
+                        std::to_string(last_scanned_) + ")");
+  if (s.step > config().steps) return drop(ch, "step " + std::to_string(s.step) + " is beyond the run's last step");
+  if (s.width != size || s.height != size)
+    return drop(ch, "scene is " + std::to_string(s.width) + "x" + std::to_string(s.height) + ", expected " +
+                        std::to_string(size) + "x" + std::to_string(size));
+  const bool is_action = s.cause == scene_t::CAUSE_ACTION;
+  if (s.cause < scene_t::CAUSE_START || s.cause > scene_t::CAUSE_OBJECTS_APPEARED)
+    return drop(ch, "cause " + std::to_string(s.cause) + " is unknown");
+  if (is_action && !validAction(s.action))
+    return drop(ch, "action id " + std::to_string(s.action) + " is out of range [0, 3]");
+  for (const std::string& why : {checkFinite("action_target_x", s.action_target_x),
+                                 checkFinite("action_target_y", s.action_target_y)})
+    if (!why.empty()) return drop(ch, why);
+  if (is_action && s.step - 1 <= last_effect_) return log_->debug("{}: effect of step {} already seen", ch, s.step - 1);
+  if (is_action && s.step - 1 != last_scanned_)
+    return drop(ch, "action scene for step " + std::to_string(s.step - 1) + " but the last focus was of step " +
+                        std::to_string(last_scanned_));
+
+  cv::Mat image;
+  if (s.encoding == scene_t::ENCODING_ZLIB_RGB8) {
+    try {
+      image = decodeScene(s.data, s.width, s.height);
+    } catch (const std::exception& e) {
+      return drop(ch, e.what());
+    }
+  } else if (s.encoding == scene_t::ENCODING_UNCHANGED) {
+    if (!eye_->hasScene()) return drop(ch, "scene marked unchanged but no scene was received before");
+    if (is_action) return drop(ch, "an action scene must carry its image");
+    image = eye_->scene();
+  } else {
+    return drop(ch, "encoding " + std::to_string(s.encoding) + " is unknown");
+  }
+
+  if (is_action) {
+    const Effect e = eye_->scanEffect(s.step - 1, image, s.action);
+    effect_t m;
+    m.run_id = runId();
+    m.step = s.step - 1;
+    m.action = s.action;
+    m.target_x = s.action_target_x;
+    m.target_y = s.action_target_y;
+    m.before_x = e.before.x;
+    m.before_y = e.before.y;
+    m.after_x = e.after.x;
+    m.after_y = e.after.y;
+    m.image_change = e.image_change;
+    m.position_change = e.position_change;
+    m.affordance = e.affordance;
+    m.side = config().eye.focus_side;
+    m.image = e.after.image;
+    m.size = static_cast<int32_t>(m.image.size());
+    log_->debug("effect of step {}: action {} image change {:.5f} position change {:.4f} -> affordance {}", m.step,
+                m.action, m.image_change, m.position_change, m.affordance);
+    publish(channel::kEffect, m);
+    last_effect_ = s.step - 1;
+    handled(s.step - 1);
+  } else if (s.encoding != scene_t::ENCODING_UNCHANGED) {
+    eye_->setScene(image);
+  }
+  if (s.scan && s.step < config().steps) {
+    publishFocus(s.step, eye_->scan(s.step));
+    last_scanned_ = s.step;
+    handled(s.step);
+  }
+}
+
+}  // namespace afford

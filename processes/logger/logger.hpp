@@ -1,0 +1,47 @@
+// Logger core: one run's events into a standard LCM log file
+// (logs/<run-id>/log.00.lcm, readable by lcm-logplayer and lcm::LogFile) and
+// a manifest (logs/<run-id>/manifest.json) with the effective config, seed,
+// version and the processes that took part. Every event is flushed as it is
+// written, so a killed logger loses nothing it had received.
+#pragma once
+#include <lcm/lcm-cpp.hpp>
+#include <nlohmann/json.hpp>
+
+#include <cstdint>
+#include <map>
+#include <memory>
+#include <string>
+
+namespace afford {
+
+class RunLog {
+ public:
+  // Opens a new segment in `dir` (created if missing); never overwrites:
+  // an existing log.NN.lcm makes this the next segment.
+  RunLog(const std::string& dir, nlohmann::json manifest);
+  ~RunLog();
+  RunLog(const RunLog&) = delete;
+  RunLog& operator=(const RunLog&) = delete;
+
+  void write(const std::string& channel, const void* data, std::uint32_t size, std::int64_t utime);
+  // A process seen on the bus (name -> pid), recorded in the manifest.
+  void sawProcess(const std::string& name, int pid);
+  // Flush and write the final manifest.
+  void close();
+
+  const std::string& dir() const { return dir_; }
+  const std::string& path() const { return path_; }
+  std::int64_t events() const { return events_; }
+
+ private:
+  void writeManifest();
+
+  std::string dir_, path_;
+  std::unique_ptr<lcm::LogFile> file_;
+  nlohmann::json manifest_;
+  std::map<std::string, int> processes_;
+  std::int64_t events_ = 0, bytes_ = 0;
+  bool closed_ = false;
+};
+
+}  // namespace afford

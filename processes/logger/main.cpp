@@ -1,0 +1,12 @@
+// afford-logger: records a run's channels as a standard LCM log. See node.hpp.
+#include "logger/node.hpp"
+
+int main(int argc, char** argv) {
+  std::string log_root = "logs";
+  return afford::processMain(
+      argc, argv, {"logger", "afford logger: every channel of a run into logs/<run-id>/"},
+      [&](afford::CLIHook& cli) { cli.option("--log-dir", log_root, "folder that receives one sub-folder per run"); },
+      [&](lcm::LCM& lcm, std::shared_ptr<spdlog::logger> log) {
+        return std::make_unique<afford::LoggerNode>(lcm, std::move(log), log_root);
+      });
+}

@@ -1,0 +1,46 @@
+#include "motivation/motivation.hpp"
+
+#include <cmath>
+
+namespace afford {
+
+double entropyBits(double p) {
+  if (p <= 0.0 || p >= 1.0) return 0.0;
+  return -p * std::log2(p) - (1.0 - p) * std::log2(1.0 - p);
+}
+
+Motivation::Motivation(const RunConfig& config)
+    : config_(config),
+      threshold_(config.system == System::FIX ? config.motivation.fixed_threshold
+                                              : config.motivation.initial_threshold) {}
+
+Decision Motivation::decide(const std::array<double, kNumActions>& affordance,
+                            const std::array<double, kNumActions>& learning_progress) {
+  Decision d;
+  for (int a = 0; a < kNumActions; ++a) {
+    const double signal =
+        config_.system == System::IMP ? std::abs(learning_progress[a]) : entropyBits(affordance[a]);
+    if (d.action < 0 || signal > d.motivation) {  // ties go to the lowest action index
+      d.action = a;
+      d.motivation = signal;
+    }
+  }
+  d.threshold = threshold_;
+  d.act = d.motivation + config_.motivation.act_margin >= threshold_;
+  if (config_.system == System::FIX) return d;
+  if (!d.act)
+    leak(0.0);  // Algorithm 1 line 16: no action, the leaky average gets 0
+  else if (config_.system == System::IMP && config_.motivation.imp_threshold_input == ImpThresholdInput::ObservedChange)
+    awaiting_ = true;
+  else
+    leak(d.motivation);  // line 13: the IM signal of the performed action
+  return d;
+}
+
+void Motivation::observeChange(double absolute_change) {
+  if (!awaiting_) return;
+  awaiting_ = false;
+  leak(absolute_change);
+}
+
+}  // namespace afford

@@ -1,0 +1,75 @@
+#include "motivation/node.hpp"
+
+#include "afford/channels.hpp"
+#include "afford/decision_t.hpp"
+
+namespace afford {
+
+MotivationNode::MotivationNode(lcm::LCM& lcm, std::shared_ptr<spdlog::logger> log)
+    : NodeBase(lcm, "motivation", std::move(log)) {
+  subscribe<prediction_t>(channel::kPrediction, [this](const prediction_t& m) { onPrediction(m); });
+  subscribe<trained_t>(channel::kTrained, [this](const trained_t& m) { onTrained(m); });
+}
+
+void MotivationNode::onConfigured(const RunConfig& config) {
+  core_ = std::make_unique<Motivation>(config);
+  last_ = last_acted_ = -1;
+  early_.clear();
+}
+
+void MotivationNode::onStop() { core_.reset(); }
+
+void MotivationNode::onPrediction(const prediction_t& m) {
+  const char* ch = channel::kPrediction;
+  if (auto why = checkSize("n_actions", m.n_actions, kNumActions); !why.empty()) return drop(ch, why);
+  for (int a = 0; a < kNumActions; ++a) {
+    const std::string ia = "affordance[" + std::to_string(a) + "]", il = "learning_progress[" + std::to_string(a) + "]";
+    for (const std::string& why : {checkRange(ia.c_str(), m.affordance[a], 0.0, 1.0),
+                                   checkFinite(il.c_str(), m.learning_progress[a])})
+      if (!why.empty()) return drop(ch, why);
+  }
+  for (const std::string& why : {checkRange("x", m.x, 0.0, 1.0), checkRange("y", m.y, 0.0, 1.0)})
+    if (!why.empty()) return drop(ch, why);
+  if (m.step <= last_)
+    return drop(ch, "step " + std::to_string(m.step) + " is in the past (decided up to " + std::to_string(last_) + ")");
+  if (m.step >= config().steps) return drop(ch, "step " + std::to_string(m.step) + " is beyond the run's last step");
+  if (early_.size() > 1000) return drop(ch, "too many early messages buffered");
+  early_.emplace(m.step, m);
+  drain();
+}
+
+void MotivationNode::onTrained(const trained_t& m) {
+  if (!std::isfinite(m.affordance_before) || !std::isfinite(m.affordance_after))
+    return drop(channel::kTrained, "affordance outputs are not finite");
+  if (m.step != last_acted_ || !core_->awaitingObservation()) return;
+  core_->observeChange(std::abs(m.affordance_after - m.affordance_before));
+  drain();
+}
+
+void MotivationNode::drain() {
+  while (!early_.empty() && early_.begin()->first == last_ + 1 && !core_->awaitingObservation()) {
+    const prediction_t m = early_.begin()->second;
+    early_.erase(early_.begin());
+    std::array<double, kNumActions> aff{}, lp{};
+    std::copy(m.affordance.begin(), m.affordance.end(), aff.begin());
+    std::copy(m.learning_progress.begin(), m.learning_progress.end(), lp.begin());
+    const Decision d = core_->decide(aff, lp);
+    decision_t out;
+    out.run_id = runId();
+    out.step = m.step;
+    out.acted = d.act;
+    out.action = static_cast<int8_t>(d.act ? d.action : decision_t::NONE);
+    out.x = m.x;
+    out.y = m.y;
+    out.target_x = out.target_y = -1.0;
+    out.motivation = d.motivation;
+    out.threshold = d.threshold;
+    publish(channel::kDecision, out);
+    last_ = m.step;
+    if (d.act) last_acted_ = m.step;
+    handled(m.step);
+    if (m.step == config().steps - 1) setState(process_status_t::DONE);
+  }
+}
+
+}  // namespace afford

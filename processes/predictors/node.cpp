@@ -1,0 +1,186 @@
+#include "predictors/node.hpp"
+
+#include "afford/affordance_table_t.hpp"
+#include "afford/channels.hpp"
+#include "afford/prediction_t.hpp"
+#include "afford/run_result_t.hpp"
+
+namespace afford {
+
+PredictorsNode::PredictorsNode(lcm::LCM& lcm, std::shared_ptr<spdlog::logger> log)
+    : NodeBase(lcm, "predictors", std::move(log)) {
+  subscribe<object_probe_t>(channel::kProbe, [this](const object_probe_t& m) { onProbe(m); });
+  subscribe<focus_t>(channel::kFocus, [this](const focus_t& m) { onFocus(m); });
+  subscribe<decision_t>(channel::kDecision, [this](const decision_t& m) { onDecision(m); });
+  subscribe<effect_t>(channel::kEffect, [this](const effect_t& m) { onEffect(m); });
+}
+
+void PredictorsNode::onConfigured(const RunConfig& config) {
+  core_ = std::make_unique<Predictors>(config);
+  probes_.clear();
+  early_.clear();
+  pending_trained_.reset();
+  current_ = -1;
+  outcome_ = Outcome::Unknown;
+  finished_ = false;
+}
+
+void PredictorsNode::onStop() {
+  core_.reset();
+  early_.clear();
+}
+
+void PredictorsNode::onProbe(const object_probe_t& m) {
+  const long want = static_cast<long>(config().eye.focus_side) * config().eye.focus_side * 3;
+  if (m.n_objects < 1) return drop(channel::kProbe, "field n_objects = " + std::to_string(m.n_objects) + " < 1");
+  if (auto why = checkSize("size", m.size, want); !why.empty()) return drop(channel::kProbe, why);
+  if (!probes_.empty()) return log_->debug("{}: probe already received", channel::kProbe);
+  probes_ = m.images;
+}
+
+void PredictorsNode::onFocus(const focus_t& m) {
+  const char* ch = channel::kFocus;
+  const int side = config().eye.focus_side;
+  for (const std::string& why : {checkSize("side", m.side, side), checkSize("size", m.size, 3L * side * side),
+                                 checkRange("x", m.x, 0.0, 1.0), checkRange("y", m.y, 0.0, 1.0)})
+    if (!why.empty()) return drop(ch, why);
+  if (m.step <= current_ || m.step < 0)
+    return drop(ch, "step " + std::to_string(m.step) + " is in the past (now at " + std::to_string(current_) + ")");
+  if (m.step >= config().steps) return drop(ch, "step " + std::to_string(m.step) + " is beyond the run's last step");
+  if (early_.size() > 1000) return drop(ch, "too many early messages buffered");
+  early_.emplace(m.step, m);
+  drainBuffered();
+}
+
+void PredictorsNode::drainBuffered() {
+  while (!early_.empty()) {
+    auto it = early_.begin();
+    const bool ready = it->first == current_ + 1 && (current_ < 0 || outcome_ == Outcome::Passed ||
+                                                     outcome_ == Outcome::Learned);
+    if (!ready) return;
+    const focus_t m = it->second;
+    early_.erase(it);
+    handleFocus(m);
+  }
+}
+
+void PredictorsNode::handleFocus(const focus_t& m) {
+  if (probes_.empty()) log_->warn("{}: no probe images received yet: affordance tables will be empty", channel::kFocus);
+  if (pending_trained_) {
+    publish(channel::kTrained, *pending_trained_);
+    pending_trained_.reset();
+  }
+  if (m.step % config().curve_interval == 0) publishTable(m.step);
+  const Prediction p = core_->predict(m.image);
+  prediction_t out;
+  out.run_id = runId();
+  out.step = m.step;
+  out.x = m.x;
+  out.y = m.y;
+  out.n_actions = kNumActions;
+  out.affordance.assign(p.affordance.begin(), p.affordance.end());
+  out.learning_progress.assign(p.learning_progress.begin(), p.learning_progress.end());
+  publish(channel::kPrediction, out);
+  current_ = m.step;
+  focus_ = m;
+  outcome_ = Outcome::Unknown;
+  action_ = -1;
+  handled(m.step);
+}
+
+void PredictorsNode::onDecision(const decision_t& m) {
+  const char* ch = channel::kDecision;
+  if (m.step != current_ || outcome_ != Outcome::Unknown) {
+    if (m.step <= current_) return log_->debug("{}: step {} already handled", ch, m.step);
+    return drop(ch, "step " + std::to_string(m.step) + " has no focus yet (now at " + std::to_string(current_) + ")");
+  }
+  if (m.acted && !validAction(m.action))
+    return drop(ch, "action id " + std::to_string(m.action) + " is out of range [0, 3]");
+  if (m.acted) {
+    outcome_ = Outcome::AwaitingEffect;
+    action_ = m.action;
+    return;
+  }
+  outcome_ = Outcome::Passed;
+  if (m.step == config().steps - 1) return finish();
+  drainBuffered();
+}
+
+void PredictorsNode::onEffect(const effect_t& m) {
+  const char* ch = channel::kEffect;
+  const int side = config().eye.focus_side;
+  if (m.step != current_ || outcome_ != Outcome::AwaitingEffect) {
+    if (m.step < current_ || (m.step == current_ && outcome_ == Outcome::Learned))
+      return drop(ch, "step " + std::to_string(m.step) + " is in the past (already learned)");
+    return drop(ch, "no action was decided at step " + std::to_string(m.step));
+  }
+  if (m.action != action_)
+    return drop(ch, "action " + std::to_string(m.action) + " differs from the decided action " + std::to_string(action_));
+  for (const std::string& why :
+       {checkSize("side", m.side, side), checkSize("size", m.size, 3L * side * side),
+        checkRange("after_x", m.after_x, 0.0, 1.0), checkRange("after_y", m.after_y, 0.0, 1.0),
+        checkRange("before_x", m.before_x, 0.0, 1.0), checkRange("before_y", m.before_y, 0.0, 1.0),
+        m.target_x == -1.0 ? std::string() : checkRange("target_x", m.target_x, 0.0, 1.0),
+        m.target_y == -1.0 ? std::string() : checkRange("target_y", m.target_y, 0.0, 1.0),
+        checkFinite("image_change", m.image_change), checkFinite("position_change", m.position_change)})
+    if (!why.empty()) return drop(ch, why);
+
+  Experience e;
+  e.action = m.action;
+  e.before_image = focus_.image;
+  e.before_x = focus_.x;
+  e.before_y = focus_.y;
+  e.target_x = m.target_x;
+  e.target_y = m.target_y;
+  e.affordance = m.affordance;
+  e.after_image = m.image;
+  e.after_x = m.after_x;
+  e.after_y = m.after_y;
+  const TrainingReport r = core_->train(e);
+  trained_t t;
+  t.run_id = runId();
+  t.step = m.step;
+  t.action = static_cast<int8_t>(r.action);
+  t.affordance = r.affordance;
+  t.affordance_before = r.affordance_before;
+  t.affordance_after = r.affordance_after;
+  t.learning_progress = r.learning_progress;
+  t.effect_trained = r.effect_trained;
+  pending_trained_ = t;
+  outcome_ = Outcome::Learned;
+  if (m.step == config().steps - 1) return finish();
+  drainBuffered();
+}
+
+void PredictorsNode::publishTable(std::int64_t step) {
+  affordance_table_t t;
+  t.run_id = runId();
+  t.step = step;
+  t.n_actions = kNumActions;
+  for (const auto& row : core_->table(probes_)) t.affordance.emplace_back(row.begin(), row.end());
+  t.n_objects = static_cast<int32_t>(t.affordance.size());
+  publish(channel::kAffordanceTable, t);
+}
+
+void PredictorsNode::finish() {
+  if (finished_) return;
+  finished_ = true;
+  if (pending_trained_) {
+    publish(channel::kTrained, *pending_trained_);
+    pending_trained_.reset();
+  }
+  publishTable(config().steps);
+  run_result_t r;
+  r.run_id = runId();
+  r.step = config().steps;
+  r.weights_checksum = core_->weightsChecksum();
+  r.n_actions = kNumActions;
+  r.actions_executed.assign(core_->executed().begin(), core_->executed().end());
+  r.successes.assign(core_->successes().begin(), core_->successes().end());
+  publish(channel::kResult, r);
+  log_->info("run '{}' learned: weights checksum {}", runId(), r.weights_checksum);
+  handled(config().steps);
+  setState(process_status_t::DONE);
+}
+
+}  // namespace afford

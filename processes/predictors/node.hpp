@@ -1,0 +1,53 @@
+// Predictors process node. Handles each step's inputs in the canonical order
+// FOCUS(t) -> DECISION(t) -> [EFFECT(t)] -> FOCUS(t+1), buffering any that
+// arrive early, so its state is a pure function of the run's messages.
+// Channels in:  RUN_CONFIG, RUN_CONTROL, PROBE, FOCUS, DECISION, EFFECT
+// Channels out: TRAINED (before the next PREDICTION), AFFORDANCE_TABLE (every
+//               run.curve_interval steps and at the end), PREDICTION, RESULT, STATUS
+#pragma once
+#include <map>
+#include <memory>
+#include <optional>
+
+#include "afford/decision_t.hpp"
+#include "afford/effect_t.hpp"
+#include "afford/focus_t.hpp"
+#include "afford/node.hpp"
+#include "afford/object_probe_t.hpp"
+#include "afford/trained_t.hpp"
+#include "predictors/predictors.hpp"
+
+namespace afford {
+
+class PredictorsNode : public NodeBase {
+ public:
+  PredictorsNode(lcm::LCM& lcm, std::shared_ptr<spdlog::logger> log);
+  // The predictors of the current run (nullptr between runs).
+  const Predictors* predictors() const { return core_.get(); }
+
+ private:
+  enum class Outcome { Unknown, Passed, AwaitingEffect, Learned };
+
+  void onConfigured(const RunConfig& config) override;
+  void onStop() override;
+  void onProbe(const object_probe_t& m);
+  void onFocus(const focus_t& m);
+  void onDecision(const decision_t& m);
+  void onEffect(const effect_t& m);
+  void handleFocus(const focus_t& m);
+  void drainBuffered();
+  void publishTable(std::int64_t step);
+  void finish();
+
+  std::unique_ptr<Predictors> core_;
+  std::vector<std::vector<std::uint8_t>> probes_;
+  std::int64_t current_ = -1;          // the step whose focus was handled last
+  Outcome outcome_ = Outcome::Unknown; // of step current_
+  int action_ = -1;                    // executed at step current_
+  focus_t focus_;                      // of step current_
+  std::map<std::int64_t, focus_t> early_;  // focus messages that came before their turn
+  std::optional<trained_t> pending_trained_;
+  bool finished_ = false;
+};
+
+}  // namespace afford

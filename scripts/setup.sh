@@ -1,0 +1,33 @@
+#!/usr/bin/env bash
+# Install every Debian package afford needs (idempotent), then configure and build a
+# Release build into build/ (executables in build/bin/).
+# Usage: scripts/setup.sh [--no-build]
+# Works as root on a fresh Debian bookworm with only the compiler toolchain.
+set -euo pipefail
+cd "$(dirname "$0")/.."
+
+packages=(
+  build-essential cmake pkg-config git ca-certificates
+  liblcm-dev liblcm-bin liblcm-java libglib2.0-dev
+  libeigen3-dev libopencv-dev libspdlog-dev libfmt-dev
+  libcli11-dev libyaml-cpp-dev nlohmann-json3-dev zlib1g-dev
+  libgtest-dev libgmock-dev
+  default-jdk-headless libjchart2d-java
+  iproute2 util-linux procps gnuplot-nox
+)
+
+missing=()
+for p in "${packages[@]}"; do
+  dpkg-query -W -f='${Status}' "$p" 2>/dev/null | grep -q "install ok installed" || missing+=("$p")
+done
+if ((${#missing[@]})); then
+  sudo=""; [[ $(id -u) -eq 0 ]] || sudo="sudo"
+  echo "setup: installing ${missing[*]}"
+  export DEBIAN_FRONTEND=noninteractive
+  $sudo apt-get update -qq
+  $sudo apt-get install -y -qq --no-install-recommends "${missing[@]}" >/dev/null
+fi
+
+[[ ${1:-} == --no-build ]] && exit 0
+cmake -S . -B build -DCMAKE_BUILD_TYPE=Release >/dev/null
+cmake --build build -j"$(nproc)"
