@@ -1,6 +1,7 @@
 #include "afford/node.hpp"
 
 #include <CLI/CLI.hpp>
+#include <opencv2/core.hpp>
 #include <unistd.h>
 
 #include <csignal>
@@ -187,6 +188,7 @@ int processMain(int argc, char** argv, const ProcessSpec& spec, const std::funct
     return 2;
   }
   installStopHandlers();
+  cv::setNumThreads(0);  // images are 150 x 150: a thread pool only adds wake-ups
   lcm::LCM lcm(url);
   if (!lcm.good()) {
     log->error("cannot open LCM at '{}' (is there a multicast route? see README: network namespace)", url);

@@ -2,6 +2,7 @@
 // real processes (udpm, default) or in one process (memq); `afford experiments`
 // lists them; `afford config NAME` prints an effective configuration.
 #include <CLI/CLI.hpp>
+#include <opencv2/core.hpp>
 
 #include <cstdio>
 
@@ -50,6 +51,7 @@ int main(int argc, char** argv) {
   show->add_option("--set", show_settings, "override a config value (repeatable)");
 
   CLI11_PARSE(app, argc, argv);
+  cv::setNumThreads(0);  // small images: OpenCV's thread pool only adds wake-ups
   auto log = afford::makeLogger("afford");
   try {
     if (list->parsed()) {

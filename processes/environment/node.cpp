@@ -28,26 +28,22 @@ void EnvironmentNode::onStart() {
   probe.n_objects = static_cast<int32_t>(probe.images.size());
   probe.size = static_cast<int32_t>(probe.images.front().size());
   publish(channel::kProbe, probe);
-  publishScene(0, scene_t::CAUSE_START, true, true, -1, -1.0, -1.0);
+  publishScene(0, scene_t::CAUSE_START, true, -1, -1.0, -1.0);
 }
 
-void EnvironmentNode::publishScene(std::int64_t step, int8_t cause, bool scan, bool with_image, int action, double tx,
-                                   double ty) {
+void EnvironmentNode::publishScene(std::int64_t step, int8_t cause, bool scan, int action, double tx, double ty) {
   scene_t s;
   s.run_id = runId();
   s.step = step;
   s.cause = cause;
   s.scan = scan;
+  s.changes_next = step + 1 < config().steps && env_->objectsAppearAt(step + 1);
   s.action = static_cast<int8_t>(action);
   s.action_target_x = tx;
   s.action_target_y = ty;
   s.width = s.height = config().world.size_px;
-  if (with_image) {
-    s.encoding = scene_t::ENCODING_ZLIB_RGB8;
-    s.data = encodeScene(env_->render());
-  } else {
-    s.encoding = scene_t::ENCODING_UNCHANGED;
-  }
+  s.encoding = scene_t::ENCODING_ZLIB_RGB8;
+  s.data = encodeScene(env_->render());
   s.size = static_cast<int32_t>(s.data.size());
   publish(channel::kScene, s);
 }
@@ -81,16 +77,14 @@ void EnvironmentNode::onDecision(const decision_t& d) {
                 out.succeeded, out.target_x, out.target_y);
     const bool appear = more && env_->objectsAppearAt(next);
     // The action's own scene first, so the eye sees its effect without the newcomers.
-    publishScene(next, scene_t::CAUSE_ACTION, more && !appear, true, d.action, out.target_x, out.target_y);
+    publishScene(next, scene_t::CAUSE_ACTION, more && !appear, d.action, out.target_x, out.target_y);
     if (appear) {
       env_->introduceObjectsAt(next);
-      publishScene(next, scene_t::CAUSE_OBJECTS_APPEARED, true, true, -1, -1.0, -1.0);
+      publishScene(next, scene_t::CAUSE_OBJECTS_APPEARED, true, -1, -1.0, -1.0);
     }
-  } else if (more) {
-    const bool appeared = env_->introduceObjectsAt(next);
-    publishScene(next, appeared ? scene_t::CAUSE_OBJECTS_APPEARED : scene_t::CAUSE_UNCHANGED, true, appeared, -1, -1.0,
-                 -1.0);
-  }
+  } else if (more && env_->introduceObjectsAt(next)) {
+    publishScene(next, scene_t::CAUSE_OBJECTS_APPEARED, true, -1, -1.0, -1.0);
+  }  // otherwise nothing changed: no scene; the eye goes on with the one it has
   if (!more) setState(process_status_t::DONE);
 }
 

@@ -1,6 +1,6 @@
 // Environment process node.
 // Channels in:  RUN_CONFIG, RUN_CONTROL (START), DECISION
-// Channels out: PROBE (once, at START), SCENE (every step), STATUS
+// Channels out: PROBE (once, at START), SCENE (when the scene changes), STATUS
 #pragma once
 #include <memory>
 
@@ -19,7 +19,7 @@ class EnvironmentNode : public NodeBase {
   void onStart() override;
   void onStop() override;
   void onDecision(const decision_t& msg);
-  void publishScene(std::int64_t step, int8_t cause, bool scan, bool with_image, int action, double tx, double ty);
+  void publishScene(std::int64_t step, int8_t cause, bool scan, int action, double tx, double ty);
 
   std::unique_ptr<Environment> env_;
   std::int64_t next_decision_ = 0;  // the step whose decision is awaited

@@ -9,11 +9,13 @@ namespace afford {
 
 EyeNode::EyeNode(lcm::LCM& lcm, std::shared_ptr<spdlog::logger> log) : NodeBase(lcm, "eye", std::move(log)) {
   subscribe<scene_t>(channel::kScene, [this](const scene_t& m) { onScene(m); });
+  subscribe<decision_t>(channel::kDecision, [this](const decision_t& m) { onDecision(m); });
 }
 
 void EyeNode::onConfigured(const RunConfig& config) {
   eye_ = std::make_unique<Eye>(config);
   last_scanned_ = last_effect_ = -1;
+  scene_announced_ = false;
 }
 
 void EyeNode::onStop() { eye_.reset(); }
@@ -41,7 +43,7 @@ void EyeNode::onScene(const scene_t& s) {
     return drop(ch, "scene is " + std::to_string(s.width) + "x" + std::to_string(s.height) + ", expected " +
                         std::to_string(size) + "x" + std::to_string(size));
   const bool is_action = s.cause == scene_t::CAUSE_ACTION;
-  if (s.cause < scene_t::CAUSE_START || s.cause > scene_t::CAUSE_OBJECTS_APPEARED)
+  if (s.cause != scene_t::CAUSE_START && s.cause != scene_t::CAUSE_ACTION && s.cause != scene_t::CAUSE_OBJECTS_APPEARED)
     return drop(ch, "cause " + std::to_string(s.cause) + " is unknown");
   if (is_action && !validAction(s.action))
     return drop(ch, "action id " + std::to_string(s.action) + " is out of range [0, 3]");
@@ -53,19 +55,12 @@ void EyeNode::onScene(const scene_t& s) {
     return drop(ch, "action scene for step " + std::to_string(s.step - 1) + " but the last focus was of step " +
                         std::to_string(last_scanned_));
 
+  if (s.encoding != scene_t::ENCODING_ZLIB_RGB8) return drop(ch, "encoding " + std::to_string(s.encoding) + " is unknown");
   cv::Mat image;
-  if (s.encoding == scene_t::ENCODING_ZLIB_RGB8) {
-    try {
-      image = decodeScene(s.data, s.width, s.height);
-    } catch (const std::exception& e) {
-      return drop(ch, e.what());
-    }
-  } else if (s.encoding == scene_t::ENCODING_UNCHANGED) {
-    if (!eye_->hasScene()) return drop(ch, "scene marked unchanged but no scene was received before");
-    if (is_action) return drop(ch, "an action scene must carry its image");
-    image = eye_->scene();
-  } else {
-    return drop(ch, "encoding " + std::to_string(s.encoding) + " is unknown");
+  try {
+    image = decodeScene(s.data, s.width, s.height);
+  } catch (const std::exception& e) {
+    return drop(ch, e.what());
   }
 
   if (is_action) {
@@ -91,14 +86,25 @@ void EyeNode::onScene(const scene_t& s) {
     publish(channel::kEffect, m);
     last_effect_ = s.step - 1;
     handled(s.step - 1);
-  } else if (s.encoding != scene_t::ENCODING_UNCHANGED) {
+  } else {
     eye_->setScene(image);
   }
-  if (s.scan && s.step < config().steps) {
-    publishFocus(s.step, eye_->scan(s.step));
-    last_scanned_ = s.step;
-    handled(s.step);
-  }
+  scene_announced_ = s.changes_next;
+  if (s.scan) scanStep(s.step);
+}
+
+void EyeNode::onDecision(const decision_t& d) {
+  // Only a pass without an announced scene starts the next step here; after an
+  // action, the action's scene does.
+  if (d.acted || scene_announced_ || d.step != last_scanned_) return;
+  scanStep(d.step + 1);
+}
+
+void EyeNode::scanStep(std::int64_t step) {
+  if (step >= config().steps || step <= last_scanned_) return;
+  publishFocus(step, eye_->scan(step));
+  last_scanned_ = step;
+  handled(step);
 }
 
 }  // namespace afford

@@ -1,9 +1,12 @@
 // Eye process node.
-// Channels in:  RUN_CONFIG, RUN_CONTROL, SCENE
+// Channels in:  RUN_CONFIG, RUN_CONTROL, SCENE, DECISION
 // Channels out: EFFECT (after a scene caused by an action), FOCUS (every step), STATUS
+// A step starts with a scene (start, action, newcomers) or, when the decision
+// was to pass and no scene was announced, with that decision.
 #pragma once
 #include <memory>
 
+#include "afford/decision_t.hpp"
 #include "afford/node.hpp"
 #include "afford/scene_t.hpp"
 #include "eye/eye.hpp"
@@ -18,11 +21,14 @@ class EyeNode : public NodeBase {
   void onConfigured(const RunConfig& config) override;
   void onStop() override;
   void onScene(const scene_t& msg);
+  void onDecision(const decision_t& msg);
+  void scanStep(std::int64_t step);
   void publishFocus(std::int64_t step, const Focus& f);
 
   std::unique_ptr<Eye> eye_;
   std::int64_t last_scanned_ = -1;   // last step whose FOCUS was published
   std::int64_t last_effect_ = -1;    // last step whose EFFECT was published
+  bool scene_announced_ = false;     // the last scene said a scene for the next step follows
 };
 
 }  // namespace afford

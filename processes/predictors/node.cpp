@@ -20,6 +20,7 @@ void PredictorsNode::onConfigured(const RunConfig& config) {
   probes_.clear();
   early_.clear();
   pending_trained_.reset();
+  pending_effects_.reset();
   current_ = -1;
   outcome_ = Outcome::Unknown;
   finished_ = false;
@@ -81,6 +82,7 @@ void PredictorsNode::handleFocus(const focus_t& m) {
   out.affordance.assign(p.affordance.begin(), p.affordance.end());
   out.learning_progress.assign(p.learning_progress.begin(), p.learning_progress.end());
   publish(channel::kPrediction, out);
+  trainPendingEffects();  // off the critical path: the next decision is under way
   current_ = m.step;
   focus_ = m;
   outcome_ = Outcome::Unknown;
@@ -136,7 +138,7 @@ void PredictorsNode::onEffect(const effect_t& m) {
   e.after_image = m.image;
   e.after_x = m.after_x;
   e.after_y = m.after_y;
-  const TrainingReport r = core_->train(e);
+  const TrainingReport r = core_->trainAffordance(e);
   trained_t t;
   t.run_id = runId();
   t.step = m.step;
@@ -147,9 +149,16 @@ void PredictorsNode::onEffect(const effect_t& m) {
   t.learning_progress = r.learning_progress;
   t.effect_trained = r.effect_trained;
   pending_trained_ = t;
+  pending_effects_ = std::move(e);
   outcome_ = Outcome::Learned;
   if (m.step == config().steps - 1) return finish();
   drainBuffered();
+}
+
+void PredictorsNode::trainPendingEffects() {
+  if (!pending_effects_) return;
+  core_->trainEffects(*pending_effects_);
+  pending_effects_.reset();
 }
 
 void PredictorsNode::publishTable(std::int64_t step) {
@@ -169,6 +178,7 @@ void PredictorsNode::finish() {
     publish(channel::kTrained, *pending_trained_);
     pending_trained_.reset();
   }
+  trainPendingEffects();
   publishTable(config().steps);
   run_result_t r;
   r.run_id = runId();

@@ -38,6 +38,7 @@ class PredictorsNode : public NodeBase {
   void drainBuffered();
   void publishTable(std::int64_t step);
   void finish();
+  void trainPendingEffects();
 
   std::unique_ptr<Predictors> core_;
   std::vector<std::vector<std::uint8_t>> probes_;
@@ -47,6 +48,7 @@ class PredictorsNode : public NodeBase {
   focus_t focus_;                      // of step current_
   std::map<std::int64_t, focus_t> early_;  // focus messages that came before their turn
   std::optional<trained_t> pending_trained_;
+  std::optional<Experience> pending_effects_;  // forward-model update still to make
   bool finished_ = false;
 };
 

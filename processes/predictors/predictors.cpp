@@ -37,6 +37,12 @@ SparseInput Predictors::whereInput(int action, double x, double y, double tx, do
 }
 
 TrainingReport Predictors::train(const Experience& e) {
+  TrainingReport r = trainAffordance(e);
+  trainEffects(e);
+  return r;
+}
+
+TrainingReport Predictors::trainAffordance(const Experience& e) {
   const int a = e.action;
   const SparseInput x = focusInput(e.before_image);
   TrainingReport r;
@@ -49,16 +55,19 @@ TrainingReport Predictors::train(const Experience& e) {
     learning_progress_[a].train(x, r.affordance_after - r.affordance_before,
                                 config_.predictors.learning_progress_learning_rate);
   ++executed_[a];
-  if (e.affordance) {  // Algorithm 1 lines 10-12: effect predictors learn from successes
-    ++successes_[a];
-    Eigen::VectorXd target(input_size_);
-    for (int i = 0; i < input_size_; ++i) target[i] = e.after_image[i] / 255.0;
-    what_[a].train(x, target, config_.predictors.what_effect_learning_rate);
-    where_[a].train(whereInput(a, e.before_x, e.before_y, e.target_x, e.target_y),
-                    Eigen::Vector2d(e.after_x, e.after_y), config_.predictors.where_effect_learning_rate);
-    r.effect_trained = true;
-  }
+  if (e.affordance) ++successes_[a];
+  r.effect_trained = e.affordance;
   return r;
+}
+
+void Predictors::trainEffects(const Experience& e) {
+  if (!e.affordance) return;  // effect predictors learn from successes only
+  const int a = e.action;
+  Eigen::VectorXd target(input_size_);
+  for (int i = 0; i < input_size_; ++i) target[i] = e.after_image[i] / 255.0;
+  what_[a].train(focusInput(e.before_image), target, config_.predictors.what_effect_learning_rate);
+  where_[a].train(whereInput(a, e.before_x, e.before_y, e.target_x, e.target_y), Eigen::Vector2d(e.after_x, e.after_y),
+                  config_.predictors.where_effect_learning_rate);
 }
 
 std::vector<PerAction> Predictors::table(const std::vector<std::vector<std::uint8_t>>& probes) const {

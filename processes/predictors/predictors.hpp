@@ -45,7 +45,15 @@ class Predictors {
   explicit Predictors(const RunConfig& config);
 
   Prediction predict(const std::vector<std::uint8_t>& focus_image) const;
+  // Algorithm 1 lines 7-12: trainAffordance() then trainEffects().
   TrainingReport train(const Experience& e);
+  // Lines 7-9: the affordance predictor, and the learning-progress predictor (IMP).
+  TrainingReport trainAffordance(const Experience& e);
+  // Lines 10-12: what- and where-effect predictors, if the action succeeded.
+  // Nothing in the intrinsic phase reads them, so the node may run this after
+  // publishing the next prediction; each model still sees the same updates in
+  // the same order.
+  void trainEffects(const Experience& e);
   // Affordance outputs for each probe image (rows) and action (columns).
   std::vector<PerAction> table(const std::vector<std::vector<std::uint8_t>>& probes) const;
   // Forward models (used by the planner in the extrinsic phase).
