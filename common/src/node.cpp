@@ -11,23 +11,6 @@
 
 namespace afford {
 
-std::string checkFinite(const char* field, double v) {
-  return std::isfinite(v) ? "" : std::string("field ") + field + " is not finite";
-}
-std::string checkRange(const char* field, double v, double lo, double hi) {
-  if (!std::isfinite(v)) return checkFinite(field, v);
-  if (v < lo || v > hi) {
-    std::ostringstream s;
-    s << "field " << field << " = " << v << " is out of range [" << lo << ", " << hi << "]";
-    return s.str();
-  }
-  return "";
-}
-std::string checkSize(const char* field, long got, long want) {
-  if (got == want) return "";
-  return std::string("field ") + field + " has size " + std::to_string(got) + ", expected " + std::to_string(want);
-}
-
 NodeBase::NodeBase(lcm::LCM& lcm, std::string process, std::shared_ptr<spdlog::logger> log)
     : lcm_(lcm), log_(std::move(log)), process_(std::move(process)) {
   subscribeRaw("RUN_CONFIG", [this](const lcm::ReceiveBuffer* b, const std::string&) { onRunConfig(b); }, 100);

@@ -71,7 +71,8 @@ std::string ProcessGroup::health() {
       c.exited = true;
       c.status = status;
       std::string how = WIFEXITED(status)     ? "exited with status " + std::to_string(WEXITSTATUS(status))
-                        : WIFSIGNALED(status) ? std::string("was killed by signal ") + strsignal(WTERMSIG(status))
+                        : WIFSIGNALED(status) ? "was killed by signal " + std::to_string(WTERMSIG(status)) + " (SIG" +
+                                                    sigabbrev_np(WTERMSIG(status)) + ")"
                                               : "ended";
       return "process '" + c.name + "' (pid " + std::to_string(c.pid) + ") " + how + "; its output: " + c.output;
     }

@@ -56,14 +56,6 @@ void EnvironmentNode::onDecision(const decision_t& d) {
   if (d.step > next_decision_)
     return drop(ch, "step " + std::to_string(d.step) + " is ahead of the scene (awaiting step " +
                         std::to_string(next_decision_) + ")");
-  for (const std::string& why :
-       {checkRange("x", d.x, 0.0, 1.0), checkRange("y", d.y, 0.0, 1.0), checkFinite("motivation", d.motivation),
-        checkFinite("threshold", d.threshold),
-        d.target_x == -1.0 ? std::string() : checkRange("target_x", d.target_x, 0.0, 1.0),
-        d.target_y == -1.0 ? std::string() : checkRange("target_y", d.target_y, 0.0, 1.0)})
-    if (!why.empty()) return drop(ch, why);
-  if (d.acted && !validAction(d.action))
-    return drop(ch, "action id " + std::to_string(d.action) + " is out of range [0, 3]");
 
   const std::int64_t next = d.step + 1;
   const bool more = next < config().steps;

@@ -34,28 +34,15 @@ void EyeNode::publishFocus(std::int64_t step, const Focus& f) {
 
 void EyeNode::onScene(const scene_t& s) {
   const char* ch = channel::kScene;
-  const int size = config().world.size_px;
   if (s.step <= last_scanned_)
     return drop(ch, "step " + std::to_string(s.step) + " is in the past (already scanned step " +
                         std::to_string(last_scanned_) + ")");
-  if (s.step > config().steps) return drop(ch, "step " + std::to_string(s.step) + " is beyond the run's last step");
-  if (s.width != size || s.height != size)
-    return drop(ch, "scene is " + std::to_string(s.width) + "x" + std::to_string(s.height) + ", expected " +
-                        std::to_string(size) + "x" + std::to_string(size));
   const bool is_action = s.cause == scene_t::CAUSE_ACTION;
-  if (s.cause != scene_t::CAUSE_START && s.cause != scene_t::CAUSE_ACTION && s.cause != scene_t::CAUSE_OBJECTS_APPEARED)
-    return drop(ch, "cause " + std::to_string(s.cause) + " is unknown");
-  if (is_action && !validAction(s.action))
-    return drop(ch, "action id " + std::to_string(s.action) + " is out of range [0, 3]");
-  for (const std::string& why : {checkFinite("action_target_x", s.action_target_x),
-                                 checkFinite("action_target_y", s.action_target_y)})
-    if (!why.empty()) return drop(ch, why);
   if (is_action && s.step - 1 <= last_effect_) return log_->debug("{}: effect of step {} already seen", ch, s.step - 1);
   if (is_action && s.step - 1 != last_scanned_)
     return drop(ch, "action scene for step " + std::to_string(s.step - 1) + " but the last focus was of step " +
                         std::to_string(last_scanned_));
 
-  if (s.encoding != scene_t::ENCODING_ZLIB_RGB8) return drop(ch, "encoding " + std::to_string(s.encoding) + " is unknown");
   cv::Mat image;
   try {
     image = decodeScene(s.data, s.width, s.height);

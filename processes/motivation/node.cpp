@@ -21,15 +21,6 @@ void MotivationNode::onStop() { core_.reset(); }
 
 void MotivationNode::onPrediction(const prediction_t& m) {
   const char* ch = channel::kPrediction;
-  if (auto why = checkSize("n_actions", m.n_actions, kNumActions); !why.empty()) return drop(ch, why);
-  for (int a = 0; a < kNumActions; ++a) {
-    const std::string ia = "affordance[" + std::to_string(a) + "]", il = "learning_progress[" + std::to_string(a) + "]";
-    for (const std::string& why : {checkRange(ia.c_str(), m.affordance[a], 0.0, 1.0),
-                                   checkFinite(il.c_str(), m.learning_progress[a])})
-      if (!why.empty()) return drop(ch, why);
-  }
-  for (const std::string& why : {checkRange("x", m.x, 0.0, 1.0), checkRange("y", m.y, 0.0, 1.0)})
-    if (!why.empty()) return drop(ch, why);
   if (m.step <= last_)
     return drop(ch, "step " + std::to_string(m.step) + " is in the past (decided up to " + std::to_string(last_) + ")");
   if (m.step >= config().steps) return drop(ch, "step " + std::to_string(m.step) + " is beyond the run's last step");
@@ -39,8 +30,6 @@ void MotivationNode::onPrediction(const prediction_t& m) {
 }
 
 void MotivationNode::onTrained(const trained_t& m) {
-  if (!std::isfinite(m.affordance_before) || !std::isfinite(m.affordance_after))
-    return drop(channel::kTrained, "affordance outputs are not finite");
   if (m.step != last_acted_ || !core_->awaitingObservation()) return;
   core_->observeChange(std::abs(m.affordance_after - m.affordance_before));
   drain();

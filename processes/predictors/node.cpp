@@ -32,19 +32,12 @@ void PredictorsNode::onStop() {
 }
 
 void PredictorsNode::onProbe(const object_probe_t& m) {
-  const long want = static_cast<long>(config().eye.focus_side) * config().eye.focus_side * 3;
-  if (m.n_objects < 1) return drop(channel::kProbe, "field n_objects = " + std::to_string(m.n_objects) + " < 1");
-  if (auto why = checkSize("size", m.size, want); !why.empty()) return drop(channel::kProbe, why);
   if (!probes_.empty()) return log_->debug("{}: probe already received", channel::kProbe);
   probes_ = m.images;
 }
 
 void PredictorsNode::onFocus(const focus_t& m) {
   const char* ch = channel::kFocus;
-  const int side = config().eye.focus_side;
-  for (const std::string& why : {checkSize("side", m.side, side), checkSize("size", m.size, 3L * side * side),
-                                 checkRange("x", m.x, 0.0, 1.0), checkRange("y", m.y, 0.0, 1.0)})
-    if (!why.empty()) return drop(ch, why);
   if (m.step <= current_ || m.step < 0)
     return drop(ch, "step " + std::to_string(m.step) + " is in the past (now at " + std::to_string(current_) + ")");
   if (m.step >= config().steps) return drop(ch, "step " + std::to_string(m.step) + " is beyond the run's last step");
@@ -96,8 +89,6 @@ void PredictorsNode::onDecision(const decision_t& m) {
     if (m.step <= current_) return log_->debug("{}: step {} already handled", ch, m.step);
     return drop(ch, "step " + std::to_string(m.step) + " has no focus yet (now at " + std::to_string(current_) + ")");
   }
-  if (m.acted && !validAction(m.action))
-    return drop(ch, "action id " + std::to_string(m.action) + " is out of range [0, 3]");
   if (m.acted) {
     outcome_ = Outcome::AwaitingEffect;
     action_ = m.action;
@@ -110,7 +101,6 @@ void PredictorsNode::onDecision(const decision_t& m) {
 
 void PredictorsNode::onEffect(const effect_t& m) {
   const char* ch = channel::kEffect;
-  const int side = config().eye.focus_side;
   if (m.step != current_ || outcome_ != Outcome::AwaitingEffect) {
     if (m.step < current_ || (m.step == current_ && outcome_ == Outcome::Learned))
       return drop(ch, "step " + std::to_string(m.step) + " is in the past (already learned)");
@@ -118,14 +108,6 @@ void PredictorsNode::onEffect(const effect_t& m) {
   }
   if (m.action != action_)
     return drop(ch, "action " + std::to_string(m.action) + " differs from the decided action " + std::to_string(action_));
-  for (const std::string& why :
-       {checkSize("side", m.side, side), checkSize("size", m.size, 3L * side * side),
-        checkRange("after_x", m.after_x, 0.0, 1.0), checkRange("after_y", m.after_y, 0.0, 1.0),
-        checkRange("before_x", m.before_x, 0.0, 1.0), checkRange("before_y", m.before_y, 0.0, 1.0),
-        m.target_x == -1.0 ? std::string() : checkRange("target_x", m.target_x, 0.0, 1.0),
-        m.target_y == -1.0 ? std::string() : checkRange("target_y", m.target_y, 0.0, 1.0),
-        checkFinite("image_change", m.image_change), checkFinite("position_change", m.position_change)})
-    if (!why.empty()) return drop(ch, why);
 
   Experience e;
   e.action = m.action;

@@ -14,8 +14,11 @@
 #include <functional>
 #include <memory>
 #include <string>
+#include <type_traits>
+#include <utility>
 #include <vector>
 
+#include "afford/checks.hpp"
 #include "afford/config.hpp"
 #include "afford/process_status_t.hpp"
 #include "afford/run_config_t.hpp"
@@ -53,10 +56,11 @@ bool decodeAtEdge(const lcm::ReceiveBuffer* rbuf, Msg& out, std::string& reason)
   return true;
 }
 
-// Field checks for handlers: each returns an empty string or the reason.
-std::string checkFinite(const char* field, double v);
-std::string checkRange(const char* field, double v, double lo, double hi);
-std::string checkSize(const char* field, long got, long want);
+
+template <class Msg, class = void>
+inline constexpr bool kHasCheck = false;
+template <class Msg>
+inline constexpr bool kHasCheck<Msg, std::void_t<decltype(checkMessage(std::declval<const Msg&>(), std::declval<const RunConfig&>()))>> = true;
 
 class NodeBase {
  public:
@@ -76,7 +80,7 @@ class NodeBase {
 
  protected:
   // Subscribe to a typed channel. The handler sees only messages that decoded,
-  // passed the run-id check, and (when `check` is given) its field checks.
+  // belong to the run, and pass checkMessage() for their type.
   template <class Msg>
   void subscribe(const std::string& channel, std::function<void(const Msg&)> handler, int queue = 10000) {
     auto holder = std::make_unique<Holder>();
@@ -85,6 +89,9 @@ class NodeBase {
       std::string reason;
       if (!decodeAtEdge(rbuf, msg, reason)) return drop(channel, reason);
       if (!acceptRun(channel, msg.run_id)) return;
+      if constexpr (kHasCheck<Msg>) {
+        if (const std::string why = checkMessage(msg, config_); !why.empty()) return drop(channel, why);
+      }
       handler(msg);
     };
     lcm::Subscription* s = lcm_.subscribe(channel, &Holder::on, holder.get());

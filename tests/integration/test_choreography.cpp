@@ -1,0 +1,331 @@
+// The whole choreography hosted in one process over memq:// (the same node
+// code as the real processes): ordering, repeatability, bad input, bad config.
+#include <gtest/gtest.h>
+#include <spdlog/sinks/ostream_sink.h>
+
+#include <cmath>
+#include <limits>
+#include <sstream>
+
+#include "afford/channels.hpp"
+#include "afford/driver.hpp"
+#include "afford/scene_t.hpp"
+#include "environment/node.hpp"
+#include "eye/node.hpp"
+#include "motivation/node.hpp"
+#include "predictors/node.hpp"
+#include "tests/support.hpp"
+
+namespace afford {
+namespace {
+
+// Publishes something malformed into a running run: (lcm, run id, current step).
+using Injector = std::function<void(lcm::LCM&, const std::string&, std::int64_t)>;
+
+struct InProcessRun {
+  std::ostringstream log;
+  std::vector<test::Event> events;
+  RunOutcome outcome;
+
+  InProcessRun(const std::string& yaml, System system, std::int64_t seed, std::int64_t steps, const Injector& inject = {},
+               std::int64_t inject_at = 50) {
+    lcm::LCM lcm("memq://");
+    auto sink = std::make_shared<spdlog::sinks::ostream_sink_mt>(log);
+    auto logger = [&](const std::string& name) {
+      auto l = std::make_shared<spdlog::logger>(name, sink);
+      l->set_pattern("[%n] %v");
+      l->set_level(spdlog::level::info);
+      return l;
+    };
+    EnvironmentNode env(lcm, logger("environment"));
+    EyeNode eye(lcm, logger("eye"));
+    PredictorsNode predictors(lcm, logger("predictors"));
+    MotivationNode motivation(lcm, logger("motivation"));
+    RunDriver driver(lcm, logger("runner"));
+    struct Tap {
+      InProcessRun* run;
+      lcm::LCM* lcm;
+      Injector inject;
+      std::int64_t at;
+      bool done = false;
+      void on(const lcm::ReceiveBuffer* b, const std::string& ch) {
+        if (ch == channel::kStatus) return;
+        const auto* d = static_cast<const std::uint8_t*>(b->data);
+        run->events.push_back({ch, std::vector<std::uint8_t>(d, d + b->data_size)});
+        if (inject && !done && ch == channel::kFocus) {
+          focus_t f;
+          f.decode(b->data, 0, static_cast<int>(b->data_size));
+          if (f.step == at) {
+            done = true;
+            inject(*lcm, f.run_id, f.step);
+          }
+        }
+      }
+    } tap{this, &lcm, inject, inject_at};
+    lcm.subscribe(".*", &Tap::on, &tap)->setQueueCapacity(100000);
+    RunSpec spec;
+    spec.run_id = "test-run";
+    spec.experiment = YAML::Load(yaml)["experiment"].as<std::string>();
+    spec.system = toString(system);
+    spec.seed = seed;
+    spec.steps = steps;
+    spec.config_yaml = yaml;
+    spec.processes = {"environment", "eye", "predictors", "motivation"};
+    spec.stall_seconds = 20;
+    auto pump = [&] {
+      while (lcm.handleTimeout(0) > 0) {
+      }
+      lcm.handleTimeout(2);
+      env.tick(), eye.tick(), predictors.tick(), motivation.tick();
+    };
+    outcome = driver.run(spec, pump, [] { return std::string(); });
+  }
+
+  int count(const std::string& channel) const {
+    int n = 0;
+    for (const auto& e : events) n += e.channel == channel;
+    return n;
+  }
+};
+
+std::string baseYaml(System s, std::int64_t steps, std::int64_t seed = 3) {
+  return test::shippedConfigYaml("base", s, seed, steps);
+}
+
+TEST(Choreography, ARunHasOnePredictionAndOneDecisionPerStepInOrder) {
+  InProcessRun run(baseYaml(System::IMP, 200), System::IMP, 3, 200);
+  ASSERT_TRUE(run.outcome.ok) << run.outcome.error;
+  EXPECT_EQ(run.count(channel::kFocus), 200);
+  EXPECT_EQ(run.count(channel::kPrediction), 200);
+  EXPECT_EQ(run.count(channel::kDecision), 200);
+  EXPECT_EQ(run.count(channel::kEffect), run.count(channel::kTrained));
+  EXPECT_EQ(run.count(channel::kResult), 1);
+  ASSERT_GE(run.events.size(), 3u);
+  EXPECT_EQ(run.events[0].channel, channel::kRunConfig);
+  EXPECT_EQ(run.events[1].channel, channel::kRunControl);
+  EXPECT_EQ(run.events[2].channel, channel::kProbe);
+  EXPECT_EQ(run.events[3].channel, channel::kScene);
+  // Curves at steps 0, 100, 200.
+  ASSERT_EQ(run.outcome.curve.size(), 3u);
+  EXPECT_EQ(run.outcome.curve[1].step, 100);
+  EXPECT_EQ(run.outcome.curve.back().affordance.size(), 9u);
+  EXPECT_EQ(run.outcome.weights_checksum.size(), 16u);
+}
+
+TEST(Choreography, RepeatedRunsAreByteIdenticalAndSeedsDiffer) {
+  InProcessRun a(baseYaml(System::IGN, 300), System::IGN, 3, 300);
+  InProcessRun b(baseYaml(System::IGN, 300), System::IGN, 3, 300);
+  ASSERT_TRUE(a.outcome.ok && b.outcome.ok);
+  ASSERT_EQ(a.events.size(), b.events.size());
+  for (std::size_t i = 0; i < a.events.size(); ++i) {
+    ASSERT_EQ(a.events[i].channel, b.events[i].channel) << "event " << i;
+    ASSERT_EQ(a.events[i].data, b.events[i].data) << "event " << i << " on " << a.events[i].channel;
+  }
+  EXPECT_EQ(a.outcome.weights_checksum, b.outcome.weights_checksum);
+  InProcessRun c(baseYaml(System::IGN, 300, 4), System::IGN, 4, 300);
+  EXPECT_NE(a.outcome.weights_checksum, c.outcome.weights_checksum);
+}
+
+TEST(Choreography, ObservedChangeThresholdInputRuns) {
+  RunRequest req{"base", System::IMP, 3, 300, {"motivation.imp_threshold_input=observed_change"}};
+  const std::string yaml = emitYaml(effectiveConfig(std::string(AFFORD_SOURCE_DIR) + "/config", req));
+  InProcessRun run(yaml, System::IMP, 3, 300);
+  ASSERT_TRUE(run.outcome.ok) << run.outcome.error;
+  EXPECT_EQ(run.count(channel::kDecision), 300);
+}
+
+TEST(Choreography, LateObjectsEnterTheSceneAtTheirStep) {
+  const std::string yaml = test::shippedConfigYaml("late1", System::IMP, 3, 2050);
+  InProcessRun run(yaml, System::IMP, 3, 2050);
+  ASSERT_TRUE(run.outcome.ok) << run.outcome.error;
+  int appeared = 0;
+  for (const auto& e : run.events) {
+    if (e.channel != channel::kScene) continue;
+    scene_t s;
+    s.decode(e.data.data(), 0, static_cast<int>(e.data.size()));
+    if (s.cause == scene_t::CAUSE_OBJECTS_APPEARED) {
+      ++appeared;
+      EXPECT_EQ(s.step, 2000);
+    }
+    if (s.step == 1999) EXPECT_TRUE(s.changes_next);
+  }
+  EXPECT_EQ(appeared, 1);
+}
+
+TEST(Choreography, ARejectedConfigFailsTheRunNamingProcessAndKey) {
+  YAML::Node root = effectiveConfig(std::string(AFFORD_SOURCE_DIR) + "/config", RunRequest{"base", System::IMP, 3, 50, {}});
+  root["eye"]["focus_side"] = 20;
+  InProcessRun run(emitYaml(root), System::IMP, 3, 50);
+  EXPECT_FALSE(run.outcome.ok);
+  EXPECT_NE(run.outcome.error.find("eye.focus_side"), std::string::npos) << run.outcome.error;
+  EXPECT_NE(run.outcome.error.find("process '"), std::string::npos) << run.outcome.error;
+}
+
+// ---- bad input: each kind is dropped with one line naming channel and reason,
+// and the run ends exactly as without it.
+
+struct BadInput {
+  const char* name;
+  const char* channel;
+  const char* reason;
+  Injector inject;
+};
+
+focus_t validFocus(const std::string& run, std::int64_t step) {
+  focus_t f;
+  f.run_id = run;
+  f.step = step;
+  f.x = f.y = 0.5;
+  f.side = 21;
+  f.size = 1323;
+  f.image.assign(1323, 0);
+  return f;
+}
+decision_t validDecision(const std::string& run, std::int64_t step) {
+  decision_t d;
+  d.run_id = run;
+  d.step = step;
+  d.acted = false;
+  d.action = decision_t::NONE;
+  d.x = d.y = 0.5;
+  d.target_x = d.target_y = -1;
+  d.motivation = d.threshold = 0;
+  return d;
+}
+template <class Msg>
+std::vector<std::uint8_t> encode(const Msg& m) {
+  std::vector<std::uint8_t> buf(m.getEncodedSize());
+  m.encode(buf.data(), 0, static_cast<int>(buf.size()));
+  return buf;
+}
+
+const double kNaN = std::numeric_limits<double>::quiet_NaN();
+const double kInf = std::numeric_limits<double>::infinity();
+
+std::vector<BadInput> badInputs() {
+  return {
+      {"WrongFingerprint", "FOCUS", "wrong fingerprint",
+       [](lcm::LCM& l, const std::string& run, std::int64_t s) {
+         const auto b = encode(validDecision(run, s));  // a decision sent as a focus
+         l.publish("FOCUS", b.data(), static_cast<unsigned>(b.size()));
+       }},
+      {"Truncated", "FOCUS", "malformed afford.focus_t",
+       [](lcm::LCM& l, const std::string& run, std::int64_t s) {
+         auto b = encode(validFocus(run, s + 1));
+         b.resize(b.size() / 2);
+         l.publish("FOCUS", b.data(), static_cast<unsigned>(b.size()));
+       }},
+      {"WrongArraySize", "FOCUS", "field size has size 100, expected 1323",
+       [](lcm::LCM& l, const std::string& run, std::int64_t s) {
+         focus_t f = validFocus(run, s + 1);
+         f.size = 100;
+         f.image.resize(100);
+         l.publish("FOCUS", &f);
+       }},
+      {"NaN", "PREDICTION", "field affordance[2] is not finite",
+       [](lcm::LCM& l, const std::string& run, std::int64_t s) {
+         prediction_t p;
+         p.run_id = run;
+         p.step = s;
+         p.x = p.y = 0.5;
+         p.n_actions = 4;
+         p.affordance = {0.5, 0.5, kNaN, 0.5};
+         p.learning_progress = {0, 0, 0, 0};
+         l.publish("PREDICTION", &p);
+       }},
+      {"Infinite", "DECISION", "field x is not finite",
+       [](lcm::LCM& l, const std::string& run, std::int64_t s) {
+         decision_t d = validDecision(run, s);
+         d.x = kInf;
+         l.publish("DECISION", &d);
+       }},
+      {"ActionOutOfRange", "DECISION", "action id 9 is out of range",
+       [](lcm::LCM& l, const std::string& run, std::int64_t s) {
+         decision_t d = validDecision(run, s);
+         d.acted = true;
+         d.action = 9;
+         l.publish("DECISION", &d);
+       }},
+      {"ObjectPositionOutOfRange", "EFFECT", "field after_x = 1.5 is out of range",
+       [](lcm::LCM& l, const std::string& run, std::int64_t s) {
+         effect_t e;
+         e.run_id = run;
+         e.step = s;
+         e.action = 0;
+         e.target_x = e.target_y = -1;
+         e.before_x = e.before_y = e.after_y = 0.5;
+         e.after_x = 1.5;
+         e.side = 21;
+         e.size = 1323;
+         e.image.assign(1323, 0);
+         l.publish("EFFECT", &e);
+       }},
+      {"ObjectCountOutOfRange", "PROBE", "field n_objects = 0",
+       [](lcm::LCM& l, const std::string& run, std::int64_t) {
+         object_probe_t p;
+         p.run_id = run;
+         p.step = 0;
+         p.n_objects = 0;
+         p.size = 1323;
+         l.publish("PROBE", &p);
+       }},
+      {"UnknownRunId", "FOCUS", "unknown run id 'intruder'",
+       [](lcm::LCM& l, const std::string&, std::int64_t s) {
+         const focus_t f = validFocus("intruder", s + 1);
+         l.publish("FOCUS", &f);
+       }},
+      {"StepFromThePast", "FOCUS", "step 40 is in the past",
+       [](lcm::LCM& l, const std::string& run, std::int64_t s) {
+         const focus_t f = validFocus(run, s - 10);
+         l.publish("FOCUS", &f);
+       }},
+      {"WrongSceneSize", "SCENE", "field width has size 100, expected 150",
+       [](lcm::LCM& l, const std::string& run, std::int64_t s) {
+         scene_t sc;
+         sc.run_id = run;
+         sc.step = s + 1;
+         sc.cause = scene_t::CAUSE_OBJECTS_APPEARED;
+         sc.scan = true;
+         sc.changes_next = false;
+         sc.action = -1;
+         sc.action_target_x = sc.action_target_y = -1;
+         sc.width = 100;
+         sc.height = 150;
+         sc.encoding = scene_t::ENCODING_ZLIB_RGB8;
+         sc.size = 0;
+         l.publish("SCENE", &sc);
+       }},
+  };
+}
+
+class BadInputTest : public ::testing::TestWithParam<BadInput> {
+ public:
+  static const std::string& cleanChecksum() {
+    static const std::string sum = InProcessRun(baseYaml(System::IMP, 120), System::IMP, 3, 120).outcome.weights_checksum;
+    return sum;
+  }
+};
+
+TEST_P(BadInputTest, IsDroppedWithOneLineAndTheRunGoesOnUnchanged) {
+  const BadInput& bad = GetParam();
+  InProcessRun run(baseYaml(System::IMP, 120), System::IMP, 3, 120, bad.inject);
+  ASSERT_TRUE(run.outcome.ok) << run.outcome.error;
+  EXPECT_EQ(run.outcome.weights_checksum, cleanChecksum());
+  const std::string want = std::string(bad.channel) + ": dropped message: ";
+  int lines = 0;
+  std::istringstream in(run.log.str());
+  for (std::string line; std::getline(in, line);)
+    if (line.find(want) != std::string::npos) {
+      ++lines;
+      EXPECT_NE(line.find(bad.reason), std::string::npos) << line;
+    }
+  // One line per process that subscribes to the channel (DECISION: environment, eye, predictors).
+  EXPECT_GE(lines, 1) << run.log.str();
+  EXPECT_LE(lines, 3) << run.log.str();
+}
+
+INSTANTIATE_TEST_SUITE_P(EachKind, BadInputTest, ::testing::ValuesIn(badInputs()),
+                         [](const auto& info) { return std::string(info.param.name); });
+
+}  // namespace
+}  // namespace afford

@@ -1,0 +1,160 @@
+// The real executables over udpm, in a private network namespace that the
+// `afford` runner creates for itself (needs root or user namespaces).
+#include <gtest/gtest.h>
+#include <signal.h>
+
+#include <chrono>
+#include <filesystem>
+#include <fstream>
+#include <nlohmann/json.hpp>
+#include <set>
+#include <thread>
+
+#include "afford/channels.hpp"
+#include "tests/support.hpp"
+
+namespace afford {
+namespace {
+
+namespace fs = std::filesystem;
+using nlohmann::json;
+
+json readJson(const fs::path& p) {
+  std::ifstream in(p);
+  return json::parse(in);
+}
+
+std::string slurp(const fs::path& p) {
+  std::ifstream in(p);
+  return std::string(std::istreambuf_iterator<char>(in), {});
+}
+
+// One short IMP base run; returns the output folder.
+std::string runBase(const std::string& name, const std::string& transport, int port) {
+  const std::string dir = test::tempDir(name);
+  const auto r = test::runCommand(test::afford("experiment base --system IMP --reps 1 --steps 300 --seed 11 --quiet"
+                                               " --run-prefix it --transport " + transport + " --out " + dir +
+                                               " --log-root " + dir + "/logs --base-port " + std::to_string(port)));
+  EXPECT_EQ(r.exit_code, 0) << r.output;
+  return dir;
+}
+
+TEST(Processes, RealProcessesRunTheBaseTestAndRecordIt) {
+  const std::string dir = runBase("udpm", "udpm", 7810);
+  const json s = readJson(fs::path(dir) / "summary.json");
+  const json& run = s["systems"]["IMP"]["runs"][0];
+  EXPECT_EQ(run["run_id"], "it-base-IMP-s11");
+  EXPECT_EQ(run["seed"], 11);
+  EXPECT_EQ(run["weights_checksum"].get<std::string>().size(), 16u);
+  ASSERT_EQ(run["affordance"].size(), 9u);
+  EXPECT_EQ(run["affordance"][0].size(), 4u);
+  EXPECT_EQ(s["systems"]["IMP"]["target"][0], json({1.0, 1.0, 0.0, 1.0}));
+  EXPECT_EQ(s["systems"]["IMP"]["curves"]["steps"], json({0, 100, 200, 300}));
+
+  const fs::path log_dir = run["log_dir"].get<std::string>();
+  const auto events = test::readLog((log_dir / "log.00.lcm").string());
+  ASSERT_FALSE(events.empty());
+  EXPECT_EQ(events.front().channel, channel::kRunConfig);
+  std::map<std::string, int> count;
+  for (const auto& e : events) ++count[e.channel];
+  EXPECT_EQ(count[channel::kPrediction], 300);
+  EXPECT_EQ(count[channel::kDecision], 300);
+  EXPECT_EQ(count[channel::kFocus], 300);
+  EXPECT_EQ(count[channel::kResult], 1);
+  EXPECT_EQ(count[channel::kStatus], 0);  // heartbeats are not recorded
+  EXPECT_EQ(count[channel::kEffect], count[channel::kTrained]);
+
+  const json m = readJson(log_dir / "manifest.json");
+  EXPECT_EQ(m["seed"], 11);
+  EXPECT_EQ(m["complete"], true);
+  EXPECT_FALSE(m["config_yaml"].get<std::string>().empty());
+  std::set<std::string> procs;
+  for (const auto& p : m["processes"]) procs.insert(p["process"].get<std::string>());
+  EXPECT_EQ(procs, (std::set<std::string>{"environment", "eye", "logger", "motivation", "predictors"}));
+}
+
+TEST(Processes, UdpmAndMemqRunsGiveByteIdenticalLogsAndWeights) {
+  const std::string a = runBase("det-udpm", "udpm", 7820);
+  const std::string b = runBase("det-memq", "memq", 7830);
+  const json sa = readJson(fs::path(a) / "summary.json"), sb = readJson(fs::path(b) / "summary.json");
+  EXPECT_EQ(sa["systems"]["IMP"]["runs"][0]["weights_checksum"], sb["systems"]["IMP"]["runs"][0]["weights_checksum"]);
+  const auto ea = test::readLog(a + "/logs/it-base-IMP-s11/log.00.lcm");
+  const auto eb = test::readLog(b + "/logs/it-base-IMP-s11/log.00.lcm");
+  ASSERT_EQ(ea.size(), eb.size());
+  for (std::size_t i = 0; i < ea.size(); ++i) {
+    ASSERT_EQ(ea[i].channel, eb[i].channel) << "event " << i;
+    ASSERT_EQ(ea[i].data, eb[i].data) << "event " << i << " on " << ea[i].channel;
+  }
+}
+
+struct BadConfigCase {
+  const char* name;
+  const char* args;
+  const char* message;
+};
+
+class BadConfig : public ::testing::TestWithParam<BadConfigCase> {};
+
+TEST_P(BadConfig, ExitsNonZeroNamingTheKeyBeforeAnyProcessStarts) {
+  const std::string dir = test::tempDir(std::string("badcfg-") + GetParam().name);
+  std::string args = GetParam().args;
+  if (args.find("CONFIG_DIR") != std::string::npos) {
+    // A copy of the shipped config with one key removed.
+    fs::copy(std::string(AFFORD_SOURCE_DIR) + "/config", dir + "/config", fs::copy_options::recursive);
+    std::string d = slurp(dir + "/config/defaults.yaml");
+    const auto at = d.find("  saliency_noise:");
+    d.erase(at, d.find('\n', at) - at + 1);
+    std::ofstream(dir + "/config/defaults.yaml") << d;
+    args.replace(args.find("CONFIG_DIR"), 10, dir + "/config");
+  }
+  const auto r = test::runCommand(test::afford(args + " --out " + dir + "/out --log-root " + dir + "/logs"));
+  EXPECT_EQ(r.exit_code, 2) << r.output;
+  EXPECT_NE(r.output.find(GetParam().message), std::string::npos) << r.output;
+  EXPECT_FALSE(fs::exists(dir + "/out")) << "the runner went ahead";
+  EXPECT_FALSE(fs::exists(dir + "/logs"));
+}
+
+INSTANTIATE_TEST_SUITE_P(
+    EachKind, BadConfig,
+    ::testing::Values(
+        BadConfigCase{"UnknownExperiment", "experiment nosuch", "unknown experiment \"nosuch\""},
+        BadConfigCase{"WrongType", "experiment base --set predictors.affordance.learning_rate=fast",
+                      "config key 'predictors.affordance.learning_rate': expected a number"},
+        BadConfigCase{"OutOfRange", "experiment base --set eye.position_change_threshold=3",
+                      "config key 'eye.position_change_threshold': value 3 is out of range"},
+        BadConfigCase{"UnknownKey", "experiment base --set eye.colour=1", "config key 'eye.colour': unknown key"},
+        BadConfigCase{"MissingKey", "--config-dir CONFIG_DIR experiment base",
+                      "config key 'eye.saliency_noise': missing"},
+        BadConfigCase{"UnknownSystem", "experiment base --system XYZ", "unknown system \"XYZ\""}),
+    [](const auto& info) { return std::string(info.param.name); });
+
+TEST(Processes, AKilledProcessEndsTheRunWithinSecondsNamingIt) {
+  const std::string dir = test::tempDir("kill");
+  const int port = 7840;
+  const std::string cmd = test::afford("experiment base --system IMP --reps 1 --steps 10000000 --keep-logs none --out " +
+                                       dir + " --base-port " + std::to_string(port));
+  std::system(("sh -c '(" + cmd + " > " + dir + "/out.txt 2>&1; echo $? > " + dir + "/rc) &'").c_str());
+  const fs::path eye_log = fs::path(dir) / "processes" / "slot0" / "eye.log";
+  const auto deadline = std::chrono::steady_clock::now() + std::chrono::seconds(20);
+  while (slurp(eye_log).find("configured") == std::string::npos) {
+    ASSERT_LT(std::chrono::steady_clock::now(), deadline) << "the run did not start";
+    std::this_thread::sleep_for(std::chrono::milliseconds(50));
+  }
+  std::this_thread::sleep_for(std::chrono::milliseconds(300));
+  const auto killed = std::chrono::steady_clock::now();
+  test::runCommand("pkill -9 -f 'afford-eye --lcm-url udpm://239.255.76.67:" + std::to_string(port) + "'");
+  while (!fs::exists(fs::path(dir) / "rc") || slurp(fs::path(dir) / "rc").empty()) {
+    ASSERT_LT(std::chrono::steady_clock::now() - killed, std::chrono::seconds(10)) << "the run did not end";
+    std::this_thread::sleep_for(std::chrono::milliseconds(50));
+  }
+  EXPECT_NE(std::stoi(slurp(fs::path(dir) / "rc")), 0);
+  const std::string out = slurp(fs::path(dir) / "out.txt");
+  EXPECT_NE(out.find("process 'eye'"), std::string::npos) << out;
+  EXPECT_NE(out.find("SIGKILL"), std::string::npos) << out;
+  // No process of the run is left behind.
+  // ([u] keeps pgrep from matching the shell that runs it.)
+  EXPECT_NE(test::runCommand("pgrep -f '[u]dpm://239.255.76.67:" + std::to_string(port) + "'").exit_code, 0);
+}
+
+}  // namespace
+}  // namespace afford

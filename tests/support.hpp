@@ -1,0 +1,69 @@
+// Helpers shared by the tests.
+#pragma once
+#include <lcm/lcm-cpp.hpp>
+
+#include <array>
+#include <cstdio>
+#include <filesystem>
+#include <memory>
+#include <string>
+#include <vector>
+
+#include "afford/config.hpp"
+
+namespace afford::test {
+
+// The effective config of one run of a shipped experiment.
+inline RunConfig shippedConfig(const std::string& experiment = "base", System system = System::IMP,
+                               std::int64_t seed = 1, std::vector<std::string> settings = {}) {
+  RunRequest req{experiment, system, seed, std::nullopt, std::move(settings)};
+  return parseRunConfig(effectiveConfig(std::string(AFFORD_SOURCE_DIR) + "/config", req));
+}
+inline std::string shippedConfigYaml(const std::string& experiment, System system, std::int64_t seed,
+                                     std::int64_t steps) {
+  RunRequest req{experiment, system, seed, steps, {}};
+  return emitYaml(effectiveConfig(std::string(AFFORD_SOURCE_DIR) + "/config", req));
+}
+
+struct CommandResult {
+  int exit_code = -1;
+  std::string output;  // stdout and stderr
+};
+
+inline CommandResult runCommand(const std::string& command) {
+  CommandResult r;
+  FILE* p = popen((command + " 2>&1").c_str(), "r");
+  if (!p) return r;
+  std::array<char, 4096> buf{};
+  while (std::fgets(buf.data(), buf.size(), p)) r.output += buf.data();
+  const int status = pclose(p);
+  r.exit_code = WIFEXITED(status) ? WEXITSTATUS(status) : -1;
+  return r;
+}
+
+inline std::string afford(const std::string& args) { return std::string(AFFORD_BIN_DIR) + "/afford " + args; }
+
+struct Event {
+  std::string channel;
+  std::vector<std::uint8_t> data;
+};
+
+inline std::vector<Event> readLog(const std::string& path) {
+  std::vector<Event> out;
+  lcm::LogFile log(path, "r");
+  if (!log.good()) return out;
+  while (const lcm::LogEvent* ev = log.readNextEvent()) {
+    const auto* d = static_cast<const std::uint8_t*>(ev->data);
+    out.push_back({ev->channel, std::vector<std::uint8_t>(d, d + ev->datalen)});
+  }
+  return out;
+}
+
+inline std::string tempDir(const std::string& name) {
+  const auto dir = std::filesystem::temp_directory_path() / ("afford-test-" + name + "-" + std::to_string(getpid()));
+  std::filesystem::remove_all(dir);
+  std::filesystem::create_directories(dir);
+  return dir.string();
+}
+
+}  // namespace afford::test

@@ -1,0 +1,128 @@
+#include <gtest/gtest.h>
+
+#include "afford/config.hpp"
+#include "tests/support.hpp"
+
+namespace afford {
+namespace {
+
+const std::string kConfigDir = std::string(AFFORD_SOURCE_DIR) + "/config";
+
+// The message of the ConfigError thrown by parsing `root`, or "" if none.
+std::string errorOf(const YAML::Node& root) {
+  try {
+    parseRunConfig(root);
+  } catch (const ConfigError& e) {
+    return e.what();
+  }
+  return "";
+}
+
+YAML::Node baseTree() { return effectiveConfig(kConfigDir, RunRequest{"base", System::IMP, 1, std::nullopt, {}}); }
+
+TEST(Config, EveryShippedExperimentParsesForEverySystem) {
+  for (const auto& name : listExperiments(kConfigDir))
+    for (System s : {System::FIX, System::IGN, System::IMP}) {
+      const RunConfig c = test::shippedConfig(name, s);
+      EXPECT_EQ(c.world.objects.size(), 9u) << name;
+      EXPECT_EQ(c.system, s);
+    }
+}
+
+TEST(Config, PaperValuesReachTheRunConfig) {
+  const RunConfig fix = test::shippedConfig("base", System::FIX);
+  const RunConfig ign = test::shippedConfig("base", System::IGN);
+  const RunConfig imp = test::shippedConfig("base", System::IMP);
+  EXPECT_DOUBLE_EQ(fix.predictors.affordance_learning_rate, 0.002);
+  EXPECT_DOUBLE_EQ(ign.predictors.affordance_learning_rate, 0.01);
+  EXPECT_DOUBLE_EQ(ign.motivation.leak, 0.3);
+  EXPECT_DOUBLE_EQ(imp.motivation.leak, 0.1);
+  EXPECT_EQ(imp.steps, 6000);
+  EXPECT_EQ(test::shippedConfig("late1").steps, 10000);
+  EXPECT_DOUBLE_EQ(test::shippedConfig("stochastic").predictors.affordance_learning_rate, 0.001);
+  EXPECT_EQ(test::shippedConfig("late1").world.objects[6].appears_at, 2000);
+}
+
+TEST(Config, MissingKeyIsNamed) {
+  YAML::Node root = baseTree();
+  root["eye"].remove("saliency_noise");
+  const std::string e = errorOf(root);
+  EXPECT_NE(e.find("'eye.saliency_noise'"), std::string::npos) << e;
+  EXPECT_NE(e.find("missing"), std::string::npos) << e;
+}
+
+TEST(Config, WrongTypeIsNamed) {
+  YAML::Node root = baseTree();
+  root["predictors"]["affordance"]["learning_rate"] = "fast";
+  const std::string e = errorOf(root);
+  EXPECT_NE(e.find("'predictors.affordance.learning_rate'"), std::string::npos) << e;
+  EXPECT_NE(e.find("expected a number"), std::string::npos) << e;
+}
+
+TEST(Config, OutOfRangeValueIsNamed) {
+  YAML::Node root = baseTree();
+  root["eye"]["image_change_threshold"] = 5.0;
+  const std::string e = errorOf(root);
+  EXPECT_NE(e.find("'eye.image_change_threshold'"), std::string::npos) << e;
+  EXPECT_NE(e.find("out of range"), std::string::npos) << e;
+}
+
+TEST(Config, ObjectOutsideTheTableIsNamedWithItsIndex) {
+  YAML::Node root = baseTree();
+  root["world"]["objects"][3]["position"][0] = 0.95;
+  const std::string e = errorOf(root);
+  EXPECT_NE(e.find("'world.objects[3].position[0]'"), std::string::npos) << e;
+}
+
+TEST(Config, UnknownKeyIsRejected) {
+  YAML::Node root = baseTree();
+  root["motivation"]["leek"] = 0.2;
+  const std::string e = errorOf(root);
+  EXPECT_NE(e.find("'motivation.leek'"), std::string::npos) << e;
+  EXPECT_NE(e.find("unknown key"), std::string::npos) << e;
+}
+
+TEST(Config, UnknownChoiceListsTheOptions) {
+  YAML::Node root = baseTree();
+  root["motivation"]["imp_threshold_input"] = "guess";
+  const std::string e = errorOf(root);
+  EXPECT_NE(e.find("signal, observed_change"), std::string::npos) << e;
+}
+
+TEST(Config, UnknownExperimentIsRejectedWithTheKnownOnes) {
+  try {
+    loadExperiment(kConfigDir, "nosuch");
+    FAIL() << "no error";
+  } catch (const ConfigError& e) {
+    EXPECT_NE(std::string(e.what()).find("unknown experiment \"nosuch\""), std::string::npos);
+    EXPECT_NE(std::string(e.what()).find("base"), std::string::npos);
+  }
+}
+
+TEST(Config, SettingsOverrideAndAreValidated) {
+  EXPECT_DOUBLE_EQ(test::shippedConfig("base", System::IMP, 1, {"motivation.leak=0.25"}).motivation.leak, 0.25);
+  try {
+    test::shippedConfig("base", System::IMP, 1, {"motivation.nope=1"});
+    FAIL() << "no error";
+  } catch (const ConfigError& e) {
+    EXPECT_NE(std::string(e.what()).find("'motivation.nope'"), std::string::npos) << e.what();
+  }
+  try {
+    test::shippedConfig("base", System::IMP, 1, {"eye.focus_side=20"});
+    FAIL() << "no error";
+  } catch (const ConfigError& e) {
+    EXPECT_NE(std::string(e.what()).find("'eye.focus_side'"), std::string::npos) << e.what();
+  }
+}
+
+TEST(Config, EmittedYamlParsesToTheSameConfig) {
+  const YAML::Node root = baseTree();
+  const RunConfig a = parseRunConfig(root);
+  const RunConfig b = parseRunConfigText(emitYaml(root));
+  EXPECT_EQ(a.steps, b.steps);
+  EXPECT_DOUBLE_EQ(a.predictors.what_effect_learning_rate, b.predictors.what_effect_learning_rate);
+  EXPECT_EQ(a.world.objects[8].name, b.world.objects[8].name);
+}
+
+}  // namespace
+}  // namespace afford

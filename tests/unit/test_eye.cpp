@@ -1,0 +1,139 @@
+#include <gtest/gtest.h>
+
+#include <set>
+
+#include "afford/actions.hpp"
+#include "environment/environment.hpp"
+#include "eye/eye.hpp"
+#include "tests/support.hpp"
+
+namespace afford {
+namespace {
+
+std::set<std::pair<int, int>> centres(const Environment& env) {
+  std::set<std::pair<int, int>> out;
+  for (const auto& o : env.objects())
+    if (o.present) out.insert({o.centre.col, o.centre.row});
+  return out;
+}
+
+TEST(Eye, ScanLandsOnAnObjectAndCentresTheFoveaOnIt) {
+  const RunConfig c = test::shippedConfig();
+  Environment env(c);
+  Eye eye(c);
+  eye.setScene(env.render());
+  const auto where = centres(env);
+  for (int step = 0; step < 40; ++step) {
+    const Focus& f = eye.scan(step);
+    EXPECT_TRUE(where.count({f.gaze.col, f.gaze.row})) << "step " << step << " gaze " << f.gaze.col << "," << f.gaze.row;
+    EXPECT_NE(eye.labelAt(f.gaze), 0);
+    EXPECT_EQ(f.image.size(), 21u * 21u * 3u);
+  }
+}
+
+TEST(Eye, ScanMovesToAnotherObjectEveryTimeAndVisitsThemAll) {
+  const RunConfig c = test::shippedConfig();
+  Environment env(c);
+  Eye eye(c);
+  eye.setScene(env.render());
+  std::set<std::pair<int, int>> visited;
+  Pixel last{-1, -1};
+  for (int step = 0; step < 200; ++step) {
+    const Focus f = eye.scan(step);
+    EXPECT_FALSE(f.gaze == last) << "step " << step;
+    last = f.gaze;
+    visited.insert({f.gaze.col, f.gaze.row});
+  }
+  EXPECT_EQ(visited.size(), 9u);
+}
+
+TEST(Eye, ThePapersNoiseThenSmoothOrderAlsoLandsOnObjects) {
+  const RunConfig c = test::shippedConfig("base", System::IMP, 1, {"eye.saliency_order=noise_then_smooth"});
+  Environment env(c);
+  Eye eye(c);
+  eye.setScene(env.render());
+  const auto where = centres(env);
+  for (int step = 0; step < 20; ++step) EXPECT_TRUE(where.count({eye.scan(step).gaze.col, eye.scan(step).gaze.row}));
+}
+
+TEST(Eye, ScansAreKeyedByStep) {
+  const RunConfig c = test::shippedConfig();
+  Environment env(c);
+  Eye a(c), b(c);
+  a.setScene(env.render());
+  b.setScene(env.render());
+  for (int step = 0; step < 20; ++step) EXPECT_EQ(a.scan(step).gaze, b.scan(step).gaze);
+}
+
+// Scan until the gaze is on the object at `centre`.
+void lookAt(Eye& eye, Pixel centre) {
+  for (int step = 0; step < 500; ++step)
+    if (eye.scan(step).gaze == centre) return;
+  FAIL() << "never looked at " << centre.col << "," << centre.row;
+}
+
+TEST(Eye, ColourChangeIsSeenAsTheTurnGreenAffordance) {
+  const RunConfig c = test::shippedConfig();
+  Environment env(c);
+  Eye eye(c);
+  eye.setScene(env.render());
+  lookAt(eye, {30, 30});  // red square
+  ASSERT_TRUE(env.execute(7, kTurnGreen, 0.2, 0.2).succeeded);
+  const Effect e = eye.scanEffect(7, env.render(), kTurnGreen);
+  EXPECT_TRUE(e.image_changed);
+  EXPECT_FALSE(e.position_changed);
+  EXPECT_TRUE(e.affordance);
+  EXPECT_EQ(e.after.gaze, (Pixel{30, 30}));
+  EXPECT_NEAR(e.image_change, 2.0 * 225 / 1323.0, 1e-9);  // R off and G on over 225 px
+}
+
+TEST(Eye, MoveIsSeenWhereTheObjectArrives) {
+  const RunConfig c = test::shippedConfig();
+  Environment env(c);
+  Eye eye(c);
+  eye.setScene(env.render());
+  lookAt(eye, {75, 75});  // green circle
+  const ActionOutcome out = env.execute(3, kMove, 0.5, 0.5);
+  ASSERT_TRUE(out.succeeded);
+  const Effect e = eye.scanEffect(3, env.render(), kMove);
+  EXPECT_TRUE(e.position_changed);
+  EXPECT_TRUE(e.affordance);
+  EXPECT_EQ(e.after.gaze, toPixel(out.target_x, out.target_y, 150));
+  EXPECT_FALSE(e.image_changed);  // the same circle, seen alone again
+}
+
+TEST(Eye, NoChangeMeansNoAffordanceAndTheGazeStays) {
+  const RunConfig c = test::shippedConfig();
+  Environment env(c);
+  Eye eye(c);
+  eye.setScene(env.render());
+  lookAt(eye, {30, 30});
+  ASSERT_FALSE(env.execute(2, kTurnRed, 0.2, 0.2).succeeded);  // red square is red already
+  const Effect e = eye.scanEffect(2, env.render(), kTurnRed);
+  EXPECT_FALSE(e.affordance);
+  EXPECT_EQ(e.after.gaze, (Pixel{30, 30}));
+  EXPECT_DOUBLE_EQ(e.image_change, 0.0);
+}
+
+TEST(Eye, AColourChangeDoesNotCountAsAMove) {
+  const RunConfig c = test::shippedConfig();
+  Environment env(c);
+  Eye eye(c);
+  eye.setScene(env.render());
+  lookAt(eye, {30, 30});
+  ASSERT_TRUE(env.execute(5, kTurnBlue, 0.2, 0.2).succeeded);
+  EXPECT_FALSE(eye.scanEffect(5, env.render(), kMove).affordance);
+}
+
+TEST(Eye, TheWrongColourDoesNotCountForAnotherColourAction) {
+  const RunConfig c = test::shippedConfig();
+  Environment env(c);
+  Eye eye(c);
+  eye.setScene(env.render());
+  lookAt(eye, {30, 30});
+  ASSERT_TRUE(env.execute(5, kTurnBlue, 0.2, 0.2).succeeded);
+  EXPECT_FALSE(eye.scanEffect(5, env.render(), kTurnGreen).affordance);
+}
+
+}  // namespace
+}  // namespace afford

@@ -1,0 +1,79 @@
+#include <gtest/gtest.h>
+
+#include "motivation/motivation.hpp"
+#include "tests/support.hpp"
+
+namespace afford {
+namespace {
+
+using A = std::array<double, kNumActions>;
+
+TEST(Entropy, IsOneBitAtOneHalfAndZeroAtCertainty) {
+  EXPECT_DOUBLE_EQ(entropyBits(0.5), 1.0);
+  EXPECT_DOUBLE_EQ(entropyBits(0.0), 0.0);
+  EXPECT_DOUBLE_EQ(entropyBits(1.0), 0.0);
+  EXPECT_DOUBLE_EQ(entropyBits(0.2), entropyBits(0.8));
+}
+
+TEST(Entropy, PointThreeBitsIsAPredictionOfAbout0947) {  // paper 2.4.1
+  EXPECT_NEAR(entropyBits(0.947), 0.3, 0.003);
+  EXPECT_NEAR(entropyBits(0.053), 0.3, 0.003);
+}
+
+TEST(Motivation, FixActsOnTheMostUncertainActionWhileAboveTheFixedThreshold) {
+  Motivation m(test::shippedConfig("base", System::FIX));
+  Decision d = m.decide(A{0.99, 0.5, 0.9, 0.99}, A{});
+  EXPECT_TRUE(d.act);
+  EXPECT_EQ(d.action, 1);
+  EXPECT_DOUBLE_EQ(d.motivation, 1.0);
+  EXPECT_DOUBLE_EQ(d.threshold, 0.3);
+  d = m.decide(A{0.99, 0.98, 0.02, 0.99}, A{});
+  EXPECT_FALSE(d.act);
+  EXPECT_DOUBLE_EQ(m.threshold(), 0.3);  // FIX never moves its threshold
+}
+
+TEST(Motivation, IgnThresholdIsALeakyAverageOfTheActedSignalOrZero) {
+  const RunConfig c = test::shippedConfig("base", System::IGN);
+  Motivation m(c);
+  const double nu = c.motivation.leak;
+  double th = c.motivation.initial_threshold;
+  Decision d = m.decide(A{0.5, 0.6, 0.9, 0.99}, A{});  // acts: H(0.5) = 1 >= th
+  ASSERT_TRUE(d.act);
+  th += nu * (1.0 - th);
+  EXPECT_DOUBLE_EQ(m.threshold(), th);
+  d = m.decide(A{0.999, 0.999, 0.999, 0.999}, A{});  // too certain: passes
+  ASSERT_FALSE(d.act);
+  th += nu * (0.0 - th);  // Algorithm 1 line 16
+  EXPECT_DOUBLE_EQ(m.threshold(), th);
+}
+
+TEST(Motivation, ImpUsesTheAbsoluteLearningProgressAndTiesGoToTheLowestAction) {
+  Motivation m(test::shippedConfig("base", System::IMP));
+  Decision d = m.decide(A{0.5, 0.5, 0.5, 0.5}, A{0.01, -0.03, 0.03, 0.02});
+  EXPECT_TRUE(d.act);
+  EXPECT_EQ(d.action, 1);
+  EXPECT_DOUBLE_EQ(d.motivation, 0.03);
+}
+
+TEST(Motivation, ActsWhenTheSignalPlusMarginReachesTheThreshold) {
+  const RunConfig c = test::shippedConfig("base", System::FIX);
+  Motivation m(c);
+  const double p = 0.947;  // entropy just above 0.3
+  const double h = entropyBits(p);
+  EXPECT_EQ(m.decide(A{p, 1.0, 1.0, 1.0}, A{}).act, h + c.motivation.act_margin >= 0.3);
+}
+
+TEST(Motivation, ImpWithObservedChangeWaitsForTheObservation) {
+  const RunConfig c = test::shippedConfig("base", System::IMP, 1, {"motivation.imp_threshold_input=observed_change"});
+  Motivation m(c);
+  const double th0 = m.threshold();
+  ASSERT_TRUE(m.decide(A{}, A{0.02, 0, 0, 0}).act);
+  EXPECT_TRUE(m.awaitingObservation());
+  EXPECT_DOUBLE_EQ(m.threshold(), th0);
+  m.observeChange(0.05);
+  EXPECT_FALSE(m.awaitingObservation());
+  EXPECT_DOUBLE_EQ(m.threshold(), th0 + c.motivation.leak * (0.05 - th0));
+}
+
+}  // namespace
+}  // namespace afford
