@@ -124,6 +124,7 @@ RunOutcome RunDriver::run(const RunSpec& spec, const std::function<void()>& pump
   start.step = 0;
   start.command = run_control_t::START;
   lcm_.publish(channel::kRunControl, &start);
+  const auto started = Clock::now();
   std::int64_t progress = -1;
   auto progress_at = Clock::now();
   while (!have_result_) {
@@ -151,6 +152,8 @@ RunOutcome RunDriver::run(const RunSpec& spec, const std::function<void()>& pump
                   " s (last step handled per process:" + where + ")");
     }
   }
+
+  out.run_seconds = std::chrono::duration<double>(Clock::now() - started).count();
 
   // 4. Stop, and let the logger close the log.
   run_control_t stop = start;

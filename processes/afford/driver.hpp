@@ -40,7 +40,10 @@ struct RunOutcome {
   std::vector<TableSnapshot> curve;           // every curve_interval steps, and the end
   std::vector<std::int64_t> executed, successes;
   std::string log_dir;                        // from the logger, if one took part
-  double wall_seconds = 0;
+  double wall_seconds = 0;                    // whole run, set-up included
+  double run_seconds = 0;                     // from START to RESULT: the steps themselves
+  std::map<std::string, long> peak_rss_kb;    // per process (VmHWM), filled by the runner
+  std::uintmax_t log_bytes = 0;               // size of the run's log, if any
 };
 
 class RunDriver {

@@ -12,6 +12,7 @@
 #include <mutex>
 #include <sstream>
 #include <thread>
+#include <unistd.h>
 
 #include "afford/actions.hpp"
 #include "afford/config.hpp"
@@ -70,7 +71,9 @@ RunOutcome runInProcess(const PlannedRun& run, const ExperimentOptions& o, int s
     motivation.tick();
     if (logger) logger->tick();
   };
-  return driver.run(run.spec, pump, [] { return std::string(); });
+  RunOutcome r = driver.run(run.spec, pump, [] { return std::string(); });
+  r.peak_rss_kb["all (one process)"] = peakRssKb(getpid());
+  return r;
 }
 
 struct Slot {
@@ -104,7 +107,11 @@ RunOutcome runOverUdpm(const PlannedRun& run, const ExperimentOptions& o, Slot& 
     return h;
   };
   RunOutcome r = driver.run(run.spec, [&] { pumpLcm(lcm); }, health);
-  if (logger) logger->stop();
+  if (slot.group) r.peak_rss_kb = slot.group->peakRssKb();
+  if (logger) {
+    for (const auto& [name, kb] : logger->peakRssKb()) r.peak_rss_kb[name] = kb;
+    logger->stop();
+  }
   if (!r.ok) slot.group.reset();  // a broken group is not reused
   return r;
 }
@@ -193,6 +200,11 @@ int runExperiment(const ExperimentOptions& o, spdlog::logger& log) {
         r.ok = false;
         r.error = "run '" + runs[i].spec.run_id + "': " + e.what();
       }
+      if (r.ok && !r.log_dir.empty()) {
+        std::error_code ec;
+        for (const auto& f : fs::directory_iterator(r.log_dir, ec))
+          if (f.path().extension() == ".lcm") r.log_bytes += fs::file_size(f.path(), ec);
+      }
       outcomes[i] = std::move(r);
       const RunOutcome& out = outcomes[i];
       std::lock_guard<std::mutex> lock(log_mutex);
@@ -258,7 +270,11 @@ int runExperiment(const ExperimentOptions& o, spdlog::logger& log) {
                             {"weights_checksum", r.weights_checksum},
                             {"actions_executed", r.executed},
                             {"successes", r.successes},
-                            {"wall_seconds", r.wall_seconds}});
+                            {"wall_seconds", r.wall_seconds},
+                            {"steps_per_second", r.run_seconds > 0 ? p.spec.steps / r.run_seconds : 0.0},
+                            {"peak_rss_kb", r.peak_rss_kb},
+                            {"log_bytes", r.log_bytes},
+                            {"log_bytes_per_step", static_cast<double>(r.log_bytes) / p.spec.steps}});
       for (const auto& snap : r.curve) {
         auto& [sum, n] = curve_sum[snap.step];
         if (sum.empty()) sum = Table(snap.affordance.size(), std::vector<double>(kNumActions, 0.0));

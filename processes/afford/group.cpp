@@ -9,6 +9,7 @@
 #include <chrono>
 #include <cstring>
 #include <filesystem>
+#include <fstream>
 #include <stdexcept>
 #include <thread>
 
@@ -62,6 +63,20 @@ ProcessGroup::ProcessGroup(const std::string& bin_dir, const std::vector<std::st
 }
 
 ProcessGroup::~ProcessGroup() { stop(); }
+
+long peakRssKb(pid_t pid) {
+  std::ifstream in("/proc/" + std::to_string(pid) + "/status");
+  for (std::string line; std::getline(in, line);)
+    if (line.rfind("VmHWM:", 0) == 0) return std::stol(line.substr(6));
+  return -1;
+}
+
+std::map<std::string, long> ProcessGroup::peakRssKb() const {
+  std::map<std::string, long> out;
+  for (const auto& c : children_)
+    if (!c.exited) out[c.name] = afford::peakRssKb(c.pid);
+  return out;
+}
 
 std::string ProcessGroup::health() {
   for (auto& c : children_) {

@@ -4,6 +4,7 @@
 #pragma once
 #include <sys/types.h>
 
+#include <map>
 #include <string>
 #include <vector>
 
@@ -31,10 +32,15 @@ class ProcessGroup {
   // SIGTERM, wait up to `grace_ms`, then SIGKILL.
   void stop(int grace_ms = 3000);
   const std::vector<Child>& children() const { return children_; }
+  // Peak resident memory (VmHWM, kB) of each running child.
+  std::map<std::string, long> peakRssKb() const;
 
  private:
   std::vector<Child> children_;
 };
+
+// Peak resident memory (VmHWM, kB) of a process, or -1.
+long peakRssKb(pid_t pid);
 
 // Directory of the running executable (where the process executables live).
 std::string executableDir();

@@ -53,7 +53,10 @@ TEST(Eye, ThePapersNoiseThenSmoothOrderAlsoLandsOnObjects) {
   Eye eye(c);
   eye.setScene(env.render());
   const auto where = centres(env);
-  for (int step = 0; step < 20; ++step) EXPECT_TRUE(where.count({eye.scan(step).gaze.col, eye.scan(step).gaze.row}));
+  for (int step = 0; step < 20; ++step) {
+    const Focus f = eye.scan(step);
+    EXPECT_TRUE(where.count({f.gaze.col, f.gaze.row})) << "step " << step;
+  }
 }
 
 TEST(Eye, ScansAreKeyedByStep) {
@@ -65,19 +68,22 @@ TEST(Eye, ScansAreKeyedByStep) {
   for (int step = 0; step < 20; ++step) EXPECT_EQ(a.scan(step).gaze, b.scan(step).gaze);
 }
 
-// Scan until the gaze is on the object at `centre`.
-void lookAt(Eye& eye, Pixel centre) {
-  for (int step = 0; step < 500; ++step)
-    if (eye.scan(step).gaze == centre) return;
-  FAIL() << "never looked at " << centre.col << "," << centre.row;
-}
+// An eye looking at the base-test scene.
+struct EyeOnBaseScene : ::testing::Test {
+  RunConfig c = test::shippedConfig();
+  Environment env{c};
+  Eye eye{c};
+  void SetUp() override { eye.setScene(env.render()); }
+  // Scan until the gaze is on the object at `centre`.
+  void lookAt(Pixel centre) {
+    for (int step = 0; step < 500; ++step)
+      if (eye.scan(step).gaze == centre) return;
+    FAIL() << "never looked at " << centre.col << "," << centre.row;
+  }
+};
 
-TEST(Eye, ColourChangeIsSeenAsTheTurnGreenAffordance) {
-  const RunConfig c = test::shippedConfig();
-  Environment env(c);
-  Eye eye(c);
-  eye.setScene(env.render());
-  lookAt(eye, {30, 30});  // red square
+TEST_F(EyeOnBaseScene, ColourChangeIsSeenAsTheTurnGreenAffordance) {
+  lookAt({30, 30});  // red square
   ASSERT_TRUE(env.execute(7, kTurnGreen, 0.2, 0.2).succeeded);
   const Effect e = eye.scanEffect(7, env.render(), kTurnGreen);
   EXPECT_TRUE(e.image_changed);
@@ -87,12 +93,8 @@ TEST(Eye, ColourChangeIsSeenAsTheTurnGreenAffordance) {
   EXPECT_NEAR(e.image_change, 2.0 * 225 / 1323.0, 1e-9);  // R off and G on over 225 px
 }
 
-TEST(Eye, MoveIsSeenWhereTheObjectArrives) {
-  const RunConfig c = test::shippedConfig();
-  Environment env(c);
-  Eye eye(c);
-  eye.setScene(env.render());
-  lookAt(eye, {75, 75});  // green circle
+TEST_F(EyeOnBaseScene, MoveIsSeenWhereTheObjectArrives) {
+  lookAt({75, 75});  // green circle
   const ActionOutcome out = env.execute(3, kMove, 0.5, 0.5);
   ASSERT_TRUE(out.succeeded);
   const Effect e = eye.scanEffect(3, env.render(), kMove);
@@ -102,12 +104,8 @@ TEST(Eye, MoveIsSeenWhereTheObjectArrives) {
   EXPECT_FALSE(e.image_changed);  // the same circle, seen alone again
 }
 
-TEST(Eye, NoChangeMeansNoAffordanceAndTheGazeStays) {
-  const RunConfig c = test::shippedConfig();
-  Environment env(c);
-  Eye eye(c);
-  eye.setScene(env.render());
-  lookAt(eye, {30, 30});
+TEST_F(EyeOnBaseScene, NoChangeMeansNoAffordanceAndTheGazeStays) {
+  lookAt({30, 30});
   ASSERT_FALSE(env.execute(2, kTurnRed, 0.2, 0.2).succeeded);  // red square is red already
   const Effect e = eye.scanEffect(2, env.render(), kTurnRed);
   EXPECT_FALSE(e.affordance);
@@ -115,22 +113,14 @@ TEST(Eye, NoChangeMeansNoAffordanceAndTheGazeStays) {
   EXPECT_DOUBLE_EQ(e.image_change, 0.0);
 }
 
-TEST(Eye, AColourChangeDoesNotCountAsAMove) {
-  const RunConfig c = test::shippedConfig();
-  Environment env(c);
-  Eye eye(c);
-  eye.setScene(env.render());
-  lookAt(eye, {30, 30});
+TEST_F(EyeOnBaseScene, AColourChangeDoesNotCountAsAMove) {
+  lookAt({30, 30});
   ASSERT_TRUE(env.execute(5, kTurnBlue, 0.2, 0.2).succeeded);
   EXPECT_FALSE(eye.scanEffect(5, env.render(), kMove).affordance);
 }
 
-TEST(Eye, TheWrongColourDoesNotCountForAnotherColourAction) {
-  const RunConfig c = test::shippedConfig();
-  Environment env(c);
-  Eye eye(c);
-  eye.setScene(env.render());
-  lookAt(eye, {30, 30});
+TEST_F(EyeOnBaseScene, TheWrongColourDoesNotCountForAnotherColourAction) {
+  lookAt({30, 30});
   ASSERT_TRUE(env.execute(5, kTurnBlue, 0.2, 0.2).succeeded);
   EXPECT_FALSE(eye.scanEffect(5, env.render(), kTurnGreen).affordance);
 }
