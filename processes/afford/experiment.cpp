@@ -173,6 +173,11 @@ int runExperiment(const ExperimentOptions& o, spdlog::logger& log) {
     }
   }
 
+  for (const auto& p : runs)
+    if (p.keep_log && fs::exists(fs::path(o.log_root) / p.spec.run_id))
+      throw ConfigError("the log folder " + (fs::path(o.log_root) / p.spec.run_id).string() +
+                        " exists already: choose another --run-prefix or --log-root");
+
   std::string network = "in-process memq://";
   std::string bin;
   if (o.transport == "udpm") {

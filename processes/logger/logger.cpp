@@ -10,6 +10,14 @@ namespace afford {
 namespace fs = std::filesystem;
 
 RunLog::RunLog(const std::string& dir, nlohmann::json manifest) : dir_(dir), manifest_(std::move(manifest)) {
+  const fs::path old_manifest = fs::path(dir_) / "manifest.json";
+  if (fs::exists(old_manifest)) {
+    std::ifstream in(old_manifest);
+    const nlohmann::json old = nlohmann::json::parse(in, nullptr, false);
+    if (!old.is_discarded() && old.value("complete", false))
+      throw std::runtime_error(dir_ + " already holds the complete log of run '" + old.value("run_id", "?") +
+                               "': refusing to mix runs (use another run id)");
+  }
   fs::create_directories(dir_);
   int segment = 0;
   char name[32];

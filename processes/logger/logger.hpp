@@ -17,7 +17,8 @@ namespace afford {
 class RunLog {
  public:
   // Opens a new segment in `dir` (created if missing); never overwrites:
-  // an existing log.NN.lcm makes this the next segment.
+  // an existing log.NN.lcm makes this the next segment of the same run.
+  // Throws if `dir` holds the complete log of a run already.
   RunLog(const std::string& dir, nlohmann::json manifest);
   ~RunLog();
   RunLog(const RunLog&) = delete;

@@ -128,6 +128,16 @@ INSTANTIATE_TEST_SUITE_P(
         BadConfigCase{"UnknownSystem", "experiment base --system XYZ", "unknown system \"XYZ\""}),
     [](const auto& info) { return std::string(info.param.name); });
 
+TEST(Processes, ARunNeverWritesIntoTheLogFolderOfAnotherRun) {
+  const std::string dir = test::tempDir("existing");
+  fs::create_directories(dir + "/logs/x-base-IMP-s1");
+  const auto r = test::runCommand(test::afford("experiment base --system IMP --reps 1 --steps 50 --run-prefix x --out " +
+                                               dir + "/out --log-root " + dir + "/logs"));
+  EXPECT_EQ(r.exit_code, 2) << r.output;
+  EXPECT_NE(r.output.find("exists already"), std::string::npos) << r.output;
+  EXPECT_FALSE(fs::exists(dir + "/out"));
+}
+
 TEST(Processes, AKilledProcessEndsTheRunWithinSecondsNamingIt) {
   const std::string dir = test::tempDir("kill");
   const int port = 7840;

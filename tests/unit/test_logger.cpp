@@ -1,0 +1,66 @@
+#include <gtest/gtest.h>
+
+#include <filesystem>
+#include <fstream>
+
+#include "logger/logger.hpp"
+#include "tests/support.hpp"
+
+namespace afford {
+namespace {
+
+namespace fs = std::filesystem;
+
+nlohmann::json manifestOf(const fs::path& dir) {
+  std::ifstream in(dir / "manifest.json");
+  return nlohmann::json::parse(in);
+}
+
+TEST(RunLog, WritesAStandardLcmLogAndAManifest) {
+  const fs::path dir = fs::path(test::tempDir("runlog")) / "run-a";
+  {
+    RunLog log(dir.string(), {{"run_id", "run-a"}, {"seed", 4}});
+    const std::uint8_t a[] = {1, 2, 3}, b[] = {9};
+    log.write("FOCUS", a, sizeof a, 100);
+    log.write("DECISION", b, sizeof b, 200);
+    log.sawProcess("eye", 42);
+    log.close();
+  }
+  const auto events = test::readLog((dir / "log.00.lcm").string());
+  ASSERT_EQ(events.size(), 2u);
+  EXPECT_EQ(events[0].channel, "FOCUS");
+  EXPECT_EQ(events[0].data, (std::vector<std::uint8_t>{1, 2, 3}));
+  EXPECT_EQ(events[1].channel, "DECISION");
+  const auto m = manifestOf(dir);
+  EXPECT_EQ(m["run_id"], "run-a");
+  EXPECT_EQ(m["events"], 2);
+  EXPECT_EQ(m["complete"], true);
+  EXPECT_EQ(m["processes"][0]["process"], "eye");
+  EXPECT_EQ(m["segments"], nlohmann::json({"log.00.lcm"}));
+}
+
+TEST(RunLog, EveryEventIsOnDiskAsSoonAsItIsWritten) {
+  const fs::path dir = fs::path(test::tempDir("runlog-flush")) / "run-b";
+  RunLog log(dir.string(), {{"run_id", "run-b"}});
+  const std::uint8_t a[] = {7, 7};
+  log.write("SCENE", a, sizeof a, 1);
+  EXPECT_EQ(test::readLog((dir / "log.00.lcm").string()).size(), 1u);  // before close
+}
+
+TEST(RunLog, RefusesTheFolderOfACompletedRun) {
+  const fs::path dir = fs::path(test::tempDir("runlog-done")) / "run-c";
+  { RunLog(dir.string(), {{"run_id", "run-c"}}).close(); }
+  EXPECT_THROW(RunLog(dir.string(), {{"run_id", "run-c"}}), std::runtime_error);
+}
+
+TEST(RunLog, ContinuesAnUnfinishedRunAsANewSegment) {
+  const fs::path dir = fs::path(test::tempDir("runlog-seg")) / "run-d";
+  fs::create_directories(dir);
+  std::ofstream(dir / "log.00.lcm") << "";
+  std::ofstream(dir / "manifest.json") << R"({"run_id": "run-d", "complete": false})";
+  RunLog log(dir.string(), {{"run_id", "run-d"}});
+  EXPECT_EQ(fs::path(log.path()).filename(), "log.01.lcm");
+}
+
+}  // namespace
+}  // namespace afford
