@@ -10,6 +10,8 @@
 #include <vector>
 
 #include "afford/config.hpp"
+#include "afford/prediction_t.hpp"
+#include "afford/run_result_t.hpp"
 
 namespace afford::test {
 
@@ -57,6 +59,23 @@ inline std::vector<Event> readLog(const std::string& path) {
     out.push_back({ev->channel, std::vector<std::uint8_t>(d, d + ev->datalen)});
   }
   return out;
+}
+
+// Training reports carried by the PREDICTION and RESULT events of a run.
+inline int trainingReports(const std::vector<Event>& events) {
+  int n = 0;
+  for (const auto& e : events) {
+    if (e.channel == "PREDICTION") {
+      prediction_t p;
+      p.decode(e.data.data(), 0, static_cast<int>(e.data.size()));
+      n += p.n_trained;
+    } else if (e.channel == "RESULT") {
+      run_result_t r;
+      r.decode(e.data.data(), 0, static_cast<int>(e.data.size()));
+      n += r.n_trained;
+    }
+  }
+  return n;
 }
 
 inline std::string tempDir(const std::string& name) {

@@ -76,6 +76,9 @@ std::string checkMessage(const prediction_t& m, const RunConfig& c) {
         !why.empty())
       return why;
   }
+  if (m.n_trained < 0 || m.n_trained > 1) return "field n_trained = " + std::to_string(m.n_trained) + " is out of range [0, 1]";
+  for (const auto& t : m.trained)
+    if (auto why = checkMessage(t, c); !why.empty()) return "trained[0]: " + why;
   return "";
 }
 

@@ -12,6 +12,8 @@
 #include <mutex>
 #include <sstream>
 #include <thread>
+#include <sys/resource.h>
+#include <sys/syscall.h>
 #include <unistd.h>
 
 #include "afford/actions.hpp"
@@ -57,8 +59,8 @@ RunOutcome runInProcess(const PlannedRun& run, const ExperimentOptions& o, int s
   const std::string tag = o.jobs > 1 ? "#" + std::to_string(slot) : "";
   const std::string level = o.process_log_level == "info" ? "warn" : o.process_log_level;
   EnvironmentNode env(lcm, makeLogger("environment" + tag, level));
-  EyeNode eye(lcm, makeLogger("eye" + tag, level));
-  PredictorsNode predictors(lcm, makeLogger("predictors" + tag, level));
+  EyeNode eye(lcm, makeLogger("eye" + tag, level), /*speculate=*/false);  // one thread: no idle time to fill
+  PredictorsNode predictors(lcm, makeLogger("predictors" + tag, level), /*async_effects=*/false);
   MotivationNode motivation(lcm, makeLogger("motivation" + tag, level));
   std::unique_ptr<LoggerNode> logger;
   if (run.keep_log) logger = std::make_unique<LoggerNode>(lcm, makeLogger("logger" + tag, level), o.log_root);
@@ -94,6 +96,9 @@ RunOutcome runOverUdpm(const PlannedRun& run, const ExperimentOptions& o, Slot& 
   if (run.keep_log)
     logger = std::make_unique<ProcessGroup>(bin, std::vector<std::string>{"logger"}, slot.url, out,
                                             std::vector<std::string>{"--log-dir", o.log_root});
+  // This thread only watches the run (see kWatcherNice); LCM's receive thread,
+  // created on the first handle(), inherits the priority.
+  setpriority(PRIO_PROCESS, static_cast<id_t>(syscall(SYS_gettid)), kWatcherNice);
   lcm::LCM lcm(slot.url);
   if (!lcm.good()) {
     RunOutcome r;

@@ -130,12 +130,16 @@ int Eye::noisyArgmax(const cv::Mat& base, std::int64_t step, int purpose, std::u
   return best;
 }
 
-const Focus& Eye::scan(std::int64_t step) {
+const Focus& Eye::scan(std::int64_t step) { return look(peekScan(step)); }
+
+const Focus& Eye::look(Focus f) {
+  focus_ = std::move(f);
+  return focus_;
+}
+
+Focus Eye::peekScan(std::int64_t step) const {
   const int objects = objectCount();
-  if (objects == 0) {
-    focus_ = focusAt(focus_.gaze);
-    return focus_;
-  }
+  if (objects == 0) return focusAt(focus_.gaze);
   const int current = labelAt(focus_.gaze);
   int chosen = 0;
   for (int attempt = 0; attempt < config_.eye.max_scan_draws; ++attempt) {
@@ -145,8 +149,7 @@ const Focus& Eye::scan(std::int64_t step) {
     chosen = label;
     if (objects == 1 || label != current) break;
   }
-  focus_ = focusAt(chosen > 0 ? blobCentre(chosen) : focus_.gaze);
-  return focus_;
+  return focusAt(chosen > 0 ? blobCentre(chosen) : focus_.gaze);
 }
 
 Effect Eye::scanEffect(std::int64_t step, cv::Mat after, int action) {

@@ -41,6 +41,11 @@ class Eye {
   // Saliency scan (Algorithm 1, Scan): noise keyed by (seed, step), redrawn
   // until the gaze lands on another object than the current one.
   const Focus& scan(std::int64_t step);
+  // The scan of `step` from the current scene and gaze, without moving the
+  // gaze: scan(step) == look(peekScan(step)).
+  Focus peekScan(std::int64_t step) const;
+  // Move the gaze to a focus computed by peekScan on the current scene.
+  const Focus& look(Focus f);
   // Change-driven scan after `action` was executed at `step` (ScanEffect and
   // Affordance): looks at the changed object in `after` and compares it with
   // the focus before the action. The eye then looks at `after`.

@@ -7,7 +7,8 @@
 
 namespace afford {
 
-EyeNode::EyeNode(lcm::LCM& lcm, std::shared_ptr<spdlog::logger> log) : NodeBase(lcm, "eye", std::move(log)) {
+EyeNode::EyeNode(lcm::LCM& lcm, std::shared_ptr<spdlog::logger> log, bool speculate)
+    : NodeBase(lcm, "eye", std::move(log)), speculate_(speculate) {
   subscribe<scene_t>(channel::kScene, [this](const scene_t& m) { onScene(m); });
   subscribe<decision_t>(channel::kDecision, [this](const decision_t& m) { onDecision(m); });
 }
@@ -16,6 +17,7 @@ void EyeNode::onConfigured(const RunConfig& config) {
   eye_ = std::make_unique<Eye>(config);
   last_scanned_ = last_effect_ = -1;
   scene_announced_ = false;
+  guess_.reset();
 }
 
 void EyeNode::onStop() { eye_.reset(); }
@@ -43,6 +45,7 @@ void EyeNode::onScene(const scene_t& s) {
     return drop(ch, "action scene for step " + std::to_string(s.step - 1) + " but the last focus was of step " +
                         std::to_string(last_scanned_));
 
+  guess_.reset();  // the scene changes: a guess made on the old one is void
   cv::Mat image;
   try {
     image = decodeScene(s.data, s.width, s.height);
@@ -89,9 +92,16 @@ void EyeNode::onDecision(const decision_t& d) {
 
 void EyeNode::scanStep(std::int64_t step) {
   if (step >= config().steps || step <= last_scanned_) return;
-  publishFocus(step, eye_->scan(step));
+  if (guess_ && guess_->first == step)
+    publishFocus(step, eye_->look(std::move(guess_->second)));
+  else
+    publishFocus(step, eye_->scan(step));
+  guess_.reset();
   last_scanned_ = step;
   handled(step);
+  // While motivation decides, prepare the scan a pass would ask for.
+  if (speculate_ && !scene_announced_ && step + 1 < config().steps)
+    guess_.emplace(step + 1, eye_->peekScan(step + 1));
 }
 
 }  // namespace afford

@@ -5,6 +5,8 @@
 // was to pass and no scene was announced, with that decision.
 #pragma once
 #include <memory>
+#include <optional>
+#include <utility>
 
 #include "afford/decision_t.hpp"
 #include "afford/node.hpp"
@@ -15,7 +17,11 @@ namespace afford {
 
 class EyeNode : public NodeBase {
  public:
-  EyeNode(lcm::LCM& lcm, std::shared_ptr<spdlog::logger> log);
+  // `speculate`: while the decision of a step is pending, compute the next
+  // step's scan on the current scene, so that a pass is answered at once.
+  // Results are the same either way; it pays where the eye would otherwise
+  // wait (its own process), not in a single-threaded memq host.
+  EyeNode(lcm::LCM& lcm, std::shared_ptr<spdlog::logger> log, bool speculate = true);
 
  private:
   void onConfigured(const RunConfig& config) override;
@@ -29,6 +35,8 @@ class EyeNode : public NodeBase {
   std::int64_t last_scanned_ = -1;   // last step whose FOCUS was published
   std::int64_t last_effect_ = -1;    // last step whose EFFECT was published
   bool scene_announced_ = false;     // the last scene said a scene for the next step follows
+  bool speculate_;
+  std::optional<std::pair<std::int64_t, Focus>> guess_;  // peekScan of the next step, if computed
 };
 
 }  // namespace afford

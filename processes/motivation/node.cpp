@@ -8,12 +8,11 @@ namespace afford {
 MotivationNode::MotivationNode(lcm::LCM& lcm, std::shared_ptr<spdlog::logger> log)
     : NodeBase(lcm, "motivation", std::move(log)) {
   subscribe<prediction_t>(channel::kPrediction, [this](const prediction_t& m) { onPrediction(m); });
-  subscribe<trained_t>(channel::kTrained, [this](const trained_t& m) { onTrained(m); });
 }
 
 void MotivationNode::onConfigured(const RunConfig& config) {
   core_ = std::make_unique<Motivation>(config);
-  last_ = last_acted_ = -1;
+  last_ = -1;
   early_.clear();
 }
 
@@ -29,16 +28,20 @@ void MotivationNode::onPrediction(const prediction_t& m) {
   drain();
 }
 
-void MotivationNode::onTrained(const trained_t& m) {
-  if (m.step != last_acted_ || !core_->awaitingObservation()) return;
-  core_->observeChange(std::abs(m.affordance_after - m.affordance_before));
-  drain();
-}
-
 void MotivationNode::drain() {
-  while (!early_.empty() && early_.begin()->first == last_ + 1 && !core_->awaitingObservation()) {
+  while (!early_.empty() && early_.begin()->first == last_ + 1) {
     const prediction_t m = early_.begin()->second;
     early_.erase(early_.begin());
+    // IMP with observed_change: the threshold takes the observed change of
+    // the affordance output that the last action caused.
+    if (core_->awaitingObservation()) {
+      if (m.n_trained != 1 || m.trained[0].step != m.step - 1) {
+        drop(channel::kPrediction, "step " + std::to_string(m.step) + " lacks the report of step " +
+                                       std::to_string(m.step - 1) + "'s update");
+        continue;
+      }
+      core_->observeChange(std::abs(m.trained[0].affordance_after - m.trained[0].affordance_before));
+    }
     std::array<double, kNumActions> aff{}, lp{};
     std::copy(m.affordance.begin(), m.affordance.end(), aff.begin());
     std::copy(m.learning_progress.begin(), m.learning_progress.end(), lp.begin());
@@ -55,7 +58,6 @@ void MotivationNode::drain() {
     out.threshold = d.threshold;
     publish(channel::kDecision, out);
     last_ = m.step;
-    if (d.act) last_acted_ = m.step;
     handled(m.step);
     if (m.step == config().steps - 1) setState(process_status_t::DONE);
   }

@@ -7,8 +7,8 @@
 
 namespace afford {
 
-PredictorsNode::PredictorsNode(lcm::LCM& lcm, std::shared_ptr<spdlog::logger> log)
-    : NodeBase(lcm, "predictors", std::move(log)) {
+PredictorsNode::PredictorsNode(lcm::LCM& lcm, std::shared_ptr<spdlog::logger> log, bool async_effects)
+    : NodeBase(lcm, "predictors", std::move(log)), async_effects_(async_effects) {
   subscribe<object_probe_t>(channel::kProbe, [this](const object_probe_t& m) { onProbe(m); });
   subscribe<focus_t>(channel::kFocus, [this](const focus_t& m) { onFocus(m); });
   subscribe<decision_t>(channel::kDecision, [this](const decision_t& m) { onDecision(m); });
@@ -16,7 +16,9 @@ PredictorsNode::PredictorsNode(lcm::LCM& lcm, std::shared_ptr<spdlog::logger> lo
 }
 
 void PredictorsNode::onConfigured(const RunConfig& config) {
+  trainer_.reset();
   core_ = std::make_unique<Predictors>(config);
+  if (async_effects_) trainer_ = std::make_unique<EffectTrainer>(*core_);
   probes_.clear();
   early_.clear();
   pending_trained_.reset();
@@ -27,6 +29,7 @@ void PredictorsNode::onConfigured(const RunConfig& config) {
 }
 
 void PredictorsNode::onStop() {
+  trainer_.reset();
   core_.reset();
   early_.clear();
 }
@@ -60,10 +63,6 @@ void PredictorsNode::drainBuffered() {
 
 void PredictorsNode::handleFocus(const focus_t& m) {
   if (probes_.empty()) log_->warn("{}: no probe images received yet: affordance tables will be empty", channel::kFocus);
-  if (pending_trained_) {
-    publish(channel::kTrained, *pending_trained_);
-    pending_trained_.reset();
-  }
   if (m.step % config().curve_interval == 0) publishTable(m.step);
   const Prediction p = core_->predict(m.image);
   prediction_t out;
@@ -74,6 +73,9 @@ void PredictorsNode::handleFocus(const focus_t& m) {
   out.n_actions = kNumActions;
   out.affordance.assign(p.affordance.begin(), p.affordance.end());
   out.learning_progress.assign(p.learning_progress.begin(), p.learning_progress.end());
+  if (pending_trained_) out.trained.push_back(*pending_trained_);  // the update since the last prediction
+  pending_trained_.reset();
+  out.n_trained = static_cast<int8_t>(out.trained.size());
   publish(channel::kPrediction, out);
   trainPendingEffects();  // off the critical path: the next decision is under way
   current_ = m.step;
@@ -139,7 +141,10 @@ void PredictorsNode::onEffect(const effect_t& m) {
 
 void PredictorsNode::trainPendingEffects() {
   if (!pending_effects_) return;
-  core_->trainEffects(*pending_effects_);
+  if (trainer_)
+    trainer_->push(std::move(*pending_effects_));
+  else
+    core_->trainEffects(*pending_effects_);
   pending_effects_.reset();
 }
 
@@ -156,11 +161,8 @@ void PredictorsNode::publishTable(std::int64_t step) {
 void PredictorsNode::finish() {
   if (finished_) return;
   finished_ = true;
-  if (pending_trained_) {
-    publish(channel::kTrained, *pending_trained_);
-    pending_trained_.reset();
-  }
   trainPendingEffects();
+  if (trainer_) trainer_->drain();  // every update applied before the checksum
   publishTable(config().steps);
   run_result_t r;
   r.run_id = runId();
@@ -169,6 +171,9 @@ void PredictorsNode::finish() {
   r.n_actions = kNumActions;
   r.actions_executed.assign(core_->executed().begin(), core_->executed().end());
   r.successes.assign(core_->successes().begin(), core_->successes().end());
+  if (pending_trained_) r.trained.push_back(*pending_trained_);
+  pending_trained_.reset();
+  r.n_trained = static_cast<int8_t>(r.trained.size());
   publish(channel::kResult, r);
   log_->info("run '{}' learned: weights checksum {}", runId(), r.weights_checksum);
   handled(config().steps);

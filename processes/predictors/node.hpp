@@ -2,8 +2,8 @@
 // FOCUS(t) -> DECISION(t) -> [EFFECT(t)] -> FOCUS(t+1), buffering any that
 // arrive early, so its state is a pure function of the run's messages.
 // Channels in:  RUN_CONFIG, RUN_CONTROL, PROBE, FOCUS, DECISION, EFFECT
-// Channels out: TRAINED (before the next PREDICTION), AFFORDANCE_TABLE (every
-//               run.curve_interval steps and at the end), PREDICTION, RESULT, STATUS
+// Channels out: AFFORDANCE_TABLE (every run.curve_interval steps and at the end),
+//               PREDICTION (with the report of the last update, if any), RESULT, STATUS
 #pragma once
 #include <map>
 #include <memory>
@@ -15,15 +15,17 @@
 #include "afford/node.hpp"
 #include "afford/object_probe_t.hpp"
 #include "afford/trained_t.hpp"
+#include "predictors/effect_trainer.hpp"
 #include "predictors/predictors.hpp"
 
 namespace afford {
 
 class PredictorsNode : public NodeBase {
  public:
-  PredictorsNode(lcm::LCM& lcm, std::shared_ptr<spdlog::logger> log);
-  // The predictors of the current run (nullptr between runs).
-  const Predictors* predictors() const { return core_.get(); }
+  // `async_effects`: make the forward-model updates on a worker thread
+  // (EffectTrainer) instead of inline after the next prediction. Same results;
+  // it pays where a second core is free, not in a single-threaded memq host.
+  PredictorsNode(lcm::LCM& lcm, std::shared_ptr<spdlog::logger> log, bool async_effects = true);
 
  private:
   enum class Outcome { Unknown, Passed, AwaitingEffect, Learned };
@@ -40,7 +42,9 @@ class PredictorsNode : public NodeBase {
   void finish();
   void trainPendingEffects();
 
+  bool async_effects_;
   std::unique_ptr<Predictors> core_;
+  std::unique_ptr<EffectTrainer> trainer_;  // declared after core_: stops before it goes
   std::vector<std::vector<std::uint8_t>> probes_;
   std::int64_t current_ = -1;          // the step whose focus was handled last
   Outcome outcome_ = Outcome::Unknown; // of step current_

@@ -98,7 +98,8 @@ TEST(Choreography, ARunHasOnePredictionAndOneDecisionPerStepInOrder) {
   EXPECT_EQ(run.count(channel::kFocus), 200);
   EXPECT_EQ(run.count(channel::kPrediction), 200);
   EXPECT_EQ(run.count(channel::kDecision), 200);
-  EXPECT_EQ(run.count(channel::kEffect), run.count(channel::kTrained));
+  EXPECT_GT(run.count(channel::kEffect), 0);
+  EXPECT_EQ(run.count(channel::kEffect), test::trainingReports(run.events));  // every action learned from once
   EXPECT_EQ(run.count(channel::kResult), 1);
   ASSERT_GE(run.events.size(), 3u);
   EXPECT_EQ(run.events[0].channel, channel::kRunConfig);

@@ -11,7 +11,6 @@ inline constexpr const char* kFocus = "FOCUS";
 inline constexpr const char* kPrediction = "PREDICTION";
 inline constexpr const char* kDecision = "DECISION";
 inline constexpr const char* kEffect = "EFFECT";
-inline constexpr const char* kTrained = "TRAINED";
 inline constexpr const char* kProbe = "PROBE";
 inline constexpr const char* kAffordanceTable = "AFFORDANCE_TABLE";
 inline constexpr const char* kResult = "RESULT";

@@ -1,0 +1,38 @@
+// Applies forward-model (what- and where-effect) updates on a worker thread,
+// one at a time in the order they were queued, so they overlap with the next
+// steps of the choreography. The affordance path never touches those models,
+// and drain() is called before anything reads them (weights checksum,
+// forward-model queries), so results are bit-identical to updating inline.
+#pragma once
+#include <condition_variable>
+#include <deque>
+#include <mutex>
+#include <thread>
+
+#include "predictors/predictors.hpp"
+
+namespace afford {
+
+class EffectTrainer {
+ public:
+  explicit EffectTrainer(Predictors& core);
+  ~EffectTrainer();
+  EffectTrainer(const EffectTrainer&) = delete;
+  EffectTrainer& operator=(const EffectTrainer&) = delete;
+
+  void push(Experience e);
+  // Block until every queued update is applied.
+  void drain();
+
+ private:
+  void work();
+
+  Predictors& core_;
+  std::mutex mutex_;
+  std::condition_variable changed_;
+  std::deque<Experience> queue_;
+  bool busy_ = false, stop_ = false;
+  std::thread thread_;
+};
+
+}  // namespace afford
