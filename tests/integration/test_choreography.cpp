@@ -232,6 +232,7 @@ std::vector<BadInput> badInputs() {
          p.n_actions = 4;
          p.affordance = {0.5, 0.5, kNaN, 0.5};
          p.learning_progress = {0, 0, 0, 0};
+         p.n_trained = 0;
          l.publish("PREDICTION", &p);
        }},
       {"Infinite", "DECISION", "field x is not finite",
