@@ -137,14 +137,21 @@ std::string fixed(double v, int digits) {
   return s.str();
 }
 
-}  // namespace
+// The validated list of runs of a request, with each system's config.
+struct Plan {
+  std::string config_dir;
+  ExperimentFile exp;
+  int reps = 0;
+  std::vector<PlannedRun> runs;
+  std::map<std::string, RunConfig> configs;  // per system (of its first repetition)
+};
 
-int runExperiment(const ExperimentOptions& o, spdlog::logger& log) {
-  const std::string config_dir = o.config_dir.empty() ? std::string(AFFORD_SOURCE_DIR) + "/config" : o.config_dir;
-
-  // Everything that can be wrong with the request is found here, before any process starts.
-  const ExperimentFile exp = loadExperiment(config_dir, o.experiment);
-  const int reps = o.reps.value_or(exp.repetitions);
+// Everything that can be wrong with the request is found here, before any process starts.
+Plan planExperiment(const ExperimentOptions& o) {
+  Plan plan;
+  plan.config_dir = o.config_dir.empty() ? std::string(AFFORD_SOURCE_DIR) + "/config" : o.config_dir;
+  plan.exp = loadExperiment(plan.config_dir, o.experiment);
+  const int reps = plan.reps = o.reps.value_or(plan.exp.repetitions);
   if (reps < 1) throw ConfigError("--reps must be at least 1");
   if (o.jobs < 1) throw ConfigError("--jobs must be at least 1");
   if (o.transport != "udpm" && o.transport != "memq")
@@ -152,13 +159,13 @@ int runExperiment(const ExperimentOptions& o, spdlog::logger& log) {
   if (o.keep_logs != "all" && o.keep_logs != "first" && o.keep_logs != "none")
     throw ConfigError("--keep-logs must be all, first or none, not \"" + o.keep_logs + "\"");
   const std::string prefix = o.run_prefix.empty() ? defaultPrefix() : o.run_prefix;
-  std::vector<PlannedRun> runs;
-  std::map<std::string, RunConfig> configs;
+  auto& runs = plan.runs;
+  auto& configs = plan.configs;
   for (const auto& sys_name : o.systems) {
     const System sys = parseSystem(sys_name);
     for (int r = 0; r < reps; ++r) {
       RunRequest req{o.experiment, sys, o.seed + r, o.steps, o.settings};
-      const YAML::Node node = effectiveConfig(config_dir, req);
+      const YAML::Node node = effectiveConfig(plan.config_dir, req);
       const RunConfig cfg = parseRunConfig(node);
       if (r == 0) configs[sys_name] = cfg;
       PlannedRun p;
@@ -183,17 +190,13 @@ int runExperiment(const ExperimentOptions& o, spdlog::logger& log) {
       throw ConfigError("the log folder " + (fs::path(o.log_root) / p.spec.run_id).string() +
                         " exists already: choose another --run-prefix or --log-root");
 
-  std::string network = "in-process memq://";
-  std::string bin;
-  if (o.transport == "udpm") {
-    network = prepareNetwork(o.netns);
-    bin = executableDir();
-  }
-  fs::create_directories(o.out_dir);
-  log.info("experiment {}: {} run(s) of {} steps, {} at a time, over {} ({})", o.experiment, runs.size(),
-           runs.front().spec.steps, o.jobs, o.transport, network);
+  return plan;
+}
 
-  // Run, J at a time.
+// Run every planned run, J at a time; outcomes in plan order.
+std::vector<RunOutcome> executeRuns(const Plan& plan, const ExperimentOptions& o, const std::string& bin,
+                                    spdlog::logger& log) {
+  const auto& runs = plan.runs;
   std::vector<RunOutcome> outcomes(runs.size());
   std::atomic<std::size_t> next{0};
   std::atomic<int> done{0};
@@ -230,7 +233,17 @@ int runExperiment(const ExperimentOptions& o, spdlog::logger& log) {
   for (int j = 0; j < std::min<int>(o.jobs, static_cast<int>(runs.size())); ++j) threads.emplace_back(worker, j);
   for (auto& t : threads) t.join();
 
-  // Summaries.
+  return outcomes;
+}
+
+// summary.json content (docs/results-schema.md); also writes the CSV files.
+json summarise(const Plan& plan, const ExperimentOptions& o, const std::vector<RunOutcome>& outcomes,
+               const std::string& network) {
+  const auto& runs = plan.runs;
+  const auto& configs = plan.configs;
+  const int reps = plan.reps;
+  const auto& exp = plan.exp;
+  const std::string& config_dir = plan.config_dir;
   const auto& any_cfg = configs.begin()->second;
   std::vector<std::string> object_names;
   for (const auto& ob : any_cfg.world.objects) object_names.push_back(ob.name);
@@ -250,9 +263,8 @@ int runExperiment(const ExperimentOptions& o, spdlog::logger& log) {
     reference = YAML::LoadFile(config_dir + "/reference.yaml")[o.experiment];
   } catch (const YAML::Exception&) {
   }
-  int failures = 0;
   for (const auto& sys : o.systems) {
-    const RunConfig& cfg = configs[sys];
+    const RunConfig& cfg = configs.at(sys);
     Table target;
     for (const auto& ob : cfg.world.objects) target.emplace_back(ob.affordance.begin(), ob.affordance.end());
     json js = {{"target", target}, {"runs", json::array()}};
@@ -265,7 +277,6 @@ int runExperiment(const ExperimentOptions& o, spdlog::logger& log) {
       if (p.system != sys) continue;
       const RunOutcome& r = outcomes[p.index];
       if (!r.ok || r.curve.empty()) {
-        ++failures;
         js["failed_runs"].push_back({{"run_id", p.spec.run_id}, {"seed", p.spec.seed}, {"error", r.error}});
         continue;
       }
@@ -339,35 +350,56 @@ int runExperiment(const ExperimentOptions& o, spdlog::logger& log) {
     summary["systems"][sys] = js;
   }
   if (reference && reference["source"]) summary["reference_source"] = reference["source"].as<std::string>();
-  {
-    std::ofstream out(fs::path(o.out_dir) / "summary.json");
-    out << summary.dump(2) << "\n";
-  }
+  return summary;
+}
 
-  if (!o.quiet) {
-    std::ostringstream t;
-    t << "\nLearned affordances after " << runs.front().spec.steps << " steps (mean of " << reps
-      << " run(s)); in brackets the paper's table\n";
-    for (const auto& sys : o.systems) {
-      const json& js = summary["systems"][sys];
-      if (!js.contains("affordance")) continue;
-      t << "\n" << sys << "            move        turn green  turn red    turn blue\n";
-      for (std::size_t i = 0; i < object_names.size(); ++i) {
-        t << "  " << std::left << std::setw(17) << object_names[i];
-        for (int a = 0; a < kNumActions; ++a)
-          t << std::setw(12)
-            << (fixed(js["affordance"][i][a].get<double>(), 2) + " (" + fixed(js["target"][i][a].get<double>(), 1) + ")");
-        t << "\n";
-      }
-      t << "  mean absolute error " << fixed(js["affordance_mae"].get<double>(), 3);
-      if (js.contains("reference_affordance_mae"))
-        t << " (authors' code: " << fixed(js["reference_affordance_mae"].get<double>(), 3) << ")";
+// The mean learned table of each system beside the experiment's table.
+void printTables(const json& summary, const ExperimentOptions& o) {
+  const auto& runs_steps = summary["steps"];
+  const auto object_names = summary["objects"].get<std::vector<std::string>>();
+  const int reps = summary["repetitions"].get<int>();
+  std::ostringstream t;
+  t << "\nLearned affordances after " << runs_steps.get<std::int64_t>() << " steps (mean of " << reps
+    << " run(s)); in brackets the paper's table\n";
+  for (const auto& sys : o.systems) {
+    const json& js = summary["systems"][sys];
+    if (!js.contains("affordance")) continue;
+    t << "\n" << sys << "            move        turn green  turn red    turn blue\n";
+    for (std::size_t i = 0; i < object_names.size(); ++i) {
+      t << "  " << std::left << std::setw(17) << object_names[i];
+      for (int a = 0; a < kNumActions; ++a)
+        t << std::setw(12)
+          << (fixed(js["affordance"][i][a].get<double>(), 2) + " (" + fixed(js["target"][i][a].get<double>(), 1) + ")");
       t << "\n";
     }
-    t << "\nsummary: " << (fs::path(o.out_dir) / "summary.json").string() << "\n";
-    std::printf("%s", t.str().c_str());
-    std::fflush(stdout);
+    t << "  mean absolute error " << fixed(js["affordance_mae"].get<double>(), 3);
+    if (js.contains("reference_affordance_mae"))
+      t << " (authors' code: " << fixed(js["reference_affordance_mae"].get<double>(), 3) << ")";
+    t << "\n";
   }
+  t << "\nsummary: " << (fs::path(o.out_dir) / "summary.json").string() << "\n";
+  std::printf("%s", t.str().c_str());
+  std::fflush(stdout);
+}
+
+}  // namespace
+
+int runExperiment(const ExperimentOptions& o, spdlog::logger& log) {
+  const Plan plan = planExperiment(o);
+  std::string network = "in-process memq://";
+  std::string bin;
+  if (o.transport == "udpm") {
+    network = prepareNetwork(o.netns);
+    bin = executableDir();
+  }
+  fs::create_directories(o.out_dir);
+  log.info("experiment {}: {} run(s) of {} steps, {} at a time, over {} ({})", o.experiment, plan.runs.size(),
+           plan.runs.front().spec.steps, o.jobs, o.transport, network);
+  const std::vector<RunOutcome> outcomes = executeRuns(plan, o, bin, log);
+  const json summary = summarise(plan, o, outcomes, network);
+  std::ofstream(fs::path(o.out_dir) / "summary.json") << summary.dump(2) << "\n";
+  if (!o.quiet) printTables(summary, o);
+  const auto failures = std::count_if(outcomes.begin(), outcomes.end(), [](const RunOutcome& r) { return !r.ok; });
   if (failures) log.error("{} run(s) failed; see summary.json failed_runs", failures);
   return failures ? 1 : 0;
 }
