@@ -177,6 +177,7 @@ RunConfig parseRunConfig(const YAML::Node& root) {
     Reader run = r.map("run");
     c.steps = run.integer("steps", 1, 100'000'000);
     c.curve_interval = run.integer("curve_interval", 1, 100'000'000);
+    c.checkpoint = run.has("checkpoint") ? run.text("checkpoint") : "";
     run.finish();
   }
   {

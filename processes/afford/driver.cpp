@@ -38,6 +38,7 @@ RunDriver::RunDriver(lcm::LCM& lcm, std::shared_ptr<spdlog::logger> log) : lcm_(
     if (!decodeAtEdge(b, m, why)) return log_->warn("{}: dropped message: {}", channel::kResult, why);
     if (!outcome_ || m.run_id != run_id_) return;
     outcome_->weights_checksum = m.weights_checksum;
+    outcome_->checkpoint = m.checkpoint;
     outcome_->executed = m.actions_executed;
     outcome_->successes = m.successes;
     have_result_ = true;

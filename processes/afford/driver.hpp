@@ -37,6 +37,7 @@ struct RunOutcome {
   bool ok = false;
   std::string error;
   std::string weights_checksum;
+  std::string checkpoint;                     // the predictors' saved weights, if any
   std::vector<TableSnapshot> curve;           // every curve_interval steps, and the end
   std::vector<std::int64_t> executed, successes;
   std::string log_dir;                        // from the logger, if one took part

@@ -165,13 +165,15 @@ Plan planExperiment(const ExperimentOptions& o) {
     const System sys = parseSystem(sys_name);
     for (int r = 0; r < reps; ++r) {
       RunRequest req{o.experiment, sys, o.seed + r, o.steps, o.settings};
-      const YAML::Node node = effectiveConfig(plan.config_dir, req);
+      YAML::Node node = effectiveConfig(plan.config_dir, req);
+      const std::string run_id = prefix + "-" + o.experiment + "-" + sys_name + "-s" + std::to_string(o.seed + r);
+      node["run"]["checkpoint"] = (fs::path(o.log_root) / run_id / "predictors.ckpt").string();
       const RunConfig cfg = parseRunConfig(node);
       if (r == 0) configs[sys_name] = cfg;
       PlannedRun p;
       p.system = sys_name;
       p.keep_log = o.keep_logs == "all" || (o.keep_logs == "first" && r == 0);
-      p.spec.run_id = prefix + "-" + o.experiment + "-" + sys_name + "-s" + std::to_string(o.seed + r);
+      p.spec.run_id = run_id;
       p.spec.experiment = o.experiment;
       p.spec.system = sys_name;
       p.spec.seed = o.seed + r;
@@ -289,6 +291,7 @@ json summarise(const Plan& plan, const ExperimentOptions& o, const std::vector<R
                             {"affordance", fin},
                             {"affordance_mae", maes.back()},
                             {"weights_checksum", r.weights_checksum},
+                            {"checkpoint", r.checkpoint},
                             {"actions_executed", r.executed},
                             {"successes", r.successes},
                             {"wall_seconds", r.wall_seconds},

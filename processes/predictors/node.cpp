@@ -168,6 +168,15 @@ void PredictorsNode::finish() {
   r.run_id = runId();
   r.step = config().steps;
   r.weights_checksum = core_->weightsChecksum();
+  r.checkpoint = config().checkpoint;
+  if (!r.checkpoint.empty()) {
+    try {
+      core_->save(r.checkpoint);
+    } catch (const std::exception& e) {
+      log_->error("{}", e.what());
+      r.checkpoint.clear();
+    }
+  }
   r.n_actions = kNumActions;
   r.actions_executed.assign(core_->executed().begin(), core_->executed().end());
   r.successes.assign(core_->successes().begin(), core_->successes().end());

@@ -1,5 +1,11 @@
 #include "predictors/predictors.hpp"
 
+#include <cstdio>
+#include <cstring>
+#include <filesystem>
+#include <fstream>
+#include <stdexcept>
+
 #include "afford/checksum.hpp"
 #include "afford/rng.hpp"
 
@@ -84,6 +90,70 @@ std::vector<double> Predictors::whatEffect(int action, const std::vector<std::ui
 std::array<double, 2> Predictors::whereEffect(int action, double x, double y, double tx, double ty) const {
   const Eigen::VectorXd p = where_[action].output(whereInput(action, x, y, tx, ty));
   return {p[0], p[1]};
+}
+
+namespace {
+constexpr char kMagic[8] = {'A', 'F', 'F', 'O', 'R', 'D', 'C', 'K'};
+constexpr std::uint32_t kVersion = 1;
+}  // namespace
+
+template <class F>
+static void forEachWeightArray(F&& f, std::vector<Unit>& aff, std::vector<Unit>& lp, std::vector<Layer>& what,
+                               std::vector<Layer>& where) {
+  for (int a = 0; a < kNumActions; ++a) {
+    f(aff[a].weights().data(), aff[a].weights().size());
+    f(lp[a].weights().data(), lp[a].weights().size());
+    f(what[a].weights().data(), what[a].weights().size());
+    f(where[a].weights().data(), where[a].weights().size());
+  }
+}
+
+void Predictors::save(const std::string& path) const {
+  const std::string tmp = path + ".tmp";
+  std::error_code ec;
+  const auto parent = std::filesystem::path(path).parent_path();
+  if (!parent.empty()) std::filesystem::create_directories(parent, ec);
+  {
+    std::ofstream out(tmp, std::ios::binary);
+    if (!out) throw std::runtime_error("cannot write checkpoint " + tmp);
+    out.write(kMagic, sizeof kMagic);
+    const std::uint32_t header[2] = {kVersion, static_cast<std::uint32_t>(input_size_)};
+    out.write(reinterpret_cast<const char*>(header), sizeof header);
+    auto self = const_cast<Predictors*>(this);
+    forEachWeightArray([&](double* d, Eigen::Index n) { out.write(reinterpret_cast<const char*>(d), n * sizeof(double)); },
+                       self->affordance_, self->learning_progress_, self->what_, self->where_);
+    out.write(reinterpret_cast<const char*>(executed_.data()), sizeof executed_);
+    out.write(reinterpret_cast<const char*>(successes_.data()), sizeof successes_);
+    const std::string sum = weightsChecksum();
+    out.write(sum.data(), static_cast<std::streamsize>(sum.size()));
+    if (!out) throw std::runtime_error("cannot write checkpoint " + tmp);
+  }
+  if (std::rename(tmp.c_str(), path.c_str()) != 0) throw std::runtime_error("cannot rename " + tmp + " to " + path);
+}
+
+void Predictors::load(const std::string& path) {
+  std::ifstream in(path, std::ios::binary);
+  if (!in) throw std::runtime_error("checkpoint " + path + ": cannot be read");
+  char magic[8];
+  std::uint32_t header[2];
+  in.read(magic, sizeof magic);
+  in.read(reinterpret_cast<char*>(header), sizeof header);
+  if (!in || std::memcmp(magic, kMagic, sizeof magic) != 0)
+    throw std::runtime_error("checkpoint " + path + ": not an afford predictors checkpoint");
+  if (header[0] != kVersion)
+    throw std::runtime_error("checkpoint " + path + ": format version " + std::to_string(header[0]) + ", expected " +
+                             std::to_string(kVersion));
+  if (header[1] != static_cast<std::uint32_t>(input_size_))
+    throw std::runtime_error("checkpoint " + path + ": focus images of " + std::to_string(header[1]) +
+                             " values, this run uses " + std::to_string(input_size_));
+  forEachWeightArray([&](double* d, Eigen::Index n) { in.read(reinterpret_cast<char*>(d), n * sizeof(double)); },
+                     affordance_, learning_progress_, what_, where_);
+  in.read(reinterpret_cast<char*>(executed_.data()), sizeof executed_);
+  in.read(reinterpret_cast<char*>(successes_.data()), sizeof successes_);
+  std::string sum(16, '\0');
+  in.read(sum.data(), 16);
+  if (!in) throw std::runtime_error("checkpoint " + path + ": truncated");
+  if (sum != weightsChecksum()) throw std::runtime_error("checkpoint " + path + ": checksum mismatch (corrupt file)");
 }
 
 std::string Predictors::weightsChecksum() const {

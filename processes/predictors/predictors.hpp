@@ -62,6 +62,13 @@ class Predictors {
 
   // FNV-1a 64 of every weight, in a fixed order (hex).
   std::string weightsChecksum() const;
+
+  // Checkpoint: every weight and counter, in the checksum's order, in a binary
+  // file that ends with the checksum. save() writes atomically (temp + rename);
+  // load() throws std::runtime_error naming the file and the problem (missing,
+  // wrong format, other dimensions, checksum mismatch).
+  void save(const std::string& path) const;
+  void load(const std::string& path);
   const std::array<std::int64_t, kNumActions>& executed() const { return executed_; }
   const std::array<std::int64_t, kNumActions>& successes() const { return successes_; }
 

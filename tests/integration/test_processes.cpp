@@ -29,12 +29,15 @@ std::string slurp(const fs::path& p) {
   return std::string(std::istreambuf_iterator<char>(in), {});
 }
 
-// One short IMP base run; returns the output folder.
-std::string runBase(const std::string& name, const std::string& transport, int port) {
+// One short IMP base run; returns the output folder. The log root is part of
+// the run's config (its checkpoint path), so runs to compare share one.
+std::string runBase(const std::string& name, const std::string& transport, int port,
+                    const std::string& log_root = "") {
   const std::string dir = test::tempDir(name);
+  const std::string logs = log_root.empty() ? dir + "/logs" : log_root;
   const auto r = test::runCommand(test::afford("experiment base --system IMP --reps 1 --steps 300 --seed 11 --quiet"
                                                " --run-prefix it --transport " + transport + " --out " + dir +
-                                               " --log-root " + dir + "/logs --base-port " + std::to_string(port)));
+                                               " --log-root " + logs + " --base-port " + std::to_string(port)));
   EXPECT_EQ(r.exit_code, 0) << r.output;
   return dir;
 }
@@ -50,6 +53,7 @@ TEST(Processes, RealProcessesRunTheBaseTestAndRecordIt) {
   EXPECT_EQ(run["affordance"][0].size(), 4u);
   EXPECT_EQ(s["systems"]["IMP"]["target"][0], json({1.0, 1.0, 0.0, 1.0}));
   EXPECT_EQ(s["systems"]["IMP"]["curves"]["steps"], json({0, 100, 200, 300}));
+  EXPECT_TRUE(fs::exists(run["checkpoint"].get<std::string>()));  // the trained predictors, for the extrinsic phase
 
   const fs::path log_dir = run["log_dir"].get<std::string>();
   const auto events = test::readLog((log_dir / "log.00.lcm").string());
@@ -74,12 +78,14 @@ TEST(Processes, RealProcessesRunTheBaseTestAndRecordIt) {
 }
 
 TEST(Processes, UdpmAndMemqRunsGiveByteIdenticalLogsAndWeights) {
-  const std::string a = runBase("det-udpm", "udpm", 7820);
-  const std::string b = runBase("det-memq", "memq", 7830);
+  const std::string logs = test::tempDir("det-logs");
+  const std::string a = runBase("det-udpm", "udpm", 7820, logs);
+  fs::rename(logs + "/it-base-IMP-s11", logs + "/udpm");
+  const std::string b = runBase("det-memq", "memq", 7830, logs);
   const json sa = readJson(fs::path(a) / "summary.json"), sb = readJson(fs::path(b) / "summary.json");
   EXPECT_EQ(sa["systems"]["IMP"]["runs"][0]["weights_checksum"], sb["systems"]["IMP"]["runs"][0]["weights_checksum"]);
-  const auto ea = test::readLog(a + "/logs/it-base-IMP-s11/log.00.lcm");
-  const auto eb = test::readLog(b + "/logs/it-base-IMP-s11/log.00.lcm");
+  const auto ea = test::readLog(logs + "/udpm/log.00.lcm");
+  const auto eb = test::readLog(logs + "/it-base-IMP-s11/log.00.lcm");
   ASSERT_EQ(ea.size(), eb.size());
   for (std::size_t i = 0; i < ea.size(); ++i) {
     ASSERT_EQ(ea[i].channel, eb[i].channel) << "event " << i;

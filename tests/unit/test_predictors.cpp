@@ -1,6 +1,8 @@
 #include <gtest/gtest.h>
 
 #include <cmath>
+#include <filesystem>
+#include <fstream>
 
 #include "afford/actions.hpp"
 #include "environment/environment.hpp"
@@ -102,6 +104,41 @@ TEST_F(Fixture, WhereEffectOfMoveLearnsTheTarget) {
   const auto where = p.whereEffect(kMove, 0.2, 0.2, 0.55, 0.35);
   EXPECT_NEAR(where[0], 0.55, 0.02);
   EXPECT_NEAR(where[1], 0.35, 0.02);
+}
+
+TEST_F(Fixture, CheckpointRestoresEveryWeight) {
+  Predictors trained(imp);
+  for (int k = 0; k < 20; ++k) trained.train(experience(k % 4, k % 3 != 0, k % 9));
+  const std::string path = test::tempDir("ckpt") + "/sub/predictors.ckpt";
+  trained.save(path);
+  Predictors fresh(imp);
+  ASSERT_NE(fresh.weightsChecksum(), trained.weightsChecksum());
+  fresh.load(path);
+  EXPECT_EQ(fresh.weightsChecksum(), trained.weightsChecksum());
+  EXPECT_EQ(fresh.executed(), trained.executed());
+  EXPECT_EQ(fresh.whatEffect(kTurnRed, probes[4]), trained.whatEffect(kTurnRed, probes[4]));
+}
+
+TEST_F(Fixture, BadCheckpointsAreRefusedNamingTheFile) {
+  const std::string dir = test::tempDir("ckpt-bad");
+  Predictors p(imp);
+  auto refusal = [&](const std::string& path) {
+    try {
+      p.load(path);
+    } catch (const std::runtime_error& e) {
+      return std::string(e.what());
+    }
+    return std::string();
+  };
+  EXPECT_NE(refusal(dir + "/missing.ckpt").find("missing.ckpt: cannot be read"), std::string::npos);
+  std::ofstream(dir + "/junk.ckpt") << "not a checkpoint at all";
+  EXPECT_NE(refusal(dir + "/junk.ckpt").find("not an afford predictors checkpoint"), std::string::npos);
+  p.save(dir + "/good.ckpt");
+  std::filesystem::resize_file(dir + "/good.ckpt", std::filesystem::file_size(dir + "/good.ckpt") - 100);
+  EXPECT_NE(refusal(dir + "/good.ckpt").find("truncated"), std::string::npos);
+  Predictors other(test::shippedConfig("base", System::IMP, 1, {"eye.focus_side=19"}));
+  other.save(dir + "/small.ckpt");
+  EXPECT_NE(refusal(dir + "/small.ckpt").find("focus images of 1083 values"), std::string::npos);
 }
 
 TEST_F(Fixture, SplitTrainingEqualsWholeTraining) {

@@ -85,6 +85,7 @@ struct RunConfig {
   std::int64_t seed = 0;
   std::int64_t steps = 0;
   std::int64_t curve_interval = 100;
+  std::string checkpoint;  // where the predictors save their weights after the last step ("" = nowhere)
   WorldConfig world;
   EyeConfig eye;
   PredictorsConfig predictors;
