@@ -133,7 +133,50 @@ ObjectSpec parseObject(const YAML::Node& node, const std::string& path, const Wo
   return o;
 }
 
+ObjectState parseState(Reader& parent, const std::string& key, const WorldConfig& w) {
+  Reader r = parent.map(key);
+  ObjectState s;
+  s.colour = r.choice<Colour>("colour", {{"red", Colour::Red}, {"green", Colour::Green}, {"blue", Colour::Blue}});
+  const auto pos = numberList(r, "position", 2, w.table_min, w.table_max);
+  s.x = pos[0];
+  s.y = pos[1];
+  r.finish();
+  return s;
+}
+
 }  // namespace
+
+Scenario parseScenario(const YAML::Node& node, const std::string& path, const WorldConfig& world) {
+  Reader r(node, path);
+  Scenario s;
+  s.name = r.text("name");
+  if (r.has("description")) s.description = r.text("description");
+  YAML::Node objs = r.raw("objects");
+  const std::string key = r.keyPath("objects");
+  if (!objs.IsSequence() || objs.size() == 0) fail(key, "expected a non-empty list of objects, got " + describe(objs));
+  for (std::size_t i = 0; i < objs.size(); ++i) {
+    Reader o(objs[i], key + "[" + std::to_string(i) + "]");
+    ScenarioObject so;
+    so.shape = o.choice<Shape>("shape", {{"square", Shape::Square}, {"circle", Shape::Circle},
+                                          {"rectangle", Shape::Rectangle}});
+    so.initial = parseState(o, "initial", world);
+    so.goal = parseState(o, "goal", world);
+    so.value = o.has("value") ? o.number("value", 0.0, 1e6) : 1.0;
+    o.finish();
+    s.objects.push_back(so);
+  }
+  r.finish();
+  return s;
+}
+
+std::vector<std::string> listScenarios(const std::string& config_dir) {
+  std::vector<std::string> names;
+  std::error_code ec;
+  for (const auto& entry : std::filesystem::directory_iterator(std::filesystem::path(config_dir) / "scenarios", ec))
+    if (entry.path().extension() == ".yaml") names.push_back(entry.path().stem().string());
+  std::sort(names.begin(), names.end());
+  return names;
+}
 
 const char* toString(Shape s) {
   switch (s) {
@@ -289,6 +332,19 @@ YAML::Node loadFile(const std::filesystem::path& file) {
   }
 }
 }  // namespace
+
+Scenario loadScenario(const std::string& config_dir, const std::string& name, const WorldConfig& world) {
+  const auto known = listScenarios(config_dir);
+  if (std::find(known.begin(), known.end(), name) == known.end()) {
+    std::string list;
+    for (const auto& k : known) list += (list.empty() ? "" : ", ") + k;
+    throw ConfigError("unknown scenario \"" + name + "\" (known in " + config_dir + "/scenarios: " + list + ")");
+  }
+  const auto file = std::filesystem::path(config_dir) / "scenarios" / (name + ".yaml");
+  Scenario s = parseScenario(loadFile(file), "", world);
+  validateScenario(s, world);
+  return s;
+}
 
 ExperimentFile loadExperiment(const std::string& config_dir, const std::string& name) {
   const auto known = listExperiments(config_dir);

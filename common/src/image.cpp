@@ -1,5 +1,6 @@
 #include "afford/image.hpp"
 
+#include <opencv2/imgproc.hpp>
 #include <zlib.h>
 
 #include <cmath>
@@ -54,6 +55,35 @@ void paintObject(cv::Mat& scene, Shape shape, Colour colour, Pixel centre, const
     px = cv::Vec3b(0, 0, 0);
     px[ch] = 255;
   }
+}
+
+cv::Mat renderScenario(const Scenario& s, bool goal, const WorldConfig& world) {
+  cv::Mat scene = blankScene(world.size_px);
+  for (const auto& o : s.objects) {
+    const ObjectState& st = goal ? o.goal : o.initial;
+    paintObject(scene, o.shape, st.colour, toPixel(st.x, st.y, world.size_px), world);
+  }
+  return scene;
+}
+
+cv::Mat scenarioPicture(const Scenario& s, const WorldConfig& world) {
+  const int scale = 3, pad = 12, label = 28;
+  const int side = world.size_px * scale;
+  cv::Mat out(side + 2 * pad + label, 2 * side + 3 * pad, CV_8UC3, cv::Scalar(90, 90, 90));
+  const char* titles[2] = {"goal", "initial"};
+  for (int k = 0; k < 2; ++k) {
+    cv::Mat rgb = renderScenario(s, k == 0, world), bgr, big;
+    cv::cvtColor(rgb, bgr, cv::COLOR_RGB2BGR);
+    cv::resize(bgr, big, cv::Size(side, side), 0, 0, cv::INTER_NEAREST);
+    const int x = pad + k * (side + pad);
+    big.copyTo(out(cv::Rect(x, pad + label, side, side)));
+    // the table limits, where object centres may be
+    const int t0 = static_cast<int>(world.table_min * side), t1 = static_cast<int>(world.table_max * side);
+    cv::rectangle(out, cv::Rect(x + t0, pad + label + t0, t1 - t0, t1 - t0), cv::Scalar(200, 200, 200), 1);
+    cv::putText(out, s.name + ": " + titles[k], cv::Point(x, pad + 20), cv::FONT_HERSHEY_SIMPLEX, 0.6,
+                cv::Scalar(255, 255, 255), 1, cv::LINE_AA);
+  }
+  return out;
 }
 
 std::vector<std::uint8_t> encodeScene(const cv::Mat& scene) {

@@ -3,6 +3,9 @@
 // lists them; `afford config NAME` prints an effective configuration.
 #include <CLI/CLI.hpp>
 #include <opencv2/core.hpp>
+#include <opencv2/imgcodecs.hpp>
+
+#include "afford/image.hpp"
 
 #include <cstdio>
 
@@ -50,6 +53,11 @@ int main(int argc, char** argv) {
   show->add_option("--system", show_system, "FIX, IGN or IMP")->capture_default_str();
   show->add_option("--set", show_settings, "override a config value (repeatable)");
 
+  std::string scenario_name, scenario_png;
+  auto* scen = app.add_subcommand("scenario", "check a scenario file and draw its goal and initial scenes");
+  scen->add_option("name", scenario_name, "scenario (config/scenarios/<name>.yaml)")->required();
+  scen->add_option("--png", scenario_png, "write the picture to this PNG file");
+
   CLI11_PARSE(app, argc, argv);
   cv::setNumThreads(0);  // small images: OpenCV's thread pool only adds wake-ups
   auto log = afford::makeLogger("afford");
@@ -59,6 +67,16 @@ int main(int argc, char** argv) {
         const auto e = afford::loadExperiment(config_dir, n);
         std::printf("%-12s %s\n", n.c_str(), e.description.c_str());
       }
+      return 0;
+    }
+    if (scen->parsed()) {
+      const afford::WorldConfig world =
+          afford::parseRunConfig(afford::effectiveConfig(config_dir, {"base", afford::System::IMP, 1, std::nullopt, {}}))
+              .world;
+      const afford::Scenario s = afford::loadScenario(config_dir, scenario_name, world);
+      std::printf("%s: %zu object(s), valid. %s\n", s.name.c_str(), s.objects.size(), s.description.c_str());
+      if (!scenario_png.empty() && !cv::imwrite(scenario_png, afford::scenarioPicture(s, world)))
+        throw std::runtime_error("cannot write " + scenario_png);
       return 0;
     }
     if (show->parsed()) {

@@ -92,6 +92,34 @@ struct RunConfig {
   MotivationConfig motivation;
 };
 
+// An extrinsic-phase scenario (paper 3.1, Figure 4): objects with the state
+// they start in and the state the goal image shows.
+struct ObjectState {
+  Colour colour = Colour::Red;
+  double x = 0.5, y = 0.5;
+};
+struct ScenarioObject {
+  Shape shape = Shape::Square;
+  ObjectState initial, goal;
+  double value = 1.0;  // utility of reaching this object's goal (utility planner)
+};
+struct Scenario {
+  std::string name;
+  std::string description;
+  std::vector<ScenarioObject> objects;
+};
+
+// Parse a scenario (types, names, ranges); `path` prefixes the keys in errors.
+// Geometry (overlaps, reachability) is checked by validateScenario().
+Scenario parseScenario(const YAML::Node& node, const std::string& path, const WorldConfig& world);
+// config/scenarios/<name>.yaml, parsed and validated.
+Scenario loadScenario(const std::string& config_dir, const std::string& name, const WorldConfig& world);
+std::vector<std::string> listScenarios(const std::string& config_dir);
+// Geometry: objects may not overlap (initial or goal), and each object's goal
+// must be one action away: the same state, a colour change in place, or a move
+// to a place no other object starts or ends in. Throws ConfigError naming the field.
+void validateScenario(const Scenario& s, const WorldConfig& world);
+
 // Parse and validate an effective configuration. Unknown keys are errors too.
 RunConfig parseRunConfig(const YAML::Node& root);
 RunConfig parseRunConfigText(const std::string& yaml_text);

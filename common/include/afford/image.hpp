@@ -32,6 +32,11 @@ cv::Mat blankScene(int size_px);
 // Paint a shape of a colour centred at a pixel (clipped at the borders).
 void paintObject(cv::Mat& scene, Shape shape, Colour colour, Pixel centre, const WorldConfig& world);
 
+// The scene of a scenario's initial or goal configuration.
+cv::Mat renderScenario(const Scenario& s, bool goal, const WorldConfig& world);
+// Goal and initial scenes side by side, enlarged, labelled, as BGR for imwrite.
+cv::Mat scenarioPicture(const Scenario& s, const WorldConfig& world);
+
 // Lossless scene transport: zlib of the raw RGB bytes (as Drake's lcmt_image).
 std::vector<std::uint8_t> encodeScene(const cv::Mat& scene);
 // Throws std::runtime_error naming the problem when the data does not decode to size x size x 3.
