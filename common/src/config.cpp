@@ -285,6 +285,19 @@ RunConfig parseRunConfig(const YAML::Node& root) {
         {{"signal", ImpThresholdInput::Signal}, {"observed_change", ImpThresholdInput::ObservedChange}});
     m.finish();
   }
+  {
+    Reader p = r.map("planner");
+    c.planner.subgoal_match = p.number("subgoal_match", 0.0, 1.0);
+    c.planner.image_match = p.number("image_match", 0.0, 1.0);
+    c.planner.position_match = p.number("position_match", 0.0, 1.0);
+    c.planner.subgoal_timeout = static_cast<int>(p.integer("subgoal_timeout", 1, 1000));
+    c.planner.budget = static_cast<int>(p.integer("budget", 1, 1'000'000));
+    c.planner.max_attempts = static_cast<int>(p.integer("max_attempts", 1, 1'000'000));
+    c.planner.restrict_by_affordance = p.choice<bool>("restrict_by_affordance", {{"true", true}, {"false", false}});
+    c.planner.affordance_threshold = p.number("affordance_threshold", 0.0, 1.0);
+    c.planner.success_distance = p.number("success_distance", 0.0, 1.0);
+    p.finish();
+  }
   r.finish();
   return c;
 }

@@ -79,6 +79,18 @@ struct MotivationConfig {
   ImpThresholdInput imp_threshold_input = ImpThresholdInput::Signal;
 };
 
+struct PlannerConfig {
+  double subgoal_match = 0.01;         // sub-goal reached: image distance below this (paper 2.4.3)
+  double image_match = 0.0035;         // predicted image matches the sub-goal (paper 2.4.3)
+  double position_match = 0.01;        // predicted position matches the sub-goal (paper 2.4.3)
+  int subgoal_timeout = 8;             // iterations before another sub-goal is chosen (paper 2.4.3)
+  int budget = 125;                    // steps per test (authors' code)
+  int max_attempts = 20;               // executed actions per test (authors' code)
+  bool restrict_by_affordance = true;  // check only actions with affordance > affordance_threshold
+  double affordance_threshold = 0.5;   // (paper 2.4.3, 3.2.4)
+  double success_distance = 1e-4;      // whole scene matches the goal image (authors' code)
+};
+
 struct RunConfig {
   std::string experiment;
   System system = System::IMP;
@@ -90,6 +102,7 @@ struct RunConfig {
   EyeConfig eye;
   PredictorsConfig predictors;
   MotivationConfig motivation;
+  PlannerConfig planner;
 };
 
 // An extrinsic-phase scenario (paper 3.1, Figure 4): objects with the state

@@ -1,0 +1,87 @@
+// Goal-based planner core (paper 2.4.3, Algorithm 2): one iteration at a time,
+// as a state machine that asks for what it needs (a look at the goal image, a
+// look at the scene, forward predictions, an action) and is fed the answers.
+// No LCM here: the planner node turns requests into messages; tests answer them
+// directly from the other cores.
+#pragma once
+#include <array>
+#include <cstdint>
+#include <optional>
+#include <vector>
+
+#include "afford/actions.hpp"
+#include "afford/config.hpp"
+
+namespace afford {
+
+// ||a - b||_2 / n for images in [0, 1] (bytes are value / 255).
+double imageDistance(const std::vector<std::uint8_t>& a, const std::vector<std::uint8_t>& b);
+double imageDistance(const std::vector<double>& predicted, const std::vector<std::uint8_t>& b);
+// ||p - q||_2 / 2 for positions in scene units.
+double positionDistance(double px, double py, double qx, double qy);
+
+struct View {
+  std::vector<std::uint8_t> image;  // a focus image
+  double x = 0, y = 0;              // where it was taken
+};
+
+// Forward-model predictions for one candidate action on the scanned object.
+struct ForwardPrediction {
+  int action = 0;
+  std::vector<double> what;  // predicted focus image after the action
+  double where_x = 0, where_y = 0;  // predicted position after the action
+};
+
+struct PlannerRequest {
+  enum Kind {
+    LookAtGoal,     // inner eye: saliency scan of the goal image -> onView
+    LookAtSceneAt,  // outer eye: look at (x, y) in the scene -> onView
+    ScanScene,      // outer eye: saliency scan of the scene -> onObject (with the object's affordances)
+    Forward,        // predictors: what/where effects of `actions` on the object, move target (x, y) -> onForward
+    Act,            // environment: execute `action` on the object at (object_x, object_y); move to (x, y) -> onActed
+    IterationDone,  // this iteration of Algorithm 2 is over
+  } kind = IterationDone;
+  double x = -1, y = -1;
+  double object_x = -1, object_y = -1;
+  std::vector<int> actions;
+  int action = -1;
+};
+
+// What the planner did for one sub-goal (a sub-goal is one pick from the goal image).
+struct SubGoalRecord {
+  double x = 0, y = 0;
+  int iterations = 0;
+  int actions_checked = 0;  // forward predictions compared with the sub-goal
+  int actions_taken = 0;
+  bool reached = false;
+};
+
+class GoalPlanner {
+ public:
+  explicit GoalPlanner(const PlannerConfig& config);
+
+  PlannerRequest startIteration();
+  PlannerRequest onView(const View& v);
+  PlannerRequest onObject(const View& object, const std::array<double, kNumActions>& affordance);
+  PlannerRequest onForward(const std::vector<ForwardPrediction>& predictions);
+  PlannerRequest onActed();
+
+  int attempts() const { return attempts_; }
+  bool subGoalActive() const { return active_; }
+  const std::vector<SubGoalRecord>& subGoals() const { return records_; }
+
+ private:
+  enum class Wait { Nothing, SubGoal, SceneAtSubGoal, Object, Forward, Acted, SceneAfterAction };
+  PlannerRequest request(PlannerRequest::Kind kind, double x = -1, double y = -1) const;
+  PlannerRequest done();
+
+  PlannerConfig config_;
+  Wait wait_ = Wait::Nothing;
+  bool active_ = false;
+  int iterations_on_sub_goal_ = 0;
+  int attempts_ = 0;
+  View sub_goal_, object_;
+  std::vector<SubGoalRecord> records_;
+};
+
+}  // namespace afford

@@ -1,0 +1,123 @@
+#include <gtest/gtest.h>
+
+#include <cmath>
+
+#include "planner/planner.hpp"
+#include "tests/support.hpp"
+
+namespace afford {
+namespace {
+
+using Kind = PlannerRequest::Kind;
+using A = std::array<double, kNumActions>;
+
+View view(std::uint8_t fill, double x, double y) { return {std::vector<std::uint8_t>(1323, fill), x, y}; }
+ForwardPrediction prediction(int action, double fill, double x, double y) {
+  return {action, std::vector<double>(1323, fill), x, y};
+}
+
+struct PlannerTest : ::testing::Test {
+  PlannerConfig config = test::shippedConfig().planner;
+  GoalPlanner planner{config};
+  const View goal = view(255, 0.2, 0.5);  // the sub-goal as the goal image shows it
+  const View scene_differs = view(0, 0.2, 0.5);
+
+  // Start an iteration and get to the scene scan of an active sub-goal.
+  void reachScan() {
+    ASSERT_EQ(planner.startIteration().kind, Kind::LookAtGoal);
+    const PlannerRequest r = planner.onView(goal);
+    ASSERT_EQ(r.kind, Kind::LookAtSceneAt);
+    EXPECT_DOUBLE_EQ(r.x, 0.2);
+    EXPECT_DOUBLE_EQ(r.y, 0.5);
+    ASSERT_EQ(planner.onView(scene_differs).kind, Kind::ScanScene);
+  }
+};
+
+TEST(PlannerDistances, ImagesAndPositions) {
+  const std::vector<std::uint8_t> a(1323, 0), b(1323, 255);
+  EXPECT_DOUBLE_EQ(imageDistance(a, a), 0.0);
+  EXPECT_NEAR(imageDistance(a, b), std::sqrt(1323.0) / 1323.0, 1e-12);
+  EXPECT_NEAR(imageDistance(std::vector<double>(1323, 0.9), b), 0.1 / std::sqrt(1323.0), 1e-12);
+  EXPECT_DOUBLE_EQ(positionDistance(0.2, 0.2, 0.2, 0.2), 0.0);
+  EXPECT_NEAR(positionDistance(0.0, 0.0, 0.03, 0.04), 0.025, 1e-12);
+}
+
+TEST_F(PlannerTest, ASubGoalAlreadyReachedEndsTheIteration) {
+  ASSERT_EQ(planner.startIteration().kind, Kind::LookAtGoal);
+  planner.onView(goal);
+  EXPECT_EQ(planner.onView(goal).kind, Kind::IterationDone);
+  EXPECT_FALSE(planner.subGoalActive());
+  ASSERT_EQ(planner.subGoals().size(), 1u);
+  EXPECT_TRUE(planner.subGoals()[0].reached);
+  EXPECT_EQ(planner.startIteration().kind, Kind::LookAtGoal);  // next iteration: a new sub-goal
+}
+
+TEST_F(PlannerTest, AnAffordedActionWhosePredictedEffectIsTheSubGoalIsTaken) {
+  reachScan();
+  PlannerRequest r = planner.onObject(view(0, 0.2, 0.5), A{0.1, 0.9, 0.2, 0.1});
+  ASSERT_EQ(r.kind, Kind::Forward);
+  EXPECT_EQ(r.actions, std::vector<int>{kTurnGreen});  // only what the object affords
+  r = planner.onForward({prediction(kTurnGreen, 0.999, 0.2, 0.5)});
+  ASSERT_EQ(r.kind, Kind::Act);
+  EXPECT_EQ(r.action, kTurnGreen);
+  EXPECT_DOUBLE_EQ(r.object_x, 0.2);
+  EXPECT_EQ(planner.attempts(), 1);
+  r = planner.onActed();
+  ASSERT_EQ(r.kind, Kind::LookAtSceneAt);  // check the sub-goal again
+  EXPECT_EQ(planner.onView(goal).kind, Kind::IterationDone);
+  EXPECT_TRUE(planner.subGoals()[0].reached);
+  EXPECT_EQ(planner.subGoals()[0].actions_checked, 1);
+}
+
+TEST_F(PlannerTest, WithoutRestrictionEveryActionIsChecked) {
+  config.restrict_by_affordance = false;
+  GoalPlanner all(config);
+  ASSERT_EQ(all.startIteration().kind, Kind::LookAtGoal);
+  all.onView(goal);
+  all.onView(scene_differs);
+  const PlannerRequest r = all.onObject(view(0, 0.2, 0.5), A{0.1, 0.9, 0.2, 0.1});
+  EXPECT_EQ(r.actions, (std::vector<int>{0, 1, 2, 3}));
+}
+
+TEST_F(PlannerTest, AMoveIsSentToTheSubGoalPosition) {
+  reachScan();
+  planner.onObject(view(0, 0.5, 0.8), A{0.9, 0.9, 0.9, 0.9});
+  const PlannerRequest r = planner.onForward({prediction(kMove, 1.0, 0.2, 0.5)});
+  ASSERT_EQ(r.kind, Kind::Act);
+  EXPECT_EQ(r.action, kMove);
+  EXPECT_DOUBLE_EQ(r.x, 0.2);
+  EXPECT_DOUBLE_EQ(r.y, 0.5);
+  EXPECT_DOUBLE_EQ(r.object_x, 0.5);
+}
+
+TEST_F(PlannerTest, PredictionsThatMissTheImageOrThePlaceAreNotTaken) {
+  reachScan();
+  planner.onObject(view(0, 0.5, 0.8), A{0.9, 0.9, 0.9, 0.9});
+  const PlannerRequest r = planner.onForward({prediction(kMove, 0.8, 0.2, 0.5),      // image off by 0.2 per value
+                                              prediction(kTurnGreen, 1.0, 0.5, 0.8)}); // right look, wrong place
+  EXPECT_EQ(r.kind, Kind::IterationDone);
+  EXPECT_EQ(planner.subGoals()[0].actions_checked, 2);
+  EXPECT_EQ(planner.attempts(), 0);
+}
+
+TEST_F(PlannerTest, ASubGoalTimesOutAfterItsIterations) {
+  for (int i = 0; i < config.subgoal_timeout; ++i) {
+    if (i == 0)
+      reachScan();
+    else
+      ASSERT_EQ(planner.startIteration().kind, Kind::ScanScene) << "iteration " << i;
+    ASSERT_EQ(planner.onObject(view(0, 0.5, 0.8), A{0.1, 0.1, 0.1, 0.1}).kind, Kind::IterationDone);
+  }
+  EXPECT_EQ(planner.subGoals()[0].iterations, config.subgoal_timeout);
+  EXPECT_EQ(planner.startIteration().kind, Kind::LookAtGoal);  // time out: another sub-goal
+}
+
+TEST_F(PlannerTest, RepliesOutOfTurnAreRefused) {
+  EXPECT_THROW(planner.onActed(), std::logic_error);
+  EXPECT_THROW(planner.onForward({}), std::logic_error);
+  planner.startIteration();
+  EXPECT_THROW(planner.startIteration(), std::logic_error);
+}
+
+}  // namespace
+}  // namespace afford
