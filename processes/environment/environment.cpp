@@ -2,6 +2,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <stdexcept>
 
 #include "afford/actions.hpp"
 #include "afford/rng.hpp"
@@ -22,6 +23,34 @@ Environment::Environment(const RunConfig& config) : config_(config) {
     footprints_.push_back(shapeFootprint(spec.shape, w));
   }
   introduceObjectsAt(0);
+}
+
+Environment::Environment(const RunConfig& config, const Scenario& scenario) : config_(config), scenario_(scenario) {
+  for (const auto& so : scenario.objects) {
+    WorldObject o;
+    o.shape = so.shape;
+    o.colour = so.initial.colour;
+    o.centre = toPixel(so.initial.x, so.initial.y, config_.world.size_px);
+    o.present = true;
+    o.table_index = -1;
+    objects_.push_back(o);
+    footprints_.push_back(shapeFootprint(so.shape, config_.world));
+  }
+}
+
+cv::Mat Environment::goalScene() const {
+  if (!scenario_) throw std::logic_error("Environment: no scenario, so no goal");
+  return renderScenario(*scenario_, true, config_.world);
+}
+
+double Environment::goalDistance() const {
+  const cv::Mat scene = render(), goal = goalScene();
+  double sum = 0;
+  for (std::size_t i = 0; i < scene.total() * 3; ++i) {
+    const double d = (static_cast<int>(scene.data[i]) - static_cast<int>(goal.data[i])) / 255.0;
+    sum += d * d;
+  }
+  return std::sqrt(sum) / static_cast<double>(scene.total() * 3);
 }
 
 cv::Mat Environment::render() const {
@@ -51,7 +80,7 @@ std::vector<std::string> Environment::probeNames() const {
 int Environment::tableRow(const WorldObject& o) const {
   // Affordances belong to what the object is now (paper 2.1: the state s_{b,o}):
   // a green square turned red is a red square. Objects with no row of their
-  // current look keep their own row.
+  // current look keep their own row (-1 for scenario objects: nothing).
   const auto& specs = config_.world.objects;
   for (std::size_t i = 0; i < specs.size(); ++i)
     if (specs[i].shape == o.shape && specs[i].colour == o.colour) return static_cast<int>(i);
@@ -118,7 +147,8 @@ ActionOutcome Environment::execute(std::int64_t step, int action, double x, doub
   if (idx < 0) return out;
   out.on_object = true;
   WorldObject& o = objects_[idx];
-  const double p = w.objects[tableRow(o)].affordance[action];
+  const int row = tableRow(o);
+  const double p = row < 0 ? 0.0 : w.objects[row].affordance[action];
   const KeyedRng success_rng(config_.seed, step, Purpose::ActionSuccess);
   const bool lucky = p >= 1.0 || (p > 0.0 && success_rng.uniform(0) < p);
   if (!lucky) return out;

@@ -31,6 +31,15 @@ struct ActionOutcome {
 class Environment {
  public:
   explicit Environment(const RunConfig& config);
+  // Extrinsic phase: the scenario's objects in their initial states. Their
+  // affordances come from the experiment's table, by current look.
+  Environment(const RunConfig& config, const Scenario& scenario);
+
+  // The goal configuration of the scenario (extrinsic phase).
+  cv::Mat goalScene() const;
+  // Distance of the scene from the goal image: ||scene - goal||_2 / (size^2 * 3),
+  // values in [0, 1]; the test succeeds below planner.success_distance.
+  double goalDistance() const;
 
   // The scene as it is now.
   cv::Mat render() const;
@@ -52,6 +61,7 @@ class Environment {
   // Index into objects() of the present object covering a pixel, or -1.
   int objectAt(Pixel p) const;
   // Row of the affordance table that applies to an object as it looks now.
+  // -1 if the table has no object that looks like it: it affords nothing.
   int tableRow(const WorldObject& o) const;
 
  private:
@@ -61,6 +71,7 @@ class Environment {
   int freeHalf() const;
 
   RunConfig config_;
+  std::optional<Scenario> scenario_;
   std::vector<WorldObject> objects_;
   std::vector<std::vector<Pixel>> footprints_;  // per object (by shape)
 };

@@ -56,42 +56,48 @@ int dominantChannel(const std::vector<std::uint8_t>& image) {
 }  // namespace
 
 Eye::Eye(const RunConfig& config) : config_(config) {
-  focus_.gaze = toPixel(config.eye.initial_gaze_x, config.eye.initial_gaze_y, config.world.size_px);
-  focus_.x = toUnit(focus_.gaze.col, config.world.size_px);
-  focus_.y = toUnit(focus_.gaze.row, config.world.size_px);
+  const Pixel start = toPixel(config.eye.initial_gaze_x, config.eye.initial_gaze_y, config.world.size_px);
+  for (Retina* r : {&outer_, &inner_}) {
+    r->focus.gaze = start;
+    r->focus.x = toUnit(start.col, config.world.size_px);
+    r->focus.y = toUnit(start.row, config.world.size_px);
+  }
 }
 
-void Eye::setScene(cv::Mat scene) {
-  scene_ = std::move(scene);
-  gray_ = meanChannels(scene_);
-  smooth_ = blur(gray_, config_.eye.saliency_sigma_px);
-  cv::Mat mask = gray_ > 0;
+void Eye::setImage(Retina& r, cv::Mat image) const {
+  r.rgb = std::move(image);
+  r.gray = meanChannels(r.rgb);
+  r.smooth = blur(r.gray, config_.eye.saliency_sigma_px);
+  cv::Mat mask = r.gray > 0;
   cv::Mat centroids;
-  n_labels_ = cv::connectedComponentsWithStats(mask, labels_, stats_, centroids, 8, CV_32S);
-  if (!focus_.image.empty()) focus_ = focusAt(focus_.gaze);
+  r.n_labels = cv::connectedComponentsWithStats(mask, r.labels, r.stats, centroids, 8, CV_32S);
+  if (!r.focus.image.empty()) r.focus = focusAt(r, r.focus.gaze);
 }
 
-int Eye::labelAt(Pixel p) const {
-  if (p.row < 0 || p.col < 0 || p.row >= labels_.rows || p.col >= labels_.cols) return 0;
-  return labels_.at<int>(p.row, p.col);
+void Eye::setScene(cv::Mat scene) { setImage(outer_, std::move(scene)); }
+void Eye::setGoal(cv::Mat goal) { setImage(inner_, std::move(goal)); }
+
+int Eye::labelAt(const Retina& r, Pixel p) {
+  if (p.row < 0 || p.col < 0 || p.row >= r.labels.rows || p.col >= r.labels.cols) return 0;
+  return r.labels.at<int>(p.row, p.col);
 }
 
-Pixel Eye::blobCentre(int label) const {
-  const int left = stats_.at<int>(label, cv::CC_STAT_LEFT), top = stats_.at<int>(label, cv::CC_STAT_TOP);
-  const int w = stats_.at<int>(label, cv::CC_STAT_WIDTH), h = stats_.at<int>(label, cv::CC_STAT_HEIGHT);
+Pixel Eye::blobCentre(const Retina& r, int label) {
+  const int left = r.stats.at<int>(label, cv::CC_STAT_LEFT), top = r.stats.at<int>(label, cv::CC_STAT_TOP);
+  const int w = r.stats.at<int>(label, cv::CC_STAT_WIDTH), h = r.stats.at<int>(label, cv::CC_STAT_HEIGHT);
   return {left + w / 2, top + h / 2};
 }
 
-Focus Eye::focusAt(Pixel p) const {
+Focus Eye::focusAt(const Retina& r, Pixel p) const {
   Focus f;
   f.gaze = p;
   f.x = toUnit(p.col, config_.world.size_px);
   f.y = toUnit(p.row, config_.world.size_px);
-  f.image = cropFocus(scene_, p, config_.eye.focus_side);
+  f.image = cropFocus(r.rgb, p, config_.eye.focus_side);
   return f;
 }
 
-int Eye::noisyArgmax(const cv::Mat& base, std::int64_t step, int purpose, std::uint64_t attempt,
+int Eye::noisyArgmax(const Retina& r, const cv::Mat& base, std::int64_t step, int purpose, std::uint64_t attempt,
                      const cv::Mat* extra) const {
   const double noise = config_.eye.saliency_noise;
   const KeyedRng rng(config_.seed, step, static_cast<Purpose>(purpose));
@@ -99,7 +105,7 @@ int Eye::noisyArgmax(const cv::Mat& base, std::int64_t step, int purpose, std::u
   const std::uint64_t offset = attempt * n;
   if (config_.eye.saliency_order == SaliencyOrder::NoiseThenSmooth) {
     // Paper's order: noise on the periphery, then smoothing.
-    cv::Mat noisy = gray_.clone();
+    cv::Mat noisy = r.gray.clone();
     auto* p = noisy.ptr<float>();
     for (std::uint64_t i = 0; i < n; ++i) p[i] += static_cast<float>((rng.uniform(offset + i) * 2.0 - 1.0) * noise);
     cv::Mat s = blur(noisy, config_.eye.saliency_sigma_px);
@@ -133,41 +139,53 @@ int Eye::noisyArgmax(const cv::Mat& base, std::int64_t step, int purpose, std::u
 const Focus& Eye::scan(std::int64_t step) { return look(peekScan(step)); }
 
 const Focus& Eye::look(Focus f) {
-  focus_ = std::move(f);
-  return focus_;
+  outer_.focus = std::move(f);
+  return outer_.focus;
 }
 
-Focus Eye::peekScan(std::int64_t step) const {
-  const int objects = objectCount();
-  if (objects == 0) return focusAt(focus_.gaze);
-  const int current = labelAt(focus_.gaze);
+Focus Eye::peekScan(std::int64_t step) const { return peekScan(outer_, step, static_cast<int>(Purpose::ScanNoise)); }
+
+const Focus& Eye::scanGoal(std::int64_t step) {
+  inner_.focus = peekScan(inner_, step, static_cast<int>(Purpose::GoalScanNoise));
+  return inner_.focus;
+}
+
+const Focus& Eye::lookAt(Pixel p) {
+  outer_.focus = focusAt(outer_, p);
+  return outer_.focus;
+}
+
+Focus Eye::peekScan(const Retina& r, std::int64_t step, int purpose) const {
+  const int objects = r.n_labels - 1;
+  if (objects == 0) return focusAt(r, r.focus.gaze);
+  const int current = labelAt(r, r.focus.gaze);
   int chosen = 0;
   for (int attempt = 0; attempt < config_.eye.max_scan_draws; ++attempt) {
-    const int i = noisyArgmax(smooth_, step, static_cast<int>(Purpose::ScanNoise), attempt, nullptr);
-    const int label = labels_.at<int>(i / labels_.cols, i % labels_.cols);
+    const int i = noisyArgmax(r, r.smooth, step, purpose, attempt, nullptr);
+    const int label = r.labels.at<int>(i / r.labels.cols, i % r.labels.cols);
     if (label == 0) continue;
     chosen = label;
     if (objects == 1 || label != current) break;
   }
-  return focusAt(chosen > 0 ? blobCentre(chosen) : focus_.gaze);
+  return focusAt(r, chosen > 0 ? blobCentre(r, chosen) : r.focus.gaze);
 }
 
 Effect Eye::scanEffect(std::int64_t step, cv::Mat after, int action) {
   Effect e;
-  e.before = focus_;
-  cv::Mat change = blur(positiveChange(scene_, after), config_.eye.change_sigma_px);
+  e.before = outer_.focus;
+  cv::Mat change = blur(positiveChange(outer_.rgb, after), config_.eye.change_sigma_px);
   setScene(std::move(after));
   double max_change;
   cv::minMaxLoc(change, nullptr, &max_change);
   if (max_change > 0) {
-    const int i = noisyArgmax(smooth_, step, static_cast<int>(Purpose::EffectNoise), 0, &change);
-    const Pixel p{i % labels_.cols, i / labels_.cols};
-    const int label = labelAt(p);
-    focus_ = focusAt(label > 0 ? blobCentre(label) : p);
+    const int i = noisyArgmax(outer_, outer_.smooth, step, static_cast<int>(Purpose::EffectNoise), 0, &change);
+    const Pixel p{i % outer_.labels.cols, i / outer_.labels.cols};
+    const int label = labelAt(outer_, p);
+    outer_.focus = focusAt(outer_, label > 0 ? blobCentre(outer_, label) : p);
   } else {
-    focus_ = focusAt(focus_.gaze);  // nothing changed: no reflex, the gaze stays
+    outer_.focus = focusAt(outer_, outer_.focus.gaze);  // nothing changed: no reflex, the gaze stays
   }
-  e.after = focus_;
+  e.after = outer_.focus;
   e.image_change = imageChange(e.before.image, e.after.image);
   e.position_change = (std::abs(e.after.x - e.before.x) + std::abs(e.after.y - e.before.y)) / 2.0;
   e.image_changed = e.image_change > config_.eye.image_change_threshold;

@@ -34,9 +34,9 @@ class Eye {
 
   // Replace the scene the eye looks at (after a scene message).
   void setScene(cv::Mat scene);
-  bool hasScene() const { return !scene_.empty(); }
-  const cv::Mat& scene() const { return scene_; }
-  const Focus& focus() const { return focus_; }
+  bool hasScene() const { return !outer_.rgb.empty(); }
+  const cv::Mat& scene() const { return outer_.rgb; }
+  const Focus& focus() const { return outer_.focus; }
 
   // Saliency scan (Algorithm 1, Scan): noise keyed by (seed, step), redrawn
   // until the gaze lands on another object than the current one.
@@ -50,25 +50,41 @@ class Eye {
   // Affordance): looks at the changed object in `after` and compares it with
   // the focus before the action. The eye then looks at `after`.
   Effect scanEffect(std::int64_t step, cv::Mat after, int action);
-  // The object blob label under a pixel (0 = background).
-  int labelAt(Pixel p) const;
-  int objectCount() const { return n_labels_ - 1; }
+  // The object blob label under a pixel of the scene (0 = background).
+  int labelAt(Pixel p) const { return labelAt(outer_, p); }
+  int objectCount() const { return outer_.n_labels - 1; }
+
+  // Extrinsic phase (paper 2.4.3). The inner eye looks at the memorised goal image.
+  void setGoal(cv::Mat goal);
+  bool hasGoal() const { return !inner_.rgb.empty(); }
+  // Scan: the inner eye's saliency scan of the goal image (a sub-goal).
+  const Focus& scanGoal(std::int64_t step);
+  // ScanEnvironmentWithSameFocusAsSubGoal: the outer eye looks at a place of the scene.
+  const Focus& lookAt(Pixel p);
 
  private:
-  Pixel blobCentre(int label) const;
-  Focus focusAt(Pixel p) const;
+  // One image the eye looks at, its saliency cache and the gaze on it.
+  struct Retina {
+    cv::Mat rgb;        // CV_8UC3 RGB
+    cv::Mat gray;       // CV_32F: RGB mean in [0, 1] (the periphery)
+    cv::Mat smooth;     // CV_32F: gray smoothed
+    cv::Mat labels;     // CV_32S blob labels
+    cv::Mat stats;      // blob bounding boxes
+    int n_labels = 1;
+    Focus focus;
+  };
+  void setImage(Retina& r, cv::Mat image) const;
+  static int labelAt(const Retina& r, Pixel p);
+  static Pixel blobCentre(const Retina& r, int label);
+  Focus focusAt(const Retina& r, Pixel p) const;
+  Focus peekScan(const Retina& r, std::int64_t step, int purpose) const;
   // argmax of base + uniform noise (keyed), exact over the whole image.
-  int noisyArgmax(const cv::Mat& base, std::int64_t step, int purpose, std::uint64_t attempt,
+  int noisyArgmax(const Retina& r, const cv::Mat& base, std::int64_t step, int purpose, std::uint64_t attempt,
                   const cv::Mat* extra) const;
 
   RunConfig config_;
-  cv::Mat scene_;        // CV_8UC3 RGB
-  cv::Mat gray_;         // CV_32F: RGB mean in [0, 1] (the periphery)
-  cv::Mat smooth_;       // CV_32F: gray_ smoothed
-  cv::Mat labels_;       // CV_32S blob labels
-  cv::Mat stats_;        // blob bounding boxes
-  int n_labels_ = 1;
-  Focus focus_;
+  Retina outer_;   // the scene
+  Retina inner_;   // the goal image (extrinsic phase)
 };
 
 }  // namespace afford

@@ -14,6 +14,7 @@
 #include "eye/node.hpp"
 #include "motivation/node.hpp"
 #include "predictors/node.hpp"
+#include "tests/reference_loops.hpp"
 #include "tests/support.hpp"
 
 namespace afford {
@@ -127,12 +128,23 @@ TEST(Choreography, RepeatedRunsAreByteIdenticalAndSeedsDiffer) {
   EXPECT_NE(a.outcome.weights_checksum, c.outcome.weights_checksum);
 }
 
+// The processes' choreography computes exactly Algorithm 1 as a plain loop.
+TEST(Choreography, ComputesWhatThePlainAlgorithmComputes) {
+  for (System s : {System::FIX, System::IGN, System::IMP}) {
+    InProcessRun run(baseYaml(s, 400), s, 3, 400);
+    ASSERT_TRUE(run.outcome.ok) << run.outcome.error;
+    const RunConfig c = parseRunConfigText(baseYaml(s, 400));
+    EXPECT_EQ(run.outcome.weights_checksum, test::runIntrinsic(c).weightsChecksum()) << toString(s);
+  }
+}
+
 TEST(Choreography, ObservedChangeThresholdInputRuns) {
   RunRequest req{"base", System::IMP, 3, 300, {"motivation.imp_threshold_input=observed_change"}};
   const std::string yaml = emitYaml(effectiveConfig(std::string(AFFORD_SOURCE_DIR) + "/config", req));
   InProcessRun run(yaml, System::IMP, 3, 300);
   ASSERT_TRUE(run.outcome.ok) << run.outcome.error;
   EXPECT_EQ(run.count(channel::kDecision), 300);
+  EXPECT_EQ(run.outcome.weights_checksum, test::runIntrinsic(parseRunConfigText(yaml)).weightsChecksum());
 }
 
 TEST(Choreography, LateObjectsEnterTheSceneAtTheirStep) {
@@ -151,6 +163,7 @@ TEST(Choreography, LateObjectsEnterTheSceneAtTheirStep) {
     if (s.step == 1999) EXPECT_TRUE(s.changes_next);
   }
   EXPECT_EQ(appeared, 1);
+  EXPECT_EQ(run.outcome.weights_checksum, test::runIntrinsic(parseRunConfigText(yaml)).weightsChecksum());
 }
 
 TEST(Choreography, ARejectedConfigFailsTheRunNamingProcessAndKey) {

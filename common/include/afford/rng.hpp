@@ -17,6 +17,7 @@ enum class Purpose : std::uint64_t {
   ActionSuccess = 4,      // environment: stochastic success of an action
   LearningProgressInit = 5, // predictors: initial learning-progress weights
   LatePlacement = 6,      // environment: free place for a late object whose spot is taken
+  GoalScanNoise = 7,      // eye: saliency noise of the inner eye's scan of the goal image
 };
 
 constexpr std::uint64_t splitmix64(std::uint64_t x) {

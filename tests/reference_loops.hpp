@@ -1,0 +1,114 @@
+// Algorithms 1 and 2 written as plain loops over the process cores, with no
+// messages. The choreography of processes must compute exactly what these
+// compute; they also let tests try the planner quickly.
+#pragma once
+#include <cmath>
+
+#include "afford/image.hpp"
+#include "environment/environment.hpp"
+#include "eye/eye.hpp"
+#include "motivation/motivation.hpp"
+#include "planner/planner.hpp"
+#include "predictors/predictors.hpp"
+
+namespace afford::test {
+
+// Algorithm 1 for config.steps steps; returns the trained predictors.
+inline Predictors runIntrinsic(const RunConfig& c) {
+  Environment env(c);
+  Eye eye(c);
+  Predictors predictors(c);
+  Motivation motivation(c);
+  eye.setScene(env.render());
+  for (std::int64_t t = 0; t < c.steps; ++t) {
+    const Focus f = eye.scan(t);
+    const Prediction p = predictors.predict(f.image);
+    const Decision d = motivation.decide(p.affordance, p.learning_progress);
+    const bool more = t + 1 < c.steps;
+    if (d.act) {
+      const ActionOutcome out = env.execute(t, d.action, f.x, f.y);
+      const Effect e = eye.scanEffect(t, env.render(), d.action);
+      Experience x;
+      x.action = d.action;
+      x.before_image = f.image;
+      x.before_x = f.x;
+      x.before_y = f.y;
+      x.target_x = out.target_x;
+      x.target_y = out.target_y;
+      x.affordance = e.affordance;
+      x.after_image = e.after.image;
+      x.after_x = e.after.x;
+      x.after_y = e.after.y;
+      const TrainingReport r = predictors.train(x);
+      if (motivation.awaitingObservation()) motivation.observeChange(std::abs(r.affordance_after - r.affordance_before));
+    }
+    if (more && env.introduceObjectsAt(t + 1)) eye.setScene(env.render());
+  }
+  return predictors;
+}
+
+struct GoalTestOutcome {
+  bool success = false;
+  int completion = 0;  // the step (from 1) at which the scene matched the goal
+  int attempts = 0;
+  std::vector<SubGoalRecord> sub_goals;
+};
+
+// One extrinsic test of Algorithm 2 on a scenario.
+inline GoalTestOutcome runGoalTest(const RunConfig& c, const Scenario& s, const Predictors& predictors) {
+  Environment env(c, s);
+  Eye eye(c);
+  eye.setGoal(env.goalScene());
+  eye.setScene(env.render());
+  GoalPlanner planner(c.planner);
+  GoalTestOutcome out;
+  auto asView = [](const Focus& f) { return View{f.image, f.x, f.y}; };
+  for (int step = 0; step < c.planner.budget && planner.attempts() < c.planner.max_attempts; ++step) {
+    PlannerRequest r = planner.startIteration();
+    View object;
+    while (r.kind != PlannerRequest::IterationDone) {
+      switch (r.kind) {
+        case PlannerRequest::LookAtGoal:
+          r = planner.onView(asView(eye.scanGoal(step)));
+          break;
+        case PlannerRequest::LookAtSceneAt:
+          r = planner.onView(asView(eye.lookAt(toPixel(r.x, r.y, c.world.size_px))));
+          break;
+        case PlannerRequest::ScanScene: {
+          object = asView(eye.scan(step));
+          r = planner.onObject(object, predictors.predict(object.image).affordance);
+          break;
+        }
+        case PlannerRequest::Forward: {
+          std::vector<ForwardPrediction> preds;
+          for (int a : r.actions) {
+            const auto where = predictors.whereEffect(a, object.x, object.y, r.x, r.y);
+            preds.push_back({a, predictors.whatEffect(a, object.image), where[0], where[1]});
+          }
+          r = planner.onForward(preds);
+          break;
+        }
+        case PlannerRequest::Act: {
+          std::optional<std::pair<double, double>> target;
+          if (r.action == kMove) target = std::make_pair(r.x, r.y);
+          env.execute(step, r.action, r.object_x, r.object_y, target);
+          eye.setScene(env.render());
+          r = planner.onActed();
+          break;
+        }
+        case PlannerRequest::IterationDone:
+          break;
+      }
+    }
+    if (env.goalDistance() < c.planner.success_distance) {
+      out.success = true;
+      out.completion = step + 1;
+      break;
+    }
+  }
+  out.attempts = planner.attempts();
+  out.sub_goals = planner.subGoals();
+  return out;
+}
+
+}  // namespace afford::test

@@ -1,0 +1,32 @@
+// Algorithm 2 with the real cores (no messages): with predictors trained by a
+// base-test intrinsic phase, the planner solves the paper's scenarios.
+#include <gtest/gtest.h>
+
+#include "tests/reference_loops.hpp"
+#include "tests/support.hpp"
+
+namespace afford {
+namespace {
+
+const std::string kConfigDir = std::string(AFFORD_SOURCE_DIR) + "/config";
+
+TEST(GoalPlanning, TrainedAgentSolvesTheFiveScenarios) {
+  RunConfig c = test::shippedConfig("base", System::IMP, 1);
+  const Predictors trained = test::runIntrinsic(c);
+  int solved = 0, tests = 0;
+  for (int k = 1; k <= 5; ++k) {
+    const Scenario s = loadScenario(kConfigDir, "scenario" + std::to_string(k), c.world);
+    for (int rep = 0; rep < 4; ++rep) {
+      c.seed = 1000 * k + rep;
+      const test::GoalTestOutcome o = test::runGoalTest(c, s, trained);
+      ++tests;
+      solved += o.success;
+      std::printf("scenario %d rep %d: %s in %d steps, %d actions\n", k, rep, o.success ? "solved" : "FAILED",
+                  o.completion, o.attempts);
+    }
+  }
+  EXPECT_GE(solved, tests - 2);
+}
+
+}  // namespace
+}  // namespace afford
