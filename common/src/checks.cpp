@@ -45,6 +45,11 @@ std::string checkAction(const char* field, int action, bool required) {
 // A move target: a position, or -1 for "none / draw one".
 std::string checkTarget(const char* field, double v) { return v == -1.0 ? "" : checkRange(field, v, 0.0, 1.0); }
 long focusSize(const RunConfig& c) { return 3L * c.eye.focus_side * c.eye.focus_side; }
+std::string checkKind(int kind) {
+  return kind == focus_t::SCENE_SCAN || kind == focus_t::GOAL_SCAN || kind == focus_t::SCENE_AT
+             ? ""
+             : "field kind = " + std::to_string(kind) + " is unknown";
+}
 
 }  // namespace
 
@@ -52,16 +57,18 @@ std::string checkMessage(const scene_t& m, const RunConfig& c) {
   return first({checkStep(m.step, c),
                 checkSize("width", m.width, c.world.size_px), checkSize("height", m.height, c.world.size_px),
                 m.cause == scene_t::CAUSE_START || m.cause == scene_t::CAUSE_ACTION ||
-                        m.cause == scene_t::CAUSE_OBJECTS_APPEARED
+                        m.cause == scene_t::CAUSE_OBJECTS_APPEARED || m.cause == scene_t::CAUSE_GOAL
                     ? ""
                     : "field cause = " + std::to_string(m.cause) + " is unknown",
                 checkAction("action", m.action, m.cause == scene_t::CAUSE_ACTION),
                 checkTarget("action_target_x", m.action_target_x), checkTarget("action_target_y", m.action_target_y),
+                m.goal_distance == -1.0 ? "" : checkRange("goal_distance", m.goal_distance, 0.0, 1.0),
                 m.encoding == scene_t::ENCODING_ZLIB_RGB8 ? "" : "field encoding = " + std::to_string(m.encoding) + " is unknown"});
 }
 
 std::string checkMessage(const focus_t& m, const RunConfig& c) {
-  return first({checkStep(m.step, c), checkSize("side", m.side, c.eye.focus_side), checkSize("size", m.size, focusSize(c)),
+  return first({checkStep(m.step, c), checkKind(m.kind), checkSize("side", m.side, c.eye.focus_side),
+                checkSize("size", m.size, focusSize(c)),
                 checkRange("x", m.x, 0.0, 1.0), checkRange("y", m.y, 0.0, 1.0)});
 }
 
@@ -109,6 +116,40 @@ std::string checkMessage(const trained_t& m, const RunConfig& c) {
 std::string checkMessage(const object_probe_t& m, const RunConfig& c) {
   return first({m.n_objects >= 1 && m.n_objects <= 1000 ? "" : "field n_objects = " + std::to_string(m.n_objects) + " is out of range [1, 1000]",
                 checkSize("size", m.size, focusSize(c))});
+}
+
+std::string checkMessage(const look_t& m, const RunConfig& c) {
+  return first({checkStep(m.step, c), checkKind(m.kind), std::string(m.seq >= 0 ? "" : "field seq is negative"),
+                m.kind != focus_t::SCENE_AT ? "" : checkRange("x", m.x, 0.0, 1.0),
+                m.kind != focus_t::SCENE_AT ? "" : checkRange("y", m.y, 0.0, 1.0)});
+}
+
+std::string checkMessage(const forward_query_t& m, const RunConfig& c) {
+  if (auto why = first({checkStep(m.step, c), checkSize("size", m.size, focusSize(c)), checkRange("x", m.x, 0.0, 1.0),
+                        checkRange("y", m.y, 0.0, 1.0), checkTarget("target_x", m.target_x),
+                        checkTarget("target_y", m.target_y),
+                        m.n_actions >= 0 && m.n_actions <= kNumActions ? "" : "field n_actions is out of range [0, 4]"});
+      !why.empty())
+    return why;
+  for (int a : m.actions)
+    if (auto why = checkAction("actions", a, true); !why.empty()) return why;
+  return "";
+}
+
+std::string checkMessage(const forward_prediction_t& m, const RunConfig& c) {
+  if (auto why = first({checkStep(m.step, c), checkSize("size", m.size, focusSize(c)),
+                        m.n_actions >= 0 && m.n_actions <= kNumActions ? "" : "field n_actions is out of range [0, 4]"});
+      !why.empty())
+    return why;
+  for (int i = 0; i < m.n_actions; ++i) {
+    if (auto why = first({checkAction("actions", m.actions[i], true), checkFinite("where_x", m.where_x[i]),
+                          checkFinite("where_y", m.where_y[i])});
+        !why.empty())
+      return why;
+    for (float v : m.what[i])
+      if (!(v >= 0.0f && v <= 1.0f)) return "field what holds a value outside [0, 1]";
+  }
+  return "";
 }
 
 }  // namespace afford

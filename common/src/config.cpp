@@ -216,6 +216,7 @@ RunConfig parseRunConfig(const YAML::Node& root) {
   c.experiment = r.text("experiment");
   c.system = r.choice<System>("system", {{"FIX", System::FIX}, {"IGN", System::IGN}, {"IMP", System::IMP}});
   c.seed = r.integer("seed", 0, INT64_MAX);
+  c.phase = r.choice<Phase>("phase", {{"intrinsic", Phase::Intrinsic}, {"extrinsic", Phase::Extrinsic}});
   {
     Reader run = r.map("run");
     c.steps = run.integer("steps", 1, 100'000'000);
@@ -285,6 +286,15 @@ RunConfig parseRunConfig(const YAML::Node& root) {
         {{"signal", ImpThresholdInput::Signal}, {"observed_change", ImpThresholdInput::ObservedChange}});
     m.finish();
   }
+  if (r.has("extrinsic")) {
+    Reader e = r.map("extrinsic");
+    c.extrinsic_checkpoint = e.text("checkpoint");
+    c.scenario = parseScenario(e.raw("scenario"), "extrinsic.scenario", c.world);
+    validateScenario(*c.scenario, c.world);
+    e.finish();
+  }
+  if (c.phase == Phase::Extrinsic && !c.scenario)
+    fail("extrinsic", "missing (an extrinsic run needs a checkpoint and a scenario)");
   {
     Reader p = r.map("planner");
     c.planner.subgoal_match = p.number("subgoal_match", 0.0, 1.0);

@@ -13,13 +13,20 @@ EnvironmentNode::EnvironmentNode(lcm::LCM& lcm, std::shared_ptr<spdlog::logger> 
 }
 
 void EnvironmentNode::onConfigured(const RunConfig& config) {
-  env_ = std::make_unique<Environment>(config);
+  env_ = config.phase == Phase::Extrinsic ? std::make_unique<Environment>(config, *config.scenario)
+                                          : std::make_unique<Environment>(config);
   next_decision_ = 0;
 }
 
 void EnvironmentNode::onStop() { env_.reset(); }
 
 void EnvironmentNode::onStart() {
+  if (extrinsic()) {  // paper 2.4.3: the goal is shown and memorised, then the objects are set up
+    const cv::Mat goal = env_->goalScene();
+    publishScene(0, scene_t::CAUSE_GOAL, false, -1, -1.0, -1.0, &goal);
+    publishScene(0, scene_t::CAUSE_START, false, -1, -1.0, -1.0);
+    return;
+  }
   object_probe_t probe;
   probe.run_id = runId();
   probe.step = 0;
@@ -31,7 +38,8 @@ void EnvironmentNode::onStart() {
   publishScene(0, scene_t::CAUSE_START, true, -1, -1.0, -1.0);
 }
 
-void EnvironmentNode::publishScene(std::int64_t step, int8_t cause, bool scan, int action, double tx, double ty) {
+void EnvironmentNode::publishScene(std::int64_t step, int8_t cause, bool scan, int action, double tx, double ty,
+                                   const cv::Mat* image) {
   scene_t s;
   s.run_id = runId();
   s.step = step;
@@ -42,15 +50,31 @@ void EnvironmentNode::publishScene(std::int64_t step, int8_t cause, bool scan, i
   s.action_target_x = tx;
   s.action_target_y = ty;
   s.width = s.height = config().world.size_px;
+  s.goal_distance = extrinsic() ? env_->goalDistance() : -1.0;
   s.encoding = scene_t::ENCODING_ZLIB_RGB8;
-  s.data = encodeScene(env_->render());
+  s.data = encodeScene(image ? *image : env_->render());
   s.size = static_cast<int32_t>(s.data.size());
   publish(channel::kScene, s);
+}
+
+void EnvironmentNode::onExtrinsicDecision(const decision_t& d) {
+  // The planner's steps are its iterations; it decides at most once in each.
+  if (d.step < next_decision_)
+    return drop(channel::kDecision, "step " + std::to_string(d.step) + " is in the past (now at " +
+                                        std::to_string(next_decision_) + ")");
+  if (!d.acted) return;
+  std::optional<std::pair<double, double>> target;
+  if (d.action == kMove) target = std::make_pair(d.target_x, d.target_y);
+  const ActionOutcome out = env_->execute(d.step, d.action, d.x, d.y, target);
+  next_decision_ = d.step + 1;
+  handled(d.step);
+  publishScene(d.step, scene_t::CAUSE_ACTION, false, d.action, out.target_x, out.target_y);
 }
 
 void EnvironmentNode::onDecision(const decision_t& d) {
   const char* ch = channel::kDecision;
   if (state() != process_status_t::RUNNING) return drop(ch, "the run has not started");
+  if (extrinsic()) return onExtrinsicDecision(d);
   if (d.step < next_decision_)
     return log_->debug("{}: step {} already handled (now at {})", ch, d.step, next_decision_);
   if (d.step > next_decision_)

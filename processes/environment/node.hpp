@@ -1,6 +1,8 @@
 // Environment process node.
-// Channels in:  RUN_CONFIG, RUN_CONTROL (START), DECISION
+// Channels in:  RUN_CONFIG, RUN_CONTROL (START), DECISION (motivation, or planner)
 // Channels out: PROBE (once, at START), SCENE (when the scene changes), STATUS
+// Extrinsic phase: at START the goal scene (to memorise), then the initial
+// scene; then a scene after every action the planner decides.
 #pragma once
 #include <memory>
 
@@ -19,7 +21,10 @@ class EnvironmentNode : public NodeBase {
   void onStart() override;
   void onStop() override;
   void onDecision(const decision_t& msg);
-  void publishScene(std::int64_t step, int8_t cause, bool scan, int action, double tx, double ty);
+  void publishScene(std::int64_t step, int8_t cause, bool scan, int action, double tx, double ty,
+                    const cv::Mat* image = nullptr);
+  void onExtrinsicDecision(const decision_t& msg);
+  bool extrinsic() const { return config().phase == Phase::Extrinsic; }
 
   std::unique_ptr<Environment> env_;
   std::int64_t next_decision_ = 0;  // the step whose decision is awaited

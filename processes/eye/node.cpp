@@ -11,6 +11,7 @@ EyeNode::EyeNode(lcm::LCM& lcm, std::shared_ptr<spdlog::logger> log, bool specul
     : NodeBase(lcm, "eye", std::move(log)), speculate_(speculate) {
   subscribe<scene_t>(channel::kScene, [this](const scene_t& m) { onScene(m); });
   subscribe<decision_t>(channel::kDecision, [this](const decision_t& m) { onDecision(m); });
+  subscribe<look_t>(channel::kLook, [this](const look_t& m) { onLook(m); });
 }
 
 void EyeNode::onConfigured(const RunConfig& config) {
@@ -18,14 +19,18 @@ void EyeNode::onConfigured(const RunConfig& config) {
   last_scanned_ = last_effect_ = -1;
   scene_announced_ = false;
   guess_.reset();
+  last_look_ = -1;
+  last_scene_ = -1;
 }
 
 void EyeNode::onStop() { eye_.reset(); }
 
-void EyeNode::publishFocus(std::int64_t step, const Focus& f) {
+void EyeNode::publishFocus(std::int64_t step, const Focus& f, int8_t kind, int32_t seq) {
   focus_t m;
   m.run_id = runId();
   m.step = step;
+  m.kind = kind;
+  m.seq = seq;
   m.x = f.x;
   m.y = f.y;
   m.side = config().eye.focus_side;
@@ -34,8 +39,43 @@ void EyeNode::publishFocus(std::int64_t step, const Focus& f) {
   publish(channel::kFocus, m);
 }
 
+void EyeNode::onExtrinsicScene(const scene_t& s) {
+  if (s.step < last_scene_)
+    return drop(channel::kScene, "step " + std::to_string(s.step) + " is in the past (now at " +
+                                     std::to_string(last_scene_) + ")");
+  cv::Mat image;
+  try {
+    image = decodeScene(s.data, s.width, s.height);
+  } catch (const std::exception& e) {
+    return drop(channel::kScene, e.what());
+  }
+  last_scene_ = s.step;
+  if (s.cause == scene_t::CAUSE_GOAL)
+    eye_->setGoal(std::move(image));  // memorised: the inner eye's image
+  else
+    eye_->setScene(std::move(image));
+}
+
+void EyeNode::onLook(const look_t& l) {
+  const char* ch = channel::kLook;
+  if (config().phase != Phase::Extrinsic) return drop(ch, "no LOOK requests in the intrinsic phase");
+  if (l.seq <= last_look_) return log_->debug("{}: request {} already answered", ch, l.seq);
+  if (!eye_->hasScene() || !eye_->hasGoal()) return drop(ch, "the goal and the scene have not been shown yet");
+  last_look_ = l.seq;
+  handled(l.step);
+  switch (l.kind) {
+    case focus_t::GOAL_SCAN:
+      return publishFocus(l.step, eye_->scanGoal(l.step), l.kind, l.seq);
+    case focus_t::SCENE_AT:
+      return publishFocus(l.step, eye_->lookAt(toPixel(l.x, l.y, config().world.size_px)), l.kind, l.seq);
+    default:
+      return publishFocus(l.step, eye_->scan(l.step), l.kind, l.seq);
+  }
+}
+
 void EyeNode::onScene(const scene_t& s) {
   const char* ch = channel::kScene;
+  if (config().phase == Phase::Extrinsic) return onExtrinsicScene(s);
   if (s.step <= last_scanned_)
     return drop(ch, "step " + std::to_string(s.step) + " is in the past (already scanned step " +
                         std::to_string(last_scanned_) + ")");
@@ -85,8 +125,8 @@ void EyeNode::onScene(const scene_t& s) {
 
 void EyeNode::onDecision(const decision_t& d) {
   // Only a pass without an announced scene starts the next step here; after an
-  // action, the action's scene does.
-  if (d.acted || scene_announced_ || d.step != last_scanned_) return;
+  // action, the action's scene does. (The planner's decisions are not steps of the eye's.)
+  if (config().phase == Phase::Extrinsic || d.acted || scene_announced_ || d.step != last_scanned_) return;
   scanStep(d.step + 1);
 }
 

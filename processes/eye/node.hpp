@@ -1,14 +1,17 @@
 // Eye process node.
-// Channels in:  RUN_CONFIG, RUN_CONTROL, SCENE, DECISION
-// Channels out: EFFECT (after a scene caused by an action), FOCUS (every step), STATUS
-// A step starts with a scene (start, action, newcomers) or, when the decision
-// was to pass and no scene was announced, with that decision.
+// Channels in:  RUN_CONFIG, RUN_CONTROL, SCENE, DECISION, LOOK (extrinsic phase)
+// Channels out: EFFECT (after a scene caused by an action), FOCUS, STATUS
+// Intrinsic phase: a step starts with a scene (start, action, newcomers) or,
+// when the decision was to pass and no scene was announced, with that decision.
+// Extrinsic phase: the goal scene is memorised for the inner eye, other scenes
+// update the outer eye, and each LOOK is answered with one FOCUS.
 #pragma once
 #include <memory>
 #include <optional>
 #include <utility>
 
 #include "afford/decision_t.hpp"
+#include "afford/look_t.hpp"
 #include "afford/node.hpp"
 #include "afford/scene_t.hpp"
 #include "eye/eye.hpp"
@@ -28,14 +31,18 @@ class EyeNode : public NodeBase {
   void onStop() override;
   void onScene(const scene_t& msg);
   void onDecision(const decision_t& msg);
+  void onLook(const look_t& msg);
+  void onExtrinsicScene(const scene_t& msg);
   void scanStep(std::int64_t step);
-  void publishFocus(std::int64_t step, const Focus& f);
+  void publishFocus(std::int64_t step, const Focus& f, int8_t kind = 0, int32_t seq = 0);
 
   std::unique_ptr<Eye> eye_;
   std::int64_t last_scanned_ = -1;   // last step whose FOCUS was published
   std::int64_t last_effect_ = -1;    // last step whose EFFECT was published
   bool scene_announced_ = false;     // the last scene said a scene for the next step follows
   bool speculate_;
+  std::int32_t last_look_ = -1;      // extrinsic: last LOOK answered
+  std::int64_t last_scene_ = -1;     // extrinsic: step of the last scene
   std::optional<std::pair<std::int64_t, Focus>> guess_;  // peekScan of the next step, if computed
 };
 

@@ -20,6 +20,7 @@ void MotivationNode::onStop() { core_.reset(); }
 
 void MotivationNode::onPrediction(const prediction_t& m) {
   const char* ch = channel::kPrediction;
+  if (config().phase == Phase::Extrinsic) return;  // the planner decides in the extrinsic phase
   if (m.step <= last_)
     return drop(ch, "step " + std::to_string(m.step) + " is in the past (decided up to " + std::to_string(last_) + ")");
   if (m.step >= config().steps) return drop(ch, "step " + std::to_string(m.step) + " is beyond the run's last step");

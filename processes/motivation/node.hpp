@@ -1,5 +1,5 @@
 // Motivation process node.
-// Channels in:  RUN_CONFIG, RUN_CONTROL, PREDICTION
+// Channels in:  RUN_CONFIG, RUN_CONTROL, PREDICTION (intrinsic phase only)
 // Channels out: DECISION, STATUS
 #pragma once
 #include <map>

@@ -13,12 +13,15 @@ PredictorsNode::PredictorsNode(lcm::LCM& lcm, std::shared_ptr<spdlog::logger> lo
   subscribe<focus_t>(channel::kFocus, [this](const focus_t& m) { onFocus(m); });
   subscribe<decision_t>(channel::kDecision, [this](const decision_t& m) { onDecision(m); });
   subscribe<effect_t>(channel::kEffect, [this](const effect_t& m) { onEffect(m); });
+  subscribe<forward_query_t>(channel::kForwardQuery, [this](const forward_query_t& m) { onForwardQuery(m); });
 }
 
 void PredictorsNode::onConfigured(const RunConfig& config) {
   trainer_.reset();
   core_ = std::make_unique<Predictors>(config);
-  if (async_effects_) trainer_ = std::make_unique<EffectTrainer>(*core_);
+  if (config.phase == Phase::Extrinsic) core_->load(config.extrinsic_checkpoint);  // throws: config refused
+  if (async_effects_ && config.phase == Phase::Intrinsic) trainer_ = std::make_unique<EffectTrainer>(*core_);
+  last_query_ = -1;
   probes_.clear();
   early_.clear();
   pending_trained_.reset();
@@ -41,6 +44,13 @@ void PredictorsNode::onProbe(const object_probe_t& m) {
 
 void PredictorsNode::onFocus(const focus_t& m) {
   const char* ch = channel::kFocus;
+  if (m.kind != focus_t::SCENE_SCAN) return;  // the planner's looks at the goal or at a place
+  if (extrinsic()) {
+    if (m.step < current_) return drop(ch, "step " + std::to_string(m.step) + " is in the past");
+    current_ = m.step;
+    handled(m.step);
+    return publishPrediction(m);
+  }
   if (m.step <= current_ || m.step < 0)
     return drop(ch, "step " + std::to_string(m.step) + " is in the past (now at " + std::to_string(current_) + ")");
   if (m.step >= config().steps) return drop(ch, "step " + std::to_string(m.step) + " is beyond the run's last step");
@@ -64,6 +74,16 @@ void PredictorsNode::drainBuffered() {
 void PredictorsNode::handleFocus(const focus_t& m) {
   if (probes_.empty()) log_->warn("{}: no probe images received yet: affordance tables will be empty", channel::kFocus);
   if (m.step % config().curve_interval == 0) publishTable(m.step);
+  publishPrediction(m);
+  trainPendingEffects();  // off the critical path: the next decision is under way
+  current_ = m.step;
+  focus_ = m;
+  outcome_ = Outcome::Unknown;
+  action_ = -1;
+  handled(m.step);
+}
+
+void PredictorsNode::publishPrediction(const focus_t& m) {
   const Prediction p = core_->predict(m.image);
   prediction_t out;
   out.run_id = runId();
@@ -77,16 +97,34 @@ void PredictorsNode::handleFocus(const focus_t& m) {
   pending_trained_.reset();
   out.n_trained = static_cast<int8_t>(out.trained.size());
   publish(channel::kPrediction, out);
-  trainPendingEffects();  // off the critical path: the next decision is under way
-  current_ = m.step;
-  focus_ = m;
-  outcome_ = Outcome::Unknown;
-  action_ = -1;
-  handled(m.step);
+}
+
+void PredictorsNode::onForwardQuery(const forward_query_t& q) {
+  const char* ch = channel::kForwardQuery;
+  if (!extrinsic()) return drop(ch, "no forward queries in the intrinsic phase");
+  if (q.seq <= last_query_) return log_->debug("{}: query {} already answered", ch, q.seq);
+  last_query_ = q.seq;
+  forward_prediction_t out;
+  out.run_id = runId();
+  out.step = q.step;
+  out.seq = q.seq;
+  out.n_actions = q.n_actions;
+  out.actions = q.actions;
+  out.size = q.size;
+  for (int a : q.actions) {
+    const std::vector<double> what = core_->whatEffect(a, q.image);
+    out.what.emplace_back(what.begin(), what.end());
+    const auto where = core_->whereEffect(a, q.x, q.y, q.target_x, q.target_y);
+    out.where_x.push_back(where[0]);
+    out.where_y.push_back(where[1]);
+  }
+  publish(channel::kForwardPrediction, out);
+  handled(q.step);
 }
 
 void PredictorsNode::onDecision(const decision_t& m) {
   const char* ch = channel::kDecision;
+  if (extrinsic()) return;  // the planner's actions: nothing to learn
   if (m.step != current_ || outcome_ != Outcome::Unknown) {
     if (m.step <= current_) return log_->debug("{}: step {} already handled", ch, m.step);
     return drop(ch, "step " + std::to_string(m.step) + " has no focus yet (now at " + std::to_string(current_) + ")");
@@ -103,6 +141,7 @@ void PredictorsNode::onDecision(const decision_t& m) {
 
 void PredictorsNode::onEffect(const effect_t& m) {
   const char* ch = channel::kEffect;
+  if (extrinsic()) return drop(ch, "no learning in the extrinsic phase");
   if (m.step != current_ || outcome_ != Outcome::AwaitingEffect) {
     if (m.step < current_ || (m.step == current_ && outcome_ == Outcome::Learned))
       return drop(ch, "step " + std::to_string(m.step) + " is in the past (already learned)");

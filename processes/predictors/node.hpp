@@ -1,9 +1,14 @@
 // Predictors process node. Handles each step's inputs in the canonical order
 // FOCUS(t) -> DECISION(t) -> [EFFECT(t)] -> FOCUS(t+1), buffering any that
 // arrive early, so its state is a pure function of the run's messages.
-// Channels in:  RUN_CONFIG, RUN_CONTROL, PROBE, FOCUS, DECISION, EFFECT
+// Channels in:  RUN_CONFIG, RUN_CONTROL, PROBE, FOCUS, DECISION, EFFECT,
+//               FORWARD_QUERY (extrinsic phase)
 // Channels out: AFFORDANCE_TABLE (every run.curve_interval steps and at the end),
-//               PREDICTION (with the report of the last update, if any), RESULT, STATUS
+//               PREDICTION (with the report of the last update, if any), RESULT,
+//               FORWARD_PREDICTION (extrinsic phase), STATUS
+// Extrinsic phase: the predictors load the checkpoint of a trained agent,
+// predict affordances for each scene scan and answer forward queries; they do
+// not learn.
 #pragma once
 #include <map>
 #include <memory>
@@ -12,6 +17,7 @@
 #include "afford/decision_t.hpp"
 #include "afford/effect_t.hpp"
 #include "afford/focus_t.hpp"
+#include "afford/forward_query_t.hpp"
 #include "afford/node.hpp"
 #include "afford/object_probe_t.hpp"
 #include "afford/trained_t.hpp"
@@ -36,6 +42,9 @@ class PredictorsNode : public NodeBase {
   void onFocus(const focus_t& m);
   void onDecision(const decision_t& m);
   void onEffect(const effect_t& m);
+  void onForwardQuery(const forward_query_t& m);
+  void publishPrediction(const focus_t& m);
+  bool extrinsic() const { return config().phase == Phase::Extrinsic; }
   void handleFocus(const focus_t& m);
   void drainBuffered();
   void publishTable(std::int64_t step);
@@ -54,6 +63,7 @@ class PredictorsNode : public NodeBase {
   std::optional<trained_t> pending_trained_;
   std::optional<Experience> pending_effects_;  // forward-model update still to make
   bool finished_ = false;
+  std::int32_t last_query_ = -1;  // extrinsic: last FORWARD_QUERY answered
 };
 
 }  // namespace afford

@@ -189,6 +189,8 @@ focus_t validFocus(const std::string& run, std::int64_t step) {
   focus_t f;
   f.run_id = run;
   f.step = step;
+  f.kind = focus_t::SCENE_SCAN;
+  f.seq = 0;
   f.x = f.y = 0.5;
   f.side = 21;
   f.size = 1323;

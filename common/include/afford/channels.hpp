@@ -14,4 +14,8 @@ inline constexpr const char* kEffect = "EFFECT";
 inline constexpr const char* kProbe = "PROBE";
 inline constexpr const char* kAffordanceTable = "AFFORDANCE_TABLE";
 inline constexpr const char* kResult = "RESULT";
+inline constexpr const char* kLook = "LOOK";
+inline constexpr const char* kForwardQuery = "FORWARD_QUERY";
+inline constexpr const char* kForwardPrediction = "FORWARD_PREDICTION";
+inline constexpr const char* kExtrinsicResult = "EXTRINSIC_RESULT";
 }  // namespace afford::channel

@@ -8,6 +8,9 @@
 #include "afford/decision_t.hpp"
 #include "afford/effect_t.hpp"
 #include "afford/focus_t.hpp"
+#include "afford/forward_prediction_t.hpp"
+#include "afford/forward_query_t.hpp"
+#include "afford/look_t.hpp"
 #include "afford/object_probe_t.hpp"
 #include "afford/prediction_t.hpp"
 #include "afford/scene_t.hpp"
@@ -26,5 +29,8 @@ std::string checkMessage(const decision_t& m, const RunConfig& c);
 std::string checkMessage(const effect_t& m, const RunConfig& c);
 std::string checkMessage(const trained_t& m, const RunConfig& c);
 std::string checkMessage(const object_probe_t& m, const RunConfig& c);
+std::string checkMessage(const look_t& m, const RunConfig& c);
+std::string checkMessage(const forward_query_t& m, const RunConfig& c);
+std::string checkMessage(const forward_prediction_t& m, const RunConfig& c);
 
 }  // namespace afford

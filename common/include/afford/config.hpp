@@ -79,32 +79,6 @@ struct MotivationConfig {
   ImpThresholdInput imp_threshold_input = ImpThresholdInput::Signal;
 };
 
-struct PlannerConfig {
-  double subgoal_match = 0.01;         // sub-goal reached: image distance below this (paper 2.4.3)
-  double image_match = 0.0035;         // predicted image matches the sub-goal (paper 2.4.3)
-  double position_match = 0.01;        // predicted position matches the sub-goal (paper 2.4.3)
-  int subgoal_timeout = 8;             // iterations before another sub-goal is chosen (paper 2.4.3)
-  int budget = 125;                    // steps per test (authors' code)
-  int max_attempts = 20;               // executed actions per test (authors' code)
-  bool restrict_by_affordance = true;  // check only actions with affordance > affordance_threshold
-  double affordance_threshold = 0.5;   // (paper 2.4.3, 3.2.4)
-  double success_distance = 1e-4;      // whole scene matches the goal image (authors' code)
-};
-
-struct RunConfig {
-  std::string experiment;
-  System system = System::IMP;
-  std::int64_t seed = 0;
-  std::int64_t steps = 0;
-  std::int64_t curve_interval = 100;
-  std::string checkpoint;  // where the predictors save their weights after the last step ("" = nowhere)
-  WorldConfig world;
-  EyeConfig eye;
-  PredictorsConfig predictors;
-  MotivationConfig motivation;
-  PlannerConfig planner;
-};
-
 // An extrinsic-phase scenario (paper 3.1, Figure 4): objects with the state
 // they start in and the state the goal image shows.
 struct ObjectState {
@@ -120,6 +94,38 @@ struct Scenario {
   std::string name;
   std::string description;
   std::vector<ScenarioObject> objects;
+};
+
+struct PlannerConfig {
+  double subgoal_match = 0.01;         // sub-goal reached: image distance below this (paper 2.4.3)
+  double image_match = 0.0035;         // predicted image matches the sub-goal (paper 2.4.3)
+  double position_match = 0.01;        // predicted position matches the sub-goal (paper 2.4.3)
+  int subgoal_timeout = 8;             // iterations before another sub-goal is chosen (paper 2.4.3)
+  int budget = 125;                    // steps per test (authors' code)
+  int max_attempts = 20;               // executed actions per test (authors' code)
+  bool restrict_by_affordance = true;  // check only actions with affordance > affordance_threshold
+  double affordance_threshold = 0.5;   // (paper 2.4.3, 3.2.4)
+  double success_distance = 1e-4;      // whole scene matches the goal image (authors' code)
+};
+
+enum class Phase { Intrinsic, Extrinsic };
+
+struct RunConfig {
+  std::string experiment;
+  Phase phase = Phase::Intrinsic;
+  // Extrinsic phase: the trained predictors to load, and the scenario of the test.
+  std::string extrinsic_checkpoint;
+  std::optional<Scenario> scenario;
+  System system = System::IMP;
+  std::int64_t seed = 0;
+  std::int64_t steps = 0;
+  std::int64_t curve_interval = 100;
+  std::string checkpoint;  // where the predictors save their weights after the last step ("" = nowhere)
+  WorldConfig world;
+  EyeConfig eye;
+  PredictorsConfig predictors;
+  MotivationConfig motivation;
+  PlannerConfig planner;
 };
 
 // Parse a scenario (types, names, ranges); `path` prefixes the keys in errors.
