@@ -439,6 +439,19 @@ YAML::Node effectiveConfig(const std::string& config_dir, const RunRequest& requ
   return root;
 }
 
+YAML::Node extrinsicConfig(const std::string& config_dir, const RunRequest& request, const std::string& checkpoint,
+                           const std::string& scenario) {
+  YAML::Node root = effectiveConfig(config_dir, request);
+  const RunConfig base = parseRunConfig(root);
+  loadScenario(config_dir, scenario, base.world);  // names the scenario's problem, if any
+  root["phase"] = "extrinsic";
+  root["run"]["steps"] = base.planner.budget;
+  root["extrinsic"]["checkpoint"] = checkpoint;
+  root["extrinsic"]["scenario"] = loadFile(std::filesystem::path(config_dir) / "scenarios" / (scenario + ".yaml"));
+  parseRunConfig(root);
+  return root;
+}
+
 std::string emitYaml(const YAML::Node& node) {
   YAML::Emitter out;
   out.SetDoublePrecision(17);

@@ -4,6 +4,7 @@
 
 #include "afford/affordance_table_t.hpp"
 #include "afford/channels.hpp"
+#include "afford/extrinsic_result_t.hpp"
 #include "afford/node.hpp"
 #include "afford/process_status_t.hpp"
 #include "afford/run_config_t.hpp"
@@ -31,6 +32,20 @@ RunDriver::RunDriver(lcm::LCM& lcm, std::shared_ptr<spdlog::logger> log) : lcm_(
     if (!decodeAtEdge(b, m, why)) return log_->warn("{}: dropped message: {}", channel::kAffordanceTable, why);
     if (!outcome_ || m.run_id != run_id_) return;
     outcome_->curve.push_back({m.step, m.affordance});
+  });
+  listen(channel::kExtrinsicResult, [this](const lcm::ReceiveBuffer* b) {
+    extrinsic_result_t m;
+    std::string why;
+    if (!decodeAtEdge(b, m, why)) return log_->warn("{}: dropped message: {}", channel::kExtrinsicResult, why);
+    if (!outcome_ || m.run_id != run_id_) return;
+    ExtrinsicOutcome& e = outcome_->extrinsic;
+    e.scenario = m.scenario;
+    e.success = m.success;
+    e.completion = m.completion;
+    e.attempts = m.attempts;
+    for (const auto& g : m.sub_goals)
+      e.sub_goals.push_back({g.x, g.y, g.iterations, g.actions_checked, g.actions_taken, g.reached});
+    have_result_ = true;
   });
   listen(channel::kResult, [this](const lcm::ReceiveBuffer* b) {
     run_result_t m;

@@ -25,12 +25,27 @@ struct RunSpec {
   std::int64_t steps = 0;
   std::string config_yaml;
   std::vector<std::string> processes;  // names expected to take part
+  bool extrinsic = false;              // ends with EXTRINSIC_RESULT instead of RESULT
   double stall_seconds = 30;           // no progress for this long fails the run
 };
 
 struct TableSnapshot {
   std::int64_t step = 0;
   std::vector<std::vector<double>> affordance;  // objects x actions
+};
+
+struct SubGoalOutcome {
+  double x = 0, y = 0;
+  int iterations = 0, actions_checked = 0, actions_taken = 0;
+  bool reached = false;
+};
+
+struct ExtrinsicOutcome {
+  std::string scenario;
+  bool success = false;
+  int completion = 0;  // iteration (from 1) at which the scene matched the goal
+  int attempts = 0;
+  std::vector<SubGoalOutcome> sub_goals;
 };
 
 struct RunOutcome {
@@ -45,6 +60,7 @@ struct RunOutcome {
   double run_seconds = 0;                     // from START to RESULT: the steps themselves
   std::map<std::string, long> peak_rss_kb;    // per process (VmHWM), filled by the runner
   std::uintmax_t log_bytes = 0;               // size of the run's log, if any
+  ExtrinsicOutcome extrinsic;                 // extrinsic runs
 };
 
 class RunDriver {

@@ -77,6 +77,17 @@ TEST(Processes, RealProcessesRunTheBaseTestAndRecordIt) {
   EXPECT_EQ(procs, (std::set<std::string>{"environment", "eye", "logger", "motivation", "predictors"}));
 }
 
+// Each channel has one publisher and a sender's datagrams arrive in order, so
+// every channel's messages are identical on both transports. (The interleaving
+// of channels follows causality, but the kernel hands a multicast datagram to
+// the sockets one by one, so a fast answer can overtake its cause on the way
+// to the logger: about once in 40 udpm runs under load.)
+std::map<std::string, std::vector<std::vector<std::uint8_t>>> byChannel(const std::vector<test::Event>& events) {
+  std::map<std::string, std::vector<std::vector<std::uint8_t>>> out;
+  for (const auto& e : events) out[e.channel].push_back(e.data);
+  return out;
+}
+
 TEST(Processes, UdpmAndMemqRunsGiveByteIdenticalLogsAndWeights) {
   const std::string logs = test::tempDir("det-logs");
   const std::string a = runBase("det-udpm", "udpm", 7820, logs);
@@ -87,9 +98,15 @@ TEST(Processes, UdpmAndMemqRunsGiveByteIdenticalLogsAndWeights) {
   const auto ea = test::readLog(logs + "/udpm/log.00.lcm");
   const auto eb = test::readLog(logs + "/it-base-IMP-s11/log.00.lcm");
   ASSERT_EQ(ea.size(), eb.size());
-  for (std::size_t i = 0; i < ea.size(); ++i) {
-    ASSERT_EQ(ea[i].channel, eb[i].channel) << "event " << i;
-    ASSERT_EQ(ea[i].data, eb[i].data) << "event " << i << " on " << ea[i].channel;
+  EXPECT_EQ(ea.front().data, eb.front().data);  // the same RUN_CONFIG
+  const auto ca = byChannel(ea), cb = byChannel(eb);
+  ASSERT_EQ(ca.size(), cb.size());
+  for (const auto& [channel, messages] : ca) {
+    ASSERT_TRUE(cb.count(channel)) << channel;
+    const auto& other = cb.at(channel);
+    ASSERT_EQ(messages.size(), other.size()) << channel;
+    for (std::size_t i = 0; i < messages.size(); ++i)
+      ASSERT_EQ(messages[i], other[i]) << channel << " message " << i;
   }
 }
 

@@ -169,6 +169,13 @@ struct RunRequest {
 YAML::Node effectiveConfig(const std::string& config_dir, const RunRequest& request);
 std::string emitYaml(const YAML::Node& node);
 
+// The effective configuration of one extrinsic test: the experiment's
+// configuration for `request` (system, seed, settings), in the extrinsic phase,
+// with the trained predictors of `checkpoint` and config/scenarios/<scenario>.yaml.
+// run.steps is the planner's budget. Validated before returning.
+YAML::Node extrinsicConfig(const std::string& config_dir, const RunRequest& request, const std::string& checkpoint,
+                           const std::string& scenario);
+
 // Overlay `over` onto `base` (maps merged recursively, everything else replaced).
 void mergeInto(YAML::Node base, const YAML::Node& over);
 

@@ -1,0 +1,160 @@
+#include "planner/node.hpp"
+
+#include "afford/channels.hpp"
+#include "afford/decision_t.hpp"
+#include "afford/extrinsic_result_t.hpp"
+#include "afford/forward_query_t.hpp"
+#include "afford/look_t.hpp"
+
+namespace afford {
+
+PlannerNode::PlannerNode(lcm::LCM& lcm, std::shared_ptr<spdlog::logger> log) : NodeBase(lcm, "planner", std::move(log)) {
+  subscribe<scene_t>(channel::kScene, [this](const scene_t& m) { onScene(m); });
+  subscribe<focus_t>(channel::kFocus, [this](const focus_t& m) { onFocus(m); });
+  subscribe<prediction_t>(channel::kPrediction, [this](const prediction_t& m) { onPrediction(m); });
+  subscribe<forward_prediction_t>(channel::kForwardPrediction,
+                                  [this](const forward_prediction_t& m) { onForward(m); });
+}
+
+void PlannerNode::onConfigured(const RunConfig& config) {
+  core_.reset();
+  if (config.phase == Phase::Extrinsic) core_ = std::make_unique<GoalPlanner>(config.planner);
+  step_ = -1;
+  seq_ = 0;
+  goal_distance_ = -1;
+  waiting_scene_ = finished_ = false;
+  object_.reset();
+  affordance_.reset();
+}
+
+void PlannerNode::onStop() { core_.reset(); }
+
+void PlannerNode::onScene(const scene_t& s) {
+  if (!active()) return;
+  if (s.cause == scene_t::CAUSE_GOAL) return;  // the eye memorises it
+  goal_distance_ = s.goal_distance;
+  if (s.cause == scene_t::CAUSE_START && step_ < 0) {  // the test begins
+    step_ = 0;
+    return follow(core_->startIteration());
+  }
+  if (s.cause == scene_t::CAUSE_ACTION && waiting_scene_ && s.step == step_) {
+    waiting_scene_ = false;
+    follow(core_->onActed());
+  }
+}
+
+void PlannerNode::look(int8_t kind, double x, double y) {
+  look_t l;
+  l.run_id = runId();
+  l.step = step_;
+  l.seq = ++seq_;
+  l.kind = kind;
+  l.x = x;
+  l.y = y;
+  publish(channel::kLook, l);
+}
+
+void PlannerNode::follow(PlannerRequest r) {
+  last_ = r;
+  switch (r.kind) {
+    case PlannerRequest::LookAtGoal:
+      return look(focus_t::GOAL_SCAN);
+    case PlannerRequest::LookAtSceneAt:
+      return look(focus_t::SCENE_AT, r.x, r.y);
+    case PlannerRequest::ScanScene:
+      object_.reset();
+      affordance_.reset();
+      return look(focus_t::SCENE_SCAN);
+    case PlannerRequest::Forward: {
+      forward_query_t q;
+      q.run_id = runId();
+      q.step = step_;
+      q.seq = ++seq_;
+      q.x = object_->x;
+      q.y = object_->y;
+      q.target_x = r.x;
+      q.target_y = r.y;
+      q.image = object_->image;
+      q.size = static_cast<int32_t>(q.image.size());
+      for (int a : r.actions) q.actions.push_back(static_cast<int8_t>(a));
+      q.n_actions = static_cast<int32_t>(q.actions.size());
+      return publish(channel::kForwardQuery, q);
+    }
+    case PlannerRequest::Act: {
+      decision_t d;
+      d.run_id = runId();
+      d.step = step_;
+      d.acted = true;
+      d.action = static_cast<int8_t>(r.action);
+      d.x = r.object_x;
+      d.y = r.object_y;
+      d.target_x = r.x;
+      d.target_y = r.y;
+      d.motivation = d.threshold = 0.0;
+      waiting_scene_ = true;
+      return publish(channel::kDecision, d);
+    }
+    case PlannerRequest::IterationDone:
+      return endIteration();
+  }
+}
+
+void PlannerNode::onFocus(const focus_t& f) {
+  if (!active() || f.seq != seq_) return;  // not the answer awaited (or already had)
+  handled(f.step);
+  if (f.kind == focus_t::SCENE_SCAN) {
+    if (last_.kind != PlannerRequest::ScanScene || object_) return;
+    object_ = f;
+    return tryObject();
+  }
+  if (last_.kind != PlannerRequest::LookAtGoal && last_.kind != PlannerRequest::LookAtSceneAt) return;
+  follow(core_->onView({f.image, f.x, f.y}));
+}
+
+void PlannerNode::onPrediction(const prediction_t& p) {
+  if (!active() || last_.kind != PlannerRequest::ScanScene || p.step != step_ || affordance_) return;
+  affordance_.emplace();
+  std::copy(p.affordance.begin(), p.affordance.end(), affordance_->begin());
+  tryObject();
+}
+
+void PlannerNode::tryObject() {
+  if (!object_ || !affordance_) return;  // the focus and its affordances, in either order
+  follow(core_->onObject({object_->image, object_->x, object_->y}, *affordance_));
+}
+
+void PlannerNode::onForward(const forward_prediction_t& m) {
+  if (!active() || m.seq != seq_ || last_.kind != PlannerRequest::Forward) return;
+  std::vector<ForwardPrediction> preds;
+  for (int i = 0; i < m.n_actions; ++i)
+    preds.push_back({m.actions[i], std::vector<double>(m.what[i].begin(), m.what[i].end()), m.where_x[i], m.where_y[i]});
+  follow(core_->onForward(preds));
+}
+
+void PlannerNode::endIteration() {
+  handled(step_);
+  if (goal_distance_ >= 0 && goal_distance_ < config().planner.success_distance) return finish(true);
+  if (step_ + 1 >= config().planner.budget || core_->attempts() >= config().planner.max_attempts) return finish(false);
+  ++step_;
+  follow(core_->startIteration());
+}
+
+void PlannerNode::finish(bool success) {
+  finished_ = true;
+  extrinsic_result_t r;
+  r.run_id = runId();
+  r.step = step_ + 1;
+  r.scenario = config().scenario->name;
+  r.success = success;
+  r.completion = success ? static_cast<int32_t>(step_ + 1) : 0;
+  r.attempts = core_->attempts();
+  for (const SubGoalRecord& g : core_->subGoals())
+    r.sub_goals.push_back({g.x, g.y, g.iterations, g.actions_checked, g.actions_taken, g.reached});
+  r.n_sub_goals = static_cast<int32_t>(r.sub_goals.size());
+  publish(channel::kExtrinsicResult, r);
+  log_->info("test '{}' on {}: {} after {} iterations, {} actions", runId(), r.scenario,
+             success ? "solved" : "not solved", r.step, r.attempts);
+  setState(process_status_t::DONE);
+}
+
+}  // namespace afford
