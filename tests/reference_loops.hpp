@@ -83,7 +83,10 @@ inline GoalTestOutcome runGoalTest(const RunConfig& c, const Scenario& s, const 
           std::vector<ForwardPrediction> preds;
           for (int a : r.actions) {
             const auto where = predictors.whereEffect(a, object.x, object.y, r.x, r.y);
-            preds.push_back({a, predictors.whatEffect(a, object.image), where[0], where[1]});
+            // (the what-effect travels as float32 in FORWARD_PREDICTION)
+            std::vector<double> what;
+            for (double v : predictors.whatEffect(a, object.image)) what.push_back(static_cast<float>(v));
+            preds.push_back({a, what, where[0], where[1]});
           }
           r = planner.onForward(preds);
           break;

@@ -13,6 +13,7 @@
 #include "environment/node.hpp"
 #include "eye/node.hpp"
 #include "motivation/node.hpp"
+#include "planner/node.hpp"
 #include "predictors/node.hpp"
 #include "tests/reference_loops.hpp"
 #include "tests/support.hpp"
@@ -42,6 +43,7 @@ struct InProcessRun {
     EyeNode eye(lcm, logger("eye"));
     PredictorsNode predictors(lcm, logger("predictors"));
     MotivationNode motivation(lcm, logger("motivation"));
+    PlannerNode planner(lcm, logger("planner"));
     RunDriver driver(lcm, logger("runner"));
     struct Tap {
       InProcessRun* run;
@@ -71,13 +73,14 @@ struct InProcessRun {
     spec.seed = seed;
     spec.steps = steps;
     spec.config_yaml = yaml;
-    spec.processes = {"environment", "eye", "predictors", "motivation"};
+    spec.extrinsic = YAML::Load(yaml)["phase"].as<std::string>() == "extrinsic";
+    spec.processes = {"environment", "eye", "predictors", spec.extrinsic ? "planner" : "motivation"};
     spec.stall_seconds = 20;
     auto pump = [&] {
       while (lcm.handleTimeout(0) > 0) {
       }
       lcm.handleTimeout(2);
-      env.tick(), eye.tick(), predictors.tick(), motivation.tick();
+      env.tick(), eye.tick(), predictors.tick(), motivation.tick(), planner.tick();
     };
     outcome = driver.run(spec, pump, [] { return std::string(); });
   }
@@ -173,6 +176,46 @@ TEST(Choreography, ARejectedConfigFailsTheRunNamingProcessAndKey) {
   EXPECT_FALSE(run.outcome.ok);
   EXPECT_NE(run.outcome.error.find("eye.focus_side"), std::string::npos) << run.outcome.error;
   EXPECT_NE(run.outcome.error.find("process '"), std::string::npos) << run.outcome.error;
+}
+
+// The extrinsic phase as a choreography (environment, eye, predictors,
+// planner) reaches exactly the outcome of Algorithm 2 as a plain loop.
+TEST(Choreography, ExtrinsicTestsMatchThePlainPlanner) {
+  const std::string dir = test::tempDir("extrinsic");
+  const std::string config_dir = std::string(AFFORD_SOURCE_DIR) + "/config";
+  const RunConfig train = parseRunConfigText(baseYaml(System::IMP, 6000, 5));
+  test::runIntrinsic(train).save(dir + "/predictors.ckpt");
+  for (int k : {1, 3, 5}) {
+    const std::string scenario = "scenario" + std::to_string(k);
+    const std::string yaml = emitYaml(
+        extrinsicConfig(config_dir, RunRequest{"base", System::IMP, 50 + k, std::nullopt, {}}, dir + "/predictors.ckpt", scenario));
+    InProcessRun run(yaml, System::IMP, 50 + k, 125);
+    ASSERT_TRUE(run.outcome.ok) << run.outcome.error;
+    const RunConfig c = parseRunConfigText(yaml);
+    Predictors loaded(c);
+    loaded.load(dir + "/predictors.ckpt");
+    const test::GoalTestOutcome ref = test::runGoalTest(c, *c.scenario, loaded);
+    const ExtrinsicOutcome& got = run.outcome.extrinsic;
+    EXPECT_EQ(got.scenario, scenario);
+    EXPECT_TRUE(got.success) << scenario;
+    EXPECT_EQ(got.success, ref.success) << scenario;
+    EXPECT_EQ(got.completion, ref.completion) << scenario;
+    EXPECT_EQ(got.attempts, ref.attempts) << scenario;
+    ASSERT_EQ(got.sub_goals.size(), ref.sub_goals.size()) << scenario;
+    for (std::size_t i = 0; i < ref.sub_goals.size(); ++i) {
+      EXPECT_EQ(got.sub_goals[i].actions_checked, ref.sub_goals[i].actions_checked) << scenario << " sub-goal " << i;
+      EXPECT_EQ(got.sub_goals[i].reached, ref.sub_goals[i].reached) << scenario << " sub-goal " << i;
+    }
+  }
+}
+
+TEST(Choreography, AnExtrinsicRunWithABadCheckpointIsRefusedNamingTheFile) {
+  const std::string config_dir = std::string(AFFORD_SOURCE_DIR) + "/config";
+  const std::string yaml = emitYaml(extrinsicConfig(config_dir, RunRequest{"base", System::IMP, 1, std::nullopt, {}},
+                                                    "/nonexistent/predictors.ckpt", "scenario1"));
+  InProcessRun run(yaml, System::IMP, 1, 125);
+  EXPECT_FALSE(run.outcome.ok);
+  EXPECT_NE(run.outcome.error.find("/nonexistent/predictors.ckpt"), std::string::npos) << run.outcome.error;
 }
 
 // ---- bad input: each kind is dropped with one line naming channel and reason,
