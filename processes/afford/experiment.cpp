@@ -25,6 +25,7 @@
 #include "eye/node.hpp"
 #include "logger/node.hpp"
 #include "motivation/node.hpp"
+#include "planner/node.hpp"
 #include "predictors/node.hpp"
 
 namespace afford {
@@ -38,6 +39,10 @@ struct PlannedRun {
   std::string system;
   bool keep_log = false;
   std::size_t index = 0;
+  // extrinsic tests: which intrinsic run trained the agent, which scenario, which repetition
+  std::size_t intrinsic = 0;
+  std::string scenario;
+  int rep = 0;
 };
 
 std::string defaultPrefix() {
@@ -61,7 +66,12 @@ RunOutcome runInProcess(const PlannedRun& run, const ExperimentOptions& o, int s
   EnvironmentNode env(lcm, makeLogger("environment" + tag, level));
   EyeNode eye(lcm, makeLogger("eye" + tag, level), /*speculate=*/false);  // one thread: no idle time to fill
   PredictorsNode predictors(lcm, makeLogger("predictors" + tag, level), /*async_effects=*/false);
-  MotivationNode motivation(lcm, makeLogger("motivation" + tag, level));
+  // The motivation decides in the intrinsic phase, the planner in the extrinsic one.
+  std::unique_ptr<NodeBase> decider;
+  if (run.spec.extrinsic)
+    decider = std::make_unique<PlannerNode>(lcm, makeLogger("planner" + tag, level));
+  else
+    decider = std::make_unique<MotivationNode>(lcm, makeLogger("motivation" + tag, level));
   std::unique_ptr<LoggerNode> logger;
   if (run.keep_log) logger = std::make_unique<LoggerNode>(lcm, makeLogger("logger" + tag, level), o.log_root);
   RunDriver driver(lcm, makeLogger("runner" + tag, level));
@@ -70,7 +80,7 @@ RunOutcome runInProcess(const PlannedRun& run, const ExperimentOptions& o, int s
     env.tick();
     eye.tick();
     predictors.tick();
-    motivation.tick();
+    decider->tick();
     if (logger) logger->tick();
   };
   RunOutcome r = driver.run(run.spec, pump, [] { return std::string(); });
@@ -81,16 +91,18 @@ RunOutcome runInProcess(const PlannedRun& run, const ExperimentOptions& o, int s
 struct Slot {
   int index = 0;
   std::string url;
-  std::unique_ptr<ProcessGroup> group;   // environment, eye, predictors, motivation
+  std::unique_ptr<ProcessGroup> group;   // environment, eye, predictors, and motivation or planner
+  bool extrinsic = false;                // which of the two the group has
 };
 
 RunOutcome runOverUdpm(const PlannedRun& run, const ExperimentOptions& o, Slot& slot, const std::string& bin) {
   const std::string out = (fs::path(o.out_dir) / "processes" / ("slot" + std::to_string(slot.index))).string();
-  if (!slot.group || !slot.group->health().empty()) {
+  if (!slot.group || !slot.group->health().empty() || slot.extrinsic != run.spec.extrinsic) {
     slot.group.reset();
-    slot.group = std::make_unique<ProcessGroup>(bin, std::vector<std::string>{"environment", "eye", "predictors",
-                                                                              "motivation"},
-                                                slot.url, out, std::vector<std::string>{});
+    slot.extrinsic = run.spec.extrinsic;
+    slot.group = std::make_unique<ProcessGroup>(
+        bin, std::vector<std::string>{"environment", "eye", "predictors", run.spec.extrinsic ? "planner" : "motivation"},
+        slot.url, out, std::vector<std::string>{});
   }
   std::unique_ptr<ProcessGroup> logger;
   if (run.keep_log)
@@ -144,6 +156,8 @@ struct Plan {
   int reps = 0;
   std::vector<PlannedRun> runs;
   std::map<std::string, RunConfig> configs;  // per system (of its first repetition)
+  std::vector<std::string> scenarios;        // extrinsic tests, if any
+  std::map<std::string, int> sub_goals;      // objects (sub-goals) per scenario
 };
 
 // Everything that can be wrong with the request is found here, before any process starts.
@@ -158,6 +172,13 @@ Plan planExperiment(const ExperimentOptions& o) {
     throw ConfigError("--transport must be udpm or memq, not \"" + o.transport + "\"");
   if (o.keep_logs != "all" && o.keep_logs != "first" && o.keep_logs != "none")
     throw ConfigError("--keep-logs must be all, first or none, not \"" + o.keep_logs + "\"");
+  if (o.extrinsic_reps < 0) throw ConfigError("--extrinsic-reps must be 0 or more");
+  if (o.extrinsic_reps > 0) {
+    const RunConfig any = parseRunConfig(effectiveConfig(plan.config_dir, RunRequest{o.experiment, System::IMP, o.seed, o.steps, o.settings}));
+    plan.scenarios = o.scenarios.empty() ? listScenarios(plan.config_dir) : o.scenarios;
+    for (const auto& name : plan.scenarios)
+      plan.sub_goals[name] = static_cast<int>(loadScenario(plan.config_dir, name, any.world).objects.size());
+  }
   const std::string prefix = o.run_prefix.empty() ? defaultPrefix() : o.run_prefix;
   auto& runs = plan.runs;
   auto& configs = plan.configs;
@@ -196,9 +217,8 @@ Plan planExperiment(const ExperimentOptions& o) {
 }
 
 // Run every planned run, J at a time; outcomes in plan order.
-std::vector<RunOutcome> executeRuns(const Plan& plan, const ExperimentOptions& o, const std::string& bin,
-                                    spdlog::logger& log) {
-  const auto& runs = plan.runs;
+std::vector<RunOutcome> executeRuns(const std::vector<PlannedRun>& runs, const ExperimentOptions& o,
+                                    const std::string& bin, spdlog::logger& log) {
   std::vector<RunOutcome> outcomes(runs.size());
   std::atomic<std::size_t> next{0};
   std::atomic<int> done{0};
@@ -224,7 +244,10 @@ std::vector<RunOutcome> executeRuns(const Plan& plan, const ExperimentOptions& o
       const RunOutcome& out = outcomes[i];
       std::lock_guard<std::mutex> lock(log_mutex);
       const int k = ++done;
-      if (out.ok)
+      if (out.ok && runs[i].spec.extrinsic)
+        log.info("[{}/{}] {}: {}", k, runs.size(), runs[i].spec.run_id,
+                 out.extrinsic.success ? "solved in " + std::to_string(out.extrinsic.completion) + " steps" : "not solved");
+      else if (out.ok)
         log.info("[{}/{}] {} done in {:.1f} s, weights {}", k, runs.size(), runs[i].spec.run_id, out.wall_seconds,
                  out.weights_checksum);
       else
@@ -236,6 +259,112 @@ std::vector<RunOutcome> executeRuns(const Plan& plan, const ExperimentOptions& o
   for (auto& t : threads) t.join();
 
   return outcomes;
+}
+
+// E tests of every scenario from each intrinsic run that left a checkpoint.
+std::vector<PlannedRun> planExtrinsic(const Plan& plan, const std::vector<RunOutcome>& trained,
+                                      const ExperimentOptions& o) {
+  std::vector<PlannedRun> tests;
+  for (const auto& p : plan.runs) {
+    const RunOutcome& r = trained[p.index];
+    if (!r.ok || r.checkpoint.empty()) continue;
+    for (std::size_t k = 0; k < plan.scenarios.size(); ++k)
+      for (int e = 0; e < o.extrinsic_reps; ++e) {
+        PlannedRun t;
+        t.system = p.system;
+        t.intrinsic = p.index;
+        t.scenario = plan.scenarios[k];
+        t.rep = e;
+        t.keep_log = o.keep_logs == "all" || (o.keep_logs == "first" && p.keep_log && e == 0);
+        // Each test its own seed, derived from the intrinsic run's (documented in docs/experiments.md).
+        const std::int64_t seed = p.spec.seed * 1'000'000 + static_cast<std::int64_t>(k + 1) * 1000 + e;
+        const RunRequest req{o.experiment, parseSystem(p.system), seed, std::nullopt, o.settings};
+        const YAML::Node node = extrinsicConfig(plan.config_dir, req, r.checkpoint, t.scenario);
+        t.spec.run_id = p.spec.run_id + "-" + t.scenario + "-e" + std::to_string(e);
+        t.spec.experiment = o.experiment;
+        t.spec.system = p.system;
+        t.spec.seed = seed;
+        t.spec.steps = node["run"]["steps"].as<std::int64_t>();
+        t.spec.config_yaml = emitYaml(node);
+        t.spec.extrinsic = true;
+        t.spec.processes = {"environment", "eye", "predictors", "planner"};
+        if (t.keep_log) t.spec.processes.push_back("logger");
+        t.spec.stall_seconds = o.stall_seconds;
+        t.index = tests.size();
+        tests.push_back(std::move(t));
+      }
+  }
+  return tests;
+}
+
+// Linear-interpolated quantile of sorted values.
+double quantile(const std::vector<double>& sorted, double q) {
+  if (sorted.empty()) return 0;
+  const double pos = q * (sorted.size() - 1);
+  const std::size_t i = static_cast<std::size_t>(pos);
+  const double f = pos - i;
+  return i + 1 < sorted.size() ? sorted[i] * (1 - f) + sorted[i + 1] * f : sorted[i];
+}
+
+// Per system: the paper's Table 2 metric, raw success, completion steps and
+// their fit a x^2 + b x (Figure 6), actions checked per sub-goal; and a CSV.
+void summariseExtrinsic(json& summary, const Plan& plan, const std::vector<PlannedRun>& tests,
+                        const std::vector<RunOutcome>& outcomes, const ExperimentOptions& o) {
+  for (const auto& sys : o.systems) {
+    std::ofstream csv(fs::path(o.out_dir) / ("extrinsic_" + sys + ".csv"));
+    csv << "system,intrinsic_run_id,seed,scenario,rep,success,completion,attempts,sub_goals,actions_checked\n";
+    json ex = {{"scenarios", plan.scenarios}, {"tests_per_scenario", o.extrinsic_reps}};
+    double sxx = 0, sxy = 0, sx3 = 0, sx4 = 0, sx2y = 0;  // least squares of y = a x^2 + b x
+    for (const auto& scenario : plan.scenarios) {
+      std::map<std::size_t, std::pair<int, int>> per_run;  // intrinsic run -> (successes, tests)
+      std::vector<double> steps;
+      double checked = 0;
+      int sub_goal_count = 0, successes = 0, total = 0;
+      for (const auto& t : tests) {
+        if (t.system != sys || t.scenario != scenario) continue;
+        const RunOutcome& r = outcomes[t.index];
+        const bool ok = r.ok && r.extrinsic.success;
+        auto& [s, n] = per_run[t.intrinsic];
+        s += ok;
+        ++n;
+        successes += ok;
+        ++total;
+        int checks = 0;
+        for (const auto& g : r.extrinsic.sub_goals) checks += g.actions_checked;
+        checked += checks;
+        sub_goal_count += static_cast<int>(r.extrinsic.sub_goals.size());
+        if (ok) {
+          steps.push_back(r.extrinsic.completion);
+          const double x = plan.sub_goals.at(scenario), y = r.extrinsic.completion;
+          sxx += x * x, sx3 += x * x * x, sx4 += x * x * x * x, sxy += x * y, sx2y += x * x * y;
+        }
+        csv << sys << "," << plan.runs[t.intrinsic].spec.run_id << "," << t.spec.seed << "," << scenario << "," << t.rep
+            << "," << ok << "," << r.extrinsic.completion << "," << r.extrinsic.attempts << ","
+            << r.extrinsic.sub_goals.size() << "," << checks << "\n";
+      }
+      int good_runs = 0;
+      for (const auto& [run, sn] : per_run) good_runs += sn.first > 0.9 * sn.second;
+      std::sort(steps.begin(), steps.end());
+      double mean = 0;
+      for (double v : steps) mean += v / steps.size();
+      ex["table_metric"][scenario] = per_run.empty() ? 0.0 : static_cast<double>(good_runs) / per_run.size();
+      ex["success_rate"][scenario] = total ? static_cast<double>(successes) / total : 0.0;
+      ex["completion_steps"][scenario] = {{"n", steps.size()},
+                                          {"sub_goals", plan.sub_goals.at(scenario)},
+                                          {"median", quantile(steps, 0.5)},
+                                          {"q1", quantile(steps, 0.25)},
+                                          {"q3", quantile(steps, 0.75)},
+                                          {"min", steps.empty() ? 0.0 : steps.front()},
+                                          {"max", steps.empty() ? 0.0 : steps.back()},
+                                          {"mean", mean}};
+      ex["actions_checked_per_sub_goal"][scenario] = sub_goal_count ? checked / sub_goal_count : 0.0;
+    }
+    // Normal equations of y = a x^2 + b x.
+    const double det = sx4 * sxx - sx3 * sx3;
+    if (std::abs(det) > 1e-12)
+      ex["completion_steps"]["fit"] = {{"a", (sx2y * sxx - sxy * sx3) / det}, {"b", (sx4 * sxy - sx3 * sx2y) / det}};
+    summary["systems"][sys]["extrinsic"] = ex;
+  }
 }
 
 // summary.json content (docs/results-schema.md); also writes the CSV files.
@@ -398,11 +527,21 @@ int runExperiment(const ExperimentOptions& o, spdlog::logger& log) {
   fs::create_directories(o.out_dir);
   log.info("experiment {}: {} run(s) of {} steps, {} at a time, over {} ({})", o.experiment, plan.runs.size(),
            plan.runs.front().spec.steps, o.jobs, o.transport, network);
-  const std::vector<RunOutcome> outcomes = executeRuns(plan, o, bin, log);
-  const json summary = summarise(plan, o, outcomes, network);
+  const std::vector<RunOutcome> outcomes = executeRuns(plan.runs, o, bin, log);
+  json summary = summarise(plan, o, outcomes, network);
+  std::vector<RunOutcome> test_outcomes;
+  if (o.extrinsic_reps > 0) {
+    const std::vector<PlannedRun> tests = planExtrinsic(plan, outcomes, o);
+    log.info("extrinsic phase: {} test(s): {} scenario(s) x {} from each trained agent", tests.size(),
+             plan.scenarios.size(), o.extrinsic_reps);
+    test_outcomes = executeRuns(tests, o, bin, log);
+    summariseExtrinsic(summary, plan, tests, test_outcomes, o);
+  }
   std::ofstream(fs::path(o.out_dir) / "summary.json") << summary.dump(2) << "\n";
   if (!o.quiet) printTables(summary, o);
-  const auto failures = std::count_if(outcomes.begin(), outcomes.end(), [](const RunOutcome& r) { return !r.ok; });
+  const auto failed = [](const RunOutcome& r) { return !r.ok; };
+  const auto failures = std::count_if(outcomes.begin(), outcomes.end(), failed) +
+                        std::count_if(test_outcomes.begin(), test_outcomes.end(), failed);
   if (failures) log.error("{} run(s) failed; see summary.json failed_runs", failures);
   return failures ? 1 : 0;
 }

@@ -32,6 +32,8 @@ struct ExperimentOptions {
   std::string process_log_level = "info";  // for the processes (udpm) / in-process nodes (memq: warn)
   double stall_seconds = 30;
   bool quiet = false;                      // no table at the end
+  int extrinsic_reps = 0;                  // tests per scenario from each intrinsic run (0: none)
+  std::vector<std::string> scenarios;      // default: every config/scenarios/*.yaml
 };
 
 // Returns the process exit code (0 when every run succeeded).

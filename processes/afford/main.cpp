@@ -44,6 +44,10 @@ int main(int argc, char** argv) {
   exp->add_option("--stall-seconds", o.stall_seconds, "fail a run after this long without progress")
       ->capture_default_str();
   exp->add_flag("--quiet", o.quiet, "do not print the table at the end");
+  exp->add_option("--extrinsic-reps", o.extrinsic_reps,
+                  "extrinsic tests of each scenario from every trained agent (0: intrinsic phase only)")
+      ->capture_default_str();
+  exp->add_option("--scenarios", o.scenarios, "scenarios to test (default: all in config/scenarios)");
 
   auto* list = app.add_subcommand("experiments", "list the experiments in the config folder");
   std::string show_name, show_system = "IMP";
