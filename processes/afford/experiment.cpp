@@ -482,6 +482,18 @@ json summarise(const Plan& plan, const ExperimentOptions& o, const std::vector<R
     summary["systems"][sys] = js;
   }
   if (reference && reference["source"]) summary["reference_source"] = reference["source"].as<std::string>();
+  try {  // the paper's extrinsic tables, for the same experiment
+    const YAML::Node ext = YAML::LoadFile(config_dir + "/reference.yaml")[o.experiment + "_extrinsic"];
+    if (ext && ext["table_metric"])
+      for (const auto& sys : o.systems)
+        if (ext["table_metric"][sys])
+          summary["systems"][sys]["reference_table_metric"] = ext["table_metric"][sys].as<std::vector<double>>();
+    if (ext && ext["completion_fit"])
+      summary["reference_completion_fit"] = {{"a", ext["completion_fit"]["a"].as<double>()},
+                                             {"b", ext["completion_fit"]["b"].as<double>()}};
+    if (ext && ext["source"]) summary["reference_extrinsic_source"] = ext["source"].as<std::string>();
+  } catch (const YAML::Exception&) {
+  }
   return summary;
 }
 
@@ -508,6 +520,50 @@ void printTables(const json& summary, const ExperimentOptions& o) {
     if (js.contains("reference_affordance_mae"))
       t << " (authors' code: " << fixed(js["reference_affordance_mae"].get<double>(), 3) << ")";
     t << "\n";
+  }
+  bool header = false;
+  for (const auto& sys : o.systems) {
+    const json& js = summary["systems"][sys];
+    if (!js.contains("extrinsic")) continue;
+    const json& ex = js["extrinsic"];
+    if (!header) {
+      t << "\nExtrinsic tests (" << ex["tests_per_scenario"].get<int>()
+        << " per scenario and trained agent): table metric = share of agents with > 90% of their tests\n"
+           "solved; in brackets the paper's; then the raw share of tests solved\n\n"
+        << "       ";
+      for (const auto& s : ex["scenarios"]) t << std::setw(14) << s.get<std::string>();
+      t << "\n";
+      header = true;
+    }
+    t << "  " << std::left << std::setw(5) << sys << std::right;
+    int k = 0;
+    for (const auto& s : ex["scenarios"]) {
+      std::string cell = fixed(ex["table_metric"][s.get<std::string>()].get<double>(), 2);
+      if (js.contains("reference_table_metric") && k < static_cast<int>(js["reference_table_metric"].size()))
+        cell += " (" + fixed(js["reference_table_metric"][k].get<double>(), 1) + ")";
+      t << std::setw(14) << cell;
+      ++k;
+    }
+    t << "\n  " << std::setw(5) << "" << std::right;
+    for (const auto& s : ex["scenarios"]) t << std::setw(14) << fixed(ex["success_rate"][s.get<std::string>()].get<double>(), 2);
+    t << "\n";
+  }
+  if (header) {
+    t << "\nCompletion steps (median over solved tests) by number of sub-goals; fit a x^2 + b x";
+    if (summary.contains("reference_completion_fit"))
+      t << " (paper, IMP: " << fixed(summary["reference_completion_fit"]["a"].get<double>(), 3) << " x^2 "
+        << fixed(summary["reference_completion_fit"]["b"].get<double>(), 3) << " x)";
+    t << "\n";
+    for (const auto& sys : o.systems) {
+      const json& js = summary["systems"][sys];
+      if (!js.contains("extrinsic")) continue;
+      const json& cs = js["extrinsic"]["completion_steps"];
+      t << "  " << std::left << std::setw(5) << sys << std::right;
+      for (const auto& s : js["extrinsic"]["scenarios"]) t << std::setw(14) << fixed(cs[s.get<std::string>()]["median"].get<double>(), 1);
+      if (cs.contains("fit"))
+        t << "   fit " << fixed(cs["fit"]["a"].get<double>(), 3) << " x^2 " << fixed(cs["fit"]["b"].get<double>(), 3) << " x";
+      t << "\n";
+    }
   }
   t << "\nsummary: " << (fs::path(o.out_dir) / "summary.json").string() << "\n";
   std::printf("%s", t.str().c_str());

@@ -110,6 +110,28 @@ TEST(Processes, UdpmAndMemqRunsGiveByteIdenticalLogsAndWeights) {
   }
 }
 
+TEST(Processes, RealProcessesSolveAnExtrinsicScenario) {
+  const std::string dir = test::tempDir("extrinsic-udpm");
+  const auto r = test::runCommand(test::afford(
+      "experiment base --system IMP --reps 1 --steps 6000 --seed 2 --extrinsic-reps 1 --scenarios scenario3 --quiet"
+      " --run-prefix ex --out " + dir + " --log-root " + dir + "/logs --base-port 7850"));
+  ASSERT_EQ(r.exit_code, 0) << r.output;
+  const json s = readJson(fs::path(dir) / "summary.json");
+  const json& ex = s["systems"]["IMP"]["extrinsic"];
+  EXPECT_EQ(ex["success_rate"]["scenario3"], 1.0);
+  EXPECT_EQ(ex["table_metric"]["scenario3"], 1.0);
+  EXPECT_EQ(ex["completion_steps"]["scenario3"]["sub_goals"], 3);
+  // The test's own log: the planner's looks, queries and decisions.
+  const auto events = test::readLog(dir + "/logs/ex-base-IMP-s2-scenario3-e0/log.00.lcm");
+  std::map<std::string, int> count;
+  for (const auto& e : events) ++count[e.channel];
+  EXPECT_GT(count[channel::kLook], 0);
+  EXPECT_GT(count[channel::kForwardQuery], 0);
+  EXPECT_EQ(count[channel::kForwardQuery], count[channel::kForwardPrediction]);
+  EXPECT_EQ(count[channel::kDecision], 3);  // one action per sub-goal
+  EXPECT_EQ(count[channel::kExtrinsicResult], 1);
+}
+
 struct BadConfigCase {
   const char* name;
   const char* args;
