@@ -6,6 +6,7 @@
 #include <opencv2/imgcodecs.hpp>
 
 #include "afford/image.hpp"
+#include "afford/plots.hpp"
 
 #include <cstdio>
 
@@ -57,6 +58,9 @@ int main(int argc, char** argv) {
   show->add_option("--system", show_system, "FIX, IGN or IMP")->capture_default_str();
   show->add_option("--set", show_settings, "override a config value (repeatable)");
 
+  std::string plot_dir;
+  auto* plot = app.add_subcommand("plot", "draw the paper's figures (PNG + CSV) from an experiment's output folder");
+  plot->add_option("dir", plot_dir, "folder with summary.json (an experiment's --out)")->required();
   std::string scenario_name, scenario_png;
   auto* scen = app.add_subcommand("scenario", "check a scenario file and draw its goal and initial scenes");
   scen->add_option("name", scenario_name, "scenario (config/scenarios/<name>.yaml)")->required();
@@ -71,6 +75,10 @@ int main(int argc, char** argv) {
         const auto e = afford::loadExperiment(config_dir, n);
         std::printf("%-12s %s\n", n.c_str(), e.description.c_str());
       }
+      return 0;
+    }
+    if (plot->parsed()) {
+      for (const auto& f : afford::plotExperiment(plot_dir)) std::printf("%s\n", f.c_str());
       return 0;
     }
     if (scen->parsed()) {
