@@ -7,6 +7,10 @@
 
 #include "afford/image.hpp"
 #include "afford/plots.hpp"
+#include "afford/report.hpp"
+
+#include <filesystem>
+#include <fstream>
 
 #include <cstdio>
 
@@ -61,6 +65,14 @@ int main(int argc, char** argv) {
   std::string plot_dir;
   auto* plot = app.add_subcommand("plot", "draw the paper's figures (PNG + CSV) from an experiment's output folder");
   plot->add_option("dir", plot_dir, "folder with summary.json (an experiment's --out)")->required();
+  std::vector<std::string> report_dirs;
+  std::string report_out = "docs/results.md", report_figures = "docs/results";
+  double report_wall = 0;
+  auto* report = app.add_subcommand("report", "write docs/results.md from experiment output folders (plotted)");
+  report->add_option("dirs", report_dirs, "experiment output folders")->required();
+  report->add_option("--out", report_out, "the markdown file")->capture_default_str();
+  report->add_option("--figures", report_figures, "where the figures are copied")->capture_default_str();
+  report->add_option("--wall-seconds", report_wall, "wall time of the reproduction, to report");
   std::string scenario_name, scenario_png;
   auto* scen = app.add_subcommand("scenario", "check a scenario file and draw its goal and initial scenes");
   scen->add_option("name", scenario_name, "scenario (config/scenarios/<name>.yaml)")->required();
@@ -75,6 +87,13 @@ int main(int argc, char** argv) {
         const auto e = afford::loadExperiment(config_dir, n);
         std::printf("%-12s %s\n", n.c_str(), e.description.c_str());
       }
+      return 0;
+    }
+    if (report->parsed()) {
+      const std::string link = std::filesystem::relative(report_figures, std::filesystem::path(report_out).parent_path()).string();
+      const std::string md = afford::writeReport(report_dirs, report_figures, link, report_wall);
+      std::ofstream(report_out) << md;
+      std::printf("%s\n", report_out.c_str());
       return 0;
     }
     if (plot->parsed()) {

@@ -18,8 +18,23 @@ PredictorsNode::PredictorsNode(lcm::LCM& lcm, std::shared_ptr<spdlog::logger> lo
 
 void PredictorsNode::onConfigured(const RunConfig& config) {
   trainer_.reset();
-  core_ = std::make_unique<Predictors>(config);
-  if (config.phase == Phase::Extrinsic) core_->load(config.extrinsic_checkpoint);  // throws: config refused
+  if (config.phase == Phase::Extrinsic) {
+    namespace fs = std::filesystem;
+    const std::string& path = config.extrinsic_checkpoint;
+    std::error_code ec;
+    const auto size = fs::file_size(path, ec);
+    const auto mtime = fs::last_write_time(path, ec);
+    if (!ec && loaded_ && loaded_->path == path && loaded_->size == size && loaded_->mtime == mtime) {
+      core_ = loaded_->core;
+    } else {
+      core_ = std::make_shared<Predictors>(config);
+      core_->load(path);  // throws: the config is refused, naming the file
+      loaded_ = Loaded{path, size, mtime, core_};
+    }
+  } else {
+    loaded_.reset();
+    core_ = std::make_shared<Predictors>(config);
+  }
   if (async_effects_ && config.phase == Phase::Intrinsic) trainer_ = std::make_unique<EffectTrainer>(*core_);
   last_query_ = -1;
   probes_.clear();

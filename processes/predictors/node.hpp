@@ -10,6 +10,7 @@
 // predict affordances for each scene scan and answer forward queries; they do
 // not learn.
 #pragma once
+#include <filesystem>
 #include <map>
 #include <memory>
 #include <optional>
@@ -52,7 +53,16 @@ class PredictorsNode : public NodeBase {
   void trainPendingEffects();
 
   bool async_effects_;
-  std::unique_ptr<Predictors> core_;
+  std::shared_ptr<Predictors> core_;
+  // Extrinsic runs do not change the predictors: the agent loaded for one test
+  // serves the next one that names the same, unchanged checkpoint file.
+  struct Loaded {
+    std::string path;
+    std::uintmax_t size = 0;
+    std::filesystem::file_time_type mtime;
+    std::shared_ptr<Predictors> core;
+  };
+  std::optional<Loaded> loaded_;
   std::unique_ptr<EffectTrainer> trainer_;  // declared after core_: stops before it goes
   std::vector<std::vector<std::uint8_t>> probes_;
   std::int64_t current_ = -1;          // the step whose focus was handled last

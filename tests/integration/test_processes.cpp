@@ -130,6 +130,22 @@ TEST(Processes, RealProcessesSolveAnExtrinsicScenario) {
   EXPECT_EQ(count[channel::kForwardQuery], count[channel::kForwardPrediction]);
   EXPECT_EQ(count[channel::kDecision], 3);  // one action per sub-goal
   EXPECT_EQ(count[channel::kExtrinsicResult], 1);
+
+  // The figures and the report from that folder.
+  const auto plot = test::runCommand(test::afford("plot " + dir));
+  ASSERT_EQ(plot.exit_code, 0) << plot.output;
+  for (const char* png : {"fig_affordances.png", "fig_curves_IMP.png", "fig_completion.png"}) {
+    const std::string bytes = slurp(fs::path(dir) / png);
+    EXPECT_GT(bytes.size(), 10000u) << png;
+    EXPECT_EQ(bytes.substr(1, 3), "PNG") << png;
+    EXPECT_TRUE(fs::exists(fs::path(dir) / (fs::path(png).stem().string() + ".csv"))) << png;
+  }
+  const auto rep = test::runCommand(test::afford("report " + dir + " --out " + dir + "/results.md --figures " + dir + "/figs"));
+  ASSERT_EQ(rep.exit_code, 0) << rep.output;
+  const std::string md = slurp(fs::path(dir) / "results.md");
+  EXPECT_NE(md.find("| scenario3 |"), std::string::npos) << md;
+  EXPECT_NE(md.find("| IMP | 1.00 (1.0) |"), std::string::npos) << md;  // beside the paper's Table 2, scenario 3
+  EXPECT_TRUE(fs::exists(fs::path(dir) / "figs" / "base" / "fig_completion.png"));
 }
 
 struct BadConfigCase {
