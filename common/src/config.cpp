@@ -133,6 +133,16 @@ ObjectSpec parseObject(const YAML::Node& node, const std::string& path, const Wo
   return o;
 }
 
+// Names of the .yaml files of config_dir/sub, sorted.
+std::vector<std::string> yamlNames(const std::string& config_dir, const char* sub) {
+  std::vector<std::string> names;
+  std::error_code ec;
+  for (const auto& entry : std::filesystem::directory_iterator(std::filesystem::path(config_dir) / sub, ec))
+    if (entry.path().extension() == ".yaml") names.push_back(entry.path().stem().string());
+  std::sort(names.begin(), names.end());
+  return names;
+}
+
 ObjectState parseState(Reader& parent, const std::string& key, const WorldConfig& w) {
   Reader r = parent.map(key);
   ObjectState s;
@@ -169,14 +179,7 @@ Scenario parseScenario(const YAML::Node& node, const std::string& path, const Wo
   return s;
 }
 
-std::vector<std::string> listScenarios(const std::string& config_dir) {
-  std::vector<std::string> names;
-  std::error_code ec;
-  for (const auto& entry : std::filesystem::directory_iterator(std::filesystem::path(config_dir) / "scenarios", ec))
-    if (entry.path().extension() == ".yaml") names.push_back(entry.path().stem().string());
-  std::sort(names.begin(), names.end());
-  return names;
-}
+std::vector<std::string> listScenarios(const std::string& config_dir) { return yamlNames(config_dir, "scenarios"); }
 
 const char* toString(Shape s) {
   switch (s) {
@@ -334,15 +337,7 @@ void mergeInto(YAML::Node base, const YAML::Node& over) {
   }
 }
 
-std::vector<std::string> listExperiments(const std::string& config_dir) {
-  std::vector<std::string> names;
-  const std::filesystem::path dir = std::filesystem::path(config_dir) / "experiments";
-  std::error_code ec;
-  for (const auto& entry : std::filesystem::directory_iterator(dir, ec))
-    if (entry.path().extension() == ".yaml") names.push_back(entry.path().stem().string());
-  std::sort(names.begin(), names.end());
-  return names;
-}
+std::vector<std::string> listExperiments(const std::string& config_dir) { return yamlNames(config_dir, "experiments"); }
 
 namespace {
 YAML::Node loadFile(const std::filesystem::path& file) {
