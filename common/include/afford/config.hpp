@@ -43,39 +43,42 @@ struct ObjectSpec {
   std::array<double, kNumActions> affordance{};  // success probability per action
 };
 
+// Every value below comes from the effective configuration (config/*.yaml,
+// where each paper value is written down with its source); the initialisers
+// are neutral placeholders, never used: parseRunConfig requires every key.
 struct WorldConfig {
-  int size_px = 150;                       // scene side in pixels
-  double object_size = 0.10;               // square side / reference size, scene units
-  double table_min = 0.2, table_max = 0.8; // allowed object centres
-  int max_target_draws = 1000;             // intrinsic move: redraws for a free target
+  int size_px = 0;                       // scene side in pixels
+  double object_size = 0;               // square side / reference size, scene units
+  double table_min = 0, table_max = 0; // allowed object centres
+  int max_target_draws = 0;             // intrinsic move: redraws for a free target
   std::vector<ObjectSpec> objects;         // in the order of the paper's tables
 };
 
 struct EyeConfig {
-  int focus_side = 21;                     // pixels
-  double saliency_noise = 0.05;            // uniform noise half-width
-  double saliency_sigma_px = 1.0;          // Gaussian smoothing of the saliency image
+  int focus_side = 0;                     // pixels
+  double saliency_noise = 0;            // uniform noise half-width
+  double saliency_sigma_px = 0;          // Gaussian smoothing of the saliency image
   SaliencyOrder saliency_order = SaliencyOrder::SmoothThenNoise;
-  double change_sigma_px = 1.0;            // Gaussian smoothing of the change image
-  double initial_gaze_x = 0.54, initial_gaze_y = 0.38;
-  double image_change_threshold = 1e-5;    // tau_i
-  double position_change_threshold = 0.02; // tau_p
-  int max_scan_draws = 100;                // redraws until the gaze lands on another object
+  double change_sigma_px = 0;            // Gaussian smoothing of the change image
+  double initial_gaze_x = 0, initial_gaze_y = 0;
+  double image_change_threshold = 0;    // tau_i
+  double position_change_threshold = 0; // tau_p
+  int max_scan_draws = 0;                // redraws until the gaze lands on another object
 };
 
 struct PredictorsConfig {
-  double affordance_learning_rate = 0.01;
-  double learning_progress_learning_rate = 0.005;
-  double learning_progress_init = 0.00075;  // magnitude of the random-sign initial weights
-  double what_effect_learning_rate = 0.04;
-  double where_effect_learning_rate = 0.5;
+  double affordance_learning_rate = 0;
+  double learning_progress_learning_rate = 0;
+  double learning_progress_init = 0;  // magnitude of the random-sign initial weights
+  double what_effect_learning_rate = 0;
+  double where_effect_learning_rate = 0;
 };
 
 struct MotivationConfig {
-  double fixed_threshold = 0.3;            // FIX
-  double leak = 0.1;                       // nu of equation 2 (IGN, IMP)
-  double initial_threshold = 0.0;          // th_0 (IGN, IMP)
-  double act_margin = 1e-5;                // act when motivation + margin >= threshold
+  double fixed_threshold = 0;            // FIX
+  double leak = 0;                       // nu of equation 2 (IGN, IMP)
+  double initial_threshold = 0;          // th_0 (IGN, IMP)
+  double act_margin = 0;                // act when motivation + margin >= threshold
   ImpThresholdInput imp_threshold_input = ImpThresholdInput::Signal;
 };
 
@@ -83,12 +86,12 @@ struct MotivationConfig {
 // they start in and the state the goal image shows.
 struct ObjectState {
   Colour colour = Colour::Red;
-  double x = 0.5, y = 0.5;
+  double x = 0, y = 0;
 };
 struct ScenarioObject {
   Shape shape = Shape::Square;
   ObjectState initial, goal;
-  double value = 1.0;  // utility of reaching this object's goal (utility planner)
+  double value = 0;  // utility of reaching this object's goal (utility planner)
 };
 struct Scenario {
   std::string name;
@@ -97,15 +100,15 @@ struct Scenario {
 };
 
 struct PlannerConfig {
-  double subgoal_match = 0.01;         // sub-goal reached: image distance below this (paper 2.4.3)
-  double image_match = 0.0035;         // predicted image matches the sub-goal (paper 2.4.3)
-  double position_match = 0.01;        // predicted position matches the sub-goal (paper 2.4.3)
-  int subgoal_timeout = 8;             // iterations before another sub-goal is chosen (paper 2.4.3)
-  int budget = 125;                    // steps per test (authors' code)
-  int max_attempts = 20;               // executed actions per test (authors' code)
-  bool restrict_by_affordance = true;  // check only actions with affordance > affordance_threshold
-  double affordance_threshold = 0.5;   // (paper 2.4.3, 3.2.4)
-  double success_distance = 1e-4;      // whole scene matches the goal image (authors' code)
+  double subgoal_match = 0;         // sub-goal reached: image distance below this (paper 2.4.3)
+  double image_match = 0;         // predicted image matches the sub-goal (paper 2.4.3)
+  double position_match = 0;        // predicted position matches the sub-goal (paper 2.4.3)
+  int subgoal_timeout = 0;             // iterations before another sub-goal is chosen (paper 2.4.3)
+  int budget = 0;                    // steps per test (authors' code)
+  int max_attempts = 0;               // executed actions per test (authors' code)
+  bool restrict_by_affordance = false;  // check only actions with affordance > affordance_threshold
+  double affordance_threshold = 0;   // (paper 2.4.3, 3.2.4)
+  double success_distance = 0;      // whole scene matches the goal image (authors' code)
 };
 
 enum class Phase { Intrinsic, Extrinsic };
@@ -119,7 +122,7 @@ struct RunConfig {
   System system = System::IMP;
   std::int64_t seed = 0;
   std::int64_t steps = 0;
-  std::int64_t curve_interval = 100;
+  std::int64_t curve_interval = 0;
   std::string checkpoint;  // where the predictors save their weights after the last step ("" = nowhere)
   WorldConfig world;
   EyeConfig eye;
