@@ -101,10 +101,25 @@ RunOutcome RunDriver::run(const RunSpec& spec, const std::function<void()>& pump
     return "";
   };
 
-  // 1. Every process present and free.
+  // 1. Every process present and free. One still in an earlier run (its STOP
+  // datagram lost) is told again, once a second.
   auto deadline = t0 + std::chrono::seconds(15);
+  auto last_stop = Clock::now() - std::chrono::seconds(2);
   while (!missing([](const Seen& s) { return s.state == process_status_t::WAITING && s.run_id.empty(); }).empty()) {
     if (auto h = health(); !h.empty()) return fail(h);
+    if (Clock::now() - last_stop > std::chrono::seconds(1)) {
+      for (const auto& p : spec.processes) {
+        auto it = seen_.find(p);
+        if (it == seen_.end() || it->second.run_id.empty() || it->second.run_id == spec.run_id) continue;
+        run_control_t stop;
+        stop.run_id = it->second.run_id;
+        stop.step = 0;
+        stop.command = run_control_t::STOP;
+        lcm_.publish(channel::kRunControl, &stop);
+        log_->warn("process '{}' is still in run '{}': told to stop again", p, it->second.run_id);
+      }
+      last_stop = Clock::now();
+    }
     if (Clock::now() > deadline)
       return fail("no process of this name reported ready for a run within 15 s: " +
                   missing([](const Seen& s) { return s.state == process_status_t::WAITING && s.run_id.empty(); }));

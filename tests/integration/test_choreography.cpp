@@ -9,6 +9,7 @@
 
 #include "afford/channels.hpp"
 #include "afford/driver.hpp"
+#include "afford/run_config_t.hpp"
 #include "afford/scene_t.hpp"
 #include "environment/node.hpp"
 #include "eye/node.hpp"
@@ -30,7 +31,7 @@ struct InProcessRun {
   RunOutcome outcome;
 
   InProcessRun(const std::string& yaml, System system, std::int64_t seed, std::int64_t steps, const Injector& inject = {},
-               std::int64_t inject_at = 50) {
+               std::int64_t inject_at = 50, bool leave_stale_run = false) {
     lcm::LCM lcm("memq://");
     auto sink = std::make_shared<spdlog::sinks::ostream_sink_mt>(log);
     auto logger = [&](const std::string& name) {
@@ -82,6 +83,18 @@ struct InProcessRun {
       lcm.handleTimeout(2);
       env.tick(), eye.tick(), predictors.tick(), motivation.tick(), planner.tick();
     };
+    if (leave_stale_run) {
+      // The processes take an earlier run whose STOP never comes (a lost datagram).
+      run_config_t stale;
+      stale.run_id = "stale-run";
+      stale.step = 0;
+      stale.seed = seed;
+      stale.experiment = spec.experiment;
+      stale.system = spec.system;
+      stale.config_yaml = yaml;
+      lcm.publish(channel::kRunConfig, &stale);
+      for (int i = 0; i < 50; ++i) pump();
+    }
     outcome = driver.run(spec, pump, [] { return std::string(); });
   }
 
@@ -139,6 +152,12 @@ TEST(Choreography, ComputesWhatThePlainAlgorithmComputes) {
     const RunConfig c = parseRunConfigText(baseYaml(s, 400));
     EXPECT_EQ(run.outcome.weights_checksum, test::runIntrinsic(c).weightsChecksum()) << toString(s);
   }
+}
+
+TEST(Choreography, ProcessesLeftInAnEarlierRunAreStoppedAgain) {
+  InProcessRun run(baseYaml(System::IMP, 50), System::IMP, 3, 50, {}, 50, /*leave_stale_run=*/true);
+  ASSERT_TRUE(run.outcome.ok) << run.outcome.error;
+  EXPECT_NE(run.log.str().find("still in run 'stale-run': told to stop again"), std::string::npos) << run.log.str();
 }
 
 TEST(Choreography, ObservedChangeThresholdInputRuns) {
