@@ -101,10 +101,11 @@ RunOutcome RunDriver::run(const RunSpec& spec, const std::function<void()>& pump
     return "";
   };
 
-  // 1. Every process present and free. One still in an earlier run (its STOP
-  // datagram lost) is told again, once a second.
+  // 1. Every process present and free. One still in an earlier run a second
+  // from now (its STOP datagram lost; normally its WAITING status is on the
+  // way) is told again, once a second.
   auto deadline = t0 + std::chrono::seconds(15);
-  auto last_stop = Clock::now() - std::chrono::seconds(2);
+  auto last_stop = Clock::now();
   while (!missing([](const Seen& s) { return s.state == process_status_t::WAITING && s.run_id.empty(); }).empty()) {
     if (auto h = health(); !h.empty()) return fail(h);
     if (Clock::now() - last_stop > std::chrono::seconds(1)) {

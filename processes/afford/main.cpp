@@ -73,6 +73,8 @@ int main(int argc, char** argv) {
   report->add_option("--out", report_out, "the markdown file")->capture_default_str();
   report->add_option("--figures", report_figures, "where the figures are copied")->capture_default_str();
   report->add_option("--wall-seconds", report_wall, "wall time of the reproduction, to report");
+  std::string report_note;
+  report->add_option("--note", report_note, "a paragraph on how the runs were made");
   std::string scenario_name, scenario_png;
   auto* scen = app.add_subcommand("scenario", "check a scenario file and draw its goal and initial scenes");
   scen->add_option("name", scenario_name, "scenario (config/scenarios/<name>.yaml)")->required();
@@ -91,7 +93,7 @@ int main(int argc, char** argv) {
     }
     if (report->parsed()) {
       const std::string link = std::filesystem::relative(report_figures, std::filesystem::path(report_out).parent_path()).string();
-      const std::string md = afford::writeReport(report_dirs, report_figures, link, report_wall);
+      const std::string md = afford::writeReport(report_dirs, report_figures, link, report_wall, report_note);
       std::ofstream(report_out) << md;
       std::printf("%s\n", report_out.c_str());
       return 0;

@@ -30,7 +30,7 @@ json load(const std::string& dir) {
 }  // namespace
 
 std::string writeReport(const std::vector<std::string>& dirs, const std::string& figures_dir,
-                        const std::string& link_prefix, double wall_seconds) {
+                        const std::string& link_prefix, double wall_seconds, const std::string& note) {
   std::vector<json> all;
   for (const auto& d : dirs) all.push_back(load(d));
   std::ostringstream md;
@@ -43,6 +43,7 @@ std::string writeReport(const std::vector<std::string>& dirs, const std::string&
      << " intrinsic runs per system (seeds from 1), then extrinsic tests of every scenario with each trained agent"
      << " (the paper's counts are 10 and 10).";
   if (wall_seconds > 0) md << " Wall time of the whole reproduction: " << num(wall_seconds / 60.0, 1) << " min on 2 cores.";
+  if (!note.empty()) md << "\n\n" << note;
   md << "\n\nNumbers in brackets are the paper's (or, where marked, the authors' code's).\n";
 
   // ---- intrinsic phase
