@@ -349,29 +349,30 @@ YAML::Node loadFile(const std::filesystem::path& file) {
     throw ConfigError("config file " + file.string() + " is not valid YAML: " + e.what());
   }
 }
-}  // namespace
 
-Scenario loadScenario(const std::string& config_dir, const std::string& name, const WorldConfig& world) {
-  const auto known = listScenarios(config_dir);
+// config_dir/<folder>/<name>.yaml, or a ConfigError listing the names known there.
+std::filesystem::path namedFile(const std::string& config_dir, const char* folder, const char* kind,
+                                const std::string& name) {
+  const auto known = yamlNames(config_dir, folder);
   if (std::find(known.begin(), known.end(), name) == known.end()) {
     std::string list;
     for (const auto& k : known) list += (list.empty() ? "" : ", ") + k;
-    throw ConfigError("unknown scenario \"" + name + "\" (known in " + config_dir + "/scenarios: " + list + ")");
+    throw ConfigError(std::string("unknown ") + kind + " \"" + name + "\" (known in " + config_dir + "/" + folder +
+                      ": " + list + ")");
   }
-  const auto file = std::filesystem::path(config_dir) / "scenarios" / (name + ".yaml");
+  return std::filesystem::path(config_dir) / folder / (name + ".yaml");
+}
+}  // namespace
+
+Scenario loadScenario(const std::string& config_dir, const std::string& name, const WorldConfig& world) {
+  const auto file = namedFile(config_dir, "scenarios", "scenario", name);
   Scenario s = parseScenario(loadFile(file), "", world);
   validateScenario(s, world);
   return s;
 }
 
 ExperimentFile loadExperiment(const std::string& config_dir, const std::string& name) {
-  const auto known = listExperiments(config_dir);
-  if (std::find(known.begin(), known.end(), name) == known.end()) {
-    std::string list;
-    for (const auto& k : known) list += (list.empty() ? "" : ", ") + k;
-    throw ConfigError("unknown experiment \"" + name + "\" (known in " + config_dir + "/experiments: " + list + ")");
-  }
-  const auto file = std::filesystem::path(config_dir) / "experiments" / (name + ".yaml");
+  const auto file = namedFile(config_dir, "experiments", "experiment", name);
   YAML::Node root = loadFile(file);
   if (!root.IsMap()) throw ConfigError("config file " + file.string() + ": expected a map");
   ExperimentFile e;
