@@ -148,9 +148,6 @@ void installStopHandlers() {
 void CLIHook::option(const std::string& name, std::string& target, const std::string& help) {
   static_cast<CLI::App*>(app_)->add_option(name, target, help)->capture_default_str();
 }
-void CLIHook::option(const std::string& name, double& target, const std::string& help) {
-  static_cast<CLI::App*>(app_)->add_option(name, target, help)->capture_default_str();
-}
 
 int processMain(int argc, char** argv, const ProcessSpec& spec, const std::function<void(CLIHook&)>& add_options,
                 const std::function<std::unique_ptr<NodeBase>(lcm::LCM&, std::shared_ptr<spdlog::logger>)>& make_node) {

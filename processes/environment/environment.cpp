@@ -9,6 +9,16 @@
 
 namespace afford {
 
+namespace {
+// The focus window, or the largest shape if that reaches further, plus a pixel.
+int clearanceOf(const std::vector<std::vector<Pixel>>& footprints, int focus_side) {
+  int half = focus_side / 2;
+  for (const auto& fp : footprints)
+    for (const Pixel& f : fp) half = std::max({half, std::abs(f.col), std::abs(f.row)});
+  return half + 1;
+}
+}  // namespace
+
 Environment::Environment(const RunConfig& config) : config_(config) {
   const auto& w = config_.world;
   for (std::size_t i = 0; i < w.objects.size(); ++i) {
@@ -22,6 +32,7 @@ Environment::Environment(const RunConfig& config) : config_(config) {
     objects_.push_back(o);
     footprints_.push_back(shapeFootprint(spec.shape, w));
   }
+  free_half_ = clearanceOf(footprints_, config_.eye.focus_side);
   introduceObjectsAt(0);
 }
 
@@ -36,15 +47,17 @@ Environment::Environment(const RunConfig& config, const Scenario& scenario) : co
     objects_.push_back(o);
     footprints_.push_back(shapeFootprint(so.shape, config_.world));
   }
+  free_half_ = clearanceOf(footprints_, config_.eye.focus_side);
+  goal_ = renderScenario(scenario, true, config_.world);
 }
 
-cv::Mat Environment::goalScene() const {
+const cv::Mat& Environment::goalScene() const {
   if (!scenario_) throw std::logic_error("Environment: no scenario, so no goal");
-  return renderScenario(*scenario_, true, config_.world);
+  return goal_;
 }
 
 double Environment::goalDistance() const {
-  const cv::Mat scene = render(), goal = goalScene();
+  const cv::Mat scene = render(), &goal = goalScene();
   double sum = 0;
   for (std::size_t i = 0; i < scene.total() * 3; ++i) {
     const double d = (static_cast<int>(scene.data[i]) - static_cast<int>(goal.data[i])) / 255.0;
@@ -97,12 +110,6 @@ int Environment::objectAt(Pixel p) const {
   return -1;
 }
 
-int Environment::freeHalf() const {
-  int half = config_.eye.focus_side / 2;
-  for (const auto& fp : footprints_)
-    for (const Pixel& f : fp) half = std::max({half, std::abs(f.col), std::abs(f.row)});
-  return half + 1;
-}
 
 bool Environment::regionFree(Pixel centre, int half, int ignore) const {
   for (std::size_t i = 0; i < objects_.size(); ++i) {

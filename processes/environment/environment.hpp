@@ -36,7 +36,7 @@ class Environment {
   Environment(const RunConfig& config, const Scenario& scenario);
 
   // The goal configuration of the scenario (extrinsic phase).
-  cv::Mat goalScene() const;
+  const cv::Mat& goalScene() const;
   // Distance of the scene from the goal image: ||scene - goal||_2 / (size^2 * 3),
   // values in [0, 1]; the test succeeds below planner.success_distance.
   double goalDistance() const;
@@ -68,12 +68,14 @@ class Environment {
   // True if a square of half-size `half` around `centre` holds no pixel of a
   // present object other than `ignore`.
   bool regionFree(Pixel centre, int half, int ignore) const;
-  int freeHalf() const;
+  int freeHalf() const { return free_half_; }
 
   RunConfig config_;
   std::optional<Scenario> scenario_;
   std::vector<WorldObject> objects_;
   std::vector<std::vector<Pixel>> footprints_;  // per object (by shape)
+  int free_half_ = 0;                           // half-size of the window a place must have free
+  cv::Mat goal_;                                // extrinsic phase: the goal scene
 };
 
 }  // namespace afford

@@ -52,7 +52,6 @@ class Eye {
   Effect scanEffect(std::int64_t step, cv::Mat after, int action);
   // The object blob label under a pixel of the scene (0 = background).
   int labelAt(Pixel p) const { return labelAt(outer_, p); }
-  int objectCount() const { return outer_.n_labels - 1; }
 
   // Extrinsic phase (paper 2.4.3). The inner eye looks at the memorised goal image.
   void setGoal(cv::Mat goal);

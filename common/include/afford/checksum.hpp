@@ -16,7 +16,6 @@ class Fnv1a {
       h_ *= 0x100000001B3ull;
     }
   }
-  std::uint64_t value() const { return h_; }
   std::string hex() const {
     char buf[17];
     std::snprintf(buf, sizeof buf, "%016llx", static_cast<unsigned long long>(h_));

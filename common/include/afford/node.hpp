@@ -74,7 +74,6 @@ class NodeBase {
   const std::string& process() const { return process_; }
   const std::string& runId() const { return run_id_; }
   int8_t state() const { return state_; }
-  bool configured() const { return state_ != process_status_t::WAITING; }
   // Leave the run (used on STOP and at shutdown); subclasses flush in onStop().
   void leaveRun();
 
@@ -157,7 +156,6 @@ class CLIHook {
  public:
   explicit CLIHook(void* app) : app_(app) {}
   void option(const std::string& name, std::string& target, const std::string& help);
-  void option(const std::string& name, double& target, const std::string& help);
 
  private:
   void* app_;
