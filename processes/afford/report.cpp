@@ -44,6 +44,8 @@ std::string writeReport(const std::vector<std::string>& dirs, const std::string&
      << " (the paper's counts are 10 and 10).";
   if (wall_seconds > 0) md << " Wall time of the whole reproduction: " << num(wall_seconds / 60.0, 1) << " min on 2 cores.";
   if (!note.empty()) md << "\n\n" << note;
+  md << "\n\nWhere our numbers differ from the paper's, what we measured about why is in "
+        "[results-discussion.md](results-discussion.md).";
   md << "\n\nNumbers in brackets are the paper's (or, where marked, the authors' code's).\n";
 
   // ---- intrinsic phase
