@@ -10,7 +10,7 @@ packages=(
   build-essential cmake pkg-config git ca-certificates
   liblcm-dev liblcm-bin liblcm-java libglib2.0-dev
   libeigen3-dev libopencv-dev libspdlog-dev libfmt-dev
-  libcli11-dev libyaml-cpp-dev nlohmann-json3-dev zlib1g-dev
+  libcli11-dev libyaml-cpp-dev nlohmann-json3-dev zlib1g-dev libgsl-dev
   libgtest-dev libgmock-dev
   default-jdk-headless libjchart2d-java
   iproute2 util-linux procps gnuplot-nox

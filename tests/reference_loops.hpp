@@ -51,16 +51,17 @@ struct GoalTestOutcome {
   bool success = false;
   int completion = 0;  // the step (from 1) at which the scene matched the goal
   int attempts = 0;
+  double utility = 0;  // value of the objects in their goal state at the end
   std::vector<SubGoalRecord> sub_goals;
 };
 
-// One extrinsic test of Algorithm 2 on a scenario.
+// One extrinsic test of Algorithm 2 (or 3, by c.planner.kind) on a scenario.
 inline GoalTestOutcome runGoalTest(const RunConfig& c, const Scenario& s, const Predictors& predictors) {
   Environment env(c, s);
   Eye eye(c);
   eye.setGoal(env.goalScene());
   eye.setScene(env.render());
-  GoalPlanner planner(c.planner);
+  Planner planner(c.planner, goalValues(s));
   GoalTestOutcome out;
   auto asView = [](const Focus& f) { return View{f.image, f.x, f.y}; };
   for (int step = 0; step < c.planner.budget && planner.attempts() < c.planner.max_attempts; ++step) {
@@ -110,6 +111,7 @@ inline GoalTestOutcome runGoalTest(const RunConfig& c, const Scenario& s, const 
     }
   }
   out.attempts = planner.attempts();
+  out.utility = env.goalUtility();
   out.sub_goals = planner.subGoals();
   return out;
 }

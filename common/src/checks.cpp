@@ -63,6 +63,7 @@ std::string checkMessage(const scene_t& m, const RunConfig& c) {
                 checkAction("action", m.action, m.cause == scene_t::CAUSE_ACTION),
                 checkTarget("action_target_x", m.action_target_x), checkTarget("action_target_y", m.action_target_y),
                 m.goal_distance == -1.0 ? "" : checkRange("goal_distance", m.goal_distance, 0.0, 1.0),
+                m.goal_utility == -1.0 ? "" : checkRange("goal_utility", m.goal_utility, 0.0, 1e12),
                 m.encoding == scene_t::ENCODING_ZLIB_RGB8 ? "" : "field encoding = " + std::to_string(m.encoding) + " is unknown"});
 }
 

@@ -225,6 +225,7 @@ RunConfig parseRunConfig(const YAML::Node& root) {
     c.steps = run.integer("steps", 1, 100'000'000);
     c.curve_interval = run.integer("curve_interval", 1, 100'000'000);
     c.checkpoint = run.has("checkpoint") ? run.text("checkpoint") : "";
+    c.checkpoint_after_actions = run.integer("checkpoint_after_actions", 0, 100'000'000);
     run.finish();
   }
   {
@@ -309,10 +310,22 @@ RunConfig parseRunConfig(const YAML::Node& root) {
     c.planner.restrict_by_affordance = p.choice<bool>("restrict_by_affordance", {{"true", true}, {"false", false}});
     c.planner.affordance_threshold = p.number("affordance_threshold", 0.0, 1.0);
     c.planner.success_distance = p.number("success_distance", 0.0, 1.0);
+    c.planner.kind = p.choice<PlannerKind>("kind", {{"goal", PlannerKind::Goal}, {"utility", PlannerKind::Utility}});
+    Reader u = p.map("utility");
+    c.planner.evaluation_iterations = static_cast<int>(u.integer("evaluation_iterations", 0, 1'000'000));
+    c.planner.raise_leak = u.number("raise_leak", 0.0, 1.0);
+    c.planner.lower_leak = u.number("lower_leak", 0.0, 1.0);
+    u.finish();
     p.finish();
   }
   r.finish();
   return c;
+}
+
+std::string actionsCheckpoint(const std::string& checkpoint, std::int64_t actions) {
+  const std::filesystem::path p(checkpoint);
+  return (p.parent_path() / (p.stem().string() + ".after-" + std::to_string(actions) + "-actions" + p.extension().string()))
+      .string();
 }
 
 RunConfig parseRunConfigText(const std::string& yaml_text) {
@@ -371,28 +384,78 @@ Scenario loadScenario(const std::string& config_dir, const std::string& name, co
   return s;
 }
 
-ExperimentFile loadExperiment(const std::string& config_dir, const std::string& name) {
+namespace {
+ExtrinsicDesign parseDesign(const YAML::Node& node, const std::string& file) {
+  Reader r(node, "extrinsic");
+  ExtrinsicDesign d;
+  const YAML::Node sc = r.raw("scenarios");
+  if (!sc.IsSequence() || sc.size() == 0) fail("extrinsic.scenarios", "expected a non-empty list of scenario names");
+  for (const auto& n : sc) d.scenarios.push_back(n.Scalar());
+  d.tests = r.has("tests") ? static_cast<int>(r.integer("tests", 1, 100000)) : 0;  // 0: only with --extrinsic-reps
+  d.after_actions = r.has("after_actions") ? r.integer("after_actions", 1, 100'000'000) : 0;
+  if (r.has("vary")) {
+    const YAML::Node v = r.raw("vary");
+    if (!v.IsMap()) fail("extrinsic.vary", "expected a map of config keys to lists of values");
+    for (const auto& kv : v) {
+      const std::string key = kv.first.Scalar();
+      if (!kv.second.IsSequence() || kv.second.size() == 0)
+        fail("extrinsic.vary." + key, "expected a non-empty list of values");
+      std::vector<std::string> values;
+      for (const auto& x : kv.second) values.push_back(YAML::Dump(x));
+      d.vary.emplace_back(key, values);
+    }
+  }
+  d.analysis = r.has("analysis") ? r.text("analysis") : "";
+  if (!d.analysis.empty() && d.analysis != "utility" && d.analysis != "forward-models" && d.analysis != "search-reduction")
+    fail("extrinsic.analysis", "expected utility, forward-models or search-reduction, got \"" + d.analysis + "\" (" + file + ")");
+  r.finish();
+  return d;
+}
+
+ExperimentFile loadExperimentChain(const std::string& config_dir, const std::string& name, int depth) {
   const auto file = namedFile(config_dir, "experiments", "experiment", name);
   YAML::Node root = loadFile(file);
   if (!root.IsMap()) throw ConfigError("config file " + file.string() + ": expected a map");
   ExperimentFile e;
+  if (root["extends"].IsDefined()) {  // start from another experiment's world, runs and systems
+    if (depth > 8) throw ConfigError("config file " + file.string() + ": 'extends' chain too long (a cycle?)");
+    e = loadExperimentChain(config_dir, root["extends"].Scalar(), depth + 1);
+    e.overlay = YAML::Clone(e.overlay);
+    e.systems = YAML::Clone(e.systems);
+    e.extrinsic.reset();
+    e.default_systems.clear();
+  } else {
+    e.overlay = YAML::Node(YAML::NodeType::Map);
+  }
   e.name = name;
-  YAML::Node overlay(YAML::NodeType::Map);
   for (const auto& kv : root) {
     const std::string key = kv.first.Scalar();
+    if (key == "extends") continue;
     if (key == "description") {
       e.description = kv.second.Scalar();
     } else if (key == "repetitions") {
       Reader r(root, "");
       e.repetitions = static_cast<int>(r.integer("repetitions", 1, 100000));
+    } else if (key == "default_systems") {
+      if (!kv.second.IsSequence()) fail("default_systems", "expected a list of systems (FIX, IGN, IMP)");
+      for (const auto& s : kv.second) e.default_systems.push_back(toString(parseSystem(s.Scalar())));
+    } else if (key == "extrinsic") {
+      e.extrinsic = parseDesign(kv.second, file.string());
     } else if (key == "systems") {
-      e.systems = kv.second;
+      if (!e.systems.IsMap()) e.systems = YAML::Node(YAML::NodeType::Map);
+      mergeInto(e.systems, kv.second);
     } else {
-      overlay[key] = kv.second;
+      YAML::Node over(YAML::NodeType::Map);
+      over[key] = kv.second;
+      mergeInto(e.overlay, over);
     }
   }
-  e.overlay = overlay;
   return e;
+}
+}  // namespace
+
+ExperimentFile loadExperiment(const std::string& config_dir, const std::string& name) {
+  return loadExperimentChain(config_dir, name, 0);
 }
 
 YAML::Node effectiveConfig(const std::string& config_dir, const RunRequest& request) {

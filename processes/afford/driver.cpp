@@ -43,6 +43,7 @@ RunDriver::RunDriver(lcm::LCM& lcm, std::shared_ptr<spdlog::logger> log) : lcm_(
     e.success = m.success;
     e.completion = m.completion;
     e.attempts = m.attempts;
+    e.utility = m.utility;
     for (const auto& g : m.sub_goals)
       e.sub_goals.push_back({g.x, g.y, g.iterations, g.actions_checked, g.actions_taken, g.reached});
     have_result_ = true;

@@ -45,6 +45,7 @@ struct ExtrinsicOutcome {
   bool success = false;
   int completion = 0;  // iteration (from 1) at which the scene matched the goal
   int attempts = 0;
+  double utility = 0;  // summed value of the objects in their goal state at the end
   std::vector<SubGoalOutcome> sub_goals;
 };
 

@@ -18,6 +18,7 @@
 
 #include "afford/actions.hpp"
 #include "afford/config.hpp"
+#include "afford/design.hpp"
 #include "afford/driver.hpp"
 #include "afford/group.hpp"
 #include "afford/logging.hpp"
@@ -42,6 +43,7 @@ struct PlannedRun {
   // extrinsic tests: which intrinsic run trained the agent, which scenario, which repetition
   std::size_t intrinsic = 0;
   std::string scenario;
+  int condition = 0;  // index into Plan::conditions
   int rep = 0;
 };
 
@@ -165,8 +167,12 @@ struct Plan {
   int reps = 0;
   std::vector<PlannedRun> runs;
   std::map<std::string, RunConfig> configs;  // per system (of its first repetition)
+  std::vector<std::string> systems;          // the systems run
   std::vector<std::string> scenarios;        // extrinsic tests, if any
   std::map<std::string, int> sub_goals;      // objects (sub-goals) per scenario
+  int tests = 0;                             // extrinsic tests per agent, condition and scenario
+  std::vector<Condition> conditions{Condition{}};  // planner settings compared (default: one, no settings)
+  ExtrinsicDesign design;                    // the experiment file's extrinsic section, if any
 };
 
 // Everything that can be wrong with the request is found here, before any process starts.
@@ -182,22 +188,37 @@ Plan planExperiment(const ExperimentOptions& o) {
   if (o.keep_logs != "all" && o.keep_logs != "first" && o.keep_logs != "none")
     throw ConfigError("--keep-logs must be all, first or none, not \"" + o.keep_logs + "\"");
   if (o.extrinsic_reps < 0) throw ConfigError("--extrinsic-reps must be 0 or more");
-  if (o.extrinsic_reps > 0) {
+  plan.systems = !o.systems.empty() ? o.systems
+                 : !plan.exp.default_systems.empty() ? plan.exp.default_systems
+                                                     : std::vector<std::string>{"FIX", "IGN", "IMP"};
+  if (plan.exp.extrinsic) plan.design = *plan.exp.extrinsic;
+  plan.tests = o.extrinsic_reps > 0 ? o.extrinsic_reps : plan.design.tests;
+  if (plan.tests > 0) {
     const RunConfig any = parseRunConfig(effectiveConfig(plan.config_dir, RunRequest{o.experiment, System::IMP, o.seed, o.steps, o.settings}));
-    plan.scenarios = o.scenarios.empty() ? listScenarios(plan.config_dir) : o.scenarios;
+    plan.scenarios = !o.scenarios.empty() ? o.scenarios
+                     : !plan.design.scenarios.empty() ? plan.design.scenarios
+                                                       : listScenarios(plan.config_dir);
     for (const auto& name : plan.scenarios)
       plan.sub_goals[name] = static_cast<int>(loadScenario(plan.config_dir, name, any.world).objects.size());
+    plan.conditions = conditionsOf(plan.design);
+    for (const Condition& c : plan.conditions) {  // every combination must make a valid extrinsic config
+      std::vector<std::string> settings = o.settings;
+      for (const auto& [k, v] : c.settings) settings.push_back(k + "=" + v);
+      extrinsicConfig(plan.config_dir, RunRequest{o.experiment, System::IMP, o.seed, o.steps, settings}, "unchecked",
+                      plan.scenarios.front());
+    }
   }
   const std::string prefix = o.run_prefix.empty() ? defaultPrefix() : o.run_prefix;
   auto& runs = plan.runs;
   auto& configs = plan.configs;
-  for (const auto& sys_name : o.systems) {
+  for (const auto& sys_name : plan.systems) {
     const System sys = parseSystem(sys_name);
     for (int r = 0; r < reps; ++r) {
       RunRequest req{o.experiment, sys, o.seed + r, o.steps, o.settings};
       YAML::Node node = effectiveConfig(plan.config_dir, req);
       const std::string run_id = prefix + "-" + o.experiment + "-" + sys_name + "-s" + std::to_string(o.seed + r);
       node["run"]["checkpoint"] = (fs::path(o.log_root) / run_id / "predictors.ckpt").string();
+      if (plan.design.after_actions > 0) node["run"]["checkpoint_after_actions"] = plan.design.after_actions;
       const RunConfig cfg = parseRunConfig(node);
       if (r == 0) configs[sys_name] = cfg;
       PlannedRun p;
@@ -270,38 +291,55 @@ std::vector<RunOutcome> executeRuns(const std::vector<PlannedRun>& runs, const E
   return outcomes;
 }
 
-// E tests of every scenario from each intrinsic run that left a checkpoint.
+// The tests of every condition and scenario from each intrinsic run that left
+// a checkpoint. An agent without the checkpoint the design asks for (too few
+// actions for extrinsic.after_actions) is not tested; `errors` says why.
 std::vector<PlannedRun> planExtrinsic(const Plan& plan, const std::vector<RunOutcome>& trained,
-                                      const ExperimentOptions& o) {
+                                      const ExperimentOptions& o, std::vector<std::string>& errors) {
   std::vector<PlannedRun> tests;
   for (const auto& p : plan.runs) {
     const RunOutcome& r = trained[p.index];
     if (!r.ok || r.checkpoint.empty()) continue;
-    for (std::size_t k = 0; k < plan.scenarios.size(); ++k)
-      for (int e = 0; e < o.extrinsic_reps; ++e) {
-        PlannedRun t;
-        t.system = p.system;
-        t.intrinsic = p.index;
-        t.scenario = plan.scenarios[k];
-        t.rep = e;
-        t.keep_log = o.keep_logs == "all" || (o.keep_logs == "first" && p.keep_log && e == 0);
-        // Each test its own seed, derived from the intrinsic run's (documented in docs/experiments.md).
-        const std::int64_t seed = p.spec.seed * 1'000'000 + static_cast<std::int64_t>(k + 1) * 1000 + e;
-        const RunRequest req{o.experiment, parseSystem(p.system), seed, std::nullopt, o.settings};
-        const YAML::Node node = extrinsicConfig(plan.config_dir, req, r.checkpoint, t.scenario);
-        t.spec.run_id = p.spec.run_id + "-" + t.scenario + "-e" + std::to_string(e);
-        t.spec.experiment = o.experiment;
-        t.spec.system = p.system;
-        t.spec.seed = seed;
-        t.spec.steps = node["run"]["steps"].as<std::int64_t>();
-        t.spec.config_yaml = emitYaml(node);
-        t.spec.extrinsic = true;
-        t.spec.processes = {"environment", "eye", "predictors", "planner"};
-        if (t.keep_log) t.spec.processes.push_back("logger");
-        t.spec.stall_seconds = o.stall_seconds;
-        t.index = tests.size();
-        tests.push_back(std::move(t));
+    std::string checkpoint = r.checkpoint;
+    if (plan.design.after_actions > 0) {
+      checkpoint = actionsCheckpoint(r.checkpoint, plan.design.after_actions);
+      if (!fs::exists(checkpoint)) {
+        errors.push_back("run '" + p.spec.run_id + "' executed fewer than " + std::to_string(plan.design.after_actions) +
+                         " actions, so it has no " + checkpoint + " (extrinsic.after_actions): give it more run.steps");
+        continue;
       }
+    }
+    for (std::size_t c = 0; c < plan.conditions.size(); ++c)
+      for (std::size_t k = 0; k < plan.scenarios.size(); ++k)
+        for (int e = 0; e < plan.tests; ++e) {
+          PlannedRun t;
+          t.system = p.system;
+          t.intrinsic = p.index;
+          t.scenario = plan.scenarios[k];
+          t.condition = static_cast<int>(c);
+          t.rep = e;
+          t.keep_log = o.keep_logs == "all" || (o.keep_logs == "first" && p.keep_log && e == 0);
+          // Each test its own seed, derived from the intrinsic run's (documented in docs/experiments.md);
+          // the conditions share seeds, so they meet the same draws.
+          const std::int64_t seed = p.spec.seed * 1'000'000 + static_cast<std::int64_t>(k + 1) * 1000 + e;
+          std::vector<std::string> settings = o.settings;
+          for (const auto& [key, value] : plan.conditions[c].settings) settings.push_back(key + "=" + value);
+          const RunRequest req{o.experiment, parseSystem(p.system), seed, std::nullopt, settings};
+          const YAML::Node node = extrinsicConfig(plan.config_dir, req, checkpoint, t.scenario);
+          t.spec.run_id = p.spec.run_id + (plan.conditions.size() > 1 ? "-c" + std::to_string(c) : "") + "-" +
+                          t.scenario + "-e" + std::to_string(e);
+          t.spec.experiment = o.experiment;
+          t.spec.system = p.system;
+          t.spec.seed = seed;
+          t.spec.steps = node["run"]["steps"].as<std::int64_t>();
+          t.spec.config_yaml = emitYaml(node);
+          t.spec.extrinsic = true;
+          t.spec.processes = {"environment", "eye", "predictors", "planner"};
+          if (t.keep_log) t.spec.processes.push_back("logger");
+          t.spec.stall_seconds = o.stall_seconds;
+          t.index = tests.size();
+          tests.push_back(std::move(t));
+        }
   }
   return tests;
 }
@@ -319,10 +357,25 @@ double quantile(const std::vector<double>& sorted, double q) {
 // their fit a x^2 + b x (Figure 6), actions checked per sub-goal; and a CSV.
 void summariseExtrinsic(json& summary, const Plan& plan, const std::vector<PlannedRun>& tests,
                         const std::vector<RunOutcome>& outcomes, const ExperimentOptions& o) {
-  for (const auto& sys : o.systems) {
+  for (const auto& sys : plan.systems) {
     std::ofstream csv(fs::path(o.out_dir) / ("extrinsic_" + sys + ".csv"));
-    csv << "system,intrinsic_run_id,seed,scenario,rep,success,completion,attempts,sub_goals,actions_checked\n";
-    json ex = {{"scenarios", plan.scenarios}, {"tests_per_scenario", o.extrinsic_reps}};
+    csv << "system,intrinsic_run_id,seed,scenario,condition,rep,success,completion,attempts,utility,sub_goals,"
+           "active_sub_goals,actions_checked\n";
+    for (const auto& t : tests) {
+      if (t.system != sys) continue;
+      const RunOutcome& r = outcomes[t.index];
+      int checks = 0, active = 0;
+      for (const auto& g : r.extrinsic.sub_goals) checks += g.actions_checked, active += g.iterations > 0;
+      csv << sys << "," << plan.runs[t.intrinsic].spec.run_id << "," << t.spec.seed << "," << t.scenario << ",\""
+          << plan.conditions[t.condition].label << "\"," << t.rep << "," << (r.ok && r.extrinsic.success) << ","
+          << r.extrinsic.completion << "," << r.extrinsic.attempts << "," << r.extrinsic.utility << ","
+          << r.extrinsic.sub_goals.size() << "," << active << "," << checks << "\n";
+    }
+    json ex = {{"scenarios", plan.scenarios}, {"tests_per_scenario", plan.tests}};
+    if (plan.conditions.size() > 1) {  // the design's summary compares the conditions
+      summary["systems"][sys]["extrinsic"] = ex;
+      continue;
+    }
     double sxx = 0, sxy = 0, sx3 = 0, sx4 = 0, sx2y = 0;  // least squares of y = a x^2 + b x
     for (const auto& scenario : plan.scenarios) {
       std::map<std::size_t, std::pair<int, int>> per_run;  // intrinsic run -> (successes, tests)
@@ -347,9 +400,6 @@ void summariseExtrinsic(json& summary, const Plan& plan, const std::vector<Plann
           const double x = plan.sub_goals.at(scenario), y = r.extrinsic.completion;
           sxx += x * x, sx3 += x * x * x, sx4 += x * x * x * x, sxy += x * y, sx2y += x * x * y;
         }
-        csv << sys << "," << plan.runs[t.intrinsic].spec.run_id << "," << t.spec.seed << "," << scenario << "," << t.rep
-            << "," << ok << "," << r.extrinsic.completion << "," << r.extrinsic.attempts << ","
-            << r.extrinsic.sub_goals.size() << "," << checks << "\n";
       }
       int good_runs = 0;
       for (const auto& [run, sn] : per_run) good_runs += sn.first > 0.9 * sn.second;
@@ -403,7 +453,7 @@ json summarise(const Plan& plan, const ExperimentOptions& o, const std::vector<R
     reference = YAML::LoadFile(config_dir + "/reference.yaml")[o.experiment];
   } catch (const YAML::Exception&) {
   }
-  for (const auto& sys : o.systems) {
+  for (const auto& sys : plan.systems) {
     const RunConfig& cfg = configs.at(sys);
     Table target;
     for (const auto& ob : cfg.world.objects) target.emplace_back(ob.affordance.begin(), ob.affordance.end());
@@ -494,7 +544,7 @@ json summarise(const Plan& plan, const ExperimentOptions& o, const std::vector<R
   try {  // the paper's extrinsic tables, for the same experiment
     const YAML::Node ext = YAML::LoadFile(config_dir + "/reference.yaml")[o.experiment + "_extrinsic"];
     if (ext && ext["table_metric"])
-      for (const auto& sys : o.systems)
+      for (const auto& sys : plan.systems)
         if (ext["table_metric"][sys]) {  // the paper's scenarios 1-5
           const auto row = ext["table_metric"][sys].as<std::vector<double>>();
           for (std::size_t k = 0; k < row.size(); ++k)
@@ -510,14 +560,14 @@ json summarise(const Plan& plan, const ExperimentOptions& o, const std::vector<R
 }
 
 // The mean learned table of each system beside the experiment's table.
-void printTables(const json& summary, const ExperimentOptions& o) {
+void printTables(const json& summary, const Plan& plan, const ExperimentOptions& o) {
   const auto& runs_steps = summary["steps"];
   const auto object_names = summary["objects"].get<std::vector<std::string>>();
   const int reps = summary["repetitions"].get<int>();
   std::ostringstream t;
   t << "\nLearned affordances after " << runs_steps.get<std::int64_t>() << " steps (mean of " << reps
     << " run(s)); in brackets the paper's table\n";
-  for (const auto& sys : o.systems) {
+  for (const auto& sys : plan.systems) {
     const json& js = summary["systems"][sys];
     if (!js.contains("affordance")) continue;
     t << "\n" << sys << "            move        turn green  turn red    turn blue\n";
@@ -534,9 +584,9 @@ void printTables(const json& summary, const ExperimentOptions& o) {
     t << "\n";
   }
   bool header = false;
-  for (const auto& sys : o.systems) {
+  for (const auto& sys : plan.systems) {
     const json& js = summary["systems"][sys];
-    if (!js.contains("extrinsic")) continue;
+    if (!js.contains("extrinsic") || !js["extrinsic"].contains("table_metric")) continue;
     const json& ex = js["extrinsic"];
     if (!header) {
       t << "\nExtrinsic tests (" << ex["tests_per_scenario"].get<int>()
@@ -565,9 +615,9 @@ void printTables(const json& summary, const ExperimentOptions& o) {
       t << " (paper, IMP: " << fixed(summary["reference_completion_fit"]["a"].get<double>(), 3) << " x^2 "
         << fixed(summary["reference_completion_fit"]["b"].get<double>(), 3) << " x)";
     t << "\n";
-    for (const auto& sys : o.systems) {
+    for (const auto& sys : plan.systems) {
       const json& js = summary["systems"][sys];
-      if (!js.contains("extrinsic")) continue;
+      if (!js.contains("extrinsic") || !js["extrinsic"].contains("completion_steps")) continue;
       const json& cs = js["extrinsic"]["completion_steps"];
       t << "  " << std::left << std::setw(5) << sys << std::right;
       for (const auto& s : js["extrinsic"]["scenarios"]) t << std::setw(14) << fixed(cs[s.get<std::string>()]["median"].get<double>(), 1);
@@ -575,6 +625,39 @@ void printTables(const json& summary, const ExperimentOptions& o) {
         t << "   fit " << fixed(cs["fit"]["a"].get<double>(), 3) << " x^2 " << fixed(cs["fit"]["b"].get<double>(), 3) << " x";
       t << "\n";
     }
+  }
+  const auto p = [](const json& v) { return v.is_null() ? std::string("-") : fixed(v.get<double>(), 4); };
+  if (summary.contains("utility")) {  // Figure 12
+    const json& u = summary["utility"];
+    t << "\nUtility gained per test (" << u["system"].get<std::string>() << ", " << u["scenario"].get<std::string>()
+      << "): goal-based vs utility-based planner, Welch's t-test\n  budget   goal     utility  p\n";
+    for (std::size_t k = 0; k < u["budgets"].size(); ++k)
+      t << "  " << std::setw(6) << u["budgets"][k].get<int>() << "   " << fixed(u["goal_mean"][k].get<double>(), 3)
+        << "    " << fixed(u["utility_mean"][k].get<double>(), 3) << "    " << p(u["p_values"][k]) << "\n";
+  }
+  if (summary.contains("forward_models")) {  // Figure 13
+    const json& f = summary["forward_models"];
+    t << "\nMean utility of the utility planner with agents trained for " << plan.design.after_actions
+      << " actions, by action budget\n  system";
+    for (const auto& b : f["budgets"]) t << std::setw(10) << b.get<int>();
+    t << "\n";
+    for (const auto& sys : plan.systems) {
+      t << "  " << std::left << std::setw(6) << sys << std::right;
+      for (const auto& m : summary["systems"][sys]["utility_mean"]) t << std::setw(10) << fixed(m.get<double>(), 3);
+      t << "\n";
+    }
+    for (const auto& [pair, ps] : f["p_values"].items()) {
+      t << "  p " << std::left << std::setw(8) << pair << std::right;
+      for (const auto& v : ps) t << std::setw(8) << p(v);
+      t << "\n";
+    }
+  }
+  if (summary.contains("search")) {  // Figure 14
+    const json& s = summary["search"];
+    t << "\nActions checked per sub-goal (" << s["system"].get<std::string>() << "): with affordance restriction "
+      << fixed(s["restricted_mean"].get<double>(), 3) << ", without " << fixed(s["unrestricted_mean"].get<double>(), 3)
+      << "; Welch's t-test p = " << (s["p_value"].is_null() ? std::string("-") : fmt::format("{:.3g}", s["p_value"].get<double>()))
+      << "\n";
   }
   t << "\nsummary: " << (fs::path(o.out_dir) / "summary.json").string() << "\n";
   std::printf("%s", t.str().c_str());
@@ -592,25 +675,49 @@ int runExperiment(const ExperimentOptions& o, spdlog::logger& log) {
     bin = executableDir();
   }
   fs::create_directories(o.out_dir);
-  log.info("experiment {}: {} run(s) of {} steps, {} at a time, over {} ({})", o.experiment, plan.runs.size(),
+  std::string systems;
+  for (const auto& sys : plan.systems) systems += (systems.empty() ? "" : ", ") + sys;
+  log.info("experiment {} ({}): {} run(s) of {} steps, {} at a time, over {} ({})", o.experiment, systems, plan.runs.size(),
            plan.runs.front().spec.steps, o.jobs, o.transport, network);
   const std::vector<RunOutcome> outcomes = executeRuns(plan.runs, o, bin, log);
   json summary = summarise(plan, o, outcomes, network);
   std::vector<RunOutcome> test_outcomes;
-  if (o.extrinsic_reps > 0) {
-    const std::vector<PlannedRun> tests = planExtrinsic(plan, outcomes, o);
-    log.info("extrinsic phase: {} test(s): {} scenario(s) x {} from each trained agent", tests.size(),
-             plan.scenarios.size(), o.extrinsic_reps);
+  std::vector<std::string> untested;
+  if (plan.tests > 0) {
+    const std::vector<PlannedRun> tests = planExtrinsic(plan, outcomes, o, untested);
+    for (const auto& e : untested) log.error("{}", e);
+    log.info("extrinsic phase: {} test(s): {} condition(s) x {} scenario(s) x {} from each trained agent", tests.size(),
+             plan.conditions.size(), plan.scenarios.size(), plan.tests);
     test_outcomes = executeRuns(tests, o, bin, log);
     summariseExtrinsic(summary, plan, tests, test_outcomes, o);
+    std::vector<TestRecord> records;
+    for (const auto& t : tests) {
+      const RunOutcome& r = test_outcomes[t.index];
+      TestRecord rec;
+      rec.system = t.system;
+      rec.agent = t.intrinsic;
+      rec.scenario = t.scenario;
+      rec.condition = t.condition;
+      rec.ok = r.ok;
+      rec.success = r.ok && r.extrinsic.success;
+      rec.utility = r.extrinsic.utility;
+      rec.attempts = r.extrinsic.attempts;
+      for (const auto& g : r.extrinsic.sub_goals) {
+        rec.actions_checked += g.actions_checked;
+        rec.active_sub_goals += g.iterations > 0;
+      }
+      records.push_back(rec);
+    }
+    summariseDesign(summary, records, plan.conditions, plan.design, plan.systems, plan.scenarios);
+    if (!untested.empty()) summary["untested_agents"] = untested;
   }
   std::ofstream(fs::path(o.out_dir) / "summary.json") << summary.dump(2) << "\n";
-  if (!o.quiet) printTables(summary, o);
+  if (!o.quiet) printTables(summary, plan, o);
   const auto failed = [](const RunOutcome& r) { return !r.ok; };
   const auto failures = std::count_if(outcomes.begin(), outcomes.end(), failed) +
                         std::count_if(test_outcomes.begin(), test_outcomes.end(), failed);
   if (failures) log.error("{} run(s) failed; see summary.json failed_runs", failures);
-  return failures ? 1 : 0;
+  return failures || !untested.empty() ? 1 : 0;
 }
 
 }  // namespace afford

@@ -25,12 +25,12 @@ int main(int argc, char** argv) {
   app.add_option("--config-dir", config_dir, "folder with defaults.yaml and experiments/")->capture_default_str();
 
   afford::ExperimentOptions o;
-  std::string system = "all", netns = "auto";
+  std::string system, netns = "auto";
   int reps = 0;
   std::int64_t steps = 0;
   auto* exp = app.add_subcommand("experiment", "run an experiment's repetitions and summarise them");
   exp->add_option("name", o.experiment, "experiment (see `afford experiments`)")->required();
-  exp->add_option("--system", system, "FIX, IGN, IMP or all")->capture_default_str();
+  exp->add_option("--system", system, "FIX, IGN, IMP or all (default: the experiment's systems, else all)");
   exp->add_option("--reps", reps, "repetitions per system (default: the experiment's)");
   exp->add_option("--steps", steps, "intrinsic steps per run (default: the experiment's)");
   exp->add_option("--jobs,-j", o.jobs, "runs at a time")->capture_default_str();
@@ -50,7 +50,8 @@ int main(int argc, char** argv) {
       ->capture_default_str();
   exp->add_flag("--quiet", o.quiet, "do not print the table at the end");
   exp->add_option("--extrinsic-reps", o.extrinsic_reps,
-                  "extrinsic tests of each scenario from every trained agent (0: intrinsic phase only)")
+                  "extrinsic tests of each scenario (and planner condition) from every trained agent "
+                  "(default: the experiment's extrinsic.tests, else 0: intrinsic phase only)")
       ->capture_default_str();
   exp->add_option("--scenarios", o.scenarios, "scenarios to test (default: all in config/scenarios)");
 
@@ -122,7 +123,7 @@ int main(int argc, char** argv) {
     if (steps) o.steps = steps;
     if (system == "all")
       o.systems = {"FIX", "IGN", "IMP"};
-    else
+    else if (!system.empty())
       o.systems = {afford::toString(afford::parseSystem(system))};
     if (netns == "auto")
       o.netns = afford::NetnsMode::Auto;

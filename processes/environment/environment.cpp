@@ -56,6 +56,17 @@ const cv::Mat& Environment::goalScene() const {
   return goal_;
 }
 
+double Environment::goalUtility() const {
+  if (!scenario_) throw std::logic_error("Environment: no scenario, so no goal");
+  double sum = 0;
+  for (std::size_t i = 0; i < objects_.size(); ++i) {
+    const ObjectState& g = scenario_->objects[i].goal;
+    const WorldObject& o = objects_[i];
+    if (o.colour == g.colour && o.centre == toPixel(g.x, g.y, config_.world.size_px)) sum += scenario_->objects[i].value;
+  }
+  return sum;
+}
+
 double Environment::goalDistance() const {
   const cv::Mat scene = render(), &goal = goalScene();
   double sum = 0;

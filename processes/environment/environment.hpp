@@ -40,6 +40,9 @@ class Environment {
   // Distance of the scene from the goal image: ||scene - goal||_2 / (size^2 * 3),
   // values in [0, 1]; the test succeeds below planner.success_distance.
   double goalDistance() const;
+  // The summed value of the scenario's objects that are in their goal state
+  // (colour and place), the measure of the utility tests (paper 3.2.2).
+  double goalUtility() const;
 
   // The scene as it is now.
   cv::Mat render() const;

@@ -51,6 +51,7 @@ void EnvironmentNode::publishScene(std::int64_t step, int8_t cause, bool scan, i
   s.action_target_y = ty;
   s.width = s.height = config().world.size_px;
   s.goal_distance = extrinsic() ? env_->goalDistance() : -1.0;
+  s.goal_utility = extrinsic() ? env_->goalUtility() : -1.0;
   s.encoding = scene_t::ENCODING_ZLIB_RGB8;
   s.data = encodeScene(image ? *image : env_->render());
   s.size = static_cast<int32_t>(s.data.size());

@@ -18,10 +18,10 @@ PlannerNode::PlannerNode(lcm::LCM& lcm, std::shared_ptr<spdlog::logger> log) : N
 
 void PlannerNode::onConfigured(const RunConfig& config) {
   core_.reset();
-  if (config.phase == Phase::Extrinsic) core_ = std::make_unique<GoalPlanner>(config.planner);
+  if (config.phase == Phase::Extrinsic) core_ = std::make_unique<Planner>(config.planner, goalValues(*config.scenario));
   step_ = -1;
   seq_ = 0;
-  goal_distance_ = -1;
+  goal_distance_ = goal_utility_ = -1;
   waiting_scene_ = finished_ = false;
   object_.reset();
   affordance_.reset();
@@ -33,6 +33,7 @@ void PlannerNode::onScene(const scene_t& s) {
   if (!active()) return;
   if (s.cause == scene_t::CAUSE_GOAL) return;  // the eye memorises it
   goal_distance_ = s.goal_distance;
+  goal_utility_ = s.goal_utility;
   if (s.cause == scene_t::CAUSE_START && step_ < 0) {  // the test begins
     step_ = 0;
     return follow(core_->startIteration());
@@ -148,6 +149,7 @@ void PlannerNode::finish(bool success) {
   r.success = success;
   r.completion = success ? static_cast<int32_t>(step_ + 1) : 0;
   r.attempts = core_->attempts();
+  r.utility = goal_utility_;
   for (const SubGoalRecord& g : core_->subGoals())
     r.sub_goals.push_back({g.x, g.y, g.iterations, g.actions_checked, g.actions_taken, g.reached});
   r.n_sub_goals = static_cast<int32_t>(r.sub_goals.size());

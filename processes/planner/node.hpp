@@ -41,10 +41,11 @@ class PlannerNode : public NodeBase {
   void finish(bool success);
   bool active() const { return core_ && state() == process_status_t::RUNNING && !finished_; }
 
-  std::unique_ptr<GoalPlanner> core_;
+  std::unique_ptr<Planner> core_;
   std::int64_t step_ = -1;          // the current iteration
   std::int32_t seq_ = 0;            // last request sent
   double goal_distance_ = -1;       // the environment's last word on it
+  double goal_utility_ = -1;        // and on the value of what is in place
   bool waiting_scene_ = false;      // an action was sent; its scene is awaited
   bool finished_ = false;
   std::optional<focus_t> object_;   // the scanned object of this iteration

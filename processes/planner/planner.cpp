@@ -29,9 +29,23 @@ double positionDistance(double px, double py, double qx, double qy) {
   return std::hypot(px - qx, py - qy) / 2.0;
 }
 
-GoalPlanner::GoalPlanner(const PlannerConfig& config) : config_(config) {}
+std::vector<GoalValue> goalValues(const Scenario& s) {
+  std::vector<GoalValue> out;
+  for (const ScenarioObject& o : s.objects) out.push_back({o.goal.x, o.goal.y, o.value});
+  return out;
+}
 
-PlannerRequest GoalPlanner::request(PlannerRequest::Kind kind, double x, double y) const {
+Planner::Planner(const PlannerConfig& config, std::vector<GoalValue> values)
+    : config_(config), values_(std::move(values)) {}
+
+double Planner::subGoalValue(double x, double y) const {
+  const GoalValue* best = nullptr;
+  for (const GoalValue& v : values_)
+    if (!best || std::hypot(v.x - x, v.y - y) < std::hypot(best->x - x, best->y - y)) best = &v;
+  return best ? best->value : 0.0;
+}
+
+PlannerRequest Planner::request(PlannerRequest::Kind kind, double x, double y) const {
   PlannerRequest r;
   r.kind = kind;
   r.x = x;
@@ -39,7 +53,7 @@ PlannerRequest GoalPlanner::request(PlannerRequest::Kind kind, double x, double 
   return r;
 }
 
-PlannerRequest GoalPlanner::done() {
+PlannerRequest Planner::done() {
   wait_ = Wait::Nothing;
   if (active_ && !records_.empty()) {
     ++records_.back().iterations;
@@ -48,8 +62,9 @@ PlannerRequest GoalPlanner::done() {
   return request(PlannerRequest::IterationDone);
 }
 
-PlannerRequest GoalPlanner::startIteration() {
-  if (wait_ != Wait::Nothing) throw std::logic_error("GoalPlanner: an iteration is already under way");
+PlannerRequest Planner::startIteration() {
+  if (wait_ != Wait::Nothing) throw std::logic_error("Planner: an iteration is already under way");
+  ++iterations_;
   const bool timed_out = iterations_on_sub_goal_ >= config_.subgoal_timeout;
   if (!active_ || timed_out) {  // Algorithm 2: select a non-achieved sub-goal
     wait_ = Wait::SubGoal;
@@ -59,7 +74,7 @@ PlannerRequest GoalPlanner::startIteration() {
   return request(PlannerRequest::ScanScene);
 }
 
-PlannerRequest GoalPlanner::onView(const View& v) {
+PlannerRequest Planner::onView(const View& v) {
   switch (wait_) {
     case Wait::SubGoal:
       sub_goal_ = v;
@@ -81,13 +96,14 @@ PlannerRequest GoalPlanner::onView(const View& v) {
       if (!active_) records_.back().reached = true;
       return done();
     default:
-      throw std::logic_error("GoalPlanner: a view it did not ask for");
+      throw std::logic_error("Planner: a view it did not ask for");
   }
 }
 
-PlannerRequest GoalPlanner::onObject(const View& object, const std::array<double, kNumActions>& affordance) {
-  if (wait_ != Wait::Object) throw std::logic_error("GoalPlanner: an object it did not ask for");
+PlannerRequest Planner::onObject(const View& object, const std::array<double, kNumActions>& affordance) {
+  if (wait_ != Wait::Object) throw std::logic_error("Planner: an object it did not ask for");
   object_ = object;
+  affordance_ = affordance;
   PlannerRequest r = request(PlannerRequest::Forward, sub_goal_.x, sub_goal_.y);
   r.object_x = object.x;
   r.object_y = object.y;
@@ -98,30 +114,56 @@ PlannerRequest GoalPlanner::onObject(const View& object, const std::array<double
   return r;
 }
 
-PlannerRequest GoalPlanner::onForward(const std::vector<ForwardPrediction>& predictions) {
-  if (wait_ != Wait::Forward) throw std::logic_error("GoalPlanner: predictions it did not ask for");
+PlannerRequest Planner::onForward(const std::vector<ForwardPrediction>& predictions) {
+  if (wait_ != Wait::Forward) throw std::logic_error("Planner: predictions it did not ask for");
   // ActionPlanning: the first candidate whose predicted effect is the sub-goal.
   for (const ForwardPrediction& p : predictions) {
     ++records_.back().actions_checked;
     const bool image_ok = imageDistance(p.what, sub_goal_.image) < config_.image_match;
     const bool place_ok = positionDistance(p.where_x, p.where_y, sub_goal_.x, sub_goal_.y) < config_.position_match;
-    if (image_ok && place_ok) {
-      PlannerRequest r = request(PlannerRequest::Act, p.action == kMove ? sub_goal_.x : -1.0,
-                                 p.action == kMove ? sub_goal_.y : -1.0);
-      r.action = p.action;
-      r.object_x = object_.x;
-      r.object_y = object_.y;
-      ++attempts_;
-      ++records_.back().actions_taken;
-      wait_ = Wait::Acted;
-      return r;
-    }
+    if (image_ok && place_ok) return config_.kind == PlannerKind::Utility ? weighUtility(p) : act(p);
   }
   return done();
 }
 
-PlannerRequest GoalPlanner::onActed() {
-  if (wait_ != Wait::Acted) throw std::logic_error("GoalPlanner: an action it did not ask for");
+PlannerRequest Planner::act(const ForwardPrediction& p) {
+  PlannerRequest r = request(PlannerRequest::Act, p.action == kMove ? sub_goal_.x : -1.0,
+                             p.action == kMove ? sub_goal_.y : -1.0);
+  r.action = p.action;
+  r.object_x = object_.x;
+  r.object_y = object_.y;
+  ++attempts_;
+  ++records_.back().actions_taken;
+  wait_ = Wait::Acted;
+  return r;
+}
+
+PlannerRequest Planner::weighUtility(const ForwardPrediction& p) {
+  // Equation 3: U = affordance x value of the sub-goal.
+  const double utility = affordance_[p.action] * subGoalValue(sub_goal_.x, sub_goal_.y);
+  const double potential = potential_utility_;
+  if (evaluating()) {  // raise the estimate of the attainable utility
+    if (utility >= potential) potential_utility_ += config_.raise_leak * (utility - potential);
+    active_ = false;   // Algorithm 3: another sub-goal next iteration
+    ++records_.back().iterations;
+    return done();
+  }
+  // Acting: lower the estimate for each chosen action, whether or not its
+  // utility reaches the estimate (docs/model.md says why), and act if it does.
+  potential_utility_ += config_.lower_leak * (0.0 - potential);
+  if (utility >= potential) return act(p);
+  active_ = false;
+  ++records_.back().iterations;
+  return done();
+}
+
+PlannerRequest Planner::onActed() {
+  if (wait_ != Wait::Acted) throw std::logic_error("Planner: an action it did not ask for");
+  if (config_.kind == PlannerKind::Utility) {  // Algorithm 3: no check; another sub-goal next iteration
+    active_ = false;
+    ++records_.back().iterations;
+    return done();
+  }
   wait_ = Wait::SceneAfterAction;
   return request(PlannerRequest::LookAtSceneAt, sub_goal_.x, sub_goal_.y);
 }

@@ -1,4 +1,5 @@
-// Goal-based planner core (paper 2.4.3, Algorithm 2): one iteration at a time,
+// Planner core: the goal-based planner (paper 2.4.3, Algorithm 2) and the
+// utility-based planner (paper 2.4.4, Algorithm 3), one iteration at a time,
 // as a state machine that asks for what it needs (a look at the goal image, a
 // look at the scene, forward predictions, an action) and is fed the answers.
 // No LCM here: the planner node turns requests into messages; tests answer them
@@ -50,15 +51,24 @@ struct PlannerRequest {
 // What the planner did for one sub-goal (a sub-goal is one pick from the goal image).
 struct SubGoalRecord {
   double x = 0, y = 0;
-  int iterations = 0;
+  int iterations = 0;       // 0: the sub-goal was found already reached
   int actions_checked = 0;  // forward predictions compared with the sub-goal
   int actions_taken = 0;
   bool reached = false;
 };
 
-class GoalPlanner {
+// The value of reaching the goal of each object of a scenario, by where the
+// goal image shows it (utility planner; paper 2.4.4, Table 8).
+struct GoalValue {
+  double x = 0, y = 0, value = 0;
+};
+std::vector<GoalValue> goalValues(const Scenario& s);
+
+class Planner {
  public:
-  explicit GoalPlanner(const PlannerConfig& config);
+  // `values`: the sub-goal values of the scenario (used by the utility planner);
+  // a sub-goal picked at (x, y) has the value of the nearest goal.
+  explicit Planner(const PlannerConfig& config, std::vector<GoalValue> values = {});
 
   PlannerRequest startIteration();
   PlannerRequest onView(const View& v);
@@ -67,6 +77,11 @@ class GoalPlanner {
   PlannerRequest onActed();
 
   int attempts() const { return attempts_; }
+  // Utility planner: the current estimate of the attainable utility, and
+  // whether the planner is still only estimating it.
+  double potentialUtility() const { return potential_utility_; }
+  bool evaluating() const { return iterations_ <= config_.evaluation_iterations; }
+  double subGoalValue(double x, double y) const;
   bool subGoalActive() const { return active_; }
   const std::vector<SubGoalRecord>& subGoals() const { return records_; }
 
@@ -75,8 +90,16 @@ class GoalPlanner {
   PlannerRequest request(PlannerRequest::Kind kind, double x = -1, double y = -1) const;
   PlannerRequest done();
 
+  PlannerRequest act(const ForwardPrediction& p);
+  // Algorithm 3 once ActionPlanning found `p` for the sub-goal and object.
+  PlannerRequest weighUtility(const ForwardPrediction& p);
+
   PlannerConfig config_;
+  std::vector<GoalValue> values_;
   Wait wait_ = Wait::Nothing;
+  int iterations_ = 0;  // started so far
+  double potential_utility_ = 0;
+  std::array<double, kNumActions> affordance_{};  // of the scanned object
   bool active_ = false;
   int iterations_on_sub_goal_ = 0;
   int attempts_ = 0;

@@ -189,6 +189,7 @@ void PredictorsNode::onEffect(const effect_t& m) {
   pending_trained_ = t;
   pending_effects_ = std::move(e);
   outcome_ = Outcome::Learned;
+  saveActionsCheckpoint();
   if (m.step == config().steps - 1) return finish();
   drainBuffered();
 }
@@ -200,6 +201,23 @@ void PredictorsNode::trainPendingEffects() {
   else
     core_->trainEffects(*pending_effects_);
   pending_effects_.reset();
+}
+
+void PredictorsNode::saveActionsCheckpoint() {
+  const std::int64_t n = config().checkpoint_after_actions;
+  if (n <= 0 || config().checkpoint.empty()) return;
+  std::int64_t executed = 0;
+  for (auto k : core_->executed()) executed += k;
+  if (executed != n) return;
+  trainPendingEffects();
+  if (trainer_) trainer_->drain();  // the forward models have learned from all n actions
+  const std::string file = actionsCheckpoint(config().checkpoint, n);
+  try {
+    core_->save(file);
+    log_->info("run '{}': weights after {} actions saved to {}", runId(), n, file);
+  } catch (const std::exception& e) {
+    log_->error("{}", e.what());
+  }
 }
 
 void PredictorsNode::publishTable(std::int64_t step) {

@@ -49,6 +49,8 @@ class PredictorsNode : public NodeBase {
   void handleFocus(const focus_t& m);
   void drainBuffered();
   void publishTable(std::int64_t step);
+  // run.checkpoint_after_actions: save the weights once that many actions are learned.
+  void saveActionsCheckpoint();
   void finish();
   void trainPendingEffects();
 

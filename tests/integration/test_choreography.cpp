@@ -228,6 +228,36 @@ TEST(Choreography, ExtrinsicTestsMatchThePlainPlanner) {
   }
 }
 
+// Algorithm 3 and the action budget in the stochastic environment: the
+// choreography gains exactly the utility the plain loop gains, test by test.
+TEST(Choreography, UtilityTestsMatchThePlainPlanner) {
+  const std::string dir = test::tempDir("utility");
+  const std::string config_dir = std::string(AFFORD_SOURCE_DIR) + "/config";
+  test::runIntrinsic(test::shippedConfig("stochastic", System::IMP, 3)).save(dir + "/predictors.ckpt");
+  double gained = 0;
+  for (const char* kind : {"goal", "utility"})
+    for (int budget : {1, 3}) {
+      const std::vector<std::string> settings{std::string("planner.kind=") + kind,
+                                              "planner.max_attempts=" + std::to_string(budget)};
+      const std::int64_t seed = 70 + budget;
+      const std::string yaml = emitYaml(extrinsicConfig(config_dir, RunRequest{"utility", System::IMP, seed, std::nullopt, settings},
+                                                        dir + "/predictors.ckpt", "utility"));
+      InProcessRun run(yaml, System::IMP, seed, 125);
+      ASSERT_TRUE(run.outcome.ok) << run.outcome.error;
+      const RunConfig c = parseRunConfigText(yaml);
+      Predictors loaded(c);
+      loaded.load(dir + "/predictors.ckpt");
+      const test::GoalTestOutcome ref = test::runGoalTest(c, *c.scenario, loaded);
+      const ExtrinsicOutcome& got = run.outcome.extrinsic;
+      EXPECT_EQ(got.attempts, ref.attempts) << kind << " budget " << budget;
+      EXPECT_LE(got.attempts, budget) << kind;
+      EXPECT_DOUBLE_EQ(got.utility, ref.utility) << kind << " budget " << budget;
+      EXPECT_EQ(got.sub_goals.size(), ref.sub_goals.size()) << kind << " budget " << budget;
+      gained += got.utility;
+    }
+  EXPECT_GT(gained, 0.0);  // some sub-goal was reached
+}
+
 TEST(Choreography, AnExtrinsicRunWithABadCheckpointIsRefusedNamingTheFile) {
   const std::string config_dir = std::string(AFFORD_SOURCE_DIR) + "/config";
   const std::string yaml = emitYaml(extrinsicConfig(config_dir, RunRequest{"base", System::IMP, 1, std::nullopt, {}},

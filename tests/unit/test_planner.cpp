@@ -18,7 +18,7 @@ ForwardPrediction prediction(int action, double fill, double x, double y) {
 
 struct PlannerTest : ::testing::Test {
   PlannerConfig config = test::shippedConfig().planner;
-  GoalPlanner planner{config};
+  Planner planner{config};
   const View goal = view(255, 0.2, 0.5);  // the sub-goal as the goal image shows it
   const View scene_differs = view(0, 0.2, 0.5);
 
@@ -71,7 +71,7 @@ TEST_F(PlannerTest, AnAffordedActionWhosePredictedEffectIsTheSubGoalIsTaken) {
 
 TEST_F(PlannerTest, WithoutRestrictionEveryActionIsChecked) {
   config.restrict_by_affordance = false;
-  GoalPlanner all(config);
+  Planner all(config);
   ASSERT_EQ(all.startIteration().kind, Kind::LookAtGoal);
   all.onView(goal);
   all.onView(scene_differs);
@@ -117,6 +117,72 @@ TEST_F(PlannerTest, RepliesOutOfTurnAreRefused) {
   EXPECT_THROW(planner.onForward({}), std::logic_error);
   planner.startIteration();
   EXPECT_THROW(planner.startIteration(), std::logic_error);
+}
+
+// ---- utility-based planner (Algorithm 3)
+
+struct UtilityPlannerTest : ::testing::Test {
+  PlannerConfig config = [] {
+    PlannerConfig c = test::shippedConfig().planner;
+    c.kind = PlannerKind::Utility;
+    return c;
+  }();
+  // Two goals: value 1 at (0.2, 0.5), value 4 at (0.2, 0.2).
+  Planner planner{config, {{0.2, 0.5, 1.0}, {0.2, 0.2, 4.0}}};
+
+  // One iteration that picks the sub-goal at `at`, finds an object whose
+  // turn-green affordance is `affordance` and whose predicted effect matches.
+  // (If a sub-goal is still active, it must be the one at `at`.)
+  PlannerRequest planFor(const View& at, double affordance) {
+    if (planner.startIteration().kind == Kind::LookAtGoal) {
+      planner.onView(at);
+      EXPECT_EQ(planner.onView(view(0, at.x, at.y)).kind, Kind::ScanScene);
+    }
+    EXPECT_EQ(planner.onObject(view(0, at.x, at.y), A{0.1, affordance, 0.1, 0.1}).kind, Kind::Forward);
+    return planner.onForward({prediction(kTurnGreen, 1.0, at.x, at.y)});
+  }
+};
+
+TEST_F(UtilityPlannerTest, SubGoalsTakeTheValueOfTheNearestGoal) {
+  EXPECT_DOUBLE_EQ(planner.subGoalValue(0.2, 0.5), 1.0);
+  EXPECT_DOUBLE_EQ(planner.subGoalValue(0.21, 0.19), 4.0);
+}
+
+TEST_F(UtilityPlannerTest, EvaluationRaisesThePotentialUtilityWithoutActing) {
+  const View low = view(255, 0.2, 0.5), high = view(255, 0.2, 0.2);
+  EXPECT_EQ(planFor(low, 0.8).kind, Kind::IterationDone);  // U = 0.8 x 1
+  EXPECT_NEAR(planner.potentialUtility(), 0.8, 1e-12);      // nu = 1: the estimate becomes U
+  EXPECT_EQ(planFor(high, 0.6).kind, Kind::IterationDone);  // U = 0.6 x 4
+  EXPECT_NEAR(planner.potentialUtility(), 2.4, 1e-12);
+  EXPECT_EQ(planFor(low, 0.8).kind, Kind::IterationDone);   // lower U: the estimate stays
+  EXPECT_NEAR(planner.potentialUtility(), 2.4, 1e-12);
+  EXPECT_EQ(planner.attempts(), 0);
+  EXPECT_FALSE(planner.subGoalActive());  // each planned couple ends its sub-goal
+}
+
+TEST_F(UtilityPlannerTest, ActsOnlyWhenTheUtilityReachesThePotentialAndLowersItPerChosenAction) {
+  const View low = view(255, 0.2, 0.5), high = view(255, 0.2, 0.2);
+  planFor(high, 0.6);  // estimate 2.4
+  while (planner.evaluating()) {  // spend the evaluation period on iterations that find nothing
+    if (planner.startIteration().kind == Kind::LookAtGoal) {
+      planner.onView(low);
+      ASSERT_EQ(planner.onView(view(0, 0.2, 0.5)).kind, Kind::ScanScene);
+    }
+    ASSERT_EQ(planner.onObject(view(0, 0.8, 0.8), A{0.1, 0.1, 0.1, 0.1}).kind, Kind::IterationDone);
+  }
+  EXPECT_NEAR(planner.potentialUtility(), 2.4, 1e-12);
+  // U = 0.8 < 2.4: not taken, but the estimate falls by 10%.
+  EXPECT_EQ(planFor(low, 0.8).kind, Kind::IterationDone);
+  EXPECT_NEAR(planner.potentialUtility(), 2.16, 1e-12);
+  EXPECT_EQ(planner.attempts(), 0);
+  // U = 2.4 >= 2.16: taken; the estimate falls again; no check of the sub-goal follows.
+  const PlannerRequest r = planFor(high, 0.6);
+  ASSERT_EQ(r.kind, Kind::Act);
+  EXPECT_EQ(r.action, kTurnGreen);
+  EXPECT_NEAR(planner.potentialUtility(), 1.944, 1e-12);
+  EXPECT_EQ(planner.onActed().kind, Kind::IterationDone);
+  EXPECT_EQ(planner.attempts(), 1);
+  EXPECT_EQ(planner.startIteration().kind, Kind::LookAtGoal);  // another sub-goal
 }
 
 }  // namespace

@@ -24,7 +24,8 @@ std::string one(const std::string& object) { return "name: t\nobjects:\n  - " + 
 const char* kBlueSquare = "{shape: square, initial: {colour: blue, position: [0.2, 0.5]}, goal: {colour: green, position: [0.2, 0.5]}}";
 
 TEST(Scenario, TheFiveScenariosOfFigure4Load) {
-  EXPECT_EQ(listScenarios(kConfigDir), (std::vector<std::string>{"scenario1", "scenario2", "scenario3", "scenario4", "scenario5"}));
+  EXPECT_EQ(listScenarios(kConfigDir),
+            (std::vector<std::string>{"scenario1", "scenario2", "scenario3", "scenario4", "scenario5", "utility"}));
   for (int k = 1; k <= 5; ++k) {
     const Scenario s = loadScenario(kConfigDir, "scenario" + std::to_string(k), kWorld);
     EXPECT_EQ(s.objects.size(), static_cast<std::size_t>(k));
@@ -34,6 +35,14 @@ TEST(Scenario, TheFiveScenariosOfFigure4Load) {
   EXPECT_EQ(s5.objects[0].goal.colour, Colour::Green);
   EXPECT_DOUBLE_EQ(s5.objects[4].goal.y, 0.2);  // the red circle moves to (0.5, 0.2)
   EXPECT_DOUBLE_EQ(s5.objects[4].value, 1.0);
+}
+
+TEST(Scenario, TheUtilityTestHasTheValuesOfTable8) {
+  const Scenario u = loadScenario(kConfigDir, "utility", kWorld);
+  ASSERT_EQ(u.objects.size(), 4u);
+  std::vector<double> values;
+  for (const auto& o : u.objects) values.push_back(o.value);
+  EXPECT_EQ(values, (std::vector<double>{1, 1, 2, 4}));
 }
 
 TEST(Scenario, AValidScenarioPasses) { EXPECT_EQ(errorOf(one(kBlueSquare)), ""); }

@@ -99,6 +99,8 @@ struct Scenario {
   std::vector<ScenarioObject> objects;
 };
 
+enum class PlannerKind { Goal, Utility };
+
 struct PlannerConfig {
   double subgoal_match = 0;         // sub-goal reached: image distance below this (paper 2.4.3)
   double image_match = 0;         // predicted image matches the sub-goal (paper 2.4.3)
@@ -109,6 +111,11 @@ struct PlannerConfig {
   bool restrict_by_affordance = false;  // check only actions with affordance > affordance_threshold
   double affordance_threshold = 0;   // (paper 2.4.3, 3.2.4)
   double success_distance = 0;      // whole scene matches the goal image (authors' code)
+  PlannerKind kind = PlannerKind::Goal;  // Algorithm 2 or Algorithm 3
+  // Utility-based planner (paper 2.4.4, Algorithm 3).
+  int evaluation_iterations = 0;     // iterations that only estimate the potential utility
+  double raise_leak = 0;             // nu of the leaky average raising the potential utility
+  double lower_leak = 0;             // nu of the leaky average lowering it (towards 0) per chosen action
 };
 
 enum class Phase { Intrinsic, Extrinsic };
@@ -124,6 +131,9 @@ struct RunConfig {
   std::int64_t steps = 0;
   std::int64_t curve_interval = 0;
   std::string checkpoint;  // where the predictors save their weights after the last step ("" = nowhere)
+  // Also save the weights as they are after this many executed actions (0 = not), to
+  // actionsCheckpoint(checkpoint, n): paper 3.2.3 tests agents trained for 4000 actions.
+  std::int64_t checkpoint_after_actions = 0;
   WorldConfig world;
   EyeConfig eye;
   PredictorsConfig predictors;
@@ -142,6 +152,9 @@ std::vector<std::string> listScenarios(const std::string& config_dir);
 // to a place no other object starts or ends in. Throws ConfigError naming the field.
 void validateScenario(const Scenario& s, const WorldConfig& world);
 
+// The file of a checkpoint taken after `actions` executed actions, beside `checkpoint`.
+std::string actionsCheckpoint(const std::string& checkpoint, std::int64_t actions);
+
 // Parse and validate an effective configuration. Unknown keys are errors too.
 RunConfig parseRunConfig(const YAML::Node& root);
 RunConfig parseRunConfigText(const std::string& yaml_text);
@@ -149,12 +162,25 @@ RunConfig parseRunConfigText(const std::string& yaml_text);
 // Experiment files (config/experiments/<name>.yaml): the effective config of one
 // run is defaults.yaml, overlaid by the experiment's keys, overlaid by
 // systems.<S>, overlaid by command-line settings.
+// The extrinsic tests an experiment file declares (`extrinsic:`): which
+// scenarios, how many tests per trained agent, and the planner settings to
+// compare (`vary`: every combination is a condition, tested from every agent).
+struct ExtrinsicDesign {
+  std::vector<std::string> scenarios;
+  int tests = 0;                            // per trained agent, condition and scenario
+  std::int64_t after_actions = 0;           // test the weights saved after this many actions (0: the final ones)
+  std::vector<std::pair<std::string, std::vector<std::string>>> vary;  // config key -> values (YAML text)
+  std::string analysis;                     // "", utility, forward-models, search-reduction
+};
+
 struct ExperimentFile {
   std::string name;
   std::string description;
   int repetitions = 1;
+  std::vector<std::string> default_systems;  // systems run when none is named (empty: all three)
   YAML::Node overlay;                      // keys merged over the defaults
   YAML::Node systems;                      // map System -> overlay
+  std::optional<ExtrinsicDesign> extrinsic;
 };
 
 std::vector<std::string> listExperiments(const std::string& config_dir);
