@@ -1,30 +1,47 @@
 #!/usr/bin/env bash
 # Regenerate the paper's results with the paper's repetition counts and write
-# docs/results.md (our tables and figures beside the paper's numbers).
+# docs/results.md (our tables and figures beside the paper's).
 #   scripts/reproduce.sh deterministic   base, late1, late2, late3: 10 intrinsic runs per
 #                                        system, 10 tests of each scenario per run (Tables
-#                                        1, 2, 4-6; Figures 5-10)
-# Environment: JOBS (runs at a time, default: cores), REPS and EXT_REPS (default 10),
-# OUT (default out/reproduce). Runs over real processes (udpm); keeps the logs
-# of the first run of each system. Takes about 40 min on 2 cores.
+#                                        1, 2, 4-6; Figures 5-10); about 21 min on 2 cores
+#   scripts/reproduce.sh stochastic      stochastic, utility, forward-models, search-reduction
+#                                        with the counts of their files (Table 7, 8;
+#                                        Figures 11-14)
+#   scripts/reproduce.sh all             both
+# Environment: JOBS (runs at a time, default: cores), REPS and EXT_REPS (default: the
+# paper's counts), OUT (default out/reproduce). Runs over real processes (udpm); keeps
+# the logs of the first run of each system. The page is written from every experiment
+# folder present under OUT, so the two halves may run at different times.
 set -euo pipefail
 cd "$(dirname "$0")/.."
 what=${1:-deterministic}
+deterministic=(base late1 late2 late3)
+stochastic=(stochastic utility forward-models search-reduction)
 case $what in
-  deterministic) experiments=(base late1 late2 late3) ;;
-  *) echo "usage: scripts/reproduce.sh deterministic" >&2; exit 2 ;;
+  deterministic) experiments=("${deterministic[@]}") ;;
+  stochastic) experiments=("${stochastic[@]}") ;;
+  all) experiments=("${deterministic[@]}" "${stochastic[@]}") ;;
+  *) echo "usage: scripts/reproduce.sh deterministic|stochastic|all" >&2; exit 2 ;;
 esac
 scripts/setup.sh
 out=${OUT:-out/reproduce}
 mkdir -p "$out"
 start=$SECONDS
-dirs=()
+prefix=$(date +%Y%m%d-%H%M%S)
 for exp in "${experiments[@]}"; do
   rm -rf "${out:?}/$exp"
-  build/bin/afford experiment "$exp" --system all --reps "${REPS:-10}" --extrinsic-reps "${EXT_REPS:-10}" \
-    --jobs "${JOBS:-$(nproc)}" --keep-logs first --out "$out/$exp" --log-root "$out/logs" --run-prefix "$(date +%Y%m%d-%H%M%S)"
+  args=(--jobs "${JOBS:-$(nproc)}" --keep-logs first --out "$out/$exp" --log-root "$out/logs" --run-prefix "$prefix")
+  [[ -n ${REPS:-} ]] && args+=(--reps "$REPS")
+  case " ${deterministic[*]} " in
+    *" $exp "*) args+=(--system all --extrinsic-reps "${EXT_REPS:-10}") ;;
+    *) [[ -n ${EXT_REPS:-} && $exp != stochastic ]] && args+=(--extrinsic-reps "$EXT_REPS") ;;
+  esac
+  build/bin/afford experiment "$exp" "${args[@]}"
   build/bin/afford plot "$out/$exp"
-  dirs+=("$out/$exp")
 done
-build/bin/afford report "${dirs[@]}" --out docs/results.md --figures docs/results --wall-seconds $((SECONDS - start))
-echo "docs/results.md written; wall time $((SECONDS - start)) s"
+dirs=()
+for exp in "${deterministic[@]}" "${stochastic[@]}"; do
+  [[ -f $out/$exp/summary.json ]] && dirs+=("$out/$exp")
+done
+build/bin/afford report "${dirs[@]}" --out docs/results.md --figures docs/results
+echo "docs/results.md written; this invocation took $((SECONDS - start)) s"

@@ -667,6 +667,7 @@ void printTables(const json& summary, const Plan& plan, const ExperimentOptions&
 }  // namespace
 
 int runExperiment(const ExperimentOptions& o, spdlog::logger& log) {
+  const auto began = std::chrono::steady_clock::now();  // reported only, never decides anything
   const Plan plan = planExperiment(o);
   std::string network = "in-process memq://";
   std::string bin;
@@ -709,8 +710,15 @@ int runExperiment(const ExperimentOptions& o, spdlog::logger& log) {
       records.push_back(rec);
     }
     summariseDesign(summary, records, plan.conditions, plan.design, plan.systems, plan.scenarios);
+    json vary = json::object();
+    for (const auto& [k, v] : plan.design.vary) vary[k] = v;
+    summary["extrinsic_design"] = {{"scenarios", plan.scenarios}, {"tests", plan.tests}, {"vary", vary},
+                                   {"analysis", plan.design.analysis}, {"after_actions", plan.design.after_actions}};
+    if (plan.design.after_actions > 0) summary["after_actions"] = plan.design.after_actions;
     if (!untested.empty()) summary["untested_agents"] = untested;
   }
+  summary["wall_seconds"] = std::chrono::duration<double>(std::chrono::steady_clock::now() - began).count();
+  summary["extrinsic_tests"] = test_outcomes.size();
   std::ofstream(fs::path(o.out_dir) / "summary.json") << summary.dump(2) << "\n";
   if (!o.quiet) printTables(summary, plan, o);
   const auto failed = [](const RunOutcome& r) { return !r.ok; };

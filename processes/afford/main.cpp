@@ -94,7 +94,7 @@ int main(int argc, char** argv) {
     }
     if (report->parsed()) {
       const std::string link = std::filesystem::relative(report_figures, std::filesystem::path(report_out).parent_path()).string();
-      const std::string md = afford::writeReport(report_dirs, report_figures, link, report_wall, report_note);
+      const std::string md = afford::writeReport(report_dirs, report_figures, link, report_wall, report_note, config_dir);
       std::ofstream(report_out) << md;
       std::printf("%s\n", report_out.c_str());
       return 0;

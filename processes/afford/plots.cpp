@@ -51,6 +51,86 @@ void runGnuplot(const fs::path& script) {
 
 std::string quoted(const std::string& s) { return "'" + s + "'"; }
 
+std::string pText(const json& p) {
+  if (p.is_null()) return "p: -";
+  char buf[32];
+  std::snprintf(buf, sizeof buf, "p=%.2g", p.get<double>());
+  return buf;
+}
+
+// One box of a box plot: its x, series (colour and legend) and values.
+struct BoxItem {
+  double x = 0;
+  std::string series;
+  std::vector<double> values;
+};
+
+// Box plots (quartiles, min-max bars, median line, mean as a cross) of groups
+// at labelled x positions, with optional labels (p values) above the groups.
+std::string boxPlot(const fs::path& dir, const std::string& name, const std::string& title, const std::string& xlabel,
+                    const std::string& ylabel, const std::vector<BoxItem>& items,
+                    const std::vector<std::pair<double, std::string>>& xtics,
+                    const std::vector<std::pair<double, std::string>>& labels,
+                    const std::map<std::string, std::string>& colours) {
+  const fs::path csv = dir / (name + ".csv"), gp = dir / (name + ".gp"), png = dir / (name + ".png");
+  std::ofstream out(csv);
+  out << "series,x,n,min,q1,median,q3,max,mean\n";
+  double top = 0, lo = 0, left = 1e9, right = -1e9;
+  for (const auto& it : items) {
+    if (it.values.empty()) continue;
+    const Box b = box(it.values);
+    double mean = 0;
+    for (double v : it.values) mean += v / it.values.size();
+    out << it.series << "," << it.x << "," << it.values.size() << "," << b.min << "," << b.q1 << "," << b.median << ","
+        << b.q3 << "," << b.max << "," << mean << "\n";
+    top = std::max(top, b.max);
+    lo = std::min(lo, b.min);
+    left = std::min(left, it.x);
+    right = std::max(right, it.x);
+  }
+  out.close();
+  std::ofstream g(gp);
+  g << "set terminal pngcairo size 900,650 font 'DejaVu Sans,11'\nset output " << quoted(png.string()) << "\n"
+    << "set datafile separator ','\nset title " << quoted(title) << "\nset xlabel " << quoted(xlabel)
+    << "\nset ylabel " << quoted(ylabel) << "\nset grid ytics\nset boxwidth 0.25\nset key outside bottom center horizontal\n"
+    << "set xrange [" << left - 0.7 << ":" << right + 0.7 << "]\nset yrange [" << lo << ":" << (top > 0 ? top * 1.2 : 1) << "]\n";
+  g << "set xtics (";
+  for (std::size_t i = 0; i < xtics.size(); ++i) g << (i ? ", " : "") << quoted(xtics[i].second) << " " << xtics[i].first;
+  g << ")\n";
+  for (const auto& [x, text] : labels)
+    g << "set label " << quoted(text) << " at " << x << "," << (top > 0 ? top * 1.1 : 0.9) << " center\n";
+  g << "plot ";
+  bool first = true;
+  for (const auto& [series, colour] : colours) {
+    g << (first ? "" : ", ") << quoted(csv.string()) << " using (strcol(1) eq " << quoted(series)
+      << " ? $2 : NaN):5:4:8:7 with candlesticks whiskerbars lc rgb '" << colour << "' fs solid 0.4 title "
+      << quoted(series) << ", '' using (strcol(1) eq " << quoted(series)
+      << " ? $2 : NaN):6:6:6:6 with candlesticks lc rgb 'black' notitle, '' using (strcol(1) eq " << quoted(series)
+      << " ? $2 : NaN):9 with points pt 2 ps 1.3 lc rgb 'black' notitle";
+    first = false;
+  }
+  g << "\n";
+  g.close();
+  runGnuplot(gp);
+  return png.string();
+}
+
+// The per-agent means of a condition's statistic, from summary.json.
+std::vector<double> agentMeans(const json& system, int condition, const std::string& scenario, const char* key) {
+  return system["extrinsic"]["conditions"][condition]["scenarios"][scenario][key].get<std::vector<double>>();
+}
+
+int conditionWith(const json& system, const std::string& key, const std::string& value, const std::string& key2 = "",
+                  const std::string& value2 = "") {
+  const json& cs = system["extrinsic"]["conditions"];
+  for (std::size_t i = 0; i < cs.size(); ++i) {
+    const json& st = cs[i]["settings"];
+    if (st.value(key, std::string()) == value && (key2.empty() || st.value(key2, std::string()) == value2))
+      return static_cast<int>(i);
+  }
+  throw std::runtime_error("summary.json has no condition with " + key + "=" + value);
+}
+
 }  // namespace
 
 std::vector<std::string> plotExperiment(const std::string& dir_name) {
@@ -147,7 +227,8 @@ std::vector<std::string> plotExperiment(const std::string& dir_name) {
 
   // ---- completion steps (Figure 6)
   bool any_extrinsic = false;
-  for (const auto& sys : systems) any_extrinsic |= s["systems"][sys].contains("extrinsic");
+  for (const auto& sys : systems)
+    any_extrinsic |= s["systems"][sys].contains("extrinsic") && s["systems"][sys]["extrinsic"].contains("completion_steps");
   if (any_extrinsic) {
     const fs::path csv = dir / "fig_completion.csv", gp = dir / "fig_completion.gp", png = dir / "fig_completion.png";
     std::ofstream out(csv);
@@ -155,7 +236,7 @@ std::vector<std::string> plotExperiment(const std::string& dir_name) {
     double top = 1;
     for (std::size_t k = 0; k < systems.size(); ++k) {
       const json& js = s["systems"][systems[k]];
-      if (!js.contains("extrinsic")) continue;
+      if (!js.contains("extrinsic") || !js["extrinsic"].contains("completion_steps")) continue;
       const json& cs = js["extrinsic"]["completion_steps"];
       const double a = cs.contains("fit") ? cs["fit"]["a"].get<double>() : 0, b = cs.contains("fit") ? cs["fit"]["b"].get<double>() : 0;
       for (const auto& sc : js["extrinsic"]["scenarios"]) {
@@ -176,7 +257,7 @@ std::vector<std::string> plotExperiment(const std::string& dir_name) {
     bool first = true;
     for (std::size_t k = 0; k < systems.size(); ++k) {
       const json& js = s["systems"][systems[k]];
-      if (!js.contains("extrinsic")) continue;
+      if (!js.contains("extrinsic") || !js["extrinsic"].contains("completion_steps")) continue;
       const json& cs = js["extrinsic"]["completion_steps"];
       g << (first ? "" : ", ") << quoted(csv.string()) << " using (strcol(1) eq " << quoted(systems[k])
         << " ? $3 : NaN):6:5:9:8 with candlesticks whiskerbars lc rgb '" << kSystemColour(systems[k])
@@ -197,6 +278,109 @@ std::vector<std::string> plotExperiment(const std::string& dir_name) {
     g.close();
     runGnuplot(gp);
     written.push_back(png.string());
+  }
+
+  // ---- stochastic affordances: final predictions against the probabilities (Figure 11)
+  bool stochastic = false;
+  for (const auto& sys : systems)
+    for (const auto& row : s["systems"][sys]["target"])
+      for (const auto& v : row) stochastic |= v.get<double>() > 0 && v.get<double>() < 1;
+  if (stochastic) {
+    const fs::path csv = dir / "fig_stochastic.csv", gp = dir / "fig_stochastic.gp", png = dir / "fig_stochastic.png";
+    std::ofstream out(csv);
+    out << "system,action,object,x,target,mean,min,max\n";
+    for (std::size_t k = 0; k < systems.size(); ++k) {
+      const json& js = s["systems"][systems[k]];
+      if (!js.contains("affordance")) continue;
+      for (std::size_t a = 0; a < actions.size(); ++a)
+        for (std::size_t i = 0; i < objects.size(); ++i)
+          out << systems[k] << "," << a << ",\"" << objects[i] << "\","
+              << i + 1 + (static_cast<double>(k) - (systems.size() - 1) / 2.0) * 0.22 << ","
+              << js["target"][i][a].get<double>() << "," << js["affordance"][i][a].get<double>() << ","
+              << js["affordance_min"][i][a].get<double>() << "," << js["affordance_max"][i][a].get<double>() << "\n";
+    }
+    out.close();
+    std::ofstream g(gp);
+    g << "set terminal pngcairo size 1400,1000 font 'DejaVu Sans,10'\nset output " << quoted(png.string()) << "\n"
+      << "set datafile separator ','\nset multiplot layout 2,2 title "
+      << quoted("Stochastic affordances: mean final prediction (bars: min-max over runs) and the true probability (" + title_base + ")")
+      << "\nset yrange [-0.05:1.05]\nset xrange [0.4:" << objects.size() + 0.6 << "]\nset grid ytics\n"
+      << "set key outside bottom center horizontal\nset xtics (";
+    for (std::size_t i = 0; i < objects.size(); ++i) g << (i ? ", " : "") << quoted(objects[i]) << " " << i + 1;
+    g << ") rotate by 30 right\n";
+    for (std::size_t a = 0; a < actions.size(); ++a) {
+      g << "set title " << quoted(actions[a]) << "\nplot ";
+      for (std::size_t k = 0; k < systems.size(); ++k)
+        g << (k ? ", " : "") << quoted(csv.string()) << " using ($2==" << a << " && strcol(1) eq " << quoted(systems[k])
+          << " ? $4 : NaN):6:7:8 with yerrorbars pt 7 ps 1.1 lc rgb '" << kSystemColour(systems[k]) << "' title "
+          << quoted(systems[k]);
+      g << ", " << quoted(csv.string()) << " using ($2==" << a << " && strcol(1) eq " << quoted(systems.front())
+        << " ? $4 : NaN):5 with points pt 6 ps 2 lc rgb 'black' title 'true probability (Table 7)'\n";
+    }
+    g << "unset multiplot\n";
+    g.close();
+    runGnuplot(gp);
+    written.push_back(png.string());
+  }
+
+  // ---- goal-based vs utility-based planner (Figure 12)
+  if (s.contains("utility")) {
+    const json& u = s["utility"];
+    const std::string sys = u["system"], sc = u["scenario"];
+    const json& js = s["systems"][sys];
+    std::vector<BoxItem> items;
+    std::vector<std::pair<double, std::string>> xtics, labels;
+    for (std::size_t k = 0; k < u["budgets"].size(); ++k) {
+      const std::string b = std::to_string(u["budgets"][k].get<int>());
+      const double x = static_cast<double>(k + 1);
+      items.push_back({x - 0.15, "goal-based", agentMeans(js, conditionWith(js, "planner.kind", "goal", "planner.max_attempts", b), sc, "utility_agent_means")});
+      items.push_back({x + 0.15, "utility-based", agentMeans(js, conditionWith(js, "planner.kind", "utility", "planner.max_attempts", b), sc, "utility_agent_means")});
+      xtics.emplace_back(x, b);
+      labels.emplace_back(x, pText(u["p_values"][k]));
+    }
+    written.push_back(boxPlot(dir, "fig_utility", "Utility gained per test (" + sys + "; boxes over agents, x: mean)",
+                              "action budget", "utility", items, xtics, labels,
+                              {{"goal-based", "#999999"}, {"utility-based", "#009e73"}}));
+  }
+
+  // ---- forward models after a number of actions (Figure 13)
+  if (s.contains("forward_models")) {
+    const json& f = s["forward_models"];
+    const std::string sc = f["scenario"];
+    std::vector<BoxItem> items;
+    std::vector<std::pair<double, std::string>> xtics, labels;
+    std::map<std::string, std::string> colours;
+    for (std::size_t k = 0; k < f["budgets"].size(); ++k) {
+      const std::string b = std::to_string(f["budgets"][k].get<int>());
+      const double x = static_cast<double>(k + 1);
+      for (std::size_t j = 0; j < systems.size(); ++j) {
+        const json& js = s["systems"][systems[j]];
+        items.push_back({x + (static_cast<double>(j) - (systems.size() - 1) / 2.0) * 0.28, systems[j],
+                         agentMeans(js, conditionWith(js, "planner.max_attempts", b), sc, "utility_agent_means")});
+        colours[systems[j]] = kSystemColour(systems[j]);
+      }
+      xtics.emplace_back(x, b);
+      std::string text;
+      for (const auto& [pair, ps] : f["p_values"].items()) text += (text.empty() ? "" : "  ") + pair + " " + pText(ps[k]);
+      labels.emplace_back(x, text);
+    }
+    written.push_back(boxPlot(dir, "fig_forward_models", "Utility planner with the weights after " +
+                                  std::to_string(s.value("after_actions", 0)) + " actions (boxes over agents, x: mean)",
+                              "action budget", "utility", items, xtics, labels, colours));
+  }
+
+  // ---- affordance-restricted search (Figure 14)
+  if (s.contains("search")) {
+    const json& r = s["search"];
+    const std::string sys = r["system"], sc = r["scenario"];
+    const json& js = s["systems"][sys];
+    std::vector<BoxItem> items{
+        {1, "restricted", agentMeans(js, conditionWith(js, "planner.restrict_by_affordance", "true"), sc, "actions_checked_agent_means")},
+        {2, "not restricted", agentMeans(js, conditionWith(js, "planner.restrict_by_affordance", "false"), sc, "actions_checked_agent_means")}};
+    written.push_back(boxPlot(dir, "fig_search", "Actions checked per sub-goal (" + sys + "; boxes over agents, x: mean)",
+                              "", "actions checked per sub-goal", items,
+                              {{1, "affordance > 0.5 only"}, {2, "all actions"}}, {{1.5, pText(r["p_value"])}},
+                              {{"restricted", "#009e73"}, {"not restricted", "#999999"}}));
   }
   return written;
 }

@@ -9,6 +9,9 @@
 #include <sstream>
 #include <stdexcept>
 
+#include <yaml-cpp/yaml.h>
+#include <cmath>
+
 namespace afford {
 namespace fs = std::filesystem;
 using nlohmann::json;
@@ -29,20 +32,116 @@ json load(const std::string& dir) {
 
 }  // namespace
 
+namespace {
+std::string pValue(const json& p) {
+  if (p.is_null()) return "-";
+  char buf[32];
+  std::snprintf(buf, sizeof buf, "%.2g", p.get<double>());
+  return buf;
+}
+
+std::string claim(const YAML::Node& ref, const std::string& key) {
+  const YAML::Node c = ref[key + "_claims"];
+  if (!c || !c["claim"]) return "";
+  return "\nThe paper (" + c["source"].as<std::string>() + "): " + c["claim"].as<std::string>() + ".\n";
+}
+
+// Section 3.2 of the paper: stochastic affordances (Figure 11) and the planner tests (Figures 12-14).
+std::string stochasticSections(const std::vector<json>& all, const std::string& config_dir) {
+  YAML::Node ref;
+  try {
+    ref = YAML::LoadFile(config_dir + "/reference.yaml");
+  } catch (const YAML::Exception&) {
+  }
+  std::ostringstream md;
+  for (const auto& s : all) {
+    const std::string exp = s["experiment"];
+    if (exp == "stochastic") {
+      md << "\n## Stochastic affordances (paper 3.2.1, Table 7, Figure 11)\n" << claim(ref, exp)
+         << "\n| system | mean absolute error vs Table 7 | IMP check: turn blue (0.8) | move, red objects (0.6) |\n|---|---|---|---|\n";
+      for (const auto& [sys, js] : s["systems"].items()) {
+        if (!js.contains("affordance")) continue;
+        double blue = 0, move = 0;
+        int nb = 0, nm = 0;
+        for (std::size_t i = 0; i < js["target"].size(); ++i) {
+          if (std::abs(js["target"][i][3].get<double>() - 0.8) < 1e-9) blue += js["affordance"][i][3].get<double>(), ++nb;
+          if (std::abs(js["target"][i][0].get<double>() - 0.6) < 1e-9) move += js["affordance"][i][0].get<double>(), ++nm;
+        }
+        md << "| " << sys << " | " << num(js["affordance_mae"].get<double>(), 3);
+        if (js.contains("reference_affordance_mae"))
+          md << " (" << num(js["reference_affordance_mae"].get<double>(), 3) << " authors' code)";
+        md << " | " << (nb ? num(blue / nb) : "-") << " | " << (nm ? num(move / nm) : "-") << " |\n";
+      }
+    }
+    if (s.contains("utility")) {
+      const json& u = s["utility"];
+      md << "\n## Goal-based vs utility-based planner (paper 3.2.2, Table 8, Figure 12)\n" << claim(ref, exp)
+         << "\nMean utility gained per test (" << u["system"].get<std::string>() << " agents, scenario "
+         << u["scenario"].get<std::string>() << "), with Welch's two-sided t-test:\n\n"
+         << "| action budget | goal-based | utility-based | p |\n|---|---|---|---|\n";
+      for (std::size_t k = 0; k < u["budgets"].size(); ++k)
+        md << "| " << u["budgets"][k].get<int>() << " | " << num(u["goal_mean"][k].get<double>(), 3) << " | "
+           << num(u["utility_mean"][k].get<double>(), 3) << " | " << pValue(u["p_values"][k]) << " |\n";
+    }
+    if (s.contains("forward_models")) {
+      const json& f = s["forward_models"];
+      md << "\n## Forward models after " << s.value("after_actions", 0) << " actions (paper 3.2.3, Figure 13)\n"
+         << claim(ref, exp) << "\nMean utility of the utility planner, by action budget, and Welch's t-test p values:\n\n| system |";
+      for (const auto& b : f["budgets"]) md << " budget " << b.get<int>() << " |";
+      md << "\n|---|";
+      for (std::size_t k = 0; k < f["budgets"].size(); ++k) md << "---|";
+      md << "\n";
+      for (const auto& [sys, js] : s["systems"].items()) {
+        if (!js.contains("utility_mean")) continue;
+        md << "| " << sys << " |";
+        for (const auto& m : js["utility_mean"]) md << " " << num(m.get<double>(), 3) << " |";
+        md << "\n";
+      }
+      for (const auto& [pair, ps] : f["p_values"].items()) {
+        md << "| p " << pair << " |";
+        for (const auto& p : ps) md << " " << pValue(p) << " |";
+        md << "\n";
+      }
+    }
+    if (s.contains("search")) {
+      const json& r = s["search"];
+      md << "\n## Affordance-restricted search (paper 3.2.4, Figure 14)\n" << claim(ref, exp)
+         << "\nMean actions checked per sub-goal (" << r["system"].get<std::string>() << " agents): with restriction "
+         << num(r["restricted_mean"].get<double>(), 3) << ", without " << num(r["unrestricted_mean"].get<double>(), 3)
+         << "; Welch's t-test p = " << pValue(r["p_value"]) << ".\n";
+    }
+  }
+  return md.str();
+}
+}  // namespace
+
 std::string writeReport(const std::vector<std::string>& dirs, const std::string& figures_dir,
-                        const std::string& link_prefix, double wall_seconds, const std::string& note) {
+                        const std::string& link_prefix, double wall_seconds, const std::string& note,
+                        const std::string& config_dir) {
   std::vector<json> all;
   for (const auto& d : dirs) all.push_back(load(d));
   std::ostringstream md;
   const std::time_t now = std::time(nullptr);
   char date[32];
   std::strftime(date, sizeof date, "%Y-%m-%d", std::gmtime(&now));
-  md << "# Results\n\nRegenerated by `scripts/reproduce.sh deterministic` on " << date << " with afford "
+  md << "# Results\n\nRegenerated by `scripts/reproduce.sh` on " << date << " with afford "
      << all.front().value("afford_version", std::string("?")) << ", over " << all.front().value("network", std::string("?"))
-     << ". Each experiment: " << all.front().value("repetitions", 0)
-     << " intrinsic runs per system (seeds from 1), then extrinsic tests of every scenario with each trained agent"
-     << " (the paper's counts are 10 and 10).";
-  if (wall_seconds > 0) md << " Wall time of the whole reproduction: " << num(wall_seconds / 60.0, 1) << " min on 2 cores.";
+     << ". The deterministic experiments: 10 intrinsic runs per system (seeds from 1), then 10 tests of every"
+        " scenario with each trained agent (the paper's counts); the stochastic ones: the counts of their"
+        " experiment files (the paper's).";
+  if (wall_seconds > 0) md << " Wall time of the reproduction: " << num(wall_seconds / 60.0, 1) << " min.";
+  md << "\n\n| experiment | runs | tests | wall time |\n|---|---|---|---|\n";
+  double total = 0;
+  for (const auto& s : all) {
+    std::size_t runs = 0, tests = 0;
+    for (const auto& [sys, js] : s["systems"].items()) runs += js.contains("runs") ? js["runs"].size() : 0;
+    tests = s.value("extrinsic_tests", static_cast<std::size_t>(0));
+    const double w = s.value("wall_seconds", 0.0);
+    total += w;
+    md << "| " << s["experiment"].get<std::string>() << " | " << runs << " | " << tests << " | "
+       << (w > 0 ? num(w / 60.0, 1) + " min" : std::string("-")) << " |\n";
+  }
+  md << "| all | | | " << num(total / 60.0, 1) << " min (2 cores) |";
   if (!note.empty()) md << "\n\n" << note;
   md << "\n\nWhere our numbers differ from the paper's, what we measured about why is in "
         "[results-discussion.md](results-discussion.md).";
@@ -93,13 +192,16 @@ std::string writeReport(const std::vector<std::string>& dirs, const std::string&
         "Below it, the share of all tests solved.\n";
   for (const auto& s : all) {
     bool any = false;
-    for (const auto& sys : systems) any |= s["systems"].contains(sys) && s["systems"][sys].contains("extrinsic");
+    for (const auto& sys : systems)
+      any |= s["systems"].contains(sys) && s["systems"][sys].contains("extrinsic") &&
+             s["systems"][sys]["extrinsic"].contains("table_metric");
     if (!any) continue;
     md << "\n### " << s["experiment"].get<std::string>();
     if (s.contains("reference_extrinsic_source")) md << " (" << s["reference_extrinsic_source"].get<std::string>() << ")";
     md << "\n\n| system |";
     for (const auto& sys : systems)
-      if (s["systems"].contains(sys) && s["systems"][sys].contains("extrinsic")) {
+      if (s["systems"].contains(sys) && s["systems"][sys].contains("extrinsic") &&
+          s["systems"][sys]["extrinsic"].contains("table_metric")) {
         for (const auto& sc : s["systems"][sys]["extrinsic"]["scenarios"]) md << " " << sc.get<std::string>() << " |";
         md << "\n|---|";
         for (std::size_t k = 0; k < s["systems"][sys]["extrinsic"]["scenarios"].size(); ++k) md << "---|";
@@ -107,7 +209,9 @@ std::string writeReport(const std::vector<std::string>& dirs, const std::string&
         break;
       }
     for (const auto& sys : systems) {
-      if (!s["systems"].contains(sys) || !s["systems"][sys].contains("extrinsic")) continue;
+      if (!s["systems"].contains(sys) || !s["systems"][sys].contains("extrinsic") ||
+          !s["systems"][sys]["extrinsic"].contains("table_metric"))
+        continue;
       const json& js = s["systems"][sys];
       const json& ex = js["extrinsic"];
       md << "| " << sys << " |";
@@ -133,7 +237,9 @@ std::string writeReport(const std::vector<std::string>& dirs, const std::string&
   md << ":\n\n| experiment | system | 1 | 2 | 3 | 4 | 5 | fit |\n|---|---|---|---|---|---|---|---|\n";
   for (const auto& s : all)
     for (const auto& sys : systems) {
-      if (!s["systems"].contains(sys) || !s["systems"][sys].contains("extrinsic")) continue;
+      if (!s["systems"].contains(sys) || !s["systems"][sys].contains("extrinsic") ||
+          !s["systems"][sys]["extrinsic"].contains("completion_steps"))
+        continue;
       const json& ex = s["systems"][sys]["extrinsic"];
       md << "| " << s["experiment"].get<std::string>() << " | " << sys << " |";
       for (const auto& sc : ex["scenarios"]) {
@@ -144,6 +250,8 @@ std::string writeReport(const std::vector<std::string>& dirs, const std::string&
       md << " " << (cs.contains("fit") ? num(cs["fit"]["a"].get<double>(), 3) + " x^2 " + num(cs["fit"]["b"].get<double>(), 3) + " x" : "-")
          << " |\n";
     }
+
+  md << stochasticSections(all, config_dir);
 
   // ---- figures
   md << "\n## Figures\n";

@@ -10,6 +10,7 @@ namespace afford {
 // Markdown text; copies each folder's fig_*.png into <figures_dir>/<experiment>/
 // and links them relative to `link_prefix`.
 std::string writeReport(const std::vector<std::string>& dirs, const std::string& figures_dir,
-                        const std::string& link_prefix, double wall_seconds, const std::string& note = "");
+                        const std::string& link_prefix, double wall_seconds, const std::string& note,
+                        const std::string& config_dir);
 
 }  // namespace afford

@@ -148,6 +148,88 @@ TEST(Processes, RealProcessesSolveAnExtrinsicScenario) {
   EXPECT_TRUE(fs::exists(fs::path(dir) / "figs" / "base" / "fig_completion.png"));
 }
 
+// The planner comparisons of the paper's section 3.2, end to end at small
+// counts (memq): the summary keys outside checks read, and the figures.
+TEST(Processes, TheUtilityDesignComparesThePlannersPerBudget) {
+  const std::string dir = test::tempDir("design-utility");
+  const auto r = test::runCommand(test::afford("experiment utility --reps 2 --steps 4000 --extrinsic-reps 3 --jobs 2"
+                                               " --transport memq --keep-logs none --quiet --out " + dir));
+  ASSERT_EQ(r.exit_code, 0) << r.output;
+  const json s = readJson(fs::path(dir) / "summary.json");
+  EXPECT_EQ(s["systems"].size(), 1u);  // default_systems: IMP only
+  const json& u = s["utility"];
+  EXPECT_EQ(u["budgets"], json({1, 2, 3, 4, 5}));
+  ASSERT_EQ(u["p_values"].size(), 5u);
+  ASSERT_EQ(u["goal_mean"].size(), 5u);
+  for (std::size_t k = 0; k < 5; ++k) {
+    EXPECT_EQ(u["n"][k], json({6, 6}));  // 2 agents x 3 tests per planner and budget
+    EXPECT_GE(u["utility_mean"][k].get<double>(), 0.0);
+    EXPECT_LE(u["utility_mean"][k].get<double>(), 8.0);  // the values sum to 8
+  }
+  EXPECT_EQ(s["systems"]["IMP"]["extrinsic"]["conditions"].size(), 10u);
+  const auto plot = test::runCommand(test::afford("plot " + dir));
+  ASSERT_EQ(plot.exit_code, 0) << plot.output;
+  for (const char* png : {"fig_utility.png", "fig_stochastic.png"})
+    EXPECT_EQ(slurp(fs::path(dir) / png).substr(1, 3), "PNG") << png;
+}
+
+TEST(Processes, TheSearchDesignCountsActionsCheckedWithAndWithoutRestriction) {
+  const std::string dir = test::tempDir("design-search");
+  const auto r = test::runCommand(test::afford("experiment search-reduction --reps 1 --steps 4000 --extrinsic-reps 3"
+                                               " --transport memq --keep-logs none --quiet --out " + dir));
+  ASSERT_EQ(r.exit_code, 0) << r.output;
+  const json s = readJson(fs::path(dir) / "summary.json");
+  const json& q = s["search"];
+  // Without restriction every action before the match is checked: never fewer.
+  EXPECT_LE(q["restricted_mean"].get<double>(), q["unrestricted_mean"].get<double>());
+  EXPECT_GE(q["restricted_mean"].get<double>(), 1.0);
+  EXPECT_TRUE(q.contains("p_value"));
+}
+
+TEST(Processes, AgentsThatNeverReachTheActionCountAreNotTestedAndTheCommandSaysWhy) {
+  const std::string dir = test::tempDir("design-after");
+  const auto r = test::runCommand(test::afford("experiment forward-models --system IMP --reps 1 --steps 300"
+                                               " --transport memq --keep-logs none --quiet --out " + dir +
+                                               " --log-root " + dir + "/logs"));
+  EXPECT_EQ(r.exit_code, 1) << r.output;
+  EXPECT_NE(r.output.find("executed fewer than 4000 actions"), std::string::npos) << r.output;
+  EXPECT_NE(r.output.find("extrinsic.after_actions"), std::string::npos) << r.output;
+  const json s = readJson(fs::path(dir) / "summary.json");  // the intrinsic results are kept
+  EXPECT_EQ(s["untested_agents"].size(), 1u);
+  EXPECT_EQ(s["systems"]["IMP"]["runs"].size(), 1u);
+}
+
+TEST(Processes, TheForwardModelDesignTestsTheWeightsSavedAfterTheActionCount) {
+  const std::string dir = test::tempDir("design-fm");
+  // FIX acts on nearly every step, so 4500 steps reach 4000 actions.
+  const auto r = test::runCommand(test::afford(
+      "experiment forward-models --system FIX --reps 1 --steps 4500 --extrinsic-reps 2 --transport memq"
+      " --keep-logs none --quiet --out " + dir + " --log-root " + dir + "/logs --run-prefix fm"));
+  ASSERT_EQ(r.exit_code, 0) << r.output;
+  const json s = readJson(fs::path(dir) / "summary.json");
+  EXPECT_EQ(s["after_actions"], 4000);
+  EXPECT_EQ(s["systems"]["FIX"]["utility_mean"].size(), 3u);
+  // The early checkpoint differs from the final one: the run learned on after it.
+  const std::string early = slurp(dir + "/logs/fm-forward-models-FIX-s1/predictors.after-4000-actions.ckpt");
+  const std::string last = slurp(dir + "/logs/fm-forward-models-FIX-s1/predictors.ckpt");
+  EXPECT_GT(early.size(), 1000u);
+  EXPECT_EQ(early.size(), last.size());
+  EXPECT_NE(early, last);
+}
+
+TEST(Processes, ABadValueInAnExtrinsicDesignIsRefusedBeforeAnyRun) {
+  const std::string dir = test::tempDir("design-bad");
+  fs::copy(std::string(AFFORD_SOURCE_DIR) + "/config", dir + "/config", fs::copy_options::recursive);
+  std::ofstream(dir + "/config/experiments/mine.yaml")
+      << "extends: utility\nextrinsic:\n  scenarios: [utility]\n  tests: 2\n"
+         "  vary:\n    planner.max_attempts: [1, 0]\n";
+  const auto r = test::runCommand(test::afford("--config-dir " + dir + "/config experiment mine --out " + dir +
+                                               "/out --log-root " + dir + "/logs"));
+  EXPECT_EQ(r.exit_code, 2) << r.output;
+  EXPECT_NE(r.output.find("config key 'planner.max_attempts': value 0 is out of range"), std::string::npos) << r.output;
+  EXPECT_FALSE(fs::exists(dir + "/out"));
+}
+
 struct BadConfigCase {
   const char* name;
   const char* args;
@@ -186,7 +268,9 @@ INSTANTIATE_TEST_SUITE_P(
         BadConfigCase{"UnknownKey", "experiment base --set eye.colour=1", "config key 'eye.colour': unknown key"},
         BadConfigCase{"MissingKey", "--config-dir CONFIG_DIR experiment base",
                       "config key 'eye.saliency_noise': missing"},
-        BadConfigCase{"UnknownSystem", "experiment base --system XYZ", "unknown system \"XYZ\""}),
+        BadConfigCase{"UnknownSystem", "experiment base --system XYZ", "unknown system \"XYZ\""},
+        BadConfigCase{"BadConditionValue", "experiment utility --set planner.kind=both",
+                      "config key 'planner.kind': unknown value \"both\""}),
     [](const auto& info) { return std::string(info.param.name); });
 
 TEST(Processes, ARunNeverWritesIntoTheLogFolderOfAnotherRun) {
