@@ -275,8 +275,9 @@ std::vector<RunOutcome> executeRuns(const std::vector<PlannedRun>& runs, const E
       std::lock_guard<std::mutex> lock(log_mutex);
       const int k = ++done;
       if (out.ok && runs[i].spec.extrinsic)
-        log.info("[{}/{}] {}: {}", k, runs.size(), runs[i].spec.run_id,
-                 out.extrinsic.success ? "solved in " + std::to_string(out.extrinsic.completion) + " steps" : "not solved");
+        log.info("[{}/{}] {}: {}, {} action(s), utility {}", k, runs.size(), runs[i].spec.run_id,
+                 out.extrinsic.success ? "solved in " + std::to_string(out.extrinsic.completion) + " steps" : "not solved",
+                 out.extrinsic.attempts, out.extrinsic.utility);
       else if (out.ok)
         log.info("[{}/{}] {} done in {:.1f} s, weights {}", k, runs.size(), runs[i].spec.run_id, out.wall_seconds,
                  out.weights_checksum);
@@ -630,7 +631,7 @@ void printTables(const json& summary, const Plan& plan, const ExperimentOptions&
   if (summary.contains("utility")) {  // Figure 12
     const json& u = summary["utility"];
     t << "\nUtility gained per test (" << u["system"].get<std::string>() << ", " << u["scenario"].get<std::string>()
-      << "): goal-based vs utility-based planner, Welch's t-test\n  budget   goal     utility  p\n";
+      << "): goal-based vs utility-based planner, Welch's t-test\n  budget   goal     utility  p\n" << std::left;
     for (std::size_t k = 0; k < u["budgets"].size(); ++k)
       t << "  " << std::setw(6) << u["budgets"][k].get<int>() << "   " << fixed(u["goal_mean"][k].get<double>(), 3)
         << "    " << fixed(u["utility_mean"][k].get<double>(), 3) << "    " << p(u["p_values"][k]) << "\n";
@@ -638,17 +639,17 @@ void printTables(const json& summary, const Plan& plan, const ExperimentOptions&
   if (summary.contains("forward_models")) {  // Figure 13
     const json& f = summary["forward_models"];
     t << "\nMean utility of the utility planner with agents trained for " << plan.design.after_actions
-      << " actions, by action budget\n  system";
+      << " actions, by action budget\n  " << std::left << std::setw(12) << "system" << std::right;
     for (const auto& b : f["budgets"]) t << std::setw(10) << b.get<int>();
     t << "\n";
     for (const auto& sys : plan.systems) {
-      t << "  " << std::left << std::setw(6) << sys << std::right;
+      t << "  " << std::left << std::setw(12) << sys << std::right;
       for (const auto& m : summary["systems"][sys]["utility_mean"]) t << std::setw(10) << fixed(m.get<double>(), 3);
       t << "\n";
     }
     for (const auto& [pair, ps] : f["p_values"].items()) {
-      t << "  p " << std::left << std::setw(8) << pair << std::right;
-      for (const auto& v : ps) t << std::setw(8) << p(v);
+      t << "  " << std::left << std::setw(12) << ("p " + pair) << std::right;
+      for (const auto& v : ps) t << std::setw(10) << p(v);
       t << "\n";
     }
   }

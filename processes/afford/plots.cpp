@@ -90,15 +90,15 @@ std::string boxPlot(const fs::path& dir, const std::string& name, const std::str
   }
   out.close();
   std::ofstream g(gp);
-  g << "set terminal pngcairo size 900,650 font 'DejaVu Sans,11'\nset output " << quoted(png.string()) << "\n"
+  g << "set terminal pngcairo size 1000,650 font 'DejaVu Sans,11'\nset output " << quoted(png.string()) << "\n"
     << "set datafile separator ','\nset title " << quoted(title) << "\nset xlabel " << quoted(xlabel)
-    << "\nset ylabel " << quoted(ylabel) << "\nset grid ytics\nset boxwidth 0.25\nset key outside bottom center horizontal\n"
+    << "\nset ylabel " << quoted(ylabel) << "\nset grid ytics\nset boxwidth 0.25\nset key outside right top vertical\n"
     << "set xrange [" << left - 0.7 << ":" << right + 0.7 << "]\nset yrange [" << lo << ":" << (top > 0 ? top * 1.2 : 1) << "]\n";
   g << "set xtics (";
   for (std::size_t i = 0; i < xtics.size(); ++i) g << (i ? ", " : "") << quoted(xtics[i].second) << " " << xtics[i].first;
   g << ")\n";
   for (const auto& [x, text] : labels)
-    g << "set label " << quoted(text) << " at " << x << "," << (top > 0 ? top * 1.1 : 0.9) << " center\n";
+    g << "set label \"" << text << "\" at " << x << "," << (top > 0 ? top * 1.1 : 0.9) << " center\n";
   g << "plot ";
   bool first = true;
   for (const auto& [series, colour] : colours) {
@@ -361,7 +361,7 @@ std::vector<std::string> plotExperiment(const std::string& dir_name) {
       }
       xtics.emplace_back(x, b);
       std::string text;
-      for (const auto& [pair, ps] : f["p_values"].items()) text += (text.empty() ? "" : "  ") + pair + " " + pText(ps[k]);
+      for (const auto& [pair, ps] : f["p_values"].items()) text += (text.empty() ? "" : "\\n") + pair + " " + pText(ps[k]);
       labels.emplace_back(x, text);
     }
     written.push_back(boxPlot(dir, "fig_forward_models", "Utility planner with the weights after " +
