@@ -3,31 +3,38 @@
 # docs/results.md (our tables and figures beside the paper's).
 #   scripts/reproduce.sh deterministic   base, late1, late2, late3: 10 intrinsic runs per
 #                                        system, 10 tests of each scenario per run (Tables
-#                                        1, 2, 4-6; Figures 5-10); about 21 min on 2 cores
+#                                        1, 2, 4-6; Figures 5-10); about 20 min on 2 cores
 #   scripts/reproduce.sh stochastic      stochastic, utility, forward-models, search-reduction
 #                                        with the counts of their files (Table 7, 8;
-#                                        Figures 11-14)
+#                                        Figures 11-14); about 15 min on 2 cores
 #   scripts/reproduce.sh all             both
+#   scripts/reproduce.sh NAME...         only these experiments (e.g. late3 utility)
 # Environment: JOBS (runs at a time, default: cores), REPS and EXT_REPS (default: the
 # paper's counts), OUT (default out/reproduce). Runs over real processes (udpm); keeps
 # the logs of the first run of each system. The page is written from every experiment
-# folder present under OUT, so the two halves may run at different times.
+# folder present under OUT, so parts may run at different times. An experiment with a
+# failed run is still summarised and plotted; the script then exits with status 1.
 set -euo pipefail
 cd "$(dirname "$0")/.."
-what=${1:-deterministic}
 deterministic=(base late1 late2 late3)
 stochastic=(stochastic utility forward-models search-reduction)
-case $what in
-  deterministic) experiments=("${deterministic[@]}") ;;
-  stochastic) experiments=("${stochastic[@]}") ;;
-  all) experiments=("${deterministic[@]}" "${stochastic[@]}") ;;
-  *) echo "usage: scripts/reproduce.sh deterministic|stochastic|all" >&2; exit 2 ;;
-esac
+[[ $# -eq 0 ]] && set -- deterministic
+experiments=()
+for what in "$@"; do
+  case $what in
+    deterministic) experiments+=("${deterministic[@]}") ;;
+    stochastic) experiments+=("${stochastic[@]}") ;;
+    all) experiments+=("${deterministic[@]}" "${stochastic[@]}") ;;
+    base|late1|late2|late3|stochastic|utility|forward-models|search-reduction) experiments+=("$what") ;;
+    *) echo "usage: scripts/reproduce.sh deterministic|stochastic|all|EXPERIMENT..." >&2; exit 2 ;;
+  esac
+done
 scripts/setup.sh
 out=${OUT:-out/reproduce}
 mkdir -p "$out"
 start=$SECONDS
 prefix=$(date +%Y%m%d-%H%M%S)
+failed=()
 for exp in "${experiments[@]}"; do
   rm -rf "${out:?}/$exp"
   args=(--jobs "${JOBS:-$(nproc)}" --keep-logs first --out "$out/$exp" --log-root "$out/logs" --run-prefix "$prefix")
@@ -36,7 +43,7 @@ for exp in "${experiments[@]}"; do
     *" $exp "*) args+=(--system all --extrinsic-reps "${EXT_REPS:-10}") ;;
     *) [[ -n ${EXT_REPS:-} && $exp != stochastic ]] && args+=(--extrinsic-reps "$EXT_REPS") ;;
   esac
-  build/bin/afford experiment "$exp" "${args[@]}"
+  build/bin/afford experiment "$exp" "${args[@]}" || failed+=("$exp")
   build/bin/afford plot "$out/$exp"
 done
 dirs=()
@@ -45,3 +52,7 @@ for exp in "${deterministic[@]}" "${stochastic[@]}"; do
 done
 build/bin/afford report "${dirs[@]}" --out docs/results.md --figures docs/results
 echo "docs/results.md written; this invocation took $((SECONDS - start)) s"
+if [[ ${#failed[@]} -gt 0 ]]; then
+  echo "experiments with failed runs (see their summary.json failed_runs): ${failed[*]}" >&2
+  exit 1
+fi

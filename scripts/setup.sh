@@ -12,8 +12,9 @@ packages=(
   libeigen3-dev libopencv-dev libspdlog-dev libfmt-dev
   libcli11-dev libyaml-cpp-dev nlohmann-json3-dev zlib1g-dev libgsl-dev
   libgtest-dev libgmock-dev
-  default-jdk-headless libjchart2d-java
+  default-jdk-headless default-jre libjchart2d-java
   iproute2 util-linux procps gnuplot-nox
+  xvfb imagemagick
 )
 
 missing=()

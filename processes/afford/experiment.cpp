@@ -256,7 +256,10 @@ std::vector<RunOutcome> executeRuns(const std::vector<PlannedRun>& runs, const E
   auto worker = [&](int slot_index) {
     Slot slot;
     slot.index = slot_index;
-    slot.url = "udpm://239.255.76.67:" + std::to_string(o.base_port + slot_index) + "?ttl=0";
+    // A 2 MB receive buffer per socket (the kernel's default is 208 KB): every process hears every
+    // datagram of its slot, and one descheduled for a while must not lose any (the kernel caps the
+    // request at net.core.rmem_max).
+    slot.url = "udpm://239.255.76.67:" + std::to_string(o.base_port + slot_index) + "?ttl=0&recv_buf_size=2097152";
     for (std::size_t i; (i = next.fetch_add(1)) < runs.size();) {
       RunOutcome r;
       try {

@@ -7,10 +7,12 @@
 
 #include "afford/image.hpp"
 #include "afford/plots.hpp"
+#include "afford/replay.hpp"
 #include "afford/report.hpp"
 
 #include <filesystem>
 #include <fstream>
+#include <sstream>
 
 #include <cstdio>
 
@@ -76,6 +78,13 @@ int main(int argc, char** argv) {
   report->add_option("--wall-seconds", report_wall, "wall time of the reproduction, to report");
   std::string report_note;
   report->add_option("--note", report_note, "a paragraph on how the runs were made");
+  afford::ReplayOptions replay_options;
+  std::string replay_into;
+  auto* replay = app.add_subcommand("replay", "feed a recorded run into fresh learning processes and compare");
+  replay->add_option("log", replay_options.log_dir, "the run's log folder (logs/<run-id>) or one .lcm file")->required();
+  replay->add_option("--into", replay_into,
+                     "processes to replay, comma-separated: predictors, motivation, planner "
+                     "(default: predictors and the run's decider)");
   std::string scenario_name, scenario_png;
   auto* scen = app.add_subcommand("scenario", "check a scenario file and draw its goal and initial scenes");
   scen->add_option("name", scenario_name, "scenario (config/scenarios/<name>.yaml)")->required();
@@ -98,6 +107,21 @@ int main(int argc, char** argv) {
       std::ofstream(report_out) << md;
       std::printf("%s\n", report_out.c_str());
       return 0;
+    }
+    if (replay->parsed()) {
+      std::stringstream ss(replay_into);
+      for (std::string p; std::getline(ss, p, ',');)
+        if (!p.empty()) replay_options.into.push_back(p);
+      const afford::ReplayResult r = afford::replayRun(replay_options, *log);
+      std::printf("run: %s (%s)\nevents: %lld%s\n", r.run_id.c_str(), r.extrinsic ? "extrinsic" : "intrinsic",
+                  static_cast<long long>(r.events), r.torn_bytes ? " (then an incomplete event, skipped)" : "");
+      if (!r.weights_checksum.empty())
+        std::printf("weights_checksum: %s\nrecorded: %s\n", r.weights_checksum.c_str(),
+                    r.recorded_checksum.empty() ? "(none in the log)" : r.recorded_checksum.c_str());
+      std::printf("decisions: %lld replayed, %lld recorded, %lld differing\n", static_cast<long long>(r.decisions),
+                  static_cast<long long>(r.decisions_recorded), static_cast<long long>(r.decisions_differing));
+      std::printf("%s\n", r.ok() ? "replay equals the record" : "REPLAY DIFFERS FROM THE RECORD");
+      return r.ok() ? 0 : 1;
     }
     if (plot->parsed()) {
       for (const auto& f : afford::plotExperiment(plot_dir)) std::printf("%s\n", f.c_str());

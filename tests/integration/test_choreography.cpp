@@ -197,6 +197,22 @@ TEST(Choreography, ARejectedConfigFailsTheRunNamingProcessAndKey) {
   EXPECT_NE(run.outcome.error.find("process '"), std::string::npos) << run.outcome.error;
 }
 
+// One extrinsic test both ways: as the process choreography (in one process)
+// and as the plain loop of Algorithm 2 or 3 with the same trained agent.
+struct BothWays {
+  RunOutcome run;
+  test::GoalTestOutcome plain;
+};
+BothWays runBothWays(const std::string& yaml, std::int64_t seed, const std::string& checkpoint) {
+  BothWays out;
+  out.run = InProcessRun(yaml, System::IMP, seed, 125).outcome;
+  const RunConfig c = parseRunConfigText(yaml);
+  Predictors loaded(c);
+  loaded.load(checkpoint);
+  out.plain = test::runGoalTest(c, *c.scenario, loaded);
+  return out;
+}
+
 // The extrinsic phase as a choreography (environment, eye, predictors,
 // planner) reaches exactly the outcome of Algorithm 2 as a plain loop.
 TEST(Choreography, ExtrinsicTestsMatchThePlainPlanner) {
@@ -208,13 +224,10 @@ TEST(Choreography, ExtrinsicTestsMatchThePlainPlanner) {
     const std::string scenario = "scenario" + std::to_string(k);
     const std::string yaml = emitYaml(
         extrinsicConfig(config_dir, RunRequest{"base", System::IMP, 50 + k, std::nullopt, {}}, dir + "/predictors.ckpt", scenario));
-    InProcessRun run(yaml, System::IMP, 50 + k, 125);
-    ASSERT_TRUE(run.outcome.ok) << run.outcome.error;
-    const RunConfig c = parseRunConfigText(yaml);
-    Predictors loaded(c);
-    loaded.load(dir + "/predictors.ckpt");
-    const test::GoalTestOutcome ref = test::runGoalTest(c, *c.scenario, loaded);
-    const ExtrinsicOutcome& got = run.outcome.extrinsic;
+    const BothWays both = runBothWays(yaml, 50 + k, dir + "/predictors.ckpt");
+    ASSERT_TRUE(both.run.ok) << both.run.error;
+    const test::GoalTestOutcome& ref = both.plain;
+    const ExtrinsicOutcome& got = both.run.extrinsic;
     EXPECT_EQ(got.scenario, scenario);
     EXPECT_TRUE(got.success) << scenario;
     EXPECT_EQ(got.success, ref.success) << scenario;
@@ -242,13 +255,10 @@ TEST(Choreography, UtilityTestsMatchThePlainPlanner) {
       const std::int64_t seed = 70 + budget;
       const std::string yaml = emitYaml(extrinsicConfig(config_dir, RunRequest{"utility", System::IMP, seed, std::nullopt, settings},
                                                         dir + "/predictors.ckpt", "utility"));
-      InProcessRun run(yaml, System::IMP, seed, 125);
-      ASSERT_TRUE(run.outcome.ok) << run.outcome.error;
-      const RunConfig c = parseRunConfigText(yaml);
-      Predictors loaded(c);
-      loaded.load(dir + "/predictors.ckpt");
-      const test::GoalTestOutcome ref = test::runGoalTest(c, *c.scenario, loaded);
-      const ExtrinsicOutcome& got = run.outcome.extrinsic;
+      const BothWays both = runBothWays(yaml, seed, dir + "/predictors.ckpt");
+      ASSERT_TRUE(both.run.ok) << both.run.error;
+      const test::GoalTestOutcome& ref = both.plain;
+      const ExtrinsicOutcome& got = both.run.extrinsic;
       EXPECT_EQ(got.attempts, ref.attempts) << kind << " budget " << budget;
       EXPECT_LE(got.attempts, budget) << kind;
       EXPECT_DOUBLE_EQ(got.utility, ref.utility) << kind << " budget " << budget;

@@ -230,6 +230,43 @@ TEST(Processes, ABadValueInAnExtrinsicDesignIsRefusedBeforeAnyRun) {
   EXPECT_FALSE(fs::exists(dir + "/out"));
 }
 
+// Exact replay: a run's log fed into fresh learning processes gives the live
+// run's weights and decisions (intrinsic), and the planner's decisions (extrinsic).
+TEST(Processes, AReplayedLogReproducesTheLiveRun) {
+  const std::string dir = test::tempDir("replay");
+  const auto r = test::runCommand(test::afford(
+      "experiment base --system IGN --reps 1 --steps 800 --extrinsic-reps 1 --scenarios scenario2 --transport memq"
+      " --keep-logs all --quiet --run-prefix rp --out " + dir + " --log-root " + dir + "/logs"));
+  ASSERT_EQ(r.exit_code, 0) << r.output;
+  const json s = readJson(fs::path(dir) / "summary.json");
+  const std::string live = s["systems"]["IGN"]["runs"][0]["weights_checksum"];
+
+  const auto intrinsic = test::runCommand(test::afford("replay " + dir + "/logs/rp-base-IGN-s1"));
+  EXPECT_EQ(intrinsic.exit_code, 0) << intrinsic.output;
+  EXPECT_NE(intrinsic.output.find("weights_checksum: " + live), std::string::npos) << intrinsic.output;
+  EXPECT_NE(intrinsic.output.find(" 0 differing"), std::string::npos) << intrinsic.output;
+  EXPECT_EQ(intrinsic.output.find("decisions: 0 replayed"), std::string::npos) << intrinsic.output;
+
+  const auto extrinsic = test::runCommand(test::afford("replay " + dir + "/logs/rp-base-IGN-s1-scenario2-e0"));
+  EXPECT_EQ(extrinsic.exit_code, 0) << extrinsic.output;
+  EXPECT_NE(extrinsic.output.find("(extrinsic)"), std::string::npos) << extrinsic.output;
+  EXPECT_NE(extrinsic.output.find(" 0 differing"), std::string::npos) << extrinsic.output;
+
+  // A log whose writer died mid-event: replayed up to the last whole event, with a warning.
+  const fs::path torn = fs::path(dir) / "torn";
+  fs::create_directories(torn);
+  std::string bytes = slurp(fs::path(dir) / "logs/rp-base-IGN-s1/log.00.lcm");
+  bytes.resize(bytes.size() - 7);
+  std::ofstream(torn / "log.00.lcm", std::ios::binary) << bytes;
+  const auto cut = test::runCommand(test::afford("replay " + torn.string() + " --into predictors"));
+  EXPECT_NE(cut.output.find("incomplete"), std::string::npos) << cut.output;
+  EXPECT_NE(cut.output.find("weights_checksum: " + live), std::string::npos) << cut.output;  // the run was over by then
+
+  const auto missing = test::runCommand(test::afford("replay " + dir + "/nosuch"));
+  EXPECT_NE(missing.exit_code, 0);
+  EXPECT_NE(missing.output.find("no run log at"), std::string::npos) << missing.output;
+}
+
 struct BadConfigCase {
   const char* name;
   const char* args;

@@ -1,0 +1,37 @@
+// `afford replay LOGDIR`: feed a recorded run's messages into fresh instances
+// of the learning processes, in log order and without a network (each on its
+// own in-process memq bus, one event at a time, handled before the next), and
+// compare what they compute with what the live run recorded.
+#pragma once
+#include <spdlog/spdlog.h>
+
+#include <cstdint>
+#include <string>
+#include <vector>
+
+namespace afford {
+
+struct ReplayOptions {
+  std::string log_dir;                    // a run's folder: log.NN.lcm segments (or one .lcm file)
+  // predictors, motivation, planner; empty: the predictors and the run's decider
+  // (the motivation in the intrinsic phase, the planner in the extrinsic one)
+  std::vector<std::string> into;
+};
+
+struct ReplayResult {
+  std::int64_t events = 0;            // read from the log
+  std::int64_t torn_bytes = 0;        // an incomplete last event (a writer killed mid-write)
+  std::string run_id;
+  bool extrinsic = false;
+  std::string weights_checksum;       // the replayed predictors' final weights ("" without them)
+  std::string recorded_checksum;      // the live run's RESULT ("" if the log has none)
+  // Per replayed decider (motivation or planner): its decisions against the recorded ones.
+  std::int64_t decisions = 0, decisions_recorded = 0, decisions_differing = 0;
+  bool ok() const;                    // everything replayed equals the record
+};
+
+// Reads `options.log_dir`; throws std::runtime_error naming the file on a
+// log it cannot read.
+ReplayResult replayRun(const ReplayOptions& options, spdlog::logger& log);
+
+}  // namespace afford

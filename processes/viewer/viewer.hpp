@@ -1,0 +1,49 @@
+// Viewer core: what a run shows, drawn as one picture. No LCM here: the
+// viewer process (main.cpp) feeds it the messages it hears.
+//   top row:    the scene with the outer eye's gaze box; the goal image with
+//               the inner eye's focus (extrinsic phase)
+//   bottom row: the focus image and the current sub-goal, enlarged; bars of the
+//               affordance predictions for the focused object; traces of the
+//               motivation signal and its threshold (intrinsic phase)
+#pragma once
+#include <opencv2/core.hpp>
+
+#include <array>
+#include <cstdint>
+#include <deque>
+#include <string>
+#include <vector>
+
+namespace afford {
+
+class Viewer {
+ public:
+  explicit Viewer(std::size_t trace_length = 400);
+
+  void onRun(const std::string& run_id, const std::string& phase);
+  // A scene (RGB, any size); `goal`: the goal configuration of an extrinsic test.
+  void onScene(std::int64_t step, const cv::Mat& rgb, bool goal);
+  // A focus image (side x side RGB bytes) at (x, y) in scene units; `goal`: the inner eye's.
+  void onFocus(std::int64_t step, const std::vector<std::uint8_t>& image, int side, double x, double y, bool goal);
+  void onPrediction(std::int64_t step, const std::array<double, 4>& affordance);
+  void onDecision(std::int64_t step, bool acted, int action, double motivation, double threshold);
+
+  // The whole picture, BGR, for cv::imshow or cv::imwrite.
+  cv::Mat render() const;
+  std::int64_t step() const { return step_; }
+
+ private:
+  std::string run_id_, phase_;
+  std::int64_t step_ = -1;
+  cv::Mat scene_, goal_;                       // RGB
+  double gaze_x_ = -1, gaze_y_ = -1, goal_x_ = -1, goal_y_ = -1;
+  int side_ = 21;
+  cv::Mat focus_, sub_goal_;                   // RGB, side x side
+  std::array<double, 4> affordance_{};
+  bool have_affordance_ = false;
+  std::string last_decision_;
+  std::size_t trace_length_;
+  std::deque<double> motivation_, threshold_;
+};
+
+}  // namespace afford

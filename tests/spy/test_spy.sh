@@ -1,0 +1,42 @@
+#!/usr/bin/env bash
+# lcm-spy on a live run, under Xvfb: every message on every channel decodes
+# with the project's types (as lcm-spy decodes them), and a screenshot of the
+# spy window is kept as a test artefact.
+#   tests/spy/test_spy.sh BUILD_DIR ARTEFACT_DIR
+# Runs in a private network namespace of its own (root), so its multicast
+# stays on this machine's loopback.
+set -euo pipefail
+build=$(cd "$1" && pwd)
+mkdir -p "$2"
+out=$(cd "$2" && pwd)
+root=$(cd "$(dirname "$0")/../.." && pwd)
+source "$root/tests/netns_xvfb.sh"
+in_netns_with_xvfb 1280x900 "$out/xvfb.log" "$0" "$@"
+
+port=7990
+url="udpm://239.255.76.67:$port?ttl=0"
+
+"$root/scripts/spy.sh" "$url" >"$out/spy.log" 2>&1 &
+java -cp "$build/share/afford-lcmtypes.jar:$build/share/afford-spycheck.jar:/usr/share/java/lcm.jar" \
+  SpyCheck "$url" 20 \
+  RUN_CONFIG,RUN_CONTROL,STATUS,SCENE,FOCUS,PREDICTION,DECISION,EFFECT,AFFORDANCE_TABLE,RESULT,LOOK,FORWARD_QUERY,FORWARD_PREDICTION,EXTRINSIC_RESULT \
+  >"$out/decoded.txt" 2>&1 &
+check=$!
+sleep 3  # the listeners are up before the run's first message
+# An intrinsic run and one extrinsic test on that bus, in this namespace.
+"$build/bin/afford" experiment base --system IMP --reps 1 --steps 3000 --extrinsic-reps 1 --scenarios scenario3 \
+  --netns off --base-port "$port" --keep-logs none --quiet --out "$out/run" --log-root "$out/logs" \
+  --run-prefix spy >"$out/run.log" 2>&1 &
+run=$!
+sleep 4
+import -window root "$out/spy-during-run.png"
+wait "$run" || { echo "the run failed:"; cat "$out/run.log"; exit 1; }
+status=0
+wait "$check" || status=$?
+import -window root "$out/spy.png"
+cat "$out/decoded.txt"
+[[ $status -eq 0 ]] || { echo "some channel was not decoded or not heard"; exit 1; }
+# The screenshot shows a window, not a blank screen.
+sd=$(convert "$out/spy.png" -colorspace Gray -format '%[fx:standard_deviation]' info:)
+echo "screenshot: $out/spy.png (grey standard deviation $sd)"
+awk -v sd="$sd" 'BEGIN { exit !(sd > 0.02) }' || { echo "the screenshot is blank"; exit 1; }
