@@ -474,6 +474,10 @@ json summarise(const Plan& plan, const ExperimentOptions& o, const std::vector<R
         js["failed_runs"].push_back({{"run_id", p.spec.run_id}, {"seed", p.spec.seed}, {"error", r.error}});
         continue;
       }
+      // Every run reports its table at the same steps (run.curve_interval): a snapshot lost on the
+      // way would bias the mean curve at that step, so say so.
+      if (r.curve.size() != static_cast<std::size_t>(cfg.steps / cfg.curve_interval + 1) + (cfg.steps % cfg.curve_interval != 0))
+        js["curve_gaps"].push_back({{"run_id", p.spec.run_id}, {"snapshots", r.curve.size()}});
       const Table& fin = r.curve.back().affordance;
       finals.push_back(fin);
       maes.push_back(meanAbsError(fin, target));
@@ -686,6 +690,10 @@ int runExperiment(const ExperimentOptions& o, spdlog::logger& log) {
            plan.runs.front().spec.steps, o.jobs, o.transport, network);
   const std::vector<RunOutcome> outcomes = executeRuns(plan.runs, o, bin, log);
   json summary = summarise(plan, o, outcomes, network);
+  for (const auto& [sys, js] : summary["systems"].items())
+    for (const auto& g : js.value("curve_gaps", json::array()))
+      log.warn("run '{}' reported {} affordance tables, not one per run.curve_interval: its curve has gaps",
+               g["run_id"].get<std::string>(), g["snapshots"].get<std::size_t>());
   std::vector<RunOutcome> test_outcomes;
   std::vector<std::string> untested;
   if (plan.tests > 0) {
