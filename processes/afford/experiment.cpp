@@ -103,7 +103,8 @@ struct Slot {
 
 RunOutcome runOverUdpm(const PlannedRun& run, const ExperimentOptions& o, Slot& slot, const std::string& bin) {
   const std::string out = (fs::path(o.out_dir) / "processes" / ("slot" + std::to_string(slot.index))).string();
-  if (!slot.group || !slot.group->health().empty() || slot.extrinsic != run.spec.extrinsic) {
+  const bool attached = !o.attach.empty();  // the user started the processes; none are ours to start
+  if (!attached && (!slot.group || !slot.group->health().empty() || slot.extrinsic != run.spec.extrinsic)) {
     slot.group.reset();
     slot.extrinsic = run.spec.extrinsic;
     slot.group = std::make_unique<ProcessGroup>(
@@ -111,7 +112,7 @@ RunOutcome runOverUdpm(const PlannedRun& run, const ExperimentOptions& o, Slot& 
         slot.url, out, std::vector<std::string>{});
   }
   std::unique_ptr<ProcessGroup> logger;
-  if (run.keep_log)
+  if (run.keep_log && !attached)
     logger = std::make_unique<ProcessGroup>(bin, std::vector<std::string>{"logger"}, slot.url, out,
                                             std::vector<std::string>{"--log-dir", o.log_root});
   if (!slot.lcm) {
@@ -130,7 +131,7 @@ RunOutcome runOverUdpm(const PlannedRun& run, const ExperimentOptions& o, Slot& 
   lcm::LCM& lcm = *slot.lcm;
   RunDriver& driver = *slot.driver;
   auto health = [&]() {
-    std::string h = slot.group->health();
+    std::string h = slot.group ? slot.group->health() : std::string();
     if (h.empty() && logger) h = logger->health();
     return h;
   };
@@ -183,6 +184,8 @@ Plan planExperiment(const ExperimentOptions& o) {
   const int reps = plan.reps = o.reps.value_or(plan.exp.repetitions);
   if (reps < 1) throw ConfigError("--reps must be at least 1");
   if (o.jobs < 1) throw ConfigError("--jobs must be at least 1");
+  if (!o.attach.empty() && (o.jobs != 1 || o.transport != "udpm"))
+    throw ConfigError("--attach runs one run at a time over the given bus: it needs --jobs 1 and --transport udpm");
   if (o.transport != "udpm" && o.transport != "memq")
     throw ConfigError("--transport must be udpm or memq, not \"" + o.transport + "\"");
   if (o.keep_logs != "all" && o.keep_logs != "first" && o.keep_logs != "none")
@@ -260,6 +263,7 @@ std::vector<RunOutcome> executeRuns(const std::vector<PlannedRun>& runs, const E
     // datagram of its slot, and one descheduled for a while must not lose any (the kernel caps the
     // request at net.core.rmem_max).
     slot.url = "udpm://239.255.76.67:" + std::to_string(o.base_port + slot_index) + "?ttl=0&recv_buf_size=2097152";
+    if (!o.attach.empty()) slot.url = o.attach;
     for (std::size_t i; (i = next.fetch_add(1)) < runs.size();) {
       RunOutcome r;
       try {
@@ -679,7 +683,9 @@ int runExperiment(const ExperimentOptions& o, spdlog::logger& log) {
   const Plan plan = planExperiment(o);
   std::string network = "in-process memq://";
   std::string bin;
-  if (o.transport == "udpm") {
+  if (!o.attach.empty()) {
+    network = "attached to " + o.attach;
+  } else if (o.transport == "udpm") {
     network = prepareNetwork(o.netns);
     bin = executableDir();
   }

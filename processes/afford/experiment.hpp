@@ -34,6 +34,7 @@ struct ExperimentOptions {
   bool quiet = false;                      // no table at the end
   int extrinsic_reps = 0;                  // tests per scenario from each intrinsic run (0: none)
   std::vector<std::string> scenarios;      // default: every config/scenarios/*.yaml
+  std::string attach;                      // run on this bus with processes started by hand (no group, one job)
 };
 
 // Returns the process exit code (0 when every run succeeded).

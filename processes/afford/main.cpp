@@ -2,11 +2,15 @@
 // real processes (udpm, default) or in one process (memq); `afford experiments`
 // lists them; `afford config NAME` prints an effective configuration.
 #include <CLI/CLI.hpp>
+#include <lcm/lcm-cpp.hpp>
+#include <chrono>
+#include <map>
 #include <opencv2/core.hpp>
 #include <opencv2/imgcodecs.hpp>
 
 #include "afford/image.hpp"
 #include "afford/plots.hpp"
+#include "afford/process_status_t.hpp"
 #include "afford/replay.hpp"
 #include "afford/report.hpp"
 
@@ -56,6 +60,9 @@ int main(int argc, char** argv) {
                   "(default: the experiment's extrinsic.tests, else 0: intrinsic phase only)")
       ->capture_default_str();
   exp->add_option("--scenarios", o.scenarios, "scenarios to test (default: all in config/scenarios)");
+  exp->add_option("--attach", o.attach,
+                  "drive the runs on this LCM URL, with processes started by hand (afford-environment ..., "
+                  "and afford-logger for logs): the runner starts none");
 
   auto* list = app.add_subcommand("experiments", "list the experiments in the config folder");
   std::string show_name, show_system = "IMP";
@@ -85,6 +92,12 @@ int main(int argc, char** argv) {
   replay->add_option("--into", replay_into,
                      "processes to replay, comma-separated: predictors, motivation, planner "
                      "(default: predictors and the run's decider)");
+  std::string status_url = "udpm://239.255.76.67:7667?ttl=0";
+  double status_seconds = 1.5;
+  auto* status = app.add_subcommand("status", "list the processes heard on a bus: pid, state, run, last step");
+  status->add_option("--lcm-url", status_url, "the bus")->capture_default_str();
+  status->add_option("--seconds", status_seconds, "how long to listen (processes report every 0.5 s)")
+      ->capture_default_str();
   std::string scenario_name, scenario_png;
   auto* scen = app.add_subcommand("scenario", "check a scenario file and draw its goal and initial scenes");
   scen->add_option("name", scenario_name, "scenario (config/scenarios/<name>.yaml)")->required();
@@ -106,6 +119,28 @@ int main(int argc, char** argv) {
       const std::string md = afford::writeReport(report_dirs, report_figures, link, report_wall, report_note, config_dir);
       std::ofstream(report_out) << md;
       std::printf("%s\n", report_out.c_str());
+      return 0;
+    }
+    if (status->parsed()) {
+      lcm::LCM bus(status_url);
+      if (!bus.good()) throw std::runtime_error("cannot open LCM at " + status_url);
+      struct Heard {
+        std::map<std::string, afford::process_status_t> last;
+        void on(const lcm::ReceiveBuffer*, const std::string&, const afford::process_status_t* m) {
+          last[m->process + "#" + std::to_string(m->pid)] = *m;
+        }
+      } heard;
+      bus.subscribe("STATUS", &Heard::on, &heard);
+      const auto until = std::chrono::steady_clock::now() + std::chrono::duration<double>(status_seconds);
+      while (std::chrono::steady_clock::now() < until) bus.handleTimeout(50);
+      const char* states[] = {"waiting", "ready", "running", "done", "failed"};
+      std::printf("%-12s %8s  %-8s %10s  %s\n", "process", "pid", "state", "last step", "run");
+      for (const auto& [key, m] : heard.last)
+        std::printf("%-12s %8d  %-8s %10lld  %s%s%s\n", m.process.c_str(), m.pid,
+                    m.state >= 0 && m.state <= 4 ? states[m.state] : "?", static_cast<long long>(m.step),
+                    m.run_id.empty() ? "-" : m.run_id.c_str(), m.detail.empty() ? "" : "  ",
+                    m.detail.c_str());
+      if (heard.last.empty()) std::printf("(no process heard on %s in %.1f s)\n", status_url.c_str(), status_seconds);
       return 0;
     }
     if (replay->parsed()) {

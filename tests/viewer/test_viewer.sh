@@ -7,8 +7,9 @@ build=$(cd "$1" && pwd)
 mkdir -p "$2"
 out=$(cd "$2" && pwd)
 root=$(cd "$(dirname "$0")/../.." && pwd)
-source "$root/tests/netns_xvfb.sh"
-in_netns_with_xvfb 1400x1000 "$out/xvfb.log" "$0" "$@"
+source "$root/tests/netns.sh"
+enter_private_netns "$0" "$@"
+start_xvfb 1400x1000 "$out/xvfb.log"
 
 port=7991
 url="udpm://239.255.76.67:$port?ttl=0"

@@ -1,0 +1,38 @@
+#!/usr/bin/env bash
+# Processes started by hand, one by one, serve a run driven by
+# `afford experiment --attach`; `afford status` lists them; the result equals
+# the same run hosted by the runner itself.
+#   tests/attach/test_attach.sh BUILD_DIR WORK_DIR
+set -euo pipefail
+build=$(cd "$1" && pwd)
+rm -rf "$2" && mkdir -p "$2"
+out=$(cd "$2" && pwd)
+root=$(cd "$(dirname "$0")/../.." && pwd)
+source "$root/tests/netns.sh"
+enter_private_netns "$0" "$@"
+
+url="udpm://239.255.76.67:7992?ttl=0"
+for p in environment eye predictors motivation; do
+  "$build/bin/afford-$p" --lcm-url "$url" >"$out/$p.log" 2>&1 &
+done
+"$build/bin/afford-logger" --lcm-url "$url" --log-dir "$out/logs" >"$out/logger.log" 2>&1 &
+sleep 1
+"$build/bin/afford" status --lcm-url "$url" | tee "$out/status-before.txt"
+[[ $(grep -c "waiting" "$out/status-before.txt") -eq 5 ]] || { echo "expected 5 waiting processes"; exit 1; }
+
+"$build/bin/afford" experiment base --system IGN --reps 1 --steps 1500 --seed 4 --attach "$url" --quiet \
+  --run-prefix byhand --out "$out/attached" --log-root "$out/logs" | tee "$out/attached.txt"
+"$build/bin/afford" status --lcm-url "$url" | tee "$out/status-after.txt"
+[[ $(grep -c "waiting" "$out/status-after.txt") -eq 5 ]] || { echo "expected 5 processes free again"; exit 1; }
+for p in environment eye predictors motivation logger; do  # each served the run, in its own output
+  grep -q "configured for run 'byhand-base-IGN-s4'" "$out/$p.log" || { echo "$p did not serve the run"; exit 1; }
+done
+
+# The same run hosted by the runner (in one process): the same weights.
+"$build/bin/afford" experiment base --system IGN --reps 1 --steps 1500 --seed 4 --transport memq --keep-logs none \
+  --quiet --out "$out/hosted"
+sum() { grep -o '"weights_checksum": "[0-9a-f]*"' "$1/summary.json"; }
+echo "attached: $(sum "$out/attached")  hosted: $(sum "$out/hosted")"
+[[ "$(sum "$out/attached")" == "$(sum "$out/hosted")" ]] || { echo "the attached run differs"; exit 1; }
+[[ -f $out/logs/byhand-base-IGN-s4/log.00.lcm ]] || { echo "the hand-started logger wrote no log"; exit 1; }
+"$build/bin/afford" replay "$out/logs/byhand-base-IGN-s4"

@@ -1,0 +1,24 @@
+# Sourced by the shell tests that put a live run on a bus of their own
+# (tests/spy, tests/viewer, tests/attach).
+#
+# enter_private_netns "$0" "$@": re-runs the calling script in a private
+# network namespace (root), with multicast routed over its loopback, so no
+# datagram leaves the machine. Background jobs are killed when the script ends.
+enter_private_netns() {
+  if [[ -z ${AFFORD_TEST_NETNS:-} ]]; then
+    exec unshare --net env AFFORD_TEST_NETNS=1 bash "$@"
+  fi
+  ip link set lo up multicast on
+  ip route add 224.0.0.0/4 dev lo
+  trap 'kill $(jobs -p) 2>/dev/null || true' EXIT
+}
+
+# start_xvfb WIDTHxHEIGHT LOGFILE: an X server on a free display; exports DISPLAY.
+start_xvfb() {
+  local display=:$((100 + $$ % 400))
+  Xvfb "$display" -screen 0 "${1}x24" -nolisten tcp >"$2" 2>&1 &
+  export DISPLAY=$display
+  for _ in $(seq 50); do [[ -e /tmp/.X11-unix/X${display#:} ]] && return 0; sleep 0.1; done
+  echo "Xvfb did not start (see $2)" >&2
+  return 1
+}
