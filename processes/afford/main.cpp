@@ -89,6 +89,7 @@ int main(int argc, char** argv) {
   std::string replay_into;
   auto* replay = app.add_subcommand("replay", "feed a recorded run into fresh learning processes and compare");
   replay->add_option("log", replay_options.log_dir, "the run's log folder (logs/<run-id>) or one .lcm file")->required();
+  replay->add_option("--run", replay_options.run_id, "the run to replay, in a log that holds several (default: the first)");
   replay->add_option("--into", replay_into,
                      "processes to replay, comma-separated: predictors, motivation, planner "
                      "(default: predictors and the run's decider)");

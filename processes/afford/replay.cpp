@@ -120,18 +120,31 @@ ReplayResult replayRun(const ReplayOptions& o, spdlog::logger& log) {
     result.torn_bytes += torn;
     events.insert(events.end(), std::make_move_iterator(part.begin()), std::make_move_iterator(part.end()));
   }
-  result.events = static_cast<std::int64_t>(events.size());
-  if (events.empty() || events.front().channel != channel::kRunConfig)
-    throw std::runtime_error(o.log_dir + ": the log does not start with RUN_CONFIG, so it cannot configure a replay");
-
-  {
+  // The run: from its RUN_CONFIG (the first one, or the one of --run) to the next run's.
+  // Our logger's logs start with it; a plain lcm-logger recording may hold
+  // heartbeats before it and other runs after it.
+  std::size_t begin = events.size(), end = events.size();
+  for (std::size_t i = 0; i < events.size(); ++i) {
+    if (events[i].channel != channel::kRunConfig) continue;
     run_config_t rc;
-    const Event& first = events.front();
-    if (rc.decode(first.data.data(), 0, static_cast<int>(first.data.size())) < 0)
-      throw std::runtime_error(o.log_dir + ": its RUN_CONFIG cannot be decoded");
-    result.run_id = rc.run_id;
-    result.extrinsic = parseRunConfigText(rc.config_yaml).phase == Phase::Extrinsic;
+    if (rc.decode(events[i].data.data(), 0, static_cast<int>(events[i].data.size())) < 0)
+      throw std::runtime_error(o.log_dir + ": a RUN_CONFIG cannot be decoded (event " + std::to_string(i) + ")");
+    if (begin == events.size()) {
+      if (!o.run_id.empty() && rc.run_id != o.run_id) continue;
+      begin = i;
+      result.run_id = rc.run_id;
+      result.extrinsic = parseRunConfigText(rc.config_yaml).phase == Phase::Extrinsic;
+    } else if (rc.run_id != result.run_id) {
+      end = i;
+      break;
+    }
   }
+  if (begin == events.size())
+    throw std::runtime_error(o.log_dir + (o.run_id.empty() ? std::string(": no RUN_CONFIG in the log, so nothing configures a replay")
+                                                            : ": no RUN_CONFIG of run '" + o.run_id + "' in the log"));
+  events = std::vector<Event>(std::make_move_iterator(events.begin() + static_cast<std::ptrdiff_t>(begin)),
+                              std::make_move_iterator(events.begin() + static_cast<std::ptrdiff_t>(end)));
+  result.events = static_cast<std::int64_t>(events.size());
   std::vector<std::string> into = o.into;
   if (into.empty()) into = {"predictors", result.extrinsic ? "planner" : "motivation"};
 

@@ -16,10 +16,11 @@ struct ReplayOptions {
   // predictors, motivation, planner; empty: the predictors and the run's decider
   // (the motivation in the intrinsic phase, the planner in the extrinsic one)
   std::vector<std::string> into;
+  std::string run_id;                     // the run to replay in a log of several (default: the first)
 };
 
 struct ReplayResult {
-  std::int64_t events = 0;            // read from the log
+  std::int64_t events = 0;            // of the replayed run in the log
   std::int64_t torn_bytes = 0;        // an incomplete last event (a writer killed mid-write)
   std::string run_id;
   bool extrinsic = false;

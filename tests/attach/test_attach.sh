@@ -16,6 +16,8 @@ for p in environment eye predictors motivation; do
   "$build/bin/afford-$p" --lcm-url "$url" >"$out/$p.log" 2>&1 &
 done
 "$build/bin/afford-logger" --lcm-url "$url" --log-dir "$out/logs" >"$out/logger.log" 2>&1 &
+lcm-logger --lcm-url="$url" -f "$out/lcm-logger.lcm" >"$out/lcm-logger.log" 2>&1 &  # LCM's own logger too
+plain=$!
 sleep 1
 "$build/bin/afford" status --lcm-url "$url" | tee "$out/status-before.txt"
 [[ $(grep -c "waiting" "$out/status-before.txt") -eq 5 ]] || { echo "expected 5 waiting processes"; exit 1; }
@@ -32,7 +34,14 @@ done
 "$build/bin/afford" experiment base --system IGN --reps 1 --steps 1500 --seed 4 --transport memq --keep-logs none \
   --quiet --out "$out/hosted"
 sum() { grep -o '"weights_checksum": "[0-9a-f]*"' "$1/summary.json"; }
+hosted_sum=$(grep -o '"weights_checksum": "[0-9a-f]*"' "$out/hosted/summary.json" | grep -o '[0-9a-f]\{16\}')
 echo "attached: $(sum "$out/attached")  hosted: $(sum "$out/hosted")"
 [[ "$(sum "$out/attached")" == "$(sum "$out/hosted")" ]] || { echo "the attached run differs"; exit 1; }
 [[ -f $out/logs/byhand-base-IGN-s4/log.00.lcm ]] || { echo "the hand-started logger wrote no log"; exit 1; }
 "$build/bin/afford" replay "$out/logs/byhand-base-IGN-s4"
+
+# LCM's plain logger heard the same run (among heartbeats): it replays the same way.
+sleep 0.5
+kill -INT "$plain"; wait "$plain" || true
+"$build/bin/afford" replay "$out/lcm-logger.lcm" | tee "$out/replay-lcm-logger.txt"
+grep -q "weights_checksum: ${hosted_sum:-x}" "$out/replay-lcm-logger.txt" || { echo "the lcm-logger log replays differently"; exit 1; }
