@@ -48,24 +48,17 @@ double variance(const std::vector<double>& v) {  // sample variance
   return s / (v.size() - 1);
 }
 
-double quantile(std::vector<double> v, double q) {
-  if (v.empty()) return 0;
-  std::sort(v.begin(), v.end());
-  const double pos = q * (v.size() - 1);
-  const std::size_t i = static_cast<std::size_t>(pos);
-  const double f = pos - i;
-  return i + 1 < v.size() ? v[i] * (1 - f) + v[i + 1] * f : v[i];
-}
-
 json describe(const std::vector<double>& v) {
+  std::vector<double> sorted = v;
+  std::sort(sorted.begin(), sorted.end());
   return {{"n", v.size()},
           {"mean", mean(v)},
           {"sd", std::sqrt(variance(v))},
-          {"median", quantile(v, 0.5)},
-          {"q1", quantile(v, 0.25)},
-          {"q3", quantile(v, 0.75)},
-          {"min", v.empty() ? 0.0 : *std::min_element(v.begin(), v.end())},
-          {"max", v.empty() ? 0.0 : *std::max_element(v.begin(), v.end())}};
+          {"median", quantile(sorted, 0.5)},
+          {"q1", quantile(sorted, 0.25)},
+          {"q3", quantile(sorted, 0.75)},
+          {"min", sorted.empty() ? 0.0 : sorted.front()},
+          {"max", sorted.empty() ? 0.0 : sorted.back()}};
 }
 
 json welchJson(const WelchResult& w) { return {{"t", w.t}, {"df", w.df}, {"p", w.p}}; }
@@ -119,6 +112,14 @@ std::vector<std::string> valuesOf(const ExtrinsicDesign& d, const std::string& k
 }
 
 }  // namespace
+
+double quantile(const std::vector<double>& sorted, double q) {
+  if (sorted.empty()) return 0;
+  const double pos = q * (sorted.size() - 1);
+  const std::size_t i = static_cast<std::size_t>(pos);
+  const double f = pos - i;
+  return i + 1 < sorted.size() ? sorted[i] * (1 - f) + sorted[i + 1] * f : sorted[i];
+}
 
 WelchResult welchTest(const std::vector<double>& a, const std::vector<double>& b) {
   if (a.size() < 2 || b.size() < 2) throw std::invalid_argument("Welch's t-test needs at least two values per sample");

@@ -25,6 +25,10 @@ struct Condition {
 // Every combination, the first key varying slowest; one empty condition without `vary`.
 std::vector<Condition> conditionsOf(const ExtrinsicDesign& d);
 
+// Linear-interpolated quantile q in [0, 1] of sorted values (0 for none): the
+// one used for every median and quartile of the summaries and figures.
+double quantile(const std::vector<double>& sorted, double q);
+
 // Welch's two-sided t-test of two samples with unequal variances.
 struct WelchResult {
   double t = 0, df = 0, p = 1;

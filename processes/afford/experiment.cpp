@@ -352,15 +352,6 @@ std::vector<PlannedRun> planExtrinsic(const Plan& plan, const std::vector<RunOut
   return tests;
 }
 
-// Linear-interpolated quantile of sorted values.
-double quantile(const std::vector<double>& sorted, double q) {
-  if (sorted.empty()) return 0;
-  const double pos = q * (sorted.size() - 1);
-  const std::size_t i = static_cast<std::size_t>(pos);
-  const double f = pos - i;
-  return i + 1 < sorted.size() ? sorted[i] * (1 - f) + sorted[i + 1] * f : sorted[i];
-}
-
 // Per system: the paper's Table 2 metric, raw success, completion steps and
 // their fit a x^2 + b x (Figure 6), actions checked per sub-goal; and a CSV.
 void summariseExtrinsic(json& summary, const Plan& plan, const std::vector<PlannedRun>& tests,

@@ -1,5 +1,7 @@
 #include "afford/plots.hpp"
 
+#include "afford/design.hpp"
+
 #include <nlohmann/json.hpp>
 
 #include <algorithm>
@@ -22,12 +24,7 @@ struct Box {
 
 Box box(std::vector<double> v) {
   std::sort(v.begin(), v.end());
-  auto q = [&](double p) {
-    const double pos = p * (v.size() - 1);
-    const std::size_t i = static_cast<std::size_t>(pos);
-    return i + 1 < v.size() ? v[i] + (pos - i) * (v[i + 1] - v[i]) : v[i];
-  };
-  return {v.front(), q(0.25), q(0.5), q(0.75), v.back()};
+  return {v.front(), quantile(v, 0.25), quantile(v, 0.5), quantile(v, 0.75), v.back()};
 }
 
 const char* kSystemColour(const std::string& s) {

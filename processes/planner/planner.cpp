@@ -144,26 +144,24 @@ PlannerRequest Planner::weighUtility(const ForwardPrediction& p) {
   const double potential = potential_utility_;
   if (evaluating()) {  // raise the estimate of the attainable utility
     if (utility >= potential) potential_utility_ += config_.raise_leak * (utility - potential);
-    active_ = false;   // Algorithm 3: another sub-goal next iteration
-    ++records_.back().iterations;
-    return done();
+    return leaveSubGoal();
   }
   // Acting: lower the estimate for each chosen action, whether or not its
   // utility reaches the estimate (docs/model.md says why), and act if it does.
   potential_utility_ += config_.lower_leak * (0.0 - potential);
   if (utility >= potential) return act(p);
-  active_ = false;
+  return leaveSubGoal();
+}
+
+PlannerRequest Planner::leaveSubGoal() {
+  active_ = false;  // Algorithm 3: another sub-goal next iteration
   ++records_.back().iterations;
   return done();
 }
 
 PlannerRequest Planner::onActed() {
   if (wait_ != Wait::Acted) throw std::logic_error("Planner: an action it did not ask for");
-  if (config_.kind == PlannerKind::Utility) {  // Algorithm 3: no check; another sub-goal next iteration
-    active_ = false;
-    ++records_.back().iterations;
-    return done();
-  }
+  if (config_.kind == PlannerKind::Utility) return leaveSubGoal();  // Algorithm 3: no check of the sub-goal
   wait_ = Wait::SceneAfterAction;
   return request(PlannerRequest::LookAtSceneAt, sub_goal_.x, sub_goal_.y);
 }

@@ -93,6 +93,8 @@ class Planner {
   PlannerRequest act(const ForwardPrediction& p);
   // Algorithm 3 once ActionPlanning found `p` for the sub-goal and object.
   PlannerRequest weighUtility(const ForwardPrediction& p);
+  // End the iteration on this sub-goal, counted, and pick another next time.
+  PlannerRequest leaveSubGoal();
 
   PlannerConfig config_;
   std::vector<GoalValue> values_;
