@@ -7,6 +7,7 @@
 #include "afford/extrinsic_result_t.hpp"
 #include "afford/node.hpp"
 #include "afford/process_status_t.hpp"
+#include "afford/resend_t.hpp"
 #include "afford/run_config_t.hpp"
 #include "afford/run_control_t.hpp"
 #include "afford/run_result_t.hpp"
@@ -21,6 +22,12 @@ RunDriver::RunDriver(lcm::LCM& lcm, std::shared_ptr<spdlog::logger> log) : lcm_(
     std::string why;
     if (!decodeAtEdge(b, m, why)) return log_->warn("{}: dropped message: {}", channel::kStatus, why);
     seen_[m.process] = {m.run_id, m.step, m.state, m.detail, Clock::now()};
+    if (outcome_ && m.counts_run == run_id_) {
+      for (int i = 0; i < m.n_channels; ++i)
+        if (m.channels[i] == channel::kAffordanceTable || m.channels[i] == channel::kResult ||
+            m.channels[i] == channel::kExtrinsicResult)
+          serials_.announce(m.channels[i], m.counts[i]);
+    }
     if (outcome_ && m.process == "logger" && m.run_id == run_id_ && m.state == process_status_t::DONE) {
       outcome_->log_dir = m.detail;
       logger_done_ = true;
@@ -30,14 +37,14 @@ RunDriver::RunDriver(lcm::LCM& lcm, std::shared_ptr<spdlog::logger> log) : lcm_(
     affordance_table_t m;
     std::string why;
     if (!decodeAtEdge(b, m, why)) return log_->warn("{}: dropped message: {}", channel::kAffordanceTable, why);
-    if (!outcome_ || m.run_id != run_id_) return;
+    if (!outcome_ || m.run_id != run_id_ || !inOrder(channel::kAffordanceTable, m.serial)) return;
     outcome_->curve.push_back({m.step, m.affordance});
   });
   listen(channel::kExtrinsicResult, [this](const lcm::ReceiveBuffer* b) {
     extrinsic_result_t m;
     std::string why;
     if (!decodeAtEdge(b, m, why)) return log_->warn("{}: dropped message: {}", channel::kExtrinsicResult, why);
-    if (!outcome_ || m.run_id != run_id_) return;
+    if (!outcome_ || m.run_id != run_id_ || !inOrder(channel::kExtrinsicResult, m.serial)) return;
     ExtrinsicOutcome& e = outcome_->extrinsic;
     e.scenario = m.scenario;
     e.success = m.success;
@@ -52,7 +59,7 @@ RunDriver::RunDriver(lcm::LCM& lcm, std::shared_ptr<spdlog::logger> log) : lcm_(
     run_result_t m;
     std::string why;
     if (!decodeAtEdge(b, m, why)) return log_->warn("{}: dropped message: {}", channel::kResult, why);
-    if (!outcome_ || m.run_id != run_id_) return;
+    if (!outcome_ || m.run_id != run_id_ || !inOrder(channel::kResult, m.serial)) return;
     outcome_->weights_checksum = m.weights_checksum;
     outcome_->checkpoint = m.checkpoint;
     outcome_->executed = m.actions_executed;
@@ -68,6 +75,25 @@ void RunDriver::listen(const std::string& channel, std::function<void(const lcm:
   holders_.push_back(std::move(h));
 }
 
+bool RunDriver::inOrder(const std::string& channel, std::int64_t serial) {
+  const SerialTracker::Verdict v = serials_.offer(channel, serial);
+  if (v == SerialTracker::Verdict::Gap) askMissing();
+  return v == SerialTracker::Verdict::Accept;
+}
+
+void RunDriver::askMissing() {
+  for (const SerialTracker::Request& r : serials_.due(Clock::now())) {
+    resend_t m;
+    m.run_id = run_id_;
+    m.step = 0;
+    m.channel = r.channel;
+    m.first = r.first;
+    m.last = r.last;
+    m.requester = "runner";
+    lcm_.publish(channel::kResend, &m);
+  }
+}
+
 RunOutcome RunDriver::run(const RunSpec& spec, const std::function<void()>& pump,
                           const std::function<std::string()>& health) {
   RunOutcome out;
@@ -76,6 +102,7 @@ RunOutcome RunDriver::run(const RunSpec& spec, const std::function<void()>& pump
   outcome_ = &out;
   have_result_ = false;
   logger_done_ = false;
+  serials_.reset();
   struct Reset {
     RunDriver* d;
     ~Reset() { d->outcome_ = nullptr; }
@@ -160,19 +187,34 @@ RunOutcome RunDriver::run(const RunSpec& spec, const std::function<void()>& pump
   const auto started = Clock::now();
   std::int64_t progress = -1;
   auto progress_at = Clock::now();
+  auto last_rejoin = Clock::now() - std::chrono::seconds(10);
+  // A process that was killed can be started again: it is silent meanwhile.
+  const auto silence = std::chrono::duration<double>(spec.stall_seconds);
   while (!have_result_) {
     if (auto h = health(); !h.empty()) return fail(h);
     if (auto f = failedProcess(); !f.empty()) return fail(f);
     pump();
+    askMissing();
     const auto now = Clock::now();
     std::int64_t step = -1;
+    std::string rejoining;
     for (const auto& p : spec.processes) {
       auto it = seen_.find(p);
       if (it == seen_.end()) continue;
-      if (now - it->second.at > std::chrono::seconds(5))
+      if (now - it->second.at > silence)
         return fail("process '" + p + "' stopped reporting (last heard " +
                     std::to_string(std::chrono::duration<double>(now - it->second.at).count()) + " s ago)");
+      if (it->second.run_id.empty() && it->second.state == process_status_t::WAITING)
+        rejoining += (rejoining.empty() ? "" : ", ") + p;
       step = std::max(step, it->second.step);
+    }
+    // A process of the run is free (restarted): give it the run again.
+    if (!rejoining.empty() && now - last_rejoin > std::chrono::seconds(1)) {
+      log_->warn("run '{}': process {} is free again (restarted?): sending it the run's configuration", spec.run_id,
+                 rejoining);
+      lcm_.publish(channel::kRunConfig, &cfg);
+      lcm_.publish(channel::kRunControl, &start);
+      last_rejoin = now;
     }
     if (step > progress) {
       progress = step;

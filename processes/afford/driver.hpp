@@ -1,9 +1,12 @@
 // The runner's side of one run's choreography: waits for the processes,
 // publishes RUN_CONFIG, waits for READY, publishes START, collects the
 // affordance tables and the result, then STOP. It watches for stalls and for
-// processes that stop reporting, so a run never hangs silently.
-// Channels in:  STATUS, AFFORDANCE_TABLE, RESULT
-// Channels out: RUN_CONFIG, RUN_CONTROL
+// processes that stop reporting, so a run never hangs silently. A process of
+// the run that reports free again (killed and started anew) is given the
+// run's RUN_CONFIG and START again: it catches up by asking for the run's
+// messages (docs/operating.md, "Killing and restarting a process").
+// Channels in:  STATUS, AFFORDANCE_TABLE, RESULT, EXTRINSIC_RESULT (in serial order)
+// Channels out: RUN_CONFIG, RUN_CONTROL, RESEND
 #pragma once
 #include <lcm/lcm-cpp.hpp>
 #include <spdlog/spdlog.h>
@@ -14,6 +17,8 @@
 #include <memory>
 #include <string>
 #include <vector>
+
+#include "afford/serials.hpp"
 
 namespace afford {
 
@@ -84,6 +89,9 @@ class RunDriver {
     void on(const lcm::ReceiveBuffer* b, const std::string&) { fn(b); }
   };
   void listen(const std::string& channel, std::function<void(const lcm::ReceiveBuffer*)> fn);
+  // A run message in serial order? (asks for missing ones)
+  bool inOrder(const std::string& channel, std::int64_t serial);
+  void askMissing();
 
   lcm::LCM& lcm_;
   std::shared_ptr<spdlog::logger> log_;
@@ -93,6 +101,7 @@ class RunDriver {
   RunOutcome* outcome_ = nullptr;
   bool have_result_ = false;
   bool logger_done_ = false;
+  SerialTracker serials_;
 };
 
 }  // namespace afford

@@ -74,13 +74,11 @@ void EnvironmentNode::onExtrinsicDecision(const decision_t& d) {
 
 void EnvironmentNode::onDecision(const decision_t& d) {
   const char* ch = channel::kDecision;
-  if (state() != process_status_t::RUNNING) return drop(ch, "the run has not started");
+  if (state() != process_status_t::RUNNING) return defer();  // before START: its turn comes after
   if (extrinsic()) return onExtrinsicDecision(d);
   if (d.step < next_decision_)
     return log_->debug("{}: step {} already handled (now at {})", ch, d.step, next_decision_);
-  if (d.step > next_decision_)
-    return drop(ch, "step " + std::to_string(d.step) + " is ahead of the scene (awaiting step " +
-                        std::to_string(next_decision_) + ")");
+  if (d.step > next_decision_) return defer();  // an earlier decision is still to come
 
   const std::int64_t next = d.step + 1;
   const bool more = next < config().steps;

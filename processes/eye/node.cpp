@@ -60,7 +60,7 @@ void EyeNode::onLook(const look_t& l) {
   const char* ch = channel::kLook;
   if (config().phase != Phase::Extrinsic) return drop(ch, "no LOOK requests in the intrinsic phase");
   if (l.seq <= last_look_) return log_->debug("{}: request {} already answered", ch, l.seq);
-  if (!eye_->hasScene() || !eye_->hasGoal()) return drop(ch, "the goal and the scene have not been shown yet");
+  if (!eye_->hasScene() || !eye_->hasGoal()) return defer();  // the goal and the scene come first
   last_look_ = l.seq;
   handled(l.step);
   switch (l.kind) {
@@ -81,9 +81,9 @@ void EyeNode::onScene(const scene_t& s) {
                         std::to_string(last_scanned_) + ")");
   const bool is_action = s.cause == scene_t::CAUSE_ACTION;
   if (is_action && s.step - 1 <= last_effect_) return log_->debug("{}: effect of step {} already seen", ch, s.step - 1);
-  if (is_action && s.step - 1 != last_scanned_)
-    return drop(ch, "action scene for step " + std::to_string(s.step - 1) + " but the last focus was of step " +
-                        std::to_string(last_scanned_));
+  // A scene for step t follows the eye's focus of step t-1 (a late message
+  // of another channel, e.g. a decision, is still to come): wait for it.
+  if (s.step - 1 > last_scanned_) return defer();
 
   guess_.reset();  // the scene changes: a guess made on the old one is void
   cv::Mat image;
@@ -126,7 +126,9 @@ void EyeNode::onScene(const scene_t& s) {
 void EyeNode::onDecision(const decision_t& d) {
   // Only a pass without an announced scene starts the next step here; after an
   // action, the action's scene does. (The planner's decisions are not steps of the eye's.)
-  if (config().phase == Phase::Extrinsic || d.acted || scene_announced_ || d.step != last_scanned_) return;
+  if (config().phase == Phase::Extrinsic) return;
+  if (d.step > last_scanned_) return defer();  // the focus of that step is still to come
+  if (d.acted || scene_announced_ || d.step != last_scanned_) return;
   scanStep(d.step + 1);
 }
 

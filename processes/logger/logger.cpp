@@ -1,5 +1,7 @@
 #include "logger/logger.hpp"
 
+#include "afford/channels.hpp"
+
 #include <cstdio>
 #include <filesystem>
 #include <fstream>
@@ -8,6 +10,54 @@
 namespace afford {
 
 namespace fs = std::filesystem;
+
+namespace {
+std::uint64_t bigEndian(const unsigned char* p, int n) {
+  std::uint64_t v = 0;
+  for (int i = 0; i < n; ++i) v = (v << 8) | p[i];
+  return v;
+}
+}  // namespace
+
+bool isSerialChannel(const std::string& channel) {
+  for (const char* c : channel::kWithSerial)
+    if (channel == c) return true;
+  return false;
+}
+
+bool peekRunHeader(const void* data, std::uint32_t size, RunHeader& out) {
+  const auto* p = static_cast<const unsigned char*>(data);
+  if (size < 12) return false;
+  const std::uint64_t len = bigEndian(p + 8, 4);  // string length, with its NUL
+  if (len < 1 || 12 + len + 16 > size) return false;
+  out.run_id.assign(reinterpret_cast<const char*>(p + 12), len - 1);
+  out.step = static_cast<std::int64_t>(bigEndian(p + 12 + len, 8));
+  out.serial = static_cast<std::int64_t>(bigEndian(p + 12 + len + 8, 8));
+  return true;
+}
+
+RecordedSoFar readRecorded(const std::string& dir) {
+  RecordedSoFar r;
+  for (int segment = 0;; ++segment) {
+    char name[32];
+    std::snprintf(name, sizeof name, "log.%02d.lcm", segment);
+    const fs::path path = fs::path(dir) / name;
+    if (!fs::exists(path)) break;
+    lcm::LogFile in(path.string(), "r");
+    if (!in.good()) throw std::runtime_error("cannot read " + path.string());
+    while (const lcm::LogEvent* ev = in.readNextEvent()) {
+      ++r.events;
+      RunHeader h;
+      if (isSerialChannel(ev->channel) && peekRunHeader(ev->data, static_cast<std::uint32_t>(ev->datalen), h)) {
+        std::int64_t& next = r.next_serial[ev->channel];
+        next = std::max(next, h.serial + 1);
+      } else {
+        r.untracked[ev->channel].insert(std::string(static_cast<const char*>(ev->data), ev->datalen));
+      }
+    }
+  }
+  return r;
+}
 
 RunLog::RunLog(const std::string& dir, nlohmann::json manifest) : dir_(dir), manifest_(std::move(manifest)) {
   const fs::path old_manifest = fs::path(dir_) / "manifest.json";
@@ -19,6 +69,11 @@ RunLog::RunLog(const std::string& dir, nlohmann::json manifest) : dir_(dir), man
                                "': refusing to mix runs (use another run id)");
   }
   fs::create_directories(dir_);
+  if (fs::exists(old_manifest)) {  // a later segment of the same run: keep the list
+    std::ifstream in(old_manifest);
+    const nlohmann::json old = nlohmann::json::parse(in, nullptr, false);
+    if (!old.is_discarded() && old.contains("segments")) manifest_["segments"] = old["segments"];
+  }
   int segment = 0;
   char name[32];
   do {

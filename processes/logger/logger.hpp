@@ -10,9 +10,27 @@
 #include <cstdint>
 #include <map>
 #include <memory>
+#include <set>
 #include <string>
 
 namespace afford {
+
+// The first fields of every run message: run_id, step, serial. False if the
+// buffer is too short to hold them.
+struct RunHeader {
+  std::string run_id;
+  std::int64_t step = 0, serial = 0;
+};
+bool peekRunHeader(const void* data, std::uint32_t size, RunHeader& out);
+bool isSerialChannel(const std::string& channel);
+
+// What earlier segments of a run's log hold (for a restarted logger).
+struct RecordedSoFar {
+  std::map<std::string, std::int64_t> next_serial;          // serial channels
+  std::map<std::string, std::set<std::string>> untracked;   // the others: contents
+  std::int64_t events = 0;
+};
+RecordedSoFar readRecorded(const std::string& dir);
 
 class RunLog {
  public:

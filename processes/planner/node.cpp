@@ -29,19 +29,32 @@ void PlannerNode::onConfigured(const RunConfig& config) {
 
 void PlannerNode::onStop() { core_.reset(); }
 
+bool PlannerNode::notNow() {
+  if (!core_ || finished_) return true;
+  if (state() == process_status_t::RUNNING) return false;
+  defer();  // before START: its turn comes after
+  return true;
+}
+
 void PlannerNode::onScene(const scene_t& s) {
-  if (!active()) return;
+  if (notNow()) return;
   if (s.cause == scene_t::CAUSE_GOAL) return;  // the eye memorises it
-  goal_distance_ = s.goal_distance;
-  goal_utility_ = s.goal_utility;
-  if (s.cause == scene_t::CAUSE_START && step_ < 0) {  // the test begins
-    step_ = 0;
+  if (s.cause == scene_t::CAUSE_START) {
+    if (step_ >= 0) return drop(channel::kScene, "the test has begun already");
+    goal_distance_ = s.goal_distance;
+    goal_utility_ = s.goal_utility;
+    step_ = 0;  // the test begins
     return follow(core_->startIteration());
   }
-  if (s.cause == scene_t::CAUSE_ACTION && waiting_scene_ && s.step == step_) {
-    waiting_scene_ = false;
-    follow(core_->onActed());
-  }
+  if (s.cause != scene_t::CAUSE_ACTION) return;
+  // The scene of an action not yet decided here (its turn comes after
+  // messages still late on other channels) waits.
+  if (step_ < 0 || s.step > step_ || (s.step == step_ && !waiting_scene_)) return defer();
+  if (s.step < step_) return drop(channel::kScene, "the scene of step " + std::to_string(s.step) + " is in the past");
+  goal_distance_ = s.goal_distance;
+  goal_utility_ = s.goal_utility;
+  waiting_scene_ = false;
+  follow(core_->onActed());
 }
 
 void PlannerNode::look(int8_t kind, double x, double y) {
@@ -101,7 +114,9 @@ void PlannerNode::follow(PlannerRequest r) {
 }
 
 void PlannerNode::onFocus(const focus_t& f) {
-  if (!active() || f.seq != seq_) return;  // not the answer awaited (or already had)
+  if (notNow()) return;
+  if (f.seq > seq_) return defer();  // the answer to a request not made yet here
+  if (f.seq < seq_) return drop(channel::kFocus, "request " + std::to_string(f.seq) + " was answered already");
   handled(f.step);
   if (f.kind == focus_t::SCENE_SCAN) {
     if (last_.kind != PlannerRequest::ScanScene || object_) return;
@@ -113,7 +128,11 @@ void PlannerNode::onFocus(const focus_t& f) {
 }
 
 void PlannerNode::onPrediction(const prediction_t& p) {
-  if (!active() || last_.kind != PlannerRequest::ScanScene || p.step != step_ || affordance_) return;
+  if (notNow()) return;
+  // Every scene scan's prediction is taken, in order: one that comes before
+  // its scan was asked for waits.
+  if (p.step < step_) return drop(channel::kPrediction, "step " + std::to_string(p.step) + " is in the past");
+  if (last_.kind != PlannerRequest::ScanScene || p.step != step_ || affordance_) return defer();
   affordance_.emplace();
   std::copy(p.affordance.begin(), p.affordance.end(), affordance_->begin());
   tryObject();
@@ -125,7 +144,9 @@ void PlannerNode::tryObject() {
 }
 
 void PlannerNode::onForward(const forward_prediction_t& m) {
-  if (!active() || m.seq != seq_ || last_.kind != PlannerRequest::Forward) return;
+  if (notNow()) return;
+  if (m.seq > seq_ || (m.seq == seq_ && last_.kind != PlannerRequest::Forward)) return defer();
+  if (m.seq < seq_) return drop(channel::kForwardPrediction, "query " + std::to_string(m.seq) + " was answered already");
   std::vector<ForwardPrediction> preds;
   for (int i = 0; i < m.n_actions; ++i)
     preds.push_back({m.actions[i], std::vector<double>(m.what[i].begin(), m.what[i].end()), m.where_x[i], m.where_y[i]});

@@ -39,6 +39,9 @@ class PlannerNode : public NodeBase {
   void tryObject();
   void endIteration();
   void finish(bool success);
+  // True when a message is not for now: the test is over (dropped) or not
+  // started (deferred).
+  bool notNow();
   bool active() const { return core_ && state() == process_status_t::RUNNING && !finished_; }
 
   std::unique_ptr<Planner> core_;

@@ -141,8 +141,9 @@ void PredictorsNode::onDecision(const decision_t& m) {
   const char* ch = channel::kDecision;
   if (extrinsic()) return;  // the planner's actions: nothing to learn
   if (m.step != current_ || outcome_ != Outcome::Unknown) {
-    if (m.step <= current_) return log_->debug("{}: step {} already handled", ch, m.step);
-    return drop(ch, "step " + std::to_string(m.step) + " has no focus yet (now at " + std::to_string(current_) + ")");
+    if (m.step < current_ || (m.step == current_ && outcome_ != Outcome::Unknown))
+      return drop(ch, "step " + std::to_string(m.step) + " is already decided (now at " + std::to_string(current_) + ")");
+    return defer();  // the focus of that step is still to come
   }
   if (m.acted) {
     outcome_ = Outcome::AwaitingEffect;
@@ -160,7 +161,9 @@ void PredictorsNode::onEffect(const effect_t& m) {
   if (m.step != current_ || outcome_ != Outcome::AwaitingEffect) {
     if (m.step < current_ || (m.step == current_ && outcome_ == Outcome::Learned))
       return drop(ch, "step " + std::to_string(m.step) + " is in the past (already learned)");
-    return drop(ch, "no action was decided at step " + std::to_string(m.step));
+    if (m.step == current_ && outcome_ == Outcome::Passed)
+      return drop(ch, "no action was decided at step " + std::to_string(m.step));
+    return defer();  // the focus or the decision of that step is still to come
   }
   if (m.action != action_)
     return drop(ch, "action " + std::to_string(m.action) + " differs from the decided action " + std::to_string(action_));

@@ -291,6 +291,7 @@ focus_t validFocus(const std::string& run, std::int64_t step) {
   focus_t f;
   f.run_id = run;
   f.step = step;
+  f.serial = 0;
   f.kind = focus_t::SCENE_SCAN;
   f.seq = 0;
   f.x = f.y = 0.5;
@@ -303,6 +304,7 @@ decision_t validDecision(const std::string& run, std::int64_t step) {
   decision_t d;
   d.run_id = run;
   d.step = step;
+  d.serial = 0;
   d.acted = false;
   d.action = decision_t::NONE;
   d.x = d.y = 0.5;
@@ -345,6 +347,7 @@ std::vector<BadInput> badInputs() {
          prediction_t p;
          p.run_id = run;
          p.step = s;
+         p.serial = 0;
          p.x = p.y = 0.5;
          p.n_actions = 4;
          p.affordance = {0.5, 0.5, kNaN, 0.5};
@@ -370,6 +373,7 @@ std::vector<BadInput> badInputs() {
          effect_t e;
          e.run_id = run;
          e.step = s;
+         e.serial = 0;
          e.action = 0;
          e.target_x = e.target_y = -1;
          e.before_x = e.before_y = e.after_y = 0.5;
@@ -384,6 +388,7 @@ std::vector<BadInput> badInputs() {
          object_probe_t p;
          p.run_id = run;
          p.step = 0;
+         p.serial = 0;
          p.n_objects = 0;
          p.size = 1323;
          l.publish("PROBE", &p);
@@ -393,9 +398,11 @@ std::vector<BadInput> badInputs() {
          const focus_t f = validFocus("intruder", s + 1);
          l.publish("FOCUS", &f);
        }},
-      {"StepFromThePast", "FOCUS", "step 40 is in the past",
+      // A message whose serial was had already is a repeat (a resend's answer
+      // reaches every subscriber): dropped without a word.
+      {"RepeatedSerial", "FOCUS", "",
        [](lcm::LCM& l, const std::string& run, std::int64_t s) {
-         const focus_t f = validFocus(run, s - 10);
+         const focus_t f = validFocus(run, s - 10);  // serial 0
          l.publish("FOCUS", &f);
        }},
       {"WrongSceneSize", "SCENE", "field width has size 100, expected 150",
@@ -403,6 +410,7 @@ std::vector<BadInput> badInputs() {
          scene_t sc;
          sc.run_id = run;
          sc.step = s + 1;
+         sc.serial = 0;
          sc.cause = scene_t::CAUSE_OBJECTS_APPEARED;
          sc.scan = true;
          sc.changes_next = false;
@@ -438,6 +446,10 @@ TEST_P(BadInputTest, IsDroppedWithOneLineAndTheRunGoesOnUnchanged) {
       ++lines;
       EXPECT_NE(line.find(bad.reason), std::string::npos) << line;
     }
+  if (std::string(bad.reason).empty()) {
+    EXPECT_EQ(lines, 0) << run.log.str();
+    return;
+  }
   // One line per process that subscribes to the channel (DECISION: environment, eye, predictors).
   EXPECT_GE(lines, 1) << run.log.str();
   EXPECT_LE(lines, 3) << run.log.str();

@@ -18,4 +18,11 @@ inline constexpr const char* kLook = "LOOK";
 inline constexpr const char* kForwardQuery = "FORWARD_QUERY";
 inline constexpr const char* kForwardPrediction = "FORWARD_PREDICTION";
 inline constexpr const char* kExtrinsicResult = "EXTRINSIC_RESULT";
+inline constexpr const char* kResend = "RESEND";
+
+// The channels whose messages carry a serial: every run message except the
+// runner's (RUN_CONFIG, RUN_CONTROL) and the wall-clock ones (STATUS, RESEND).
+inline constexpr const char* kWithSerial[] = {kScene,  kFocus,           kPrediction, kDecision,
+                                              kEffect, kProbe,           kAffordanceTable, kResult,
+                                              kLook,   kForwardQuery,    kForwardPrediction, kExtrinsicResult};
 }  // namespace afford::channel

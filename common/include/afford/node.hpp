@@ -1,10 +1,15 @@
 // The LCM edge shared by every process (ARCHITECTURE.md "How a process is
 // built"): decoding with fingerprint checks, one-line drops naming the channel
 // and reason, the run lifecycle (RUN_CONFIG -> READY -> START -> RUNNING ->
-// STOP) and the STATUS heartbeat.
+// STOP), the STATUS heartbeat, and reliable delivery (afford/serials.hpp):
+// each subscribed channel is taken in serial order without repeats, missing
+// messages are asked for on RESEND, and the history of what this process
+// published in the run answers others' requests. A handler that gets a
+// message before its turn (another channel's message it depends on is late)
+// calls defer(): the message is offered again after each message handled.
 //
-// Channels in:  RUN_CONFIG, RUN_CONTROL (+ whatever the process subscribes)
-// Channels out: STATUS
+// Channels in:  RUN_CONFIG, RUN_CONTROL, STATUS, RESEND (+ what the process subscribes)
+// Channels out: STATUS, RESEND (+ what the process publishes)
 #pragma once
 #include <lcm/lcm-cpp.hpp>
 #include <spdlog/spdlog.h>
@@ -12,6 +17,7 @@
 #include <chrono>
 #include <cmath>
 #include <functional>
+#include <map>
 #include <memory>
 #include <string>
 #include <type_traits>
@@ -23,6 +29,7 @@
 #include "afford/process_status_t.hpp"
 #include "afford/run_config_t.hpp"
 #include "afford/run_control_t.hpp"
+#include "afford/serials.hpp"
 
 namespace afford {
 
@@ -91,8 +98,10 @@ class NodeBase {
       if constexpr (kHasCheck<Msg>) {
         if (const std::string why = checkMessage(msg, config_); !why.empty()) return drop(channel, why);
       }
-      handler(msg);
+      if (!inSerialOrder(channel, msg.serial)) return;
+      dispatch(channel, [handler, msg]() { handler(msg); });
     };
+    tracked_.push_back(channel);
     lcm::Subscription* s = lcm_.subscribe(channel, &Holder::on, holder.get());
     s->setQueueCapacity(queue);
     holders_.push_back(std::move(holder));
@@ -107,10 +116,29 @@ class NodeBase {
   const RunConfig& config() const { return config_; }
   const run_config_t& runConfigMessage() const { return run_msg_; }
 
+  // Publish with the channel's next serial, and keep the bytes in the run's
+  // history (for RESEND).
   template <class Msg>
   void publish(const std::string& channel, const Msg& msg) {
-    lcm_.publish(channel, &msg);
+    Msg out = msg;
+    std::vector<std::vector<std::uint8_t>>& h = history_[channel];
+    out.serial = static_cast<std::int64_t>(h.size());
+    std::vector<std::uint8_t> bytes(static_cast<std::size_t>(out.getEncodedSize()));
+    out.encode(bytes.data(), 0, static_cast<int>(bytes.size()));
+    lcm_.publish(channel, bytes.data(), static_cast<unsigned>(bytes.size()));
+    h.push_back(std::move(bytes));
   }
+  // Called by a handler: this message came before its turn; offer it again later.
+  void defer() { defer_now_ = true; }
+  // For raw subscribers (the logger): take `channel` in serial order too.
+  void trackChannel(const std::string& channel) { tracked_.push_back(channel); }
+  void expectSerial(const std::string& channel, std::int64_t next) { serials_.expect(channel, next); }
+  bool inSerialOrder(const std::string& channel, std::int64_t serial);
+  std::int64_t missingMessages() const { return serials_.missing(); }
+  // On STOP, leave only once this says so (or after `stop_grace` seconds):
+  // the logger waits for the messages still missing from its log.
+  virtual bool readyToLeave() { return true; }
+  virtual void onLeaveTimeout() {}
 
   // Build the core for a run; throw ConfigError to refuse the configuration.
   virtual void onConfigured(const RunConfig& config) = 0;
@@ -128,7 +156,13 @@ class NodeBase {
   bool acceptRun(const std::string& channel, const std::string& run_id);
   void onRunConfig(const lcm::ReceiveBuffer* rbuf);
   void onRunControl(const lcm::ReceiveBuffer* rbuf);
+  void onStatus(const lcm::ReceiveBuffer* rbuf);
+  void onResend(const lcm::ReceiveBuffer* rbuf);
   void publishStatus();
+  void askMissing();
+  void dispatch(const std::string& channel, std::function<void()> call);
+  void retryDeferred();
+  void forgetRun();
 
   std::string process_;
   std::vector<std::unique_ptr<Holder>> holders_;
@@ -139,6 +173,19 @@ class NodeBase {
   std::string detail_;
   int64_t last_step_ = -1;
   std::chrono::steady_clock::time_point next_beat_{};
+  // Reliable delivery.
+  std::vector<std::string> tracked_;  // subscribed channels
+  SerialTracker serials_;
+  std::map<std::string, std::vector<std::vector<std::uint8_t>>> history_;  // published, by channel
+  std::string history_run_;  // the run of history_ (kept after STOP for late requests)
+  struct Deferred {
+    std::string channel;
+    std::function<void()> call;
+  };
+  std::vector<Deferred> deferred_;
+  bool defer_now_ = false, retrying_ = false;
+  bool stop_pending_ = false;
+  std::chrono::steady_clock::time_point stop_deadline_{};
 };
 
 // The main() of every process: flags (--lcm-url, --log-level, plus extras),
