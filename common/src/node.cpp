@@ -81,6 +81,7 @@ void NodeBase::onRunConfig(const lcm::ReceiveBuffer* rbuf) {
     st.pid = static_cast<int32_t>(getpid());
     st.state = process_status_t::FAILED;
     st.detail = e.what();
+    st.n_channels = 0;  // nothing published in that run
     lcm_.publish("STATUS", &st);
     return;
   }

@@ -190,7 +190,11 @@ RunOutcome RunDriver::run(const RunSpec& spec, const std::function<void()>& pump
   auto last_rejoin = Clock::now() - std::chrono::seconds(10);
   // A process that was killed can be started again: it is silent meanwhile.
   const auto silence = std::chrono::duration<double>(spec.stall_seconds);
-  while (!have_result_) {
+  const bool logged = std::find(spec.processes.begin(), spec.processes.end(), "logger") != spec.processes.end();
+  // The logger must be in the run to close its log: one restarted after the
+  // last step still catches up first.
+  auto loggerIn = [&] { return !logged || (seen_.count("logger") && seen_["logger"].run_id == spec.run_id); };
+  while (!have_result_ || !loggerIn()) {
     if (auto h = health(); !h.empty()) return fail(h);
     if (auto f = failedProcess(); !f.empty()) return fail(f);
     pump();
@@ -210,8 +214,8 @@ RunOutcome RunDriver::run(const RunSpec& spec, const std::function<void()>& pump
     }
     // A process of the run is free (restarted): give it the run again.
     if (!rejoining.empty() && now - last_rejoin > std::chrono::seconds(1)) {
-      log_->warn("run '{}': process {} is free again (restarted?): sending it the run's configuration", spec.run_id,
-                 rejoining);
+      log_->warn("run '{}': process {} is free again (restarted?) at step {}: sending it the run's configuration",
+                 spec.run_id, rejoining, step);
       lcm_.publish(channel::kRunConfig, &cfg);
       lcm_.publish(channel::kRunControl, &start);
       last_rejoin = now;
@@ -235,7 +239,6 @@ RunOutcome RunDriver::run(const RunSpec& spec, const std::function<void()>& pump
   stop.command = run_control_t::STOP;
   stop.step = spec.steps;
   lcm_.publish(channel::kRunControl, &stop);
-  const bool logged = std::find(spec.processes.begin(), spec.processes.end(), "logger") != spec.processes.end();
   deadline = Clock::now() + std::chrono::seconds(15);
   while (logged && !logger_done_) {
     if (auto h = health(); !h.empty()) return fail(h);

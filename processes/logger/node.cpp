@@ -68,7 +68,7 @@ void LoggerNode::onAny(const lcm::ReceiveBuffer* rbuf, const std::string& ch) {
     if (!decodeAtEdge(rbuf, st, reason)) return;
     if (st.run_id == runId()) {
       log_file_->sawProcess(st.process, st.pid);
-      left_.emplace(st.process, false);
+      if (st.process != process()) left_.emplace(st.process, false);
     } else if (st.counts_run == runId() && left_.count(st.process)) {
       left_[st.process] = true;  // it left the run: its counts are final
     }

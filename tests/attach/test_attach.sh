@@ -11,7 +11,7 @@ root=$(cd "$(dirname "$0")/../.." && pwd)
 source "$root/tests/netns.sh"
 enter_private_netns "$0" "$@"
 
-url="udpm://239.255.76.67:7992?ttl=0"
+url="udpm://239.255.76.67:7992?ttl=0&recv_buf_size=2097152"
 for p in environment eye predictors motivation; do
   "$build/bin/afford-$p" --lcm-url "$url" >"$out/$p.log" 2>&1 &
 done
