@@ -1,0 +1,155 @@
+#!/usr/bin/env bash
+# Start, stop, restart and watch the processes of a run by hand.
+#
+#   scripts/procs.sh start   RUN [PROCESS...]   start processes (default: all six) on RUN's bus
+#   scripts/procs.sh stop    RUN [PROCESS...]   SIGINT, then SIGKILL after $AFFORD_GRACE s (default 5)
+#   scripts/procs.sh restart RUN PROCESS...     stop, then start again with the same command
+#   scripts/procs.sh kill    RUN PROCESS...     kill -9 (to try a live restart)
+#   scripts/procs.sh status  RUN                pid and liveness, then each process's state,
+#                                               run id and last step handled (its STATUS)
+#   scripts/procs.sh run     RUN EXPERIMENT [afford experiment options...]
+#                                               drive runs on the group (run ids RUN-<exp>-<sys>-s<seed>)
+#   scripts/procs.sh exec    RUN COMMAND...     run a command on RUN's bus (spy, viewer, lcm-logger)
+#
+# PROCESS: environment eye predictors motivation planner logger.
+# Each process's output goes to logs/RUN/<process>.log (appended), its pid to
+# logs/RUN/<process>.pid, its command line to logs/RUN/<process>.cmd; the bus
+# to logs/RUN/lcm-url. The bus is $AFFORD_URL (default below) at `start`.
+#
+# Multicast needs a route. By default the group lives in the named network
+# namespace "afford" (created at the first start: loopback only, multicast
+# routed over lo), which every terminal can enter, so no datagram leaves the
+# machine. AFFORD_NETNS=none uses the current namespace instead (it must
+# route 224.0.0.0/4, e.g. inside `unshare --net`).
+set -euo pipefail
+root=$(cd "$(dirname "$0")/.." && pwd)
+bin=${AFFORD_BIN:-$root/build/bin}
+logs=${AFFORD_LOGS:-$root/logs}
+netns=${AFFORD_NETNS:-afford}
+grace=${AFFORD_GRACE:-5}
+all=(environment eye predictors motivation planner logger)
+
+usage() { sed -n '2,23p' "$0" | sed 's/^# \{0,1\}//'; exit 2; }
+die() { echo "procs.sh: $*" >&2; exit 1; }
+[[ $# -ge 2 ]] || usage
+cmd=$1 run=$2
+shift 2
+[[ $run =~ ^[A-Za-z0-9._-]+$ ]] || die "run id '$run': use letters, digits, '.', '_' or '-'"
+dir=$logs/$run
+
+in_ns() {  # run "$@" in the group's namespace
+  if [[ $netns == none ]]; then "$@"; else ip netns exec "$netns" "$@"; fi
+}
+ensure_ns() {
+  [[ $netns == none ]] && return 0
+  if ! ip netns list | grep -qw "^$netns"; then
+    ip netns add "$netns" || die "cannot create network namespace '$netns' (root needed; or AFFORD_NETNS=none)"
+  fi
+  ip netns exec "$netns" ip link set lo up multicast on
+  ip netns exec "$netns" ip route replace 224.0.0.0/4 dev lo
+}
+check_process() {
+  local p
+  for p in "${all[@]}"; do [[ $1 == "$p" ]] && return 0; done
+  die "unknown process '$1' (one of: ${all[*]})"
+}
+url() { [[ -f $dir/lcm-url ]] || die "no group '$run' (scripts/procs.sh start $run first)"; cat "$dir/lcm-url"; }
+running() {  # pid $1 exists and is not a zombie (a killed process nobody has reaped yet)
+  [[ -r /proc/$1/stat ]] && [[ $(awk '{print $3}' "/proc/$1/stat" 2>/dev/null) != Z ]]
+}
+alive() { [[ -f $dir/$1.pid ]] && running "$(cat "$dir/$1.pid")"; }
+
+start_one() {
+  local p=$1 u=$2
+  check_process "$p"
+  alive "$p" && { echo "$p is running already (pid $(cat "$dir/$p.pid"))"; return 0; }
+  local line=("$bin/afford-$p" --lcm-url "$u")
+  [[ $p == logger ]] && line+=(--log-dir "$logs")
+  printf '%q ' "${line[@]}" >"$dir/$p.cmd"
+  echo "=== $(date -Is) start: $(cat "$dir/$p.cmd")" >>"$dir/$p.log"
+  # A simple command in the background, so that $! is the process itself
+  # (`ip netns exec` execs it), and signals reach it.
+  if [[ $netns == none ]]; then
+    "${line[@]}" >>"$dir/$p.log" 2>&1 </dev/null &
+  else
+    ip netns exec "$netns" "${line[@]}" >>"$dir/$p.log" 2>&1 </dev/null &
+  fi
+  echo $! >"$dir/$p.pid"
+  echo "$p started (pid $!, output in $dir/$p.log)"
+}
+
+stop_one() {
+  local p=$1
+  check_process "$p"
+  alive "$p" || { echo "$p is not running"; return 0; }
+  local pid
+  pid=$(cat "$dir/$p.pid")
+  kill -INT "$pid"
+  for _ in $(seq $((grace * 10))); do running "$pid" || break; sleep 0.1; done
+  if running "$pid"; then
+    kill -KILL "$pid"
+    echo "$p (pid $pid) did not stop within ${grace} s: killed"
+  else
+    echo "$p (pid $pid) stopped"
+  fi
+}
+
+case $cmd in
+  start)
+    mkdir -p "$dir"
+    ensure_ns
+    [[ -f $dir/lcm-url ]] || echo "${AFFORD_URL:-udpm://239.255.76.67:7700?ttl=0&recv_buf_size=2097152}" >"$dir/lcm-url"
+    u=$(url)
+    procs=("$@")
+    [[ ${#procs[@]} -gt 0 ]] || procs=("${all[@]}")
+    for p in "${procs[@]}"; do start_one "$p" "$u"; done
+    if [[ $netns == none ]]; then echo "bus: $u"; else echo "bus: $u (network namespace '$netns')"; fi
+    ;;
+  stop)
+    url >/dev/null
+    procs=("$@")
+    [[ ${#procs[@]} -gt 0 ]] || procs=("${all[@]}")
+    for p in "${procs[@]}"; do stop_one "$p"; done
+    ;;
+  restart)
+    [[ $# -ge 1 ]] || usage
+    u=$(url)
+    ensure_ns
+    for p in "$@"; do stop_one "$p"; start_one "$p" "$u"; done
+    ;;
+  kill)
+    [[ $# -ge 1 ]] || usage
+    url >/dev/null
+    for p in "$@"; do
+      check_process "$p"
+      alive "$p" || { echo "$p is not running"; continue; }
+      pid=$(cat "$dir/$p.pid")
+      kill -KILL "$pid"
+      for _ in $(seq 50); do running "$pid" || break; sleep 0.1; done
+      echo "$p (pid $pid) killed with SIGKILL"
+    done
+    ;;
+  status)
+    u=$(url)
+    printf '%-12s %8s  %s\n' process pid alive
+    for p in "${all[@]}"; do
+      [[ -f $dir/$p.pid ]] || continue
+      if alive "$p"; then a=yes; else a=no; fi
+      printf '%-12s %8s  %s\n' "$p" "$(cat "$dir/$p.pid")" "$a"
+    done
+    echo
+    in_ns "$bin/afford" status --lcm-url "$u"
+    ;;
+  run)
+    [[ $# -ge 1 ]] || usage
+    u=$(url)
+    in_ns "$bin/afford" experiment "$@" --attach "$u" --run-prefix "$run" --log-root "$logs"
+    ;;
+  exec)
+    [[ $# -ge 1 ]] || usage
+    u=$(url)
+    export AFFORD_URL=$u LCM_DEFAULT_URL=$u
+    in_ns "$@"
+    ;;
+  *) usage ;;
+esac
