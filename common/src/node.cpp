@@ -179,17 +179,22 @@ bool NodeBase::inSerialOrder(const std::string& channel, std::int64_t serial) {
   return false;
 }
 
+void publishResend(lcm::LCM& lcm, const std::string& run_id, const SerialTracker::Request& r,
+                   const std::string& requester) {
+  resend_t m;
+  m.run_id = run_id;
+  m.step = 0;
+  m.channel = r.channel;
+  m.first = r.first;
+  m.last = r.last;
+  m.requester = requester;
+  lcm.publish(channel::kResend, &m);
+}
+
 void NodeBase::askMissing() {
   for (const SerialTracker::Request& r : serials_.due(std::chrono::steady_clock::now())) {
-    resend_t m;
-    m.run_id = run_id_;
-    m.step = 0;
-    m.channel = r.channel;
-    m.first = r.first;
-    m.last = r.last;
-    m.requester = process_;
     log_->debug("{}: asking for serials {}..{}", r.channel, r.first, r.last);
-    lcm_.publish(channel::kResend, &m);
+    publishResend(lcm_, run_id_, r, process_);
   }
 }
 

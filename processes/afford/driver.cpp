@@ -7,7 +7,6 @@
 #include "afford/extrinsic_result_t.hpp"
 #include "afford/node.hpp"
 #include "afford/process_status_t.hpp"
-#include "afford/resend_t.hpp"
 #include "afford/run_config_t.hpp"
 #include "afford/run_control_t.hpp"
 #include "afford/run_result_t.hpp"
@@ -82,16 +81,7 @@ bool RunDriver::inOrder(const std::string& channel, std::int64_t serial) {
 }
 
 void RunDriver::askMissing() {
-  for (const SerialTracker::Request& r : serials_.due(Clock::now())) {
-    resend_t m;
-    m.run_id = run_id_;
-    m.step = 0;
-    m.channel = r.channel;
-    m.first = r.first;
-    m.last = r.last;
-    m.requester = "runner";
-    lcm_.publish(channel::kResend, &m);
-  }
+  for (const SerialTracker::Request& r : serials_.due(Clock::now())) publishResend(lcm_, run_id_, r, "runner");
 }
 
 RunOutcome RunDriver::run(const RunSpec& spec, const std::function<void()>& pump,

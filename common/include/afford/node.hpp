@@ -69,6 +69,10 @@ inline constexpr bool kHasCheck = false;
 template <class Msg>
 inline constexpr bool kHasCheck<Msg, std::void_t<decltype(checkMessage(std::declval<const Msg&>(), std::declval<const RunConfig&>()))>> = true;
 
+// Ask the publisher of r.channel for the serials r.first..r.last again (RESEND).
+void publishResend(lcm::LCM& lcm, const std::string& run_id, const SerialTracker::Request& r,
+                   const std::string& requester);
+
 class NodeBase {
  public:
   NodeBase(lcm::LCM& lcm, std::string process, std::shared_ptr<spdlog::logger> log);
