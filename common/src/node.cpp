@@ -26,9 +26,13 @@ void NodeBase::subscribeRaw(const std::string& channel_regex,
                             std::function<void(const lcm::ReceiveBuffer*, const std::string&)> handler, int queue) {
   auto holder = std::make_unique<Holder>();
   holder->fn = std::move(handler);
-  lcm::Subscription* s = lcm_.subscribe(channel_regex, &Holder::on, holder.get());
-  s->setQueueCapacity(queue);
+  holder->sub = lcm_.subscribe(channel_regex, &Holder::on, holder.get());
+  holder->sub->setQueueCapacity(queue);
   holders_.push_back(std::move(holder));
+}
+
+NodeBase::~NodeBase() {
+  for (const auto& h : holders_) lcm_.unsubscribe(h->sub);
 }
 
 void NodeBase::drop(const std::string& channel, const std::string& reason) {

@@ -190,7 +190,7 @@ RunOutcome RunDriver::run(const RunSpec& spec, const std::function<void()>& pump
     pump();
     askMissing();
     const auto now = Clock::now();
-    std::int64_t step = -1;
+    std::int64_t step = -1, handled = 0;  // the furthest step; the steps of all, in the run
     std::string rejoining;
     for (const auto& p : spec.processes) {
       auto it = seen_.find(p);
@@ -201,6 +201,7 @@ RunOutcome RunDriver::run(const RunSpec& spec, const std::function<void()>& pump
       if (it->second.run_id.empty() && it->second.state == process_status_t::WAITING)
         rejoining += (rejoining.empty() ? "" : ", ") + p;
       step = std::max(step, it->second.step);
+      if (it->second.run_id == spec.run_id) handled += it->second.step + 1;
     }
     // A process of the run is free (restarted): give it the run again.
     if (!rejoining.empty() && now - last_rejoin > std::chrono::seconds(1)) {
@@ -210,8 +211,9 @@ RunOutcome RunDriver::run(const RunSpec& spec, const std::function<void()>& pump
       lcm_.publish(channel::kRunControl, &start);
       last_rejoin = now;
     }
-    if (step > progress) {
-      progress = step;
+    // Progress is any process moving on, a restarted one catching up included.
+    if (handled != progress) {
+      progress = handled;
       progress_at = now;
     } else if (now - progress_at > std::chrono::duration<double>(spec.stall_seconds)) {
       std::string where;

@@ -5,6 +5,8 @@
 
 #include <cmath>
 #include <limits>
+#include <map>
+#include <memory>
 #include <sstream>
 
 #include "afford/channels.hpp"
@@ -25,13 +27,22 @@ namespace {
 // Publishes something malformed into a running run: (lcm, run id, current step).
 using Injector = std::function<void(lcm::LCM&, const std::string&, std::int64_t)>;
 
+// A process "killed" (its node destroyed, with whatever was in flight to it)
+// and started anew, once it has handled step `at`.
+struct Restart {
+  std::string process;  // empty: none
+  std::int64_t at = 0;
+};
+
 struct InProcessRun {
   std::ostringstream log;
   std::vector<test::Event> events;
   RunOutcome outcome;
+  bool restarted = false;
+  std::int64_t restarted_at = -1;  // the last step the killed node had handled
 
   InProcessRun(const std::string& yaml, System system, std::int64_t seed, std::int64_t steps, const Injector& inject = {},
-               std::int64_t inject_at = 50, bool leave_stale_run = false) {
+               std::int64_t inject_at = 50, bool leave_stale_run = false, const Restart& restart = {}) {
     lcm::LCM lcm("memq://");
     auto sink = std::make_shared<spdlog::sinks::ostream_sink_mt>(log);
     auto logger = [&](const std::string& name) {
@@ -40,11 +51,16 @@ struct InProcessRun {
       l->set_level(spdlog::level::info);
       return l;
     };
-    EnvironmentNode env(lcm, logger("environment"));
-    EyeNode eye(lcm, logger("eye"));
-    PredictorsNode predictors(lcm, logger("predictors"));
-    MotivationNode motivation(lcm, logger("motivation"));
-    PlannerNode planner(lcm, logger("planner"));
+    std::map<std::string, std::unique_ptr<NodeBase>> nodes;
+    auto start = [&](const std::string& p) {
+      nodes[p].reset();  // unsubscribes: what was queued for it is lost, as in a kill
+      if (p == "environment") nodes[p] = std::make_unique<EnvironmentNode>(lcm, logger(p));
+      if (p == "eye") nodes[p] = std::make_unique<EyeNode>(lcm, logger(p));
+      if (p == "predictors") nodes[p] = std::make_unique<PredictorsNode>(lcm, logger(p));
+      if (p == "motivation") nodes[p] = std::make_unique<MotivationNode>(lcm, logger(p));
+      if (p == "planner") nodes[p] = std::make_unique<PlannerNode>(lcm, logger(p));
+    };
+    for (const char* p : {"environment", "eye", "predictors", "motivation", "planner"}) start(p);
     RunDriver driver(lcm, logger("runner"));
     struct Tap {
       InProcessRun* run;
@@ -77,11 +93,18 @@ struct InProcessRun {
     spec.extrinsic = YAML::Load(yaml)["phase"].as<std::string>() == "extrinsic";
     spec.processes = {"environment", "eye", "predictors", spec.extrinsic ? "planner" : "motivation"};
     spec.stall_seconds = 20;
+    auto maybeRestart = [&] {
+      if (restart.process.empty() || restarted) return;
+      const NodeBase& v = *nodes.at(restart.process);
+      if (v.runId() != spec.run_id || v.lastStep() < restart.at) return;
+      restarted_at = v.lastStep();
+      start(restart.process);
+      restarted = true;
+    };
     auto pump = [&] {
-      while (lcm.handleTimeout(0) > 0) {
-      }
+      while (lcm.handleTimeout(0) > 0) maybeRestart();  // one message at a time
       lcm.handleTimeout(2);
-      env.tick(), eye.tick(), predictors.tick(), motivation.tick(), planner.tick();
+      for (auto& [name, node] : nodes) node->tick();
     };
     if (leave_stale_run) {
       // The processes take an earlier run whose STOP never comes (a lost datagram).
@@ -195,6 +218,27 @@ TEST(Choreography, ARejectedConfigFailsTheRunNamingProcessAndKey) {
   EXPECT_FALSE(run.outcome.ok);
   EXPECT_NE(run.outcome.error.find("eye.focus_side"), std::string::npos) << run.outcome.error;
   EXPECT_NE(run.outcome.error.find("process '"), std::string::npos) << run.outcome.error;
+}
+
+// Live restart in one process: a node destroyed mid-run and made anew is
+// given the run again by the runner, catches up from its peers' histories
+// (RESEND), and the run ends as if nothing had happened.
+TEST(Choreography, AProcessRestartedMidRunCatchesUpAndTheRunIsUnchanged) {
+  const std::string yaml = baseYaml(System::IMP, 400);
+  InProcessRun plain(yaml, System::IMP, 3, 400);
+  ASSERT_TRUE(plain.outcome.ok) << plain.outcome.error;
+  for (const char* p : {"environment", "eye", "predictors", "motivation"}) {
+    InProcessRun run(yaml, System::IMP, 3, 400, {}, 50, false, Restart{p, 150});
+    ASSERT_TRUE(run.outcome.ok) << p << ": " << run.outcome.error;
+    ASSERT_TRUE(run.restarted) << p;
+    EXPECT_GE(run.restarted_at, 150) << p;
+    EXPECT_LT(run.restarted_at, 399) << p;
+    EXPECT_NE(run.log.str().find(std::string("process ") + p + " is free again"), std::string::npos) << run.log.str();
+    EXPECT_EQ(run.outcome.weights_checksum, plain.outcome.weights_checksum) << p;
+    ASSERT_EQ(run.outcome.curve.size(), plain.outcome.curve.size()) << p;
+    for (std::size_t i = 0; i < plain.outcome.curve.size(); ++i)
+      EXPECT_EQ(run.outcome.curve[i].affordance, plain.outcome.curve[i].affordance) << p << " curve point " << i;
+  }
 }
 
 // One extrinsic test both ways: as the process choreography (in one process)

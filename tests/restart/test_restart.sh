@@ -4,6 +4,8 @@
 # complete with the same final weights and the same summary as an
 # uninterrupted run, and its log (the segments together) must replay to them.
 #   tests/restart/test_restart.sh BUILD_DIR WORK_DIR PROCESS [SEED]
+# AFFORD_KILL_STEP=N kills at step N (at least) instead of a random step; for the
+# planner AFFORD_KILL_DELAY_MS=N kills at N ms into its second test.
 # PROCESS: environment, eye, predictors, motivation, logger (killed during the
 # intrinsic run) or planner (killed during the extrinsic tests).
 set -euo pipefail
@@ -15,6 +17,18 @@ seed=${4:-$((1 + RANDOM % 20))}
 root=$(cd "$(dirname "$0")/../.." && pwd)
 source "$root/tests/netns.sh"
 enter_private_netns "$0" "$@"
+# On failure, what the runner and the processes said, so a CI log shows why.
+diagnose() {
+  local rc=$?
+  kill $(jobs -p) 2>/dev/null || true
+  ((rc == 0)) && return
+  echo "--- diagnostics (seed $seed, $victim): $(cat "$out/kill.txt" 2>/dev/null)"
+  tail -n 15 "$out/attached.txt" 2>/dev/null || true
+  for p in "${processes[@]}"; do
+    grep -h -E "\] \[(warning|error|critical)\]" "$out/$p.log" 2>/dev/null | tail -n 6 | sed "s/^/$p: /" || true
+  done
+}
+trap diagnose EXIT
 
 url="udpm://239.255.76.67:7993?ttl=0&recv_buf_size=2097152"
 steps=3000
@@ -40,19 +54,32 @@ echo "seed $seed, killing $victim"
   --out "$out/attached" --log-root "$out/logs" >"$out/attached.txt" 2>&1 &
 runner=$!
 
-# The moment: a random time into the phase the process serves.
-if [[ $victim == planner ]]; then  # a random moment of the second test
+# The moment: in the middle of the victim's work. The planner: a random time
+# into the second test. The others: a random step of the intrinsic run, read
+# from the STATUS heartbeats (a time would land after the run on a fast
+# machine, or between runs on a slow one).
+if [[ $victim == planner ]]; then
   for _ in $(seq 6000); do grep -q "configured for run '.*-e1'" "$out/planner.log" && break; sleep 0.01; done
-  delay=$((20 + RANDOM % 200))
+  delay=${AFFORD_KILL_DELAY_MS:-$((20 + RANDOM % 200))}
+  sleep "$(printf '%d.%03d' $((delay / 1000)) $((delay % 1000)))"
+  moment="${delay} ms into its second test"
 else
-  for _ in $(seq 600); do grep -q "configured for run" "$out/$victim.log" && break; sleep 0.1; done
-  delay=$((300 + RANDOM % 1700))  # ms into the intrinsic run (it lasts 4-7 s)
+  # The run's step: the furthest process's (the logger counts no steps).
+  target=${AFFORD_KILL_STEP:-$((200 + RANDOM % 1000))}  # of 3000: heartbeats come every 0.5 s, so it overshoots
+  at=-1
+  for _ in $(seq 200); do
+    at=$("$build/bin/afford" status --lcm-url "$url" --seconds 0.55 |
+      awk -v p="$victim" -v r="restart-base-IMP-s$seed" '$5 == r && $4 > max {max = $4}
+        $1 == p && ($3 == "running" || $3 == "done") && $5 == r {in_run = 1} END {if (in_run) print max + 0}')
+    [[ -n $at ]] && ((at >= target)) && break
+    kill -0 "$runner" 2>/dev/null || break
+  done
+  moment="at step ${at:-?} of the intrinsic run (aimed at $target)"
 fi
-sleep "$(printf '%d.%03d' $((delay / 1000)) $((delay % 1000)))"
 kill -0 "$runner" 2>/dev/null || { cat "$out/attached.txt"; echo "the run ended before the kill"; exit 1; }
 kill -9 "${pid[$victim]}"
 wait "${pid[$victim]}" 2>/dev/null || true
-echo "killed $victim ${delay} ms into its phase" | tee "$out/kill.txt"
+echo "killed $victim $moment" | tee "$out/kill.txt"
 sleep 0.5
 start "$victim"
 wait "$runner" || { cat "$out/attached.txt"; echo "the run with a restarted $victim failed"; exit 1; }

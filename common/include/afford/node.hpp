@@ -76,7 +76,7 @@ void publishResend(lcm::LCM& lcm, const std::string& run_id, const SerialTracker
 class NodeBase {
  public:
   NodeBase(lcm::LCM& lcm, std::string process, std::shared_ptr<spdlog::logger> log);
-  virtual ~NodeBase() = default;
+  virtual ~NodeBase();  // unsubscribes: the bus may outlive the node (a restart in one process)
   NodeBase(const NodeBase&) = delete;
   NodeBase& operator=(const NodeBase&) = delete;
 
@@ -85,6 +85,7 @@ class NodeBase {
   const std::string& process() const { return process_; }
   const std::string& runId() const { return run_id_; }
   int8_t state() const { return state_; }
+  std::int64_t lastStep() const { return last_step_; }  // the last step handled in the run (-1: none)
   // Leave the run (used on STOP and at shutdown); subclasses flush in onStop().
   void leaveRun();
 
@@ -106,8 +107,8 @@ class NodeBase {
       dispatch(channel, [handler, msg]() { handler(msg); });
     };
     tracked_.push_back(channel);
-    lcm::Subscription* s = lcm_.subscribe(channel, &Holder::on, holder.get());
-    s->setQueueCapacity(queue);
+    holder->sub = lcm_.subscribe(channel, &Holder::on, holder.get());
+    holder->sub->setQueueCapacity(queue);
     holders_.push_back(std::move(holder));
   }
   // Raw subscription (logger): no decoding, no run check.
@@ -155,6 +156,7 @@ class NodeBase {
  private:
   struct Holder {
     std::function<void(const lcm::ReceiveBuffer*, const std::string&)> fn;
+    lcm::Subscription* sub = nullptr;
     void on(const lcm::ReceiveBuffer* rbuf, const std::string& channel) { fn(rbuf, channel); }
   };
   bool acceptRun(const std::string& channel, const std::string& run_id);
