@@ -61,8 +61,6 @@ json describe(const std::vector<double>& v) {
           {"max", sorted.empty() ? 0.0 : sorted.back()}};
 }
 
-json welchJson(const WelchResult& w) { return {{"t", w.t}, {"df", w.df}, {"p", w.p}}; }
-
 // Samples of one system, scenario and condition: per test, and per agent (means).
 struct Samples {
   std::vector<double> utility, checked_per_sub_goal;

@@ -51,7 +51,7 @@ RunDriver::RunDriver(lcm::LCM& lcm, std::shared_ptr<spdlog::logger> log) : lcm_(
     e.attempts = m.attempts;
     e.utility = m.utility;
     for (const auto& g : m.sub_goals)
-      e.sub_goals.push_back({g.x, g.y, g.iterations, g.actions_checked, g.actions_taken, g.reached});
+      e.sub_goals.push_back({g.x, g.y, g.iterations, g.actions_checked, g.actions_taken, g.reached != 0});
     have_result_ = true;
   });
   listen(channel::kResult, [this](const lcm::ReceiveBuffer* b) {
