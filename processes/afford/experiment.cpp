@@ -300,14 +300,20 @@ std::vector<RunOutcome> executeRuns(const std::vector<PlannedRun>& runs, const E
 }
 
 // The tests of every condition and scenario from each intrinsic run that left
-// a checkpoint. An agent without the checkpoint the design asks for (too few
-// actions for extrinsic.after_actions) is not tested; `errors` says why.
+// a checkpoint. An agent without the checkpoint the design asks for (not
+// written, or too few actions for extrinsic.after_actions) is not tested;
+// `errors` says why.
 std::vector<PlannedRun> planExtrinsic(const Plan& plan, const std::vector<RunOutcome>& trained,
                                       const ExperimentOptions& o, std::vector<std::string>& errors) {
   std::vector<PlannedRun> tests;
   for (const auto& p : plan.runs) {
     const RunOutcome& r = trained[p.index];
-    if (!r.ok || r.checkpoint.empty()) continue;
+    if (!r.ok) continue;  // a failed run is reported as such
+    if (r.checkpoint.empty()) {
+      errors.push_back("run '" + p.spec.run_id + "' left no checkpoint of its predictors (they could not write it: " +
+                       "see their log), so its agent is not tested");
+      continue;
+    }
     std::string checkpoint = r.checkpoint;
     if (plan.design.after_actions > 0) {
       checkpoint = actionsCheckpoint(r.checkpoint, plan.design.after_actions);

@@ -5,6 +5,7 @@
 #include <filesystem>
 #include <fstream>
 #include <stdexcept>
+#include <unistd.h>
 
 #include "afford/checksum.hpp"
 #include "afford/rng.hpp"
@@ -109,7 +110,9 @@ static void forEachWeightArray(F&& f, std::vector<Unit>& aff, std::vector<Unit>&
 }
 
 void Predictors::save(const std::string& path) const {
-  const std::string tmp = path + ".tmp";
+  // A file of this process's own, renamed into place: a reader never sees half
+  // a checkpoint, and two writers of the same path do not clobber each other.
+  const std::string tmp = path + ".tmp." + std::to_string(getpid());
   std::error_code ec;
   const auto parent = std::filesystem::path(path).parent_path();
   if (!parent.empty()) std::filesystem::create_directories(parent, ec);

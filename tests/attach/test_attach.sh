@@ -32,7 +32,7 @@ done
 
 # The same run hosted by the runner (in one process): the same weights.
 "$build/bin/afford" experiment base --system IGN --reps 1 --steps 1500 --seed 4 --transport memq --keep-logs none \
-  --quiet --out "$out/hosted"
+  --quiet --out "$out/hosted" --log-root "$out/hosted-logs"
 sum() { grep -o '"weights_checksum": "[0-9a-f]*"' "$1/summary.json"; }
 hosted_sum=$(grep -o '"weights_checksum": "[0-9a-f]*"' "$out/hosted/summary.json" | grep -o '[0-9a-f]\{16\}')
 echo "attached: $(sum "$out/attached")  hosted: $(sum "$out/hosted")"

@@ -153,7 +153,8 @@ TEST(Processes, RealProcessesSolveAnExtrinsicScenario) {
 TEST(Processes, TheUtilityDesignComparesThePlannersPerBudget) {
   const std::string dir = test::tempDir("design-utility");
   const auto r = test::runCommand(test::afford("experiment utility --reps 2 --steps 4000 --extrinsic-reps 3 --jobs 2"
-                                               " --transport memq --keep-logs none --quiet --out " + dir));
+                                               " --transport memq --keep-logs none --quiet --out " + dir +
+                                               " --log-root " + dir + "/logs"));
   ASSERT_EQ(r.exit_code, 0) << r.output;
   const json s = readJson(fs::path(dir) / "summary.json");
   EXPECT_EQ(s["systems"].size(), 1u);  // default_systems: IMP only
@@ -176,7 +177,8 @@ TEST(Processes, TheUtilityDesignComparesThePlannersPerBudget) {
 TEST(Processes, TheSearchDesignCountsActionsCheckedWithAndWithoutRestriction) {
   const std::string dir = test::tempDir("design-search");
   const auto r = test::runCommand(test::afford("experiment search-reduction --reps 1 --steps 4000 --extrinsic-reps 3"
-                                               " --transport memq --keep-logs none --quiet --out " + dir));
+                                               " --transport memq --keep-logs none --quiet --out " + dir +
+                                               " --log-root " + dir + "/logs"));
   ASSERT_EQ(r.exit_code, 0) << r.output;
   const json s = readJson(fs::path(dir) / "summary.json");
   const json& q = s["search"];
@@ -320,11 +322,28 @@ TEST(Processes, ARunNeverWritesIntoTheLogFolderOfAnotherRun) {
   EXPECT_FALSE(fs::exists(dir + "/out"));
 }
 
+// The predictors cannot write the checkpoint (the log root is a file): the
+// agent is not tested, and the experiment says so and fails.
+TEST(Processes, AnAgentWithoutACheckpointIsNotTestedAndTheExperimentSaysWhy) {
+  const std::string dir = test::tempDir("no-checkpoint");
+  std::ofstream(dir + "/not-a-folder") << "x";
+  const auto r = test::runCommand(test::afford("experiment base --system IMP --reps 1 --steps 50 --extrinsic-reps 1"
+                                               " --scenarios scenario1 --transport memq --keep-logs none --quiet"
+                                               " --run-prefix nc --out " + dir + "/out --log-root " + dir +
+                                               "/not-a-folder"));
+  EXPECT_EQ(r.exit_code, 1) << r.output;
+  EXPECT_NE(r.output.find("cannot write checkpoint"), std::string::npos) << r.output;
+  EXPECT_NE(r.output.find("run 'nc-base-IMP-s1' left no checkpoint"), std::string::npos) << r.output;
+  const json s = readJson(fs::path(dir) / "out" / "summary.json");
+  EXPECT_EQ(s["extrinsic_tests"], 0);
+  ASSERT_EQ(s["untested_agents"].size(), 1u);
+}
+
 TEST(Processes, AKilledProcessEndsTheRunWithinSecondsNamingIt) {
   const std::string dir = test::tempDir("kill");
   const int port = 7840;
   const std::string cmd = test::afford("experiment base --system IMP --reps 1 --steps 10000000 --keep-logs none --out " +
-                                       dir + " --base-port " + std::to_string(port));
+                                       dir + " --log-root " + dir + "/logs --base-port " + std::to_string(port));
   std::system(("sh -c '(" + cmd + " > " + dir + "/out.txt 2>&1; echo $? > " + dir + "/rc) &'").c_str());
   const fs::path eye_log = fs::path(dir) / "processes" / "slot0" / "eye.log";
   const auto deadline = std::chrono::steady_clock::now() + std::chrono::seconds(20);

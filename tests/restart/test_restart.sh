@@ -87,8 +87,10 @@ grep -q "free again" "$out/attached.txt" || { cat "$out/attached.txt"; echo "the
 grep -o "process $victim is free again.* at step [0-9]*" "$out/attached.txt" | head -1
 
 # The same experiment uninterrupted, hosted by the runner in one process.
+# Its own log root: the checkpoint goes there, and the same seed may be run by
+# another test case at the same time.
 "$build/bin/afford" "${experiment[@]}" "${extrinsic[@]}" --transport memq --keep-logs none --run-prefix restart \
-  --out "$out/uninterrupted" >"$out/uninterrupted.txt" 2>&1
+  --out "$out/uninterrupted" --log-root "$out/uninterrupted-logs" >"$out/uninterrupted.txt" 2>&1
 
 # Summaries equal, but for what the wall clock, the host or the paths decide.
 results() {
