@@ -1,5 +1,5 @@
 # Sourced by the shell tests that put a live run on a bus of their own
-# (tests/spy, tests/viewer, tests/attach).
+# (tests/spy, tests/viewer, tests/attach, tests/procs, tests/restart).
 #
 # enter_private_netns "$0" "$@": re-runs the calling script in a private
 # network namespace (root), with multicast routed over its loopback, so no
@@ -11,6 +11,16 @@ enter_private_netns() {
   ip link set lo up multicast on
   ip route add 224.0.0.0/4 dev lo
   trap 'kill $(jobs -p) 2>/dev/null || true' EXIT
+}
+
+# enter_test "$0" "$@": the start of a test called as SCRIPT BUILD_DIR WORK_DIR
+# [...]. Re-runs it in a private network namespace, then sets `build` and
+# `out` (WORK_DIR, emptied) to absolute paths.
+enter_test() {
+  enter_private_netns "$@"
+  build=$(cd "$2" && pwd)
+  rm -rf "$3" && mkdir -p "$3"
+  out=$(cd "$3" && pwd)
 }
 
 # start_xvfb WIDTHxHEIGHT LOGFILE: an X server on a free display; exports DISPLAY.

@@ -4,12 +4,9 @@
 # the same run hosted by the runner itself.
 #   tests/attach/test_attach.sh BUILD_DIR WORK_DIR
 set -euo pipefail
-build=$(cd "$1" && pwd)
-rm -rf "$2" && mkdir -p "$2"
-out=$(cd "$2" && pwd)
 root=$(cd "$(dirname "$0")/../.." && pwd)
 source "$root/tests/netns.sh"
-enter_private_netns "$0" "$@"
+enter_test "$0" "$@"
 
 url="udpm://239.255.76.67:7992?ttl=0&recv_buf_size=2097152"
 for p in environment eye predictors motivation; do

@@ -29,6 +29,12 @@ std::string slurp(const fs::path& p) {
   return std::string(std::istreambuf_iterator<char>(in), {});
 }
 
+// `afford experiment ARGS` writing into DIR, with a log root of its own, DIR/logs:
+// tests running at the same time never share a run folder (checkpoints live there).
+std::string experimentIn(const std::string& dir, const std::string& args) {
+  return test::afford("experiment " + args + " --out " + dir + " --log-root " + dir + "/logs");
+}
+
 // One short IMP base run; returns the output folder. The log root is part of
 // the run's config (its checkpoint path), so runs to compare share one.
 std::string runBase(const std::string& name, const std::string& transport, int port,
@@ -112,9 +118,9 @@ TEST(Processes, UdpmAndMemqRunsGiveByteIdenticalLogsAndWeights) {
 
 TEST(Processes, RealProcessesSolveAnExtrinsicScenario) {
   const std::string dir = test::tempDir("extrinsic-udpm");
-  const auto r = test::runCommand(test::afford(
-      "experiment base --system IMP --reps 1 --steps 6000 --seed 2 --extrinsic-reps 1 --scenarios scenario3 --quiet"
-      " --run-prefix ex --out " + dir + " --log-root " + dir + "/logs --base-port 7850"));
+  const auto r = test::runCommand(experimentIn(
+      dir, "base --system IMP --reps 1 --steps 6000 --seed 2 --extrinsic-reps 1 --scenarios scenario3 --quiet"
+           " --run-prefix ex --base-port 7850"));
   ASSERT_EQ(r.exit_code, 0) << r.output;
   const json s = readJson(fs::path(dir) / "summary.json");
   const json& ex = s["systems"]["IMP"]["extrinsic"];
@@ -152,9 +158,8 @@ TEST(Processes, RealProcessesSolveAnExtrinsicScenario) {
 // counts (memq): the summary keys outside checks read, and the figures.
 TEST(Processes, TheUtilityDesignComparesThePlannersPerBudget) {
   const std::string dir = test::tempDir("design-utility");
-  const auto r = test::runCommand(test::afford("experiment utility --reps 2 --steps 4000 --extrinsic-reps 3 --jobs 2"
-                                               " --transport memq --keep-logs none --quiet --out " + dir +
-                                               " --log-root " + dir + "/logs"));
+  const auto r = test::runCommand(experimentIn(dir, "utility --reps 2 --steps 4000 --extrinsic-reps 3 --jobs 2"
+                                                    " --transport memq --keep-logs none --quiet"));
   ASSERT_EQ(r.exit_code, 0) << r.output;
   const json s = readJson(fs::path(dir) / "summary.json");
   EXPECT_EQ(s["systems"].size(), 1u);  // default_systems: IMP only
@@ -176,9 +181,8 @@ TEST(Processes, TheUtilityDesignComparesThePlannersPerBudget) {
 
 TEST(Processes, TheSearchDesignCountsActionsCheckedWithAndWithoutRestriction) {
   const std::string dir = test::tempDir("design-search");
-  const auto r = test::runCommand(test::afford("experiment search-reduction --reps 1 --steps 4000 --extrinsic-reps 3"
-                                               " --transport memq --keep-logs none --quiet --out " + dir +
-                                               " --log-root " + dir + "/logs"));
+  const auto r = test::runCommand(experimentIn(dir, "search-reduction --reps 1 --steps 4000 --extrinsic-reps 3"
+                                                    " --transport memq --keep-logs none --quiet"));
   ASSERT_EQ(r.exit_code, 0) << r.output;
   const json s = readJson(fs::path(dir) / "summary.json");
   const json& q = s["search"];
@@ -190,9 +194,8 @@ TEST(Processes, TheSearchDesignCountsActionsCheckedWithAndWithoutRestriction) {
 
 TEST(Processes, AgentsThatNeverReachTheActionCountAreNotTestedAndTheCommandSaysWhy) {
   const std::string dir = test::tempDir("design-after");
-  const auto r = test::runCommand(test::afford("experiment forward-models --system IMP --reps 1 --steps 300"
-                                               " --transport memq --keep-logs none --quiet --out " + dir +
-                                               " --log-root " + dir + "/logs"));
+  const auto r = test::runCommand(experimentIn(dir, "forward-models --system IMP --reps 1 --steps 300"
+                                                    " --transport memq --keep-logs none --quiet"));
   EXPECT_EQ(r.exit_code, 1) << r.output;
   EXPECT_NE(r.output.find("executed fewer than 4000 actions"), std::string::npos) << r.output;
   EXPECT_NE(r.output.find("extrinsic.after_actions"), std::string::npos) << r.output;
@@ -204,9 +207,9 @@ TEST(Processes, AgentsThatNeverReachTheActionCountAreNotTestedAndTheCommandSaysW
 TEST(Processes, TheForwardModelDesignTestsTheWeightsSavedAfterTheActionCount) {
   const std::string dir = test::tempDir("design-fm");
   // FIX acts on nearly every step, so 4500 steps reach 4000 actions.
-  const auto r = test::runCommand(test::afford(
-      "experiment forward-models --system FIX --reps 1 --steps 4500 --extrinsic-reps 2 --transport memq"
-      " --keep-logs none --quiet --out " + dir + " --log-root " + dir + "/logs --run-prefix fm"));
+  const auto r = test::runCommand(experimentIn(
+      dir, "forward-models --system FIX --reps 1 --steps 4500 --extrinsic-reps 2 --transport memq"
+           " --keep-logs none --quiet --run-prefix fm"));
   ASSERT_EQ(r.exit_code, 0) << r.output;
   const json s = readJson(fs::path(dir) / "summary.json");
   EXPECT_EQ(s["after_actions"], 4000);
@@ -236,9 +239,9 @@ TEST(Processes, ABadValueInAnExtrinsicDesignIsRefusedBeforeAnyRun) {
 // run's weights and decisions (intrinsic), and the planner's decisions (extrinsic).
 TEST(Processes, AReplayedLogReproducesTheLiveRun) {
   const std::string dir = test::tempDir("replay");
-  const auto r = test::runCommand(test::afford(
-      "experiment base --system IGN --reps 1 --steps 800 --extrinsic-reps 1 --scenarios scenario2 --transport memq"
-      " --keep-logs all --quiet --run-prefix rp --out " + dir + " --log-root " + dir + "/logs"));
+  const auto r = test::runCommand(experimentIn(
+      dir, "base --system IGN --reps 1 --steps 800 --extrinsic-reps 1 --scenarios scenario2 --transport memq"
+           " --keep-logs all --quiet --run-prefix rp"));
   ASSERT_EQ(r.exit_code, 0) << r.output;
   const json s = readJson(fs::path(dir) / "summary.json");
   const std::string live = s["systems"]["IGN"]["runs"][0]["weights_checksum"];
@@ -342,8 +345,8 @@ TEST(Processes, AnAgentWithoutACheckpointIsNotTestedAndTheExperimentSaysWhy) {
 TEST(Processes, AKilledProcessEndsTheRunWithinSecondsNamingIt) {
   const std::string dir = test::tempDir("kill");
   const int port = 7840;
-  const std::string cmd = test::afford("experiment base --system IMP --reps 1 --steps 10000000 --keep-logs none --out " +
-                                       dir + " --log-root " + dir + "/logs --base-port " + std::to_string(port));
+  const std::string cmd = experimentIn(
+      dir, "base --system IMP --reps 1 --steps 10000000 --keep-logs none --base-port " + std::to_string(port));
   std::system(("sh -c '(" + cmd + " > " + dir + "/out.txt 2>&1; echo $? > " + dir + "/rc) &'").c_str());
   const fs::path eye_log = fs::path(dir) / "processes" / "slot0" / "eye.log";
   const auto deadline = std::chrono::steady_clock::now() + std::chrono::seconds(20);

@@ -3,12 +3,9 @@
 # kill -9 and start one process during the run, restart one, stop them all.
 #   tests/procs/test_procs.sh BUILD_DIR WORK_DIR
 set -euo pipefail
-build=$(cd "$1" && pwd)
-rm -rf "$2" && mkdir -p "$2"
-out=$(cd "$2" && pwd)
 root=$(cd "$(dirname "$0")/../.." && pwd)
 source "$root/tests/netns.sh"
-enter_private_netns "$0" "$@"
+enter_test "$0" "$@"
 export AFFORD_NETNS=none AFFORD_BIN=$build/bin AFFORD_LOGS=$out/logs AFFORD_GRACE=3
 procs=$root/scripts/procs.sh
 

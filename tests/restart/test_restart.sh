@@ -9,14 +9,11 @@
 # PROCESS: environment, eye, predictors, motivation, logger (killed during the
 # intrinsic run) or planner (killed during the extrinsic tests).
 set -euo pipefail
-build=$(cd "$1" && pwd)
-rm -rf "$2" && mkdir -p "$2"
-out=$(cd "$2" && pwd)
-victim=$3
-seed=${4:-$((1 + RANDOM % 20))}
 root=$(cd "$(dirname "$0")/../.." && pwd)
 source "$root/tests/netns.sh"
-enter_private_netns "$0" "$@"
+enter_test "$0" "$@"
+victim=$3
+seed=${4:-$((1 + RANDOM % 20))}
 # On failure, what the runner and the processes said, so a CI log shows why.
 diagnose() {
   local rc=$?

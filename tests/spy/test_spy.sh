@@ -6,12 +6,9 @@
 # Runs in a private network namespace of its own (root), so its multicast
 # stays on this machine's loopback.
 set -euo pipefail
-build=$(cd "$1" && pwd)
-mkdir -p "$2"
-out=$(cd "$2" && pwd)
 root=$(cd "$(dirname "$0")/../.." && pwd)
 source "$root/tests/netns.sh"
-enter_private_netns "$0" "$@"
+enter_test "$0" "$@"
 start_xvfb 1280x900 "$out/xvfb.log"
 
 port=7990

@@ -3,12 +3,9 @@
 # blank, and --png writes the same frames as files. Both stay as artefacts.
 #   tests/viewer/test_viewer.sh BUILD_DIR ARTEFACT_DIR
 set -euo pipefail
-build=$(cd "$1" && pwd)
-mkdir -p "$2"
-out=$(cd "$2" && pwd)
 root=$(cd "$(dirname "$0")/../.." && pwd)
 source "$root/tests/netns.sh"
-enter_private_netns "$0" "$@"
+enter_test "$0" "$@"
 start_xvfb 1400x1000 "$out/xvfb.log"
 
 port=7991
