@@ -6,7 +6,6 @@
 
 namespace afford {
 
-
 LoggerNode::LoggerNode(lcm::LCM& lcm, std::shared_ptr<spdlog::logger> log, std::string log_root)
     : NodeBase(lcm, "logger", std::move(log)), log_root_(std::move(log_root)) {
   for (const char* c : channel::kWithSerial) trackChannel(c);
