@@ -15,6 +15,9 @@
 
 namespace afford::test {
 
+// The protocol of the shipped defaults (what processes use between runs).
+inline ProtocolConfig shippedProtocol() { return loadProtocol(std::string(AFFORD_SOURCE_DIR) + "/config"); }
+
 // The effective config of one run of a shipped experiment.
 inline RunConfig shippedConfig(const std::string& experiment = "base", System system = System::IMP,
                                std::int64_t seed = 1, std::vector<std::string> settings = {}) {

@@ -32,11 +32,16 @@ std::string first(std::initializer_list<std::string> reasons) {
     if (!r.empty()) return r;
   return "";
 }
-std::string checkStep(std::int64_t step, const RunConfig& c) {
-  if (step < 0 || step > c.steps)
-    return "field step = " + std::to_string(step) + " is out of range [0, " + std::to_string(c.steps) + "]";
-  return "";
+std::string checkInt(const char* field, std::int64_t v, std::int64_t lo, std::int64_t hi) {
+  if (v >= lo && v <= hi) return "";
+  return std::string("field ") + field + " = " + std::to_string(v) + " is out of range [" + std::to_string(lo) + ", " +
+         std::to_string(hi) + "]";
 }
+// A step of the run: [0, steps] with the run's configuration, else not negative.
+std::string checkStep(std::int64_t step, const BoundsContext& c) {
+  return checkInt("step", step, 0, c.run ? c.run->steps : INT64_MAX);
+}
+std::string checkSerial(std::int64_t serial) { return checkInt("serial", serial, 0, INT64_MAX); }
 std::string checkAction(const char* field, int action, bool required) {
   if (!required && action == -1) return "";
   if (!validAction(action)) return std::string("field ") + field + ": action id " + std::to_string(action) + " is out of range [0, 3]";
@@ -44,18 +49,36 @@ std::string checkAction(const char* field, int action, bool required) {
 }
 // A move target: a position, or -1 for "none / draw one".
 std::string checkTarget(const char* field, double v) { return v == -1.0 ? "" : checkRange(field, v, 0.0, 1.0); }
-long focusSize(const RunConfig& c) { return 3L * c.eye.focus_side * c.eye.focus_side; }
+// The focus image size of the run (3 x side^2), or any the protocol accepts.
+std::string checkFocus(const char* side_field, int side, const char* size_field, long size, const BoundsContext& c) {
+  if (c.run)
+    return first({checkSize(side_field, side, c.run->eye.focus_side),
+                  checkSize(size_field, size, 3L * c.run->eye.focus_side * c.run->eye.focus_side)});
+  return first({checkInt(side_field, side, 1, c.protocol->limits.focus_side), checkSize(size_field, size, 3L * side * side)});
+}
+std::string checkFocusSize(const char* field, long size, const BoundsContext& c) {
+  if (c.run) return checkSize(field, size, 3L * c.run->eye.focus_side * c.run->eye.focus_side);
+  return checkInt(field, size, 3, 3L * c.protocol->limits.focus_side * c.protocol->limits.focus_side);
+}
 std::string checkKind(int kind) {
   return kind == focus_t::SCENE_SCAN || kind == focus_t::GOAL_SCAN || kind == focus_t::SCENE_AT
              ? ""
              : "field kind = " + std::to_string(kind) + " is unknown";
 }
+std::string checkActions(const std::vector<std::int8_t>& actions) {
+  for (int a : actions)
+    if (auto why = checkAction("actions", a, true); !why.empty()) return why;
+  return "";
+}
+std::string checkProbability(const std::string& field, double v) { return checkRange(field.c_str(), v, 0.0, 1.0); }
 
 }  // namespace
 
-std::string checkMessage(const scene_t& m, const RunConfig& c) {
-  return first({checkStep(m.step, c),
-                checkSize("width", m.width, c.world.size_px), checkSize("height", m.height, c.world.size_px),
+std::string checkMessage(const scene_t& m, const BoundsContext& c) {
+  const int side = c.run ? c.run->world.size_px : 0;
+  return first({checkStep(m.step, c), checkSerial(m.serial),
+                c.run ? checkSize("width", m.width, side) : checkInt("width", m.width, 1, c.protocol->limits.scene_side),
+                c.run ? checkSize("height", m.height, side) : checkInt("height", m.height, 1, c.protocol->limits.scene_side),
                 m.cause == scene_t::CAUSE_START || m.cause == scene_t::CAUSE_ACTION ||
                         m.cause == scene_t::CAUSE_OBJECTS_APPEARED || m.cause == scene_t::CAUSE_GOAL
                     ? ""
@@ -67,14 +90,14 @@ std::string checkMessage(const scene_t& m, const RunConfig& c) {
                 m.encoding == scene_t::ENCODING_ZLIB_RGB8 ? "" : "field encoding = " + std::to_string(m.encoding) + " is unknown"});
 }
 
-std::string checkMessage(const focus_t& m, const RunConfig& c) {
-  return first({checkStep(m.step, c), checkKind(m.kind), checkSize("side", m.side, c.eye.focus_side),
-                checkSize("size", m.size, focusSize(c)),
+std::string checkMessage(const focus_t& m, const BoundsContext& c) {
+  return first({checkStep(m.step, c), checkSerial(m.serial), checkKind(m.kind),
+                checkInt("seq", m.seq, 0, INT32_MAX), checkFocus("side", m.side, "size", m.size, c),
                 checkRange("x", m.x, 0.0, 1.0), checkRange("y", m.y, 0.0, 1.0)});
 }
 
-std::string checkMessage(const prediction_t& m, const RunConfig& c) {
-  if (auto why = first({checkStep(m.step, c), checkSize("n_actions", m.n_actions, kNumActions),
+std::string checkMessage(const prediction_t& m, const BoundsContext& c) {
+  if (auto why = first({checkStep(m.step, c), checkSerial(m.serial), checkSize("n_actions", m.n_actions, kNumActions),
                         checkRange("x", m.x, 0.0, 1.0), checkRange("y", m.y, 0.0, 1.0)});
       !why.empty())
     return why;
@@ -84,73 +107,152 @@ std::string checkMessage(const prediction_t& m, const RunConfig& c) {
         !why.empty())
       return why;
   }
-  if (m.n_trained < 0 || m.n_trained > 1) return "field n_trained = " + std::to_string(m.n_trained) + " is out of range [0, 1]";
+  if (auto why = checkInt("n_trained", m.n_trained, 0, 1); !why.empty()) return why;
   for (const auto& t : m.trained)
     if (auto why = checkMessage(t, c); !why.empty()) return "trained[0]: " + why;
   return "";
 }
 
-std::string checkMessage(const decision_t& m, const RunConfig& c) {
-  return first({checkStep(m.step, c), checkAction("action", m.action, m.acted),
+std::string checkMessage(const decision_t& m, const BoundsContext& c) {
+  return first({checkStep(m.step, c), checkSerial(m.serial), checkAction("action", m.action, m.acted),
                 m.acted || m.action == decision_t::NONE ? "" : "field action must be -1 when acted is false",
                 checkRange("x", m.x, 0.0, 1.0), checkRange("y", m.y, 0.0, 1.0), checkTarget("target_x", m.target_x),
                 checkTarget("target_y", m.target_y), checkFinite("motivation", m.motivation),
                 checkFinite("threshold", m.threshold)});
 }
 
-std::string checkMessage(const effect_t& m, const RunConfig& c) {
-  return first({checkStep(m.step, c), checkAction("action", m.action, true), checkSize("side", m.side, c.eye.focus_side),
-                checkSize("size", m.size, focusSize(c)), checkTarget("target_x", m.target_x),
+std::string checkMessage(const effect_t& m, const BoundsContext& c) {
+  return first({checkStep(m.step, c), checkSerial(m.serial), checkAction("action", m.action, true),
+                checkFocus("side", m.side, "size", m.size, c), checkTarget("target_x", m.target_x),
                 checkTarget("target_y", m.target_y), checkRange("before_x", m.before_x, 0.0, 1.0),
                 checkRange("before_y", m.before_y, 0.0, 1.0), checkRange("after_x", m.after_x, 0.0, 1.0),
                 checkRange("after_y", m.after_y, 0.0, 1.0), checkRange("image_change", m.image_change, 0.0, 1.0),
                 checkRange("position_change", m.position_change, 0.0, 1.0)});
 }
 
-std::string checkMessage(const trained_t& m, const RunConfig& c) {
+std::string checkMessage(const trained_t& m, const BoundsContext& c) {
   return first({checkStep(m.step, c), checkAction("action", m.action, true),
                 checkRange("affordance_before", m.affordance_before, 0.0, 1.0),
                 checkRange("affordance_after", m.affordance_after, 0.0, 1.0),
                 checkFinite("learning_progress", m.learning_progress)});
 }
 
-std::string checkMessage(const object_probe_t& m, const RunConfig& c) {
-  return first({m.n_objects >= 1 && m.n_objects <= 1000 ? "" : "field n_objects = " + std::to_string(m.n_objects) + " is out of range [1, 1000]",
-                checkSize("size", m.size, focusSize(c))});
+std::string checkMessage(const object_probe_t& m, const BoundsContext& c) {
+  const long objects = c.run ? static_cast<long>(c.run->world.objects.size()) : c.protocol->limits.objects;
+  return first({checkStep(m.step, c), checkSerial(m.serial),
+                c.run ? checkSize("n_objects", m.n_objects, objects) : checkInt("n_objects", m.n_objects, 1, objects),
+                checkFocusSize("size", m.size, c)});
 }
 
-std::string checkMessage(const look_t& m, const RunConfig& c) {
-  return first({checkStep(m.step, c), checkKind(m.kind), std::string(m.seq >= 0 ? "" : "field seq is negative"),
+std::string checkMessage(const look_t& m, const BoundsContext& c) {
+  return first({checkStep(m.step, c), checkSerial(m.serial), checkKind(m.kind), checkInt("seq", m.seq, 0, INT32_MAX),
                 m.kind != focus_t::SCENE_AT ? "" : checkRange("x", m.x, 0.0, 1.0),
                 m.kind != focus_t::SCENE_AT ? "" : checkRange("y", m.y, 0.0, 1.0)});
 }
 
-std::string checkMessage(const forward_query_t& m, const RunConfig& c) {
-  if (auto why = first({checkStep(m.step, c), checkSize("size", m.size, focusSize(c)), checkRange("x", m.x, 0.0, 1.0),
-                        checkRange("y", m.y, 0.0, 1.0), checkTarget("target_x", m.target_x),
-                        checkTarget("target_y", m.target_y),
-                        m.n_actions >= 0 && m.n_actions <= kNumActions ? "" : "field n_actions is out of range [0, 4]"});
-      !why.empty())
-    return why;
-  for (int a : m.actions)
-    if (auto why = checkAction("actions", a, true); !why.empty()) return why;
-  return "";
+std::string checkMessage(const forward_query_t& m, const BoundsContext& c) {
+  return first({checkStep(m.step, c), checkSerial(m.serial), checkInt("seq", m.seq, 0, INT32_MAX),
+                checkFocusSize("size", m.size, c), checkRange("x", m.x, 0.0, 1.0), checkRange("y", m.y, 0.0, 1.0),
+                checkTarget("target_x", m.target_x), checkTarget("target_y", m.target_y),
+                checkInt("n_actions", m.n_actions, 0, kNumActions), checkActions(m.actions)});
 }
 
-std::string checkMessage(const forward_prediction_t& m, const RunConfig& c) {
-  if (auto why = first({checkStep(m.step, c), checkSize("size", m.size, focusSize(c)),
-                        m.n_actions >= 0 && m.n_actions <= kNumActions ? "" : "field n_actions is out of range [0, 4]"});
+std::string checkMessage(const forward_prediction_t& m, const BoundsContext& c) {
+  if (auto why = first({checkStep(m.step, c), checkSerial(m.serial), checkInt("seq", m.seq, 0, INT32_MAX),
+                        checkFocusSize("size", m.size, c), checkInt("n_actions", m.n_actions, 0, kNumActions),
+                        checkActions(m.actions)});
       !why.empty())
     return why;
   for (int i = 0; i < m.n_actions; ++i) {
-    if (auto why = first({checkAction("actions", m.actions[i], true), checkFinite("where_x", m.where_x[i]),
-                          checkFinite("where_y", m.where_y[i])});
-        !why.empty())
+    if (auto why = first({checkFinite("where_x", m.where_x[i]), checkFinite("where_y", m.where_y[i])}); !why.empty())
       return why;
     for (float v : m.what[i])
       if (!(v >= 0.0f && v <= 1.0f)) return "field what holds a value outside [0, 1]";
   }
   return "";
+}
+
+std::string checkMessage(const affordance_table_t& m, const BoundsContext& c) {
+  const long objects = c.run ? static_cast<long>(c.run->world.objects.size()) : c.protocol->limits.objects;
+  if (auto why = first({checkStep(m.step, c), checkSerial(m.serial),
+                        c.run ? checkSize("n_objects", m.n_objects, objects) : checkInt("n_objects", m.n_objects, 0, objects),
+                        checkSize("n_actions", m.n_actions, kNumActions)});
+      !why.empty())
+    return why;
+  for (int i = 0; i < m.n_objects; ++i)
+    for (int a = 0; a < kNumActions; ++a)
+      if (auto why = checkProbability("affordance[" + std::to_string(i) + "][" + std::to_string(a) + "]", m.affordance[i][a]);
+          !why.empty())
+        return why;
+  return "";
+}
+
+std::string checkMessage(const run_result_t& m, const BoundsContext& c) {
+  if (auto why = first({checkStep(m.step, c), checkSerial(m.serial), checkSize("n_actions", m.n_actions, kNumActions),
+                        checkInt("n_trained", m.n_trained, 0, 1),
+                        m.weights_checksum.size() == 16 &&
+                                m.weights_checksum.find_first_not_of("0123456789abcdef") == std::string::npos
+                            ? ""
+                            : "field weights_checksum is not 16 hex digits"});
+      !why.empty())
+    return why;
+  for (int a = 0; a < kNumActions; ++a) {
+    if (auto why = first({checkInt("actions_executed", m.actions_executed[a], 0, INT64_MAX),
+                          checkInt("successes", m.successes[a], 0, m.actions_executed[a])});
+        !why.empty())
+      return why;
+  }
+  for (const auto& t : m.trained)
+    if (auto why = checkMessage(t, c); !why.empty()) return "trained[0]: " + why;
+  return "";
+}
+
+std::string checkMessage(const sub_goal_t& m, const BoundsContext& c) {
+  const int budget = c.run ? c.run->planner.budget : INT32_MAX;
+  return first({checkRange("x", m.x, 0.0, 1.0), checkRange("y", m.y, 0.0, 1.0),
+                checkInt("iterations", m.iterations, 0, budget), checkInt("actions_checked", m.actions_checked, 0, INT32_MAX),
+                checkInt("actions_taken", m.actions_taken, 0, budget)});
+}
+
+std::string checkMessage(const extrinsic_result_t& m, const BoundsContext& c) {
+  const int budget = c.run ? c.run->planner.budget : INT32_MAX;
+  if (auto why = first({checkStep(m.step, c), checkSerial(m.serial), checkInt("completion", m.completion, 0, budget),
+                        m.success || m.completion == 0 ? "" : "field completion must be 0 when success is false",
+                        checkInt("attempts", m.attempts, 0, budget), checkRange("utility", m.utility, -1.0, 1e12),
+                        checkInt("n_sub_goals", m.n_sub_goals, 0, budget)});
+      !why.empty())
+    return why;
+  for (std::size_t i = 0; i < m.sub_goals.size(); ++i)
+    if (auto why = checkMessage(m.sub_goals[i], c); !why.empty()) return "sub_goals[" + std::to_string(i) + "]: " + why;
+  return "";
+}
+
+std::string checkMessage(const process_status_t& m, const BoundsContext&) {
+  if (auto why = first({checkInt("step", m.step, -1, INT64_MAX), m.process.empty() ? "field process is empty" : "",
+                        checkInt("pid", m.pid, 0, INT32_MAX),
+                        checkInt("state", m.state, process_status_t::WAITING, process_status_t::FAILED)});
+      !why.empty())
+    return why;
+  for (int i = 0; i < m.n_channels; ++i)
+    if (m.counts[i] < 0) return "field counts[" + std::to_string(i) + "] is negative";
+  return "";
+}
+
+std::string checkMessage(const resend_t& m, const BoundsContext&) {
+  return first({m.run_id.empty() ? "field run_id is empty" : "", m.channel.empty() ? "field channel is empty" : "",
+                checkInt("first", m.first, 0, INT64_MAX), checkInt("last", m.last, m.first, INT64_MAX)});
+}
+
+std::string checkMessage(const run_config_t& m, const BoundsContext&) {
+  return first({m.run_id.empty() ? "field run_id is empty" : "", checkInt("step", m.step, 0, 0),
+                checkInt("seed", m.seed, 0, INT64_MAX), m.config_yaml.empty() ? "field config_yaml is empty" : ""});
+}
+
+std::string checkMessage(const run_control_t& m, const BoundsContext&) {
+  return first({m.run_id.empty() ? "field run_id is empty" : "", checkInt("step", m.step, 0, INT64_MAX),
+                m.command == run_control_t::START || m.command == run_control_t::STOP
+                    ? ""
+                    : "field command = " + std::to_string(m.command) + " is unknown"});
 }
 
 }  // namespace afford

@@ -213,6 +213,52 @@ System parseSystem(const std::string& s) {
 }
 int colourChannel(Colour c) { return c == Colour::Red ? 0 : c == Colour::Green ? 1 : 2; }
 
+ProtocolConfig parseProtocol(const YAML::Node& node, const std::string& path) {
+  Reader p(node, path);
+  ProtocolConfig c;
+  c.heartbeat_ms = static_cast<int>(p.integer("heartbeat_ms", 10, 60'000));
+  c.idle_announce_ms = static_cast<int>(p.integer("idle_announce_ms", 1, 60'000));
+  c.retry_ms = static_cast<int>(p.integer("retry_ms", 1, 60'000));
+  c.resend_batch = static_cast<int>(p.integer("resend_batch", 1, 100'000));
+  c.resend_cap = static_cast<int>(p.integer("resend_cap", 1, 100'000));
+  c.resend_budget = static_cast<int>(p.integer("resend_budget", 1, 1'000'000));
+  c.stop_grace_ms = static_cast<int>(p.integer("stop_grace_ms", 0, 600'000));
+  c.ready_timeout_ms = static_cast<int>(p.integer("ready_timeout_ms", 100, 600'000));
+  c.close_timeout_ms = static_cast<int>(p.integer("close_timeout_ms", 100, 600'000));
+  c.max_deferred = static_cast<int>(p.integer("max_deferred", 1, 1'000'000));
+  c.queue_capacity = static_cast<int>(p.integer("queue_capacity", 30, 1'000'000));
+  if (c.max_deferred < c.resend_batch)
+    fail(p.keyPath("max_deferred"), "must be at least resend_batch (" + std::to_string(c.resend_batch) +
+                                        "): a channel catching up defers up to a batch");
+  if (c.close_timeout_ms <= c.stop_grace_ms)
+    fail(p.keyPath("close_timeout_ms"), "must be longer than stop_grace_ms (the logger waits that long first)");
+  Reader l = p.map("limits");
+  c.limits.name_bytes = static_cast<int>(l.integer("name_bytes", 16, 65'536));
+  c.limits.text_bytes = static_cast<int>(l.integer("text_bytes", 16, 1'048'576));
+  c.limits.config_bytes = static_cast<int>(l.integer("config_bytes", 1024, 64 * 1'048'576));
+  c.limits.objects = static_cast<int>(l.integer("objects", 1, 100'000));
+  c.limits.focus_side = static_cast<int>(l.integer("focus_side", 3, 4096));
+  c.limits.scene_side = static_cast<int>(l.integer("scene_side", 32, 8192));
+  c.limits.sub_goals = static_cast<int>(l.integer("sub_goals", 1, 1'000'000));
+  l.finish();
+  p.finish();
+  return c;
+}
+
+ProtocolConfig loadProtocol(const std::string& config_dir) {
+  const std::filesystem::path file = std::filesystem::path(config_dir) / "defaults.yaml";
+  YAML::Node root;
+  try {
+    root = YAML::LoadFile(file.string());
+  } catch (const YAML::BadFile&) {
+    throw ConfigError("cannot read config file " + file.string());
+  } catch (const YAML::Exception& e) {
+    throw ConfigError("config file " + file.string() + " is not valid YAML: " + e.what());
+  }
+  if (!root.IsMap() || !root["protocol"].IsDefined()) fail("protocol", "missing in " + file.string());
+  return parseProtocol(root["protocol"]);
+}
+
 RunConfig parseRunConfig(const YAML::Node& root) {
   Reader r(root, "");
   RunConfig c;
@@ -226,6 +272,7 @@ RunConfig parseRunConfig(const YAML::Node& root) {
     c.curve_interval = run.integer("curve_interval", 1, 100'000'000);
     c.checkpoint = run.has("checkpoint") ? run.text("checkpoint") : "";
     c.checkpoint_after_actions = run.integer("checkpoint_after_actions", 0, 100'000'000);
+    c.record = run.choice<bool>("record", {{"true", true}, {"false", false}});
     run.finish();
   }
   {
@@ -318,6 +365,7 @@ RunConfig parseRunConfig(const YAML::Node& root) {
     u.finish();
     p.finish();
   }
+  c.protocol = parseProtocol(r.raw("protocol"));
   r.finish();
   return c;
 }

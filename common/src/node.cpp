@@ -6,74 +6,58 @@
 
 #include <algorithm>
 #include <csignal>
-#include <sstream>
 
 #include "afford/channels.hpp"
 #include "afford/logging.hpp"
-#include "afford/resend_t.hpp"
 
 namespace afford {
 
-NodeBase::NodeBase(lcm::LCM& lcm, std::string process, std::shared_ptr<spdlog::logger> log)
-    : lcm_(lcm), log_(std::move(log)), process_(std::move(process)) {
-  subscribeRaw("RUN_CONFIG", [this](const lcm::ReceiveBuffer* b, const std::string&) { onRunConfig(b); }, 100);
-  subscribeRaw("RUN_CONTROL", [this](const lcm::ReceiveBuffer* b, const std::string&) { onRunControl(b); }, 100);
-  subscribeRaw(channel::kStatus, [this](const lcm::ReceiveBuffer* b, const std::string&) { onStatus(b); }, 1000);
-  subscribeRaw(channel::kResend, [this](const lcm::ReceiveBuffer* b, const std::string&) { onResend(b); }, 1000);
+using Clock = std::chrono::steady_clock;
+using std::chrono::milliseconds;
+
+NodeBase::NodeBase(lcm::LCM& lcm, std::string process, std::shared_ptr<spdlog::logger> log,
+                   const ProtocolConfig& protocol)
+    : lcm_(lcm), log_(std::move(log)), process_(std::move(process)), edge_(lcm, log_, process_, protocol) {
+  edge_.subscribe<run_config_t>(
+      channel::kRunConfig, [this](const run_config_t& m, const Envelope& e) { return onRunConfig(m, e); }, Scope::Any,
+      Order::None);
+  edge_.subscribe<run_control_t>(
+      channel::kRunControl, [this](const run_control_t& m, const Envelope& e) { return onRunControl(m, e); },
+      Scope::Any, Order::None);
+  edge_.subscribe<process_status_t>(
+      channel::kStatus, [this](const process_status_t& m) { return onStatus(m); }, Scope::Any, Order::None);
+  edge_.answerResends();
+  edge_.onFailure([this](const std::string& channel, const std::string& why) { failRun(channel + ": " + why); });
 }
 
-void NodeBase::subscribeRaw(const std::string& channel_regex,
-                            std::function<void(const lcm::ReceiveBuffer*, const std::string&)> handler, int queue) {
-  auto holder = std::make_unique<Holder>();
-  holder->fn = std::move(handler);
-  holder->sub = lcm_.subscribe(channel_regex, &Holder::on, holder.get());
-  holder->sub->setQueueCapacity(queue);
-  holders_.push_back(std::move(holder));
-}
-
-NodeBase::~NodeBase() {
-  for (const auto& h : holders_) lcm_.unsubscribe(h->sub);
-}
-
-void NodeBase::drop(const std::string& channel, const std::string& reason) {
-  log_->warn("{}: dropped message: {}", channel, reason);
-}
-
-bool NodeBase::acceptRun(const std::string& channel, const std::string& run_id) {
-  if (state_ == process_status_t::WAITING) {
-    log_->debug("{}: ignored message of run '{}': no run configured", channel, run_id);
-    return false;
-  }
-  if (run_id != run_id_) {
-    drop(channel, "unknown run id '" + run_id + "' (this process serves run '" + run_id_ + "')");
-    return false;
-  }
-  return true;
-}
-
-void NodeBase::onRunConfig(const lcm::ReceiveBuffer* rbuf) {
-  run_config_t msg;
-  std::string reason;
-  if (!decodeAtEdge(rbuf, msg, reason)) return drop("RUN_CONFIG", reason);
+Turn NodeBase::onRunConfig(const run_config_t& msg, const Envelope& envelope) {
   if (state_ != process_status_t::WAITING) {
     if (msg.run_id == run_id_) {
       publishStatus();  // a repeated config: confirm we have it
-      return;
+      onControl(envelope);
+      return Turn::take();
     }
-    return drop("RUN_CONFIG", "run '" + msg.run_id + "' ignored: this process serves run '" + run_id_ + "'");
+    log_->debug("RUN_CONFIG: run '{}' ignored: this process serves run '{}'", msg.run_id, run_id_);
+    return Turn::take();
   }
   try {
     RunConfig cfg = parseRunConfigText(msg.config_yaml);
     if (cfg.seed != msg.seed || toString(cfg.system) != msg.system || cfg.experiment != msg.experiment)
       throw ConfigError("message fields (seed, system, experiment) disagree with config_yaml");
+    if (!wantsRun(cfg)) {
+      log_->info("run '{}' is not for this process (run.record: false): staying free", msg.run_id);
+      return Turn::take();
+    }
     config_ = std::move(cfg);
     run_msg_ = msg;
     run_id_ = msg.run_id;
     last_step_ = -1;
-    forgetRun();
-    history_run_ = run_id_;
+    detail_.clear();
+    edge_.join(run_id_, &config_);
     onConfigured(config_);
+    onControl(envelope);
   } catch (const std::exception& e) {
+    edge_.leave();
     run_id_.clear();
     log_->error("RUN_CONFIG: rejected run '{}': {}", msg.run_id, e.what());
     detail_ = e.what();
@@ -84,41 +68,62 @@ void NodeBase::onRunConfig(const lcm::ReceiveBuffer* rbuf) {
     st.process = process_;
     st.pid = static_cast<int32_t>(getpid());
     st.state = process_status_t::FAILED;
-    st.detail = e.what();
+    st.detail = detail_.substr(0, static_cast<std::size_t>(protocol().limits.text_bytes));
     st.n_channels = 0;  // nothing published in that run
-    lcm_.publish("STATUS", &st);
-    return;
+    edge_.send(channel::kStatus, st);
+    return Turn::take();
   }
   log_->info("configured for run '{}' ({} {} seed {}, {} steps)", run_id_, msg.experiment, msg.system, msg.seed,
              config_.steps);
   setState(process_status_t::READY);
+  return Turn::take();
 }
 
-void NodeBase::onRunControl(const lcm::ReceiveBuffer* rbuf) {
-  run_control_t msg;
-  std::string reason;
-  if (!decodeAtEdge(rbuf, msg, reason)) return drop("RUN_CONTROL", reason);
-  if (!acceptRun("RUN_CONTROL", msg.run_id)) return;
+Turn NodeBase::onRunControl(const run_control_t& msg, const Envelope& envelope) {
+  if (run_id_.empty() || msg.run_id != run_id_) {
+    log_->debug("RUN_CONTROL: for run '{}', not this process's", msg.run_id);
+    return Turn::take();
+  }
+  onControl(envelope);
   if (msg.command == run_control_t::START) {
-    if (state_ != process_status_t::READY) return;  // already started: idempotent
+    if (state_ != process_status_t::READY) return Turn::take();  // already started: idempotent
     setState(process_status_t::RUNNING);
     onStart();
-    retryDeferred();  // messages that came before START
-  } else if (msg.command == run_control_t::STOP) {
-    if (readyToLeave()) return leaveRun();
-    if (!stop_pending_) stop_deadline_ = std::chrono::steady_clock::now() + std::chrono::seconds(5);
-    stop_pending_ = true;
+    edge_.retry();  // messages that came before START
   } else {
-    drop("RUN_CONTROL", "unknown command " + std::to_string(msg.command));
+    if (readyToLeave()) {
+      leaveRun();
+      return Turn::take();
+    }
+    if (!stop_pending_) stop_deadline_ = Clock::now() + milliseconds(protocol().stop_grace_ms);
+    stop_pending_ = true;
   }
+  return Turn::take();
+}
+
+Turn NodeBase::onStatus(const process_status_t& st) {
+  if (st.process == process_ && st.pid == getpid()) return Turn::take();  // our own
+  edge_.claim(st);
+  onPeerStatus(st);
+  // A process that has just (re)joined our run catches up from what we say we published.
+  const bool joined = !run_id_.empty() && st.run_id == run_id_ && st.step == -1 &&
+                      (st.state == process_status_t::READY || st.state == process_status_t::RUNNING);
+  if (joined && !edge_.counts().empty() && Clock::now() - announced_at_ >= milliseconds(protocol().idle_announce_ms))
+    publishStatus();
+  return Turn::take();
 }
 
 void NodeBase::leaveRun() {
   if (state_ == process_status_t::WAITING) return;
-  onStop();
+  try {
+    onStop();
+  } catch (const std::exception& e) {
+    log_->error("leaving run '{}': {}", run_id_, e.what());
+    detail_ = e.what();
+  }
   log_->info("left run '{}' at step {}", run_id_, last_step_);
-  deferred_.clear();
   stop_pending_ = false;
+  edge_.leave();
   run_id_.clear();
   last_step_ = -1;
   setState(process_status_t::WAITING, detail_);
@@ -130,6 +135,13 @@ void NodeBase::setState(int8_t state, const std::string& detail) {
   publishStatus();
 }
 
+void NodeBase::failRun(const std::string& why) {
+  if (run_id_.empty()) return log_->error("{}", why);
+  log_->error("run '{}' failed here: {}", run_id_, why);
+  edge_.suspend();
+  setState(process_status_t::FAILED, why);
+}
+
 void NodeBase::publishStatus() {
   process_status_t st;
   st.run_id = run_id_;
@@ -137,150 +149,50 @@ void NodeBase::publishStatus() {
   st.process = process_;
   st.pid = static_cast<int32_t>(getpid());
   st.state = state_;
-  st.detail = detail_;
-  st.counts_run = history_run_;
-  for (const auto& [channel, h] : history_) {
+  st.detail = detail_.substr(0, static_cast<std::size_t>(protocol().limits.text_bytes));
+  st.counts_run = edge_.historyRun();
+  for (const auto& [channel, n] : edge_.counts()) {
     st.channels.push_back(channel);
-    st.counts.push_back(static_cast<int64_t>(h.size()));
+    st.counts.push_back(n);
   }
   st.n_channels = static_cast<int32_t>(st.channels.size());
-  lcm_.publish("STATUS", &st);
-  next_beat_ = std::chrono::steady_clock::now() + std::chrono::milliseconds(500);
+  edge_.send(channel::kStatus, st);
+  const auto now = Clock::now();
+  next_beat_ = now + milliseconds(protocol().heartbeat_ms);
+  announced_at_ = now;
 }
 
 void NodeBase::tick() {
-  if (std::chrono::steady_clock::now() >= next_beat_) publishStatus();
-  if (!run_id_.empty()) askMissing();
-  if (stop_pending_ && (readyToLeave() || std::chrono::steady_clock::now() > stop_deadline_)) {
+  const auto now = Clock::now();
+  if (now >= next_beat_) publishStatus();
+  const bool in_run = state_ == process_status_t::RUNNING || state_ == process_status_t::DONE;
+  if (in_run && !edge_.counts().empty()) {
+    // Idle after publishing: say what we published, in case the last of it was lost.
+    const auto idle = milliseconds(protocol().idle_announce_ms);
+    if (edge_.lastActivity() > announced_at_ || announce_wait_ == Clock::duration{}) announce_wait_ = idle;
+    if (now - edge_.lastActivity() >= idle && now - announced_at_ >= announce_wait_) {
+      const auto wait = announce_wait_;
+      publishStatus();
+      announce_wait_ = std::min<Clock::duration>(wait * 2, milliseconds(protocol().heartbeat_ms));
+    }
+  }
+  if (!run_id_.empty()) edge_.askMissing();
+  if (stop_pending_ && (readyToLeave() || now > stop_deadline_)) {
     if (!readyToLeave()) onLeaveTimeout();
     leaveRun();
   }
 }
 
-// ---- reliable delivery -------------------------------------------------------
-
-void NodeBase::forgetRun() {
-  serials_.reset();
-  history_.clear();
-  deferred_.clear();
-  history_run_.clear();
-}
-
-bool NodeBase::inSerialOrder(const std::string& channel, std::int64_t serial) {
-  switch (serials_.offer(channel, serial)) {
-    case SerialTracker::Verdict::Repeat:
-      log_->debug("{}: serial {} already had (a repeat)", channel, serial);
-      return false;
-    case SerialTracker::Verdict::Gap:
-      log_->debug("{}: serial {} came before serial {}: asking again for the missing ones", channel, serial,
-                  serials_.expected(channel));
-      askMissing();
-      return false;
-    case SerialTracker::Verdict::Accept:
-      if (serials_.missing() > 0) askMissing();
-      return true;
+int NodeBase::msUntilDue() const {
+  const auto now = Clock::now();
+  Clock::time_point due = std::min(next_beat_, edge_.nextDue());
+  if ((state_ == process_status_t::RUNNING || state_ == process_status_t::DONE) && !edge_.counts().empty()) {
+    const auto idle = milliseconds(protocol().idle_announce_ms);
+    due = std::min(due, std::max(edge_.lastActivity() + idle, announced_at_ + std::max<Clock::duration>(announce_wait_, idle)));
   }
-  return false;
-}
-
-void publishResend(lcm::LCM& lcm, const std::string& run_id, const SerialTracker::Request& r,
-                   const std::string& requester) {
-  resend_t m;
-  m.run_id = run_id;
-  m.step = 0;
-  m.channel = r.channel;
-  m.first = r.first;
-  m.last = r.last;
-  m.requester = requester;
-  lcm.publish(channel::kResend, &m);
-}
-
-void NodeBase::askMissing() {
-  for (const SerialTracker::Request& r : serials_.due(std::chrono::steady_clock::now())) {
-    log_->debug("{}: asking for serials {}..{}", r.channel, r.first, r.last);
-    publishResend(lcm_, run_id_, r, process_);
-  }
-}
-
-void NodeBase::onStatus(const lcm::ReceiveBuffer* rbuf) {
-  if (run_id_.empty()) return;
-  process_status_t st;
-  std::string reason;
-  if (!decodeAtEdge(rbuf, st, reason)) return drop(channel::kStatus, reason);
-  if (st.counts_run != run_id_ || st.process == process_) return;
-  bool any = false;
-  for (int i = 0; i < st.n_channels; ++i)
-    if (std::find(tracked_.begin(), tracked_.end(), st.channels[i]) != tracked_.end()) {
-      serials_.announce(st.channels[i], st.counts[i]);
-      any = true;
-    }
-  if (any) askMissing();
-}
-
-void NodeBase::onResend(const lcm::ReceiveBuffer* rbuf) {
-  resend_t r;
-  std::string reason;
-  if (!decodeAtEdge(rbuf, r, reason)) return drop(channel::kResend, reason);
-  if (r.run_id.empty() || r.run_id != history_run_) return;
-  auto it = history_.find(r.channel);
-  if (it == history_.end()) return;  // another process's channel
-  const auto& h = it->second;
-  constexpr std::int64_t kMostAtOnce = 128;
-  const std::int64_t first = std::max<std::int64_t>(0, r.first);
-  const std::int64_t last = std::min({r.last, first + kMostAtOnce - 1, static_cast<std::int64_t>(h.size()) - 1});
-  if (first > last) return;
-  log_->debug("{}: publishing serials {}..{} again for {}", r.channel, first, last, r.requester);
-  for (std::int64_t i = first; i <= last; ++i)
-    lcm_.publish(r.channel, h[static_cast<std::size_t>(i)].data(), static_cast<unsigned>(h[static_cast<std::size_t>(i)].size()));
-}
-
-void NodeBase::dispatch(const std::string& channel, std::function<void()> call) {
-  // A channel's messages keep their order: behind a deferred one, a message waits too.
-  const bool queued = std::any_of(deferred_.begin(), deferred_.end(),
-                                  [&](const Deferred& d) { return d.channel == channel; });
-  bool handled_now = false;
-  if (!queued) {
-    defer_now_ = false;
-    call();
-    handled_now = !defer_now_;
-    defer_now_ = false;
-  }
-  if (!handled_now) {
-    constexpr std::size_t kMostDeferred = 100000;
-    if (deferred_.size() >= kMostDeferred)
-      return drop(channel, "more than " + std::to_string(kMostDeferred) + " messages wait for their turn");
-    deferred_.push_back({channel, std::move(call)});
-    if (!queued) return;
-  }
-  retryDeferred();
-}
-
-void NodeBase::retryDeferred() {
-  if (retrying_ || deferred_.empty()) return;
-  retrying_ = true;
-  for (bool progress = true; progress && !deferred_.empty() && !run_id_.empty();) {
-    progress = false;
-    std::vector<Deferred> waiting = std::move(deferred_);
-    deferred_.clear();
-    std::vector<std::string> blocked;  // channels whose earlier message still waits
-    for (Deferred& d : waiting) {
-      if (run_id_.empty()) break;  // the run ended in a handler
-      if (std::find(blocked.begin(), blocked.end(), d.channel) != blocked.end()) {
-        deferred_.push_back(std::move(d));
-        continue;
-      }
-      defer_now_ = false;
-      d.call();
-      if (defer_now_) {
-        blocked.push_back(d.channel);
-        deferred_.push_back(std::move(d));
-      } else {
-        progress = true;
-      }
-    }
-    defer_now_ = false;
-  }
-  retrying_ = false;
+  if (stop_pending_) due = std::min(due, stop_deadline_);
+  const auto ms = std::chrono::duration_cast<milliseconds>(due - now).count();
+  return static_cast<int>(std::clamp<long long>(ms, 1, 100));
 }
 
 // ---- process main ------------------------------------------------------------
@@ -299,17 +211,23 @@ void installStopHandlers() {
   sigaction(SIGTERM, &sa, nullptr);
 }
 
+std::string defaultConfigDir() { return std::string(AFFORD_SOURCE_DIR) + "/config"; }
+
 void CLIHook::option(const std::string& name, std::string& target, const std::string& help) {
   static_cast<CLI::App*>(app_)->add_option(name, target, help)->capture_default_str();
 }
 
 int processMain(int argc, char** argv, const ProcessSpec& spec, const std::function<void(CLIHook&)>& add_options,
-                const std::function<std::unique_ptr<NodeBase>(lcm::LCM&, std::shared_ptr<spdlog::logger>)>& make_node) {
+                const std::function<std::unique_ptr<NodeBase>(lcm::LCM&, std::shared_ptr<spdlog::logger>,
+                                                              const ProtocolConfig&)>& make_node) {
   CLI::App app{spec.description, "afford-" + spec.name};
   std::string url = "udpm://239.255.76.67:7667?ttl=0";
   std::string level = "info";
+  std::string config_dir = defaultConfigDir();
   app.add_option("--lcm-url", url, "LCM provider URL of the run (one UDP port per run)")->capture_default_str();
   app.add_option("--log-level", level, "trace, debug, info, warn, error or off")->capture_default_str();
+  app.add_option("--config-dir", config_dir, "folder whose defaults.yaml gives the protocol used between runs")
+      ->capture_default_str();
   CLIHook hook(&app);
   add_options(hook);
   CLI11_PARSE(app, argc, argv);
@@ -321,6 +239,13 @@ int processMain(int argc, char** argv, const ProcessSpec& spec, const std::funct
     std::fprintf(stderr, "afford-%s: --log-level: %s\n", spec.name.c_str(), e.what());
     return 2;
   }
+  ProtocolConfig protocol;
+  try {
+    protocol = loadProtocol(config_dir);
+  } catch (const std::exception& e) {
+    log->error("--config-dir: {}", e.what());
+    return 2;
+  }
   installStopHandlers();
   cv::setNumThreads(0);  // images are 150 x 150: a thread pool only adds wake-ups
   lcm::LCM lcm(url);
@@ -330,15 +255,19 @@ int processMain(int argc, char** argv, const ProcessSpec& spec, const std::funct
   }
   std::unique_ptr<NodeBase> node;
   try {
-    node = make_node(lcm, log);
+    node = make_node(lcm, log, protocol);
   } catch (const std::exception& e) {
     log->error("cannot start: {}", e.what());
     return 1;
   }
   log->info("listening on {}", url);
   while (!stopRequested()) {
-    lcm.handleTimeout(100);
-    node->tick();
+    lcm.handleTimeout(node->msUntilDue());
+    try {
+      node->tick();
+    } catch (const std::exception& e) {
+      log->error("{}", e.what());
+    }
   }
   node->leaveRun();
   node.reset();

@@ -13,94 +13,185 @@
 
 namespace afford {
 
-using Clock = std::chrono::steady_clock;
+using std::chrono::milliseconds;
 
-RunDriver::RunDriver(lcm::LCM& lcm, std::shared_ptr<spdlog::logger> log) : lcm_(lcm), log_(std::move(log)) {
-  listen(channel::kStatus, [this](const lcm::ReceiveBuffer* b) {
-    process_status_t m;
-    std::string why;
-    if (!decodeAtEdge(b, m, why)) return log_->warn("{}: dropped message: {}", channel::kStatus, why);
-    seen_[m.process] = {m.run_id, m.step, m.state, m.detail, Clock::now()};
-    if (outcome_ && m.counts_run == run_id_) {
-      for (int i = 0; i < m.n_channels; ++i)
-        if (m.channels[i] == channel::kAffordanceTable || m.channels[i] == channel::kResult ||
-            m.channels[i] == channel::kExtrinsicResult)
-          serials_.announce(m.channels[i], m.counts[i]);
-    }
-    if (outcome_ && m.process == "logger" && m.run_id == run_id_ && m.state == process_status_t::DONE) {
-      outcome_->log_dir = m.detail;
-      logger_done_ = true;
-    }
-  });
-  listen(channel::kAffordanceTable, [this](const lcm::ReceiveBuffer* b) {
-    affordance_table_t m;
-    std::string why;
-    if (!decodeAtEdge(b, m, why)) return log_->warn("{}: dropped message: {}", channel::kAffordanceTable, why);
-    if (!outcome_ || m.run_id != run_id_ || !inOrder(channel::kAffordanceTable, m.serial)) return;
-    outcome_->curve.push_back({m.step, m.affordance});
-  });
-  listen(channel::kExtrinsicResult, [this](const lcm::ReceiveBuffer* b) {
-    extrinsic_result_t m;
-    std::string why;
-    if (!decodeAtEdge(b, m, why)) return log_->warn("{}: dropped message: {}", channel::kExtrinsicResult, why);
-    if (!outcome_ || m.run_id != run_id_ || !inOrder(channel::kExtrinsicResult, m.serial)) return;
-    ExtrinsicOutcome& e = outcome_->extrinsic;
-    e.scenario = m.scenario;
-    e.success = m.success;
-    e.completion = m.completion;
-    e.attempts = m.attempts;
-    e.utility = m.utility;
-    for (const auto& g : m.sub_goals)
-      e.sub_goals.push_back({g.x, g.y, g.iterations, g.actions_checked, g.actions_taken, g.reached != 0});
-    have_result_ = true;
-  });
-  listen(channel::kResult, [this](const lcm::ReceiveBuffer* b) {
-    run_result_t m;
-    std::string why;
-    if (!decodeAtEdge(b, m, why)) return log_->warn("{}: dropped message: {}", channel::kResult, why);
-    if (!outcome_ || m.run_id != run_id_ || !inOrder(channel::kResult, m.serial)) return;
-    outcome_->weights_checksum = m.weights_checksum;
-    outcome_->checkpoint = m.checkpoint;
-    outcome_->executed = m.actions_executed;
-    outcome_->successes = m.successes;
-    have_result_ = true;
-  });
+RunDriver::RunDriver(lcm::LCM& lcm, std::shared_ptr<spdlog::logger> log, const ProtocolConfig& protocol)
+    : lcm_(lcm), log_(std::move(log)), edge_(lcm, log_, "runner", protocol) {
+  edge_.warnOtherRuns(false);  // late messages of the slot's previous run are normal
+  edge_.subscribe<process_status_t>(
+      channel::kStatus, [this](const process_status_t& m) { return onStatus(m); }, Scope::Any, Order::None);
+  edge_.subscribe<affordance_table_t>(
+      channel::kAffordanceTable,
+      [this](const affordance_table_t& m) {
+        if (outcome_) outcome_->curve.push_back({m.step, m.affordance});
+        return Turn::take();
+      },
+      Scope::Run, Order::Serial);
+  edge_.subscribe<extrinsic_result_t>(
+      channel::kExtrinsicResult,
+      [this](const extrinsic_result_t& m) {
+        if (!outcome_) return Turn::take();
+        ExtrinsicOutcome& e = outcome_->extrinsic;
+        e.scenario = m.scenario;
+        e.success = m.success;
+        e.completion = m.completion;
+        e.attempts = m.attempts;
+        e.utility = m.utility;
+        for (const auto& g : m.sub_goals)
+          e.sub_goals.push_back({g.x, g.y, g.iterations, g.actions_checked, g.actions_taken, g.reached != 0});
+        have_result_ = true;
+        return Turn::take();
+      },
+      Scope::Run, Order::Serial);
+  edge_.subscribe<run_result_t>(
+      channel::kResult,
+      [this](const run_result_t& m) {
+        if (!outcome_) return Turn::take();
+        outcome_->weights_checksum = m.weights_checksum;
+        outcome_->checkpoint = m.checkpoint;
+        outcome_->executed = m.actions_executed;
+        outcome_->successes = m.successes;
+        have_result_ = true;
+        return Turn::take();
+      },
+      Scope::Run, Order::Serial);
 }
 
-void RunDriver::listen(const std::string& channel, std::function<void(const lcm::ReceiveBuffer*)> fn) {
-  auto h = std::make_unique<Holder>();
-  h->fn = std::move(fn);
-  lcm_.subscribe(channel, &Holder::on, h.get())->setQueueCapacity(10000);
-  holders_.push_back(std::move(h));
+bool RunDriver::ours(const std::string& process) const {
+  return spec_ && std::find(spec_->processes.begin(), spec_->processes.end(), process) != spec_->processes.end();
 }
 
-bool RunDriver::inOrder(const std::string& channel, std::int64_t serial) {
-  const SerialTracker::Verdict v = serials_.offer(channel, serial);
-  if (v == SerialTracker::Verdict::Gap) askMissing();
-  return v == SerialTracker::Verdict::Accept;
+void RunDriver::sendControl(const std::string& run_id, int8_t command) {
+  run_control_t c;
+  c.run_id = run_id;
+  c.step = command == run_control_t::STOP && spec_ && run_id == spec_->run_id ? spec_->steps : 0;
+  c.command = command;
+  edge_.send(channel::kRunControl, c);
 }
 
-void RunDriver::askMissing() {
-  for (const SerialTracker::Request& r : serials_.due(Clock::now())) publishResend(lcm_, run_id_, r, "runner");
+Turn RunDriver::onStatus(const process_status_t& m) {
+  Seen& s = seen_[m.process];
+  s = {m.run_id, m.step, m.state, m.pid, m.detail, Clock::now()};
+  edge_.claim(m);
+  if (phase_ == Phase::Idle || !spec_) return Turn::take();
+  if (m.process == "logger" && m.run_id == spec_->run_id && m.state == process_status_t::DONE && outcome_) {
+    outcome_->log_dir = m.detail;
+    logger_done_ = true;
+  }
+  if (ours(m.process)) nudge(m.process, s);
+  return Turn::take();
+}
+
+void RunDriver::nudge(const std::string& process, const Seen& s) {
+  const std::string& run = spec_->run_id;
+  const bool free = s.run_id.empty() && s.state == process_status_t::WAITING;
+  const auto now = Clock::now();
+  auto& last = nudged_[process];
+  if (now - last < milliseconds(config_.protocol.retry_ms)) return;  // told a moment ago: the answer is on its way
+  switch (phase_) {
+    case Phase::Freeing:
+      // Still in another run a while after this one began (its WAITING is not simply on its way):
+      // its STOP was lost, or it serves a run nobody runs.
+      if (!s.run_id.empty() && s.run_id != run && now - phase_at_ >= milliseconds(config_.protocol.retry_ms)) {
+        log_->warn("process '{}' is still in run '{}': told to stop again", process, s.run_id);
+        sendControl(s.run_id, run_control_t::STOP);
+        last = now;
+      }
+      return;
+    case Phase::Configuring:
+      if (free) {  // it has not had the configuration (lost, or it started after it went out)
+        edge_.send(channel::kRunConfig, config_msg_);
+        last = now;
+      } else if (!s.run_id.empty() && s.run_id != run) {
+        sendControl(s.run_id, run_control_t::STOP);
+        last = now;
+      }
+      return;
+    case Phase::Running:
+      if (free) {  // restarted: give it the run again; it catches up
+        std::int64_t step = -1;
+        for (const auto& [p, other] : seen_)
+          if (other.run_id == run) step = std::max(step, other.step);
+        log_->warn("run '{}': process {} is free again (restarted?) at step {}: sending it the run's configuration",
+                   run, process, step);
+        edge_.send(channel::kRunConfig, config_msg_);
+        sendControl(run, run_control_t::START);
+        last = now;
+      } else if (s.run_id == run && s.state == process_status_t::READY) {  // its START was lost
+        sendControl(run, run_control_t::START);
+        last = now;
+      }
+      return;
+    case Phase::Stopping:
+      if (s.run_id == run && s.state != process_status_t::FAILED) {  // its STOP was lost
+        sendControl(run, run_control_t::STOP);
+        last = now;
+      }
+      return;
+    case Phase::Idle:
+      return;
+  }
 }
 
 RunOutcome RunDriver::run(const RunSpec& spec, const std::function<void()>& pump,
                           const std::function<std::string()>& health) {
   RunOutcome out;
   const auto t0 = Clock::now();
-  run_id_ = spec.run_id;
+  try {
+    config_ = parseRunConfigText(spec.config_yaml);
+  } catch (const std::exception& e) {
+    out.error = "run '" + spec.run_id + "': " + e.what();
+    return out;
+  }
+  spec_ = &spec;
   outcome_ = &out;
   have_result_ = false;
   logger_done_ = false;
-  serials_.reset();
+  nudged_.clear();
+  edge_.join(spec.run_id, &config_);
+  const ProtocolConfig& protocol = config_.protocol;
+  config_msg_ = run_config_t();
+  config_msg_.run_id = spec.run_id;
+  config_msg_.step = 0;
+  config_msg_.seed = spec.seed;
+  config_msg_.experiment = spec.experiment;
+  config_msg_.system = spec.system;
+  config_msg_.config_yaml = spec.config_yaml;
   struct Reset {
     RunDriver* d;
-    ~Reset() { d->outcome_ = nullptr; }
+    ~Reset() {
+      d->phase_ = Phase::Idle;
+      d->outcome_ = nullptr;
+      d->spec_ = nullptr;
+      d->edge_.leave();
+    }
   } reset{this};
 
+  const bool logged = std::find(spec.processes.begin(), spec.processes.end(), "logger") != spec.processes.end();
+  auto stopAndWait = [&] {  // the processes leave the run; the logger closes the log
+    phase_ = Phase::Stopping;
+    sendControl(spec.run_id, run_control_t::STOP);
+    const auto until = Clock::now() + milliseconds(protocol.close_timeout_ms);
+    while (logged && !logger_done_ && Clock::now() < until && health().empty()) pump();
+  };
   auto fail = [&](const std::string& why) {
     out.ok = false;
     out.error = "run '" + spec.run_id + "': " + why;
+    if (phase_ != Phase::Freeing) {
+      phase_ = Phase::Stopping;
+      sendControl(spec.run_id, run_control_t::STOP);  // no process stays in a failed run
+    }
+    out.wall_seconds = std::chrono::duration<double>(Clock::now() - t0).count();
+    return out;
+  };
+  auto interrupted = [&] {
+    std::int64_t step = -1;
+    for (const auto& [p, s] : seen_)
+      if (s.run_id == spec.run_id) step = std::max(step, s.step);
+    stopAndWait();
+    out.ok = false;
+    out.interrupted = true;
+    out.error = "run '" + spec.run_id + "': interrupted at step " + std::to_string(step);
     out.wall_seconds = std::chrono::duration<double>(Clock::now() - t0).count();
     return out;
   };
@@ -113,130 +204,110 @@ RunOutcome RunDriver::run(const RunSpec& spec, const std::function<void()>& pump
   auto failedProcess = [&]() -> std::string {
     for (const auto& p : spec.processes) {
       auto it = seen_.find(p);
-      if (it != seen_.end() && it->second.run_id == spec.run_id && it->second.state == process_status_t::FAILED)
-        return "process '" + p + "' failed: " + it->second.detail;
+      if (it == seen_.end() || it->second.run_id != spec.run_id || it->second.state != process_status_t::FAILED) continue;
+      // Once the result is in, a process that fails afterwards (restarted after its
+      // last step, it refuses to save its weights again) changes nothing; the logger does.
+      if (have_result_ && p != "logger") continue;
+      return "process '" + p + "' failed: " + it->second.detail;
     }
     return "";
   };
+  // Heard within three heartbeats: alive (a stale entry is a process gone).
+  const auto fresh = milliseconds(3 * protocol.heartbeat_ms);
+  auto free = [&](const Seen& s) {
+    return s.state == process_status_t::WAITING && s.run_id.empty() && Clock::now() - s.at < fresh;
+  };
 
-  // 1. Every process present and free. One still in an earlier run a second
-  // from now (its STOP datagram lost; normally its WAITING status is on the
-  // way) is told again, once a second.
-  auto deadline = t0 + std::chrono::seconds(15);
-  auto last_stop = Clock::now();
-  while (!missing([](const Seen& s) { return s.state == process_status_t::WAITING && s.run_id.empty(); }).empty()) {
+  // 1. Every process present and free (one still in another run is told to stop on its next STATUS).
+  phase_ = Phase::Freeing;
+  phase_at_ = Clock::now();
+  auto deadline = Clock::now() + milliseconds(protocol.ready_timeout_ms);
+  while (!missing(free).empty()) {
     if (auto h = health(); !h.empty()) return fail(h);
-    if (Clock::now() - last_stop > std::chrono::seconds(1)) {
-      for (const auto& p : spec.processes) {
-        auto it = seen_.find(p);
-        if (it == seen_.end() || it->second.run_id.empty() || it->second.run_id == spec.run_id) continue;
-        run_control_t stop;
-        stop.run_id = it->second.run_id;
-        stop.step = 0;
-        stop.command = run_control_t::STOP;
-        lcm_.publish(channel::kRunControl, &stop);
-        log_->warn("process '{}' is still in run '{}': told to stop again", p, it->second.run_id);
-      }
-      last_stop = Clock::now();
-    }
+    if (stopRequested()) return interrupted();
     if (Clock::now() > deadline)
-      return fail("no process of this name reported ready for a run within 15 s: " +
-                  missing([](const Seen& s) { return s.state == process_status_t::WAITING && s.run_id.empty(); }));
+      return fail("no process of this name reported free for a run within " +
+                  std::to_string(protocol.ready_timeout_ms / 1000.0).substr(0, 4) + " s: " + missing(free));
     pump();
   }
 
-  // 2. Configure.
-  run_config_t cfg;
-  cfg.run_id = spec.run_id;
-  cfg.step = 0;
-  cfg.seed = spec.seed;
-  cfg.experiment = spec.experiment;
-  cfg.system = spec.system;
-  cfg.config_yaml = spec.config_yaml;
-  lcm_.publish(channel::kRunConfig, &cfg);
-  auto last_send = Clock::now();
-  deadline = Clock::now() + std::chrono::seconds(15);
+  // 2. Configure: START as soon as every one says READY.
+  phase_ = Phase::Configuring;
+  edge_.send(channel::kRunConfig, config_msg_);
+  auto said = Clock::now();
+  auto again = milliseconds(protocol.retry_ms);
+  deadline = Clock::now() + milliseconds(protocol.ready_timeout_ms);
   auto ready = [&](const Seen& s) { return s.run_id == spec.run_id && s.state == process_status_t::READY; };
   while (!missing(ready).empty()) {
     if (auto h = health(); !h.empty()) return fail(h);
     if (auto f = failedProcess(); !f.empty()) return fail(f);
-    if (Clock::now() > deadline) return fail("not configured within 15 s: " + missing(ready));
-    if (Clock::now() - last_send > std::chrono::seconds(2)) {  // a lost datagram: say it again
-      lcm_.publish(channel::kRunConfig, &cfg);
-      last_send = Clock::now();
+    if (stopRequested()) return interrupted();
+    if (Clock::now() > deadline) return fail("not configured within the protocol's ready_timeout_ms: " + missing(ready));
+    if (Clock::now() - said > again) {  // a datagram lost on the way there or back: say it again, backing off
+      edge_.send(channel::kRunConfig, config_msg_);
+      said = Clock::now();
+      again = std::min(again * 2, milliseconds(protocol.heartbeat_ms));
     }
     pump();
   }
 
   // 3. Run.
-  run_control_t start;
-  start.run_id = spec.run_id;
-  start.step = 0;
-  start.command = run_control_t::START;
-  lcm_.publish(channel::kRunControl, &start);
+  phase_ = Phase::Running;
+  sendControl(spec.run_id, run_control_t::START);
   const auto started = Clock::now();
   std::int64_t progress = -1;
   auto progress_at = Clock::now();
-  auto last_rejoin = Clock::now() - std::chrono::seconds(10);
-  // A process that was killed can be started again: it is silent meanwhile.
   const auto silence = std::chrono::duration<double>(spec.stall_seconds);
-  const bool logged = std::find(spec.processes.begin(), spec.processes.end(), "logger") != spec.processes.end();
+  // An intrinsic run reports its affordance table every curve_interval steps and at the end.
+  const std::size_t tables = spec.extrinsic ? 0
+                                            : static_cast<std::size_t>(config_.steps / config_.curve_interval + 1 +
+                                                                       (config_.steps % config_.curve_interval != 0));
   // The logger must be in the run to close its log: one restarted after the
   // last step still catches up first.
   auto loggerIn = [&] { return !logged || (seen_.count("logger") && seen_["logger"].run_id == spec.run_id); };
-  while (!have_result_ || !loggerIn()) {
+  while (!have_result_ || out.curve.size() < tables || !loggerIn()) {
     if (auto h = health(); !h.empty()) return fail(h);
     if (auto f = failedProcess(); !f.empty()) return fail(f);
+    if (stopRequested()) return interrupted();
     pump();
-    askMissing();
+    edge_.askMissing();
     const auto now = Clock::now();
-    std::int64_t step = -1, handled = 0;  // the furthest step; the steps of all, in the run
-    std::string rejoining;
+    std::int64_t handled = 0;  // the steps of all, in the run
     for (const auto& p : spec.processes) {
       auto it = seen_.find(p);
       if (it == seen_.end()) continue;
       if (now - it->second.at > silence)
         return fail("process '" + p + "' stopped reporting (last heard " +
                     std::to_string(std::chrono::duration<double>(now - it->second.at).count()) + " s ago)");
-      if (it->second.run_id.empty() && it->second.state == process_status_t::WAITING)
-        rejoining += (rejoining.empty() ? "" : ", ") + p;
-      step = std::max(step, it->second.step);
       if (it->second.run_id == spec.run_id) handled += it->second.step + 1;
     }
-    // A process of the run is free (restarted): give it the run again.
-    if (!rejoining.empty() && now - last_rejoin > std::chrono::seconds(1)) {
-      log_->warn("run '{}': process {} is free again (restarted?) at step {}: sending it the run's configuration",
-                 spec.run_id, rejoining, step);
-      lcm_.publish(channel::kRunConfig, &cfg);
-      lcm_.publish(channel::kRunControl, &start);
-      last_rejoin = now;
-    }
-    // Progress is any process moving on, a restarted one catching up included.
-    if (handled != progress) {
-      progress = handled;
+    // Progress is any process moving on (a restarted one catching up included), or a table coming in.
+    if (const auto p = handled + static_cast<std::int64_t>(out.curve.size()); p != progress) {
+      progress = p;
       progress_at = now;
-    } else if (now - progress_at > std::chrono::duration<double>(spec.stall_seconds)) {
+    }
+    if (now - progress_at > std::chrono::duration<double>(spec.stall_seconds)) {
       std::string where;
       for (const auto& p : spec.processes)
         if (seen_.count(p)) where += " " + p + "@" + std::to_string(seen_[p].step);
+      std::string lacking;
+      for (const auto& [channel, range] : edge_.missingRanges())
+        lacking += " " + channel + " " + std::to_string(range.first) + ".." + std::to_string(range.second - 1);
       return fail("stalled: no progress for " + std::to_string(static_cast<int>(spec.stall_seconds)) +
-                  " s (last step handled per process:" + where + ")");
+                  " s (last step handled per process:" + where + ")" +
+                  (lacking.empty() ? "" : "; the runner still misses" + lacking));
     }
   }
-
   out.run_seconds = std::chrono::duration<double>(Clock::now() - started).count();
 
   // 4. Stop, and let the logger close the log.
-  run_control_t stop = start;
-  stop.command = run_control_t::STOP;
-  stop.step = spec.steps;
-  lcm_.publish(channel::kRunControl, &stop);
-  deadline = Clock::now() + std::chrono::seconds(15);
-  while (logged && !logger_done_) {
+  stopAndWait();
+  if (logged && !logger_done_) {
     if (auto h = health(); !h.empty()) return fail(h);
-    if (Clock::now() > deadline) return fail("the logger did not close the log within 15 s");
-    pump();
+    if (auto f = failedProcess(); !f.empty()) return fail(f);
+    return fail("the logger did not close the log within the protocol's close_timeout_ms");
   }
+  if (auto f = failedProcess(); !f.empty()) return fail(f);
   out.ok = true;
   out.wall_seconds = std::chrono::duration<double>(Clock::now() - t0).count();
   return out;

@@ -1,11 +1,16 @@
-// The runner's side of one run's choreography: waits for the processes,
-// publishes RUN_CONFIG, waits for READY, publishes START, collects the
-// affordance tables and the result, then STOP. It watches for stalls and for
-// processes that stop reporting, so a run never hangs silently. A process of
-// the run that reports free again (killed and started anew) is given the
-// run's RUN_CONFIG and START again: it catches up by asking for the run's
-// messages (docs/operating.md, "Killing and restarting a process").
-// Channels in:  STATUS, AFFORDANCE_TABLE, RESULT, EXTRINSIC_RESULT (in serial order)
+// The runner's side of one run's choreography: it waits until the processes
+// of the run are free, publishes RUN_CONFIG, publishes START as soon as every
+// one has said READY, collects the affordance tables and the result, then
+// publishes STOP and waits for the logger to close the log. Every boundary is
+// an event (a STATUS saying so); timers only recover lost datagrams: the
+// configuration is said again (backing off) while someone has not taken it,
+// and a process that says it is free, ready or still in the run when it
+// should not be is told again at once. A process of the run that reports
+// free again mid-run (killed and started anew) is given the run's RUN_CONFIG
+// and START again: it catches up by asking for the run's messages
+// (docs/operating.md, "Killing and restarting a process"). Stalls and
+// silent processes fail the run, naming them.
+// Channels in:  STATUS, AFFORDANCE_TABLE, RESULT, EXTRINSIC_RESULT (in serial order, through the edge)
 // Channels out: RUN_CONFIG, RUN_CONTROL, RESEND
 #pragma once
 #include <lcm/lcm-cpp.hpp>
@@ -18,7 +23,8 @@
 #include <string>
 #include <vector>
 
-#include "afford/serials.hpp"
+#include "afford/config.hpp"
+#include "afford/edge.hpp"
 
 namespace afford {
 
@@ -56,6 +62,7 @@ struct ExtrinsicOutcome {
 
 struct RunOutcome {
   bool ok = false;
+  bool interrupted = false;                   // SIGINT/SIGTERM cut it (error says at which step)
   std::string error;
   std::string weights_checksum;
   std::string checkpoint;                     // the predictors' saved weights, if any
@@ -71,37 +78,43 @@ struct RunOutcome {
 
 class RunDriver {
  public:
-  RunDriver(lcm::LCM& lcm, std::shared_ptr<spdlog::logger> log);
+  // `protocol`: what the driver uses between runs (each run's configuration brings its own).
+  RunDriver(lcm::LCM& lcm, std::shared_ptr<spdlog::logger> log, const ProtocolConfig& protocol);
   // `pump` handles pending messages (and ticks in-process nodes); `health`
-  // returns "" or why a process is gone.
+  // returns "" or why a process is gone. A SIGINT or SIGTERM (stopRequested())
+  // cuts the run: it is stopped, its log closed, and the outcome says so.
   RunOutcome run(const RunSpec& spec, const std::function<void()>& pump, const std::function<std::string()>& health);
 
  private:
+  using Clock = std::chrono::steady_clock;
+  enum class Phase { Idle, Freeing, Configuring, Running, Stopping };
   struct Seen {
     std::string run_id;
     std::int64_t step = -1;
     int state = -1;
+    int pid = 0;
     std::string detail;
-    std::chrono::steady_clock::time_point at;
+    Clock::time_point at;
   };
-  struct Holder {
-    std::function<void(const lcm::ReceiveBuffer*)> fn;
-    void on(const lcm::ReceiveBuffer* b, const std::string&) { fn(b); }
-  };
-  void listen(const std::string& channel, std::function<void(const lcm::ReceiveBuffer*)> fn);
-  // A run message in serial order? (asks for missing ones)
-  bool inOrder(const std::string& channel, std::int64_t serial);
-  void askMissing();
+  Turn onStatus(const process_status_t& m);
+  // Tell a process of the run what it missed (a lost datagram, or a restart).
+  void nudge(const std::string& process, const Seen& s);
+  void sendControl(const std::string& run_id, int8_t command);
+  bool ours(const std::string& process) const;
 
   lcm::LCM& lcm_;
   std::shared_ptr<spdlog::logger> log_;
-  std::vector<std::unique_ptr<Holder>> holders_;
+  Edge edge_;
   std::map<std::string, Seen> seen_;
-  std::string run_id_;
+  std::map<std::string, Clock::time_point> nudged_;  // last time each process was told again
+  const RunSpec* spec_ = nullptr;
+  RunConfig config_;
+  run_config_t config_msg_;
+  Phase phase_ = Phase::Idle;
+  Clock::time_point phase_at_{};  // when the current phase began
   RunOutcome* outcome_ = nullptr;
   bool have_result_ = false;
   bool logger_done_ = false;
-  SerialTracker serials_;
 };
 
 }  // namespace afford

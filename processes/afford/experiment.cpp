@@ -61,22 +61,22 @@ void pumpLcm(lcm::LCM& lcm) {
   if (handled == 0) lcm.handleTimeout(5);
 }
 
-RunOutcome runInProcess(const PlannedRun& run, const ExperimentOptions& o, int slot) {
+RunOutcome runInProcess(const PlannedRun& run, const ExperimentOptions& o, const ProtocolConfig& protocol, int slot) {
   lcm::LCM lcm("memq://");
   const std::string tag = o.jobs > 1 ? "#" + std::to_string(slot) : "";
   const std::string level = o.process_log_level == "info" ? "warn" : o.process_log_level;
-  EnvironmentNode env(lcm, makeLogger("environment" + tag, level));
-  EyeNode eye(lcm, makeLogger("eye" + tag, level), /*speculate=*/false);  // one thread: no idle time to fill
-  PredictorsNode predictors(lcm, makeLogger("predictors" + tag, level), /*async_effects=*/false);
+  EnvironmentNode env(lcm, makeLogger("environment" + tag, level), protocol);
+  EyeNode eye(lcm, makeLogger("eye" + tag, level), protocol, /*speculate=*/false);  // one thread: no idle time to fill
+  PredictorsNode predictors(lcm, makeLogger("predictors" + tag, level), protocol, /*async_effects=*/false);
   // The motivation decides in the intrinsic phase, the planner in the extrinsic one.
   std::unique_ptr<NodeBase> decider;
   if (run.spec.extrinsic)
-    decider = std::make_unique<PlannerNode>(lcm, makeLogger("planner" + tag, level));
+    decider = std::make_unique<PlannerNode>(lcm, makeLogger("planner" + tag, level), protocol);
   else
-    decider = std::make_unique<MotivationNode>(lcm, makeLogger("motivation" + tag, level));
+    decider = std::make_unique<MotivationNode>(lcm, makeLogger("motivation" + tag, level), protocol);
   std::unique_ptr<LoggerNode> logger;
-  if (run.keep_log) logger = std::make_unique<LoggerNode>(lcm, makeLogger("logger" + tag, level), o.log_root);
-  RunDriver driver(lcm, makeLogger("runner" + tag, level));
+  if (run.keep_log) logger = std::make_unique<LoggerNode>(lcm, makeLogger("logger" + tag, level), protocol, o.log_root);
+  RunDriver driver(lcm, makeLogger("runner" + tag, level), protocol);
   auto pump = [&] {
     pumpLcm(lcm);
     env.tick();
@@ -95,13 +95,15 @@ struct Slot {
   std::string url;
   std::unique_ptr<ProcessGroup> group;   // environment, eye, predictors, and motivation or planner
   bool extrinsic = false;                // which of the two the group has
+  std::unique_ptr<ProcessGroup> logger;  // started with the slot's first recorded run, kept for the others
   // One bus connection and driver for all the slot's runs: the driver keeps
   // what each process last said, so a run starts as soon as they are free.
   std::unique_ptr<lcm::LCM> lcm;
   std::unique_ptr<RunDriver> driver;
 };
 
-RunOutcome runOverUdpm(const PlannedRun& run, const ExperimentOptions& o, Slot& slot, const std::string& bin) {
+RunOutcome runOverUdpm(const PlannedRun& run, const ExperimentOptions& o, const ProtocolConfig& protocol, Slot& slot,
+                       const std::string& bin) {
   const std::string out = (fs::path(o.out_dir) / "processes" / ("slot" + std::to_string(slot.index))).string();
   const bool attached = !o.attach.empty();  // the user started the processes; none are ours to start
   if (!attached && (!slot.group || !slot.group->health().empty() || slot.extrinsic != run.spec.extrinsic)) {
@@ -111,10 +113,11 @@ RunOutcome runOverUdpm(const PlannedRun& run, const ExperimentOptions& o, Slot& 
         bin, std::vector<std::string>{"environment", "eye", "predictors", run.spec.extrinsic ? "planner" : "motivation"},
         slot.url, out, std::vector<std::string>{});
   }
-  std::unique_ptr<ProcessGroup> logger;
-  if (run.keep_log && !attached)
-    logger = std::make_unique<ProcessGroup>(bin, std::vector<std::string>{"logger"}, slot.url, out,
-                                            std::vector<std::string>{"--log-dir", o.log_root});
+  // The logger serves the slot's runs one after another; those not to be kept
+  // say so in their configuration (run.record), and it stays free during them.
+  if (run.keep_log && !attached && (!slot.logger || !slot.logger->health().empty()))
+    slot.logger = std::make_unique<ProcessGroup>(bin, std::vector<std::string>{"logger"}, slot.url, out,
+                                                 std::vector<std::string>{"--log-dir", o.log_root});
   if (!slot.lcm) {
     // This thread only watches the runs (see kWatcherNice); LCM's receive
     // thread, created on the first handle(), inherits the priority.
@@ -126,22 +129,23 @@ RunOutcome runOverUdpm(const PlannedRun& run, const ExperimentOptions& o, Slot& 
       r.error = "cannot open LCM at " + slot.url;
       return r;
     }
-    slot.driver = std::make_unique<RunDriver>(*slot.lcm, makeLogger("runner", "warn"));
+    slot.driver = std::make_unique<RunDriver>(*slot.lcm, makeLogger("runner", "warn"), protocol);
   }
   lcm::LCM& lcm = *slot.lcm;
   RunDriver& driver = *slot.driver;
   auto health = [&]() {
     std::string h = slot.group ? slot.group->health() : std::string();
-    if (h.empty() && logger) h = logger->health();
+    if (h.empty() && slot.logger && run.keep_log) h = slot.logger->health();
     return h;
   };
   RunOutcome r = driver.run(run.spec, [&] { pumpLcm(lcm); }, health);
   if (slot.group) r.peak_rss_kb = slot.group->peakRssKb();
-  if (logger) {
-    for (const auto& [name, kb] : logger->peakRssKb()) r.peak_rss_kb[name] = kb;
-    logger->stop();
+  if (slot.logger && run.keep_log)
+    for (const auto& [name, kb] : slot.logger->peakRssKb()) r.peak_rss_kb[name] = kb;
+  if (!r.ok) {  // a broken group is not reused
+    slot.group.reset();
+    slot.logger.reset();
   }
-  if (!r.ok) slot.group.reset();  // a broken group is not reused
   return r;
 }
 
@@ -174,6 +178,7 @@ struct Plan {
   int tests = 0;                             // extrinsic tests per agent, condition and scenario
   std::vector<Condition> conditions{Condition{}};  // planner settings compared (default: one, no settings)
   ExtrinsicDesign design;                    // the experiment file's extrinsic section, if any
+  ProtocolConfig protocol;                   // the runner's between runs (each run's config has its own)
 };
 
 // Everything that can be wrong with the request is found here, before any process starts.
@@ -181,6 +186,7 @@ Plan planExperiment(const ExperimentOptions& o) {
   Plan plan;
   plan.config_dir = o.config_dir.empty() ? std::string(AFFORD_SOURCE_DIR) + "/config" : o.config_dir;
   plan.exp = loadExperiment(plan.config_dir, o.experiment);
+  plan.protocol = loadProtocol(plan.config_dir);
   const int reps = plan.reps = o.reps.value_or(plan.exp.repetitions);
   if (reps < 1) throw ConfigError("--reps must be at least 1");
   if (o.jobs < 1) throw ConfigError("--jobs must be at least 1");
@@ -221,6 +227,7 @@ Plan planExperiment(const ExperimentOptions& o) {
       YAML::Node node = effectiveConfig(plan.config_dir, req);
       const std::string run_id = prefix + "-" + o.experiment + "-" + sys_name + "-s" + std::to_string(o.seed + r);
       node["run"]["checkpoint"] = (fs::path(o.log_root) / run_id / "predictors.ckpt").string();
+      node["run"]["record"] = o.keep_logs == "all" || (o.keep_logs == "first" && r == 0);
       if (plan.design.after_actions > 0) node["run"]["checkpoint_after_actions"] = plan.design.after_actions;
       const RunConfig cfg = parseRunConfig(node);
       if (r == 0) configs[sys_name] = cfg;
@@ -241,8 +248,9 @@ Plan planExperiment(const ExperimentOptions& o) {
     }
   }
 
+  // The run's folder holds its log and its checkpoint: a run never writes into another's.
   for (const auto& p : runs)
-    if (p.keep_log && fs::exists(fs::path(o.log_root) / p.spec.run_id))
+    if (fs::exists(fs::path(o.log_root) / p.spec.run_id))
       throw ConfigError("the log folder " + (fs::path(o.log_root) / p.spec.run_id).string() +
                         " exists already: choose another --run-prefix or --log-root");
 
@@ -251,7 +259,7 @@ Plan planExperiment(const ExperimentOptions& o) {
 
 // Run every planned run, J at a time; outcomes in plan order.
 std::vector<RunOutcome> executeRuns(const std::vector<PlannedRun>& runs, const ExperimentOptions& o,
-                                    const std::string& bin, spdlog::logger& log) {
+                                    const ProtocolConfig& protocol, const std::string& bin, spdlog::logger& log) {
   std::vector<RunOutcome> outcomes(runs.size());
   std::atomic<std::size_t> next{0};
   std::atomic<int> done{0};
@@ -267,7 +275,8 @@ std::vector<RunOutcome> executeRuns(const std::vector<PlannedRun>& runs, const E
     for (std::size_t i; (i = next.fetch_add(1)) < runs.size();) {
       RunOutcome r;
       try {
-        r = o.transport == "memq" ? runInProcess(runs[i], o, slot_index) : runOverUdpm(runs[i], o, slot, bin);
+        r = o.transport == "memq" ? runInProcess(runs[i], o, protocol, slot_index)
+                                  : runOverUdpm(runs[i], o, protocol, slot, bin);
       } catch (const std::exception& e) {
         r.ok = false;
         r.error = "run '" + runs[i].spec.run_id + "': " + e.what();
@@ -339,7 +348,8 @@ std::vector<PlannedRun> planExtrinsic(const Plan& plan, const std::vector<RunOut
           std::vector<std::string> settings = o.settings;
           for (const auto& [key, value] : plan.conditions[c].settings) settings.push_back(key + "=" + value);
           const RunRequest req{o.experiment, parseSystem(p.system), seed, std::nullopt, settings};
-          const YAML::Node node = extrinsicConfig(plan.config_dir, req, checkpoint, t.scenario);
+          YAML::Node node = extrinsicConfig(plan.config_dir, req, checkpoint, t.scenario);
+          node["run"]["record"] = t.keep_log;
           t.spec.run_id = p.spec.run_id + (plan.conditions.size() > 1 ? "-c" + std::to_string(c) : "") + "-" +
                           t.scenario + "-e" + std::to_string(e);
           t.spec.experiment = o.experiment;
@@ -691,7 +701,7 @@ int runExperiment(const ExperimentOptions& o, spdlog::logger& log) {
   for (const auto& sys : plan.systems) systems += (systems.empty() ? "" : ", ") + sys;
   log.info("experiment {} ({}): {} run(s) of {} steps, {} at a time, over {} ({})", o.experiment, systems, plan.runs.size(),
            plan.runs.front().spec.steps, o.jobs, o.transport, network);
-  const std::vector<RunOutcome> outcomes = executeRuns(plan.runs, o, bin, log);
+  const std::vector<RunOutcome> outcomes = executeRuns(plan.runs, o, plan.protocol, bin, log);
   json summary = summarise(plan, o, outcomes, network);
   for (const auto& [sys, js] : summary["systems"].items())
     for (const auto& g : js.value("curve_gaps", json::array()))
@@ -704,7 +714,7 @@ int runExperiment(const ExperimentOptions& o, spdlog::logger& log) {
     for (const auto& e : untested) log.error("{}", e);
     log.info("extrinsic phase: {} test(s): {} condition(s) x {} scenario(s) x {} from each trained agent", tests.size(),
              plan.conditions.size(), plan.scenarios.size(), plan.tests);
-    test_outcomes = executeRuns(tests, o, bin, log);
+    test_outcomes = executeRuns(tests, o, plan.protocol, bin, log);
     summariseExtrinsic(summary, plan, tests, test_outcomes, o);
     std::vector<TestRecord> records;
     for (const auto& t : tests) {

@@ -10,6 +10,8 @@
 
 #include "afford/image.hpp"
 #include "afford/plots.hpp"
+#include "afford/edge.hpp"
+#include "afford/node.hpp"
 #include "afford/process_status_t.hpp"
 #include "afford/replay.hpp"
 #include "afford/report.hpp"
@@ -125,23 +127,24 @@ int main(int argc, char** argv) {
     if (status->parsed()) {
       lcm::LCM bus(status_url);
       if (!bus.good()) throw std::runtime_error("cannot open LCM at " + status_url);
-      struct Heard {
-        std::map<std::string, afford::process_status_t> last;
-        void on(const lcm::ReceiveBuffer*, const std::string&, const afford::process_status_t* m) {
-          last[m->process + "#" + std::to_string(m->pid)] = *m;
-        }
-      } heard;
-      bus.subscribe("STATUS", &Heard::on, &heard);
+      std::map<std::string, afford::process_status_t> heard;  // process#pid -> its last STATUS
+      afford::Edge edge(bus, afford::makeLogger("status", "warn"), "status", afford::loadProtocol(config_dir));
+      edge.subscribe<afford::process_status_t>(
+          "STATUS",
+          [&heard](const afford::process_status_t& m) {
+            heard[m.process + "#" + std::to_string(m.pid)] = m;
+            return afford::Turn::take();
+          },
+          afford::Scope::Any, afford::Order::None);
       const auto until = std::chrono::steady_clock::now() + std::chrono::duration<double>(status_seconds);
       while (std::chrono::steady_clock::now() < until) bus.handleTimeout(50);
       const char* states[] = {"waiting", "ready", "running", "done", "failed"};
       std::printf("%-12s %8s  %-8s %10s  %s\n", "process", "pid", "state", "last step", "run");
-      for (const auto& [key, m] : heard.last)
-        std::printf("%-12s %8d  %-8s %10lld  %s%s%s\n", m.process.c_str(), m.pid,
-                    m.state >= 0 && m.state <= 4 ? states[m.state] : "?", static_cast<long long>(m.step),
-                    m.run_id.empty() ? "-" : m.run_id.c_str(), m.detail.empty() ? "" : "  ",
+      for (const auto& [key, m] : heard)
+        std::printf("%-12s %8d  %-8s %10lld  %s%s%s\n", m.process.c_str(), m.pid, states[m.state],
+                    static_cast<long long>(m.step), m.run_id.empty() ? "-" : m.run_id.c_str(), m.detail.empty() ? "" : "  ",
                     m.detail.c_str());
-      if (heard.last.empty()) std::printf("(no process heard on %s in %.1f s)\n", status_url.c_str(), status_seconds);
+      if (heard.empty()) std::printf("(no process heard on %s in %.1f s)\n", status_url.c_str(), status_seconds);
       return 0;
     }
     if (replay->parsed()) {
@@ -151,12 +154,25 @@ int main(int argc, char** argv) {
       const afford::ReplayResult r = afford::replayRun(replay_options, *log);
       std::printf("run: %s (%s)\nevents: %lld%s\n", r.run_id.c_str(), r.extrinsic ? "extrinsic" : "intrinsic",
                   static_cast<long long>(r.events), r.torn_bytes ? " (then an incomplete event, skipped)" : "");
-      if (!r.weights_checksum.empty())
-        std::printf("weights_checksum: %s\nrecorded: %s\n", r.weights_checksum.c_str(),
+      if (!r.incomplete.empty()) std::printf("the log is incomplete: %s\n", r.incomplete.c_str());
+      for (const auto& g : r.gaps)
+        std::printf("missing from the recording: %s serial%s %lld%s\n", g.channel.c_str(), g.first == g.last ? "" : "s",
+                    static_cast<long long>(g.first),
+                    g.first == g.last ? "" : (".." + std::to_string(g.last)).c_str());
+      if (r.dropped) std::printf("refused: %lld recorded message(s) (corrupted; see the warnings)\n", static_cast<long long>(r.dropped));
+      if (!r.weights_checksum.empty() || !r.recorded_checksum.empty())
+        std::printf("weights_checksum: %s\nrecorded: %s\n",
+                    r.weights_checksum.empty() ? "(not reached: the replay stopped before the end)" : r.weights_checksum.c_str(),
                     r.recorded_checksum.empty() ? "(none in the log)" : r.recorded_checksum.c_str());
       std::printf("decisions: %lld replayed, %lld recorded, %lld differing\n", static_cast<long long>(r.decisions),
                   static_cast<long long>(r.decisions_recorded), static_cast<long long>(r.decisions_differing));
-      std::printf("%s\n", r.ok() ? "replay equals the record" : "REPLAY DIFFERS FROM THE RECORD");
+      if (r.ok())
+        std::printf("replay equals the record\n");
+      else if (!r.consistent())
+        std::printf("REPLAY DIFFERS FROM THE RECORD\n");
+      else
+        std::printf("replay equals the record as far as it goes, but the record is %s\n",
+                    r.gaps.empty() ? "incomplete" : "missing messages (above)");
       return r.ok() ? 0 : 1;
     }
     if (plot->parsed()) {

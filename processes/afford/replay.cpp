@@ -10,11 +10,18 @@
 #include <set>
 #include <stdexcept>
 
+#include <fstream>
+#include <nlohmann/json.hpp>
+
+#include "afford/affordance_table_t.hpp"
 #include "afford/channels.hpp"
-#include "afford/logging.hpp"
 #include "afford/config.hpp"
+#include "afford/edge.hpp"
+#include "afford/extrinsic_result_t.hpp"
+#include "afford/logging.hpp"
 #include "afford/run_config_t.hpp"
 #include "afford/run_result_t.hpp"
+#include "logger/logger.hpp"
 #include "motivation/node.hpp"
 #include "planner/node.hpp"
 #include "predictors/node.hpp"
@@ -22,9 +29,14 @@
 namespace afford {
 namespace fs = std::filesystem;
 
-bool ReplayResult::ok() const {
+bool ReplayResult::consistent() const {
   const bool weights = recorded_checksum.empty() || weights_checksum.empty() || weights_checksum == recorded_checksum;
-  return weights && decisions_differing == 0 && decisions == decisions_recorded;
+  return weights && decisions_differing == 0 && dropped == 0;
+}
+
+bool ReplayResult::ok() const {
+  return consistent() && gaps.empty() && incomplete.empty() && decisions == decisions_recorded &&
+         (recorded_checksum.empty() || !weights_checksum.empty());
 }
 
 namespace {
@@ -74,6 +86,7 @@ struct Replayed {
   std::string name;
   std::unique_ptr<lcm::LCM> bus;
   std::unique_ptr<NodeBase> node;
+  std::unique_ptr<Edge> tap;      // what it publishes, through the edge like any subscriber
   std::set<std::string> outputs;  // channels it publishes: the record's copies are not fed back
   std::vector<std::vector<std::uint8_t>> decisions;  // what it published on DECISION
   std::string checksum;           // what it published on RESULT
@@ -92,21 +105,78 @@ struct Replayed {
   }
 };
 
-class Tap {  // records what a replayed process publishes
- public:
-  explicit Tap(Replayed& r) : r_(r) {}
-  void onDecision(const lcm::ReceiveBuffer* b, const std::string&) {
-    const auto* p = static_cast<const std::uint8_t*>(b->data);
-    r_.decisions.emplace_back(p, p + b->data_size);
-  }
-  void onResult(const lcm::ReceiveBuffer* b, const std::string&) {
-    run_result_t m;
-    if (m.decode(b->data, 0, b->data_size) > 0) r_.checksum = m.weights_checksum;
-  }
+// A recorded event as its channel's type would take it (bounds, fields, digest); "" or why not.
+std::string checkRecorded(const Event& e, const BoundsContext& ctx) {
+  std::string why;
+  auto check = [&](auto msg) { return decodeChecked(e.data.data(), e.data.size(), ctx, msg, why) ? std::string() : why; };
+  const std::string& c = e.channel;
+  if (c == channel::kScene) return check(scene_t());
+  if (c == channel::kFocus) return check(focus_t());
+  if (c == channel::kPrediction) return check(prediction_t());
+  if (c == channel::kDecision) return check(decision_t());
+  if (c == channel::kEffect) return check(effect_t());
+  if (c == channel::kProbe) return check(object_probe_t());
+  if (c == channel::kAffordanceTable) return check(affordance_table_t());
+  if (c == channel::kResult) return check(run_result_t());
+  if (c == channel::kLook) return check(look_t());
+  if (c == channel::kForwardQuery) return check(forward_query_t());
+  if (c == channel::kForwardPrediction) return check(forward_prediction_t());
+  if (c == channel::kExtrinsicResult) return check(extrinsic_result_t());
+  if (c == channel::kRunConfig) return check(run_config_t());
+  if (c == channel::kRunControl) return check(run_control_t());
+  if (c == channel::kStatus) return check(process_status_t());
+  if (c == channel::kResend) return check(resend_t());
+  return "";  // another channel: not ours to judge
+}
 
- private:
-  Replayed& r_;
-};
+// The serials each channel's publisher published that `events` lack: holes
+// below the highest recorded serial, and beyond it up to the publisher's own
+// count (STATUS, in lcm-logger recordings).
+std::vector<ReplayResult::Gap> gapsIn(const std::vector<Event>& events, const std::string& run_id, bool extrinsic,
+                                      const BoundsContext& ctx) {
+  std::map<std::string, std::set<std::int64_t>> had;
+  std::map<std::string, std::int64_t> claimed;
+  for (const Event& e : events) {
+    if (isSerialChannel(e.channel)) {
+      RunHeader h;
+      if (peekRunHeader(e.data.data(), static_cast<std::uint32_t>(e.data.size()), h) && h.run_id == run_id)
+        had[e.channel].insert(h.serial);
+    } else if (e.channel == channel::kStatus) {
+      process_status_t st;
+      std::string why;
+      if (!decodeChecked(e.data.data(), e.data.size(), ctx, st, why) || st.counts_run != run_id) continue;
+      for (int i = 0; i < st.n_channels; ++i)
+        if (publisherOf(st.channels[i], extrinsic) == st.process)
+          claimed[st.channels[i]] = std::max(claimed[st.channels[i]], st.counts[i]);
+    }
+  }
+  std::vector<ReplayResult::Gap> gaps;
+  std::set<std::string> channels;
+  for (const auto& [c, s] : had) channels.insert(c);
+  for (const auto& [c, n] : claimed) channels.insert(c);
+  for (const auto& c : channels) {
+    const std::set<std::int64_t>& s = had[c];
+    const std::int64_t end = std::max(s.empty() ? 0 : *s.rbegin() + 1, claimed.count(c) ? claimed[c] : 0);
+    std::int64_t next = 0;
+    for (std::int64_t serial : s) {
+      if (serial > next) gaps.push_back({c, next, serial - 1});
+      next = serial + 1;
+    }
+    if (end > next) gaps.push_back({c, next, end - 1});
+  }
+  return gaps;
+}
+
+// The manifest beside a log folder's segments: its reason if it says the log is incomplete.
+std::string manifestIncomplete(const fs::path& log) {
+  const fs::path manifest = (fs::is_directory(log) ? log : log.parent_path()) / "manifest.json";
+  if (!fs::exists(manifest)) return "";
+  std::ifstream in(manifest);
+  const nlohmann::json m = nlohmann::json::parse(in, nullptr, false);
+  if (m.is_discarded()) return "its manifest.json cannot be read";
+  if (m.value("complete", true)) return "";
+  return m.value("incomplete", std::string("its manifest says it is not complete"));
+}
 
 }  // namespace
 
@@ -120,21 +190,24 @@ ReplayResult replayRun(const ReplayOptions& o, spdlog::logger& log) {
     result.torn_bytes += torn;
     events.insert(events.end(), std::make_move_iterator(part.begin()), std::make_move_iterator(part.end()));
   }
+  result.incomplete = manifestIncomplete(o.log_dir);
   // The run: from its RUN_CONFIG (the first one, or the one of --run) to the next run's.
   // Our logger's logs start with it; a plain lcm-logger recording may hold
   // heartbeats before it and other runs after it.
+  const ProtocolConfig observer = loadProtocol(defaultConfigDir());
   std::size_t begin = events.size(), end = events.size();
+  run_config_t config_msg;
   for (std::size_t i = 0; i < events.size(); ++i) {
     if (events[i].channel != channel::kRunConfig) continue;
     run_config_t rc;
-    if (rc.decode(events[i].data.data(), 0, static_cast<int>(events[i].data.size())) < 0)
-      throw std::runtime_error(o.log_dir + ": a RUN_CONFIG cannot be decoded (event " + std::to_string(i) + ")");
+    std::string why;
+    if (!decodeChecked(events[i].data.data(), events[i].data.size(), BoundsContext{&observer, nullptr}, rc, why))
+      throw std::runtime_error(o.log_dir + ": the RUN_CONFIG of event " + std::to_string(i) + " is refused: " + why);
     if (begin == events.size()) {
       if (!o.run_id.empty() && rc.run_id != o.run_id) continue;
       begin = i;
-      result.run_id = rc.run_id;
-      result.extrinsic = parseRunConfigText(rc.config_yaml).phase == Phase::Extrinsic;
-    } else if (rc.run_id != result.run_id) {
+      config_msg = rc;
+    } else if (rc.run_id != config_msg.run_id) {
       end = i;
       break;
     }
@@ -144,44 +217,80 @@ ReplayResult replayRun(const ReplayOptions& o, spdlog::logger& log) {
                                                             : ": no RUN_CONFIG of run '" + o.run_id + "' in the log"));
   events = std::vector<Event>(std::make_move_iterator(events.begin() + static_cast<std::ptrdiff_t>(begin)),
                               std::make_move_iterator(events.begin() + static_cast<std::ptrdiff_t>(end)));
+  result.run_id = config_msg.run_id;
   result.events = static_cast<std::int64_t>(events.size());
+  const RunConfig config = parseRunConfigText(config_msg.config_yaml);
+  result.extrinsic = config.phase == Phase::Extrinsic;
+  const BoundsContext ctx{&config.protocol, &config};
+
+  // The replayed processes write nothing: no checkpoint goes into the recorded run's folder.
+  {
+    YAML::Node node = YAML::Load(config_msg.config_yaml);
+    node["run"]["checkpoint"] = "";
+    node["run"]["checkpoint_after_actions"] = 0;
+    config_msg.config_yaml = emitYaml(node);
+    std::vector<std::uint8_t> bytes = sealed(config_msg);
+    events.front().data = std::move(bytes);
+  }
+  result.gaps = gapsIn(events, result.run_id, result.extrinsic, ctx);
+
   std::vector<std::string> into = o.into;
   if (into.empty()) into = {"predictors", result.extrinsic ? "planner" : "motivation"};
-
   std::vector<std::unique_ptr<Replayed>> procs;
-  std::vector<std::unique_ptr<Tap>> taps;
   for (const auto& name : into) {
     auto r = std::make_unique<Replayed>();
     r->name = name;
     r->bus = std::make_unique<lcm::LCM>("memq://");
     auto logger = makeLogger("replay-" + name, "warn");
     if (name == "predictors") {
-      r->node = std::make_unique<PredictorsNode>(*r->bus, logger, /*async_effects=*/false);
+      r->node = std::make_unique<PredictorsNode>(*r->bus, logger, config.protocol, /*async_effects=*/false);
       r->outputs = {channel::kPrediction, channel::kAffordanceTable, channel::kResult, channel::kForwardPrediction,
                     channel::kStatus};
     } else if (name == "motivation") {
-      r->node = std::make_unique<MotivationNode>(*r->bus, logger);
+      r->node = std::make_unique<MotivationNode>(*r->bus, logger, config.protocol);
       r->outputs = {channel::kDecision, channel::kStatus};
     } else if (name == "planner") {
-      r->node = std::make_unique<PlannerNode>(*r->bus, logger);
+      r->node = std::make_unique<PlannerNode>(*r->bus, logger, config.protocol);
       r->outputs = {channel::kLook, channel::kForwardQuery, channel::kDecision, channel::kExtrinsicResult,
                     channel::kStatus};
     } else {
       throw std::runtime_error("--into: unknown process \"" + name + "\" (predictors, motivation or planner)");
     }
-    auto tap = std::make_unique<Tap>(*r);
-    r->bus->subscribe(channel::kDecision, &Tap::onDecision, tap.get());
-    r->bus->subscribe(channel::kResult, &Tap::onResult, tap.get());
-    taps.push_back(std::move(tap));
+    // What the replayed process publishes, taken through the edge like any subscriber.
+    r->tap = std::make_unique<Edge>(*r->bus, logger, "replay", config.protocol);
+    r->tap->join(result.run_id, &config);
+    Replayed* raw = r.get();
+    r->tap->subscribe<decision_t>(
+        channel::kDecision,
+        [raw](const decision_t&, const Envelope& e) {
+          raw->decisions.emplace_back(e.data, e.data + e.size);
+          return Turn::take();
+        },
+        Scope::Run, Order::None);
+    r->tap->subscribe<run_result_t>(
+        channel::kResult,
+        [raw](const run_result_t& m) {
+          raw->checksum = m.weights_checksum;
+          return Turn::take();
+        },
+        Scope::Run, Order::None);
     procs.push_back(std::move(r));
   }
 
-  std::vector<const Event*> recorded_decisions;
+  std::map<std::int64_t, const Event*> recorded_decisions;  // by serial: a recording may hold repeats
   for (const Event& e : events) {
-    if (e.channel == channel::kDecision) recorded_decisions.push_back(&e);
-    if (e.channel == channel::kResult) {
+    if (const std::string why = checkRecorded(e, ctx); !why.empty()) {
+      ++result.dropped;
+      log.warn("{}: a recorded message is refused: {}", e.channel, why);
+    }
+    RunHeader h;
+    if ((e.channel == channel::kDecision || e.channel == channel::kResult) &&
+        peekRunHeader(e.data.data(), static_cast<std::uint32_t>(e.data.size()), h) && h.run_id == result.run_id) {
+      if (e.channel == channel::kDecision) recorded_decisions.emplace(h.serial, &e);
       run_result_t m;
-      if (m.decode(e.data.data(), 0, static_cast<int>(e.data.size())) > 0) result.recorded_checksum = m.weights_checksum;
+      std::string why;
+      if (e.channel == channel::kResult && decodeChecked(e.data.data(), e.data.size(), ctx, m, why))
+        result.recorded_checksum = m.weights_checksum;
     }
     for (auto& p : procs) p->feed(e);
   }
@@ -194,8 +303,9 @@ ReplayResult replayRun(const ReplayOptions& o, spdlog::logger& log) {
       if (!decided_here) continue;
       result.decisions = static_cast<std::int64_t>(p->decisions.size());
       result.decisions_recorded = static_cast<std::int64_t>(recorded_decisions.size());
-      for (std::size_t i = 0; i < std::min(p->decisions.size(), recorded_decisions.size()); ++i)
-        result.decisions_differing += p->decisions[i] != recorded_decisions[i]->data;
+      auto it = recorded_decisions.begin();
+      for (std::size_t i = 0; i < p->decisions.size() && it != recorded_decisions.end(); ++i, ++it)
+        result.decisions_differing += p->decisions[i] != it->second->data;
     }
   }
   return result;

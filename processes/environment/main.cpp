@@ -4,7 +4,7 @@
 int main(int argc, char** argv) {
   return afford::processMain(
       argc, argv, {"environment", "afford environment: scene, objects, actions"}, [](afford::CLIHook&) {},
-      [](lcm::LCM& lcm, std::shared_ptr<spdlog::logger> log) {
-        return std::make_unique<afford::EnvironmentNode>(lcm, std::move(log));
+      [](lcm::LCM& lcm, std::shared_ptr<spdlog::logger> log, const afford::ProtocolConfig& protocol) {
+        return std::make_unique<afford::EnvironmentNode>(lcm, std::move(log), protocol);
       });
 }

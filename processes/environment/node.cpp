@@ -7,9 +7,9 @@
 
 namespace afford {
 
-EnvironmentNode::EnvironmentNode(lcm::LCM& lcm, std::shared_ptr<spdlog::logger> log)
-    : NodeBase(lcm, "environment", std::move(log)) {
-  subscribe<decision_t>(channel::kDecision, [this](const decision_t& m) { onDecision(m); });
+EnvironmentNode::EnvironmentNode(lcm::LCM& lcm, std::shared_ptr<spdlog::logger> log, const ProtocolConfig& protocol)
+    : NodeBase(lcm, "environment", std::move(log), protocol) {
+  subscribe<decision_t>(channel::kDecision, [this](const decision_t& m) { return onDecision(m); });
 }
 
 void EnvironmentNode::onConfigured(const RunConfig& config) {
@@ -58,27 +58,28 @@ void EnvironmentNode::publishScene(std::int64_t step, int8_t cause, bool scan, i
   publish(channel::kScene, s);
 }
 
-void EnvironmentNode::onExtrinsicDecision(const decision_t& d) {
+Turn EnvironmentNode::onExtrinsicDecision(const decision_t& d) {
   // The planner's steps are its iterations; it decides at most once in each.
   if (d.step < next_decision_)
-    return drop(channel::kDecision, "step " + std::to_string(d.step) + " is in the past (now at " +
-                                        std::to_string(next_decision_) + ")");
-  if (!d.acted) return;
+    return Turn::refuse("step " + std::to_string(d.step) + " is in the past (now at " + std::to_string(next_decision_) +
+                        ")");
+  if (!d.acted) return Turn::take();
   std::optional<std::pair<double, double>> target;
   if (d.action == kMove) target = std::make_pair(d.target_x, d.target_y);
   const ActionOutcome out = env_->execute(d.step, d.action, d.x, d.y, target);
   next_decision_ = d.step + 1;
   handled(d.step);
   publishScene(d.step, scene_t::CAUSE_ACTION, false, d.action, out.target_x, out.target_y);
+  return Turn::take();
 }
 
-void EnvironmentNode::onDecision(const decision_t& d) {
-  const char* ch = channel::kDecision;
-  if (state() != process_status_t::RUNNING) return defer();  // before START: its turn comes after
+Turn EnvironmentNode::onDecision(const decision_t& d) {
+  if (state() == process_status_t::READY) return Turn::later();  // before START: its turn comes after
   if (extrinsic()) return onExtrinsicDecision(d);
   if (d.step < next_decision_)
-    return log_->debug("{}: step {} already handled (now at {})", ch, d.step, next_decision_);
-  if (d.step > next_decision_) return defer();  // an earlier decision is still to come
+    return Turn::refuse("step " + std::to_string(d.step) + " is decided already (now at " +
+                        std::to_string(next_decision_) + ")");
+  if (d.step > next_decision_) return Turn::later();  // an earlier decision is still to come
 
   const std::int64_t next = d.step + 1;
   const bool more = next < config().steps;
@@ -101,6 +102,7 @@ void EnvironmentNode::onDecision(const decision_t& d) {
     publishScene(next, scene_t::CAUSE_OBJECTS_APPEARED, true, -1, -1.0, -1.0);
   }  // otherwise nothing changed: no scene; the eye goes on with the one it has
   if (!more) setState(process_status_t::DONE);
+  return Turn::take();
 }
 
 }  // namespace afford

@@ -14,16 +14,16 @@ namespace afford {
 
 class EnvironmentNode : public NodeBase {
  public:
-  EnvironmentNode(lcm::LCM& lcm, std::shared_ptr<spdlog::logger> log);
+  EnvironmentNode(lcm::LCM& lcm, std::shared_ptr<spdlog::logger> log, const ProtocolConfig& protocol);
 
  private:
   void onConfigured(const RunConfig& config) override;
   void onStart() override;
   void onStop() override;
-  void onDecision(const decision_t& msg);
+  Turn onDecision(const decision_t& msg);
   void publishScene(std::int64_t step, int8_t cause, bool scan, int action, double tx, double ty,
                     const cv::Mat* image = nullptr);
-  void onExtrinsicDecision(const decision_t& msg);
+  Turn onExtrinsicDecision(const decision_t& msg);
   bool extrinsic() const { return config().phase == Phase::Extrinsic; }
 
   std::unique_ptr<Environment> env_;

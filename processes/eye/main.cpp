@@ -4,7 +4,7 @@
 int main(int argc, char** argv) {
   return afford::processMain(
       argc, argv, {"eye", "afford eye: saliency scans, focus images, effect detection"}, [](afford::CLIHook&) {},
-      [](lcm::LCM& lcm, std::shared_ptr<spdlog::logger> log) {
-        return std::make_unique<afford::EyeNode>(lcm, std::move(log));
+      [](lcm::LCM& lcm, std::shared_ptr<spdlog::logger> log, const afford::ProtocolConfig& protocol) {
+        return std::make_unique<afford::EyeNode>(lcm, std::move(log), protocol);
       });
 }

@@ -7,11 +7,11 @@
 
 namespace afford {
 
-EyeNode::EyeNode(lcm::LCM& lcm, std::shared_ptr<spdlog::logger> log, bool speculate)
-    : NodeBase(lcm, "eye", std::move(log)), speculate_(speculate) {
-  subscribe<scene_t>(channel::kScene, [this](const scene_t& m) { onScene(m); });
-  subscribe<decision_t>(channel::kDecision, [this](const decision_t& m) { onDecision(m); });
-  subscribe<look_t>(channel::kLook, [this](const look_t& m) { onLook(m); });
+EyeNode::EyeNode(lcm::LCM& lcm, std::shared_ptr<spdlog::logger> log, const ProtocolConfig& protocol, bool speculate)
+    : NodeBase(lcm, "eye", std::move(log), protocol), speculate_(speculate) {
+  subscribe<scene_t>(channel::kScene, [this](const scene_t& m) { return onScene(m); });
+  subscribe<decision_t>(channel::kDecision, [this](const decision_t& m) { return onDecision(m); });
+  subscribe<look_t>(channel::kLook, [this](const look_t& m) { return onLook(m); });
 }
 
 void EyeNode::onConfigured(const RunConfig& config) {
@@ -39,59 +39,61 @@ void EyeNode::publishFocus(std::int64_t step, const Focus& f, int8_t kind, int32
   publish(channel::kFocus, m);
 }
 
-void EyeNode::onExtrinsicScene(const scene_t& s) {
+Turn EyeNode::onExtrinsicScene(const scene_t& s) {
   if (s.step < last_scene_)
-    return drop(channel::kScene, "step " + std::to_string(s.step) + " is in the past (now at " +
-                                     std::to_string(last_scene_) + ")");
+    return Turn::refuse("step " + std::to_string(s.step) + " is in the past (now at " + std::to_string(last_scene_) + ")");
   cv::Mat image;
   try {
     image = decodeScene(s.data, s.width, s.height);
   } catch (const std::exception& e) {
-    return drop(channel::kScene, e.what());
+    return Turn::refuse(e.what());
   }
   last_scene_ = s.step;
   if (s.cause == scene_t::CAUSE_GOAL)
     eye_->setGoal(std::move(image));  // memorised: the inner eye's image
   else
     eye_->setScene(std::move(image));
+  return Turn::take();
 }
 
-void EyeNode::onLook(const look_t& l) {
-  const char* ch = channel::kLook;
-  if (config().phase != Phase::Extrinsic) return drop(ch, "no LOOK requests in the intrinsic phase");
-  if (l.seq <= last_look_) return log_->debug("{}: request {} already answered", ch, l.seq);
-  if (!eye_->hasScene() || !eye_->hasGoal()) return defer();  // the goal and the scene come first
+Turn EyeNode::onLook(const look_t& l) {
+  if (config().phase != Phase::Extrinsic) return Turn::refuse("no LOOK requests in the intrinsic phase");
+  if (l.seq <= last_look_) return Turn::refuse("request " + std::to_string(l.seq) + " was answered already");
+  if (!eye_->hasScene() || !eye_->hasGoal()) return Turn::later();  // the goal and the scene come first
   last_look_ = l.seq;
   handled(l.step);
   switch (l.kind) {
     case focus_t::GOAL_SCAN:
-      return publishFocus(l.step, eye_->scanGoal(l.step), l.kind, l.seq);
+      publishFocus(l.step, eye_->scanGoal(l.step), l.kind, l.seq);
+      break;
     case focus_t::SCENE_AT:
-      return publishFocus(l.step, eye_->lookAt(toPixel(l.x, l.y, config().world.size_px)), l.kind, l.seq);
+      publishFocus(l.step, eye_->lookAt(toPixel(l.x, l.y, config().world.size_px)), l.kind, l.seq);
+      break;
     default:
-      return publishFocus(l.step, eye_->scan(l.step), l.kind, l.seq);
+      publishFocus(l.step, eye_->scan(l.step), l.kind, l.seq);
   }
+  return Turn::take();
 }
 
-void EyeNode::onScene(const scene_t& s) {
-  const char* ch = channel::kScene;
+Turn EyeNode::onScene(const scene_t& s) {
   if (config().phase == Phase::Extrinsic) return onExtrinsicScene(s);
   if (s.step <= last_scanned_)
-    return drop(ch, "step " + std::to_string(s.step) + " is in the past (already scanned step " +
+    return Turn::refuse("step " + std::to_string(s.step) + " is in the past (already scanned step " +
                         std::to_string(last_scanned_) + ")");
   const bool is_action = s.cause == scene_t::CAUSE_ACTION;
-  if (is_action && s.step - 1 <= last_effect_) return log_->debug("{}: effect of step {} already seen", ch, s.step - 1);
+  if (is_action && s.step - 1 <= last_effect_)
+    return Turn::refuse("the effect of step " + std::to_string(s.step - 1) + " was seen already");
   // A scene for step t follows the eye's focus of step t-1 (a late message
   // of another channel, e.g. a decision, is still to come): wait for it.
-  if (s.step - 1 > last_scanned_) return defer();
+  if (s.step - 1 > last_scanned_) return Turn::later();
 
-  guess_.reset();  // the scene changes: a guess made on the old one is void
   cv::Mat image;
   try {
     image = decodeScene(s.data, s.width, s.height);
   } catch (const std::exception& e) {
-    return drop(ch, e.what());
+    return Turn::refuse(e.what());
   }
+  guess_.reset();  // the scene changes: a guess made on the old one is void
 
   if (is_action) {
     const Effect e = eye_->scanEffect(s.step - 1, image, s.action);
@@ -121,15 +123,17 @@ void EyeNode::onScene(const scene_t& s) {
   }
   scene_announced_ = s.changes_next;
   if (s.scan) scanStep(s.step);
+  return Turn::take();
 }
 
-void EyeNode::onDecision(const decision_t& d) {
+Turn EyeNode::onDecision(const decision_t& d) {
   // Only a pass without an announced scene starts the next step here; after an
   // action, the action's scene does. (The planner's decisions are not steps of the eye's.)
-  if (config().phase == Phase::Extrinsic) return;
-  if (d.step > last_scanned_) return defer();  // the focus of that step is still to come
-  if (d.acted || scene_announced_ || d.step != last_scanned_) return;
+  if (config().phase == Phase::Extrinsic) return Turn::take();
+  if (d.step > last_scanned_) return Turn::later();  // the focus of that step is still to come
+  if (d.acted || scene_announced_ || d.step != last_scanned_) return Turn::take();
   scanStep(d.step + 1);
+  return Turn::take();
 }
 
 void EyeNode::scanStep(std::int64_t step) {

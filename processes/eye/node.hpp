@@ -24,15 +24,15 @@ class EyeNode : public NodeBase {
   // step's scan on the current scene, so that a pass is answered at once.
   // Results are the same either way; it pays where the eye would otherwise
   // wait (its own process), not in a single-threaded memq host.
-  EyeNode(lcm::LCM& lcm, std::shared_ptr<spdlog::logger> log, bool speculate = true);
+  EyeNode(lcm::LCM& lcm, std::shared_ptr<spdlog::logger> log, const ProtocolConfig& protocol, bool speculate = true);
 
  private:
   void onConfigured(const RunConfig& config) override;
   void onStop() override;
-  void onScene(const scene_t& msg);
-  void onDecision(const decision_t& msg);
-  void onLook(const look_t& msg);
-  void onExtrinsicScene(const scene_t& msg);
+  Turn onScene(const scene_t& msg);
+  Turn onDecision(const decision_t& msg);
+  Turn onLook(const look_t& msg);
+  Turn onExtrinsicScene(const scene_t& msg);
   void scanStep(std::int64_t step);
   void publishFocus(std::int64_t step, const Focus& f, int8_t kind = 0, int32_t seq = 0);
 

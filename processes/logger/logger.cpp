@@ -2,7 +2,9 @@
 
 #include "afford/channels.hpp"
 
+#include <cerrno>
 #include <cstdio>
+#include <cstring>
 #include <filesystem>
 #include <fstream>
 #include <stdexcept>
@@ -51,6 +53,7 @@ RecordedSoFar readRecorded(const std::string& dir) {
       if (isSerialChannel(ev->channel) && peekRunHeader(ev->data, static_cast<std::uint32_t>(ev->datalen), h)) {
         std::int64_t& next = r.next_serial[ev->channel];
         next = std::max(next, h.serial + 1);
+        if (ev->channel == channel::kResult || ev->channel == channel::kExtrinsicResult) r.ended = true;
       } else {
         r.untracked[ev->channel].insert(std::string(static_cast<const char*>(ev->data), ev->datalen));
       }
@@ -88,7 +91,7 @@ RunLog::RunLog(const std::string& dir, nlohmann::json manifest) : dir_(dir), man
 
 RunLog::~RunLog() {
   try {
-    close();
+    close("the logger stopped before the run ended");
   } catch (...) {
   }
 }
@@ -101,8 +104,8 @@ void RunLog::write(const std::string& channel, const void* data, std::uint32_t s
   ev.channel = channel;
   ev.datalen = static_cast<int32_t>(size);
   ev.data = const_cast<void*>(data);
-  if (file_->writeEvent(&ev) != 0) throw std::runtime_error("cannot write to log file " + path_);
-  std::fflush(file_->getFilePtr());
+  if (file_->writeEvent(&ev) != 0 || std::fflush(file_->getFilePtr()) != 0)
+    throw std::runtime_error("cannot write to log file " + path_ + ": " + std::strerror(errno));
   ++events_;
   bytes_ += size;
 }
@@ -114,12 +117,16 @@ void RunLog::sawProcess(const std::string& name, int pid) {
   writeManifest();
 }
 
-void RunLog::close() {
+void RunLog::close(const std::string& incomplete, const nlohmann::json& missing) {
   if (closed_) return;
   closed_ = true;
   std::fflush(file_->getFilePtr());
   file_.reset();
-  manifest_["complete"] = true;
+  manifest_["complete"] = incomplete.empty();
+  if (!incomplete.empty()) {
+    manifest_["incomplete"] = incomplete;
+    manifest_["missing"] = missing;
+  }
   writeManifest();
 }
 
@@ -133,7 +140,8 @@ void RunLog::writeManifest() {
   {
     std::ofstream out(tmp);
     out << manifest_.dump(2) << "\n";
-    if (!out) throw std::runtime_error("cannot write " + tmp.string());
+    out.flush();
+    if (!out) throw std::runtime_error("cannot write " + tmp.string() + ": " + std::strerror(errno));
   }
   fs::rename(tmp, fs::path(dir_) / "manifest.json");
 }

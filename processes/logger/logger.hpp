@@ -1,8 +1,10 @@
 // Logger core: one run's events into a standard LCM log file
 // (logs/<run-id>/log.00.lcm, readable by lcm-logplayer and lcm::LogFile) and
 // a manifest (logs/<run-id>/manifest.json) with the effective config, seed,
-// version and the processes that took part. Every event is flushed as it is
-// written, so a killed logger loses nothing it had received.
+// version, the processes that took part, and whether the log is complete
+// (`complete`; else `incomplete` says why and `missing` lists what is missing).
+// Every event is flushed as it is written, so a killed logger loses nothing
+// it had received.
 #pragma once
 #include <lcm/lcm-cpp.hpp>
 #include <nlohmann/json.hpp>
@@ -15,8 +17,10 @@
 
 namespace afford {
 
-// The first fields of every run message: run_id, step, serial. False if the
-// buffer is too short to hold them.
+// The first fields of every run message (a type of channel::kWithSerial):
+// run_id, step, serial, read without decoding. False if the buffer is too
+// short to hold them (tests/unit/test_logger.cpp pins the layout for every
+// serial-carrying type).
 struct RunHeader {
   std::string run_id;
   std::int64_t step = 0, serial = 0;
@@ -29,6 +33,7 @@ struct RecordedSoFar {
   std::map<std::string, std::int64_t> next_serial;          // serial channels
   std::map<std::string, std::set<std::string>> untracked;   // the others: contents
   std::int64_t events = 0;
+  bool ended = false;  // the run's end (RESULT or EXTRINSIC_RESULT) is in them
 };
 RecordedSoFar readRecorded(const std::string& dir);
 
@@ -45,8 +50,9 @@ class RunLog {
   void write(const std::string& channel, const void* data, std::uint32_t size, std::int64_t utime);
   // A process seen on the bus (name -> pid), recorded in the manifest.
   void sawProcess(const std::string& name, int pid);
-  // Flush and write the final manifest.
-  void close();
+  // Flush and write the final manifest: complete when `incomplete` is empty,
+  // else that reason and the serials still missing per channel.
+  void close(const std::string& incomplete = "", const nlohmann::json& missing = nlohmann::json::object());
 
   const std::string& dir() const { return dir_; }
   const std::string& path() const { return path_; }

@@ -6,7 +6,7 @@ int main(int argc, char** argv) {
   return afford::processMain(
       argc, argv, {"logger", "afford logger: every channel of a run into logs/<run-id>/"},
       [&](afford::CLIHook& cli) { cli.option("--log-dir", log_root, "folder that receives one sub-folder per run"); },
-      [&](lcm::LCM& lcm, std::shared_ptr<spdlog::logger> log) {
-        return std::make_unique<afford::LoggerNode>(lcm, std::move(log), log_root);
+      [&](lcm::LCM& lcm, std::shared_ptr<spdlog::logger> log, const afford::ProtocolConfig& protocol) {
+        return std::make_unique<afford::LoggerNode>(lcm, std::move(log), protocol, log_root);
       });
 }

@@ -1,15 +1,48 @@
 #include "logger/node.hpp"
 
+#include <unistd.h>
+
 #include <filesystem>
 
+#include "afford/affordance_table_t.hpp"
 #include "afford/channels.hpp"
+#include "afford/decision_t.hpp"
+#include "afford/effect_t.hpp"
+#include "afford/extrinsic_result_t.hpp"
+#include "afford/focus_t.hpp"
+#include "afford/forward_prediction_t.hpp"
+#include "afford/forward_query_t.hpp"
+#include "afford/look_t.hpp"
+#include "afford/object_probe_t.hpp"
+#include "afford/prediction_t.hpp"
+#include "afford/run_result_t.hpp"
+#include "afford/scene_t.hpp"
 
 namespace afford {
 
-LoggerNode::LoggerNode(lcm::LCM& lcm, std::shared_ptr<spdlog::logger> log, std::string log_root)
-    : NodeBase(lcm, "logger", std::move(log)), log_root_(std::move(log_root)) {
-  for (const char* c : channel::kWithSerial) trackChannel(c);
-  subscribeRaw(".*", [this](const lcm::ReceiveBuffer* b, const std::string& ch) { onAny(b, ch); }, 100000);
+LoggerNode::LoggerNode(lcm::LCM& lcm, std::shared_ptr<spdlog::logger> log, const ProtocolConfig& protocol,
+                       std::string log_root)
+    : NodeBase(lcm, "logger", std::move(log), protocol), log_root_(std::move(log_root)) {
+  record<scene_t>(channel::kScene);
+  record<focus_t>(channel::kFocus);
+  record<prediction_t>(channel::kPrediction);
+  record<decision_t>(channel::kDecision);
+  record<effect_t>(channel::kEffect);
+  record<object_probe_t>(channel::kProbe);
+  record<affordance_table_t>(channel::kAffordanceTable);
+  record<run_result_t>(channel::kResult);
+  record<look_t>(channel::kLook);
+  record<forward_query_t>(channel::kForwardQuery);
+  record<forward_prediction_t>(channel::kForwardPrediction);
+  record<extrinsic_result_t>(channel::kExtrinsicResult);
+}
+
+template <class Msg>
+void LoggerNode::record(const char* channel) {
+  subscribe<Msg>(channel, [this](const Msg&, const Envelope& e) {
+    write(e);
+    return Turn::take();
+  });
 }
 
 void LoggerNode::onConfigured(const RunConfig& config) {
@@ -21,11 +54,15 @@ void LoggerNode::onConfigured(const RunConfig& config) {
   const std::string dir = (std::filesystem::path(log_root_) / m.run_id).string();
   written_.clear();
   left_.clear();
+  ended_ = false;
+  write_error_.clear();
   // A logger restarted during the run: go on where the earlier segments end.
   const RecordedSoFar before = readRecorded(dir);
-  log_file_ = std::make_unique<RunLog>(dir, manifest);
-  for (const auto& [channel, next] : before.next_serial) expectSerial(channel, next);
+  log_file_ = std::make_unique<RunLog>(dir, manifest);  // refuses a folder that holds a complete log
+  log_file_->sawProcess(process(), static_cast<int>(getpid()));
+  for (const auto& [channel, next] : before.next_serial) edge().expectSerial(channel, next);
   for (const auto& [channel, contents] : before.untracked) written_[channel] = contents;
+  ended_ = before.ended;
   if (before.events > 0)
     log_->info("recording run '{}' into {}, after {} events in earlier segments", m.run_id, log_file_->path(),
                before.events);
@@ -33,9 +70,37 @@ void LoggerNode::onConfigured(const RunConfig& config) {
     log_->info("recording run '{}' into {}", m.run_id, log_file_->path());
 }
 
+void LoggerNode::onControl(const Envelope& e) {
+  if (!log_file_) return;
+  std::string content(reinterpret_cast<const char*>(e.data), e.size);
+  if (!written_[e.channel].insert(std::move(content)).second) return;  // said again: recorded once
+  write(e);
+}
+
+void LoggerNode::onPeerStatus(const process_status_t& st) {
+  if (!log_file_) return;
+  if (st.run_id == runId()) {
+    log_file_->sawProcess(st.process, st.pid);
+    left_.emplace(st.process, false);
+  } else if (st.counts_run == runId() && left_.count(st.process)) {
+    left_[st.process] = true;  // it left the run: its counts are final
+  }
+}
+
+void LoggerNode::write(const Envelope& e) {
+  if (!log_file_) return;
+  try {
+    log_file_->write(e.channel, e.data, static_cast<std::uint32_t>(e.size), e.recv_utime);
+  } catch (const std::exception& ex) {
+    if (write_error_.empty()) write_error_ = ex.what();
+    throw;  // the edge fails the run with it
+  }
+  if (e.channel == channel::kResult || e.channel == channel::kExtrinsicResult) ended_ = true;
+}
+
 bool LoggerNode::readyToLeave() {
-  if (!log_file_) return true;
-  if (missingMessages() > 0) return false;
+  if (!log_file_ || !write_error_.empty()) return true;
+  if (edge().missing() > 0) return false;
   for (const auto& [process, left] : left_)
     if (!left) return false;
   return true;
@@ -45,55 +110,32 @@ void LoggerNode::onLeaveTimeout() {
   std::string who;
   for (const auto& [process, left] : left_)
     if (!left) who += " " + process;
-  log_->warn("closing the log of run '{}' with {} messages still missing{}{}", runId(), missingMessages(),
+  log_->warn("closing the log of run '{}' with {} messages still missing{}{}", runId(), edge().missing(),
              who.empty() ? "" : "; no final count from:", who);
 }
 
 void LoggerNode::onStop() {
   if (!log_file_) return;
-  log_file_->close();
-  log_->info("closed {} ({} events)", log_file_->path(), log_file_->events());
+  nlohmann::json missing = nlohmann::json::object();
+  for (const auto& [channel, range] : edge().missingRanges())
+    missing[channel] = {{"first", range.first}, {"last", range.second - 1}};
+  std::string why;
+  if (!write_error_.empty())
+    why = "a write failed: " + write_error_;
+  else if (!missing.empty())
+    why = "messages are missing (see \"missing\")";
+  else if (!ended_)
+    why = "the run did not end: it was stopped before its last step";
   const std::string dir = log_file_->dir();
-  log_file_.reset();
-  setState(process_status_t::DONE, dir);
-}
-
-void LoggerNode::onAny(const lcm::ReceiveBuffer* rbuf, const std::string& ch) {
-  if (!log_file_) return;
-  if (ch == channel::kResend) return;
-  if (ch == channel::kStatus) {
-    process_status_t st;
-    std::string reason;
-    if (!decodeAtEdge(rbuf, st, reason)) return;
-    if (st.run_id == runId()) {
-      log_file_->sawProcess(st.process, st.pid);
-      if (st.process != process()) left_.emplace(st.process, false);
-    } else if (st.counts_run == runId() && left_.count(st.process)) {
-      left_[st.process] = true;  // it left the run: its counts are final
-    }
-    return;
-  }
-  if (isSerialChannel(ch)) {
-    RunHeader h;
-    if (peekRunHeader(rbuf->data, rbuf->data_size, h)) {
-      if (h.run_id != runId()) return;  // another run's message (or stray)
-      if (!inSerialOrder(ch, h.serial)) return;
-    }
-    return write(rbuf, ch);
-  }
-  // The runner's channels: each content once (RUN_CONFIG is said again to latecomers).
-  auto& seen = written_[ch];
-  std::string content(static_cast<const char*>(rbuf->data), rbuf->data_size);
-  if (!seen.insert(std::move(content)).second) return;
-  write(rbuf, ch);
-}
-
-void LoggerNode::write(const lcm::ReceiveBuffer* rbuf, const std::string& ch) {
   try {
-    log_file_->write(ch, rbuf->data, rbuf->data_size, rbuf->recv_utime);
+    log_file_->close(why, missing);
+    log_->info("closed {} ({} events){}", log_file_->path(), log_file_->events(), why.empty() ? "" : ": incomplete, " + why);
   } catch (const std::exception& e) {
-    log_->error("{}: {}", ch, e.what());
+    log_->error("closing {}: {}", log_file_->path(), e.what());
+    if (why.empty()) why = e.what();
   }
+  log_file_.reset();
+  if (write_error_.empty()) setState(process_status_t::DONE, dir);
 }
 
 }  // namespace afford

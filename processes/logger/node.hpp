@@ -1,16 +1,24 @@
-// Logger process node: records every channel of the run.
-// Channels in:  all (".*"). STATUS and RESEND are not recorded: they follow the
-//               wall clock, not the run. STATUS is read for the manifest and
-//               for the publishers' message counts.
+// Logger process node: records every channel of a run.
+// Channels in:  RUN_CONFIG and RUN_CONTROL of the run (each distinct message
+//               once), every run channel (channel::kWithSerial) through the
+//               edge like any receiver, STATUS (for the manifest and the
+//               publishers' message counts; not recorded: it follows the wall
+//               clock), RESEND (not recorded).
 // Channels out: STATUS (state DONE with the log directory in `detail` after
 //               STOP), RESEND (for messages missing from the log)
 //
-// The run channels are recorded in serial order, each message once: a repeat
-// is skipped, and after a gap the missing messages are asked for again, so a
-// lost datagram does not leave a hole in the log. A logger restarted during a
-// run opens the next segment (log.01.lcm, ...), reads its earlier segments to
-// know where each channel stopped, and asks for everything it missed. On STOP
-// it closes the log once nothing is missing (at most 5 s later).
+// Only runs whose configuration says run.record are recorded; the logger
+// stays free during the others. The run channels are recorded in serial
+// order, each message once: a repeat is skipped, and after a gap the missing
+// messages are asked for again, so a lost datagram does not leave a hole in
+// the log. A logger restarted during a run opens the next segment (log.01.lcm,
+// ...), reads its earlier segments to know where each channel stopped, and
+// asks for everything it missed. On STOP it closes the log once nothing is
+// missing and every process of the run has left (at most
+// protocol.stop_grace_ms later). The manifest says `complete` only when the
+// log holds the run's end (RESULT or EXTRINSIC_RESULT), nothing is missing and
+// every write succeeded; otherwise it says why not. A write error (a full
+// disk) fails the run with the reason; the logger stays alive for the next.
 #pragma once
 #include <map>
 #include <memory>
@@ -24,20 +32,26 @@ namespace afford {
 
 class LoggerNode : public NodeBase {
  public:
-  LoggerNode(lcm::LCM& lcm, std::shared_ptr<spdlog::logger> log, std::string log_root);
+  LoggerNode(lcm::LCM& lcm, std::shared_ptr<spdlog::logger> log, const ProtocolConfig& protocol, std::string log_root);
 
  private:
+  template <class Msg>
+  void record(const char* channel);
+  bool wantsRun(const RunConfig& config) override { return config.record; }
   void onConfigured(const RunConfig& config) override;
   void onStop() override;
   bool readyToLeave() override;
   void onLeaveTimeout() override;
-  void onAny(const lcm::ReceiveBuffer* rbuf, const std::string& channel);
-  void write(const lcm::ReceiveBuffer* rbuf, const std::string& channel);
+  void onControl(const Envelope& envelope) override;
+  void onPeerStatus(const process_status_t& status) override;
+  void write(const Envelope& envelope);
 
   std::string log_root_;
   std::unique_ptr<RunLog> log_file_;
-  std::map<std::string, std::set<std::string>> written_;  // untracked channels: contents already recorded
+  std::map<std::string, std::set<std::string>> written_;  // RUN_CONFIG, RUN_CONTROL: contents recorded
   std::map<std::string, bool> left_;  // processes of the run -> their final counts are in
+  bool ended_ = false;                // the run's end (RESULT, EXTRINSIC_RESULT) is in the log
+  std::string write_error_;           // the first write that failed
 };
 
 }  // namespace afford

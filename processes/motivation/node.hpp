@@ -1,8 +1,9 @@
 // Motivation process node.
 // Channels in:  RUN_CONFIG, RUN_CONTROL, PREDICTION (intrinsic phase only)
 // Channels out: DECISION, STATUS
+// Predictions are decided in step order; one that comes before its turn waits
+// at the edge (Turn::later), so the decisions are a pure function of the run.
 #pragma once
-#include <map>
 #include <memory>
 
 #include "afford/node.hpp"
@@ -13,17 +14,15 @@ namespace afford {
 
 class MotivationNode : public NodeBase {
  public:
-  MotivationNode(lcm::LCM& lcm, std::shared_ptr<spdlog::logger> log);
+  MotivationNode(lcm::LCM& lcm, std::shared_ptr<spdlog::logger> log, const ProtocolConfig& protocol);
 
  private:
   void onConfigured(const RunConfig& config) override;
   void onStop() override;
-  void onPrediction(const prediction_t& m);
-  void drain();
+  Turn onPrediction(const prediction_t& m);
 
   std::unique_ptr<Motivation> core_;
-  std::int64_t last_ = -1;                  // last decided step
-  std::map<std::int64_t, prediction_t> early_;
+  std::int64_t last_ = -1;  // last decided step
 };
 
 }  // namespace afford

@@ -8,12 +8,13 @@
 
 namespace afford {
 
-PlannerNode::PlannerNode(lcm::LCM& lcm, std::shared_ptr<spdlog::logger> log) : NodeBase(lcm, "planner", std::move(log)) {
-  subscribe<scene_t>(channel::kScene, [this](const scene_t& m) { onScene(m); });
-  subscribe<focus_t>(channel::kFocus, [this](const focus_t& m) { onFocus(m); });
-  subscribe<prediction_t>(channel::kPrediction, [this](const prediction_t& m) { onPrediction(m); });
+PlannerNode::PlannerNode(lcm::LCM& lcm, std::shared_ptr<spdlog::logger> log, const ProtocolConfig& protocol)
+    : NodeBase(lcm, "planner", std::move(log), protocol) {
+  subscribe<scene_t>(channel::kScene, [this](const scene_t& m) { return onScene(m); });
+  subscribe<focus_t>(channel::kFocus, [this](const focus_t& m) { return onFocus(m); });
+  subscribe<prediction_t>(channel::kPrediction, [this](const prediction_t& m) { return onPrediction(m); });
   subscribe<forward_prediction_t>(channel::kForwardPrediction,
-                                  [this](const forward_prediction_t& m) { onForward(m); });
+                                  [this](const forward_prediction_t& m) { return onForward(m); });
 }
 
 void PlannerNode::onConfigured(const RunConfig& config) {
@@ -29,32 +30,33 @@ void PlannerNode::onConfigured(const RunConfig& config) {
 
 void PlannerNode::onStop() { core_.reset(); }
 
-bool PlannerNode::notNow() {
-  if (!core_ || finished_) return true;
-  if (state() == process_status_t::RUNNING) return false;
-  defer();  // before START: its turn comes after
-  return true;
+std::optional<Turn> PlannerNode::notNow() {
+  if (!core_ || finished_) return Turn::take();
+  if (state() == process_status_t::READY) return Turn::later();  // before START: its turn comes after
+  return std::nullopt;
 }
 
-void PlannerNode::onScene(const scene_t& s) {
-  if (notNow()) return;
-  if (s.cause == scene_t::CAUSE_GOAL) return;  // the eye memorises it
+Turn PlannerNode::onScene(const scene_t& s) {
+  if (auto t = notNow()) return *t;
+  if (s.cause == scene_t::CAUSE_GOAL) return Turn::take();  // the eye memorises it
   if (s.cause == scene_t::CAUSE_START) {
-    if (step_ >= 0) return drop(channel::kScene, "the test has begun already");
+    if (step_ >= 0) return Turn::refuse("the test has begun already");
     goal_distance_ = s.goal_distance;
     goal_utility_ = s.goal_utility;
     step_ = 0;  // the test begins
-    return follow(core_->startIteration());
+    follow(core_->startIteration());
+    return Turn::take();
   }
-  if (s.cause != scene_t::CAUSE_ACTION) return;
+  if (s.cause != scene_t::CAUSE_ACTION) return Turn::take();
+  if (s.step < step_) return Turn::refuse("the scene of step " + std::to_string(s.step) + " is in the past");
   // The scene of an action not yet decided here (its turn comes after
   // messages still late on other channels) waits.
-  if (step_ < 0 || s.step > step_ || (s.step == step_ && !waiting_scene_)) return defer();
-  if (s.step < step_) return drop(channel::kScene, "the scene of step " + std::to_string(s.step) + " is in the past");
+  if (step_ < 0 || s.step > step_ || !waiting_scene_) return Turn::later();
   goal_distance_ = s.goal_distance;
   goal_utility_ = s.goal_utility;
   waiting_scene_ = false;
   follow(core_->onActed());
+  return Turn::take();
 }
 
 void PlannerNode::look(int8_t kind, double x, double y) {
@@ -113,29 +115,33 @@ void PlannerNode::follow(PlannerRequest r) {
   }
 }
 
-void PlannerNode::onFocus(const focus_t& f) {
-  if (notNow()) return;
-  if (f.seq > seq_) return defer();  // the answer to a request not made yet here
-  if (f.seq < seq_) return drop(channel::kFocus, "request " + std::to_string(f.seq) + " was answered already");
+Turn PlannerNode::onFocus(const focus_t& f) {
+  if (auto t = notNow()) return *t;
+  if (f.seq > seq_) return Turn::later();  // the answer to a request not made yet here
+  if (f.seq < seq_) return Turn::refuse("request " + std::to_string(f.seq) + " was answered already");
   handled(f.step);
   if (f.kind == focus_t::SCENE_SCAN) {
-    if (last_.kind != PlannerRequest::ScanScene || object_) return;
+    if (last_.kind != PlannerRequest::ScanScene || object_) return Turn::refuse("a scan the planner did not ask for");
     object_ = f;
-    return tryObject();
+    tryObject();
+    return Turn::take();
   }
-  if (last_.kind != PlannerRequest::LookAtGoal && last_.kind != PlannerRequest::LookAtSceneAt) return;
+  if (last_.kind != PlannerRequest::LookAtGoal && last_.kind != PlannerRequest::LookAtSceneAt)
+    return Turn::refuse("a look the planner did not ask for");
   follow(core_->onView({f.image, f.x, f.y}));
+  return Turn::take();
 }
 
-void PlannerNode::onPrediction(const prediction_t& p) {
-  if (notNow()) return;
+Turn PlannerNode::onPrediction(const prediction_t& p) {
+  if (auto t = notNow()) return *t;
   // Every scene scan's prediction is taken, in order: one that comes before
   // its scan was asked for waits.
-  if (p.step < step_) return drop(channel::kPrediction, "step " + std::to_string(p.step) + " is in the past");
-  if (last_.kind != PlannerRequest::ScanScene || p.step != step_ || affordance_) return defer();
+  if (p.step < step_) return Turn::refuse("step " + std::to_string(p.step) + " is in the past");
+  if (last_.kind != PlannerRequest::ScanScene || p.step != step_ || affordance_) return Turn::later();
   affordance_.emplace();
   std::copy(p.affordance.begin(), p.affordance.end(), affordance_->begin());
   tryObject();
+  return Turn::take();
 }
 
 void PlannerNode::tryObject() {
@@ -143,14 +149,15 @@ void PlannerNode::tryObject() {
   follow(core_->onObject({object_->image, object_->x, object_->y}, *affordance_));
 }
 
-void PlannerNode::onForward(const forward_prediction_t& m) {
-  if (notNow()) return;
-  if (m.seq > seq_ || (m.seq == seq_ && last_.kind != PlannerRequest::Forward)) return defer();
-  if (m.seq < seq_) return drop(channel::kForwardPrediction, "query " + std::to_string(m.seq) + " was answered already");
+Turn PlannerNode::onForward(const forward_prediction_t& m) {
+  if (auto t = notNow()) return *t;
+  if (m.seq > seq_ || (m.seq == seq_ && last_.kind != PlannerRequest::Forward)) return Turn::later();
+  if (m.seq < seq_) return Turn::refuse("query " + std::to_string(m.seq) + " was answered already");
   std::vector<ForwardPrediction> preds;
   for (int i = 0; i < m.n_actions; ++i)
     preds.push_back({m.actions[i], std::vector<double>(m.what[i].begin(), m.what[i].end()), m.where_x[i], m.where_y[i]});
   follow(core_->onForward(preds));
+  return Turn::take();
 }
 
 void PlannerNode::endIteration() {

@@ -24,24 +24,24 @@ namespace afford {
 
 class PlannerNode : public NodeBase {
  public:
-  PlannerNode(lcm::LCM& lcm, std::shared_ptr<spdlog::logger> log);
+  PlannerNode(lcm::LCM& lcm, std::shared_ptr<spdlog::logger> log, const ProtocolConfig& protocol);
 
  private:
   void onConfigured(const RunConfig& config) override;
   void onStop() override;
-  void onScene(const scene_t& m);
-  void onFocus(const focus_t& m);
-  void onPrediction(const prediction_t& m);
-  void onForward(const forward_prediction_t& m);
+  Turn onScene(const scene_t& m);
+  Turn onFocus(const focus_t& m);
+  Turn onPrediction(const prediction_t& m);
+  Turn onForward(const forward_prediction_t& m);
   // Carry out a request of the core (until it needs an answer).
   void follow(PlannerRequest r);
   void look(int8_t kind, double x = -1, double y = -1);
   void tryObject();
   void endIteration();
   void finish(bool success);
-  // True when a message is not for now: the test is over (dropped) or not
-  // started (deferred).
-  bool notNow();
+  // A message that is not for now: the test is over or there is none (taken,
+  // nothing to do), or it has not started (later).
+  std::optional<Turn> notNow();
   bool active() const { return core_ && state() == process_status_t::RUNNING && !finished_; }
 
   std::unique_ptr<Planner> core_;

@@ -7,13 +7,14 @@
 
 namespace afford {
 
-PredictorsNode::PredictorsNode(lcm::LCM& lcm, std::shared_ptr<spdlog::logger> log, bool async_effects)
-    : NodeBase(lcm, "predictors", std::move(log)), async_effects_(async_effects) {
-  subscribe<object_probe_t>(channel::kProbe, [this](const object_probe_t& m) { onProbe(m); });
-  subscribe<focus_t>(channel::kFocus, [this](const focus_t& m) { onFocus(m); });
-  subscribe<decision_t>(channel::kDecision, [this](const decision_t& m) { onDecision(m); });
-  subscribe<effect_t>(channel::kEffect, [this](const effect_t& m) { onEffect(m); });
-  subscribe<forward_query_t>(channel::kForwardQuery, [this](const forward_query_t& m) { onForwardQuery(m); });
+PredictorsNode::PredictorsNode(lcm::LCM& lcm, std::shared_ptr<spdlog::logger> log, const ProtocolConfig& protocol,
+                               bool async_effects)
+    : NodeBase(lcm, "predictors", std::move(log), protocol), async_effects_(async_effects) {
+  subscribe<object_probe_t>(channel::kProbe, [this](const object_probe_t& m) { return onProbe(m); });
+  subscribe<focus_t>(channel::kFocus, [this](const focus_t& m) { return onFocus(m); });
+  subscribe<decision_t>(channel::kDecision, [this](const decision_t& m) { return onDecision(m); });
+  subscribe<effect_t>(channel::kEffect, [this](const effect_t& m) { return onEffect(m); });
+  subscribe<forward_query_t>(channel::kForwardQuery, [this](const forward_query_t& m) { return onForwardQuery(m); });
 }
 
 void PredictorsNode::onConfigured(const RunConfig& config) {
@@ -33,12 +34,18 @@ void PredictorsNode::onConfigured(const RunConfig& config) {
     }
   } else {
     loaded_.reset();
+    // Never overwrite what an earlier run of this id saved (a replayed log on a live bus, a reused id).
+    for (const std::string& file : {config.checkpoint, config.checkpoint_after_actions > 0
+                                                           ? actionsCheckpoint(config.checkpoint, config.checkpoint_after_actions)
+                                                           : std::string()})
+      if (!file.empty() && std::filesystem::exists(file))
+        throw ConfigError("checkpoint " + file + " exists already: run '" + runId() +
+                          "' has been run before, and its weights are not overwritten");
     core_ = std::make_shared<Predictors>(config);
   }
   if (async_effects_ && config.phase == Phase::Intrinsic) trainer_ = std::make_unique<EffectTrainer>(*core_);
   last_query_ = -1;
   probes_.clear();
-  early_.clear();
   pending_trained_.reset();
   pending_effects_.reset();
   current_ = -1;
@@ -49,41 +56,33 @@ void PredictorsNode::onConfigured(const RunConfig& config) {
 void PredictorsNode::onStop() {
   trainer_.reset();
   core_.reset();
-  early_.clear();
 }
 
-void PredictorsNode::onProbe(const object_probe_t& m) {
-  if (!probes_.empty()) return log_->debug("{}: probe already received", channel::kProbe);
+Turn PredictorsNode::onProbe(const object_probe_t& m) {
+  if (!probes_.empty()) return Turn::refuse("the probe was received already");
   probes_ = m.images;
+  return Turn::take();
 }
 
-void PredictorsNode::onFocus(const focus_t& m) {
-  const char* ch = channel::kFocus;
-  if (m.kind != focus_t::SCENE_SCAN) return;  // the planner's looks at the goal or at a place
+Turn PredictorsNode::onFocus(const focus_t& m) {
+  if (m.kind != focus_t::SCENE_SCAN) return Turn::take();  // the planner's looks at the goal or at a place
   if (extrinsic()) {
-    if (m.step < current_) return drop(ch, "step " + std::to_string(m.step) + " is in the past");
+    if (m.step < current_) return Turn::refuse("step " + std::to_string(m.step) + " is in the past");
     current_ = m.step;
     handled(m.step);
-    return publishPrediction(m);
+    publishPrediction(m);
+    return Turn::take();
   }
-  if (m.step <= current_ || m.step < 0)
-    return drop(ch, "step " + std::to_string(m.step) + " is in the past (now at " + std::to_string(current_) + ")");
-  if (m.step >= config().steps) return drop(ch, "step " + std::to_string(m.step) + " is beyond the run's last step");
-  if (early_.size() > 1000) return drop(ch, "too many early messages buffered");
-  early_.emplace(m.step, m);
-  drainBuffered();
-}
-
-void PredictorsNode::drainBuffered() {
-  while (!early_.empty()) {
-    auto it = early_.begin();
-    const bool ready = it->first == current_ + 1 && (current_ < 0 || outcome_ == Outcome::Passed ||
-                                                     outcome_ == Outcome::Learned);
-    if (!ready) return;
-    const focus_t m = it->second;
-    early_.erase(it);
-    handleFocus(m);
-  }
+  if (m.step <= current_)
+    return Turn::refuse("step " + std::to_string(m.step) + " is in the past (now at " + std::to_string(current_) + ")");
+  if (m.step >= config().steps)
+    return Turn::refuse("step " + std::to_string(m.step) + " is beyond the run's last step");
+  // Its turn: the next step, once the current one is decided (and learned from).
+  const bool ready = m.step == current_ + 1 &&
+                     (current_ < 0 || outcome_ == Outcome::Passed || outcome_ == Outcome::Learned);
+  if (!ready) return Turn::later();
+  handleFocus(m);
+  return Turn::take();
 }
 
 void PredictorsNode::handleFocus(const focus_t& m) {
@@ -114,10 +113,9 @@ void PredictorsNode::publishPrediction(const focus_t& m) {
   publish(channel::kPrediction, out);
 }
 
-void PredictorsNode::onForwardQuery(const forward_query_t& q) {
-  const char* ch = channel::kForwardQuery;
-  if (!extrinsic()) return drop(ch, "no forward queries in the intrinsic phase");
-  if (q.seq <= last_query_) return log_->debug("{}: query {} already answered", ch, q.seq);
+Turn PredictorsNode::onForwardQuery(const forward_query_t& q) {
+  if (!extrinsic()) return Turn::refuse("no forward queries in the intrinsic phase");
+  if (q.seq <= last_query_) return Turn::refuse("query " + std::to_string(q.seq) + " was answered already");
   last_query_ = q.seq;
   forward_prediction_t out;
   out.run_id = runId();
@@ -135,38 +133,33 @@ void PredictorsNode::onForwardQuery(const forward_query_t& q) {
   }
   publish(channel::kForwardPrediction, out);
   handled(q.step);
+  return Turn::take();
 }
 
-void PredictorsNode::onDecision(const decision_t& m) {
-  const char* ch = channel::kDecision;
-  if (extrinsic()) return;  // the planner's actions: nothing to learn
-  if (m.step != current_ || outcome_ != Outcome::Unknown) {
-    if (m.step < current_ || (m.step == current_ && outcome_ != Outcome::Unknown))
-      return drop(ch, "step " + std::to_string(m.step) + " is already decided (now at " + std::to_string(current_) + ")");
-    return defer();  // the focus of that step is still to come
-  }
+Turn PredictorsNode::onDecision(const decision_t& m) {
+  if (extrinsic()) return Turn::take();  // the planner's actions: nothing to learn
+  if (m.step < current_ || (m.step == current_ && outcome_ != Outcome::Unknown))
+    return Turn::refuse("step " + std::to_string(m.step) + " is already decided (now at " + std::to_string(current_) + ")");
+  if (m.step != current_) return Turn::later();  // the focus of that step is still to come
   if (m.acted) {
     outcome_ = Outcome::AwaitingEffect;
     action_ = m.action;
-    return;
+    return Turn::take();
   }
   outcome_ = Outcome::Passed;
-  if (m.step == config().steps - 1) return finish();
-  drainBuffered();
+  if (m.step == config().steps - 1) finish();
+  return Turn::take();
 }
 
-void PredictorsNode::onEffect(const effect_t& m) {
-  const char* ch = channel::kEffect;
-  if (extrinsic()) return drop(ch, "no learning in the extrinsic phase");
-  if (m.step != current_ || outcome_ != Outcome::AwaitingEffect) {
-    if (m.step < current_ || (m.step == current_ && outcome_ == Outcome::Learned))
-      return drop(ch, "step " + std::to_string(m.step) + " is in the past (already learned)");
-    if (m.step == current_ && outcome_ == Outcome::Passed)
-      return drop(ch, "no action was decided at step " + std::to_string(m.step));
-    return defer();  // the focus or the decision of that step is still to come
-  }
+Turn PredictorsNode::onEffect(const effect_t& m) {
+  if (extrinsic()) return Turn::refuse("no learning in the extrinsic phase");
+  if (m.step < current_ || (m.step == current_ && outcome_ == Outcome::Learned))
+    return Turn::refuse("step " + std::to_string(m.step) + " is in the past (already learned)");
+  if (m.step == current_ && outcome_ == Outcome::Passed)
+    return Turn::refuse("no action was decided at step " + std::to_string(m.step));
+  if (m.step != current_ || outcome_ != Outcome::AwaitingEffect) return Turn::later();  // its focus or decision is to come
   if (m.action != action_)
-    return drop(ch, "action " + std::to_string(m.action) + " differs from the decided action " + std::to_string(action_));
+    return Turn::refuse("action " + std::to_string(m.action) + " differs from the decided action " + std::to_string(action_));
 
   Experience e;
   e.action = m.action;
@@ -193,8 +186,8 @@ void PredictorsNode::onEffect(const effect_t& m) {
   pending_effects_ = std::move(e);
   outcome_ = Outcome::Learned;
   saveActionsCheckpoint();
-  if (m.step == config().steps - 1) return finish();
-  drainBuffered();
+  if (m.step == config().steps - 1) finish();
+  return Turn::take();
 }
 
 void PredictorsNode::trainPendingEffects() {

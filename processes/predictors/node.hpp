@@ -1,6 +1,7 @@
 // Predictors process node. Handles each step's inputs in the canonical order
-// FOCUS(t) -> DECISION(t) -> [EFFECT(t)] -> FOCUS(t+1), buffering any that
-// arrive early, so its state is a pure function of the run's messages.
+// FOCUS(t) -> DECISION(t) -> [EFFECT(t)] -> FOCUS(t+1); one that comes before
+// its turn waits at the edge (Turn::later), so its state is a pure function
+// of the run's messages.
 // Channels in:  RUN_CONFIG, RUN_CONTROL, PROBE, FOCUS, DECISION, EFFECT,
 //               FORWARD_QUERY (extrinsic phase)
 // Channels out: AFFORDANCE_TABLE (every run.curve_interval steps and at the end),
@@ -32,22 +33,22 @@ class PredictorsNode : public NodeBase {
   // `async_effects`: make the forward-model updates on a worker thread
   // (EffectTrainer) instead of inline after the next prediction. Same results;
   // it pays where a second core is free, not in a single-threaded memq host.
-  PredictorsNode(lcm::LCM& lcm, std::shared_ptr<spdlog::logger> log, bool async_effects = true);
+  PredictorsNode(lcm::LCM& lcm, std::shared_ptr<spdlog::logger> log, const ProtocolConfig& protocol,
+                 bool async_effects = true);
 
  private:
   enum class Outcome { Unknown, Passed, AwaitingEffect, Learned };
 
   void onConfigured(const RunConfig& config) override;
   void onStop() override;
-  void onProbe(const object_probe_t& m);
-  void onFocus(const focus_t& m);
-  void onDecision(const decision_t& m);
-  void onEffect(const effect_t& m);
-  void onForwardQuery(const forward_query_t& m);
+  Turn onProbe(const object_probe_t& m);
+  Turn onFocus(const focus_t& m);
+  Turn onDecision(const decision_t& m);
+  Turn onEffect(const effect_t& m);
+  Turn onForwardQuery(const forward_query_t& m);
   void publishPrediction(const focus_t& m);
   bool extrinsic() const { return config().phase == Phase::Extrinsic; }
   void handleFocus(const focus_t& m);
-  void drainBuffered();
   void publishTable(std::int64_t step);
   // run.checkpoint_after_actions: save the weights once that many actions are learned.
   void saveActionsCheckpoint();
@@ -71,7 +72,6 @@ class PredictorsNode : public NodeBase {
   Outcome outcome_ = Outcome::Unknown; // of step current_
   int action_ = -1;                    // executed at step current_
   focus_t focus_;                      // of step current_
-  std::map<std::int64_t, focus_t> early_;  // focus messages that came before their turn
   std::optional<trained_t> pending_trained_;
   std::optional<Experience> pending_effects_;  // forward-model update still to make
   bool finished_ = false;

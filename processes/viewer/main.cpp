@@ -19,6 +19,7 @@
 #include "afford/focus_t.hpp"
 #include "afford/image.hpp"
 #include "afford/logging.hpp"
+#include "afford/edge.hpp"
 #include "afford/node.hpp"
 #include "afford/prediction_t.hpp"
 #include "afford/run_config_t.hpp"
@@ -27,60 +28,50 @@
 
 namespace {
 
+// What the viewer hears, through the edge (afford/edge.hpp): decoded, checked,
+// of the run shown (the last RUN_CONFIG's; any run until one is heard), each
+// channel in serial order (a gap is skipped: the viewer asks for nothing).
 struct Listener {
   afford::Viewer& viewer;
   spdlog::logger& log;
-  std::string run_id;
+  afford::Edge& edge;
+  afford::RunConfig config;  // of the run shown
 
-  template <typename Msg>
-  bool decode(const lcm::ReceiveBuffer* b, Msg& m, const char* channel) {
-    if (m.decode(b->data, 0, b->data_size) < 0) {
-      log.warn("{}: dropped a message that does not decode", channel);
-      return false;
-    }
-    return run_id.empty() || m.run_id == run_id;  // only the run being shown (after RUN_CONFIG)
-  }
-  void onConfig(const lcm::ReceiveBuffer* b, const std::string&) {
-    afford::run_config_t m;
-    if (m.decode(b->data, 0, b->data_size) < 0) return log.warn("RUN_CONFIG: dropped a message that does not decode");
-    std::string phase = "intrinsic";
+  afford::Turn onConfig(const afford::run_config_t& m) {
     try {
-      const YAML::Node cfg = YAML::Load(m.config_yaml);
-      if (cfg["phase"]) phase = cfg["phase"].as<std::string>();
-    } catch (const YAML::Exception&) {
+      config = afford::parseRunConfigText(m.config_yaml);
+    } catch (const std::exception& e) {
+      return afford::Turn::refuse(std::string("its configuration is refused: ") + e.what());
     }
-    run_id = m.run_id;
-    viewer.onRun(m.run_id, phase + " " + m.experiment + " " + m.system);
+    edge.join(m.run_id, &config);
+    viewer.onRun(m.run_id, std::string(config.phase == afford::Phase::Extrinsic ? "extrinsic " : "intrinsic ") +
+                               m.experiment + " " + m.system);
     log.info("showing run '{}'", m.run_id);
+    return afford::Turn::take();
   }
-  void onScene(const lcm::ReceiveBuffer* b, const std::string&) {
-    afford::scene_t m;
-    if (!decode(b, m, afford::channel::kScene)) return;
+  afford::Turn onScene(const afford::scene_t& m) {
     try {
       viewer.onScene(m.step, afford::decodeScene(m.data, m.width, m.height), m.cause == afford::scene_t::CAUSE_GOAL);
     } catch (const std::exception& e) {
-      log.warn("SCENE: {}", e.what());
+      return afford::Turn::refuse(e.what());
     }
+    return afford::Turn::take();
   }
-  void onFocus(const lcm::ReceiveBuffer* b, const std::string&) {
-    afford::focus_t m;
-    if (!decode(b, m, afford::channel::kFocus)) return;
+  afford::Turn onFocus(const afford::focus_t& m) {
     viewer.onFocus(m.step, m.image, m.side, m.x, m.y, m.kind == afford::focus_t::GOAL_SCAN);
+    return afford::Turn::take();
   }
-  void onPrediction(const lcm::ReceiveBuffer* b, const std::string&) {
-    afford::prediction_t m;
-    if (!decode(b, m, afford::channel::kPrediction) || m.affordance.size() != 4) return;
+  afford::Turn onPrediction(const afford::prediction_t& m) {
     viewer.onPrediction(m.step, {m.affordance[0], m.affordance[1], m.affordance[2], m.affordance[3]});
+    return afford::Turn::take();
   }
-  void onEffect(const lcm::ReceiveBuffer* b, const std::string&) {  // the gaze after the change-driven scan
-    afford::effect_t m;
-    if (!decode(b, m, afford::channel::kEffect)) return;
+  afford::Turn onEffect(const afford::effect_t& m) {  // the gaze after the change-driven scan
     viewer.onFocus(m.step, m.image, m.side, m.after_x, m.after_y, false);
+    return afford::Turn::take();
   }
-  void onDecision(const lcm::ReceiveBuffer* b, const std::string&) {
-    afford::decision_t m;
-    if (!decode(b, m, afford::channel::kDecision)) return;
+  afford::Turn onDecision(const afford::decision_t& m) {
     viewer.onDecision(m.step, m.acted, m.action, m.motivation, m.threshold);
+    return afford::Turn::take();
   }
 };
 
@@ -95,8 +86,18 @@ int main(int argc, char** argv) {
   app.add_option("--every", every, "with --png: a frame every N steps")->capture_default_str()->check(CLI::PositiveNumber);
   app.add_option("--max-frames", max_frames, "with --png: stop after this many frames (0: never)")->capture_default_str();
   app.add_option("--log-level", level, "trace, debug, info, warn, error or off")->capture_default_str();
+  std::string config_dir = afford::defaultConfigDir();
+  app.add_option("--config-dir", config_dir, "folder whose defaults.yaml gives what is accepted before a run is heard")
+      ->capture_default_str();
   CLI11_PARSE(app, argc, argv);
   auto log = afford::makeLogger("viewer", level);
+  afford::ProtocolConfig protocol;
+  try {
+    protocol = afford::loadProtocol(config_dir);
+  } catch (const std::exception& e) {
+    log->error("--config-dir: {}", e.what());
+    return 2;
+  }
   afford::installStopHandlers();
   lcm::LCM lcm(url);
   if (!lcm.good()) {
@@ -105,13 +106,29 @@ int main(int argc, char** argv) {
   }
   if (!png_dir.empty()) std::filesystem::create_directories(png_dir);
   afford::Viewer viewer;
-  Listener listener{viewer, *log, ""};
-  lcm.subscribe(afford::channel::kRunConfig, &Listener::onConfig, &listener);
-  lcm.subscribe(afford::channel::kScene, &Listener::onScene, &listener)->setQueueCapacity(1000);
-  lcm.subscribe(afford::channel::kFocus, &Listener::onFocus, &listener)->setQueueCapacity(1000);
-  lcm.subscribe(afford::channel::kPrediction, &Listener::onPrediction, &listener)->setQueueCapacity(1000);
-  lcm.subscribe(afford::channel::kDecision, &Listener::onDecision, &listener)->setQueueCapacity(1000);
-  lcm.subscribe(afford::channel::kEffect, &Listener::onEffect, &listener)->setQueueCapacity(1000);
+  afford::Edge edge(lcm, log, "viewer", protocol);
+  edge.warnOtherRuns(false);
+  Listener listener{viewer, *log, edge, {}};
+  using afford::Order;
+  using afford::Scope;
+  edge.subscribe<afford::run_config_t>(
+      afford::channel::kRunConfig, [&](const afford::run_config_t& m) { return listener.onConfig(m); }, Scope::Any,
+      Order::None);
+  edge.subscribe<afford::scene_t>(
+      afford::channel::kScene, [&](const afford::scene_t& m) { return listener.onScene(m); }, Scope::RunOrAny,
+      Order::Follow);
+  edge.subscribe<afford::focus_t>(
+      afford::channel::kFocus, [&](const afford::focus_t& m) { return listener.onFocus(m); }, Scope::RunOrAny,
+      Order::Follow);
+  edge.subscribe<afford::prediction_t>(
+      afford::channel::kPrediction, [&](const afford::prediction_t& m) { return listener.onPrediction(m); },
+      Scope::RunOrAny, Order::Follow);
+  edge.subscribe<afford::decision_t>(
+      afford::channel::kDecision, [&](const afford::decision_t& m) { return listener.onDecision(m); }, Scope::RunOrAny,
+      Order::Follow);
+  edge.subscribe<afford::effect_t>(
+      afford::channel::kEffect, [&](const afford::effect_t& m) { return listener.onEffect(m); }, Scope::RunOrAny,
+      Order::Follow);
   log->info("watching {}{}", url, png_dir.empty() ? "" : ", frames to " + png_dir);
 
   std::int64_t written = 0, last_frame_step = -1;
@@ -120,7 +137,7 @@ int main(int argc, char** argv) {
   while (!afford::stopRequested()) {
     lcm.handleTimeout(20);
     if (!png_dir.empty()) {
-      if (listener.run_id != last_run) last_run = listener.run_id, last_frame_step = -1;
+      if (edge.run() != last_run) last_run = edge.run(), last_frame_step = -1;
       if (viewer.step() >= 0 && (last_frame_step < 0 || viewer.step() >= last_frame_step + every)) {
         last_frame_step = viewer.step();
         char name[64];

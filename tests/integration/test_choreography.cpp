@@ -13,6 +13,7 @@
 #include "afford/driver.hpp"
 #include "afford/run_config_t.hpp"
 #include "afford/scene_t.hpp"
+#include "afford/seal.hpp"
 #include "environment/node.hpp"
 #include "eye/node.hpp"
 #include "motivation/node.hpp"
@@ -52,16 +53,17 @@ struct InProcessRun {
       return l;
     };
     std::map<std::string, std::unique_ptr<NodeBase>> nodes;
+    const ProtocolConfig protocol = test::shippedProtocol();
     auto start = [&](const std::string& p) {
       nodes[p].reset();  // unsubscribes: what was queued for it is lost, as in a kill
-      if (p == "environment") nodes[p] = std::make_unique<EnvironmentNode>(lcm, logger(p));
-      if (p == "eye") nodes[p] = std::make_unique<EyeNode>(lcm, logger(p));
-      if (p == "predictors") nodes[p] = std::make_unique<PredictorsNode>(lcm, logger(p));
-      if (p == "motivation") nodes[p] = std::make_unique<MotivationNode>(lcm, logger(p));
-      if (p == "planner") nodes[p] = std::make_unique<PlannerNode>(lcm, logger(p));
+      if (p == "environment") nodes[p] = std::make_unique<EnvironmentNode>(lcm, logger(p), protocol);
+      if (p == "eye") nodes[p] = std::make_unique<EyeNode>(lcm, logger(p), protocol);
+      if (p == "predictors") nodes[p] = std::make_unique<PredictorsNode>(lcm, logger(p), protocol);
+      if (p == "motivation") nodes[p] = std::make_unique<MotivationNode>(lcm, logger(p), protocol);
+      if (p == "planner") nodes[p] = std::make_unique<PlannerNode>(lcm, logger(p), protocol);
     };
     for (const char* p : {"environment", "eye", "predictors", "motivation", "planner"}) start(p);
-    RunDriver driver(lcm, logger("runner"));
+    RunDriver driver(lcm, logger("runner"), protocol);
     struct Tap {
       InProcessRun* run;
       lcm::LCM* lcm;
@@ -115,7 +117,8 @@ struct InProcessRun {
       stale.experiment = spec.experiment;
       stale.system = spec.system;
       stale.config_yaml = yaml;
-      lcm.publish(channel::kRunConfig, &stale);
+      const auto bytes = sealed(stale);
+      lcm.publish(channel::kRunConfig, bytes.data(), static_cast<unsigned>(bytes.size()));
       for (int i = 0; i < 50; ++i) pump();
     }
     outcome = driver.run(spec, pump, [] { return std::string(); });
@@ -205,19 +208,24 @@ TEST(Choreography, LateObjectsEnterTheSceneAtTheirStep) {
       ++appeared;
       EXPECT_EQ(s.step, 2000);
     }
-    if (s.step == 1999) EXPECT_TRUE(s.changes_next);
+    if (s.step == 1999) {
+      EXPECT_TRUE(s.changes_next);
+    }
   }
   EXPECT_EQ(appeared, 1);
   EXPECT_EQ(run.outcome.weights_checksum, test::runIntrinsic(parseRunConfigText(yaml)).weightsChecksum());
 }
 
-TEST(Choreography, ARejectedConfigFailsTheRunNamingProcessAndKey) {
+// The runner reads the configuration it is to send: one no process could take
+// fails the run naming the key, and no process is configured with it.
+TEST(Choreography, ARejectedConfigFailsTheRunNamingTheKeyBeforeAnyProcessTakesIt) {
   YAML::Node root = effectiveConfig(std::string(AFFORD_SOURCE_DIR) + "/config", RunRequest{"base", System::IMP, 3, 50, {}});
   root["eye"]["focus_side"] = 20;
   InProcessRun run(emitYaml(root), System::IMP, 3, 50);
   EXPECT_FALSE(run.outcome.ok);
   EXPECT_NE(run.outcome.error.find("eye.focus_side"), std::string::npos) << run.outcome.error;
-  EXPECT_NE(run.outcome.error.find("process '"), std::string::npos) << run.outcome.error;
+  EXPECT_EQ(run.count(channel::kRunConfig), 0);
+  EXPECT_EQ(run.log.str().find("configured for run"), std::string::npos) << run.log.str();
 }
 
 // Live restart in one process: a node destroyed mid-run and made anew is
@@ -362,6 +370,12 @@ std::vector<std::uint8_t> encode(const Msg& m) {
   m.encode(buf.data(), 0, static_cast<int>(buf.size()));
   return buf;
 }
+// A message with its digest, as a process publishes it.
+template <class Msg>
+void publishSealed(lcm::LCM& l, const char* channel, Msg m) {
+  const auto b = sealed(m);
+  l.publish(channel, b.data(), static_cast<unsigned>(b.size()));
+}
 
 const double kNaN = std::numeric_limits<double>::quiet_NaN();
 const double kInf = std::numeric_limits<double>::infinity();
@@ -373,7 +387,7 @@ std::vector<BadInput> badInputs() {
          const auto b = encode(validDecision(run, s));  // a decision sent as a focus
          l.publish("FOCUS", b.data(), static_cast<unsigned>(b.size()));
        }},
-      {"Truncated", "FOCUS", "malformed afford.focus_t",
+      {"Truncated", "FOCUS", "field image",
        [](lcm::LCM& l, const std::string& run, std::int64_t s) {
          auto b = encode(validFocus(run, s + 1));
          b.resize(b.size() / 2);
@@ -427,7 +441,7 @@ std::vector<BadInput> badInputs() {
          e.image.assign(1323, 0);
          l.publish("EFFECT", &e);
        }},
-      {"ObjectCountOutOfRange", "PROBE", "field n_objects = 0",
+      {"ObjectCountOutOfRange", "PROBE", "field n_objects has size 0, expected 9",
        [](lcm::LCM& l, const std::string& run, std::int64_t) {
          object_probe_t p;
          p.run_id = run;
@@ -446,8 +460,49 @@ std::vector<BadInput> badInputs() {
       // reaches every subscriber): dropped without a word.
       {"RepeatedSerial", "FOCUS", "",
        [](lcm::LCM& l, const std::string& run, std::int64_t s) {
-         const focus_t f = validFocus(run, s - 10);  // serial 0
-         l.publish("FOCUS", &f);
+         publishSealed(l, "FOCUS", validFocus(run, s - 10));  // serial 0
+       }},
+      // A well-formed, valid message whose digest does not match (a forgery or a corrupted copy).
+      {"DigestMismatch", "FOCUS", "field digest does not match",
+       [](lcm::LCM& l, const std::string& run, std::int64_t s) {
+         focus_t f = validFocus(run, s + 1);
+         f.serial = s + 1;
+         auto b = sealed(f);
+         b[b.size() - 20] ^= 0x01;  // one bit of the image flipped after sealing
+         l.publish("FOCUS", b.data(), static_cast<unsigned>(b.size()));
+       }},
+      // A size field far beyond anything the run sends: refused before any decode.
+      {"HugeArraySize", "PREDICTION", "field n_actions",
+       [](lcm::LCM& l, const std::string& run, std::int64_t s) {
+         prediction_t p;
+         p.run_id = run;
+         p.step = s;
+         p.serial = 0;
+         p.x = p.y = 0.5;
+         p.n_actions = 4;
+         p.affordance = {0.5, 0.5, 0.5, 0.5};
+         p.learning_progress = {0, 0, 0, 0};
+         p.n_trained = 0;
+         auto b = sealed(p);
+         const std::size_t at = 8 + 4 + run.size() + 1 + 8 + 8 + 8 + 8;  // fingerprint, run_id, step, serial, x, y
+         b[at] = 0x10, b[at + 1] = 0x00, b[at + 2] = 0x00, b[at + 3] = 0x01;  // n_actions = 0x10000001
+         l.publish("PREDICTION", b.data(), static_cast<unsigned>(b.size()));
+       }},
+      {"HugeStatusCount", "STATUS", "field n_channels",
+       [](lcm::LCM& l, const std::string& run, std::int64_t s) {
+         process_status_t st;
+         st.run_id = run;
+         st.step = s;
+         st.process = "eye";
+         st.pid = 1;
+         st.state = process_status_t::RUNNING;
+         st.counts_run = run;
+         st.n_channels = 0;
+         auto b = sealed(st);
+         // n_channels sits after run_id, step, process, pid, state, detail and counts_run.
+         const std::size_t at = 8 + (4 + run.size() + 1) + 8 + (4 + 4) + 4 + 1 + (4 + 1) + (4 + run.size() + 1);
+         b[at] = 0x01, b[at + 1] = b[at + 2] = b[at + 3] = 0x00;  // n_channels = 0x01000000
+         l.publish("STATUS", b.data(), static_cast<unsigned>(b.size()));
        }},
       {"WrongSceneSize", "SCENE", "field width has size 100, expected 150",
        [](lcm::LCM& l, const std::string& run, std::int64_t s) {
@@ -494,9 +549,10 @@ TEST_P(BadInputTest, IsDroppedWithOneLineAndTheRunGoesOnUnchanged) {
     EXPECT_EQ(lines, 0) << run.log.str();
     return;
   }
-  // One line per process that subscribes to the channel (DECISION: environment, eye, predictors).
+  // One line per process that subscribes to the channel (DECISION: environment, eye, predictors;
+  // STATUS: every process and the runner).
   EXPECT_GE(lines, 1) << run.log.str();
-  EXPECT_LE(lines, 3) << run.log.str();
+  EXPECT_LE(lines, 6) << run.log.str();
 }
 
 INSTANTIATE_TEST_SUITE_P(EachKind, BadInputTest, ::testing::ValuesIn(badInputs()),

@@ -1,6 +1,7 @@
 // SerialTracker: each channel in serial order, repeats and gaps told apart,
 // missing messages asked for in batches, a standing request not repeated
-// until its time is up.
+// until its time is up (then backing off), a publisher's claim replacing
+// what was believed before, a refused message expected again.
 #include <gtest/gtest.h>
 
 #include "afford/serials.hpp"
@@ -11,8 +12,10 @@ namespace {
 using V = SerialTracker::Verdict;
 using namespace std::chrono_literals;
 
+SerialTracker tracker() { return SerialTracker(64, 20ms, 500ms); }
+
 TEST(Serials, AcceptsInOrderAndDropsRepeats) {
-  SerialTracker t;
+  SerialTracker t = tracker();
   EXPECT_EQ(t.offer("FOCUS", 0), V::Accept);
   EXPECT_EQ(t.offer("FOCUS", 1), V::Accept);
   EXPECT_EQ(t.offer("FOCUS", 1), V::Repeat);
@@ -23,7 +26,7 @@ TEST(Serials, AcceptsInOrderAndDropsRepeats) {
 }
 
 TEST(Serials, AGapIsNotTakenAndIsAskedForThenFilled) {
-  SerialTracker t;
+  SerialTracker t = tracker();
   const auto now = SerialTracker::Clock::now();
   ASSERT_EQ(t.offer("FOCUS", 0), V::Accept);
   EXPECT_EQ(t.offer("FOCUS", 3), V::Gap);  // 1 and 2 lost
@@ -39,27 +42,84 @@ TEST(Serials, AGapIsNotTakenAndIsAskedForThenFilled) {
   EXPECT_TRUE(t.due(now).empty());
 }
 
-TEST(Serials, AnnouncedCountsRevealALostLastMessageAndAskInBatches) {
-  SerialTracker t(64, 300ms);
+TEST(Serials, ClaimedCountsRevealALostLastMessageAndAskInBatches) {
+  SerialTracker t = tracker();
   const auto now = SerialTracker::Clock::now();
-  t.announce("FOCUS", 200);  // a restarted receiver: everything is missing
+  t.claim("FOCUS", 200);  // a restarted receiver: everything is missing
   auto r = t.due(now);
   ASSERT_EQ(r.size(), 1u);
   EXPECT_EQ(r[0].first, 0);
   EXPECT_EQ(r[0].last, 63);
-  EXPECT_TRUE(t.due(now + 100ms).empty()) << "a standing request is not repeated";
+  EXPECT_TRUE(t.due(now + 10ms).empty()) << "a standing request is not repeated";
   for (int s = 0; s < 64; ++s) ASSERT_EQ(t.offer("FOCUS", s), V::Accept);
-  r = t.due(now + 100ms);  // that batch is in: the next one at once
+  r = t.due(now + 10ms);  // that batch is in: the next one at once
   ASSERT_EQ(r.size(), 1u);
   EXPECT_EQ(r[0].first, 64);
   EXPECT_EQ(r[0].last, 127);
-  r = t.due(now + 500ms);  // unanswered for longer than the retry time: asked again
+  r = t.due(now + 35ms);  // unanswered for longer than the retry time: asked again
   ASSERT_EQ(r.size(), 1u);
   EXPECT_EQ(r[0].first, 64);
 }
 
+TEST(Serials, AnUnansweredRequestIsAskedAgainLessAndLessOften) {
+  SerialTracker t = tracker();
+  auto now = SerialTracker::Clock::now();
+  t.claim("SCENE", 5);
+  ASSERT_EQ(t.due(now).size(), 1u);
+  std::vector<std::chrono::milliseconds> waits;
+  auto asked = now;
+  for (int k = 0; k < 8; ++k) {  // nothing ever comes: find when each request goes out again
+    do now += 1ms;
+    while (t.due(now).empty());
+    waits.push_back(std::chrono::duration_cast<std::chrono::milliseconds>(now - asked));
+    asked = now;
+  }
+  EXPECT_EQ(waits.front(), 20ms);
+  for (std::size_t k = 1; k < waits.size(); ++k) EXPECT_GE(waits[k], waits[k - 1]);
+  EXPECT_EQ(waits.back(), 500ms) << "the wait stops growing at the heartbeat";
+  ASSERT_EQ(t.offer("SCENE", 0), V::Accept);  // an answer: the rest is asked for after the short wait again
+  EXPECT_TRUE(t.due(now + 19ms).empty());
+  const auto r = t.due(now + 21ms);
+  ASSERT_EQ(r.size(), 1u);
+  EXPECT_EQ(r[0].first, 1);
+}
+
+TEST(Serials, ThePublishersClaimReplacesAForgedCountOrSerial) {
+  SerialTracker t = tracker();
+  ASSERT_EQ(t.offer("FOCUS", 0), V::Accept);
+  EXPECT_EQ(t.offer("FOCUS", 1'000'000), V::Gap);  // a forged serial far ahead
+  EXPECT_EQ(t.missing(), 1'000'000);
+  t.claim("FOCUS", 1);  // the publisher: it has published one message
+  EXPECT_EQ(t.missing(), 0);
+  t.claim("FOCUS", 1'000'000'000);  // a forged claim ...
+  EXPECT_GT(t.missing(), 0);
+  t.claim("FOCUS", 1);  // ... until the publisher's next
+  EXPECT_EQ(t.missing(), 0);
+  EXPECT_EQ(t.offer("FOCUS", 1), V::Accept);
+}
+
+TEST(Serials, AChannelNotAllowedToAskWaits) {
+  SerialTracker t = tracker();
+  const auto now = SerialTracker::Clock::now();
+  t.claim("EFFECT", 10);
+  t.claim("FOCUS", 10);
+  const auto r = t.due(now, [](const std::string& c) { return c != "EFFECT"; });
+  ASSERT_EQ(r.size(), 1u);
+  EXPECT_EQ(r[0].channel, "FOCUS");
+  EXPECT_EQ(t.due(now, {}).size(), 1u) << "EFFECT, once allowed";
+}
+
+TEST(Serials, ARefusedMessageIsExpectedAgain) {
+  SerialTracker t = tracker();
+  for (int s = 0; s < 5; ++s) ASSERT_EQ(t.offer("LOOK", s), V::Accept);
+  t.rewind("LOOK", 3);  // serial 3 was not the real one: 3 and 4 are not had
+  EXPECT_EQ(t.expected("LOOK"), 3);
+  EXPECT_EQ(t.offer("LOOK", 3), V::Accept);
+  EXPECT_EQ(t.offer("LOOK", 2), V::Repeat);
+}
+
 TEST(Serials, ExpectResumesAChannelWhereAnEarlierSegmentEnded) {
-  SerialTracker t;
+  SerialTracker t = tracker();
   t.expect("SCENE", 10);
   EXPECT_EQ(t.offer("SCENE", 9), V::Repeat);
   EXPECT_EQ(t.offer("SCENE", 10), V::Accept);

@@ -25,4 +25,9 @@ inline constexpr const char* kResend = "RESEND";
 inline constexpr const char* kWithSerial[] = {kScene,  kFocus,           kPrediction, kDecision,
                                               kEffect, kProbe,           kAffordanceTable, kResult,
                                               kLook,   kForwardQuery,    kForwardPrediction, kExtrinsicResult};
+
+// Every channel of a run (the most a STATUS lists).
+inline constexpr const char* kAll[] = {kRunConfig, kRunControl, kStatus, kScene, kFocus, kPrediction,
+                                       kDecision, kEffect, kProbe, kAffordanceTable, kResult, kLook,
+                                       kForwardQuery, kForwardPrediction, kExtrinsicResult, kResend};
 }  // namespace afford::channel

@@ -120,6 +120,35 @@ struct PlannerConfig {
 
 enum class Phase { Intrinsic, Extrinsic };
 
+// The message edge (config key `protocol`, docs/processes-and-channels.md):
+// how fast a lost datagram is found and asked for again, how long the runner
+// and the logger wait for the others, and what a receiver accepts. None of it
+// changes what a run computes. A process uses the values of its run's
+// configuration, and those of the config folder's defaults.yaml between runs.
+struct ProtocolLimits {       // what a receiver accepts before a run's configuration says more
+  int name_bytes = 0;         // run ids, process, channel, experiment and object names
+  int text_bytes = 0;         // STATUS detail
+  int config_bytes = 0;       // RUN_CONFIG config_yaml
+  int objects = 0;            // objects of a probe or an affordance table
+  int focus_side = 0;         // side of a focus image, pixels
+  int scene_side = 0;         // side of a scene, pixels
+  int sub_goals = 0;          // sub-goal records of an extrinsic result
+};
+struct ProtocolConfig {
+  int heartbeat_ms = 0;       // STATUS period
+  int idle_announce_ms = 0;   // a process of a run idle this long announces its counts at once
+  int retry_ms = 0;           // an unanswered RESEND is asked again after this (then doubling up to heartbeat_ms)
+  int resend_batch = 0;       // serials asked for in one RESEND
+  int resend_cap = 0;         // serials a publisher republishes for one RESEND
+  int resend_budget = 0;      // serials a publisher republishes per channel within retry_ms
+  int stop_grace_ms = 0;      // after STOP, the logger waits this long for missing messages
+  int ready_timeout_ms = 0;   // the runner fails a run whose processes are not free, configured or started by then
+  int close_timeout_ms = 0;   // the runner fails a run whose log is not closed this long after STOP
+  int max_deferred = 0;       // messages waiting for their turn in a process; reaching it fails the run
+  int queue_capacity = 0;     // LCM's queue of each subscription, messages
+  ProtocolLimits limits;
+};
+
 struct RunConfig {
   std::string experiment;
   Phase phase = Phase::Intrinsic;
@@ -134,11 +163,13 @@ struct RunConfig {
   // Also save the weights as they are after this many executed actions (0 = not), to
   // actionsCheckpoint(checkpoint, n): paper 3.2.3 tests agents trained for 4000 actions.
   std::int64_t checkpoint_after_actions = 0;
+  bool record = true;  // a logger on the bus records this run (afford experiment --keep-logs decides)
   WorldConfig world;
   EyeConfig eye;
   PredictorsConfig predictors;
   MotivationConfig motivation;
   PlannerConfig planner;
+  ProtocolConfig protocol;
 };
 
 // Parse a scenario (types, names, ranges); `path` prefixes the keys in errors.
@@ -158,6 +189,10 @@ std::string actionsCheckpoint(const std::string& checkpoint, std::int64_t action
 // Parse and validate an effective configuration. Unknown keys are errors too.
 RunConfig parseRunConfig(const YAML::Node& root);
 RunConfig parseRunConfigText(const std::string& yaml_text);
+// The `protocol` section alone (keys named from `path`).
+ProtocolConfig parseProtocol(const YAML::Node& node, const std::string& path = "protocol");
+// The protocol of config_dir/defaults.yaml: what a process uses between runs.
+ProtocolConfig loadProtocol(const std::string& config_dir);
 
 // Experiment files (config/experiments/<name>.yaml): the effective config of one
 // run is defaults.yaml, overlaid by the experiment's keys, overlaid by

@@ -1,0 +1,343 @@
+// The message edge: the one place where bytes from the bus become typed
+// messages (docs/processes-and-channels.md, "The message edge"). Every
+// subscriber goes through it: the processes (NodeBase), the runner, the
+// viewer, `afford status` and replay. For each datagram, in this order:
+//
+//   1. fingerprint: the channel's type, else dropped;
+//   2. run: the run id is read (bounded) before anything is decoded; a message
+//      of no run this subscriber serves is dropped;
+//   3. bounds: every string length and array size against the bytes left and
+//      against a maximum from the configuration (afford/bounds.hpp), so LCM's
+//      decoder never sees a size it could overflow or over-allocate on;
+//   4. decode, then checkMessage(): every field (afford/checks.hpp); a type
+//      without a check does not compile;
+//   5. digest: the last 8 bytes must be the digest of the rest (afford/seal.hpp);
+//   6. order: run messages are taken in serial order, once; a gap is asked
+//      for at once (RESEND); a repeat is dropped quietly;
+//   7. the handler says Take, Later (its turn has not come: offered again
+//      after the next message taken, with its channel's later messages behind
+//      it) or Refuse (it cannot be the channel's next message: dropped, and
+//      the serial is expected again).
+//
+// A bad message is dropped with one log line naming the channel and the field.
+// An exception from a handler never leaves the edge: the edge stops taking the
+// run's messages and reports the failure (the process then says FAILED).
+// Channels in:  those subscribed; RESEND (when it answers for what it published)
+// Channels out: RESEND (asking), and what the owner publishes
+#pragma once
+#include <lcm/lcm-cpp.hpp>
+#include <spdlog/spdlog.h>
+
+#include <chrono>
+#include <cstdint>
+#include <deque>
+#include <functional>
+#include <map>
+#include <memory>
+#include <string>
+#include <type_traits>
+#include <utility>
+#include <vector>
+
+#include "afford/bounds.hpp"
+#include "afford/checks.hpp"
+#include "afford/config.hpp"
+#include "afford/process_status_t.hpp"
+#include "afford/resend_t.hpp"
+#include "afford/seal.hpp"
+#include "afford/serials.hpp"
+#include "afford/wire.hpp"
+
+namespace afford {
+
+// What a handler makes of a message offered to it.
+class Turn {
+ public:
+  enum class Kind { Take, Later, Refuse };
+  static Turn take() { return Turn(Kind::Take, {}); }
+  static Turn later() { return Turn(Kind::Later, {}); }
+  static Turn refuse(std::string why) { return Turn(Kind::Refuse, std::move(why)); }
+  Kind kind() const { return kind_; }
+  const std::string& why() const { return why_; }
+
+ private:
+  Turn(Kind k, std::string why) : kind_(k), why_(std::move(why)) {}
+  Kind kind_;
+  std::string why_;
+};
+
+// The bytes a message arrived as (for a handler that records them).
+struct Envelope {
+  const std::string& channel;
+  const std::uint8_t* data;
+  std::size_t size;
+  std::int64_t recv_utime;
+};
+
+// Which runs' messages a subscription takes.
+enum class Scope {
+  Run,        // the run joined; nothing while none is
+  RunOrAny,   // the run joined; every run while none is (observers)
+  Any,        // every message (control channels, STATUS)
+};
+// How a subscription orders a channel (types with a serial).
+enum class Order {
+  Serial,   // in serial order, once; missing messages asked for
+  Follow,   // in serial order, once, but a gap is skipped (observers, which ask for nothing)
+  None,     // as they come (types without a serial)
+};
+
+// The publisher of each run channel (one per channel and run); "" for others.
+std::string publisherOf(const std::string& channel, bool extrinsic);
+
+// Decode one buffer as Msg through steps 1, 3, 4 and 5 above; false with the
+// reason naming the field.
+template <class Msg>
+bool decodeChecked(const void* data, std::size_t size, const BoundsContext& ctx, Msg& out, std::string& why) {
+  if (!wire::checkWire<Msg>(data, size, boundsFor<Msg>(ctx), why)) return false;
+  const int n = out.decode(data, 0, static_cast<int>(size));
+  if (n < 0 || static_cast<std::size_t>(n) != size) {
+    why = std::string("afford.") + wire::Bounds<Msg>::kName + " does not decode";
+    return false;
+  }
+  if (std::string reason = checkMessage(out, ctx); !reason.empty()) {
+    why = std::move(reason);
+    return false;
+  }
+  if (!sealIntact(data, size)) {
+    why = "field digest does not match the message (corrupted or forged)";
+    return false;
+  }
+  return true;
+}
+
+// The run id a message starts with, read without decoding it; false if the
+// buffer cannot hold one of at most `max_bytes`.
+bool peekRunId(const void* data, std::size_t size, int max_bytes, std::string& out);
+
+class Edge {
+ public:
+  // `owner`: the process (or tool) this edge belongs to, named in its requests.
+  Edge(lcm::LCM& lcm, std::shared_ptr<spdlog::logger> log, std::string owner, const ProtocolConfig& protocol);
+  ~Edge();  // unsubscribes: the bus may outlive the edge (a restart in one process)
+  Edge(const Edge&) = delete;
+  Edge& operator=(const Edge&) = delete;
+
+  // ---- the run served -----------------------------------------------------------
+  // Serve `run_id` with `config` (kept by the caller, alive until leave()):
+  // ordering, deferral and history start anew; the run's protocol applies.
+  void join(const std::string& run_id, const RunConfig* config);
+  // Leave the run: its messages are dropped from now on; the history of what
+  // was published stays, to answer late requests, until the next join().
+  void leave();
+  const std::string& run() const { return run_; }
+  const RunConfig* config() const { return config_; }
+  const ProtocolConfig& protocol() const { return *protocol_; }
+  BoundsContext context() const { return {protocol_, config_}; }
+  // Other runs' messages: a warning (processes) or a debug line (the runner).
+  void warnOtherRuns(bool on) { warn_other_runs_ = on; }
+  // Called when a handler throws or a bound is reached: (channel, reason).
+  // The edge has already stopped taking the run's messages.
+  void onFailure(std::function<void(const std::string&, const std::string&)> f) { on_failure_ = std::move(f); }
+  bool failed() const { return failed_; }
+  // Stop taking the run's messages (the owner failed for another reason).
+  void suspend() {
+    failed_ = true;
+    deferred_.clear();
+  }
+  // Offer the waiting messages again (the owner's state changed, e.g. START).
+  void retry() { retryDeferred(); }
+
+  // ---- receiving ----------------------------------------------------------------
+  // `handler` is called as Turn(const Msg&) or Turn(const Msg&, const Envelope&).
+  template <class Msg, class F>
+  void subscribe(const std::string& channel, F handler, Scope scope, Order order);
+  // Take a publisher's counts (its STATUS) as claims on the channels it publishes.
+  void claim(const process_status_t& status);
+  // Ask for what is missing, if due (call from the loop too: retries).
+  void askMissing();
+  std::int64_t missing() const { return serials_.missing(); }
+  std::map<std::string, std::pair<std::int64_t, std::int64_t>> missingRanges() const { return serials_.missingRanges(); }
+  // A restarted recorder goes on from where its earlier record ends.
+  void expectSerial(const std::string& channel, std::int64_t next) { serials_.expect(channel, next); }
+  std::size_t deferred() const { return deferred_.size(); }
+  // Last time a message of the run was taken or published.
+  std::chrono::steady_clock::time_point lastActivity() const { return last_activity_; }
+  // When the edge next has something to do by itself (a request's retry).
+  std::chrono::steady_clock::time_point nextDue() const { return serials_.nextDue(); }
+
+  // ---- publishing ------------------------------------------------------------------
+  // A run message: the channel's next serial and the digest are set; its bytes
+  // are kept in the run's history to answer RESEND.
+  template <class Msg>
+  void publish(const std::string& channel, Msg& msg);
+  // A message without a serial (RUN_CONFIG, RUN_CONTROL, STATUS): sealed and sent.
+  template <class Msg>
+  void send(const std::string& channel, Msg& msg) {
+    const std::vector<std::uint8_t> bytes = sealed(msg);
+    lcm_.publish(channel, bytes.data(), static_cast<unsigned>(bytes.size()));
+  }
+  // Answer RESEND requests for what this edge published (processes).
+  void answerResends();
+  // Per channel published in the history's run: how many messages.
+  std::vector<std::pair<std::string, std::int64_t>> counts() const;
+  const std::string& historyRun() const { return history_run_; }
+
+ private:
+  struct Subscription {
+    std::function<void(const lcm::ReceiveBuffer*)> fn;
+    lcm::Subscription* sub = nullptr;
+    void on(const lcm::ReceiveBuffer* b, const std::string&) { fn(b); }
+  };
+  struct Pending {
+    std::string channel;
+    std::int64_t serial = -1;
+    std::function<Turn()> call;
+  };
+  struct History {
+    std::vector<std::vector<std::uint8_t>> messages;
+    std::vector<std::chrono::steady_clock::time_point> republished;  // last republication of each
+    std::chrono::steady_clock::time_point window{};                  // start of the budget window
+    int in_window = 0;                                                // republished in it
+  };
+
+  template <class Msg, class F>
+  void receive(const std::string& channel, const lcm::ReceiveBuffer* rb, const std::shared_ptr<const F>& handler,
+               Scope scope, Order order);
+  bool inScope(const std::string& channel, const std::string& run_id, Scope scope);
+  void drop(const std::string& channel, const std::string& why);
+  // Offer an accepted serial message (or queue it behind its channel's waiting ones).
+  void dispatch(Pending p);
+  Turn::Kind attempt(Pending& p);
+  void retryDeferred();
+  void refused(const Pending& p, const std::string& why);
+  void fail(const std::string& channel, const std::string& why);
+  bool blocked(const std::string& channel) const;
+  void onResend(const resend_t& r);
+
+  lcm::LCM& lcm_;
+  std::shared_ptr<spdlog::logger> log_;
+  std::string owner_;
+  const ProtocolConfig* protocol_;
+  ProtocolConfig own_protocol_;  // between runs
+  std::vector<std::unique_ptr<Subscription>> subs_;
+  std::string run_;
+  const RunConfig* config_ = nullptr;
+  bool warn_other_runs_ = true;
+  bool failed_ = false;
+  std::function<void(const std::string&, const std::string&)> on_failure_;
+  SerialTracker serials_;
+  std::vector<std::string> tracked_;       // channels taken in serial order (and asked for)
+  std::deque<Pending> deferred_;
+  bool retrying_ = false;
+  std::chrono::steady_clock::time_point last_activity_{};
+  std::map<std::string, History> history_;  // what this edge published, by channel
+  std::string history_run_;
+  bool answering_ = false;
+};
+
+// ---- template definitions ------------------------------------------------------------
+
+namespace detail {
+template <class Msg, class F>
+Turn invokeHandler(const F& handler, const Msg& msg, const Envelope& envelope) {
+  if constexpr (std::is_invocable_r_v<Turn, const F&, const Msg&, const Envelope&>)
+    return handler(msg, envelope);
+  else
+    return handler(msg);
+}
+}  // namespace detail
+
+template <class Msg, class F>
+void Edge::subscribe(const std::string& channel, F handler, Scope scope, Order order) {
+  static_assert(std::is_invocable_r_v<Turn, const F&, const Msg&, const Envelope&> ||
+                    std::is_invocable_r_v<Turn, const F&, const Msg&>,
+                "a handler is Turn(const Msg&) or Turn(const Msg&, const Envelope&)");
+  if (!wire::Bounds<Msg>::kSerial && order != Order::None)
+    throw std::logic_error(channel + ": afford." + wire::Bounds<Msg>::kName + " has no serial to order by");
+  auto shared = std::make_shared<const F>(std::move(handler));
+  auto s = std::make_unique<Subscription>();
+  s->fn = [this, channel, shared, scope, order](const lcm::ReceiveBuffer* rb) {
+    try {
+      receive<Msg>(channel, rb, shared, scope, order);
+    } catch (const std::exception& e) {
+      fail(channel, e.what());
+    } catch (...) {
+      fail(channel, "an unknown exception");
+    }
+  };
+  s->sub = lcm_.subscribe(channel, &Subscription::on, s.get());
+  s->sub->setQueueCapacity(protocol_->queue_capacity);
+  if (order == Order::Serial) tracked_.push_back(channel);
+  subs_.push_back(std::move(s));
+}
+
+template <class Msg, class F>
+void Edge::receive(const std::string& channel, const lcm::ReceiveBuffer* rb, const std::shared_ptr<const F>& handler,
+                   Scope scope, Order order) {
+  const auto* data = static_cast<const std::uint8_t*>(rb->data);
+  const std::size_t size = rb->data_size;
+  std::int64_t hash = 0;
+  if (size < 8 || (__int64_t_decode_array(data, 0, 8, &hash, 1), hash != Msg::getHash()))
+    return drop(channel, std::string("wrong fingerprint: not an afford.") + wire::Bounds<Msg>::kName);
+  std::string run_id;
+  if (!peekRunId(data, size, protocol_->limits.name_bytes, run_id))
+    return drop(channel, "field run_id: no string of at most " + std::to_string(protocol_->limits.name_bytes) +
+                             " bytes where it begins");
+  if (!inScope(channel, run_id, scope)) return;
+  auto msg = std::make_shared<Msg>();
+  std::string why;
+  if (!decodeChecked(data, size, context(), *msg, why)) return drop(channel, why);
+
+  if (order == Order::None) {
+    const Turn t = detail::invokeHandler(*handler, *msg, Envelope{channel, data, size, rb->recv_utime});
+    if (t.kind() == Turn::Kind::Refuse) drop(channel, t.why());
+    return;
+  }
+  if constexpr (wire::Bounds<Msg>::kSerial) {
+    switch (serials_.offer(channel, msg->serial)) {
+      case SerialTracker::Verdict::Repeat:
+        log_->trace("{}: serial {} already had (a repeat)", channel, msg->serial);
+        return;
+      case SerialTracker::Verdict::Gap:
+        if (order == Order::Follow) {  // an observer goes on from here
+          serials_.expect(channel, msg->serial);
+          serials_.offer(channel, msg->serial);
+          break;
+        }
+        log_->debug("{}: serial {} came before serial {}: asking for the missing ones", channel, msg->serial,
+                    serials_.expected(channel));
+        askMissing();
+        return;
+      case SerialTracker::Verdict::Accept:
+        break;
+    }
+    Pending p;
+    p.channel = channel;
+    p.serial = msg->serial;
+    if constexpr (std::is_invocable_r_v<Turn, const F&, const Msg&, const Envelope&>) {
+      // The bytes outlive this callback if the message has to wait its turn.
+      auto bytes = std::make_shared<const std::vector<std::uint8_t>>(data, data + size);
+      p.call = [handler, msg, bytes, channel, utime = rb->recv_utime]() {
+        return (*handler)(*msg, Envelope{channel, bytes->data(), bytes->size(), utime});
+      };
+    } else {
+      p.call = [handler, msg]() { return (*handler)(*msg); };
+    }
+    dispatch(std::move(p));
+    if (order == Order::Serial && serials_.missing() > 0) askMissing();
+  }
+}
+
+template <class Msg>
+void Edge::publish(const std::string& channel, Msg& msg) {
+  History& h = history_[channel];
+  msg.serial = static_cast<std::int64_t>(h.messages.size());
+  std::vector<std::uint8_t> bytes = sealed(msg);
+  lcm_.publish(channel, bytes.data(), static_cast<unsigned>(bytes.size()));
+  h.messages.push_back(std::move(bytes));
+  h.republished.emplace_back();
+  last_activity_ = std::chrono::steady_clock::now();
+}
+
+}  // namespace afford

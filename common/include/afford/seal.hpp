@@ -1,0 +1,34 @@
+// The integrity digest every message ends with (`int64_t digest`, the last
+// field of every type): FNV-1a 64 of all the bytes before it, fingerprint
+// included, written big-endian in the last 8 bytes. A receiver drops a message
+// whose digest does not match (docs/processes-and-channels.md, "The message
+// edge"): corrupted, truncated, mangled or naively forged copies never reach
+// a handler. It is a check against accidents and careless forgery, not an
+// authentication: anyone on the bus can compute it.
+#pragma once
+#include <cstddef>
+#include <cstdint>
+#include <vector>
+
+namespace afford {
+
+// FNV-1a 64 of `n` bytes.
+std::uint64_t fnv1a64(const void* data, std::size_t n);
+
+// True if the last 8 bytes of the buffer are the digest of the bytes before them.
+bool sealIntact(const void* data, std::size_t n);
+
+// Write the digest of buf[0, n-8) into buf[n-8, n); returns it.
+std::int64_t sealBuffer(std::uint8_t* buf, std::size_t n);
+
+// Encode `msg` with its digest (also set in msg.digest).
+template <class Msg>
+std::vector<std::uint8_t> sealed(Msg& msg) {
+  msg.digest = 0;
+  std::vector<std::uint8_t> bytes(static_cast<std::size_t>(msg.getEncodedSize()));
+  msg.encode(bytes.data(), 0, static_cast<int>(bytes.size()));
+  msg.digest = sealBuffer(bytes.data(), bytes.size());
+  return bytes;
+}
+
+}  // namespace afford
