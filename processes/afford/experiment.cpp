@@ -375,7 +375,7 @@ void summariseExtrinsic(json& summary, const Plan& plan, const std::vector<Plann
   for (const auto& sys : plan.systems) {
     std::ofstream csv(fs::path(o.out_dir) / ("extrinsic_" + sys + ".csv"));
     csv << "system,intrinsic_run_id,seed,scenario,condition,rep,success,completion,attempts,utility,sub_goals,"
-           "active_sub_goals,actions_checked\n";
+           "active_sub_goals,actions_checked,wall_seconds\n";
     for (const auto& t : tests) {
       if (t.system != sys) continue;
       const RunOutcome& r = outcomes[t.index];
@@ -384,7 +384,7 @@ void summariseExtrinsic(json& summary, const Plan& plan, const std::vector<Plann
       csv << sys << "," << plan.runs[t.intrinsic].spec.run_id << "," << t.spec.seed << "," << t.scenario << ",\""
           << plan.conditions[t.condition].label << "\"," << t.rep << "," << (r.ok && r.extrinsic.success) << ","
           << r.extrinsic.completion << "," << r.extrinsic.attempts << "," << r.extrinsic.utility << ","
-          << r.extrinsic.sub_goals.size() << "," << active << "," << checks << "\n";
+          << r.extrinsic.sub_goals.size() << "," << active << "," << checks << "," << r.wall_seconds << "\n";
     }
     json ex = {{"scenarios", plan.scenarios}, {"tests_per_scenario", plan.tests}};
     if (plan.conditions.size() > 1) {  // the design's summary compares the conditions
