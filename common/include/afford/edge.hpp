@@ -39,8 +39,7 @@
 #include <utility>
 #include <vector>
 
-#include "afford/bounds.hpp"
-#include "afford/checks.hpp"
+#include "afford/decode.hpp"
 #include "afford/config.hpp"
 #include "afford/process_status_t.hpp"
 #include "afford/resend_t.hpp"
@@ -89,27 +88,6 @@ enum class Order {
 
 // The publisher of each run channel (one per channel and run); "" for others.
 std::string publisherOf(const std::string& channel, bool extrinsic);
-
-// Decode one buffer as Msg through steps 1, 3, 4 and 5 above; false with the
-// reason naming the field.
-template <class Msg>
-bool decodeChecked(const void* data, std::size_t size, const BoundsContext& ctx, Msg& out, std::string& why) {
-  if (!wire::checkWire<Msg>(data, size, boundsFor<Msg>(ctx), why)) return false;
-  const int n = out.decode(data, 0, static_cast<int>(size));
-  if (n < 0 || static_cast<std::size_t>(n) != size) {
-    why = std::string("afford.") + wire::Bounds<Msg>::kName + " does not decode";
-    return false;
-  }
-  if (std::string reason = checkMessage(out, ctx); !reason.empty()) {
-    why = std::move(reason);
-    return false;
-  }
-  if (!sealIntact(data, size)) {
-    why = "field digest does not match the message (corrupted or forged)";
-    return false;
-  }
-  return true;
-}
 
 // The run id a message starts with, read without decoding it; false if the
 // buffer cannot hold one of at most `max_bytes`.
