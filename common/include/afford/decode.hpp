@@ -13,8 +13,8 @@
 
 namespace afford {
 
-// Decode one buffer as Msg through the edge's steps 1, 3, 4 and 5 (fingerprint, bounds, fields, digest); false with the
-// reason naming the field.
+// Decode one buffer as Msg: fingerprint, bounds, fields, digest (the edge's
+// steps 1, 3, 4 and 5); false with the reason, naming the field.
 template <class Msg>
 bool decodeChecked(const void* data, std::size_t size, const BoundsContext& ctx, Msg& out, std::string& why) {
   if (!wire::checkWire<Msg>(data, size, boundsFor<Msg>(ctx), why)) return false;
