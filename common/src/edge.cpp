@@ -20,6 +20,12 @@ std::string publisherOf(const std::string& channel, bool extrinsic) {
   return "";
 }
 
+bool isProcessName(const std::string& name) {
+  for (const char* p : {"environment", "eye", "predictors", "motivation", "planner", "logger"})
+    if (name == p) return true;
+  return false;
+}
+
 bool peekRunId(const void* data, std::size_t size, int max_bytes, std::string& out) {
   const auto* p = static_cast<const std::uint8_t*>(data);
   if (size < 12) return false;
@@ -50,6 +56,7 @@ void Edge::join(const std::string& run_id, const RunConfig* config) {
                            std::chrono::milliseconds(protocol_->heartbeat_ms));
   deferred_.clear();
   failed_ = false;
+  chains_.clear();
   history_.clear();
   history_run_ = run_id;
   last_activity_ = Clock::now();
@@ -62,6 +69,7 @@ void Edge::leave() {
   protocol_ = &own_protocol_;
   deferred_.clear();
   serials_.reset();
+  chains_.clear();
   failed_ = false;
 }
 
@@ -106,6 +114,30 @@ Turn::Kind Edge::attempt(Pending& p) {
   return t.kind();
 }
 
+void Edge::expectSerial(const std::string& channel, std::int64_t next, std::int64_t last_digest) {
+  serials_.expect(channel, next);
+  Chain& c = chains_[channel];
+  c.first = next - 1;
+  c.digests.assign(1, last_digest);
+}
+
+bool Edge::follows(const std::string& channel, std::int64_t serial, std::int64_t prev_digest, Order order) {
+  if (serial == 0) return prev_digest == chainSeed(run_, channel);
+  const Chain& c = chains_[channel];
+  if (!c.knows(serial - 1)) return order == Order::Follow;  // an observer that came in later takes what it gets
+  return prev_digest == c.digests[static_cast<std::size_t>(serial - 1 - c.first)];
+}
+
+void Edge::chained(const std::string& channel, std::int64_t serial, std::int64_t digest) {
+  Chain& c = chains_[channel];
+  if (!c.knows(serial - 1)) {  // the first one known (serial 0, or an observer's first)
+    c.first = serial;
+    c.digests.clear();
+  }
+  c.digests.resize(static_cast<std::size_t>(serial - c.first));
+  c.digests.push_back(digest);
+}
+
 void Edge::refused(const Pending& p, const std::string& why) {
   // Not the channel's next message after all (a forged or mangled one that
   // passed every check): drop it and whatever waits behind it on its channel,
@@ -115,6 +147,8 @@ void Edge::refused(const Pending& p, const std::string& why) {
                                  [&](const Pending& d) { return d.channel == p.channel && d.serial > p.serial; }),
                   deferred_.end());
   serials_.rewind(p.channel, p.serial);
+  Chain& c = chains_[p.channel];
+  if (c.knows(p.serial)) c.digests.resize(static_cast<std::size_t>(p.serial - c.first));
 }
 
 void Edge::dispatch(Pending p) {
@@ -255,6 +289,22 @@ void Edge::onResend(const resend_t& r) {
   }
   log_->debug("{}: serials {}..{} asked by {}: {} republished, {} just were", r.channel, first, last, r.requester, sent,
               held);
+}
+
+bool Edge::newerStatus(const process_status_t& st) {
+  const std::string key = st.process + "#" + std::to_string(st.pid);
+  auto it = beats_.find(key);
+  if (it != beats_.end()) {
+    if (st.beat <= it->second.beat) return false;
+    it->second = {st.beat, ++beat_order_};
+    return true;
+  }
+  constexpr std::size_t kMostProcesses = 256;  // forged pids cannot grow it further
+  if (beats_.size() >= kMostProcesses)
+    beats_.erase(std::min_element(beats_.begin(), beats_.end(),
+                                  [](const auto& a, const auto& b) { return a.second.order < b.second.order; }));
+  beats_[key] = {st.beat, ++beat_order_};
+  return true;
 }
 
 std::vector<std::pair<std::string, std::int64_t>> Edge::counts() const {

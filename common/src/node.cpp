@@ -2,6 +2,7 @@
 
 #include <CLI/CLI.hpp>
 #include <opencv2/core.hpp>
+#include <malloc.h>
 #include <unistd.h>
 
 #include <algorithm>
@@ -33,6 +34,8 @@ NodeBase::NodeBase(lcm::LCM& lcm, std::string process, std::shared_ptr<spdlog::l
 Turn NodeBase::onRunConfig(const run_config_t& msg, const Envelope& envelope) {
   if (state_ != process_status_t::WAITING) {
     if (msg.run_id == run_id_) {
+      if (msg.digest != run_msg_.digest)
+        return Turn::refuse("a configuration of run '" + msg.run_id + "' other than the one this process took");
       publishStatus();  // a repeated config: confirm we have it
       onControl(envelope);
       return Turn::take();
@@ -67,7 +70,9 @@ Turn NodeBase::onRunConfig(const run_config_t& msg, const Envelope& envelope) {
     st.step = -1;
     st.process = process_;
     st.pid = static_cast<int32_t>(getpid());
+    st.beat = beat_++;
     st.state = process_status_t::FAILED;
+    st.config_digest = msg.digest;  // the configuration refused
     st.detail = detail_.substr(0, static_cast<std::size_t>(protocol().limits.text_bytes));
     st.n_channels = 0;  // nothing published in that run
     edge_.send(channel::kStatus, st);
@@ -148,7 +153,9 @@ void NodeBase::publishStatus() {
   st.step = last_step_;
   st.process = process_;
   st.pid = static_cast<int32_t>(getpid());
+  st.beat = beat_++;
   st.state = state_;
+  st.config_digest = run_id_.empty() ? 0 : run_msg_.digest;
   st.detail = detail_.substr(0, static_cast<std::size_t>(protocol().limits.text_bytes));
   st.counts_run = edge_.historyRun();
   for (const auto& [channel, n] : edge_.counts()) {
@@ -211,6 +218,16 @@ void installStopHandlers() {
   sigaction(SIGTERM, &sa, nullptr);
 }
 
+void boundHeapGrowth() {
+  // LCM assembles a fragmented message in one buffer of its size and frees it
+  // once the edge has dropped or taken it. glibc raises its mmap threshold after
+  // each such free, so later large buffers come from the heap and stay
+  // resident; a fixed threshold sends every block of 128 KB or more back to the
+  // kernel as soon as it is freed (docs/processes-and-channels.md).
+  mallopt(M_MMAP_THRESHOLD, 128 * 1024);
+  mallopt(M_TRIM_THRESHOLD, 256 * 1024);
+}
+
 std::string defaultConfigDir() { return std::string(AFFORD_SOURCE_DIR) + "/config"; }
 
 void CLIHook::option(const std::string& name, std::string& target, const std::string& help) {
@@ -247,6 +264,11 @@ int processMain(int argc, char** argv, const ProcessSpec& spec, const std::funct
     return 2;
   }
   installStopHandlers();
+  boundHeapGrowth();
+  // Log lines are written once per pass of the loop, not one write each: a
+  // flood of bad messages is a flood of lines.
+  static char log_buffer[1 << 16];
+  std::setvbuf(stderr, log_buffer, _IOFBF, sizeof log_buffer);
   cv::setNumThreads(0);  // images are 150 x 150: a thread pool only adds wake-ups
   lcm::LCM lcm(url);
   if (!lcm.good()) {
@@ -262,12 +284,17 @@ int processMain(int argc, char** argv, const ProcessSpec& spec, const std::funct
   }
   log->info("listening on {}", url);
   while (!stopRequested()) {
-    lcm.handleTimeout(node->msUntilDue());
+    // Everything pending, then the node's own business: a burst is taken off
+    // LCM's queue at once (what waits there is held in memory).
+    if (lcm.handleTimeout(node->msUntilDue()) > 0)
+      for (int more = 0; more < 1000 && lcm.handleTimeout(0) > 0; ++more) {
+      }
     try {
       node->tick();
     } catch (const std::exception& e) {
       log->error("{}", e.what());
     }
+    std::fflush(stderr);  // the log lines of the burst, in one write
   }
   node->leaveRun();
   node.reset();

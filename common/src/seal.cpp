@@ -20,6 +20,11 @@ bool sealIntact(const void* data, std::size_t n) {
   return stored == fnv1a64(p, n - 8);
 }
 
+std::int64_t chainSeed(const std::string& run_id, const std::string& channel) {
+  const std::string key = run_id + "\n" + channel;
+  return static_cast<std::int64_t>(fnv1a64(key.data(), key.size()));
+}
+
 std::int64_t sealBuffer(std::uint8_t* buf, std::size_t n) {
   const std::uint64_t h = fnv1a64(buf, n - 8);
   for (int i = 0; i < 8; ++i) buf[n - 1 - i] = static_cast<std::uint8_t>(h >> (8 * i));

@@ -1,6 +1,7 @@
 #include "afford/driver.hpp"
 
 #include <algorithm>
+#include <filesystem>
 
 #include "afford/affordance_table_t.hpp"
 #include "afford/channels.hpp"
@@ -70,11 +71,17 @@ void RunDriver::sendControl(const std::string& run_id, int8_t command) {
 }
 
 Turn RunDriver::onStatus(const process_status_t& m) {
+  if (!isProcessName(m.process)) return Turn::take();  // not one of ours (a tool, or a forgery)
   Seen& s = seen_[m.process];
-  s = {m.run_id, m.step, m.state, m.pid, m.detail, Clock::now()};
+  s = {m.run_id, m.step, m.state, m.pid, m.config_digest, m.detail, Clock::now()};
   edge_.claim(m);
   if (phase_ == Phase::Idle || !spec_) return Turn::take();
-  if (m.process == "logger" && m.run_id == spec_->run_id && m.state == process_status_t::DONE && outcome_) {
+  // The logger closed the log: it says DONE with the log's folder, then, free
+  // again, the run it left (its DONE may have been lost on the way).
+  const bool closed = m.state == process_status_t::DONE && m.run_id == spec_->run_id;
+  const bool left = phase_ == Phase::Stopping && m.state == process_status_t::WAITING && m.run_id.empty() &&
+                    m.counts_run == spec_->run_id && std::filesystem::is_directory(m.detail);
+  if (m.process == "logger" && (closed || left) && outcome_) {
     outcome_->log_dir = m.detail;
     logger_done_ = true;
   }
@@ -157,6 +164,7 @@ RunOutcome RunDriver::run(const RunSpec& spec, const std::function<void()>& pump
   config_msg_.experiment = spec.experiment;
   config_msg_.system = spec.system;
   config_msg_.config_yaml = spec.config_yaml;
+  sealed(config_msg_);  // its digest: what the processes' STATUS name
   struct Reset {
     RunDriver* d;
     ~Reset() {
@@ -205,6 +213,7 @@ RunOutcome RunDriver::run(const RunSpec& spec, const std::function<void()>& pump
     for (const auto& p : spec.processes) {
       auto it = seen_.find(p);
       if (it == seen_.end() || it->second.run_id != spec.run_id || it->second.state != process_status_t::FAILED) continue;
+      if (it->second.config_digest != config_msg_.digest) continue;  // about a configuration that is not ours
       // Once the result is in, a process that fails afterwards (restarted after its
       // last step, it refuses to save its weights again) changes nothing; the logger does.
       if (have_result_ && p != "logger") continue;
@@ -238,9 +247,21 @@ RunOutcome RunDriver::run(const RunSpec& spec, const std::function<void()>& pump
   auto again = milliseconds(protocol.retry_ms);
   deadline = Clock::now() + milliseconds(protocol.ready_timeout_ms);
   auto ready = [&](const Seen& s) { return s.run_id == spec.run_id && s.state == process_status_t::READY; };
+  // A process that took a configuration of this run other than ours: another publisher on the bus.
+  auto impostor = [&]() -> std::string {
+    for (const auto& p : spec.processes) {
+      auto it = seen_.find(p);
+      if (it != seen_.end() && it->second.run_id == spec.run_id && it->second.state != process_status_t::FAILED &&
+          it->second.config_digest != config_msg_.digest)
+        return "process '" + p + "' took a configuration of this run that is not the runner's: another publisher "
+               "on the bus sends RUN_CONFIG with this run id";
+    }
+    return "";
+  };
   while (!missing(ready).empty()) {
     if (auto h = health(); !h.empty()) return fail(h);
     if (auto f = failedProcess(); !f.empty()) return fail(f);
+    if (auto f = impostor(); !f.empty()) return fail(f);
     if (stopRequested()) return interrupted();
     if (Clock::now() > deadline) return fail("not configured within the protocol's ready_timeout_ms: " + missing(ready));
     if (Clock::now() - said > again) {  // a datagram lost on the way there or back: say it again, backing off

@@ -93,6 +93,7 @@ class RunDriver {
     std::int64_t step = -1;
     int state = -1;
     int pid = 0;
+    std::int64_t config_digest = 0;  // of the configuration its state is about
     std::string detail;
     Clock::time_point at;
   };

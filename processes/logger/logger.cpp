@@ -52,7 +52,11 @@ RecordedSoFar readRecorded(const std::string& dir) {
       RunHeader h;
       if (isSerialChannel(ev->channel) && peekRunHeader(ev->data, static_cast<std::uint32_t>(ev->datalen), h)) {
         std::int64_t& next = r.next_serial[ev->channel];
-        next = std::max(next, h.serial + 1);
+        if (h.serial + 1 > next && ev->datalen >= 8) {
+          next = h.serial + 1;
+          r.last_digest[ev->channel] = static_cast<std::int64_t>(
+              bigEndian(static_cast<const unsigned char*>(ev->data) + ev->datalen - 8, 8));
+        }
         if (ev->channel == channel::kResult || ev->channel == channel::kExtrinsicResult) r.ended = true;
       } else {
         r.untracked[ev->channel].insert(std::string(static_cast<const char*>(ev->data), ev->datalen));

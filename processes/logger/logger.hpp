@@ -31,6 +31,7 @@ bool isSerialChannel(const std::string& channel);
 // What earlier segments of a run's log hold (for a restarted logger).
 struct RecordedSoFar {
   std::map<std::string, std::int64_t> next_serial;          // serial channels
+  std::map<std::string, std::int64_t> last_digest;          // ... the digest of the last one recorded
   std::map<std::string, std::set<std::string>> untracked;   // the others: contents
   std::int64_t events = 0;
   bool ended = false;  // the run's end (RESULT or EXTRINSIC_RESULT) is in them

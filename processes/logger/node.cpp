@@ -60,7 +60,7 @@ void LoggerNode::onConfigured(const RunConfig& config) {
   const RecordedSoFar before = readRecorded(dir);
   log_file_ = std::make_unique<RunLog>(dir, manifest);  // refuses a folder that holds a complete log
   log_file_->sawProcess(process(), static_cast<int>(getpid()));
-  for (const auto& [channel, next] : before.next_serial) edge().expectSerial(channel, next);
+  for (const auto& [channel, next] : before.next_serial) edge().expectSerial(channel, next, before.last_digest.at(channel));
   for (const auto& [channel, contents] : before.untracked) written_[channel] = contents;
   ended_ = before.ended;
   if (before.events > 0)
@@ -78,10 +78,14 @@ void LoggerNode::onControl(const Envelope& e) {
 }
 
 void LoggerNode::onPeerStatus(const process_status_t& st) {
-  if (!log_file_) return;
+  if (!log_file_ || !isProcessName(st.process)) return;
   if (st.run_id == runId()) {
     log_file_->sawProcess(st.process, st.pid);
-    left_.emplace(st.process, false);
+    // Its final counts matter if it publishes a channel of the run.
+    bool publisher = false;
+    for (const char* ch : channel::kWithSerial)
+      publisher = publisher || publisherOf(ch, config().phase == Phase::Extrinsic) == st.process;
+    if (publisher) left_.emplace(st.process, false);
   } else if (st.counts_run == runId() && left_.count(st.process)) {
     left_[st.process] = true;  // it left the run: its counts are final
   }

@@ -25,8 +25,10 @@
 namespace afford {
 namespace {
 
-// Publishes something malformed into a running run: (lcm, run id, current step).
-using Injector = std::function<void(lcm::LCM&, const std::string&, std::int64_t)>;
+// Publishes something malformed into a running run: (lcm, run id, current
+// step, the bytes of that step's real FOCUS).
+using Bytes = std::vector<std::uint8_t>;
+using Injector = std::function<void(lcm::LCM&, const std::string&, std::int64_t, const Bytes&)>;
 
 // A process "killed" (its node destroyed, with whatever was in flight to it)
 // and started anew, once it has handled step `at`.
@@ -79,7 +81,7 @@ struct InProcessRun {
           f.decode(b->data, 0, static_cast<int>(b->data_size));
           if (f.step == at) {
             done = true;
-            inject(*lcm, f.run_id, f.step);
+            inject(*lcm, f.run_id, f.step, run->events.back().data);
           }
         }
       }
@@ -383,25 +385,25 @@ const double kInf = std::numeric_limits<double>::infinity();
 std::vector<BadInput> badInputs() {
   return {
       {"WrongFingerprint", "FOCUS", "wrong fingerprint",
-       [](lcm::LCM& l, const std::string& run, std::int64_t s) {
+       [](lcm::LCM& l, const std::string& run, std::int64_t s, const Bytes&) {
          const auto b = encode(validDecision(run, s));  // a decision sent as a focus
          l.publish("FOCUS", b.data(), static_cast<unsigned>(b.size()));
        }},
       {"Truncated", "FOCUS", "field image",
-       [](lcm::LCM& l, const std::string& run, std::int64_t s) {
+       [](lcm::LCM& l, const std::string& run, std::int64_t s, const Bytes&) {
          auto b = encode(validFocus(run, s + 1));
          b.resize(b.size() / 2);
          l.publish("FOCUS", b.data(), static_cast<unsigned>(b.size()));
        }},
       {"WrongArraySize", "FOCUS", "field size has size 100, expected 1323",
-       [](lcm::LCM& l, const std::string& run, std::int64_t s) {
+       [](lcm::LCM& l, const std::string& run, std::int64_t s, const Bytes&) {
          focus_t f = validFocus(run, s + 1);
          f.size = 100;
          f.image.resize(100);
          l.publish("FOCUS", &f);
        }},
       {"NaN", "PREDICTION", "field affordance[2] is not finite",
-       [](lcm::LCM& l, const std::string& run, std::int64_t s) {
+       [](lcm::LCM& l, const std::string& run, std::int64_t s, const Bytes&) {
          prediction_t p;
          p.run_id = run;
          p.step = s;
@@ -414,20 +416,20 @@ std::vector<BadInput> badInputs() {
          l.publish("PREDICTION", &p);
        }},
       {"Infinite", "DECISION", "field x is not finite",
-       [](lcm::LCM& l, const std::string& run, std::int64_t s) {
+       [](lcm::LCM& l, const std::string& run, std::int64_t s, const Bytes&) {
          decision_t d = validDecision(run, s);
          d.x = kInf;
          l.publish("DECISION", &d);
        }},
       {"ActionOutOfRange", "DECISION", "action id 9 is out of range",
-       [](lcm::LCM& l, const std::string& run, std::int64_t s) {
+       [](lcm::LCM& l, const std::string& run, std::int64_t s, const Bytes&) {
          decision_t d = validDecision(run, s);
          d.acted = true;
          d.action = 9;
          l.publish("DECISION", &d);
        }},
       {"ObjectPositionOutOfRange", "EFFECT", "field after_x = 1.5 is out of range",
-       [](lcm::LCM& l, const std::string& run, std::int64_t s) {
+       [](lcm::LCM& l, const std::string& run, std::int64_t s, const Bytes&) {
          effect_t e;
          e.run_id = run;
          e.step = s;
@@ -442,7 +444,7 @@ std::vector<BadInput> badInputs() {
          l.publish("EFFECT", &e);
        }},
       {"ObjectCountOutOfRange", "PROBE", "field n_objects has size 0, expected 9",
-       [](lcm::LCM& l, const std::string& run, std::int64_t) {
+       [](lcm::LCM& l, const std::string& run, std::int64_t, const Bytes&) {
          object_probe_t p;
          p.run_id = run;
          p.step = 0;
@@ -452,28 +454,53 @@ std::vector<BadInput> badInputs() {
          l.publish("PROBE", &p);
        }},
       {"UnknownRunId", "FOCUS", "unknown run id 'intruder'",
-       [](lcm::LCM& l, const std::string&, std::int64_t s) {
+       [](lcm::LCM& l, const std::string&, std::int64_t s, const Bytes&) {
          const focus_t f = validFocus("intruder", s + 1);
          l.publish("FOCUS", &f);
        }},
       // A message whose serial was had already is a repeat (a resend's answer
       // reaches every subscriber): dropped without a word.
       {"RepeatedSerial", "FOCUS", "",
-       [](lcm::LCM& l, const std::string& run, std::int64_t s) {
+       [](lcm::LCM& l, const std::string& run, std::int64_t s, const Bytes&) {
          publishSealed(l, "FOCUS", validFocus(run, s - 10));  // serial 0
        }},
       // A well-formed, valid message whose digest does not match (a forgery or a corrupted copy).
       {"DigestMismatch", "FOCUS", "field digest does not match",
-       [](lcm::LCM& l, const std::string& run, std::int64_t s) {
+       [](lcm::LCM& l, const std::string& run, std::int64_t s, const Bytes&) {
          focus_t f = validFocus(run, s + 1);
          f.serial = s + 1;
          auto b = sealed(f);
          b[b.size() - 20] ^= 0x01;  // one bit of the image flipped after sealing
          l.publish("FOCUS", b.data(), static_cast<unsigned>(b.size()));
        }},
+      // The step's real focus, re-sealed with the next serial: it would take the
+      // next focus's place, but it does not follow the real one in the chain.
+      {"CopyWithTheNextSerial", "FOCUS", "field prev_digest does not follow",
+       [](lcm::LCM& l, const std::string&, std::int64_t, const Bytes& real) {
+         focus_t f;
+         f.decode(real.data(), 0, static_cast<int>(real.size()));
+         ++f.serial;
+         publishSealed(l, "FOCUS", f);
+       }},
+      {"CopyWithTheNextSerialAndStep", "FOCUS", "field prev_digest does not follow",
+       [](lcm::LCM& l, const std::string&, std::int64_t, const Bytes& real) {
+         focus_t f;
+         f.decode(real.data(), 0, static_cast<int>(real.size()));
+         ++f.serial;
+         ++f.step;
+         publishSealed(l, "FOCUS", f);
+       }},
+      // The real focus re-sealed with another step: its serial was had, so it is a repeat.
+      {"CopyWithAnotherStep", "FOCUS", "",
+       [](lcm::LCM& l, const std::string&, std::int64_t, const Bytes& real) {
+         focus_t f;
+         f.decode(real.data(), 0, static_cast<int>(real.size()));
+         f.step += 7;
+         publishSealed(l, "FOCUS", f);
+       }},
       // A size field far beyond anything the run sends: refused before any decode.
       {"HugeArraySize", "PREDICTION", "field n_actions",
-       [](lcm::LCM& l, const std::string& run, std::int64_t s) {
+       [](lcm::LCM& l, const std::string& run, std::int64_t s, const Bytes&) {
          prediction_t p;
          p.run_id = run;
          p.step = s;
@@ -484,12 +511,12 @@ std::vector<BadInput> badInputs() {
          p.learning_progress = {0, 0, 0, 0};
          p.n_trained = 0;
          auto b = sealed(p);
-         const std::size_t at = 8 + 4 + run.size() + 1 + 8 + 8 + 8 + 8;  // fingerprint, run_id, step, serial, x, y
+         const std::size_t at = 8 + 4 + run.size() + 1 + 8 + 8 + 8 + 8 + 8;  // fingerprint, run_id, step, serial, prev_digest, x, y
          b[at] = 0x10, b[at + 1] = 0x00, b[at + 2] = 0x00, b[at + 3] = 0x01;  // n_actions = 0x10000001
          l.publish("PREDICTION", b.data(), static_cast<unsigned>(b.size()));
        }},
       {"HugeStatusCount", "STATUS", "field n_channels",
-       [](lcm::LCM& l, const std::string& run, std::int64_t s) {
+       [](lcm::LCM& l, const std::string& run, std::int64_t s, const Bytes&) {
          process_status_t st;
          st.run_id = run;
          st.step = s;
@@ -499,13 +526,13 @@ std::vector<BadInput> badInputs() {
          st.counts_run = run;
          st.n_channels = 0;
          auto b = sealed(st);
-         // n_channels sits after run_id, step, process, pid, state, detail and counts_run.
-         const std::size_t at = 8 + (4 + run.size() + 1) + 8 + (4 + 4) + 4 + 1 + (4 + 1) + (4 + run.size() + 1);
+         // n_channels sits after run_id, step, process, pid, beat, state, config_digest, detail and counts_run.
+         const std::size_t at = 8 + (4 + run.size() + 1) + 8 + (4 + 4) + 4 + 8 + 1 + 8 + (4 + 1) + (4 + run.size() + 1);
          b[at] = 0x01, b[at + 1] = b[at + 2] = b[at + 3] = 0x00;  // n_channels = 0x01000000
          l.publish("STATUS", b.data(), static_cast<unsigned>(b.size()));
        }},
       {"WrongSceneSize", "SCENE", "field width has size 100, expected 150",
-       [](lcm::LCM& l, const std::string& run, std::int64_t s) {
+       [](lcm::LCM& l, const std::string& run, std::int64_t s, const Bytes&) {
          scene_t sc;
          sc.run_id = run;
          sc.step = s + 1;

@@ -524,7 +524,7 @@ TEST(Wire, APredictionWithAHugeActionCountIsRefused) {
   m.trained.clear();
   m.n_trained = 0;
   Bytes b = encode(m);
-  const std::size_t at = 8 + (4 + kRunId.size() + 1) + 4 * 8;  // fingerprint, run_id, step, serial, x, y
+  const std::size_t at = 8 + (4 + kRunId.size() + 1) + 5 * 8;  // fingerprint, run_id, step, serial, prev_digest, x, y
   ASSERT_EQ(get(b, at, 4), kNumActions);
   put(b, at, 4, 0x10000001);  // sizeof(double) * count wraps in LCM's decode
   std::string why;

@@ -7,8 +7,9 @@
 // It fails with "file:line: what" on anything it does not understand and on
 // the project's message rules (STYLE.md habit 1): a message type (one that is
 // no other type's field) begins with `string run_id; int64_t step;` and ends
-// with `int64_t digest;`; a field `serial` is the third, an int64_t; a
-// dimension names an earlier integer field or is a constant.
+// with `int64_t digest;`; a field `serial` is the third, an int64_t, and
+// `int64_t prev_digest;` follows it; a dimension names an earlier integer
+// field or is a constant.
 // A host tool of the build: the standard library only.
 #include <algorithm>
 #include <cctype>
@@ -307,10 +308,10 @@ bool is(const Field& f, const char* type, const char* name) {
   return f.type == type && f.name == name && f.dims.empty();
 }
 
-// Carries run_id, step, serial first.
+// Carries run_id, step, serial, prev_digest first.
 bool carriesSerial(const Struct& s) {
-  return s.fields.size() >= 3 && is(s.fields[0], "string", "run_id") && is(s.fields[1], "int64_t", "step") &&
-         is(s.fields[2], "int64_t", "serial");
+  return s.fields.size() >= 4 && is(s.fields[0], "string", "run_id") && is(s.fields[1], "int64_t", "step") &&
+         is(s.fields[2], "int64_t", "serial") && is(s.fields[3], "int64_t", "prev_digest");
 }
 
 void resolve(std::vector<Struct>& all) {
@@ -367,6 +368,8 @@ void resolve(std::vector<Struct>& all) {
     if (const Field* serial = findField(s, "serial")) {
       if (s.fields.size() < 3 || &s.fields[2] != serial || !is(*serial, "int64_t", "serial"))
         fail(s.file, serial->line, "field 'serial' must be the third field, `int64_t serial;`");
+      if (s.fields.size() < 4 || !is(s.fields[3], "int64_t", "prev_digest"))
+        fail(s.file, serial->line, "field 'serial' must be followed by `int64_t prev_digest;`");
     }
     if (s.part) continue;
     if (s.fields.size() < 2 || !is(s.fields[0], "string", "run_id") || !is(s.fields[1], "int64_t", "step"))
@@ -534,7 +537,7 @@ void writeHeader(std::ostream& o, const std::vector<const Struct*>& order, const
     o << ">;\n";
   };
   list("MessageTypes", "Every message type (no other type's field), by name.", [](const Struct& s) { return !s.part; });
-  list("SerialTypes", "The message types that carry a serial (run_id, step, serial first).",
+  list("SerialTypes", "The message types that carry a serial (run_id, step, serial, prev_digest first).",
        [](const Struct& s) { return !s.part && carriesSerial(s); });
   o << "\n}  // namespace afford::wire\n";
 }

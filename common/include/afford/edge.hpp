@@ -13,7 +13,9 @@
 //      without a check does not compile;
 //   5. digest: the last 8 bytes must be the digest of the rest (afford/seal.hpp);
 //   6. order: run messages are taken in serial order, once; a gap is asked
-//      for at once (RESEND); a repeat is dropped quietly;
+//      for at once (RESEND); a repeat is dropped quietly; the message at the
+//      expected serial must name, in prev_digest, the digest of the one taken
+//      before it (the chain), else it is a copy given another serial;
 //   7. the handler says Take, Later (its turn has not come: offered again
 //      after the next message taken, with its channel's later messages behind
 //      it) or Refuse (it cannot be the channel's next message: dropped, and
@@ -88,6 +90,8 @@ enum class Order {
 
 // The publisher of each run channel (one per channel and run); "" for others.
 std::string publisherOf(const std::string& channel, bool extrinsic);
+// One of the project's processes (environment, eye, predictors, motivation, planner, logger)?
+bool isProcessName(const std::string& name);
 
 // The run id a message starts with, read without decoding it; false if the
 // buffer cannot hold one of at most `max_bytes`.
@@ -136,8 +140,9 @@ class Edge {
   void askMissing();
   std::int64_t missing() const { return serials_.missing(); }
   std::map<std::string, std::pair<std::int64_t, std::int64_t>> missingRanges() const { return serials_.missingRanges(); }
-  // A restarted recorder goes on from where its earlier record ends.
-  void expectSerial(const std::string& channel, std::int64_t next) { serials_.expect(channel, next); }
+  // A restarted recorder goes on from where its earlier record ends: `next`
+  // is the serial to expect, `last_digest` the digest of the one before it.
+  void expectSerial(const std::string& channel, std::int64_t next, std::int64_t last_digest);
   std::size_t deferred() const { return deferred_.size(); }
   // Last time a message of the run was taken or published.
   std::chrono::steady_clock::time_point lastActivity() const { return last_activity_; }
@@ -172,7 +177,19 @@ class Edge {
     std::int64_t serial = -1;
     std::function<Turn()> call;
   };
+  // The digests of a channel's messages taken in order, from serial `first`.
+  struct Chain {
+    std::int64_t first = 0;
+    std::vector<std::int64_t> digests;
+    bool knows(std::int64_t serial) const {
+      return serial >= first && serial < first + static_cast<std::int64_t>(digests.size());
+    }
+  };
+  // Does a message at the channel's expected serial follow the one taken before it?
+  bool follows(const std::string& channel, std::int64_t serial, std::int64_t prev_digest, Order order);
+  void chained(const std::string& channel, std::int64_t serial, std::int64_t digest);
   struct History {
+    std::int64_t last_digest = 0;
     std::vector<std::vector<std::uint8_t>> messages;
     std::vector<std::chrono::steady_clock::time_point> republished;  // last republication of each
     std::chrono::steady_clock::time_point window{};                  // start of the budget window
@@ -192,6 +209,8 @@ class Edge {
   void fail(const std::string& channel, const std::string& why);
   bool blocked(const std::string& channel) const;
   void onResend(const resend_t& r);
+  // Is this STATUS newer (by beat) than the last one taken from its process and pid?
+  bool newerStatus(const process_status_t& st);
 
   lcm::LCM& lcm_;
   std::shared_ptr<spdlog::logger> log_;
@@ -209,9 +228,16 @@ class Edge {
   std::deque<Pending> deferred_;
   bool retrying_ = false;
   std::chrono::steady_clock::time_point last_activity_{};
+  std::map<std::string, Chain> chains_;     // what was taken, by channel
   std::map<std::string, History> history_;  // what this edge published, by channel
   std::string history_run_;
   bool answering_ = false;
+  struct Beat {
+    std::int64_t beat = -1;
+    std::uint64_t order = 0;  // when it was last updated (for evicting the oldest)
+  };
+  std::map<std::string, Beat> beats_;  // process#pid -> the last STATUS taken (bounded)
+  std::uint64_t beat_order_ = 0;
 };
 
 // ---- template definitions ------------------------------------------------------------
@@ -266,6 +292,9 @@ void Edge::receive(const std::string& channel, const lcm::ReceiveBuffer* rb, con
   auto msg = std::make_shared<Msg>();
   std::string why;
   if (!decodeChecked(data, size, context(), *msg, why)) return drop(channel, why);
+  if constexpr (std::is_same_v<Msg, process_status_t>) {
+    if (!newerStatus(*msg)) return log_->trace("{}: an old STATUS of {} (pid {}) again", channel, msg->process, msg->pid);
+  }
 
   if (order == Order::None) {
     const Turn t = detail::invokeHandler(*handler, *msg, Envelope{channel, data, size, rb->recv_utime});
@@ -273,6 +302,9 @@ void Edge::receive(const std::string& channel, const lcm::ReceiveBuffer* rb, con
     return;
   }
   if constexpr (wire::Bounds<Msg>::kSerial) {
+    if (msg->serial == serials_.expected(channel) && !follows(channel, msg->serial, msg->prev_digest, order))
+      return drop(channel, "field prev_digest does not follow the channel's message " + std::to_string(msg->serial - 1) +
+                               " (a copy given another serial, or another run's)");
     switch (serials_.offer(channel, msg->serial)) {
       case SerialTracker::Verdict::Repeat:
         log_->trace("{}: serial {} already had (a repeat)", channel, msg->serial);
@@ -290,6 +322,7 @@ void Edge::receive(const std::string& channel, const lcm::ReceiveBuffer* rb, con
       case SerialTracker::Verdict::Accept:
         break;
     }
+    chained(channel, msg->serial, msg->digest);
     Pending p;
     p.channel = channel;
     p.serial = msg->serial;
@@ -311,7 +344,9 @@ template <class Msg>
 void Edge::publish(const std::string& channel, Msg& msg) {
   History& h = history_[channel];
   msg.serial = static_cast<std::int64_t>(h.messages.size());
+  msg.prev_digest = h.messages.empty() ? chainSeed(history_run_, channel) : h.last_digest;
   std::vector<std::uint8_t> bytes = sealed(msg);
+  h.last_digest = msg.digest;
   lcm_.publish(channel, bytes.data(), static_cast<unsigned>(bytes.size()));
   h.messages.push_back(std::move(bytes));
   h.republished.emplace_back();

@@ -96,11 +96,12 @@ class NodeBase {
   std::string process_;
   Edge edge_;
   std::string run_id_;
-  run_config_t run_msg_;
+  run_config_t run_msg_;  // the run's RUN_CONFIG (its digest is in every STATUS)
   RunConfig config_;
   int8_t state_ = process_status_t::WAITING;
   std::string detail_;
   int64_t last_step_ = -1;
+  std::int64_t beat_ = 0;  // STATUS messages published so far
   Clock::time_point next_beat_{};
   // Idle announcement: when the last one went out, and how long until the next.
   Clock::time_point announced_at_{};
@@ -133,6 +134,10 @@ class CLIHook {
 
 // The folder of defaults.yaml (--config-dir's default): the source tree's config/.
 std::string defaultConfigDir();
+
+// Large transient buffers (LCM's reassembly of fragmented messages) go back to
+// the kernel when freed, so a flood of them does not stay resident.
+void boundHeapGrowth();
 
 // Set by SIGINT/SIGTERM.
 bool stopRequested();

@@ -8,6 +8,7 @@
 #pragma once
 #include <cstddef>
 #include <cstdint>
+#include <string>
 #include <vector>
 
 namespace afford {
@@ -20,6 +21,12 @@ bool sealIntact(const void* data, std::size_t n);
 
 // Write the digest of buf[0, n-8) into buf[n-8, n); returns it.
 std::int64_t sealBuffer(std::uint8_t* buf, std::size_t n);
+
+// The `prev_digest` of a channel's first message (serial 0) in a run: every
+// run message names the digest of its channel's previous one, so a copy given
+// another serial (re-sealed or not) does not follow the real one and is refused
+// before it can take that serial's place.
+std::int64_t chainSeed(const std::string& run_id, const std::string& channel);
 
 // Encode `msg` with its digest (also set in msg.digest).
 template <class Msg>

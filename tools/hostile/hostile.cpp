@@ -1,0 +1,314 @@
+// afford-hostile: a hostile publisher for tests (tests/hostile). It listens to
+// a live run on a bus, keeps copies of the run's own traffic, and once the run
+// is under way publishes --messages bad messages over the run's channels:
+//
+//   random      random bytes (sometimes up to 60 KB), with or without a right fingerprint
+//   large       random bytes of 64 to 256 KB (LCM sends them in fragments), with a right fingerprint
+//   truncated   a real message cut short
+//   flipped     a real message with 1 to 8 bits flipped
+//   size        a real message with a size field (array size or string length) set
+//               to 0, -1, max+1, the bytes left + 1 or huge; half of them re-sealed
+//   run_id      a real message of another run id (re-sealed)
+//   step        a real message with another step (re-sealed)
+//   serial      a real message with another serial: next, random, huge, negative (re-sealed)
+//   nan         a real message with NaN or an infinity in a field (re-sealed)
+//   duplicate   an earlier real message, as it was
+//   resend      a storm of RESEND requests for real channels, some for huge ranges
+//   status      a real STATUS whose counts lie (x1000, +1, huge), re-sealed; or a
+//               STATUS of a process that does not exist
+//   config      a RUN_CONFIG of another run, or with text that is not YAML
+//
+// "Re-sealed": the tool recomputes the trailing digest, as a forger who knows
+// the protocol would, so the message reaches the checks behind the digest.
+// What it does not do: forge a message the real publisher is about to send
+// (the next serial with the right chain digest), or STOP the run: no receiver
+// on an unauthenticated bus can tell those from the real ones
+// (docs/processes-and-channels.md, "What the edge cannot tell").
+#include <CLI/CLI.hpp>
+#include <lcm/lcm-cpp.hpp>
+
+#include <chrono>
+#include <cmath>
+#include <cstdio>
+#include <functional>
+#include <limits>
+#include <map>
+#include <random>
+#include <string>
+#include <thread>
+#include <vector>
+
+#include "afford/channels.hpp"
+#include "afford/node.hpp"
+#include "afford/seal.hpp"
+#include "afford/bounds.hpp"
+#include "afford/edge.hpp"
+#include "afford/wire.hpp"
+
+namespace {
+
+using Bytes = std::vector<std::uint8_t>;
+
+// The size fields of a real message of the channel's type (offsets, widths):
+// the bounds walk records them on the way.
+afford::ProtocolConfig g_protocol;
+template <class Msg>
+std::vector<afford::wire::SizeField> sizesOf(const Bytes& b) {
+  std::vector<afford::wire::SizeField> sizes;
+  std::string why;
+  afford::wire::checkWire<Msg>(b.data(), b.size(), afford::boundsFor<Msg>({&g_protocol, nullptr}), why, &sizes);
+  return sizes;
+}
+
+struct Channel {
+  std::int64_t hash = 0;
+  std::function<std::vector<afford::wire::SizeField>(const Bytes&)> sizes;
+  // Decode, change a field, encode again (nan, step, serial, run_id); false if not this type.
+  std::function<bool(Bytes&, const std::function<void(void*)>&)> edit;
+};
+
+template <class Msg>
+Channel channelOf() {
+  Channel c;
+  c.hash = Msg::getHash();
+  c.sizes = [](const Bytes& b) { return sizesOf<Msg>(b); };
+  c.edit = [](Bytes& b, const std::function<void(void*)>& change) {
+    Msg m;
+    std::string why;
+    if (!afford::decodeChecked(b.data(), b.size(), {&g_protocol, nullptr}, m, why)) return false;
+    change(&m);
+    b.assign(static_cast<std::size_t>(m.getEncodedSize()), 0);
+    m.encode(b.data(), 0, static_cast<int>(b.size()));
+    return true;
+  };
+  return c;
+}
+
+class Hostile {
+ public:
+  Hostile(lcm::LCM& lcm, std::uint64_t seed) : lcm_(lcm), rng_(seed) {
+    using namespace afford;
+    channels_[channel::kScene] = channelOf<scene_t>();
+    channels_[channel::kFocus] = channelOf<focus_t>();
+    channels_[channel::kPrediction] = channelOf<prediction_t>();
+    channels_[channel::kDecision] = channelOf<decision_t>();
+    channels_[channel::kEffect] = channelOf<effect_t>();
+    channels_[channel::kProbe] = channelOf<object_probe_t>();
+    channels_[channel::kAffordanceTable] = channelOf<affordance_table_t>();
+    channels_[channel::kResult] = channelOf<run_result_t>();
+    channels_[channel::kLook] = channelOf<look_t>();
+    channels_[channel::kForwardQuery] = channelOf<forward_query_t>();
+    channels_[channel::kForwardPrediction] = channelOf<forward_prediction_t>();
+    channels_[channel::kExtrinsicResult] = channelOf<extrinsic_result_t>();
+    channels_[channel::kStatus] = channelOf<process_status_t>();
+    channels_[channel::kResend] = channelOf<resend_t>();
+    channels_[channel::kRunConfig] = channelOf<run_config_t>();
+    for (const auto& [name, c] : channels_) lcm_.subscribe(name, &Hostile::onMessage, this)->setQueueCapacity(100000);
+  }
+
+  // Copies of the run's traffic kept so far.
+  std::size_t heard() const {
+    std::size_t n = 0;
+    for (const auto& [ch, list] : heard_) n += list.size();
+    return n;
+  }
+  bool runUnderWay() const { return heard_.count(afford::channel::kFocus) > 0; }
+
+  void send(const char* kind) {
+    std::string ch;
+    Bytes b;
+    const std::string k = kind;
+    if (k == "large") {
+      ch = randomChannel();
+      b.resize(pick(65536, 256 * 1024));
+      for (auto& x : b) x = static_cast<std::uint8_t>(rng_());
+      writeBig(b, 0, 8, static_cast<std::uint64_t>(channels_[ch].hash));
+    } else if (k == "random") {
+      ch = randomChannel();
+      const std::size_t n = coin(0.05) ? pick(1000, 60000) : pick(0, 2000);
+      b.resize(n);
+      for (auto& x : b) x = static_cast<std::uint8_t>(rng_());
+      if (n >= 8 && coin(0.5)) writeBig(b, 0, 8, static_cast<std::uint64_t>(channels_[ch].hash));
+    } else if (k == "resend") {
+      for (std::size_t i = 0, n = pick(1, 10); i < n; ++i) {
+        afford::resend_t r;
+        r.run_id = run_;
+        r.step = 0;
+        r.channel = realChannel();
+        r.first = coin(0.2) ? static_cast<std::int64_t>(pick(0, 1'000'000'000'000)) : static_cast<std::int64_t>(pick(0, 3000));
+        r.last = r.first + static_cast<std::int64_t>(coin(0.3) ? pick(0, 1'000'000'000) : pick(0, 200));
+        r.requester = "hostile";
+        const Bytes s = afford::sealed(r);
+        publish(afford::channel::kResend, s);
+      }
+      return;
+    } else if (k == "config") {
+      afford::run_config_t c;
+      c.run_id = coin(0.5) ? run_ + "-not" : run_;
+      c.step = 0;
+      c.seed = 1;
+      c.experiment = "base";
+      c.system = "IMP";
+      c.config_yaml = coin(0.5) ? "{{{ not: yaml" : "run: {steps: 5}";
+      b = afford::sealed(c);
+      ch = afford::channel::kRunConfig;
+    } else {
+      if (!copy(k == "status" ? afford::channel::kStatus : realChannel(), ch, b)) return;
+      Channel& c = channels_[ch];
+      if (k == "truncated") {
+        b.resize(pick(0, b.size() - 1));
+      } else if (k == "flipped") {
+        for (std::size_t i = 0, n = pick(1, 8); i < n; ++i) b[pick(0, b.size() - 1)] ^= static_cast<std::uint8_t>(1u << pick(0, 7));
+      } else if (k == "size") {
+        const auto sizes = c.sizes(b);
+        if (sizes.empty()) return;
+        const auto& f = sizes[pick(0, sizes.size() - 1)];
+        const std::int64_t left = static_cast<std::int64_t>(b.size() - f.offset);
+        const std::int64_t values[] = {0, -1, f.max + 1, left + 1, 0x10000001, 0x01000000, std::numeric_limits<std::int32_t>::max()};
+        writeBig(b, f.offset, f.width, static_cast<std::uint64_t>(values[pick(0, 6)]));
+        if (coin(0.5)) afford::sealBuffer(b.data(), b.size());
+      } else if (k == "duplicate") {
+        // as it was
+      } else if (!editField(k, ch, b)) {
+        return;
+      }
+    }
+    publish(ch, b);
+  }
+
+  std::size_t sent() const { return sent_; }
+  const std::map<std::string, std::size_t>& sentPerChannel() const { return per_channel_; }
+
+ private:
+  void onMessage(const lcm::ReceiveBuffer* rb, const std::string& ch) {
+    const auto* d = static_cast<const std::uint8_t*>(rb->data);
+    // Only what looks real is copied (its own bad messages come back to it too).
+    if (!afford::sealIntact(d, rb->data_size)) return;
+    auto& list = heard_[ch];
+    if (list.size() < 2000) list.emplace_back(d, d + rb->data_size);
+    else list[pick(0, list.size() - 1)] = Bytes(d, d + rb->data_size);
+    std::string run;
+    if (ch == afford::channel::kFocus && afford::peekRunId(d, rb->data_size, 4096, run)) run_ = run;
+  }
+
+  // A field of a real message changed, then re-sealed.
+  bool editField(const std::string& kind, const std::string& ch, Bytes& b) {
+    Channel& c = channels_[ch];
+    const double bad[] = {std::numeric_limits<double>::quiet_NaN(), std::numeric_limits<double>::infinity(),
+                          -std::numeric_limits<double>::infinity()};
+    const double nan = bad[pick(0, 2)];
+    const std::int64_t serials[] = {1, static_cast<std::int64_t>(pick(0, 100000)), std::numeric_limits<std::int64_t>::max(), -1};
+    const std::int64_t serial_pick = serials[pick(0, 3)];
+    const std::int64_t step = static_cast<std::int64_t>(pick(0, 20000)) - 10;
+    const std::string other_run = run_ + "-" + std::to_string(pick(0, 99));
+    const bool ok = c.edit(b, [&](void* p) {
+      using namespace afford;
+      auto common = [&](auto* m) {
+        if (kind == "run_id") m->run_id = other_run;
+        if (kind == "step") m->step = step;
+        if constexpr (wire::Bounds<std::remove_pointer_t<decltype(m)>>::kSerial)
+          if (kind == "serial") m->serial = serial_pick == 1 ? m->serial + 1 : serial_pick;
+      };
+      if (ch == channel::kScene) { auto* m = static_cast<scene_t*>(p); common(m); if (kind == "nan") m->goal_distance = nan; }
+      if (ch == channel::kFocus) { auto* m = static_cast<focus_t*>(p); common(m); if (kind == "nan") m->x = nan; }
+      if (ch == channel::kPrediction) { auto* m = static_cast<prediction_t*>(p); common(m); if (kind == "nan" && !m->affordance.empty()) m->affordance[pick(0, m->affordance.size() - 1)] = nan; }
+      if (ch == channel::kDecision) { auto* m = static_cast<decision_t*>(p); common(m); if (kind == "nan") m->motivation = nan; }
+      if (ch == channel::kEffect) { auto* m = static_cast<effect_t*>(p); common(m); if (kind == "nan") m->after_x = nan; }
+      if (ch == channel::kProbe) { auto* m = static_cast<object_probe_t*>(p); common(m); }
+      if (ch == channel::kAffordanceTable) { auto* m = static_cast<affordance_table_t*>(p); common(m); if (kind == "nan" && !m->affordance.empty() && !m->affordance[0].empty()) m->affordance[0][0] = nan; }
+      if (ch == channel::kResult) { auto* m = static_cast<run_result_t*>(p); common(m); }
+      if (ch == channel::kLook) { auto* m = static_cast<look_t*>(p); common(m); if (kind == "nan") m->x = nan; }
+      if (ch == channel::kForwardQuery) { auto* m = static_cast<forward_query_t*>(p); common(m); if (kind == "nan") m->x = nan; }
+      if (ch == channel::kForwardPrediction) { auto* m = static_cast<forward_prediction_t*>(p); common(m); if (kind == "nan" && !m->where_x.empty()) m->where_x[0] = nan; }
+      if (ch == channel::kExtrinsicResult) { auto* m = static_cast<extrinsic_result_t*>(p); common(m); if (kind == "nan") m->utility = nan; }
+      if (ch == channel::kStatus) {
+        auto* m = static_cast<process_status_t*>(p);
+        if (coin(0.2)) m->process = "ghost" + std::to_string(pick(0, 9));
+        for (auto& n : m->counts) n = coin(0.3) ? n + 1 : coin(0.5) ? n * 1000 + 7 : std::numeric_limits<std::int64_t>::max() / 2;
+      }
+    });
+    if (ok) afford::sealBuffer(b.data(), b.size());
+    return ok;
+  }
+
+  bool copy(const std::string& want, std::string& ch, Bytes& b) {
+    auto it = heard_.find(want);
+    if (it == heard_.end() || it->second.empty()) return false;
+    ch = want;
+    b = it->second[pick(0, it->second.size() - 1)];
+    return !b.empty();
+  }
+  std::string realChannel() {
+    std::vector<std::string> run_channels;
+    for (const auto& [ch, list] : heard_)
+      if (ch != afford::channel::kStatus && ch != afford::channel::kResend && ch != afford::channel::kRunConfig && !list.empty())
+        run_channels.push_back(ch);
+    return run_channels.empty() ? std::string(afford::channel::kFocus) : run_channels[pick(0, run_channels.size() - 1)];
+  }
+  std::string randomChannel() {
+    auto it = channels_.begin();
+    std::advance(it, static_cast<long>(pick(0, channels_.size() - 1)));
+    return it->first;
+  }
+  void publish(const std::string& ch, const Bytes& b) {
+    lcm_.publish(ch, b.data(), static_cast<unsigned>(b.size()));
+    ++sent_;
+    ++per_channel_[ch];
+  }
+  static void writeBig(Bytes& b, std::size_t at, int width, std::uint64_t v) {
+    for (int i = 0; i < width && at + static_cast<std::size_t>(i) < b.size(); ++i)
+      b[at + static_cast<std::size_t>(width - 1 - i)] = static_cast<std::uint8_t>(v >> (8 * i));
+  }
+  std::size_t pick(std::size_t lo, std::size_t hi) { return std::uniform_int_distribution<std::size_t>(lo, hi)(rng_); }
+  bool coin(double p) { return std::uniform_real_distribution<double>(0, 1)(rng_) < p; }
+
+  lcm::LCM& lcm_;
+  std::mt19937_64 rng_;
+  std::map<std::string, Channel> channels_;
+  std::map<std::string, std::vector<Bytes>> heard_;
+  std::string run_;
+  std::size_t sent_ = 0;
+  std::map<std::string, std::size_t> per_channel_;
+};
+
+}  // namespace
+
+int main(int argc, char** argv) {
+  CLI::App app{"afford-hostile: floods a live run with bad messages built from its own traffic (tests)", "afford-hostile"};
+  std::string url = "udpm://239.255.76.67:7667?ttl=0";
+  std::size_t messages = 10000;
+  std::uint64_t seed = 1;
+  int burst = 40, pause_ms = 5;
+  std::vector<std::string> kinds = {"random", "large", "truncated", "flipped", "size", "run_id", "step", "serial", "nan",
+                                    "duplicate", "resend", "status", "config"};
+  app.add_option("--lcm-url", url, "the run's bus")->capture_default_str();
+  app.add_option("--messages", messages, "bad messages to publish (a RESEND storm counts its requests)")->capture_default_str();
+  app.add_option("--seed", seed, "of the tool's own random choices")->capture_default_str();
+  app.add_option("--burst", burst, "messages per burst")->capture_default_str();
+  app.add_option("--pause-ms", pause_ms, "between bursts")->capture_default_str();
+  app.add_option("--kinds", kinds, "kinds of bad messages, chosen uniformly")->capture_default_str();
+  std::string config_dir = afford::defaultConfigDir();
+  app.add_option("--config-dir", config_dir, "folder of defaults.yaml (the protocol's limits)")->capture_default_str();
+  CLI11_PARSE(app, argc, argv);
+  g_protocol = afford::loadProtocol(config_dir);
+  afford::installStopHandlers();
+  lcm::LCM lcm(url);
+  if (!lcm.good()) {
+    std::fprintf(stderr, "afford-hostile: cannot open %s\n", url.c_str());
+    return 1;
+  }
+  Hostile h(lcm, seed);
+  while (!h.runUnderWay() && !afford::stopRequested()) lcm.handleTimeout(50);  // a run's traffic to copy
+  std::mt19937_64 pick(seed ^ 0x5eed);
+  while (h.sent() < messages && !afford::stopRequested()) {
+    for (int i = 0; i < burst && h.sent() < messages; ++i)
+      h.send(kinds[std::uniform_int_distribution<std::size_t>(0, kinds.size() - 1)(pick)].c_str());
+    while (lcm.handleTimeout(0) > 0) {
+    }
+    std::this_thread::sleep_for(std::chrono::milliseconds(pause_ms));  // the tool's own pacing, not a test's wait
+  }
+  std::printf("sent %zu bad messages:", h.sent());
+  for (const auto& [ch, n] : h.sentPerChannel()) std::printf(" %s %zu", ch.c_str(), n);
+  std::printf("\n");
+  return 0;
+}
