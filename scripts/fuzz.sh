@@ -40,10 +40,11 @@ rm -rf "$fuzz/seeds"
 mkdir -p "$fuzz/corpus" "$fuzz/crashes"
 "$fuzz/fuzz_edge_seeds" "$fuzz/seeds"
 
-# One process: new inputs go to the corpus (the first folder), the seeds are read too.
+# One process: new inputs go to the corpus (the first folder); the seeds and
+# the inputs of bugs found before (tests/fuzz/regressions) are read too.
 echo "fuzz.sh: fuzzing for $seconds s (log: $fuzz/fuzz.log)"
 status=0
-UBSAN_OPTIONS=print_stacktrace=1 "$fuzz/fuzz_edge" "$fuzz/corpus" "$fuzz/seeds" \
+UBSAN_OPTIONS=print_stacktrace=1 "$fuzz/fuzz_edge" "$fuzz/corpus" "$fuzz/seeds" "$root/tests/fuzz/regressions" \
   -max_total_time="$seconds" -timeout=10 -rss_limit_mb=2048 -malloc_limit_mb=256 \
   -artifact_prefix="$fuzz/crashes/" -print_final_stats=1 >"$fuzz/fuzz.log" 2>&1 || status=$?
 

@@ -17,6 +17,8 @@
 
 #include "afford/bounds.hpp"
 #include "afford/channels.hpp"
+#include "afford/decode.hpp"
+#include "afford/seal.hpp"
 #include "tests/samples.hpp"
 #include "tests/support.hpp"
 
@@ -237,6 +239,18 @@ TYPED_TEST(WireMessage, EachStringWithoutItsNulFailsNamingIt) {
   }
 }
 
+// LCM's decode would keep the NUL inside the string and its encode stop at
+// it: a handler would see a string that does not re-encode to its message.
+TYPED_TEST(WireMessage, EachStringWithANulInsideFailsNamingIt) {
+  for (const SizeField& f : this->sizes()) {
+    if (!f.is_string) continue;
+    Bytes b = this->bytes_;
+    b.at(f.offset + 4) = 0;  // its first character
+    EXPECT_FALSE(this->passes(b)) << f.field;
+    EXPECT_EQ(this->why_, "field " + f.field + ": the string holds a NUL before its end");
+  }
+}
+
 TYPED_TEST(WireMessage, ItsBoundsCannotBeLeftUnset) {
   // Every message type has a run_id, so its bounds hold a Max: `Bounds{}` does not compile.
   static_assert(!std::is_default_constructible_v<typename wire::Bounds<TypeParam>::type>);
@@ -319,6 +333,26 @@ TEST(Wire, TheMessageTypesAreTheChannelsTypes) {
   EXPECT_EQ(std::tuple_size_v<wire::SerialTypes>, std::size(channel::kWithSerial));
   static_assert(wire::Bounds<prediction_t>::kSerial && !wire::Bounds<process_status_t>::kSerial);
   static_assert(!wire::Bounds<trained_t>::kMessage && !wire::Bounds<sub_goal_t>::kMessage);
+}
+
+// ---- found by the fuzzer (tests/fuzz; the inputs are in tests/fuzz/regressions) -------
+
+// nul-inside-string: LCM's decode kept the NUL inside a string, so a handler
+// saw a string its own message does not encode (LCM's encode stops at a NUL).
+TEST(Decode, AStringWithANulInsideIsRefused) {
+  process_status_t m = sample(static_cast<const process_status_t*>(nullptr));
+  Bytes b = sealed(m);
+  std::vector<SizeField> sizes;
+  std::string why;
+  ASSERT_TRUE(wire::checkWire<process_status_t>(b.data(), b.size(), boundsFor<process_status_t>(observerContext()),
+                                                why, &sizes));
+  const auto f = std::find_if(sizes.begin(), sizes.end(), [](const SizeField& s) { return s.field == "counts_run"; });
+  ASSERT_NE(f, sizes.end());
+  b.at(f->offset + 4 + 16) = 0;  // "20240501-120000-\0ase-IMP-s1"
+  sealBuffer(b.data(), b.size());
+  process_status_t out;
+  EXPECT_FALSE(decodeChecked(b.data(), b.size(), observerContext(), out, why));
+  EXPECT_EQ(why, "field counts_run: the string holds a NUL before its end");
 }
 
 // ---- the maxima of a context ----------------------------------------------------------
