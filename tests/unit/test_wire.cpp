@@ -355,6 +355,25 @@ TEST(Decode, AStringWithANulInsideIsRefused) {
   EXPECT_EQ(why, "field counts_run: the string holds a NUL before its end");
 }
 
+// focus-side-overflow: an observer computed 3 * side * side before it checked
+// the side, which overflows for most sides (undefined behaviour, UBSan).
+TEST(Decode, AnObserverRefusesAFocusSideOfAnyIntNamingIt) {
+  const int limit = observerProtocol().limits.focus_side;
+  const auto refused = [&](auto m) {
+    for (std::int32_t side : {std::numeric_limits<std::int32_t>::min(), -1824718621, -1, 0, limit + 1,
+                              std::numeric_limits<std::int32_t>::max()}) {
+      m.side = side;
+      const Bytes b = sealed(m);
+      decltype(m) out;
+      std::string why;
+      EXPECT_FALSE(decodeChecked(b.data(), b.size(), observerContext(), out, why)) << side;
+      EXPECT_EQ(why, "field side = " + std::to_string(side) + " is out of range [1, " + std::to_string(limit) + "]");
+    }
+  };
+  refused(sample(static_cast<const focus_t*>(nullptr)));
+  refused(sample(static_cast<const effect_t*>(nullptr)));
+}
+
 // ---- the maxima of a context ----------------------------------------------------------
 
 TEST(Bounds, FollowTheRunConfig) {
