@@ -15,6 +15,7 @@ packages=(
   default-jdk-headless default-jre libjchart2d-java
   iproute2 util-linux procps gnuplot-nox
   xvfb imagemagick
+  clang libclang-rt-14-dev llvm  # scripts/fuzz.sh: libFuzzer, ASan, UBSan, llvm-symbolizer
 )
 
 missing=()

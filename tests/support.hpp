@@ -1,6 +1,8 @@
 // Helpers shared by the tests.
 #pragma once
 #include <lcm/lcm-cpp.hpp>
+#include <sys/wait.h>
+#include <unistd.h>
 
 #include <array>
 #include <cstdio>

@@ -54,7 +54,9 @@ std::string checkFocus(const char* side_field, int side, const char* size_field,
   if (c.run)
     return first({checkSize(side_field, side, c.run->eye.focus_side),
                   checkSize(size_field, size, 3L * c.run->eye.focus_side * c.run->eye.focus_side)});
-  return first({checkInt(side_field, side, 1, c.protocol->limits.focus_side), checkSize(size_field, size, 3L * side * side)});
+  // The side first: 3 * side * side of any int would overflow.
+  if (auto why = checkInt(side_field, side, 1, c.protocol->limits.focus_side); !why.empty()) return why;
+  return checkSize(size_field, size, 3L * side * side);
 }
 std::string checkFocusSize(const char* field, long size, const BoundsContext& c) {
   if (c.run) return checkSize(field, size, 3L * c.run->eye.focus_side * c.run->eye.focus_side);

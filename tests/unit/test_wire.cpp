@@ -17,7 +17,9 @@
 
 #include "afford/bounds.hpp"
 #include "afford/channels.hpp"
-#include "afford/image.hpp"
+#include "afford/decode.hpp"
+#include "afford/seal.hpp"
+#include "tests/samples.hpp"
 #include "tests/support.hpp"
 
 namespace afford {
@@ -28,10 +30,7 @@ using Bytes = std::vector<std::uint8_t>;
 
 static_assert(!std::is_default_constructible_v<wire::Max>, "a maximum is always given");
 
-const RunConfig& runConfig() {
-  static const RunConfig c = test::shippedConfig();
-  return c;
-}
+const RunConfig& runConfig() { return test::sampleConfig(); }
 const ProtocolConfig& observerProtocol() {  // what a process uses between runs
   static const ProtocolConfig p = loadProtocol(std::string(AFFORD_SOURCE_DIR) + "/config");
   return p;
@@ -39,280 +38,11 @@ const ProtocolConfig& observerProtocol() {  // what a process uses between runs
 BoundsContext runContext() { return {&runConfig().protocol, &runConfig()}; }
 BoundsContext observerContext() { return {&observerProtocol(), nullptr}; }
 
-// ---- realistic messages of a run of the shipped base experiment -------------------------
+// ---- realistic messages of a run of the shipped base experiment (tests/samples.hpp) --
 
-const std::string kRunId = "20240501-120000-base-IMP-s1";
-
-Bytes focusImage(int side) {
-  Bytes image(static_cast<std::size_t>(3 * side * side));
-  for (std::size_t i = 0; i < image.size(); ++i) image[i] = (i / 3) % 7 == 0 ? 255 : 0;
-  return image;
-}
-Bytes focusImage() { return focusImage(runConfig().eye.focus_side); }
-
-trained_t sampleTrained() {
-  trained_t t;
-  t.run_id = kRunId;
-  t.step = 41;
-  t.action = kTurnRed;
-  t.affordance = true;
-  t.affordance_before = 0.42;
-  t.affordance_after = 0.47;
-  t.learning_progress = 0.01;
-  t.effect_trained = true;
-  return t;
-}
-
-affordance_table_t sample(const affordance_table_t*) {
-  affordance_table_t m;
-  m.run_id = kRunId;
-  m.step = 1000;
-  m.serial = 9;
-  for (std::size_t o = 0; o < runConfig().world.objects.size(); ++o)
-    m.affordance.push_back({0.9, 0.1 * static_cast<double>(o % 3), 0.5, 0.05});
-  m.n_objects = static_cast<int32_t>(m.affordance.size());
-  m.n_actions = kNumActions;
-  m.digest = 0x1234;
-  return m;
-}
-
-decision_t sample(const decision_t*) {
-  decision_t m;
-  m.run_id = kRunId;
-  m.step = 42;
-  m.serial = 42;
-  m.acted = true;
-  m.action = decision_t::MOVE;
-  m.x = 0.3;
-  m.y = 0.6;
-  m.target_x = -1;
-  m.target_y = -1;
-  m.motivation = 0.8;
-  m.threshold = 0.7;
-  m.digest = 0x1234;
-  return m;
-}
-
-effect_t sample(const effect_t*) {
-  effect_t m;
-  m.run_id = kRunId;
-  m.step = 42;
-  m.serial = 17;
-  m.action = decision_t::TURN_GREEN;
-  m.target_x = m.target_y = -1;
-  m.before_x = m.after_x = 0.3;
-  m.before_y = m.after_y = 0.6;
-  m.image_change = 0.2;
-  m.position_change = 0;
-  m.affordance = true;
-  m.side = runConfig().eye.focus_side;
-  m.image = focusImage();
-  m.size = static_cast<int32_t>(m.image.size());
-  m.digest = 0x1234;
-  return m;
-}
-
-extrinsic_result_t sample(const extrinsic_result_t*) {
-  extrinsic_result_t m;
-  m.run_id = kRunId + "-stack";
-  m.step = 12;
-  m.serial = 0;
-  m.scenario = "stack";
-  m.success = true;
-  m.completion = 12;
-  m.attempts = 3;
-  m.utility = 1.5;
-  m.sub_goals = {{0.2, 0.3, 5, 8, 2, 1}, {0.7, 0.4, 7, 4, 1, 1}};
-  m.n_sub_goals = static_cast<int32_t>(m.sub_goals.size());
-  m.digest = 0x1234;
-  return m;
-}
-
-focus_t sample(const focus_t*) {
-  focus_t m;
-  m.run_id = kRunId;
-  m.step = 42;
-  m.serial = 43;
-  m.kind = focus_t::SCENE_SCAN;
-  m.seq = 0;
-  m.x = 0.3;
-  m.y = 0.6;
-  m.side = runConfig().eye.focus_side;
-  m.image = focusImage();
-  m.size = static_cast<int32_t>(m.image.size());
-  m.digest = 0x1234;
-  return m;
-}
-
-forward_prediction_t sample(const forward_prediction_t*) {
-  forward_prediction_t m;
-  m.run_id = kRunId + "-stack";
-  m.step = 3;
-  m.serial = 5;
-  m.seq = 6;
-  m.actions = {kMove, kTurnBlue};  // the candidates the query asked for
-  m.n_actions = static_cast<int32_t>(m.actions.size());
-  const Bytes image = focusImage();
-  m.size = static_cast<int32_t>(image.size());
-  for (std::size_t a = 0; a < m.actions.size(); ++a) {
-    m.what.emplace_back(image.size());
-    for (std::size_t i = 0; i < image.size(); ++i) m.what[a][i] = static_cast<float>(image[i]) / 255.0f;
-  }
-  m.where_x = {0.5, 0.3};
-  m.where_y = {0.4, 0.6};
-  m.digest = 0x1234;
-  return m;
-}
-
-forward_query_t sample(const forward_query_t*) {
-  forward_query_t m;
-  m.run_id = kRunId + "-stack";
-  m.step = 3;
-  m.serial = 5;
-  m.seq = 6;
-  m.x = 0.3;
-  m.y = 0.6;
-  m.target_x = 0.5;
-  m.target_y = 0.4;
-  m.image = focusImage();
-  m.size = static_cast<int32_t>(m.image.size());
-  m.actions = {kMove, kTurnBlue};
-  m.n_actions = static_cast<int32_t>(m.actions.size());
-  m.digest = 0x1234;
-  return m;
-}
-
-look_t sample(const look_t*) {
-  look_t m;
-  m.run_id = kRunId + "-stack";
-  m.step = 3;
-  m.serial = 7;
-  m.seq = 7;
-  m.kind = focus_t::SCENE_AT;
-  m.x = 0.5;
-  m.y = 0.4;
-  m.digest = 0x1234;
-  return m;
-}
-
-object_probe_t sample(const object_probe_t*) {
-  object_probe_t m;
-  m.run_id = kRunId;
-  m.step = 0;
-  m.serial = 0;
-  for (const ObjectSpec& o : runConfig().world.objects) {
-    m.names.push_back(o.name);
-    m.images.push_back(focusImage());
-  }
-  m.n_objects = static_cast<int32_t>(m.names.size());
-  m.size = static_cast<int32_t>(m.images.front().size());
-  m.digest = 0x1234;
-  return m;
-}
-
-prediction_t sample(const prediction_t*) {
-  prediction_t m;
-  m.run_id = kRunId;
-  m.step = 42;
-  m.serial = 42;
-  m.x = 0.3;
-  m.y = 0.6;
-  m.n_actions = kNumActions;
-  m.affordance = {0.9, 0.2, 0.6, 0.1};
-  m.learning_progress = {0.01, -0.02, 0.0, 0.03};
-  m.trained = {sampleTrained()};
-  m.n_trained = 1;
-  m.digest = 0x1234;
-  return m;
-}
-
-process_status_t sample(const process_status_t*) {
-  process_status_t m;
-  m.run_id = kRunId;
-  m.step = 42;
-  m.process = "logger";
-  m.pid = 4242;
-  m.state = process_status_t::RUNNING;
-  m.detail = "logs/" + kRunId;
-  m.counts_run = kRunId;
-  m.channels = {channel::kScene, channel::kFocus, channel::kPrediction};
-  m.counts = {12, 43, 43};
-  m.n_channels = static_cast<int32_t>(m.channels.size());
-  m.digest = 0x1234;
-  return m;
-}
-
-resend_t sample(const resend_t*) {
-  resend_t m;
-  m.run_id = kRunId;
-  m.step = 0;
-  m.channel = channel::kFocus;
-  m.first = 40;
-  m.last = 43;
-  m.requester = "motivation";
-  m.digest = 0x1234;
-  return m;
-}
-
-run_config_t sample(const run_config_t*) {
-  run_config_t m;
-  m.run_id = kRunId;
-  m.step = 0;
-  m.seed = 1;
-  m.experiment = "base";
-  m.system = "IMP";
-  m.config_yaml = test::shippedConfigYaml("base", System::IMP, 1, 1000);
-  m.digest = 0x1234;
-  return m;
-}
-
-run_control_t sample(const run_control_t*) {
-  run_control_t m;
-  m.run_id = kRunId;
-  m.step = 0;
-  m.command = run_control_t::START;
-  m.digest = 0x1234;
-  return m;
-}
-
-run_result_t sample(const run_result_t*) {
-  run_result_t m;
-  m.run_id = kRunId;
-  m.step = 1000;
-  m.serial = 0;
-  m.weights_checksum = "9ac0f1d2e3b4a5c6";
-  m.checkpoint = "logs/" + kRunId + "/predictors.ckpt";
-  m.n_actions = kNumActions;
-  m.actions_executed = {120, 80, 75, 90};
-  m.successes = {60, 40, 20, 30};
-  m.trained = {sampleTrained()};
-  m.n_trained = 1;
-  m.digest = 0x1234;
-  return m;
-}
-
-scene_t sample(const scene_t*) {
-  const RunConfig& c = runConfig();
-  cv::Mat scene = blankScene(c.world.size_px);
-  for (const ObjectSpec& o : c.world.objects)
-    paintObject(scene, o.shape, o.colour, toPixel(o.x, o.y, c.world.size_px), c.world);
-  scene_t m;
-  m.run_id = kRunId;
-  m.step = 0;
-  m.serial = 0;
-  m.cause = scene_t::CAUSE_START;
-  m.scan = true;
-  m.changes_next = false;
-  m.action = -1;
-  m.action_target_x = m.action_target_y = -1;
-  m.goal_distance = m.goal_utility = -1;
-  m.width = m.height = c.world.size_px;
-  m.encoding = scene_t::ENCODING_ZLIB_RGB8;
-  m.data = encodeScene(scene);
-  m.size = static_cast<int32_t>(m.data.size());
-  m.digest = 0x1234;
-  return m;
-}
+using test::focusImage;
+using test::sample;
+const std::string& kRunId = test::kSampleRunId;
 
 template <class Msg>
 Bytes encode(const Msg& m) {
@@ -509,6 +239,18 @@ TYPED_TEST(WireMessage, EachStringWithoutItsNulFailsNamingIt) {
   }
 }
 
+// LCM's decode would keep the NUL inside the string and its encode stop at
+// it: a handler would see a string that does not re-encode to its message.
+TYPED_TEST(WireMessage, EachStringWithANulInsideFailsNamingIt) {
+  for (const SizeField& f : this->sizes()) {
+    if (!f.is_string) continue;
+    Bytes b = this->bytes_;
+    b.at(f.offset + 4) = 0;  // its first character
+    EXPECT_FALSE(this->passes(b)) << f.field;
+    EXPECT_EQ(this->why_, "field " + f.field + ": the string holds a NUL before its end");
+  }
+}
+
 TYPED_TEST(WireMessage, ItsBoundsCannotBeLeftUnset) {
   // Every message type has a run_id, so its bounds hold a Max: `Bounds{}` does not compile.
   static_assert(!std::is_default_constructible_v<typename wire::Bounds<TypeParam>::type>);
@@ -591,6 +333,45 @@ TEST(Wire, TheMessageTypesAreTheChannelsTypes) {
   EXPECT_EQ(std::tuple_size_v<wire::SerialTypes>, std::size(channel::kWithSerial));
   static_assert(wire::Bounds<prediction_t>::kSerial && !wire::Bounds<process_status_t>::kSerial);
   static_assert(!wire::Bounds<trained_t>::kMessage && !wire::Bounds<sub_goal_t>::kMessage);
+}
+
+// ---- found by the fuzzer (tests/fuzz; the inputs are in tests/fuzz/regressions) -------
+
+// nul-inside-string: LCM's decode kept the NUL inside a string, so a handler
+// saw a string its own message does not encode (LCM's encode stops at a NUL).
+TEST(Decode, AStringWithANulInsideIsRefused) {
+  process_status_t m = sample(static_cast<const process_status_t*>(nullptr));
+  Bytes b = sealed(m);
+  std::vector<SizeField> sizes;
+  std::string why;
+  ASSERT_TRUE(wire::checkWire<process_status_t>(b.data(), b.size(), boundsFor<process_status_t>(observerContext()),
+                                                why, &sizes));
+  const auto f = std::find_if(sizes.begin(), sizes.end(), [](const SizeField& s) { return s.field == "counts_run"; });
+  ASSERT_NE(f, sizes.end());
+  b.at(f->offset + 4 + 16) = 0;  // "20240501-120000-\0ase-IMP-s1"
+  sealBuffer(b.data(), b.size());
+  process_status_t out;
+  EXPECT_FALSE(decodeChecked(b.data(), b.size(), observerContext(), out, why));
+  EXPECT_EQ(why, "field counts_run: the string holds a NUL before its end");
+}
+
+// focus-side-overflow: an observer computed 3 * side * side before it checked
+// the side, which overflows for most sides (undefined behaviour, UBSan).
+TEST(Decode, AnObserverRefusesAFocusSideOfAnyIntNamingIt) {
+  const int limit = observerProtocol().limits.focus_side;
+  const auto refused = [&](auto m) {
+    for (std::int32_t side : {std::numeric_limits<std::int32_t>::min(), -1824718621, -1, 0, limit + 1,
+                              std::numeric_limits<std::int32_t>::max()}) {
+      m.side = side;
+      const Bytes b = sealed(m);
+      decltype(m) out;
+      std::string why;
+      EXPECT_FALSE(decodeChecked(b.data(), b.size(), observerContext(), out, why)) << side;
+      EXPECT_EQ(why, "field side = " + std::to_string(side) + " is out of range [1, " + std::to_string(limit) + "]");
+    }
+  };
+  refused(sample(static_cast<const focus_t*>(nullptr)));
+  refused(sample(static_cast<const effect_t*>(nullptr)));
 }
 
 // ---- the maxima of a context ----------------------------------------------------------

@@ -11,6 +11,7 @@
 #pragma once
 #include <cstddef>
 #include <cstdint>
+#include <cstring>
 #include <initializer_list>
 #include <limits>
 #include <string>
@@ -57,7 +58,9 @@ class Cursor {
   bool primitive(const char* field, std::size_t element_bytes, std::int64_t count);
   // A signed big-endian count of `width` bytes: 0 <= value <= max.value.
   bool size(const char* field, int width, Max max, std::int64_t& value);
-  // Length with the NUL in [1, bytes left], at most max.value bytes before it, NUL present.
+  // Length with the NUL in [1, bytes left], at most max.value bytes before it,
+  // ending with the NUL and holding no other: LCM's decode keeps a NUL inside
+  // the string, its encode stops at it.
   bool string(const char* field, Max max);
 
   // One element of array `field` (a string or a nested struct) at `index`:
@@ -192,6 +195,8 @@ inline bool Cursor::string(const char* field, Max max) {
                 std::to_string(max.value));
   const auto end = offset_ + 4 + static_cast<std::size_t>(length);
   if (data_[end - 1] != 0) return fail("field " + path(field) + ": the string does not end with a NUL");
+  if (std::memchr(data_ + offset_ + 4, 0, static_cast<std::size_t>(length - 1)) != nullptr)
+    return fail("field " + path(field) + ": the string holds a NUL before its end");
   offset_ = end;
   return true;
 }
