@@ -49,6 +49,7 @@ inline affordance_table_t sample(const affordance_table_t*) {
   m.run_id = kSampleRunId;
   m.step = 1000;
   m.serial = 9;
+  m.prev_digest = 0x5eed0000 + 9;
   for (std::size_t o = 0; o < sampleConfig().world.objects.size(); ++o)
     m.affordance.push_back({0.9, 0.1 * static_cast<double>(o % 3), 0.5, 0.05});
   m.n_objects = static_cast<int32_t>(m.affordance.size());
@@ -62,6 +63,7 @@ inline decision_t sample(const decision_t*) {
   m.run_id = kSampleRunId;
   m.step = 42;
   m.serial = 42;
+  m.prev_digest = 0x5eed0000 + 42;
   m.acted = true;
   m.action = decision_t::MOVE;
   m.x = 0.3;
@@ -79,6 +81,7 @@ inline effect_t sample(const effect_t*) {
   m.run_id = kSampleRunId;
   m.step = 42;
   m.serial = 17;
+  m.prev_digest = 0x5eed0000 + 17;
   m.action = decision_t::TURN_GREEN;
   m.target_x = m.target_y = -1;
   m.before_x = m.after_x = 0.3;
@@ -98,6 +101,7 @@ inline extrinsic_result_t sample(const extrinsic_result_t*) {
   m.run_id = kSampleRunId + "-stack";
   m.step = 12;
   m.serial = 0;
+  m.prev_digest = 0x5eed0000 + 0;
   m.scenario = "stack";
   m.success = true;
   m.completion = 12;
@@ -114,6 +118,7 @@ inline focus_t sample(const focus_t*) {
   m.run_id = kSampleRunId;
   m.step = 42;
   m.serial = 43;
+  m.prev_digest = 0x5eed0000 + 43;
   m.kind = focus_t::SCENE_SCAN;
   m.seq = 0;
   m.x = 0.3;
@@ -130,6 +135,7 @@ inline forward_prediction_t sample(const forward_prediction_t*) {
   m.run_id = kSampleRunId + "-stack";
   m.step = 3;
   m.serial = 5;
+  m.prev_digest = 0x5eed0000 + 5;
   m.seq = 6;
   m.actions = {kMove, kTurnBlue};  // the candidates the query asked for
   m.n_actions = static_cast<int32_t>(m.actions.size());
@@ -150,6 +156,7 @@ inline forward_query_t sample(const forward_query_t*) {
   m.run_id = kSampleRunId + "-stack";
   m.step = 3;
   m.serial = 5;
+  m.prev_digest = 0x5eed0000 + 5;
   m.seq = 6;
   m.x = 0.3;
   m.y = 0.6;
@@ -168,6 +175,7 @@ inline look_t sample(const look_t*) {
   m.run_id = kSampleRunId + "-stack";
   m.step = 3;
   m.serial = 7;
+  m.prev_digest = 0x5eed0000 + 7;
   m.seq = 7;
   m.kind = focus_t::SCENE_AT;
   m.x = 0.5;
@@ -181,6 +189,7 @@ inline object_probe_t sample(const object_probe_t*) {
   m.run_id = kSampleRunId;
   m.step = 0;
   m.serial = 0;
+  m.prev_digest = 0x5eed0000 + 0;
   for (const ObjectSpec& o : sampleConfig().world.objects) {
     m.names.push_back(o.name);
     m.images.push_back(focusImage());
@@ -196,6 +205,7 @@ inline prediction_t sample(const prediction_t*) {
   m.run_id = kSampleRunId;
   m.step = 42;
   m.serial = 42;
+  m.prev_digest = 0x5eed0000 + 42;
   m.x = 0.3;
   m.y = 0.6;
   m.n_actions = kNumActions;
@@ -213,7 +223,9 @@ inline process_status_t sample(const process_status_t*) {
   m.step = 42;
   m.process = "logger";
   m.pid = 4242;
+  m.beat = 12;
   m.state = process_status_t::RUNNING;
+  m.config_digest = 0x0c0ffee;
   m.detail = "logs/" + kSampleRunId;
   m.counts_run = kSampleRunId;
   m.channels = {channel::kScene, channel::kFocus, channel::kPrediction};
@@ -261,6 +273,7 @@ inline run_result_t sample(const run_result_t*) {
   m.run_id = kSampleRunId;
   m.step = 1000;
   m.serial = 0;
+  m.prev_digest = 0x5eed0000 + 0;
   m.weights_checksum = "9ac0f1d2e3b4a5c6";
   m.checkpoint = "logs/" + kSampleRunId + "/predictors.ckpt";
   m.n_actions = kNumActions;
@@ -281,6 +294,7 @@ inline scene_t sample(const scene_t*) {
   m.run_id = kSampleRunId;
   m.step = 0;
   m.serial = 0;
+  m.prev_digest = 0x5eed0000 + 0;
   m.cause = scene_t::CAUSE_START;
   m.scan = true;
   m.changes_next = false;
