@@ -342,8 +342,8 @@ json unfinishedState(const ExperimentOptions& given) {
   return state;
 }
 
-// Why a run stopped by a signal before its logger opened its log ended at once.
-const char* const kStoppedBeforeTheLog = "stopped before its log was opened";
+// Why a run stopped by a signal before its logger joined it ended at once.
+const char* const kStoppedBeforeTheLog = "stopped as it was starting";
 
 // Handle what is pending (up to a batch), or wait briefly for something.
 void pumpLcm(lcm::LCM& lcm) {
@@ -677,8 +677,9 @@ void executeRuns(const std::vector<PlannedRun>& runs, PhaseRuns& phase, const Ex
       if (cut) {
         const std::string prefix = "run '" + id + "': ";
         std::string where = r.error.rfind(prefix, 0) == 0 ? r.error.substr(prefix.size()) : r.error;
+        // (The step is the last one the processes reported, in their heartbeats.)
         if (const std::string none = "at step -1"; where.size() > none.size() && where.substr(where.size() - none.size()) == none)
-          where = where.substr(0, where.size() - none.size()) + "before its first step";
+          where = where.substr(0, where.size() - none.size()) + "before any step was reported";
         phase.cut[i] = where;
         log.warn("{}: {}", id, phase.cut[i]);
         continue;
