@@ -150,10 +150,18 @@ TEST(Interrupt, CtrlCOverUdpmKeepsTheFinishedRunsAndResumeCompletesTheExperiment
   Job job("experiment " + plan + " --base-port 7960 --out " + (dir / "out").string() + " --log-root " +
               (dir / "logs").string(),
           (dir / "first.txt").string());
-  // Once the first run is kept and the second is under way (its logger opened its folder).
+  // Once the first run is kept and the second is well under way: its log holds
+  // ~1400 of its 4000 steps (~3.5 KB each), so its processes have reported a step.
   ASSERT_TRUE(waitFor([&] { return fs::exists(dir / "out/runs/int-base-IMP-s1.json") || !job.running(); }, 60))
       << job.output();
-  ASSERT_TRUE(waitFor([&] { return fs::exists(dir / "logs/int-base-IMP-s2/manifest.json") || !job.running(); }, 30))
+  const fs::path second_log = dir / "logs/int-base-IMP-s2/log.00.lcm";
+  ASSERT_TRUE(waitFor(
+      [&] {
+        std::error_code ec;
+        const auto bytes = fs::file_size(second_log, ec);
+        return (!ec && bytes > 5'000'000) || !job.running();
+      },
+      30))
       << job.output();
   ASSERT_TRUE(job.running()) << job.output();
   job.signalGroup(SIGINT);
