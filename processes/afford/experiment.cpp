@@ -5,6 +5,7 @@
 #include <atomic>
 #include <chrono>
 #include <cmath>
+#include <csignal>
 #include <ctime>
 #include <filesystem>
 #include <fstream>
@@ -12,16 +13,20 @@
 #include <mutex>
 #include <sstream>
 #include <thread>
+#include <fcntl.h>
+#include <sys/file.h>
 #include <sys/resource.h>
 #include <sys/syscall.h>
 #include <unistd.h>
 
 #include "afford/actions.hpp"
+#include "afford/checksum.hpp"
 #include "afford/config.hpp"
 #include "afford/design.hpp"
 #include "afford/driver.hpp"
 #include "afford/group.hpp"
 #include "afford/logging.hpp"
+#include "afford/node.hpp"
 #include "environment/node.hpp"
 #include "eye/node.hpp"
 #include "logger/node.hpp"
@@ -54,6 +59,292 @@ std::string defaultPrefix() {
   return buf;
 }
 
+// ---- interruption ------------------------------------------------------------
+
+volatile std::sig_atomic_t g_signal = 0;  // the first SIGINT or SIGTERM received (0: none)
+void (*g_stop_handler)(int) = nullptr;     // common's handler: it sets stopRequested()
+std::string g_quit_message;                // said on a second signal (set before the handlers, then never changed)
+
+void onInterrupt(int sig) {
+  if (g_signal != 0) {  // a second one: quit now; every file written so far is whole (written aside, then renamed)
+    (void)!write(STDERR_FILENO, g_quit_message.data(), g_quit_message.size());
+    _exit(128 + sig);
+  }
+  g_signal = sig;
+  static const char msg[] =
+      "\nafford: stopping the runs under way, then writing what finished (a second signal quits at once)\n";
+  (void)!write(STDERR_FILENO, msg, sizeof msg - 1);
+  if (g_stop_handler) g_stop_handler(sig);
+}
+
+// SIGINT and SIGTERM set stopRequested() (the drivers stop their runs) and are
+// remembered for the exit status. `resume`: the command that goes on.
+void installInterruptHandlers(const std::string& resume) {
+  g_quit_message = "\nafford: a second signal: quitting at once; what finished is kept. To resume: " + resume + "\n";
+  installStopHandlers();
+  struct sigaction common {};
+  sigaction(SIGINT, nullptr, &common);
+  g_stop_handler = common.sa_handler;
+  struct sigaction sa {};
+  sa.sa_handler = onInterrupt;
+  sigemptyset(&sa.sa_mask);
+  sigaddset(&sa.sa_mask, SIGINT);
+  sigaddset(&sa.sa_mask, SIGTERM);
+  sigaction(SIGINT, &sa, nullptr);
+  sigaction(SIGTERM, &sa, nullptr);
+}
+
+std::string signalName(int sig) { return sig == SIGINT ? "SIGINT" : sig == SIGTERM ? "SIGTERM" : std::to_string(sig); }
+
+// ---- what --resume needs: DIR/experiment.json and DIR/runs/<run-id>.json --------
+
+// `text` into `path`, whole or not at all: written beside it, then renamed
+// over it (an interruption leaves the previous version or the new one).
+void writeWhole(const fs::path& path, const std::string& text) {
+  const fs::path part = path.string() + ".part";
+  {
+    std::ofstream f(part, std::ios::binary | std::ios::trunc);
+    f << text;
+    f.close();
+    if (!f) throw std::runtime_error("cannot write " + part.string());
+  }
+  fs::rename(part, path);
+}
+
+fs::path statePath(const fs::path& out) { return out / "experiment.json"; }
+fs::path outcomePath(const fs::path& out, const std::string& run_id) { return out / "runs" / (run_id + ".json"); }
+
+const char* netnsName(NetnsMode m) { return m == NetnsMode::On ? "on" : m == NetnsMode::Off ? "off" : "auto"; }
+
+json optionsToJson(const ExperimentOptions& o) {
+  return {{"experiment", o.experiment},
+          {"systems", o.systems},
+          {"reps", o.reps ? json(*o.reps) : json(nullptr)},
+          {"steps", o.steps ? json(*o.steps) : json(nullptr)},
+          {"seed", o.seed},
+          {"keep_logs", o.keep_logs},
+          {"log_root", o.log_root},
+          {"run_prefix", o.run_prefix},
+          {"config_dir", o.config_dir},
+          {"settings", o.settings},
+          {"extrinsic_reps", o.extrinsic_reps},
+          {"scenarios", o.scenarios},
+          // run options: --resume uses them unless given again
+          {"jobs", o.jobs},
+          {"transport", o.transport},
+          {"netns", netnsName(o.netns)},
+          {"base_port", o.base_port},
+          {"process_log_level", o.process_log_level},
+          {"stall_seconds", o.stall_seconds},
+          {"quiet", o.quiet},
+          {"attach", o.attach}};
+}
+
+ExperimentOptions optionsFromJson(const json& j) {
+  ExperimentOptions o;
+  o.experiment = j.at("experiment").get<std::string>();
+  o.systems = j.at("systems").get<std::vector<std::string>>();
+  if (!j.at("reps").is_null()) o.reps = j["reps"].get<int>();
+  if (!j.at("steps").is_null()) o.steps = j["steps"].get<std::int64_t>();
+  o.seed = j.at("seed").get<std::int64_t>();
+  o.keep_logs = j.at("keep_logs").get<std::string>();
+  o.log_root = j.at("log_root").get<std::string>();
+  o.run_prefix = j.at("run_prefix").get<std::string>();
+  o.config_dir = j.at("config_dir").get<std::string>();
+  o.settings = j.at("settings").get<std::vector<std::string>>();
+  o.extrinsic_reps = j.at("extrinsic_reps").get<int>();
+  o.scenarios = j.at("scenarios").get<std::vector<std::string>>();
+  o.jobs = j.at("jobs").get<int>();
+  o.transport = j.at("transport").get<std::string>();
+  const std::string netns = j.at("netns").get<std::string>();
+  o.netns = netns == "on" ? NetnsMode::On : netns == "off" ? NetnsMode::Off : NetnsMode::Auto;
+  o.base_port = j.at("base_port").get<int>();
+  o.process_log_level = j.at("process_log_level").get<std::string>();
+  o.stall_seconds = j.at("stall_seconds").get<double>();
+  o.quiet = j.at("quiet").get<bool>();
+  o.attach = j.at("attach").get<std::string>();
+  return o;
+}
+
+json outcomeToJson(const RunOutcome& r) {
+  json curve = json::array();
+  for (const auto& s : r.curve) curve.push_back({{"step", s.step}, {"affordance", s.affordance}});
+  json goals = json::array();
+  for (const auto& g : r.extrinsic.sub_goals)
+    goals.push_back({{"x", g.x}, {"y", g.y}, {"iterations", g.iterations}, {"actions_checked", g.actions_checked},
+                     {"actions_taken", g.actions_taken}, {"reached", g.reached}});
+  return {{"ok", r.ok},
+          {"error", r.error},
+          {"weights_checksum", r.weights_checksum},
+          {"checkpoint", r.checkpoint},
+          {"curve", curve},
+          {"executed", r.executed},
+          {"successes", r.successes},
+          {"log_dir", r.log_dir},
+          {"wall_seconds", r.wall_seconds},
+          {"run_seconds", r.run_seconds},
+          {"peak_rss_kb", r.peak_rss_kb},
+          {"log_bytes", r.log_bytes},
+          {"extrinsic",
+           {{"scenario", r.extrinsic.scenario},
+            {"success", r.extrinsic.success},
+            {"completion", r.extrinsic.completion},
+            {"attempts", r.extrinsic.attempts},
+            {"utility", r.extrinsic.utility},
+            {"sub_goals", goals}}}};
+}
+
+RunOutcome outcomeFromJson(const json& j) {
+  RunOutcome r;
+  r.ok = j.at("ok").get<bool>();
+  r.error = j.at("error").get<std::string>();
+  r.weights_checksum = j.at("weights_checksum").get<std::string>();
+  r.checkpoint = j.at("checkpoint").get<std::string>();
+  for (const auto& s : j.at("curve"))
+    r.curve.push_back({s.at("step").get<std::int64_t>(), s.at("affordance").get<std::vector<std::vector<double>>>()});
+  r.executed = j.at("executed").get<std::vector<std::int64_t>>();
+  r.successes = j.at("successes").get<std::vector<std::int64_t>>();
+  r.log_dir = j.at("log_dir").get<std::string>();
+  r.wall_seconds = j.at("wall_seconds").get<double>();
+  r.run_seconds = j.at("run_seconds").get<double>();
+  r.peak_rss_kb = j.at("peak_rss_kb").get<std::map<std::string, long>>();
+  r.log_bytes = j.at("log_bytes").get<std::uintmax_t>();
+  const json& e = j.at("extrinsic");
+  r.extrinsic.scenario = e.at("scenario").get<std::string>();
+  r.extrinsic.success = e.at("success").get<bool>();
+  r.extrinsic.completion = e.at("completion").get<int>();
+  r.extrinsic.attempts = e.at("attempts").get<int>();
+  r.extrinsic.utility = e.at("utility").get<double>();
+  for (const auto& g : e.at("sub_goals"))
+    r.extrinsic.sub_goals.push_back({g.at("x").get<double>(), g.at("y").get<double>(), g.at("iterations").get<int>(),
+                                     g.at("actions_checked").get<int>(), g.at("actions_taken").get<int>(),
+                                     g.at("reached").get<bool>()});
+  return r;
+}
+
+// A finished run's outcome, kept as it finishes: --resume does not run it again.
+void keepOutcome(const fs::path& out, const std::string& run_id, const RunOutcome& r) {
+  fs::create_directories(out / "runs");
+  writeWhole(outcomePath(out, run_id), json{{"run_id", run_id}, {"outcome", outcomeToJson(r)}}.dump() + "\n");
+}
+
+std::optional<RunOutcome> keptOutcome(const fs::path& out, const std::string& run_id) {
+  const fs::path path = outcomePath(out, run_id);
+  if (!fs::exists(path)) return std::nullopt;
+  try {
+    std::ifstream in(path);
+    const json j = json::parse(in);
+    if (j.at("run_id") != run_id) throw std::runtime_error("it is the outcome of run '" + j["run_id"].dump() + "'");
+    return outcomeFromJson(j.at("outcome"));
+  } catch (const std::exception& e) {
+    throw ConfigError("cannot read " + path.string() + ": " + e.what());
+  }
+}
+
+json readState(const fs::path& out) {
+  std::ifstream in(statePath(out));
+  try {
+    return json::parse(in);
+  } catch (const std::exception& e) {
+    throw ConfigError("cannot read " + statePath(out).string() + ": " + e.what());
+  }
+}
+
+// Each run's id and the FNV-1a of its configuration: a resumed experiment
+// must plan the very same runs.
+json fingerprint(const std::vector<PlannedRun>& runs) {
+  json f = json::array();
+  for (const auto& p : runs) {
+    Fnv1a h;
+    h.add(p.spec.config_yaml.data(), p.spec.config_yaml.size());
+    f.push_back({{"run_id", p.spec.run_id}, {"config", h.hex()}});
+  }
+  return f;
+}
+
+void refuseOtherPlan(const json& stored, const json& now, const std::string& what) {
+  for (std::size_t i = 0; i < std::max(stored.size(), now.size()); ++i) {
+    if (i < stored.size() && i < now.size() && stored[i] == now[i]) continue;
+    const std::string id = (i < stored.size() ? stored[i] : now[i])["run_id"].get<std::string>();
+    throw ConfigError("--resume: the " + what + " differ from those stored: run '" + id +
+                      (i < stored.size() && i < now.size() && stored[i]["run_id"] == now[i]["run_id"]
+                           ? "' now has another configuration (did the config folder change since?)"
+                           : "' is not in both") +
+                      "; start a new experiment with another --out instead");
+  }
+}
+
+std::string shellQuoted(const std::string& s) {
+  if (!s.empty() && s.find_first_not_of("abcdefghijklmnopqrstuvwxyzABCDEFGHIJKLMNOPQRSTUVWXYZ0123456789_./:=@%+,-") ==
+                        std::string::npos)
+    return s;
+  std::string q = "'";
+  for (char c : s) q += c == '\'' ? std::string("'\\''") : std::string(1, c);
+  return q + "'";
+}
+
+std::string resumeCommand(const ExperimentOptions& o) {
+  return shellQuoted(o.program) + " experiment --resume --out " + shellQuoted(o.out_dir);
+}
+
+// One runner per output folder, until it exits (closed on exec: the children do not hold it).
+void lockOutDir(const fs::path& out) {
+  const fs::path lock = out / ".lock";
+  const int fd = open(lock.c_str(), O_RDWR | O_CREAT | O_CLOEXEC, 0644);
+  if (fd < 0 || flock(fd, LOCK_EX | LOCK_NB) != 0)
+    throw ConfigError("another afford experiment is writing to " + out.string() + " (it holds " + lock.string() + ")");
+}
+
+// A fresh experiment never replaces one that did not finish.
+void refuseUnfinished(const ExperimentOptions& o) {
+  if (!fs::exists(statePath(o.out_dir))) return;
+  const json state = readState(o.out_dir);
+  if (state.value("state", "") == "finished") return;
+  throw ConfigError("--out " + o.out_dir + " holds an experiment that did not finish (" +
+                    state.value("experiment", "?") + ", " + state.value("state", "?") + "): continue it with `" +
+                    resumeCommand(o) + "`, or choose another --out");
+}
+
+// The stored experiment's options, with the run options given now (--jobs, --transport, ...).
+ExperimentOptions resumedOptions(const ExperimentOptions& given, const json& state) {
+  ExperimentOptions o = optionsFromJson(state.at("options"));
+  o.out_dir = given.out_dir;
+  o.resume = true;
+  o.given = given.given;
+  o.program = given.program;
+  const auto has = [&](const char* option) { return given.given.count(option) > 0; };
+  if (has("--jobs")) o.jobs = given.jobs;
+  if (has("--transport")) o.transport = given.transport;
+  if (has("--netns")) o.netns = given.netns;
+  if (has("--base-port")) o.base_port = given.base_port;
+  if (has("--process-log-level")) o.process_log_level = given.process_log_level;
+  if (has("--stall-seconds")) o.stall_seconds = given.stall_seconds;
+  if (has("--quiet")) o.quiet = given.quiet;
+  if (has("--attach")) o.attach = given.attach;
+  const std::string cwd = state.at("cwd").get<std::string>();
+  if (fs::current_path() != fs::path(cwd))
+    for (const auto& [option, path] : {std::pair{"--log-root", o.log_root}, {"--config-dir", o.config_dir}})
+      if (fs::path(path).is_relative())
+        throw ConfigError("--resume: the experiment in " + given.out_dir + " was started in " + cwd + ", and its " +
+                          option + " '" + path + "' is relative to that folder: resume it from there");
+  return o;
+}
+
+// The stored experiment of DIR, if it did not finish.
+json unfinishedState(const ExperimentOptions& given) {
+  if (!fs::exists(statePath(given.out_dir)))
+    throw ConfigError("--resume: " + given.out_dir + " holds no experiment to resume (no " +
+                      statePath(given.out_dir).string() + "): is --out right?");
+  json state = readState(given.out_dir);
+  if (state.value("state", "") == "finished")
+    throw ConfigError("--resume: the experiment in " + given.out_dir + " (" + state.value("experiment", "?") +
+                      ") finished: its results are in " + (fs::path(given.out_dir) / "summary.json").string());
+  return state;
+}
+
+// Why a run stopped by a signal before its logger joined it ended at once.
+const char* const kStoppedBeforeTheLog = "stopped as it was starting";
+
 // Handle what is pending (up to a batch), or wait briefly for something.
 void pumpLcm(lcm::LCM& lcm) {
   int handled = 0;
@@ -85,7 +376,12 @@ RunOutcome runInProcess(const PlannedRun& run, const ExperimentOptions& o, const
     decider->tick();
     if (logger) logger->tick();
   };
-  RunOutcome r = driver.run(run.spec, pump, [] { return std::string(); });
+  // After a signal, a log the logger never opened has nothing to close: the driver need not wait for it.
+  auto health = [&]() -> std::string {
+    if (stopRequested() && logger && logger->runId() != run.spec.run_id) return kStoppedBeforeTheLog;
+    return "";
+  };
+  RunOutcome r = driver.run(run.spec, pump, health);
   r.peak_rss_kb["all (one process)"] = peakRssKb(getpid());
   return r;
 }
@@ -136,6 +432,9 @@ RunOutcome runOverUdpm(const PlannedRun& run, const ExperimentOptions& o, const 
   auto health = [&]() {
     std::string h = slot.group ? slot.group->health() : std::string();
     if (h.empty() && slot.logger && run.keep_log) h = slot.logger->health();
+    // After a signal, a log the logger never opened has nothing to close: the driver need not wait for it.
+    if (h.empty() && run.keep_log && stopRequested() && !fs::exists(fs::path(o.log_root) / run.spec.run_id))
+      h = kStoppedBeforeTheLog;
     return h;
   };
   RunOutcome r = driver.run(run.spec, [&] { pumpLcm(lcm); }, health);
@@ -182,7 +481,8 @@ struct Plan {
 };
 
 // Everything that can be wrong with the request is found here, before any process starts.
-Plan planExperiment(const ExperimentOptions& o) {
+// `fresh`: no run may have a log folder yet (a resumed experiment has some).
+Plan planExperiment(const ExperimentOptions& o, bool fresh) {
   Plan plan;
   plan.config_dir = o.config_dir.empty() ? std::string(AFFORD_SOURCE_DIR) + "/config" : o.config_dir;
   plan.exp = loadExperiment(plan.config_dir, o.experiment);
@@ -250,20 +550,98 @@ Plan planExperiment(const ExperimentOptions& o) {
 
   // The run's folder holds its log and its checkpoint: a run never writes into another's.
   for (const auto& p : runs)
-    if (fs::exists(fs::path(o.log_root) / p.spec.run_id))
+    if (fresh && fs::exists(fs::path(o.log_root) / p.spec.run_id))
       throw ConfigError("the log folder " + (fs::path(o.log_root) / p.spec.run_id).string() +
                         " exists already: choose another --run-prefix or --log-root");
 
   return plan;
 }
 
-// Run every planned run, J at a time; outcomes in plan order.
-std::vector<RunOutcome> executeRuns(const std::vector<PlannedRun>& runs, const ExperimentOptions& o,
-                                    const ProtocolConfig& protocol, const std::string& bin, spdlog::logger& log) {
-  std::vector<RunOutcome> outcomes(runs.size());
+std::string joined(const std::vector<std::string>& v) {
+  std::string s;
+  for (const auto& e : v) s += (s.empty() ? "" : " ") + e;
+  return s;
+}
+
+// With --resume, a plan option given again must say what the stored experiment
+// says (`stored`: its options; `plan`: what they resolved to).
+void refuseChangedPlan(const ExperimentOptions& given, const ExperimentOptions& stored, const Plan& plan) {
+  const auto check = [&](const std::string& option, const std::string& now, const std::string& then) {
+    if (!given.given.count(option) || now == then) return;
+    const std::string name = option == "name" ? "the experiment name" : option;
+    throw ConfigError("--resume: " + name + " '" + now + "' differs from the stored experiment's '" + then +
+                      "': a resumed experiment keeps its plan (leave " + name +
+                      " out, or start a new experiment with another --out)");
+  };
+  const auto path = [](const std::string& p) { return fs::absolute(p).lexically_normal().string(); };
+  check("name", given.experiment, stored.experiment);
+  check("--system", joined(given.systems), joined(plan.systems));
+  // 0 (or none) stands for the experiment's own count: nothing to compare
+  if (given.reps) check("--reps", std::to_string(*given.reps), std::to_string(plan.reps));
+  if (given.steps) check("--steps", std::to_string(*given.steps), std::to_string(plan.runs.front().spec.steps));
+  if (given.extrinsic_reps > 0)
+    check("--extrinsic-reps", std::to_string(given.extrinsic_reps), std::to_string(plan.tests));
+  check("--seed", std::to_string(given.seed), std::to_string(stored.seed));
+  check("--keep-logs", given.keep_logs, stored.keep_logs);
+  check("--log-root", path(given.log_root), path(stored.log_root));
+  check("--run-prefix", given.run_prefix, stored.run_prefix);
+  check("--set", joined(given.settings), joined(stored.settings));
+  check("--config-dir", path(given.config_dir), path(stored.config_dir));
+  check("--scenarios", joined(given.scenarios), joined(plan.scenarios));
+}
+
+// The runs of one phase (intrinsic runs, or extrinsic tests), in plan order.
+struct PhaseRuns {
+  std::vector<RunOutcome> outcomes;
+  std::vector<char> finished;              // its outcome is final (it succeeded or failed) and kept in DIR/runs/
+  std::map<std::size_t, std::string> cut;  // run index -> where a signal stopped it
+  std::size_t finishedCount() const { return static_cast<std::size_t>(std::count(finished.begin(), finished.end(), 1)); }
+};
+
+// The outcomes kept by an earlier invocation (--resume); none on a fresh start.
+PhaseRuns keptRuns(const std::vector<PlannedRun>& runs, const fs::path& out) {
+  PhaseRuns phase;
+  phase.outcomes.resize(runs.size());
+  phase.finished.assign(runs.size(), 0);
+  for (std::size_t i = 0; i < runs.size(); ++i)
+    if (auto r = keptOutcome(out, runs[i].spec.run_id)) {
+      phase.outcomes[i] = std::move(*r);
+      phase.finished[i] = 1;
+    }
+  return phase;
+}
+
+// A run that did not finish may have left its folder (an incomplete log): it
+// is never reused nor deleted, but moved aside as <run-id>.cut-<k>, and the
+// run starts afresh.
+void moveUnfinishedAside(const std::vector<PlannedRun>& runs, const PhaseRuns& phase, const ExperimentOptions& o,
+                         json& state, spdlog::logger& log) {
+  bool moved = false;
+  for (std::size_t i = 0; i < runs.size(); ++i) {
+    const fs::path dir = fs::path(o.log_root) / runs[i].spec.run_id;
+    if (phase.finished[i] || !fs::exists(dir)) continue;
+    fs::path aside;
+    for (int k = 1; fs::exists(aside = dir.string() + ".cut-" + std::to_string(k)); ++k) {
+    }
+    fs::rename(dir, aside);
+    state["moved_aside"].push_back({{"run_id", runs[i].spec.run_id}, {"to", aside.string()}});
+    log.info("run '{}' did not finish: its folder is now {}; the run starts again", runs[i].spec.run_id, aside.string());
+    moved = true;
+  }
+  if (moved) writeWhole(statePath(o.out_dir), state.dump(2) + "\n");
+}
+
+// Run every planned run not finished yet, J at a time, and keep each outcome
+// in DIR/runs/ as it comes. After a SIGINT or SIGTERM no run starts; a run it
+// stopped is cut, not finished.
+void executeRuns(const std::vector<PlannedRun>& runs, PhaseRuns& phase, const ExperimentOptions& o,
+                 const ProtocolConfig& protocol, const std::string& bin, spdlog::logger& log) {
+  std::vector<std::size_t> todo;
+  for (std::size_t i = 0; i < runs.size(); ++i)
+    if (!phase.finished[i]) todo.push_back(i);
   std::atomic<std::size_t> next{0};
-  std::atomic<int> done{0};
-  std::mutex log_mutex;
+  std::size_t done = phase.finishedCount();
+  std::mutex mutex;
   auto worker = [&](int slot_index) {
     Slot slot;
     slot.index = slot_index;
@@ -272,40 +650,58 @@ std::vector<RunOutcome> executeRuns(const std::vector<PlannedRun>& runs, const E
     // request at net.core.rmem_max).
     slot.url = "udpm://239.255.76.67:" + std::to_string(o.base_port + slot_index) + "?ttl=0&recv_buf_size=2097152";
     if (!o.attach.empty()) slot.url = o.attach;
-    for (std::size_t i; (i = next.fetch_add(1)) < runs.size();) {
+    for (std::size_t k; !stopRequested() && (k = next.fetch_add(1)) < todo.size();) {
+      const std::size_t i = todo[k];
+      const std::string& id = runs[i].spec.run_id;
       RunOutcome r;
       try {
         r = o.transport == "memq" ? runInProcess(runs[i], o, protocol, slot_index)
                                   : runOverUdpm(runs[i], o, protocol, slot, bin);
       } catch (const std::exception& e) {
         r.ok = false;
-        r.error = "run '" + runs[i].spec.run_id + "': " + e.what();
+        r.error = "run '" + id + "': " + e.what();
       }
+      // A run that fails while the processes are being stopped failed because of it: cut too.
+      const bool cut = r.interrupted || (!r.ok && stopRequested());
       if (r.ok && !r.log_dir.empty()) {
         std::error_code ec;
         for (const auto& f : fs::directory_iterator(r.log_dir, ec))
           if (f.path().extension() == ".lcm") r.log_bytes += fs::file_size(f.path(), ec);
       }
-      outcomes[i] = std::move(r);
-      const RunOutcome& out = outcomes[i];
-      std::lock_guard<std::mutex> lock(log_mutex);
-      const int k = ++done;
+      if (!cut) try {
+          keepOutcome(o.out_dir, id, r);
+        } catch (const std::exception& e) {
+          log.error("cannot keep the outcome of run '{}' ({}): --resume would run it again", id, e.what());
+        }
+      std::lock_guard<std::mutex> lock(mutex);
+      if (cut) {
+        const std::string prefix = "run '" + id + "': ";
+        std::string where = r.error.rfind(prefix, 0) == 0 ? r.error.substr(prefix.size()) : r.error;
+        // (The step is the last one the processes reported, in their heartbeats.)
+        if (const std::string none = "at step -1"; where.size() > none.size() && where.substr(where.size() - none.size()) == none)
+          where = where.substr(0, where.size() - none.size()) + "before any step was reported";
+        phase.cut[i] = where;
+        log.warn("{}: {}", id, phase.cut[i]);
+        continue;
+      }
+      phase.outcomes[i] = std::move(r);
+      phase.finished[i] = 1;
+      const RunOutcome& out = phase.outcomes[i];
+      ++done;
       if (out.ok && runs[i].spec.extrinsic)
-        log.info("[{}/{}] {}: {}, {} action(s), utility {}", k, runs.size(), runs[i].spec.run_id,
+        log.info("[{}/{}] {}: {}, {} action(s), utility {}", done, runs.size(), id,
                  out.extrinsic.success ? "solved in " + std::to_string(out.extrinsic.completion) + " steps" : "not solved",
                  out.extrinsic.attempts, out.extrinsic.utility);
       else if (out.ok)
-        log.info("[{}/{}] {} done in {:.1f} s, weights {}", k, runs.size(), runs[i].spec.run_id, out.wall_seconds,
+        log.info("[{}/{}] {} done in {:.1f} s, weights {}", done, runs.size(), id, out.wall_seconds,
                  out.weights_checksum);
       else
-        log.error("[{}/{}] {}", k, runs.size(), out.error);
+        log.error("[{}/{}] {}", done, runs.size(), out.error);
     }
   };
   std::vector<std::thread> threads;
-  for (int j = 0; j < std::min<int>(o.jobs, static_cast<int>(runs.size())); ++j) threads.emplace_back(worker, j);
+  for (int j = 0; j < std::min<int>(o.jobs, static_cast<int>(todo.size())); ++j) threads.emplace_back(worker, j);
   for (auto& t : threads) t.join();
-
-  return outcomes;
 }
 
 // The tests of every condition and scenario from each intrinsic run that left
@@ -370,14 +766,16 @@ std::vector<PlannedRun> planExtrinsic(const Plan& plan, const std::vector<RunOut
 
 // Per system: the paper's Table 2 metric, raw success, completion steps and
 // their fit a x^2 + b x (Figure 6), actions checked per sub-goal; and a CSV.
-void summariseExtrinsic(json& summary, const Plan& plan, const std::vector<PlannedRun>& tests,
-                        const std::vector<RunOutcome>& outcomes, const ExperimentOptions& o) {
+// Only the finished tests count (all of them, unless a signal stopped the phase).
+void summariseExtrinsic(json& summary, const Plan& plan, const std::vector<PlannedRun>& tests, const PhaseRuns& phase,
+                        const ExperimentOptions& o) {
+  const auto& outcomes = phase.outcomes;
   for (const auto& sys : plan.systems) {
-    std::ofstream csv(fs::path(o.out_dir) / ("extrinsic_" + sys + ".csv"));
+    std::ostringstream csv;
     csv << "system,intrinsic_run_id,seed,scenario,condition,rep,success,completion,attempts,utility,sub_goals,"
            "active_sub_goals,actions_checked,wall_seconds\n";
     for (const auto& t : tests) {
-      if (t.system != sys) continue;
+      if (t.system != sys || !phase.finished[t.index]) continue;
       const RunOutcome& r = outcomes[t.index];
       int checks = 0, active = 0;
       for (const auto& g : r.extrinsic.sub_goals) checks += g.actions_checked, active += g.iterations > 0;
@@ -386,6 +784,7 @@ void summariseExtrinsic(json& summary, const Plan& plan, const std::vector<Plann
           << r.extrinsic.completion << "," << r.extrinsic.attempts << "," << r.extrinsic.utility << ","
           << r.extrinsic.sub_goals.size() << "," << active << "," << checks << "," << r.wall_seconds << "\n";
     }
+    writeWhole(fs::path(o.out_dir) / ("extrinsic_" + sys + ".csv"), csv.str());
     json ex = {{"scenarios", plan.scenarios}, {"tests_per_scenario", plan.tests}};
     if (plan.conditions.size() > 1) {  // the design's summary compares the conditions
       summary["systems"][sys]["extrinsic"] = ex;
@@ -398,7 +797,7 @@ void summariseExtrinsic(json& summary, const Plan& plan, const std::vector<Plann
       double checked = 0;
       int sub_goal_count = 0, successes = 0, total = 0;
       for (const auto& t : tests) {
-        if (t.system != sys || t.scenario != scenario) continue;
+        if (t.system != sys || t.scenario != scenario || !phase.finished[t.index]) continue;
         const RunOutcome& r = outcomes[t.index];
         const bool ok = r.ok && r.extrinsic.success;
         auto& [s, n] = per_run[t.intrinsic];
@@ -441,9 +840,9 @@ void summariseExtrinsic(json& summary, const Plan& plan, const std::vector<Plann
   }
 }
 
-// summary.json content (docs/results-schema.md); also writes the CSV files.
-json summarise(const Plan& plan, const ExperimentOptions& o, const std::vector<RunOutcome>& outcomes,
-               const std::string& network) {
+// summary.json content (docs/results-schema.md) of the finished runs; also writes the CSV files.
+json summarise(const Plan& plan, const ExperimentOptions& o, const PhaseRuns& phase, const std::string& network) {
+  const auto& outcomes = phase.outcomes;
   const auto& runs = plan.runs;
   const auto& configs = plan.configs;
   const int reps = plan.reps;
@@ -475,11 +874,11 @@ json summarise(const Plan& plan, const ExperimentOptions& o, const std::vector<R
     json js = {{"target", target}, {"runs", json::array()}};
     std::vector<Table> finals;
     std::vector<double> maes;
-    std::ofstream curves_csv(fs::path(o.out_dir) / ("curves_" + sys + ".csv"));
+    std::ostringstream curves_csv;
     curves_csv << "system,run_id,seed,step,object,action,prediction\n";
     std::map<std::int64_t, std::pair<Table, int>> curve_sum;
     for (const auto& p : runs) {
-      if (p.system != sys) continue;
+      if (p.system != sys || !phase.finished[p.index]) continue;
       const RunOutcome& r = outcomes[p.index];
       if (!r.ok || r.curve.empty()) {
         js["failed_runs"].push_back({{"run_id", p.spec.run_id}, {"seed", p.spec.seed}, {"error", r.error}});
@@ -548,13 +947,15 @@ json summarise(const Plan& plan, const ExperimentOptions& o, const std::vector<R
         means.push_back(sum);
       }
       js["curves"] = {{"steps", steps}, {"mean", means}};
-      std::ofstream csv(fs::path(o.out_dir) / ("affordance_" + sys + ".csv"));
+      std::ostringstream csv;
       csv << "system,object,action,target,mean,min,max\n";
       for (std::size_t i = 0; i < target.size(); ++i)
         for (int a = 0; a < kNumActions; ++a)
           csv << sys << ",\"" << object_names[i] << "\"," << kActionNames[a] << "," << target[i][a] << ","
               << mean[i][a] << "," << mn[i][a] << "," << mx[i][a] << "\n";
+      writeWhole(fs::path(o.out_dir) / ("affordance_" + sys + ".csv"), csv.str());
     }
+    writeWhole(fs::path(o.out_dir) / ("curves_" + sys + ".csv"), curves_csv.str());
     if (reference && reference["affordance_mae"] && reference["affordance_mae"][sys])
       js["reference_affordance_mae"] = reference["affordance_mae"][sys].as<double>();
     summary["systems"][sys] = js;
@@ -683,11 +1084,72 @@ void printTables(const json& summary, const Plan& plan, const ExperimentOptions&
   std::fflush(stdout);
 }
 
+// After a SIGINT or SIGTERM, once the runs under way have stopped: the summary
+// of what finished, where the others stopped, and the command that goes on.
+// `summary` holds what finished; `phase` is "intrinsic" or "extrinsic".
+int stopHere(json& summary, const std::string& phase_name, const std::vector<PlannedRun>& runs, const PhaseRuns& phase,
+             bool extrinsic_to_come, const ExperimentOptions& o, json& state, spdlog::logger& log) {
+  const std::string signal = signalName(g_signal);
+  json cut = json::array(), not_started = json::array();
+  for (std::size_t i = 0; i < runs.size(); ++i) {
+    if (phase.finished[i]) continue;
+    const std::string& id = runs[i].spec.run_id;
+    const fs::path dir = fs::path(o.log_root) / id;
+    if (auto c = phase.cut.find(i); c != phase.cut.end())
+      cut.push_back({{"run_id", id}, {"where", c->second}, {"log_dir", fs::exists(dir) ? json(dir.string()) : json(nullptr)}});
+    else
+      not_started.push_back(id);
+  }
+  const std::string command = resumeCommand(o);
+  const std::string cwd = fs::current_path().string();
+  summary["interrupted"] = {{"signal", signal},
+                            {"phase", phase_name},
+                            {"finished", phase.finishedCount()},
+                            {"planned", runs.size()},
+                            {"cut", cut},
+                            {"not_started", not_started},
+                            {"extrinsic_tests_to_come", extrinsic_to_come},
+                            {"resume", command},
+                            {"resume_in", cwd}};
+  writeWhole(fs::path(o.out_dir) / "summary.json", summary.dump(2) + "\n");
+  state["state"] = "interrupted";
+  state["interruptions"].push_back({{"signal", signal}, {"phase", phase_name}, {"cut", cut}});
+  writeWhole(statePath(o.out_dir), state.dump(2) + "\n");
+
+  const std::string what = phase_name == "intrinsic" ? "intrinsic run(s)" : "extrinsic test(s)";
+  log.warn("interrupted by {} during the {} phase", signal, phase_name);
+  log.info("kept: {} of {} {} finished{}, in {} and the CSV files beside it", phase.finishedCount(), runs.size(), what,
+           phase_name == "extrinsic" ? " (and every intrinsic run)" : "",
+           (fs::path(o.out_dir) / "summary.json").string());
+  for (const auto& c : cut)
+    log.info("cut: {} ({}){}", c["run_id"].get<std::string>(), c["where"].get<std::string>(),
+             c["log_dir"].is_null() ? std::string()
+                                    : "; its log, incomplete, stays in " + c["log_dir"].get<std::string>());
+  if (!not_started.empty()) log.info("not started: {} {}", not_started.size(), what);
+  if (extrinsic_to_come) log.info("not started: the extrinsic tests");
+  log.warn("to resume (in {}): {}", cwd, command);
+  return 128 + g_signal;
+}
+
 }  // namespace
 
-int runExperiment(const ExperimentOptions& o, spdlog::logger& log) {
+int runExperiment(const ExperimentOptions& request, spdlog::logger& log) {
   const auto began = std::chrono::steady_clock::now();  // reported only, never decides anything
-  const Plan plan = planExperiment(o);
+  // Everything is checked before anything is written or started.
+  json state;
+  ExperimentOptions o = request;
+  if (request.resume) {
+    state = unfinishedState(request);
+    o = resumedOptions(request, state);
+  } else {
+    refuseUnfinished(request);
+    if (o.run_prefix.empty()) o.run_prefix = defaultPrefix();  // stored: --resume plans the same run ids
+  }
+  const Plan plan = planExperiment(o, /*fresh=*/!o.resume);
+  if (o.resume) {
+    refuseChangedPlan(request, optionsFromJson(state.at("options")), plan);
+    refuseOtherPlan(state.at("runs"), fingerprint(plan.runs), "intrinsic runs");
+  }
   std::string network = "in-process memq://";
   std::string bin;
   if (!o.attach.empty()) {
@@ -696,29 +1158,73 @@ int runExperiment(const ExperimentOptions& o, spdlog::logger& log) {
     network = prepareNetwork(o.netns);
     bin = executableDir();
   }
-  fs::create_directories(o.out_dir);
+  // From here a signal stops the experiment in order, whenever it comes.
+  installInterruptHandlers(resumeCommand(o));
+  const fs::path out = o.out_dir;
+  fs::create_directories(out);
+  lockOutDir(out);
+  if (!o.resume) {
+    fs::remove_all(out / "runs");  // the outcomes of the finished experiment this one replaces
+    state = {{"experiment", o.experiment},
+             {"cwd", fs::current_path().string()},
+             {"options", optionsToJson(o)},
+             {"runs", fingerprint(plan.runs)},
+             {"interruptions", json::array()},
+             {"moved_aside", json::array()}};
+  }
+  state["state"] = "running";
+  state["resume"] = resumeCommand(o);
+  writeWhole(statePath(out), state.dump(2) + "\n");
+
+  PhaseRuns intrinsic = keptRuns(plan.runs, out);
   std::string systems;
   for (const auto& sys : plan.systems) systems += (systems.empty() ? "" : ", ") + sys;
   log.info("experiment {} ({}): {} run(s) of {} steps, {} at a time, over {} ({})", o.experiment, systems, plan.runs.size(),
            plan.runs.front().spec.steps, o.jobs, o.transport, network);
-  const std::vector<RunOutcome> outcomes = executeRuns(plan.runs, o, plan.protocol, bin, log);
-  json summary = summarise(plan, o, outcomes, network);
+  if (o.resume) {
+    log.info("resuming {}: {} of {} run(s) finished already", out.string(), intrinsic.finishedCount(), plan.runs.size());
+    moveUnfinishedAside(plan.runs, intrinsic, o, state, log);
+  }
+  executeRuns(plan.runs, intrinsic, o, plan.protocol, bin, log);
+  const auto& outcomes = intrinsic.outcomes;
+  json summary = summarise(plan, o, intrinsic, network);
+  const auto stamp = [&](std::size_t tests) {
+    summary["wall_seconds"] = std::chrono::duration<double>(std::chrono::steady_clock::now() - began).count();
+    summary["extrinsic_tests"] = tests;
+  };
+  if (g_signal) {
+    stamp(0);
+    return stopHere(summary, "intrinsic", plan.runs, intrinsic, plan.tests > 0, o, state, log);
+  }
   for (const auto& [sys, js] : summary["systems"].items())
     for (const auto& g : js.value("curve_gaps", json::array()))
       log.warn("run '{}' reported {} affordance tables, not one per run.curve_interval: its curve has gaps",
                g["run_id"].get<std::string>(), g["snapshots"].get<std::size_t>());
-  std::vector<RunOutcome> test_outcomes;
+  PhaseRuns extrinsic;
   std::vector<std::string> untested;
   if (plan.tests > 0) {
     const std::vector<PlannedRun> tests = planExtrinsic(plan, outcomes, o, untested);
+    if (state.contains("tests"))
+      refuseOtherPlan(state["tests"], fingerprint(tests), "extrinsic tests");
+    else {
+      state["tests"] = fingerprint(tests);
+      writeWhole(statePath(out), state.dump(2) + "\n");
+    }
     for (const auto& e : untested) log.error("{}", e);
     log.info("extrinsic phase: {} test(s): {} condition(s) x {} scenario(s) x {} from each trained agent", tests.size(),
              plan.conditions.size(), plan.scenarios.size(), plan.tests);
-    test_outcomes = executeRuns(tests, o, plan.protocol, bin, log);
-    summariseExtrinsic(summary, plan, tests, test_outcomes, o);
+    extrinsic = keptRuns(tests, out);
+    if (o.resume) {
+      if (extrinsic.finishedCount())
+        log.info("{} of {} test(s) finished already", extrinsic.finishedCount(), tests.size());
+      moveUnfinishedAside(tests, extrinsic, o, state, log);
+    }
+    executeRuns(tests, extrinsic, o, plan.protocol, bin, log);
+    summariseExtrinsic(summary, plan, tests, extrinsic, o);
     std::vector<TestRecord> records;
     for (const auto& t : tests) {
-      const RunOutcome& r = test_outcomes[t.index];
+      if (!extrinsic.finished[t.index]) continue;
+      const RunOutcome& r = extrinsic.outcomes[t.index];
       TestRecord rec;
       rec.system = t.system;
       rec.agent = t.intrinsic;
@@ -741,14 +1247,19 @@ int runExperiment(const ExperimentOptions& o, spdlog::logger& log) {
                                    {"analysis", plan.design.analysis}, {"after_actions", plan.design.after_actions}};
     if (plan.design.after_actions > 0) summary["after_actions"] = plan.design.after_actions;
     if (!untested.empty()) summary["untested_agents"] = untested;
+    if (g_signal) {
+      stamp(extrinsic.finishedCount());
+      return stopHere(summary, "extrinsic", tests, extrinsic, false, o, state, log);
+    }
   }
-  summary["wall_seconds"] = std::chrono::duration<double>(std::chrono::steady_clock::now() - began).count();
-  summary["extrinsic_tests"] = test_outcomes.size();
-  std::ofstream(fs::path(o.out_dir) / "summary.json") << summary.dump(2) << "\n";
+  stamp(extrinsic.finishedCount());
+  writeWhole(out / "summary.json", summary.dump(2) + "\n");
+  state["state"] = "finished";
+  writeWhole(statePath(out), state.dump(2) + "\n");
   if (!o.quiet) printTables(summary, plan, o);
   const auto failed = [](const RunOutcome& r) { return !r.ok; };
   const auto failures = std::count_if(outcomes.begin(), outcomes.end(), failed) +
-                        std::count_if(test_outcomes.begin(), test_outcomes.end(), failed);
+                        std::count_if(extrinsic.outcomes.begin(), extrinsic.outcomes.end(), failed);
   if (failures) log.error("{} run(s) failed; see summary.json failed_runs", failures);
   return failures || !untested.empty() ? 1 : 0;
 }

@@ -1,11 +1,16 @@
 // `afford experiment NAME ...`: runs repetitions of an experiment's intrinsic
 // phase for one or more systems, J runs at a time, each on its own LCM URL,
 // and writes DIR/summary.json plus CSV files (schema: docs/results-schema.md).
+// It keeps its options (DIR/experiment.json) and each finished run's outcome
+// (DIR/runs/<run-id>.json) as it goes: SIGINT or SIGTERM stops the runs under
+// way, writes the summary of those that finished and exits 128 + the signal;
+// `--resume` runs the rest (docs/experiments.md).
 #pragma once
 #include <spdlog/spdlog.h>
 
 #include <cstdint>
 #include <optional>
+#include <set>
 #include <string>
 #include <vector>
 
@@ -35,6 +40,10 @@ struct ExperimentOptions {
   int extrinsic_reps = 0;                  // tests per scenario from each intrinsic run (0: none)
   std::vector<std::string> scenarios;      // default: every config/scenarios/*.yaml
   std::string attach;                      // run on this bus with processes started by hand (no group, one job)
+  bool resume = false;                     // continue the unfinished experiment stored in out_dir
+  std::set<std::string> given;             // options given on the command line ("--reps", "name", ...): with
+                                           // resume, plan options must match the stored ones, run options override
+  std::string program = "afford";          // how the command was called (in the resume command it prints)
 };
 
 // Returns the process exit code (0 when every run succeeded).

@@ -45,6 +45,9 @@ ProcessGroup::ProcessGroup(const std::string& bin_dir, const std::vector<std::st
     }
     if (pid == 0) {
       prctl(PR_SET_PDEATHSIG, SIGTERM);  // never outlive the runner
+      // A process group of its own: the terminal's Ctrl-C goes to the runner
+      // alone, which stops the run in order and then ends the group.
+      setpgid(0, 0);
       // The logger only records: a lower CPU priority keeps its wake-ups from
       // preempting the processes on the step's critical path (its socket
       // buffer holds far more than it ever falls behind).
@@ -52,6 +55,11 @@ ProcessGroup::ProcessGroup(const std::string& bin_dir, const std::vector<std::st
       // runner's thread has.)
       setpriority(PRIO_PROCESS, 0, name == "logger" ? kWatcherNice : 0);
       if (getppid() != parent) _exit(1);
+      const int null = open("/dev/null", O_RDONLY);  // never read the terminal from the background
+      if (null >= 0) {
+        dup2(null, 0);
+        close(null);
+      }
       const int fd = open(c.output.c_str(), O_WRONLY | O_CREAT | O_APPEND, 0644);
       if (fd >= 0) {
         dup2(fd, 1);
@@ -64,6 +72,7 @@ ProcessGroup::ProcessGroup(const std::string& bin_dir, const std::vector<std::st
       execv(argv[0], argv.data());
       _exit(127);
     }
+    setpgid(pid, pid);  // also here: the group exists whichever of the two runs first
     c.pid = pid;
     children_.push_back(c);
   }

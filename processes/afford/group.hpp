@@ -1,6 +1,7 @@
 // A group of afford processes started by the runner (one per process name),
 // each with its output in a file, watched for unexpected exits, and stopped
-// with SIGTERM then SIGKILL after a grace period.
+// with SIGTERM then SIGKILL after a grace period. Each child leads a process
+// group of its own, so a signal from the terminal reaches the runner only.
 #pragma once
 #include <sys/types.h>
 

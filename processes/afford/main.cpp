@@ -37,7 +37,7 @@ int main(int argc, char** argv) {
   int reps = 0;
   std::int64_t steps = 0;
   auto* exp = app.add_subcommand("experiment", "run an experiment's repetitions and summarise them");
-  exp->add_option("name", o.experiment, "experiment (see `afford experiments`)")->required();
+  exp->add_option("name", o.experiment, "experiment (see `afford experiments`); optional with --resume");
   exp->add_option("--system", system, "FIX, IGN, IMP or all (default: the experiment's systems, else all)");
   exp->add_option("--reps", reps, "repetitions per system (default: the experiment's)");
   exp->add_option("--steps", steps, "intrinsic steps per run (default: the experiment's)");
@@ -65,6 +65,8 @@ int main(int argc, char** argv) {
   exp->add_option("--attach", o.attach,
                   "drive the runs on this LCM URL, with processes started by hand (afford-environment ..., "
                   "and afford-logger for logs): the runner starts none");
+  exp->add_flag("--resume", o.resume,
+                "continue the interrupted experiment of --out: the runs not finished, with its stored options");
 
   auto* list = app.add_subcommand("experiments", "list the experiments in the config folder");
   std::string show_name, show_system = "IMP";
@@ -195,6 +197,13 @@ int main(int argc, char** argv) {
       return 0;
     }
     o.config_dir = config_dir;
+    o.program = argv[0];
+    for (const CLI::Option* opt : exp->get_options())
+      if (opt->count() > 0) o.given.insert(opt->get_name());
+    if (app.count("--config-dir") > 0) o.given.insert("--config-dir");
+    if (!o.resume && o.experiment.empty())
+      throw afford::ConfigError("which experiment? `afford experiment NAME` (see `afford experiments`), or "
+                                "`afford experiment --resume --out DIR` to continue an interrupted one");
     if (reps) o.reps = reps;
     if (steps) o.steps = steps;
     if (system == "all")
