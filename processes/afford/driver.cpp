@@ -176,11 +176,14 @@ RunOutcome RunDriver::run(const RunSpec& spec, const std::function<void()>& pump
   } reset{this};
 
   const bool logged = std::find(spec.processes.begin(), spec.processes.end(), "logger") != spec.processes.end();
-  auto stopAndWait = [&] {  // the processes leave the run; the logger closes the log
+  // The logger took the run (a log to close), as far as its STATUS says.
+  auto loggerJoined = [&] { return seen_.count("logger") && seen_["logger"].run_id == spec.run_id; };
+  auto stopAndWait = [&] {  // the processes leave the run; the logger closes the log, if it opened one
+    const bool opened = phase_ == Phase::Running || loggerJoined();
     phase_ = Phase::Stopping;
     sendControl(spec.run_id, run_control_t::STOP);
     const auto until = Clock::now() + milliseconds(protocol.close_timeout_ms);
-    while (logged && !logger_done_ && Clock::now() < until && health().empty()) pump();
+    while (logged && opened && !logger_done_ && Clock::now() < until && health().empty()) pump();
   };
   auto fail = [&](const std::string& why) {
     out.ok = false;
@@ -285,7 +288,7 @@ RunOutcome RunDriver::run(const RunSpec& spec, const std::function<void()>& pump
                                                                        (config_.steps % config_.curve_interval != 0));
   // The logger must be in the run to close its log: one restarted after the
   // last step still catches up first.
-  auto loggerIn = [&] { return !logged || (seen_.count("logger") && seen_["logger"].run_id == spec.run_id); };
+  auto loggerIn = [&] { return !logged || loggerJoined(); };
   while (!have_result_ || out.curve.size() < tables || !loggerIn()) {
     if (auto h = health(); !h.empty()) return fail(h);
     if (auto f = failedProcess(); !f.empty()) return fail(f);

@@ -342,9 +342,6 @@ json unfinishedState(const ExperimentOptions& given) {
   return state;
 }
 
-// Why a run stopped by a signal before its logger joined it ended at once.
-const char* const kStoppedBeforeTheLog = "stopped as it was starting";
-
 // Handle what is pending (up to a batch), or wait briefly for something.
 void pumpLcm(lcm::LCM& lcm) {
   int handled = 0;
@@ -376,12 +373,7 @@ RunOutcome runInProcess(const PlannedRun& run, const ExperimentOptions& o, const
     decider->tick();
     if (logger) logger->tick();
   };
-  // After a signal, a log the logger never opened has nothing to close: the driver need not wait for it.
-  auto health = [&]() -> std::string {
-    if (stopRequested() && logger && logger->runId() != run.spec.run_id) return kStoppedBeforeTheLog;
-    return "";
-  };
-  RunOutcome r = driver.run(run.spec, pump, health);
+  RunOutcome r = driver.run(run.spec, pump, [] { return std::string(); });
   r.peak_rss_kb["all (one process)"] = peakRssKb(getpid());
   return r;
 }
@@ -432,9 +424,6 @@ RunOutcome runOverUdpm(const PlannedRun& run, const ExperimentOptions& o, const 
   auto health = [&]() {
     std::string h = slot.group ? slot.group->health() : std::string();
     if (h.empty() && slot.logger && run.keep_log) h = slot.logger->health();
-    // After a signal, a log the logger never opened has nothing to close: the driver need not wait for it.
-    if (h.empty() && run.keep_log && stopRequested() && !fs::exists(fs::path(o.log_root) / run.spec.run_id))
-      h = kStoppedBeforeTheLog;
     return h;
   };
   RunOutcome r = driver.run(run.spec, [&] { pumpLcm(lcm); }, health);
