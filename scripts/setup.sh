@@ -13,7 +13,7 @@ packages=(
   libcli11-dev libyaml-cpp-dev nlohmann-json3-dev zlib1g-dev libgsl-dev
   libgtest-dev libgmock-dev
   default-jdk-headless default-jre libjchart2d-java
-  iproute2 util-linux procps gnuplot-nox
+  iproute2 iptables util-linux procps gnuplot-nox
   xvfb imagemagick
   clang libclang-rt-14-dev llvm  # scripts/fuzz.sh: libFuzzer, ASan, UBSan, llvm-symbolizer
 )

@@ -77,8 +77,9 @@ Turn PredictorsNode::onFocus(const focus_t& m) {
     return Turn::refuse("step " + std::to_string(m.step) + " is in the past (now at " + std::to_string(current_) + ")");
   if (m.step >= config().steps)
     return Turn::refuse("step " + std::to_string(m.step) + " is beyond the run's last step");
-  // Its turn: the next step, once the current one is decided (and learned from).
-  const bool ready = m.step == current_ + 1 &&
+  // Its turn: the next step, once the current one is decided (and learned from),
+  // and the probe images are in (the affordance tables are computed on them).
+  const bool ready = m.step == current_ + 1 && !probes_.empty() &&
                      (current_ < 0 || outcome_ == Outcome::Passed || outcome_ == Outcome::Learned);
   if (!ready) return Turn::later();
   handleFocus(m);
@@ -86,7 +87,6 @@ Turn PredictorsNode::onFocus(const focus_t& m) {
 }
 
 void PredictorsNode::handleFocus(const focus_t& m) {
-  if (probes_.empty()) log_->warn("{}: no probe images received yet: affordance tables will be empty", channel::kFocus);
   if (m.step % config().curve_interval == 0) publishTable(m.step);
   publishPrediction(m);
   trainPendingEffects();  // off the critical path: the next decision is under way

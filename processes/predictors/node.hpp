@@ -1,5 +1,5 @@
 // Predictors process node. Handles each step's inputs in the canonical order
-// FOCUS(t) -> DECISION(t) -> [EFFECT(t)] -> FOCUS(t+1); one that comes before
+// PROBE, then FOCUS(t) -> DECISION(t) -> [EFFECT(t)] -> FOCUS(t+1); one that comes before
 // its turn waits at the edge (Turn::later), so its state is a pure function
 // of the run's messages.
 // Channels in:  RUN_CONFIG, RUN_CONTROL, PROBE, FOCUS, DECISION, EFFECT,
