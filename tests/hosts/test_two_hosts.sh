@@ -1,0 +1,85 @@
+#!/usr/bin/env bash
+# Two hosts: two network namespaces joined by a veth pair (a LAN of two
+# machines with nothing else on it), multicast routed over the pair, ttl=1.
+# The environment, the eye and the logger run on host A with the runner; the
+# predictors, the motivation and the planner on host B. An experiment (an
+# intrinsic run and extrinsic tests of its agent) driven across them must give
+# the summary and CSV files of the same experiment in one process (memq), and
+# its log must replay to the same weights.
+#   tests/hosts/test_two_hosts.sh BUILD_DIR WORK_DIR
+set -euo pipefail
+build=$(cd "$1" && pwd)
+rm -rf "$2" && mkdir -p "$2"
+out=$(cd "$2" && pwd)
+[[ $(id -u) -eq 0 ]] || { echo "needs root (ip netns, veth)"; exit 1; }
+seed=${AFFORD_HOSTS_SEED:-$((1 + RANDOM % 50))}
+a=afford-a-$$ b=afford-b-$$ va=afa$$ vb=afb$$
+cleanup() {
+  local rc=$?
+  kill $(jobs -p) 2>/dev/null || true
+  wait 2>/dev/null || true
+  ip netns del "$a" 2>/dev/null || true
+  ip netns del "$b" 2>/dev/null || true
+  if ((rc != 0)); then
+    echo "--- diagnostics (seed $seed)"
+    tail -n 8 "$out/two-hosts.txt" 2>/dev/null || true
+    grep -h -E "\] \[(warning|error)\]" "$out"/*.log 2>/dev/null | tail -n 12 || true
+  fi
+}
+trap cleanup EXIT
+
+ip netns add "$a"
+ip netns add "$b"
+ip link add "$va" type veth peer name "$vb"
+ip link set "$va" netns "$a"
+ip link set "$vb" netns "$b"
+host() {  # host a|b: the interface's address and the multicast route
+  local ns=$1 dev=$2 addr=$3
+  ip -n "$ns" link set lo up
+  ip -n "$ns" addr add "$addr/24" dev "$dev"
+  ip -n "$ns" link set "$dev" up multicast on
+  ip -n "$ns" route add 224.0.0.0/4 dev "$dev"
+}
+host "$a" "$va" 10.77.0.1
+host "$b" "$vb" 10.77.0.2
+echo "hosts: $a (10.77.0.1) and $b (10.77.0.2), seed $seed"
+
+url="udpm://239.255.76.67:7997?ttl=1&recv_buf_size=2097152"
+on() { local ns=$1; shift; ip netns exec "$ns" "$@"; }
+for p in environment eye; do on "$a" "$build/bin/afford-$p" --lcm-url "$url" >"$out/$p.log" 2>&1 & done
+on "$a" "$build/bin/afford-logger" --lcm-url "$url" --log-dir "$out/logs" >"$out/logger.log" 2>&1 &
+for p in predictors motivation planner; do on "$b" "$build/bin/afford-$p" --lcm-url "$url" >"$out/$p.log" 2>&1 & done
+
+# Host A hears all six: the processes of host B across the link.
+for _ in $(seq 100); do
+  on "$a" "$build/bin/afford" status --lcm-url "$url" --seconds 0.6 >"$out/status.txt"
+  (($(grep -c -E "^(environment|eye|predictors|motivation|planner|logger) " "$out/status.txt") >= 6)) && break
+done
+cat "$out/status.txt"
+(($(grep -c -E "^(environment|eye|predictors|motivation|planner|logger) " "$out/status.txt") >= 6)) ||
+  { echo "host A does not hear the six processes"; exit 1; }
+
+args=(experiment base --system IMP --reps 1 --steps 1500 --seed "$seed" --extrinsic-reps 2 --scenarios scenario3 --quiet
+      --run-prefix hosts)
+on "$a" "$build/bin/afford" "${args[@]}" --attach "$url" --out "$out/two-hosts" --log-root "$out/logs" \
+  >"$out/two-hosts.txt" 2>&1 || { cat "$out/two-hosts.txt"; echo "the experiment across two hosts failed"; exit 1; }
+"$build/bin/afford" "${args[@]}" --transport memq --keep-logs none --out "$out/one-process" \
+  --log-root "$out/one-process-logs" >"$out/one-process.txt" 2>&1
+
+results() {  # the summary but for what the clock, the host or the paths decide
+  awk '/"peak_rss_kb": \{\}/ {next} /"peak_rss_kb": \{/ {skip=1; next} skip && /\}/ {skip=0; next} !skip' "$1/summary.json" |
+    grep -v -E '"(wall_seconds|run_seconds|steps_per_second|log_bytes|log_bytes_per_step|log_dir|checkpoint|transport|network|afford_version|run_id)"'
+}
+diff <(results "$out/one-process") <(results "$out/two-hosts") >"$out/summary.diff" ||
+  { head -30 "$out/summary.diff"; echo "the summary across two hosts differs from the one-process run's"; exit 1; }
+for f in "$out"/one-process/*.csv; do  # an extrinsic test's wall time (its last column) aside
+  cmp -s <(sed 's/,[^,]*$//' "$f") <(sed 's/,[^,]*$//' "$out/two-hosts/$(basename "$f")") ||
+    { echo "$(basename "$f") differs"; exit 1; }
+done
+sum=$(grep -o '"weights_checksum": "[0-9a-f]*"' "$out/two-hosts/summary.json" | head -1 | grep -o '[0-9a-f]\{16\}')
+echo "weights_checksum $sum across two hosts, equal to one process's; summary and CSV files equal"
+# What crossed the link.
+ip -n "$b" -s link show "$vb" | awk '/RX:/ {getline; print "host B received " $2 " packets over the link"}'
+
+"$build/bin/afford" replay "$out/logs/hosts-base-IMP-s$seed" | tee "$out/replay.txt"
+grep -q "weights_checksum: $sum" "$out/replay.txt" || { echo "the log replays differently"; exit 1; }
