@@ -3,7 +3,13 @@
 #include <filesystem>
 #include <fstream>
 
+#include <set>
+#include <tuple>
+
+#include "afford/seal.hpp"
+#include "afford/wire_bounds.hpp"
 #include "logger/logger.hpp"
+#include "tests/samples.hpp"
 #include "tests/support.hpp"
 
 namespace afford {
@@ -60,6 +66,47 @@ TEST(RunLog, ContinuesAnUnfinishedRunAsANewSegment) {
   std::ofstream(dir / "manifest.json") << R"({"run_id": "run-d", "complete": false})";
   RunLog log(dir.string(), {{"run_id", "run-d"}});
   EXPECT_EQ(fs::path(log.path()).filename(), "log.01.lcm");
+}
+
+// ---- the run header the logger reads without decoding (peekRunHeader) ----------
+
+// Every serial-carrying type, encoded as its publisher sends it, read back.
+template <class Msg>
+void expectHeaderRead(std::set<std::string>& seen) {
+  Msg m = test::sample<Msg>();
+  m.run_id = "a-run-id-of-some-length-" + std::string(wire::Bounds<Msg>::kName);
+  m.step = 123456789;
+  m.serial = 987654321;
+  const std::vector<std::uint8_t> bytes = sealed(m);
+  RunHeader h;
+  ASSERT_TRUE(peekRunHeader(bytes.data(), static_cast<std::uint32_t>(bytes.size()), h)) << wire::Bounds<Msg>::kName;
+  EXPECT_EQ(h.run_id, m.run_id) << wire::Bounds<Msg>::kName;
+  EXPECT_EQ(h.step, m.step) << wire::Bounds<Msg>::kName;
+  EXPECT_EQ(h.serial, m.serial) << wire::Bounds<Msg>::kName;
+  seen.insert(wire::Bounds<Msg>::kName);
+}
+
+TEST(RunHeader, IsReadFromEverySerialCarryingType) {
+  std::set<std::string> seen;
+  std::apply([&](auto... m) { (expectHeaderRead<decltype(m)>(seen), ...); }, wire::SerialTypes{});
+  EXPECT_EQ(seen.size(), std::tuple_size_v<wire::SerialTypes>);
+  EXPECT_EQ(seen.size(), std::size(channel::kWithSerial)) << "one serial-carrying type per serial channel";
+}
+
+TEST(RunHeader, IsNotReadFromABufferTooShortForIt) {
+  focus_t m = test::sample<focus_t>();
+  const std::vector<std::uint8_t> bytes = sealed(m);
+  const std::size_t header = 8 + 4 + m.run_id.size() + 1 + 8 + 8;  // fingerprint, run_id, step, serial
+  RunHeader h;
+  for (std::size_t n = 0; n < header; ++n)
+    EXPECT_FALSE(peekRunHeader(bytes.data(), static_cast<std::uint32_t>(n), h)) << n << " bytes";
+  EXPECT_TRUE(peekRunHeader(bytes.data(), static_cast<std::uint32_t>(header), h));
+}
+
+TEST(RunHeader, TheSerialChannelsAreThoseOfTheSerialTypes) {
+  for (const char* c : channel::kWithSerial) EXPECT_TRUE(isSerialChannel(c)) << c;
+  for (const char* c : {channel::kRunConfig, channel::kRunControl, channel::kStatus, channel::kResend})
+    EXPECT_FALSE(isSerialChannel(c)) << c;
 }
 
 }  // namespace
