@@ -167,14 +167,19 @@ std::vector<ReplayResult::Gap> gapsIn(const std::vector<Event>& events, const st
   return gaps;
 }
 
-// The manifest beside a log folder's segments: its reason if it says the log is incomplete.
-std::string manifestIncomplete(const fs::path& log) {
+// The manifest beside a log folder's segments: its reason if it says the log
+// is incomplete, and the serials it says the logger never got.
+std::string manifestIncomplete(const fs::path& log, std::vector<ReplayResult::Gap>& missing) {
   const fs::path manifest = (fs::is_directory(log) ? log : log.parent_path()) / "manifest.json";
   if (!fs::exists(manifest)) return "";
   std::ifstream in(manifest);
   const nlohmann::json m = nlohmann::json::parse(in, nullptr, false);
   if (m.is_discarded()) return "its manifest.json cannot be read";
   if (m.value("complete", true)) return "";
+  if (m.contains("missing") && m["missing"].is_object())
+    for (const auto& [channel, range] : m["missing"].items())
+      if (range.is_object() && range.contains("first") && range.contains("last"))
+        missing.push_back({channel, range["first"].get<std::int64_t>(), range["last"].get<std::int64_t>()});
   return m.value("incomplete", std::string("its manifest says it is not complete"));
 }
 
@@ -190,7 +195,8 @@ ReplayResult replayRun(const ReplayOptions& o, spdlog::logger& log) {
     result.torn_bytes += torn;
     events.insert(events.end(), std::make_move_iterator(part.begin()), std::make_move_iterator(part.end()));
   }
-  result.incomplete = manifestIncomplete(o.log_dir);
+  std::vector<ReplayResult::Gap> manifest_missing;
+  result.incomplete = manifestIncomplete(o.log_dir, manifest_missing);
   // The run: from its RUN_CONFIG (the first one, or the one of --run) to the next run's.
   // Our logger's logs start with it; a plain lcm-logger recording may hold
   // heartbeats before it and other runs after it.
@@ -233,6 +239,12 @@ ReplayResult replayRun(const ReplayOptions& o, spdlog::logger& log) {
     events.front().data = std::move(bytes);
   }
   result.gaps = gapsIn(events, result.run_id, result.extrinsic, ctx);
+  for (const auto& g : manifest_missing) {  // what the logger knew it never got, beyond the last recorded
+    const bool known = std::any_of(result.gaps.begin(), result.gaps.end(), [&](const ReplayResult::Gap& h) {
+      return h.channel == g.channel && h.first <= g.first && h.last >= g.last;
+    });
+    if (!known) result.gaps.push_back(g);
+  }
 
   std::vector<std::string> into = o.into;
   if (into.empty()) into = {"predictors", result.extrinsic ? "planner" : "motivation"};
@@ -303,9 +315,13 @@ ReplayResult replayRun(const ReplayOptions& o, spdlog::logger& log) {
       if (!decided_here) continue;
       result.decisions = static_cast<std::int64_t>(p->decisions.size());
       result.decisions_recorded = static_cast<std::int64_t>(recorded_decisions.size());
-      auto it = recorded_decisions.begin();
-      for (std::size_t i = 0; i < p->decisions.size() && it != recorded_decisions.end(); ++i, ++it)
-        result.decisions_differing += p->decisions[i] != it->second->data;
+      // Compared serial by serial: a recording may lack some (its gaps).
+      for (const auto& d : p->decisions) {
+        RunHeader h;
+        if (!peekRunHeader(d.data(), static_cast<std::uint32_t>(d.size()), h)) continue;
+        auto it = recorded_decisions.find(h.serial);
+        if (it != recorded_decisions.end()) result.decisions_differing += d != it->second->data;
+      }
     }
   }
   return result;

@@ -272,6 +272,55 @@ TEST(Processes, AReplayedLogReproducesTheLiveRun) {
   EXPECT_NE(missing.output.find("no run log at"), std::string::npos) << missing.output;
 }
 
+// A recording that lost messages (an lcm-logger capture, say): replay names
+// the channels and serials missing, replays as far as it can, compares that
+// with the record, and does not call it equal. Replay writes nothing into
+// the recorded run's folder.
+TEST(Processes, AReplayOfARecordingWithGapsNamesThemAndComparesWhatItCan) {
+  const std::string dir = test::tempDir("replay-gaps");
+  const auto r = test::runCommand(experimentIn(dir, "base --system IMP --reps 1 --steps 600 --transport memq --quiet"
+                                                    " --run-prefix gp"));
+  ASSERT_EQ(r.exit_code, 0) << r.output;
+  const fs::path run = fs::path(dir) / "logs" / "gp-base-IMP-s1";
+  std::map<std::string, std::string> before;
+  for (const auto& f : fs::directory_iterator(run)) before[f.path().filename().string()] = slurp(f.path());
+
+  // A copy of the log without FOCUS 300..302 and DECISION 400.
+  const auto events = test::readLog((run / "log.00.lcm").string());
+  const fs::path gaps = fs::path(dir) / "gaps.lcm";
+  {
+    lcm::LogFile out(gaps.string(), "w");
+    int decision = 0, focus = 0, n = 0;
+    for (const auto& e : events) {
+      if (e.channel == channel::kFocus && (focus++ >= 300 && focus <= 303)) continue;
+      if (e.channel == channel::kDecision && decision++ == 400) continue;
+      lcm::LogEvent ev;
+      ev.eventnum = n++;
+      ev.timestamp = 0;
+      ev.channel = e.channel;
+      ev.datalen = static_cast<int32_t>(e.data.size());
+      ev.data = const_cast<std::uint8_t*>(e.data.data());
+      out.writeEvent(&ev);
+    }
+  }
+  const auto replay = test::runCommand(test::afford("replay " + gaps.string()));
+  EXPECT_EQ(replay.exit_code, 1) << replay.output;
+  EXPECT_NE(replay.output.find("missing from the recording: FOCUS serials 300..302"), std::string::npos) << replay.output;
+  EXPECT_NE(replay.output.find("missing from the recording: DECISION serial 400"), std::string::npos) << replay.output;
+  EXPECT_NE(replay.output.find("weights_checksum: (not reached"), std::string::npos) << replay.output;
+  // The motivation decides on the recorded predictions: all 600, compared where the record has them.
+  EXPECT_NE(replay.output.find("decisions: 600 replayed, 599 recorded, 0 differing"), std::string::npos) << replay.output;
+  EXPECT_NE(replay.output.find("replay equals the record as far as it goes, but the record is missing messages"),
+            std::string::npos)
+      << replay.output;
+
+  // The whole log replays equal, and nothing in the run's folder changed.
+  const auto whole = test::runCommand(test::afford("replay " + run.string()));
+  EXPECT_EQ(whole.exit_code, 0) << whole.output;
+  for (const auto& [name, bytes] : before) EXPECT_EQ(slurp(run / name), bytes) << name << " changed";
+  EXPECT_EQ(std::distance(fs::directory_iterator(run), fs::directory_iterator{}), static_cast<long>(before.size()));
+}
+
 struct BadConfigCase {
   const char* name;
   const char* args;
