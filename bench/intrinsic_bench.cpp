@@ -1,19 +1,22 @@
-// afford-bench: intrinsic-phase throughput over udpm (real processes) and memq
-// (the same cores in one process), their ratio, log bytes per step and peak
-// memory per process. Runs `afford experiment base` once per transport with the
-// same seeds and reads the figures from its summary.json.
-#include <CLI/CLI.hpp>
+// afford-bench, first mode: intrinsic-phase throughput over udpm (real
+// processes) and memq (the same cores in one process), their ratio, log bytes
+// per step and peak memory per process. Runs `afford experiment base` once per
+// transport with the same seeds and reads the figures from its summary.json.
 #include <nlohmann/json.hpp>
 
+#include <algorithm>
 #include <cstdio>
-#include <cstdlib>
-#include <filesystem>
 #include <fstream>
 #include <map>
 #include <string>
 
-namespace fs = std::filesystem;
+#include "bench.hpp"
+
+namespace afford::bench {
+
 using nlohmann::json;
+
+namespace {
 
 struct Figures {
   double steps_per_second = 0;
@@ -22,21 +25,14 @@ struct Figures {
   std::string checksum;
 };
 
-static Figures measure(const std::string& afford, const std::string& transport, int steps, int reps, const fs::path& out) {
-  fs::remove_all(out);
-  const std::string cmd = afford + " experiment base --system IMP --quiet --run-prefix bench --jobs 1 --keep-logs all" +
-                          " --steps " + std::to_string(steps) + " --reps " + std::to_string(reps) + " --transport " +
-                          transport + " --out " + out.string() + " --log-root " + (out / "logs").string() + " 2>" +
-                          (out.string() + ".stderr");
-  fs::create_directories(out);
-  if (std::system(cmd.c_str()) != 0) {
-    std::fprintf(stderr, "afford-bench: `%s` failed; see %s.stderr\n", cmd.c_str(), out.string().c_str());
-    std::exit(1);
-  }
-  std::ifstream in(out / "summary.json");
-  const json s = json::parse(in);
+Figures measure(const std::string& afford, const std::string& transport, int steps, int reps, const fs::path& out) {
+  const Finished run = runExperiment(afford,
+                                     "base --system IMP --quiet --run-prefix bench --jobs 1 --keep-logs all --steps " +
+                                         std::to_string(steps) + " --reps " + std::to_string(reps) + " --transport " +
+                                         transport,
+                                     out);
   Figures f;
-  const json& runs = s["systems"]["IMP"]["runs"];
+  const json& runs = run.summary["systems"]["IMP"]["runs"];
   for (const auto& r : runs) {
     f.steps_per_second += r["steps_per_second"].get<double>() / runs.size();
     f.log_bytes_per_step += r["log_bytes_per_step"].get<double>() / runs.size();
@@ -46,15 +42,12 @@ static Figures measure(const std::string& afford, const std::string& transport, 
   return f;
 }
 
-int main(int argc, char** argv) {
-  CLI::App app{"Intrinsic-phase throughput, log size and memory, udpm vs memq", "afford-bench"};
-  int steps = 6000, reps = 3;
-  std::string out = "out/bench";
-  app.add_option("--steps", steps, "steps per run")->capture_default_str();
-  app.add_option("--reps", reps, "runs per transport (seeds 1..reps)")->capture_default_str();
-  app.add_option("--out", out, "working folder")->capture_default_str();
-  CLI11_PARSE(app, argc, argv);
-  const std::string afford = (fs::read_symlink("/proc/self/exe").parent_path() / "afford").string();
+}  // namespace
+
+int intrinsicBench(const IntrinsicOptions& o) {
+  const int steps = o.steps, reps = o.reps;
+  const std::string& out = o.out;
+  const std::string afford = affordBeside();
 
   const Figures memq = measure(afford, "memq", steps, reps, fs::path(out) / "memq");
   const Figures udpm = measure(afford, "udpm", steps, reps, fs::path(out) / "udpm");
@@ -91,3 +84,5 @@ int main(int argc, char** argv) {
   std::ofstream(fs::path(out) / "bench.json") << j.dump(2) << "\n";
   return memq.checksum == udpm.checksum ? 0 : 1;
 }
+
+}  // namespace afford::bench
