@@ -394,18 +394,7 @@ RunOutcome runOverUdpm(const PlannedRun& run, const ExperimentOptions& o, const 
                        const std::string& bin) {
   const std::string out = (fs::path(o.out_dir) / "processes" / ("slot" + std::to_string(slot.index))).string();
   const bool attached = !o.attach.empty();  // the user started the processes; none are ours to start
-  if (!attached && (!slot.group || !slot.group->health().empty() || slot.extrinsic != run.spec.extrinsic)) {
-    slot.group.reset();
-    slot.extrinsic = run.spec.extrinsic;
-    slot.group = std::make_unique<ProcessGroup>(
-        bin, std::vector<std::string>{"environment", "eye", "predictors", run.spec.extrinsic ? "planner" : "motivation"},
-        slot.url, out, std::vector<std::string>{});
-  }
-  // The logger serves the slot's runs one after another; those not to be kept
-  // say so in their configuration (run.record), and it stays free during them.
-  if (run.keep_log && !attached && (!slot.logger || !slot.logger->health().empty()))
-    slot.logger = std::make_unique<ProcessGroup>(bin, std::vector<std::string>{"logger"}, slot.url, out,
-                                                 std::vector<std::string>{"--log-dir", o.log_root});
+  // The runner listens before it starts any process: it hears each one's first STATUS.
   if (!slot.lcm) {
     // This thread only watches the runs (see kWatcherNice); LCM's receive
     // thread, created on the first handle(), inherits the priority.
@@ -419,6 +408,18 @@ RunOutcome runOverUdpm(const PlannedRun& run, const ExperimentOptions& o, const 
     }
     slot.driver = std::make_unique<RunDriver>(*slot.lcm, makeLogger("runner", "warn"), protocol);
   }
+  if (!attached && (!slot.group || !slot.group->health().empty() || slot.extrinsic != run.spec.extrinsic)) {
+    slot.group.reset();
+    slot.extrinsic = run.spec.extrinsic;
+    slot.group = std::make_unique<ProcessGroup>(
+        bin, std::vector<std::string>{"environment", "eye", "predictors", run.spec.extrinsic ? "planner" : "motivation"},
+        slot.url, out, std::vector<std::string>{});
+  }
+  // The logger serves the slot's runs one after another; those not to be kept
+  // say so in their configuration (run.record), and it stays free during them.
+  if (run.keep_log && !attached && (!slot.logger || !slot.logger->health().empty()))
+    slot.logger = std::make_unique<ProcessGroup>(bin, std::vector<std::string>{"logger"}, slot.url, out,
+                                                 std::vector<std::string>{"--log-dir", o.log_root});
   lcm::LCM& lcm = *slot.lcm;
   RunDriver& driver = *slot.driver;
   auto health = [&]() {
