@@ -1,5 +1,5 @@
 # Sourced by the shell tests that put a live run on a bus of their own
-# (tests/spy, tests/viewer, tests/attach, tests/procs, tests/restart).
+# (tests/spy, viewer, attach, procs, restart, hostile, loss, hosts, logger, replay).
 #
 # enter_private_netns "$0" "$@": re-runs the calling script in a private
 # network namespace (root), with multicast routed over its loopback, so no
@@ -31,4 +31,31 @@ start_xvfb() {
   for _ in $(seq 50); do [[ -e /tmp/.X11-unix/X${display#:} ]] && return 0; sleep 0.1; done
   echo "Xvfb did not start (see $2)" >&2
   return 1
+}
+
+# summary_results DIR: DIR/summary.json without what the clock, the host or
+# the paths decide (wall times, speeds, memory, log sizes and folders, run
+# ids, versions): two experiments with the same results print the same.
+summary_results() {
+  awk '/"peak_rss_kb": \{\}/ {next} /"peak_rss_kb": \{/ {skip=1; next} skip && /\}/ {skip=0; next} !skip' "$1/summary.json" |
+    grep -v -E '"(wall_seconds|run_seconds|steps_per_second|log_bytes|log_bytes_per_step|log_dir|checkpoint|transport|network|afford_version|run_id)"'
+}
+
+# same_results A B: the summary and every CSV file of experiment folders A and
+# B are equal (an extrinsic test's wall time aside); else says what differs.
+same_results() {
+  local a=$1 b=$2 f name
+  if ! diff <(summary_results "$a") <(summary_results "$b") >"$b.summary.diff"; then
+    head -30 "$b.summary.diff"
+    echo "the summary in $b differs from the one in $a"
+    return 1
+  fi
+  for f in "$a"/*.csv; do
+    name=$(basename "$f")
+    if [[ $name == extrinsic_* ]]; then
+      cmp -s <(sed 's/,[^,]*$//' "$f") <(sed 's/,[^,]*$//' "$b/$name") || { echo "$name differs"; return 1; }
+    else
+      cmp -s "$f" "$b/$name" || { echo "$name differs"; return 1; }
+    fi
+  done
 }

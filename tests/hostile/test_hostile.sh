@@ -82,16 +82,7 @@ wait "$runner" || { cat "$out/hostile.txt"; echo "the experiment under the flood
 stop_group hostile
 
 # The same results, but for what the clock, the host or the paths decide.
-results() {
-  awk '/"peak_rss_kb": \{\}/ {next} /"peak_rss_kb": \{/ {skip=1; next} skip && /\}/ {skip=0; next} !skip' "$1/summary.json" |
-    grep -v -E '"(wall_seconds|run_seconds|steps_per_second|log_bytes|log_bytes_per_step|log_dir|checkpoint|transport|network|afford_version|run_id)"'
-}
-diff <(results "$out/clean") <(results "$out/hostile") >"$out/summary.diff" ||
-  { head -40 "$out/summary.diff"; echo "the summary differs from the undisturbed experiment's"; exit 1; }
-for f in "$out"/clean/*.csv; do  # an extrinsic test's wall time (last column) aside
-  name=$(basename "$f")
-  cmp -s <(sed 's/,[^,]*$//' "$f") <(sed 's/,[^,]*$//' "$out/hostile/$name") || { echo "$name differs"; exit 1; }
-done
+same_results "$out/clean" "$out/hostile" || exit 1
 sum=$(grep -o '"weights_checksum": "[0-9a-f]*"' "$out/hostile/summary.json" | head -1 | grep -o '[0-9a-f]\{16\}')
 echo "weights_checksum $sum, equal to the undisturbed experiment's; summary and CSV files equal"
 

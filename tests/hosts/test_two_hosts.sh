@@ -8,6 +8,8 @@
 # its log must replay to the same weights.
 #   tests/hosts/test_two_hosts.sh BUILD_DIR WORK_DIR
 set -euo pipefail
+root=$(cd "$(dirname "$0")/../.." && pwd)
+source "$root/tests/netns.sh"  # the shared helpers (this test makes its own namespaces)
 build=$(cd "$1" && pwd)
 rm -rf "$2" && mkdir -p "$2"
 out=$(cd "$2" && pwd)
@@ -66,16 +68,7 @@ on "$a" "$build/bin/afford" "${args[@]}" --attach "$url" --out "$out/two-hosts" 
 "$build/bin/afford" "${args[@]}" --transport memq --keep-logs none --out "$out/one-process" \
   --log-root "$out/one-process-logs" >"$out/one-process.txt" 2>&1
 
-results() {  # the summary but for what the clock, the host or the paths decide
-  awk '/"peak_rss_kb": \{\}/ {next} /"peak_rss_kb": \{/ {skip=1; next} skip && /\}/ {skip=0; next} !skip' "$1/summary.json" |
-    grep -v -E '"(wall_seconds|run_seconds|steps_per_second|log_bytes|log_bytes_per_step|log_dir|checkpoint|transport|network|afford_version|run_id)"'
-}
-diff <(results "$out/one-process") <(results "$out/two-hosts") >"$out/summary.diff" ||
-  { head -30 "$out/summary.diff"; echo "the summary across two hosts differs from the one-process run's"; exit 1; }
-for f in "$out"/one-process/*.csv; do  # an extrinsic test's wall time (its last column) aside
-  cmp -s <(sed 's/,[^,]*$//' "$f") <(sed 's/,[^,]*$//' "$out/two-hosts/$(basename "$f")") ||
-    { echo "$(basename "$f") differs"; exit 1; }
-done
+same_results "$out/one-process" "$out/two-hosts" || exit 1
 sum=$(grep -o '"weights_checksum": "[0-9a-f]*"' "$out/two-hosts/summary.json" | head -1 | grep -o '[0-9a-f]\{16\}')
 echo "weights_checksum $sum across two hosts, equal to one process's; summary and CSV files equal"
 # What crossed the link.

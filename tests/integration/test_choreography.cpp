@@ -354,6 +354,18 @@ focus_t validFocus(const std::string& run, std::int64_t step) {
   f.image.assign(1323, 0);
   return f;
 }
+prediction_t validPrediction(const std::string& run, std::int64_t step) {
+  prediction_t p;
+  p.run_id = run;
+  p.step = step;
+  p.serial = 0;
+  p.x = p.y = 0.5;
+  p.n_actions = 4;
+  p.affordance = {0.5, 0.5, 0.5, 0.5};
+  p.learning_progress = {0, 0, 0, 0};
+  p.n_trained = 0;
+  return p;
+}
 decision_t validDecision(const std::string& run, std::int64_t step) {
   decision_t d;
   d.run_id = run;
@@ -404,15 +416,8 @@ std::vector<BadInput> badInputs() {
        }},
       {"NaN", "PREDICTION", "field affordance[2] is not finite",
        [](lcm::LCM& l, const std::string& run, std::int64_t s, const Bytes&) {
-         prediction_t p;
-         p.run_id = run;
-         p.step = s;
-         p.serial = 0;
-         p.x = p.y = 0.5;
-         p.n_actions = 4;
-         p.affordance = {0.5, 0.5, kNaN, 0.5};
-         p.learning_progress = {0, 0, 0, 0};
-         p.n_trained = 0;
+         prediction_t p = validPrediction(run, s);
+         p.affordance[2] = kNaN;
          l.publish("PREDICTION", &p);
        }},
       {"Infinite", "DECISION", "field x is not finite",
@@ -501,15 +506,7 @@ std::vector<BadInput> badInputs() {
       // A size field far beyond anything the run sends: refused before any decode.
       {"HugeArraySize", "PREDICTION", "field n_actions",
        [](lcm::LCM& l, const std::string& run, std::int64_t s, const Bytes&) {
-         prediction_t p;
-         p.run_id = run;
-         p.step = s;
-         p.serial = 0;
-         p.x = p.y = 0.5;
-         p.n_actions = 4;
-         p.affordance = {0.5, 0.5, 0.5, 0.5};
-         p.learning_progress = {0, 0, 0, 0};
-         p.n_trained = 0;
+         prediction_t p = validPrediction(run, s);
          auto b = sealed(p);
          const std::size_t at = 8 + 4 + run.size() + 1 + 8 + 8 + 8 + 8 + 8;  // fingerprint, run_id, step, serial, prev_digest, x, y
          b[at] = 0x10, b[at + 1] = 0x00, b[at + 2] = 0x00, b[at + 3] = 0x01;  // n_actions = 0x10000001

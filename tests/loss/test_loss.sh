@@ -30,10 +30,6 @@ experiment() {  # $1: loss rate (0 = none); the results in $out/p$1
   iptables -F INPUT
 }
 field() { grep -o "\"$2\": [0-9.e+-]*" "$1/summary.json" | head -1 | awk '{print $2}'; }
-results() {  # the summary but for what the clock, the host or the paths decide
-  awk '/"peak_rss_kb": \{\}/ {next} /"peak_rss_kb": \{/ {skip=1; next} skip && /\}/ {skip=0; next} !skip' "$1/summary.json" |
-    grep -v -E '"(wall_seconds|run_seconds|steps_per_second|log_bytes|log_bytes_per_step|log_dir|checkpoint|transport|network|afford_version|run_id)"'
-}
 
 experiment 0
 base=$(field "$out/p0" steps_per_second)
@@ -44,12 +40,7 @@ for p in "${rates[@]}"; do
   sps=$(field "$out/p$p" steps_per_second)
   slowdown=$(awk -v a="$base" -v b="$sps" 'BEGIN {printf "%.2f", a / b}')
   printf "loss %s: %.0f steps/s, %.2f times as long as without loss (%s datagrams dropped)\n" "$p" "$sps" "$slowdown" "$dropped"
-  diff <(results "$out/p0") <(results "$out/p$p") >"$out/p$p.diff" ||
-    { head -20 "$out/p$p.diff"; echo "the summary at loss $p differs from the lossless one"; exit 1; }
-  for f in "$out"/p0/*.csv; do  # an extrinsic test's wall time (its last column) aside
-    cmp -s <(sed 's/,[^,]*$//' "$f") <(sed 's/,[^,]*$//' "$out/p$p/$(basename "$f")") ||
-      { echo "$(basename "$f") at loss $p differs"; exit 1; }
-  done
+  same_results "$out/p0" "$out/p$p" || { echo "at loss $p"; exit 1; }
   if [[ $p == 0.05 ]]; then
     awk -v s="$slowdown" 'BEGIN {exit !(s <= 3)}' || { echo "at 5% loss the run took more than 3 times as long"; exit 1; }
   fi
