@@ -178,6 +178,7 @@ inline look_t sample(const look_t*) {
   m.prev_digest = 0x5eed0000 + 7;
   m.seq = 7;
   m.kind = focus_t::SCENE_AT;
+  m.scene = 2;
   m.x = 0.5;
   m.y = 0.4;
   m.digest = 0x1234;

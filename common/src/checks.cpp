@@ -148,6 +148,7 @@ std::string checkMessage(const object_probe_t& m, const BoundsContext& c) {
 
 std::string checkMessage(const look_t& m, const BoundsContext& c) {
   return first({checkStep(m.step, c), checkSerial(m.serial), checkKind(m.kind), checkInt("seq", m.seq, 0, INT32_MAX),
+                checkInt("scene", m.scene, 0, INT64_MAX),
                 m.kind != focus_t::SCENE_AT ? "" : checkRange("x", m.x, 0.0, 1.0),
                 m.kind != focus_t::SCENE_AT ? "" : checkRange("y", m.y, 0.0, 1.0)});
 }

@@ -21,9 +21,14 @@ void EyeNode::onConfigured(const RunConfig& config) {
   guess_.reset();
   last_look_ = -1;
   last_scene_ = -1;
+  outer_scene_ = -1;
+  scenes_.clear();
 }
 
-void EyeNode::onStop() { eye_.reset(); }
+void EyeNode::onStop() {
+  eye_.reset();
+  scenes_.clear();
+}
 
 void EyeNode::publishFocus(std::int64_t step, const Focus& f, int8_t kind, int32_t seq) {
   focus_t m;
@@ -52,13 +57,26 @@ Turn EyeNode::onExtrinsicScene(const scene_t& s) {
   if (s.cause == scene_t::CAUSE_GOAL)
     eye_->setGoal(std::move(image));  // memorised: the inner eye's image
   else
-    eye_->setScene(std::move(image));
+    scenes_[s.serial] = std::move(image);  // the outer eye's, once a LOOK names it
   return Turn::take();
 }
 
 Turn EyeNode::onLook(const look_t& l) {
   if (config().phase != Phase::Extrinsic) return Turn::refuse("no LOOK requests in the intrinsic phase");
   if (l.seq <= last_look_) return Turn::refuse("request " + std::to_string(l.seq) + " was answered already");
+  // The scene the planner looked on when it asked (a LOOK can overtake its scene).
+  if (l.scene != outer_scene_) {
+    auto it = scenes_.find(l.scene);
+    if (it == scenes_.end()) {
+      if (l.scene < outer_scene_)
+        return Turn::refuse("it names scene " + std::to_string(l.scene) + ", before the one looked at (" +
+                            std::to_string(outer_scene_) + ")");
+      return Turn::later();  // that scene is still to come
+    }
+    eye_->setScene(std::move(it->second));
+    outer_scene_ = l.scene;
+    scenes_.erase(scenes_.begin(), std::next(it));  // LOOKs come in order: no later one names these
+  }
   if (!eye_->hasScene() || !eye_->hasGoal()) return Turn::later();  // the goal and the scene come first
   last_look_ = l.seq;
   handled(l.step);

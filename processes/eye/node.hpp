@@ -3,9 +3,11 @@
 // Channels out: EFFECT (after a scene caused by an action), FOCUS, STATUS
 // Intrinsic phase: a step starts with a scene (start, action, newcomers) or,
 // when the decision was to pass and no scene was announced, with that decision.
-// Extrinsic phase: the goal scene is memorised for the inner eye, other scenes
-// update the outer eye, and each LOOK is answered with one FOCUS.
+// Extrinsic phase: the goal scene is memorised for the inner eye; each LOOK is
+// answered with one FOCUS, on the scene it names (the serial of the last SCENE
+// the planner took): a LOOK that overtakes its scene waits for it.
 #pragma once
+#include <map>
 #include <memory>
 #include <optional>
 #include <utility>
@@ -43,6 +45,8 @@ class EyeNode : public NodeBase {
   bool speculate_;
   std::int32_t last_look_ = -1;      // extrinsic: last LOOK answered
   std::int64_t last_scene_ = -1;     // extrinsic: step of the last scene
+  std::int64_t outer_scene_ = -1;    // extrinsic: serial of the scene the outer eye holds
+  std::map<std::int64_t, cv::Mat> scenes_;  // extrinsic: scenes taken, not yet named by a LOOK (by serial)
   std::optional<std::pair<std::int64_t, Focus>> guess_;  // peekScan of the next step, if computed
 };
 

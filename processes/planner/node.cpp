@@ -24,6 +24,7 @@ void PlannerNode::onConfigured(const RunConfig& config) {
   seq_ = 0;
   goal_distance_ = goal_utility_ = -1;
   waiting_scene_ = finished_ = false;
+  scene_ = -1;
   object_.reset();
   affordance_.reset();
 }
@@ -41,6 +42,7 @@ Turn PlannerNode::onScene(const scene_t& s) {
   if (s.cause == scene_t::CAUSE_GOAL) return Turn::take();  // the eye memorises it
   if (s.cause == scene_t::CAUSE_START) {
     if (step_ >= 0) return Turn::refuse("the test has begun already");
+    scene_ = s.serial;
     goal_distance_ = s.goal_distance;
     goal_utility_ = s.goal_utility;
     step_ = 0;  // the test begins
@@ -55,6 +57,7 @@ Turn PlannerNode::onScene(const scene_t& s) {
   goal_distance_ = s.goal_distance;
   goal_utility_ = s.goal_utility;
   waiting_scene_ = false;
+  scene_ = s.serial;
   follow(core_->onActed());
   return Turn::take();
 }
@@ -65,6 +68,7 @@ void PlannerNode::look(int8_t kind, double x, double y) {
   l.step = step_;
   l.seq = ++seq_;
   l.kind = kind;
+  l.scene = scene_;
   l.x = x;
   l.y = y;
   publish(channel::kLook, l);

@@ -50,6 +50,7 @@ class PlannerNode : public NodeBase {
   double goal_distance_ = -1;       // the environment's last word on it
   double goal_utility_ = -1;        // and on the value of what is in place
   bool waiting_scene_ = false;      // an action was sent; its scene is awaited
+  std::int64_t scene_ = -1;         // serial of the last SCENE taken: each LOOK names it
   bool finished_ = false;
   std::optional<focus_t> object_;   // the scanned object of this iteration
   std::optional<std::array<double, kNumActions>> affordance_;

@@ -19,123 +19,18 @@
 #include "motivation/node.hpp"
 #include "planner/node.hpp"
 #include "predictors/node.hpp"
+#include "tests/in_process.hpp"
 #include "tests/reference_loops.hpp"
 #include "tests/support.hpp"
 
 namespace afford {
 namespace {
 
-// Publishes something malformed into a running run: (lcm, run id, current
-// step, the bytes of that step's real FOCUS).
-using Bytes = std::vector<std::uint8_t>;
-using Injector = std::function<void(lcm::LCM&, const std::string&, std::int64_t, const Bytes&)>;
-
-// A process "killed" (its node destroyed, with whatever was in flight to it)
-// and started anew, once it has handled step `at`.
-struct Restart {
-  std::string process;  // empty: none
-  std::int64_t at = 0;
-};
-
-struct InProcessRun {
-  std::ostringstream log;
-  std::vector<test::Event> events;
-  RunOutcome outcome;
-  bool restarted = false;
-  std::int64_t restarted_at = -1;  // the last step the killed node had handled
-
-  InProcessRun(const std::string& yaml, System system, std::int64_t seed, std::int64_t steps, const Injector& inject = {},
-               std::int64_t inject_at = 50, bool leave_stale_run = false, const Restart& restart = {}) {
-    lcm::LCM lcm("memq://");
-    auto sink = std::make_shared<spdlog::sinks::ostream_sink_mt>(log);
-    auto logger = [&](const std::string& name) {
-      auto l = std::make_shared<spdlog::logger>(name, sink);
-      l->set_pattern("[%n] %v");
-      l->set_level(spdlog::level::info);
-      return l;
-    };
-    std::map<std::string, std::unique_ptr<NodeBase>> nodes;
-    const ProtocolConfig protocol = test::shippedProtocol();
-    auto start = [&](const std::string& p) {
-      nodes[p].reset();  // unsubscribes: what was queued for it is lost, as in a kill
-      if (p == "environment") nodes[p] = std::make_unique<EnvironmentNode>(lcm, logger(p), protocol);
-      if (p == "eye") nodes[p] = std::make_unique<EyeNode>(lcm, logger(p), protocol);
-      if (p == "predictors") nodes[p] = std::make_unique<PredictorsNode>(lcm, logger(p), protocol);
-      if (p == "motivation") nodes[p] = std::make_unique<MotivationNode>(lcm, logger(p), protocol);
-      if (p == "planner") nodes[p] = std::make_unique<PlannerNode>(lcm, logger(p), protocol);
-    };
-    for (const char* p : {"environment", "eye", "predictors", "motivation", "planner"}) start(p);
-    RunDriver driver(lcm, logger("runner"), protocol);
-    struct Tap {
-      InProcessRun* run;
-      lcm::LCM* lcm;
-      Injector inject;
-      std::int64_t at;
-      bool done = false;
-      void on(const lcm::ReceiveBuffer* b, const std::string& ch) {
-        if (ch == channel::kStatus) return;
-        const auto* d = static_cast<const std::uint8_t*>(b->data);
-        run->events.push_back({ch, std::vector<std::uint8_t>(d, d + b->data_size)});
-        if (inject && !done && ch == channel::kFocus) {
-          focus_t f;
-          f.decode(b->data, 0, static_cast<int>(b->data_size));
-          if (f.step == at) {
-            done = true;
-            inject(*lcm, f.run_id, f.step, run->events.back().data);
-          }
-        }
-      }
-    } tap{this, &lcm, inject, inject_at};
-    lcm.subscribe(".*", &Tap::on, &tap)->setQueueCapacity(100000);
-    RunSpec spec;
-    spec.run_id = "test-run";
-    spec.experiment = YAML::Load(yaml)["experiment"].as<std::string>();
-    spec.system = toString(system);
-    spec.seed = seed;
-    spec.steps = steps;
-    spec.config_yaml = yaml;
-    spec.extrinsic = YAML::Load(yaml)["phase"].as<std::string>() == "extrinsic";
-    spec.processes = {"environment", "eye", "predictors", spec.extrinsic ? "planner" : "motivation"};
-    spec.stall_seconds = 20;
-    auto maybeRestart = [&] {
-      if (restart.process.empty() || restarted) return;
-      const NodeBase& v = *nodes.at(restart.process);
-      if (v.runId() != spec.run_id || v.lastStep() < restart.at) return;
-      restarted_at = v.lastStep();
-      start(restart.process);
-      restarted = true;
-    };
-    auto pump = [&] {
-      while (lcm.handleTimeout(0) > 0) maybeRestart();  // one message at a time
-      lcm.handleTimeout(2);
-      for (auto& [name, node] : nodes) node->tick();
-    };
-    if (leave_stale_run) {
-      // The processes take an earlier run whose STOP never comes (a lost datagram).
-      run_config_t stale;
-      stale.run_id = "stale-run";
-      stale.step = 0;
-      stale.seed = seed;
-      stale.experiment = spec.experiment;
-      stale.system = spec.system;
-      stale.config_yaml = yaml;
-      const auto bytes = sealed(stale);
-      lcm.publish(channel::kRunConfig, bytes.data(), static_cast<unsigned>(bytes.size()));
-      for (int i = 0; i < 50; ++i) pump();
-    }
-    outcome = driver.run(spec, pump, [] { return std::string(); });
-  }
-
-  int count(const std::string& channel) const {
-    int n = 0;
-    for (const auto& e : events) n += e.channel == channel;
-    return n;
-  }
-};
-
-std::string baseYaml(System s, std::int64_t steps, std::int64_t seed = 3) {
-  return test::shippedConfigYaml("base", s, seed, steps);
-}
+using test::Bytes;
+using test::Injector;
+using test::InProcessRun;
+using test::Restart;
+using test::baseYaml;
 
 TEST(Choreography, ARunHasOnePredictionAndOneDecisionPerStepInOrder) {
   InProcessRun run(baseYaml(System::IMP, 200), System::IMP, 3, 200);

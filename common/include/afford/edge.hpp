@@ -139,6 +139,8 @@ class Edge {
   // Ask for what is missing, if due (call from the loop too: retries).
   void askMissing();
   std::int64_t missing() const { return serials_.missing(); }
+  // The channels taken in serial order (Order::Serial): those whose gaps are asked for.
+  const std::vector<std::string>& ordered() const { return tracked_; }
   std::map<std::string, std::pair<std::int64_t, std::int64_t>> missingRanges() const { return serials_.missingRanges(); }
   // A restarted recorder goes on from where its earlier record ends: `next`
   // is the serial to expect, `last_digest` the digest of the one before it.

@@ -19,6 +19,7 @@
 #include <functional>
 #include <memory>
 #include <string>
+#include <vector>
 
 #include "afford/config.hpp"
 #include "afford/edge.hpp"
@@ -44,6 +45,8 @@ class NodeBase {
   const std::string& process() const { return process_; }
   const std::string& runId() const { return run_id_; }
   int8_t state() const { return state_; }
+  // The run channels this process takes, in serial order (what it subscribes to).
+  const std::vector<std::string>& takes() const { return edge_.ordered(); }
   std::int64_t lastStep() const { return last_step_; }  // the last step handled in the run (-1: none)
   // Leave the run (used on STOP and at shutdown); subclasses flush in onStop().
   void leaveRun();
