@@ -351,6 +351,8 @@ RunConfig parseRunConfig(const YAML::Node& root) {
     c.planner.subgoal_match = p.number("subgoal_match", 0.0, 1.0);
     c.planner.image_match = p.number("image_match", 0.0, 1.0);
     c.planner.position_match = p.number("position_match", 0.0, 1.0);
+    c.planner.position_metric = p.choice<PositionMetric>(
+        "position_metric", {{"euclidean", PositionMetric::Euclidean}, {"half_euclidean", PositionMetric::HalfEuclidean}});
     c.planner.subgoal_timeout = static_cast<int>(p.integer("subgoal_timeout", 1, 1000));
     c.planner.budget = static_cast<int>(p.integer("budget", 1, 1'000'000));
     c.planner.max_attempts = static_cast<int>(p.integer("max_attempts", 1, 1'000'000));

@@ -25,8 +25,9 @@ double imageDistance(const std::vector<double>& predicted, const std::vector<std
   return std::sqrt(sum) / static_cast<double>(b.size());
 }
 
-double positionDistance(double px, double py, double qx, double qy) {
-  return std::hypot(px - qx, py - qy) / 2.0;
+double positionDistance(double px, double py, double qx, double qy, PositionMetric metric) {
+  const double d = std::hypot(px - qx, py - qy);
+  return metric == PositionMetric::HalfEuclidean ? d / 2.0 : d;
 }
 
 std::vector<GoalValue> goalValues(const Scenario& s) {
@@ -120,7 +121,8 @@ PlannerRequest Planner::onForward(const std::vector<ForwardPrediction>& predicti
   for (const ForwardPrediction& p : predictions) {
     ++records_.back().actions_checked;
     const bool image_ok = imageDistance(p.what, sub_goal_.image) < config_.image_match;
-    const bool place_ok = positionDistance(p.where_x, p.where_y, sub_goal_.x, sub_goal_.y) < config_.position_match;
+    const bool place_ok = positionDistance(p.where_x, p.where_y, sub_goal_.x, sub_goal_.y, config_.position_metric) <=
+                          config_.position_match;
     if (image_ok && place_ok) return config_.kind == PlannerKind::Utility ? weighUtility(p) : act(p);
   }
   return done();

@@ -18,8 +18,9 @@ namespace afford {
 // ||a - b||_2 / n for images in [0, 1] (bytes are value / 255).
 double imageDistance(const std::vector<std::uint8_t>& a, const std::vector<std::uint8_t>& b);
 double imageDistance(const std::vector<double>& predicted, const std::vector<std::uint8_t>& b);
-// ||p - q||_2 / 2 for positions in scene units.
-double positionDistance(double px, double py, double qx, double qy);
+// ||p - q||_2 for positions in scene units (planner.position_metric: euclidean),
+// or half of it (half_euclidean, afford before issue 10).
+double positionDistance(double px, double py, double qx, double qy, PositionMetric metric);
 
 struct View {
   std::vector<std::uint8_t> image;  // a focus image

@@ -38,8 +38,9 @@ TEST(PlannerDistances, ImagesAndPositions) {
   EXPECT_DOUBLE_EQ(imageDistance(a, a), 0.0);
   EXPECT_NEAR(imageDistance(a, b), std::sqrt(1323.0) / 1323.0, 1e-12);
   EXPECT_NEAR(imageDistance(std::vector<double>(1323, 0.9), b), 0.1 / std::sqrt(1323.0), 1e-12);
-  EXPECT_DOUBLE_EQ(positionDistance(0.2, 0.2, 0.2, 0.2), 0.0);
-  EXPECT_NEAR(positionDistance(0.0, 0.0, 0.03, 0.04), 0.025, 1e-12);
+  EXPECT_DOUBLE_EQ(positionDistance(0.2, 0.2, 0.2, 0.2, PositionMetric::Euclidean), 0.0);
+  EXPECT_NEAR(positionDistance(0.0, 0.0, 0.03, 0.04, PositionMetric::Euclidean), 0.05, 1e-12);
+  EXPECT_NEAR(positionDistance(0.0, 0.0, 0.03, 0.04, PositionMetric::HalfEuclidean), 0.025, 1e-12);
 }
 
 TEST_F(PlannerTest, ASubGoalAlreadyReachedEndsTheIteration) {

@@ -100,11 +100,14 @@ struct Scenario {
 };
 
 enum class PlannerKind { Goal, Utility };
+// The distance of a predicted where-effect from the sub-goal's place.
+enum class PositionMetric { Euclidean, HalfEuclidean };
 
 struct PlannerConfig {
   double subgoal_match = 0;         // sub-goal reached: image distance below this (paper 2.4.3)
   double image_match = 0;         // predicted image matches the sub-goal (paper 2.4.3)
   double position_match = 0;        // predicted position matches the sub-goal (paper 2.4.3)
+  PositionMetric position_metric = PositionMetric::Euclidean;  // how that distance is measured
   int subgoal_timeout = 0;             // iterations before another sub-goal is chosen (paper 2.4.3)
   int budget = 0;                    // steps per test (authors' code)
   int max_attempts = 0;               // executed actions per test (authors' code)
