@@ -13,15 +13,13 @@ source "$root/tests/netns.sh"  # the shared helpers (this test makes its own nam
 build=$(cd "$1" && pwd)
 rm -rf "$2" && mkdir -p "$2"
 out=$(cd "$2" && pwd)
-[[ $(id -u) -eq 0 ]] || { echo "needs root (ip netns, veth)"; exit 1; }
+[[ $(id -u) -eq 0 ]] || { echo "needs root (network namespaces, veth)"; exit 1; }
 seed=${AFFORD_HOSTS_SEED:-$((1 + RANDOM % 50))}
-a=afford-a-$$ b=afford-b-$$ va=afa$$ vb=afb$$
+va=afa$$ vb=afb$$
 cleanup() {
   local rc=$?
-  kill $(jobs -p) 2>/dev/null || true
+  kill $(jobs -p) 2>/dev/null || true  # the hosts' holders too: their namespaces and the veth pair go with them
   wait 2>/dev/null || true
-  ip netns del "$a" 2>/dev/null || true
-  ip netns del "$b" 2>/dev/null || true
   if ((rc != 0)); then
     echo "--- diagnostics (seed $seed)"
     tail -n 8 "$out/two-hosts.txt" 2>/dev/null || true
@@ -30,24 +28,36 @@ cleanup() {
 }
 trap cleanup EXIT
 
-ip netns add "$a"
-ip netns add "$b"
+# A host is a network namespace held by a sleeping process; commands enter it
+# with nsenter (not `ip netns exec`, which remounts / and fails in a chroot).
+newhost() {
+  unshare --net sleep infinity &
+  local pid=$! self
+  self=$(readlink /proc/self/ns/net)
+  for _ in $(seq 200); do
+    [[ $(readlink "/proc/$pid/ns/net" 2>/dev/null) != "$self" ]] && break
+    sleep 0.01
+  done
+  host_pid=$pid
+}
+newhost; a=$host_pid
+newhost; b=$host_pid
+on() { local pid=$1; shift; nsenter --net="/proc/$pid/ns/net" "$@"; }
 ip link add "$va" type veth peer name "$vb"
 ip link set "$va" netns "$a"
 ip link set "$vb" netns "$b"
 host() {  # host a|b: the interface's address and the multicast route
-  local ns=$1 dev=$2 addr=$3
-  ip -n "$ns" link set lo up
-  ip -n "$ns" addr add "$addr/24" dev "$dev"
-  ip -n "$ns" link set "$dev" up multicast on
-  ip -n "$ns" route add 224.0.0.0/4 dev "$dev"
+  local pid=$1 dev=$2 addr=$3
+  on "$pid" ip link set lo up
+  on "$pid" ip addr add "$addr/24" dev "$dev"
+  on "$pid" ip link set "$dev" up multicast on
+  on "$pid" ip route add 224.0.0.0/4 dev "$dev"
 }
 host "$a" "$va" 10.77.0.1
 host "$b" "$vb" 10.77.0.2
-echo "hosts: $a (10.77.0.1) and $b (10.77.0.2), seed $seed"
+echo "hosts: A (10.77.0.1) and B (10.77.0.2), seed $seed"
 
 url="udpm://239.255.76.67:7997?ttl=1&recv_buf_size=2097152"
-on() { local ns=$1; shift; ip netns exec "$ns" "$@"; }
 for p in environment eye; do on "$a" "$build/bin/afford-$p" --lcm-url "$url" >"$out/$p.log" 2>&1 & done
 on "$a" "$build/bin/afford-logger" --lcm-url "$url" --log-dir "$out/logs" >"$out/logger.log" 2>&1 &
 for p in predictors motivation planner; do on "$b" "$build/bin/afford-$p" --lcm-url "$url" >"$out/$p.log" 2>&1 & done
@@ -72,7 +82,7 @@ same_results "$out/one-process" "$out/two-hosts" || exit 1
 sum=$(grep -o '"weights_checksum": "[0-9a-f]*"' "$out/two-hosts/summary.json" | head -1 | grep -o '[0-9a-f]\{16\}')
 echo "weights_checksum $sum across two hosts, equal to one process's; summary and CSV files equal"
 # What crossed the link.
-ip -n "$b" -s link show "$vb" | awk '/RX:/ {getline; print "host B received " $2 " packets over the link"}'
+on "$b" ip -s link show "$vb" | awk '/RX:/ {getline; print "host B received " $2 " packets over the link"}'
 
 "$build/bin/afford" replay "$out/logs/hosts-base-IMP-s$seed" | tee "$out/replay.txt"
 grep -q "weights_checksum: $sum" "$out/replay.txt" || { echo "the log replays differently"; exit 1; }

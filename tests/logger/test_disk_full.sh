@@ -7,7 +7,10 @@
 #   tests/logger/test_disk_full.sh BUILD_DIR WORK_DIR
 set -euo pipefail
 root=$(cd "$(dirname "$0")/../.." && pwd)
-if [[ -z ${AFFORD_TEST_MOUNTNS:-} ]]; then  # a mount namespace of its own for the tmpfs
+# A mount namespace of its own for the tmpfs, where there can be one: in a
+# chroot (whose root is not a mount point) there cannot, and the tmpfs is
+# mounted where the test runs and unmounted when it ends.
+if [[ -z ${AFFORD_TEST_MOUNTNS:-} ]] && unshare --mount true 2>/dev/null; then
   exec unshare --mount env AFFORD_TEST_MOUNTNS=1 bash "$0" "$@"
 fi
 source "$root/tests/netns.sh"
@@ -16,6 +19,7 @@ url="udpm://239.255.76.67:7998?ttl=0&recv_buf_size=2097152"
 disk="$out/disk"
 mkdir -p "$disk"
 mount -t tmpfs -o size=256k tmpfs "$disk"
+trap 'kill $(jobs -p) 2>/dev/null || true; wait 2>/dev/null || true; umount -l "$disk" 2>/dev/null || true' EXIT
 
 for p in environment eye predictors motivation; do
   "$build/bin/afford-$p" --lcm-url "$url" >"$out/$p.log" 2>&1 &
