@@ -290,7 +290,7 @@ inline scene_t sample(const scene_t*) {
   const RunConfig& c = sampleConfig();
   cv::Mat scene = blankScene(c.world.size_px);
   for (const ObjectSpec& o : c.world.objects)
-    paintObject(scene, o.shape, o.colour, toPixel(o.x, o.y, c.world.size_px), c.world);
+    paintObject(scene, o.shape, o.colour, o.x, o.y, c.world);
   scene_t m;
   m.run_id = kSampleRunId;
   m.step = 0;

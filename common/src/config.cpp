@@ -284,6 +284,9 @@ RunConfig parseRunConfig(const YAML::Node& root) {
     c.world.table_min = table[0];
     c.world.table_max = table[1];
     c.world.max_target_draws = static_cast<int>(w.integer("max_target_draws", 1, 1'000'000));
+    c.world.positions =
+        w.choice<Positions>("positions", {{"continuous", Positions::Continuous}, {"pixel", Positions::Pixel}});
+    c.world.late_overlap = w.choice<bool>("late_overlap", {{"true", true}, {"false", false}});
     YAML::Node objs = w.raw("objects");
     if (!objs.IsSequence() || objs.size() == 0)
       fail("world.objects", "expected a non-empty list of objects, got " + describe(objs));

@@ -44,24 +44,66 @@ std::vector<Pixel> shapeFootprint(Shape shape, const WorldConfig& world) {
   return out;
 }
 
+int roundHalfAway(double v) { return static_cast<int>(std::round(std::round(v * 1e9) / 1e9)); }
+
+std::vector<Pixel> shapePixels(Shape shape, double x, double y, const WorldConfig& world) {
+  std::vector<Pixel> out;
+  if (world.positions == Positions::Pixel) {
+    const Pixel c = toPixel(x, y, world.size_px);
+    for (const Pixel& f : shapeFootprint(shape, world)) out.push_back({c.col + f.col, c.row + f.row});
+    return out;
+  }
+  const double cx = x * world.size_px, cy = y * world.size_px, side = world.object_size * world.size_px;
+  auto box = [&](double w, double h) {
+    const int c0 = roundHalfAway(cx - w / 2), c1 = roundHalfAway(cx + w / 2);
+    const int r0 = roundHalfAway(cy - h / 2), r1 = roundHalfAway(cy + h / 2);
+    for (int r = r0; r < r1; ++r)
+      for (int c = c0; c < c1; ++c) out.push_back({c, r});
+  };
+  switch (shape) {
+    case Shape::Square:
+      box(side, side);
+      break;
+    case Shape::Rectangle:
+      box(side * 2.0 / 3.0, side * 1.5);
+      break;
+    case Shape::Circle: {
+      const double radius = side / std::sqrt(M_PI);
+      for (int r = static_cast<int>(std::floor(cy - radius)); r <= static_cast<int>(std::ceil(cy + radius)); ++r)
+        for (int c = static_cast<int>(std::floor(cx - radius)); c <= static_cast<int>(std::ceil(cx + radius)); ++c)
+          if ((c - cx) * (c - cx) + (r - cy) * (r - cy) < radius * radius) out.push_back({c, r});
+      break;
+    }
+  }
+  return out;
+}
+
+Pixel windowCorner(double x, double y, int side, int size_px) {
+  const double half = side / 2.0;
+  return {roundHalfAway(x * size_px - half), roundHalfAway(y * size_px - half)};
+}
+
 cv::Mat blankScene(int size_px) { return cv::Mat(size_px, size_px, CV_8UC3, cv::Scalar(0, 0, 0)); }
 
-void paintObject(cv::Mat& scene, Shape shape, Colour colour, Pixel centre, const WorldConfig& world) {
+void paintPixels(cv::Mat& scene, const std::vector<Pixel>& pixels, Colour colour) {
   const int ch = colourChannel(colour);
-  for (const Pixel& o : shapeFootprint(shape, world)) {
-    const int r = centre.row + o.row, c = centre.col + o.col;
-    if (r < 0 || c < 0 || r >= scene.rows || c >= scene.cols) continue;
-    auto& px = scene.at<cv::Vec3b>(r, c);
+  for (const Pixel& p : pixels) {
+    if (p.row < 0 || p.col < 0 || p.row >= scene.rows || p.col >= scene.cols) continue;
+    auto& px = scene.at<cv::Vec3b>(p.row, p.col);
     px = cv::Vec3b(0, 0, 0);
     px[ch] = 255;
   }
+}
+
+void paintObject(cv::Mat& scene, Shape shape, Colour colour, double x, double y, const WorldConfig& world) {
+  paintPixels(scene, shapePixels(shape, x, y, world), colour);
 }
 
 cv::Mat renderScenario(const Scenario& s, bool goal, const WorldConfig& world) {
   cv::Mat scene = blankScene(world.size_px);
   for (const auto& o : s.objects) {
     const ObjectState& st = goal ? o.goal : o.initial;
-    paintObject(scene, o.shape, st.colour, toPixel(st.x, st.y, world.size_px), world);
+    paintObject(scene, o.shape, st.colour, st.x, st.y, world);
   }
   return scene;
 }

@@ -10,11 +10,11 @@
 namespace afford {
 
 namespace {
-// The focus window, or the largest shape if that reaches further, plus a pixel.
-int clearanceOf(const std::vector<std::vector<Pixel>>& footprints, int focus_side) {
+// Pixel world: the focus window, or the largest shape if that reaches further, plus a pixel.
+int clearanceOf(const std::vector<WorldObject>& objects, const WorldConfig& w, int focus_side) {
   int half = focus_side / 2;
-  for (const auto& fp : footprints)
-    for (const Pixel& f : fp) half = std::max({half, std::abs(f.col), std::abs(f.row)});
+  for (const WorldObject& o : objects)
+    for (const Pixel& f : shapeFootprint(o.shape, w)) half = std::max({half, std::abs(f.col), std::abs(f.row)});
   return half + 1;
 }
 }  // namespace
@@ -27,12 +27,11 @@ Environment::Environment(const RunConfig& config) : config_(config) {
     o.table_index = static_cast<int>(i);
     o.shape = spec.shape;
     o.colour = spec.colour;
-    o.centre = toPixel(spec.x, spec.y, w.size_px);
+    place(o, spec.x, spec.y);
     o.present = false;
     objects_.push_back(o);
-    footprints_.push_back(shapeFootprint(spec.shape, w));
   }
-  free_half_ = clearanceOf(footprints_, config_.eye.focus_side);
+  free_half_ = clearanceOf(objects_, w, config_.eye.focus_side);
   introduceObjectsAt(0);
 }
 
@@ -41,14 +40,41 @@ Environment::Environment(const RunConfig& config, const Scenario& scenario) : co
     WorldObject o;
     o.shape = so.shape;
     o.colour = so.initial.colour;
-    o.centre = toPixel(so.initial.x, so.initial.y, config_.world.size_px);
+    place(o, so.initial.x, so.initial.y);
     o.present = true;
     o.table_index = -1;
     objects_.push_back(o);
-    footprints_.push_back(shapeFootprint(so.shape, config_.world));
   }
-  free_half_ = clearanceOf(footprints_, config_.eye.focus_side);
+  free_half_ = clearanceOf(objects_, config_.world, config_.eye.focus_side);
   goal_ = renderScenario(scenario, true, config_.world);
+}
+
+void Environment::place(WorldObject& o, double x, double y) const {
+  const int size = config_.world.size_px;
+  o.centre = toPixel(x, y, size);
+  o.x = continuous() ? x : toUnit(o.centre.col, size);
+  o.y = continuous() ? y : toUnit(o.centre.row, size);
+  o.pixels = shapePixels(o.shape, o.x, o.y, config_.world);
+}
+
+template <class Counts>
+bool Environment::placeFree(double x, double y, Counts counts) const {
+  const int size = config_.world.size_px;
+  Pixel lo, hi;  // the window, inclusive
+  if (continuous()) {
+    lo = windowCorner(x, y, config_.eye.focus_side, size);
+    hi = {lo.col + config_.eye.focus_side - 1, lo.row + config_.eye.focus_side - 1};
+  } else {
+    const Pixel c = toPixel(x, y, size);
+    lo = {c.col - free_half_, c.row - free_half_};
+    hi = {c.col + free_half_, c.row + free_half_};
+  }
+  for (std::size_t i = 0; i < objects_.size(); ++i) {
+    if (!counts(static_cast<int>(i))) continue;
+    for (const Pixel& p : objects_[i].pixels)
+      if (p.col >= lo.col && p.col <= hi.col && p.row >= lo.row && p.row <= hi.row) return false;
+  }
+  return true;
 }
 
 const cv::Mat& Environment::goalScene() const {
@@ -56,13 +82,23 @@ const cv::Mat& Environment::goalScene() const {
   return goal_;
 }
 
+bool Environment::placeFree(double x, double y) const {
+  return placeFree(x, y, [this](int i) { return objects_[i].present; });
+}
+
 double Environment::goalUtility() const {
   if (!scenario_) throw std::logic_error("Environment: no scenario, so no goal");
+  const int size = config_.world.size_px;
   double sum = 0;
   for (std::size_t i = 0; i < objects_.size(); ++i) {
     const ObjectState& g = scenario_->objects[i].goal;
     const WorldObject& o = objects_[i];
-    if (o.colour == g.colour && o.centre == toPixel(g.x, g.y, config_.world.size_px)) sum += scenario_->objects[i].value;
+    // In place: on the goal's pixel (pixel world), or within a pixel of the goal's
+    // centre in each direction (continuous: a move goes where the eye saw the goal
+    // object, the centre of its drawn pixels, which can be a fraction of a pixel off).
+    const bool placed = continuous() ? std::max(std::abs(o.x - g.x), std::abs(o.y - g.y)) * size <= 1.0 + 1e-9
+                                     : o.centre == toPixel(g.x, g.y, size);
+    if (o.colour == g.colour && placed) sum += scenario_->objects[i].value;
   }
   return sum;
 }
@@ -80,16 +116,17 @@ double Environment::goalDistance() const {
 cv::Mat Environment::render() const {
   cv::Mat scene = blankScene(config_.world.size_px);
   for (const auto& o : objects_)
-    if (o.present) paintObject(scene, o.shape, o.colour, o.centre, config_.world);
+    if (o.present) paintPixels(scene, o.pixels, o.colour);
   return scene;
 }
 
 std::vector<std::vector<std::uint8_t>> Environment::probeImages() const {
   std::vector<std::vector<std::uint8_t>> out;
   const int mid = config_.world.size_px / 2;
+  const double u = toUnit(mid, config_.world.size_px);
   for (const auto& spec : config_.world.objects) {
     cv::Mat scene = blankScene(config_.world.size_px);
-    paintObject(scene, spec.shape, spec.colour, {mid, mid}, config_.world);
+    paintObject(scene, spec.shape, spec.colour, u, u, config_.world);
     out.push_back(cropFocus(scene, {mid, mid}, config_.eye.focus_side));
   }
   return out;
@@ -112,25 +149,13 @@ int Environment::tableRow(const WorldObject& o) const {
 }
 
 int Environment::objectAt(Pixel p) const {
-  for (std::size_t i = 0; i < objects_.size(); ++i) {
+  for (std::size_t i = objects_.size(); i-- > 0;) {  // the last drawn is on top
     const auto& o = objects_[i];
     if (!o.present) continue;
-    for (const Pixel& f : footprints_[i])
-      if (o.centre.col + f.col == p.col && o.centre.row + f.row == p.row) return static_cast<int>(i);
+    for (const Pixel& q : o.pixels)
+      if (q == p) return static_cast<int>(i);
   }
   return -1;
-}
-
-
-bool Environment::regionFree(Pixel centre, int half, int ignore) const {
-  for (std::size_t i = 0; i < objects_.size(); ++i) {
-    if (static_cast<int>(i) == ignore || !objects_[i].present) continue;
-    for (const Pixel& f : footprints_[i]) {
-      const int c = objects_[i].centre.col + f.col, r = objects_[i].centre.row + f.row;
-      if (std::abs(c - centre.col) <= half && std::abs(r - centre.row) <= half) return false;
-    }
-  }
-  return true;
 }
 
 ActionOutcome Environment::execute(std::int64_t step, int action, double x, double y,
@@ -138,28 +163,28 @@ ActionOutcome Environment::execute(std::int64_t step, int action, double x, doub
   ActionOutcome out;
   const auto& w = config_.world;
   const int idx = objectAt(toPixel(x, y, w.size_px));
-  Pixel target_px{};
+  double tx = -1, ty = -1;  // the move target, scene units (a pixel's, in the pixel world)
   bool have_target = false;
+  auto aim = [&](double x0, double y0) {
+    tx = continuous() ? x0 : toUnit(toPixel(x0, w.size_px), w.size_px);
+    ty = continuous() ? y0 : toUnit(toPixel(y0, w.size_px), w.size_px);
+    return placeFree(tx, ty);
+  };
   if (action == kMove) {
     // The window at the target must be free in the scene as it is, the moving
-    // object included (PARAMETERS.md: "redrawn until the focus window there is
-    // free"), so a move always lands visibly away from where the object was.
+    // object included (docs/parameters.md: "redrawn until the focus window
+    // there is free"), so a move always lands visibly away from where the object was.
     if (target) {
-      target_px = toPixel(target->first, target->second, w.size_px);
-      have_target = regionFree(target_px, freeHalf(), -1);
+      have_target = aim(target->first, target->second);
     } else {
       // Intrinsic move (paper 2.3.2): uniform in the table limits, redrawn until free.
       const KeyedRng rng(config_.seed, step, Purpose::MoveTarget);
-      for (int k = 0; k < w.max_target_draws && !have_target; ++k) {
-        const double tx = rng.uniform(2 * k, w.table_min, w.table_max);
-        const double ty = rng.uniform(2 * k + 1, w.table_min, w.table_max);
-        target_px = toPixel(tx, ty, w.size_px);
-        have_target = regionFree(target_px, freeHalf(), -1);
-      }
+      for (int k = 0; k < w.max_target_draws && !have_target; ++k)
+        have_target = aim(rng.uniform(2 * k, w.table_min, w.table_max), rng.uniform(2 * k + 1, w.table_min, w.table_max));
     }
     if (have_target) {
-      out.target_x = toUnit(target_px.col, w.size_px);
-      out.target_y = toUnit(target_px.row, w.size_px);
+      out.target_x = tx;
+      out.target_y = ty;
     }
   }
   if (idx < 0) return out;
@@ -172,8 +197,8 @@ ActionOutcome Environment::execute(std::int64_t step, int action, double x, doub
   if (!lucky) return out;
   if (action == kMove) {
     if (!have_target) return out;  // nowhere free to go: the routine does nothing
-    out.succeeded = !(o.centre == target_px);
-    o.centre = target_px;
+    out.succeeded = !(o.x == tx && o.y == ty);
+    place(o, tx, ty);
   } else {
     const Colour c = action == kTurnGreen ? Colour::Green : action == kTurnRed ? Colour::Red : Colour::Blue;
     out.succeeded = o.colour != c;
@@ -191,18 +216,28 @@ bool Environment::objectsAppearAt(std::int64_t step) const {
 bool Environment::introduceObjectsAt(std::int64_t step) {
   bool any = false;
   const auto& w = config_.world;
+  std::vector<bool> before(objects_.size());  // present before this step's newcomers
+  for (std::size_t i = 0; i < objects_.size(); ++i) before[i] = objects_[i].present;
   for (std::size_t i = 0; i < objects_.size(); ++i) {
     WorldObject& o = objects_[i];
     if (o.present || w.objects[i].appears_at != step) continue;
-    // A late object takes its configured place, or a free one if that is taken.
-    if (step > 0 && !regionFree(o.centre, freeHalf(), static_cast<int>(i))) {
-      const KeyedRng rng(config_.seed, step, Purpose::LatePlacement, i);
-      for (int k = 0; k < w.max_target_draws; ++k) {
-        const Pixel p = toPixel(rng.uniform(2 * k, w.table_min, w.table_max),
-                                rng.uniform(2 * k + 1, w.table_min, w.table_max), w.size_px);
-        if (regionFree(p, freeHalf(), static_cast<int>(i))) {
-          o.centre = p;
-          break;
+    if (step > 0) {
+      // Continuous positions (authors' code): a random place whose window is free
+      // of the objects there before this step (with late_overlap), or of every
+      // object present. Pixel world: the configured place, or a free one if that is taken.
+      const auto counts = [&](int j) {
+        return j != static_cast<int>(i) && (before[j] || (objects_[j].present && !(continuous() && w.late_overlap)));
+      };
+      if (continuous() || !placeFree(o.x, o.y, counts)) {
+        const KeyedRng rng(config_.seed, step, Purpose::LatePlacement, i);
+        for (int k = 0; k < w.max_target_draws; ++k) {
+          const double x = rng.uniform(2 * k, w.table_min, w.table_max), y = rng.uniform(2 * k + 1, w.table_min, w.table_max);
+          const double px = continuous() ? x : toUnit(toPixel(x, w.size_px), w.size_px);
+          const double py = continuous() ? y : toUnit(toPixel(y, w.size_px), w.size_px);
+          if (placeFree(px, py, counts)) {
+            place(o, px, py);
+            break;
+          }
         }
       }
     }

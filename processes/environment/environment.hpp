@@ -17,7 +17,9 @@ struct WorldObject {
   int table_index = 0;   // row of the experiment's affordance table (= probe index)
   Shape shape = Shape::Square;
   Colour colour = Colour::Red;
-  Pixel centre;
+  double x = 0, y = 0;   // centre, scene units (a pixel's, in the pixel world)
+  Pixel centre;          // the nearest pixel
+  std::vector<Pixel> pixels;  // what it covers (image.hpp: shapePixels)
   bool present = false;
 };
 
@@ -61,23 +63,29 @@ class Environment {
   bool objectsAppearAt(std::int64_t step) const;
 
   const std::vector<WorldObject>& objects() const { return objects_; }
-  // Index into objects() of the present object covering a pixel, or -1.
+  // Index into objects() of the present object covering a pixel, or -1; where
+  // objects overlap, the one drawn last (on top).
   int objectAt(Pixel p) const;
   // Row of the affordance table that applies to an object as it looks now.
   // -1 if the table has no object that looks like it: it affords nothing.
   int tableRow(const WorldObject& o) const;
 
  private:
-  // True if a square of half-size `half` around `centre` holds no pixel of a
-  // present object other than `ignore`.
-  bool regionFree(Pixel centre, int half, int ignore) const;
-  int freeHalf() const { return free_half_; }
+  // Put an object's centre at (x, y), scene units (snapped to a pixel in the pixel world).
+  void place(WorldObject& o, double x, double y) const;
+  // Is a place free for an object? Continuous positions: the focus window
+  // there (windowCorner) holds no pixel of the objects `counts` accepts
+  // (indices into objects_). Pixel world: the square of half-size free_half_
+  // around the place's pixel holds none.
+  template <class Counts>
+  bool placeFree(double x, double y, Counts counts) const;
+  bool placeFree(double x, double y) const;  // of every present object
+  bool continuous() const { return config_.world.positions == Positions::Continuous; }
 
   RunConfig config_;
   std::optional<Scenario> scenario_;
   std::vector<WorldObject> objects_;
-  std::vector<std::vector<Pixel>> footprints_;  // per object (by shape)
-  int free_half_ = 0;                           // half-size of the window a place must have free
+  int free_half_ = 0;                           // pixel world: half-size of the square a place must have free
   cv::Mat goal_;                                // extrinsic phase: the goal scene
 };
 

@@ -283,7 +283,7 @@ const Recording& extrinsicRecording() {
   static const Recording rec = [] {
     const std::string dir = test::tempDir("alone-extrinsic");
     const std::string config_dir = std::string(AFFORD_SOURCE_DIR) + "/config";
-    test::runIntrinsic(parseRunConfigText(test::baseYaml(System::IMP, 1500, 5))).save(dir + "/predictors.ckpt");
+    test::runIntrinsic(parseRunConfigText(test::baseYaml(System::IMP, 6000, 5))).save(dir + "/predictors.ckpt");
     const std::string yaml = emitYaml(extrinsicConfig(config_dir, RunRequest{"base", System::IMP, 11, std::nullopt, {}},
                                                       dir + "/predictors.ckpt", "scenario3"));
     test::InProcessRun run(yaml, System::IMP, 11, 125);

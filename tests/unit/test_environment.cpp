@@ -13,8 +13,23 @@ int index(const Environment& env, const std::string& name, const RunConfig& c) {
   return -1;
 }
 
-double ux(const WorldObject& o, const RunConfig& c) { return toUnit(o.centre.col, c.world.size_px); }
-double uy(const WorldObject& o, const RunConfig& c) { return toUnit(o.centre.row, c.world.size_px); }
+// Does any pixel of `o` lie in the focus window around (x, y)?
+bool inWindow(const WorldObject& o, double x, double y, const RunConfig& c) {
+  const Pixel lo = windowCorner(x, y, c.eye.focus_side, c.world.size_px);
+  for (const Pixel& p : o.pixels)
+    if (p.col >= lo.col && p.col < lo.col + c.eye.focus_side && p.row >= lo.row && p.row < lo.row + c.eye.focus_side)
+      return true;
+  return false;
+}
+bool overlap(const WorldObject& a, const WorldObject& b) {
+  for (const Pixel& p : a.pixels)
+    for (const Pixel& q : b.pixels)
+      if (p == q) return true;
+  return false;
+}
+RunConfig withSettings(const std::string& experiment, std::int64_t seed, std::vector<std::string> settings) {
+  return test::shippedConfig(experiment, System::IMP, seed, std::move(settings));
+}
 
 TEST(Environment, StartsWithTheLayoutOfTheAuthorsCode) {
   const RunConfig c = test::shippedConfig();
@@ -62,16 +77,31 @@ TEST(Environment, IntrinsicMoveGoesToARandomFreePlaceInTheTable) {
     const ActionOutcome out = env.execute(step, kMove, 0.5, 0.5);
     ASSERT_TRUE(out.succeeded) << "step " << step;
     const auto& o = env.objects()[index(env, "green circle", c)];
-    EXPECT_DOUBLE_EQ(ux(o, c), out.target_x);
-    EXPECT_DOUBLE_EQ(uy(o, c), out.target_y);
+    EXPECT_DOUBLE_EQ(o.x, out.target_x);  // a real-valued place: nothing snaps to a pixel
+    EXPECT_DOUBLE_EQ(o.y, out.target_y);
     EXPECT_GE(out.target_x, c.world.table_min);
     EXPECT_LE(out.target_x, c.world.table_max);
     // Free: no other object within the focus window around the new place.
     for (const auto& other : env.objects()) {
-      if (&other == &o) continue;
-      EXPECT_GT(std::max(std::abs(other.centre.col - o.centre.col), std::abs(other.centre.row - o.centre.row)), 10 + 7);
+      if (&other != &o) {
+        EXPECT_FALSE(inWindow(other, o.x, o.y, c)) << "step " << step;
+      }
     }
   }
+}
+
+TEST(Environment, MoveTargetsAreRealNumbersInTheContinuousWorldAndPixelsInThePixelWorld) {
+  int off_pixel = 0;
+  for (int step = 0; step < 20; ++step) {
+    Environment cont(withSettings("base", 1, {"world.positions=continuous"})),
+        pix(withSettings("base", 1, {"world.positions=pixel"}));
+    const ActionOutcome a = cont.execute(step, kMove, 0.5, 0.5), b = pix.execute(step, kMove, 0.5, 0.5);
+    ASSERT_TRUE(a.succeeded && b.succeeded);
+    off_pixel += std::abs(a.target_x * 150 - std::round(a.target_x * 150)) > 1e-6;
+    EXPECT_NEAR(b.target_x * 150, std::round(b.target_x * 150), 1e-9);
+    EXPECT_NEAR(b.target_y * 150, std::round(b.target_y * 150), 1e-9);
+  }
+  EXPECT_GT(off_pixel, 15);
 }
 
 TEST(Environment, MoveTargetsAreKeyedBySeedAndStep) {
@@ -118,8 +148,73 @@ TEST(Environment, LateObjectsAppearAtTheirStep) {
   EXPECT_FALSE(env.objectsAppearAt(1999));
   EXPECT_TRUE(env.objectsAppearAt(2000));
   EXPECT_TRUE(env.introduceObjectsAt(2000));
-  EXPECT_TRUE(env.objects()[rect].present);
-  EXPECT_FALSE(env.execute(2000, kMove, 0.8, 0.2).succeeded);  // late1 rectangles are not movable
+  const WorldObject& r = env.objects()[rect];
+  EXPECT_TRUE(r.present);
+  EXPECT_FALSE(env.execute(2000, kMove, r.x, r.y).succeeded);  // late1 rectangles are not movable
+}
+
+// Continuous world (authors' code): each late object goes to a random place whose
+// window is free in the scene as it was before its step; late objects of one
+// step may overlap each other unless world.late_overlap is false.
+TEST(Environment, LateObjectsGoToRandomPlacesFreeOfTheObjectsBeforeThem) {
+  int overlapping = 0, moved = 0;
+  for (std::int64_t seed = 1; seed <= 60; ++seed) {
+    for (bool allow : {true, false}) {
+      const RunConfig c = withSettings("late1", seed, {"world.positions=continuous",
+                                                       std::string("world.late_overlap=") + (allow ? "true" : "false")});
+      Environment env(c);
+      std::vector<int> late, early;
+      for (std::size_t i = 0; i < c.world.objects.size(); ++i)
+        (c.world.objects[i].appears_at == 2000 ? late : early).push_back(static_cast<int>(i));
+      ASSERT_TRUE(env.introduceObjectsAt(2000));
+      for (int i : late) {
+        const WorldObject& o = env.objects()[i];
+        moved += std::abs(o.x - c.world.objects[i].x) > 1e-9 || std::abs(o.y - c.world.objects[i].y) > 1e-9;
+        EXPECT_GE(o.x, c.world.table_min);
+        EXPECT_LE(o.x, c.world.table_max);
+        for (int j : early) EXPECT_FALSE(inWindow(env.objects()[j], o.x, o.y, c)) << "seed " << seed;
+        for (int j : late)
+          if (j < i && overlap(env.objects()[j], o)) {
+            EXPECT_TRUE(allow) << "seed " << seed << ": late objects overlap with late_overlap false";
+            overlapping += allow;
+          }
+      }
+    }
+  }
+  EXPECT_GT(moved, 100);      // not the configured places
+  EXPECT_GT(overlapping, 0);  // with late_overlap, some do overlap
+}
+
+TEST(Environment, ThePixelWorldPutsLateObjectsAtTheirConfiguredPlaces) {
+  const RunConfig c = withSettings("late1", 3, {"world.positions=pixel"});
+  Environment env(c);
+  ASSERT_TRUE(env.introduceObjectsAt(2000));
+  for (std::size_t i = 0; i < c.world.objects.size(); ++i)
+    EXPECT_EQ(env.objects()[i].centre, toPixel(c.world.objects[i].x, c.world.objects[i].y, 150)) << i;
+}
+
+// Where late objects overlap, the one drawn last is on top: it is what the
+// scene shows and what an action at that pixel acts on.
+TEST(Environment, OverlappingObjectsActOnTheOneOnTop) {
+  for (std::int64_t seed = 1; seed <= 200; ++seed) {
+    const RunConfig c = withSettings("late1", seed, {"world.positions=continuous"});
+    Environment env(c);
+    env.introduceObjectsAt(2000);
+    const auto& objs = env.objects();
+    for (std::size_t a = 0; a < objs.size(); ++a)
+      for (std::size_t b = a + 1; b < objs.size(); ++b) {
+        if (!objs[a].present || !objs[b].present || !overlap(objs[a], objs[b])) continue;
+        Pixel shared{};
+        for (const Pixel& p : objs[a].pixels)
+          if (std::find(objs[b].pixels.begin(), objs[b].pixels.end(), p) != objs[b].pixels.end()) shared = p;
+        EXPECT_EQ(env.objectAt(shared), static_cast<int>(b));
+        const Colour top = objs[b].colour;
+        const cv::Vec3b px = env.render().at<cv::Vec3b>(shared.row, shared.col);
+        EXPECT_EQ(px[top == Colour::Red ? 0 : top == Colour::Green ? 1 : 2], 255);
+        return;  // one overlap is enough
+      }
+  }
+  FAIL() << "no seed in 1..200 put two late objects over each other";
 }
 
 TEST(Environment, ProbeImagesAreWhatTheEyeSeesOfEachObject) {

@@ -1,6 +1,10 @@
 #include <gtest/gtest.h>
 
 #include <algorithm>
+#include <cmath>
+#include <random>
+#include <set>
+#include <tuple>
 
 #include "afford/image.hpp"
 #include "tests/support.hpp"
@@ -36,9 +40,92 @@ TEST(Image, RectangleIsTenWideAndTwentyTwoTall) {
   EXPECT_EQ(rmax->row - rmin->row + 1, 22);
 }
 
+// The continuous world (world.positions: continuous, the default): shapes
+// rasterised from real-valued centres as the authors' code does.
+std::vector<std::pair<double, double>> randomPlaces(int n) {
+  std::mt19937_64 rng(11);
+  std::uniform_real_distribution<double> u(0.2, 0.8);
+  std::vector<std::pair<double, double>> out;
+  for (int i = 0; i < n; ++i) out.emplace_back(u(rng), u(rng));
+  return out;
+}
+std::pair<int, int> extent(const std::vector<Pixel>& px) {
+  auto [cmin, cmax] = std::minmax_element(px.begin(), px.end(), [](auto a, auto b) { return a.col < b.col; });
+  auto [rmin, rmax] = std::minmax_element(px.begin(), px.end(), [](auto a, auto b) { return a.row < b.row; });
+  return {cmax->col - cmin->col + 1, rmax->row - rmin->row + 1};
+}
+// The pattern of a shape's pixels relative to its first pixel.
+std::vector<Pixel> pattern(std::vector<Pixel> px) {
+  std::sort(px.begin(), px.end(), [](auto a, auto b) { return std::tie(a.row, a.col) < std::tie(b.row, b.col); });
+  const Pixel o = px.front();
+  for (Pixel& p : px) p = {p.col - o.col, p.row - o.row};
+  return px;
+}
+
+TEST(Image, ContinuousSquaresLookTheSameEverywhere) {
+  std::set<std::vector<std::pair<int, int>>> seen;
+  for (auto [x, y] : randomPlaces(3000)) {
+    const auto px = shapePixels(Shape::Square, x, y, world());
+    ASSERT_EQ(px.size(), 225u) << x << ", " << y;
+    ASSERT_EQ(extent(px), std::make_pair(15, 15));
+  }
+}
+
+TEST(Image, ContinuousRectanglesHaveTwoPhases) {
+  std::set<int> heights;
+  for (auto [x, y] : randomPlaces(3000)) {
+    const auto px = shapePixels(Shape::Rectangle, x, y, world());
+    const auto [w, h] = extent(px);
+    ASSERT_EQ(w, 10);
+    ASSERT_EQ(px.size(), static_cast<std::size_t>(w * h));
+    heights.insert(h);
+  }
+  EXPECT_EQ(heights, (std::set<int>{22, 23}));  // 0.15 x 150 = 22.5 pixels between rounded corners
+}
+
+TEST(Image, ContinuousCirclesTakeManyPatterns) {
+  std::set<std::vector<std::pair<int, int>>> patterns;
+  for (auto [x, y] : randomPlaces(3000)) {
+    std::vector<std::pair<int, int>> key;
+    for (const Pixel& p : pattern(shapePixels(Shape::Circle, x, y, world()))) key.emplace_back(p.col, p.row);
+    patterns.insert(key);
+  }
+  EXPECT_GT(patterns.size(), 100u);  // the authors' code: 575 over 3000 random places
+}
+
+TEST(Image, ACircleCoversThePixelsWithinItsRadiusOfTheRealCentre) {
+  const WorldConfig w = world();
+  const double x = 0.4137, y = 0.6021, r = w.object_size / std::sqrt(M_PI) * w.size_px;
+  const auto px = shapePixels(Shape::Circle, x, y, w);
+  std::set<std::pair<int, int>> in;
+  for (const Pixel& p : px) in.insert({p.col, p.row});
+  for (int row = 70; row < 112; ++row)
+    for (int col = 40; col < 84; ++col) {
+      const double d = std::hypot(col - x * w.size_px, row - y * w.size_px);
+      EXPECT_EQ(in.count({col, row}) == 1, d < r) << col << ", " << row;
+    }
+}
+
+TEST(Image, TheFocusWindowOfAPixelCentreIsTheOneCropFocusTakes) {
+  for (int c : {11, 30, 75, 121})  // centres in the scene's inner part (the table is [30, 120] px)
+    EXPECT_EQ(windowCorner(toUnit(c, 150), toUnit(c + 3, 150), 21, 150), (Pixel{c - 10, c + 3 - 10}));
+  EXPECT_EQ(windowCorner(74.6 / 150, 75.6 / 150, 21, 150), (Pixel{64, 65}));  // 64.1 and 65.1
+}
+
+TEST(Image, ThePixelWorldDrawsTheFootprintAroundTheNearestPixel) {
+  WorldConfig w = world();
+  w.positions = Positions::Pixel;
+  for (Shape s : {Shape::Square, Shape::Circle, Shape::Rectangle}) {
+    const auto px = shapePixels(s, 0.3012, 0.4, w);
+    const auto fp = shapeFootprint(s, w);
+    ASSERT_EQ(px.size(), fp.size());
+    for (std::size_t i = 0; i < fp.size(); ++i) EXPECT_EQ(px[i], (Pixel{45 + fp[i].col, 60 + fp[i].row}));
+  }
+}
+
 TEST(Image, PaintedObjectIsPureColourOnBlack) {
   cv::Mat scene = blankScene(150);
-  paintObject(scene, Shape::Square, Colour::Green, {30, 75}, world());
+  paintObject(scene, Shape::Square, Colour::Green, 0.2, 0.5, world());
   EXPECT_EQ(scene.at<cv::Vec3b>(75, 30), cv::Vec3b(0, 255, 0));
   EXPECT_EQ(scene.at<cv::Vec3b>(75, 37), cv::Vec3b(0, 255, 0));
   EXPECT_EQ(scene.at<cv::Vec3b>(75, 38), cv::Vec3b(0, 0, 0));
@@ -46,7 +133,7 @@ TEST(Image, PaintedObjectIsPureColourOnBlack) {
 
 TEST(Image, SceneEncodingIsLossless) {
   cv::Mat scene = blankScene(150);
-  paintObject(scene, Shape::Circle, Colour::Blue, {75, 75}, world());
+  paintObject(scene, Shape::Circle, Colour::Blue, 0.5, 0.5, world());
   const auto bytes = encodeScene(scene);
   EXPECT_LT(bytes.size(), 2000u);  // 67.5 KB raw
   const cv::Mat back = decodeScene(bytes, 150, 150);

@@ -23,7 +23,7 @@ TEST(Viewer, DrawsWhatItIsFed) {
 
   const RunConfig c = test::shippedConfig();
   cv::Mat scene = blankScene(150);
-  paintObject(scene, Shape::Square, Colour::Red, {30, 30}, c.world);
+  paintObject(scene, Shape::Square, Colour::Red, 0.2, 0.2, c.world);
   v.onRun("r1", "intrinsic base IMP");
   v.onScene(3, scene, false);
   v.onFocus(3, cropFocus(scene, {30, 30}, 21), 21, 0.2, 0.2, false);

@@ -27,6 +27,11 @@ enum class Colour { Red, Green, Blue };
 enum class System { FIX, IGN, IMP };
 enum class SaliencyOrder { SmoothThenNoise, NoiseThenSmooth };
 enum class ImpThresholdInput { Signal, ObservedChange };
+// How object centres become pixels (world.positions, docs/parameters.md).
+enum class Positions {
+  Continuous,  // real-valued centres and move targets, each shape rasterised from its centre (authors' code)
+  Pixel,       // centres snapped to a pixel, one fixed footprint per shape (afford before issue 10)
+};
 
 const char* toString(Shape);
 const char* toString(Colour);
@@ -51,6 +56,10 @@ struct WorldConfig {
   double object_size = 0;               // square side / reference size, scene units
   double table_min = 0, table_max = 0; // allowed object centres
   int max_target_draws = 0;             // intrinsic move: redraws for a free target
+  Positions positions = Positions::Continuous;
+  // Continuous positions: a late object's place is free of the objects present
+  // before its step only, so late objects of one step may overlap (authors' code).
+  bool late_overlap = true;
   std::vector<ObjectSpec> objects;         // in the order of the paper's tables
 };
 

@@ -21,16 +21,38 @@ int toPixel(double u, int size_px);
 double toUnit(int px, int size_px);
 Pixel toPixel(double x, double y, int size_px);
 
-// Pixel offsets covered by a shape centred on a pixel (PARAMETERS.md: square
-// 15 x 15 = 225 px; circle of radius 0.1/sqrt(pi) = 221 px; rectangle 10 wide
-// by 22 tall = 220 px). The bounding box of every shape has its centre at
-// offset (0, 0) with the rule centre = min + extent / 2.
+// Round half away from zero, after clearing floating-point noise below 1e-9
+// (150 x 0.1 is 15.000000000000002: a square's corners must not depend on it).
+int roundHalfAway(double v);
+
+// Pixel offsets covered by a shape centred on a pixel, the pixel world's
+// footprint (docs/parameters.md: square 15 x 15 = 225 px; circle of radius
+// 0.1/sqrt(pi) = 221 px; rectangle 10 wide by 22 tall = 220 px). The bounding
+// box of every shape has its centre at offset (0, 0) with the rule
+// centre = min + extent / 2.
 std::vector<Pixel> shapeFootprint(Shape shape, const WorldConfig& world);
+
+// The pixels a shape covers with its centre at (x, y), scene units (world.positions):
+//  continuous: squares and rectangles fill the pixels between their corners,
+//    each corner rounded half away from zero in pixel indices (x * size_px);
+//    a circle covers the pixels whose index distance from the centre is below
+//    its radius. Squares always look the same, rectangles (22.5 px tall) have
+//    two phases, circles many.
+//  pixel: shapeFootprint around the nearest pixel.
+// Pixels outside the scene are included; painting clips them.
+std::vector<Pixel> shapePixels(Shape shape, double x, double y, const WorldConfig& world);
+
+// The first column and row of the side x side window around (x, y), scene
+// units: round half away from zero of size_px x (centre - side / (2 size_px)).
+// For a centre on a pixel it is centre - side / 2, the window cropFocus takes.
+Pixel windowCorner(double x, double y, int side, int size_px);
 
 // A blank (black) scene.
 cv::Mat blankScene(int size_px);
-// Paint a shape of a colour centred at a pixel (clipped at the borders).
-void paintObject(cv::Mat& scene, Shape shape, Colour colour, Pixel centre, const WorldConfig& world);
+// Paint pixels in a colour (clipped at the borders).
+void paintPixels(cv::Mat& scene, const std::vector<Pixel>& pixels, Colour colour);
+// Paint a shape of a colour centred at (x, y), scene units (shapePixels).
+void paintObject(cv::Mat& scene, Shape shape, Colour colour, double x, double y, const WorldConfig& world);
 
 // The scene of a scenario's initial or goal configuration.
 cv::Mat renderScenario(const Scenario& s, bool goal, const WorldConfig& world);
