@@ -444,7 +444,10 @@ std::string subGoalText(const Explanation& e, std::size_t i) {
 std::string closestText(const ExplainedSubGoal& g, const PlannerConfig& p) {
   if (!g.closest) return "no action was checked";
   const ExplainedCheck& c = *g.closest;
-  return format("closest: %s at iteration %lld, what %.5f (%s %.5f), where %.4f (%s %.4f)", actionName(c.action).c_str(),
+  // An action that passed both thresholds is no miss: the sub-goal was lost
+  // after it (the action failed, or the utility planner did not take it).
+  return format("%s: %s at iteration %lld, what %.5f (%s %.5f), where %.4f (%s %.4f)",
+                c.passes() ? "passed" : "closest", actionName(c.action).c_str(),
                 static_cast<long long>(g.closest_step), c.what_distance, c.what_ok ? "<" : "not <", p.image_match,
                 c.where_distance, c.where_ok ? "<=" : "not <=", p.position_match);
 }
