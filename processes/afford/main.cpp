@@ -11,6 +11,7 @@
 #include "afford/image.hpp"
 #include "afford/plots.hpp"
 #include "afford/edge.hpp"
+#include "afford/explain.hpp"
 #include "afford/node.hpp"
 #include "afford/process_status_t.hpp"
 #include "afford/replay.hpp"
@@ -97,6 +98,17 @@ int main(int argc, char** argv) {
   replay->add_option("--into", replay_into,
                      "processes to replay, comma-separated: predictors, motivation, planner "
                      "(default: predictors and the run's decider)");
+  std::string explain_log, explain_run;
+  bool explain_json = false;
+  auto* explain = app.add_subcommand(
+      "explain", "why an extrinsic test ended as it did, from its log; or every test in a folder of logs, summarised");
+  explain
+      ->add_option("log", explain_log,
+                   "the test's log folder (<log-root>/<run-id>) or one .lcm file; or a folder of run log folders "
+                   "(an experiment's --log-root) for a summary")
+      ->required();
+  explain->add_option("--run", explain_run, "the test to explain, in a log that holds several (default: the first)");
+  explain->add_flag("--json", explain_json, "print one JSON object (for scripts) instead of text");
   std::string status_url = "udpm://239.255.76.67:7667?ttl=0";
   double status_seconds = 1.5;
   auto* status = app.add_subcommand("status", "list the processes heard on a bus: pid, state, run, last step");
@@ -176,6 +188,18 @@ int main(int argc, char** argv) {
         std::printf("replay equals the record as far as it goes, but the record is %s\n",
                     r.gaps.empty() ? "incomplete" : "missing messages (above)");
       return r.ok() ? 0 : 1;
+    }
+    if (explain->parsed()) {
+      if (afford::isLogRoot(explain_log)) {
+        if (!explain_run.empty())
+          throw afford::ConfigError("--run picks a run in one log, but " + explain_log + " is a folder of run logs");
+        const afford::ExplainSummary s = afford::explainLogRoot(explain_log, *log);
+        std::printf("%s", explain_json ? (afford::summaryJson(s).dump(2) + "\n").c_str() : afford::summaryText(s).c_str());
+        return s.errors.empty() ? 0 : 1;  // a log that could not be explained is named, and fails the summary
+      }
+      const afford::Explanation e = afford::explainLog(explain_log, explain_run, *log);
+      std::printf("%s", explain_json ? (afford::explanationJson(e).dump(2) + "\n").c_str() : afford::explanationText(e).c_str());
+      return 0;
     }
     if (plot->parsed()) {
       for (const auto& f : afford::plotExperiment(plot_dir)) std::printf("%s\n", f.c_str());

@@ -39,19 +39,10 @@ bool ReplayResult::ok() const {
          (recorded_checksum.empty() || !weights_checksum.empty());
 }
 
-namespace {
-
-struct Event {
-  std::string channel;
-  std::vector<std::uint8_t> data;
-};
-
-// Every complete event of one log file, in order; `torn` gets the bytes of an
-// incomplete last event.
-std::vector<Event> readLogFile(const fs::path& file, std::int64_t& torn) {
+std::vector<LogEvent> readLogFile(const fs::path& file, std::int64_t& torn) {
   lcm_eventlog_t* in = lcm_eventlog_create(file.c_str(), "r");
   if (!in) throw std::runtime_error("cannot open the log " + file.string());
-  std::vector<Event> out;
+  std::vector<LogEvent> out;
   const auto size = static_cast<std::int64_t>(fs::file_size(file));
   for (;;) {
     const long before = std::ftell(in->f);
@@ -69,8 +60,7 @@ std::vector<Event> readLogFile(const fs::path& file, std::int64_t& torn) {
   return out;
 }
 
-// The log's segments in order (log.00.lcm, log.01.lcm, ...), or the one file given.
-std::vector<fs::path> segments(const fs::path& dir) {
+std::vector<fs::path> logSegments(const fs::path& dir) {
   if (fs::is_regular_file(dir)) return {dir};
   if (!fs::is_directory(dir)) throw std::runtime_error("no run log at " + dir.string());
   std::vector<fs::path> files;
@@ -80,6 +70,49 @@ std::vector<fs::path> segments(const fs::path& dir) {
   if (files.empty()) throw std::runtime_error("no .lcm file in " + dir.string());
   return files;
 }
+
+RecordedLog readRecordedLog(const fs::path& log_path, spdlog::logger& log) {
+  RecordedLog out;
+  for (const auto& f : logSegments(log_path)) {
+    std::int64_t torn = 0;
+    auto part = readLogFile(f, torn);
+    if (torn > 0) log.warn("{}: the last event is incomplete ({} bytes): reading up to the one before", f.string(), torn);
+    out.torn_bytes += torn;
+    out.events.insert(out.events.end(), std::make_move_iterator(part.begin()), std::make_move_iterator(part.end()));
+  }
+  return out;
+}
+
+RunEvents runEventsOf(std::vector<LogEvent> events, const std::string& run_id, const std::string& where) {
+  // Our logger's logs start with the RUN_CONFIG; a plain lcm-logger recording
+  // may hold heartbeats before it and other runs after it.
+  const ProtocolConfig observer = loadProtocol(defaultConfigDir());
+  RunEvents out;
+  std::size_t begin = events.size(), end = events.size();
+  for (std::size_t i = 0; i < events.size(); ++i) {
+    if (events[i].channel != channel::kRunConfig) continue;
+    run_config_t rc;
+    std::string why;
+    if (!decodeChecked(events[i].data.data(), events[i].data.size(), BoundsContext{&observer, nullptr}, rc, why))
+      throw std::runtime_error(where + ": the RUN_CONFIG of event " + std::to_string(i) + " is refused: " + why);
+    if (begin == events.size()) {
+      if (!run_id.empty() && rc.run_id != run_id) continue;
+      begin = i;
+      out.config = rc;
+    } else if (rc.run_id != out.config.run_id) {
+      end = i;
+      break;
+    }
+  }
+  if (begin == events.size())
+    throw std::runtime_error(where + (run_id.empty() ? std::string(": no RUN_CONFIG in the log, so nothing says how the run was configured")
+                                                     : ": no RUN_CONFIG of run '" + run_id + "' in the log"));
+  out.events = std::vector<LogEvent>(std::make_move_iterator(events.begin() + static_cast<std::ptrdiff_t>(begin)),
+                                     std::make_move_iterator(events.begin() + static_cast<std::ptrdiff_t>(end)));
+  return out;
+}
+
+namespace {
 
 // One fresh process on its own bus, fed the recorded events it does not publish itself.
 struct Replayed {
@@ -91,7 +124,7 @@ struct Replayed {
   std::vector<std::vector<std::uint8_t>> decisions;  // what it published on DECISION
   std::string checksum;           // what it published on RESULT
 
-  void feed(const Event& e) {
+  void feed(const LogEvent& e) {
     if (outputs.count(e.channel)) return;
     bus->publish(e.channel, e.data.data(), static_cast<unsigned>(e.data.size()));
     settle();
@@ -106,7 +139,7 @@ struct Replayed {
 };
 
 // A recorded event as its channel's type would take it (bounds, fields, digest); "" or why not.
-std::string checkRecorded(const Event& e, const BoundsContext& ctx) {
+std::string checkRecorded(const LogEvent& e, const BoundsContext& ctx) {
   std::string why;
   auto check = [&](auto msg) { return decodeChecked(e.data.data(), e.data.size(), ctx, msg, why) ? std::string() : why; };
   const std::string& c = e.channel;
@@ -129,14 +162,13 @@ std::string checkRecorded(const Event& e, const BoundsContext& ctx) {
   return "";  // another channel: not ours to judge
 }
 
-// The serials each channel's publisher published that `events` lack: holes
-// below the highest recorded serial, and beyond it up to the publisher's own
-// count (STATUS, in lcm-logger recordings).
-std::vector<ReplayResult::Gap> gapsIn(const std::vector<Event>& events, const std::string& run_id, bool extrinsic,
-                                      const BoundsContext& ctx) {
+}  // namespace
+
+std::vector<LogGap> recordingGaps(const std::vector<LogEvent>& events, const std::string& run_id, bool extrinsic,
+                                  const BoundsContext& ctx) {
   std::map<std::string, std::set<std::int64_t>> had;
   std::map<std::string, std::int64_t> claimed;
-  for (const Event& e : events) {
+  for (const LogEvent& e : events) {
     if (isSerialChannel(e.channel)) {
       RunHeader h;
       if (peekRunHeader(e.data.data(), static_cast<std::uint32_t>(e.data.size()), h) && h.run_id == run_id)
@@ -150,7 +182,7 @@ std::vector<ReplayResult::Gap> gapsIn(const std::vector<Event>& events, const st
           claimed[st.channels[i]] = std::max(claimed[st.channels[i]], st.counts[i]);
     }
   }
-  std::vector<ReplayResult::Gap> gaps;
+  std::vector<LogGap> gaps;
   std::set<std::string> channels;
   for (const auto& [c, s] : had) channels.insert(c);
   for (const auto& [c, n] : claimed) channels.insert(c);
@@ -167,9 +199,7 @@ std::vector<ReplayResult::Gap> gapsIn(const std::vector<Event>& events, const st
   return gaps;
 }
 
-// The manifest beside a log folder's segments: its reason if it says the log
-// is incomplete, and the serials it says the logger never got.
-std::string manifestIncomplete(const fs::path& log, std::vector<ReplayResult::Gap>& missing) {
+std::string manifestIncomplete(const fs::path& log, std::vector<LogGap>& missing) {
   const fs::path manifest = (fs::is_directory(log) ? log : log.parent_path()) / "manifest.json";
   if (!fs::exists(manifest)) return "";
   std::ifstream in(manifest);
@@ -183,46 +213,16 @@ std::string manifestIncomplete(const fs::path& log, std::vector<ReplayResult::Ga
   return m.value("incomplete", std::string("its manifest says it is not complete"));
 }
 
-}  // namespace
-
 ReplayResult replayRun(const ReplayOptions& o, spdlog::logger& log) {
   ReplayResult result;
-  std::vector<Event> events;
-  for (const auto& f : segments(o.log_dir)) {
-    std::int64_t torn = 0;
-    auto part = readLogFile(f, torn);
-    if (torn > 0) log.warn("{}: the last event is incomplete ({} bytes): replaying up to the one before", f.string(), torn);
-    result.torn_bytes += torn;
-    events.insert(events.end(), std::make_move_iterator(part.begin()), std::make_move_iterator(part.end()));
-  }
-  std::vector<ReplayResult::Gap> manifest_missing;
+  RecordedLog recorded = readRecordedLog(o.log_dir, log);
+  result.torn_bytes = recorded.torn_bytes;
+  std::vector<LogGap> manifest_missing;
   result.incomplete = manifestIncomplete(o.log_dir, manifest_missing);
   // The run: from its RUN_CONFIG (the first one, or the one of --run) to the next run's.
-  // Our logger's logs start with it; a plain lcm-logger recording may hold
-  // heartbeats before it and other runs after it.
-  const ProtocolConfig observer = loadProtocol(defaultConfigDir());
-  std::size_t begin = events.size(), end = events.size();
-  run_config_t config_msg;
-  for (std::size_t i = 0; i < events.size(); ++i) {
-    if (events[i].channel != channel::kRunConfig) continue;
-    run_config_t rc;
-    std::string why;
-    if (!decodeChecked(events[i].data.data(), events[i].data.size(), BoundsContext{&observer, nullptr}, rc, why))
-      throw std::runtime_error(o.log_dir + ": the RUN_CONFIG of event " + std::to_string(i) + " is refused: " + why);
-    if (begin == events.size()) {
-      if (!o.run_id.empty() && rc.run_id != o.run_id) continue;
-      begin = i;
-      config_msg = rc;
-    } else if (rc.run_id != config_msg.run_id) {
-      end = i;
-      break;
-    }
-  }
-  if (begin == events.size())
-    throw std::runtime_error(o.log_dir + (o.run_id.empty() ? std::string(": no RUN_CONFIG in the log, so nothing configures a replay")
-                                                            : ": no RUN_CONFIG of run '" + o.run_id + "' in the log"));
-  events = std::vector<Event>(std::make_move_iterator(events.begin() + static_cast<std::ptrdiff_t>(begin)),
-                              std::make_move_iterator(events.begin() + static_cast<std::ptrdiff_t>(end)));
+  RunEvents run = runEventsOf(std::move(recorded.events), o.run_id, o.log_dir);
+  std::vector<LogEvent> events = std::move(run.events);
+  run_config_t config_msg = std::move(run.config);
   result.run_id = config_msg.run_id;
   result.events = static_cast<std::int64_t>(events.size());
   const RunConfig config = parseRunConfigText(config_msg.config_yaml);
@@ -238,7 +238,7 @@ ReplayResult replayRun(const ReplayOptions& o, spdlog::logger& log) {
     std::vector<std::uint8_t> bytes = sealed(config_msg);
     events.front().data = std::move(bytes);
   }
-  result.gaps = gapsIn(events, result.run_id, result.extrinsic, ctx);
+  result.gaps = recordingGaps(events, result.run_id, result.extrinsic, ctx);
   for (const auto& g : manifest_missing) {  // what the logger knew it never got, beyond the last recorded
     const bool known = std::any_of(result.gaps.begin(), result.gaps.end(), [&](const ReplayResult::Gap& h) {
       return h.channel == g.channel && h.first <= g.first && h.last >= g.last;
@@ -289,8 +289,8 @@ ReplayResult replayRun(const ReplayOptions& o, spdlog::logger& log) {
     procs.push_back(std::move(r));
   }
 
-  std::map<std::int64_t, const Event*> recorded_decisions;  // by serial: a recording may hold repeats
-  for (const Event& e : events) {
+  std::map<std::int64_t, const LogEvent*> recorded_decisions;  // by serial: a recording may hold repeats
+  for (const LogEvent& e : events) {
     if (const std::string why = checkRecorded(e, ctx); !why.empty()) {
       ++result.dropped;
       log.warn("{}: a recorded message is refused: {}", e.channel, why);

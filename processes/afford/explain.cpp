@@ -1,0 +1,753 @@
+#include "afford/explain.hpp"
+
+#include <yaml-cpp/yaml.h>
+
+#include <algorithm>
+#include <cstdarg>
+#include <cstdio>
+#include <filesystem>
+#include <fstream>
+#include <map>
+
+#include "afford/channels.hpp"
+#include "afford/decision_t.hpp"
+#include "afford/decode.hpp"
+#include "afford/extrinsic_result_t.hpp"
+#include "afford/focus_t.hpp"
+#include "afford/forward_prediction_t.hpp"
+#include "afford/forward_query_t.hpp"
+#include "afford/look_t.hpp"
+#include "afford/prediction_t.hpp"
+#include "afford/scene_t.hpp"
+#include "planner/planner.hpp"
+
+namespace afford {
+namespace fs = std::filesystem;
+using nlohmann::json;
+
+bool ExplainedIteration::reached() const {
+  return std::any_of(reach_checks.begin(), reach_checks.end(), [](const ExplainedReachCheck& c) { return c.reached; });
+}
+
+namespace {
+
+std::string format(const char* fmt, ...) __attribute__((format(printf, 1, 2)));
+std::string format(const char* fmt, ...) {
+  va_list args;
+  va_start(args, fmt);
+  va_list again;
+  va_copy(again, args);
+  const int n = std::vsnprintf(nullptr, 0, fmt, args);
+  va_end(args);
+  std::string out(n > 0 ? static_cast<std::size_t>(n) : 0, '\0');
+  if (n > 0) std::vsnprintf(out.data(), out.size() + 1, fmt, again);
+  va_end(again);
+  return out;
+}
+
+std::string actionName(int a) { return validAction(a) ? std::string(kActionNames[a]) : "action " + std::to_string(a); }
+
+const char* kindName(PlannerKind k) { return k == PlannerKind::Utility ? "utility" : "goal"; }
+const char* metricName(PositionMetric m) { return m == PositionMetric::HalfEuclidean ? "half_euclidean" : "euclidean"; }
+
+// The run's messages of one type, each serial once (a recording may hold a
+// message twice: one the logger asked for again and got after all), decoded
+// and checked as a receiver would; what a receiver would refuse is a warning.
+template <class Msg>
+std::map<std::int64_t, Msg> messages(const std::vector<LogEvent>& events, const char* channel, const std::string& run_id,
+                                     const BoundsContext& ctx, std::vector<std::string>& warnings) {
+  std::map<std::int64_t, Msg> out;
+  int refused = 0;
+  std::string first_why;
+  for (const LogEvent& e : events) {
+    if (e.channel != channel) continue;
+    Msg m;
+    std::string why;
+    if (!decodeChecked(e.data.data(), e.data.size(), ctx, m, why)) {
+      if (refused++ == 0) first_why = why;
+      continue;
+    }
+    if (m.run_id != run_id) continue;
+    out.emplace(m.serial, std::move(m));
+  }
+  if (refused > 0)
+    warnings.push_back(format("%s: %d recorded message(s) refused (corrupted?), the first: %s", channel, refused,
+                              first_why.c_str()));
+  return out;
+}
+
+// A request of the planner in the order it made them: LOOK and FORWARD_QUERY
+// draw their seq from one counter.
+struct Request {
+  const look_t* look = nullptr;
+  const forward_query_t* query = nullptr;
+  std::int64_t step() const { return look ? look->step : query->step; }
+};
+
+struct SubGoalImage {
+  std::vector<std::uint8_t> image;
+  double x = 0, y = 0;
+};
+
+}  // namespace
+
+Explanation explainRunEvents(const RunEvents& run, const std::string& where, std::int64_t torn_bytes,
+                             const std::string& incomplete, const std::vector<LogGap>& manifest_missing) {
+  Explanation ex;
+  ex.log = where;
+  ex.run_id = run.config.run_id;
+  ex.experiment = run.config.experiment;
+  ex.system = run.config.system;
+  ex.seed = run.config.seed;
+  RunConfig config;
+  try {
+    config = parseRunConfigText(run.config.config_yaml);
+  } catch (const std::exception& e) {
+    throw std::runtime_error(where + ": the configuration in the RUN_CONFIG of run '" + ex.run_id +
+                             "' is refused: " + e.what());
+  }
+  if (config.phase != Phase::Extrinsic || !config.scenario)
+    throw NotAnExtrinsicTest(where + ": run '" + ex.run_id +
+                             "' is not an extrinsic test (its RUN_CONFIG says phase: intrinsic); "
+                             "explain reads the log of one extrinsic test");
+  ex.scenario = config.scenario->name;
+  ex.planner = config.planner;
+  const PlannerConfig& p = config.planner;
+  const BoundsContext ctx{&config.protocol, &config};
+  std::vector<std::string>& warn = ex.warnings;
+
+  const auto results = messages<extrinsic_result_t>(run.events, channel::kExtrinsicResult, ex.run_id, ctx, warn);
+  if (results.empty()) {
+    // How far the log goes, to say where it was cut.
+    std::int64_t last_step = -1;
+    for (const auto& [serial, s] : messages<scene_t>(run.events, channel::kScene, ex.run_id, ctx, warn))
+      last_step = std::max(last_step, s.step);
+    for (const auto& [serial, l] : messages<look_t>(run.events, channel::kLook, ex.run_id, ctx, warn))
+      last_step = std::max(last_step, l.step);
+    std::string why = where + ": the log of test '" + ex.run_id +
+                      "' ends before its EXTRINSIC_RESULT, so it does not say how the test ended (a truncated log: " +
+                      std::to_string(run.events.size()) + " events, " +
+                      (last_step < 0 ? std::string("the test had not begun")
+                                     : "the last at planner iteration " + std::to_string(last_step));
+    if (torn_bytes > 0) why += ", then an incomplete event of " + std::to_string(torn_bytes) + " bytes";
+    if (!incomplete.empty()) why += "; its manifest: " + incomplete;
+    throw std::runtime_error(why + ")");
+  }
+  const extrinsic_result_t& result = results.begin()->second;
+  if (results.size() > 1) warn.push_back(format("%zu EXTRINSIC_RESULT messages: the first is explained", results.size()));
+  if (torn_bytes > 0)
+    warn.push_back(format("the log ends with an incomplete event (%lld bytes), after the EXTRINSIC_RESULT",
+                          static_cast<long long>(torn_bytes)));
+  if (!incomplete.empty()) warn.push_back("the log's manifest says it is incomplete: " + incomplete);
+  std::vector<LogGap> gaps = recordingGaps(run.events, ex.run_id, true, ctx);
+  for (const LogGap& g : manifest_missing) {  // what the logger knew it never got, beyond the last recorded
+    const bool known = std::any_of(gaps.begin(), gaps.end(), [&](const LogGap& h) {
+      return h.channel == g.channel && h.first <= g.first && h.last >= g.last;
+    });
+    if (!known) gaps.push_back(g);
+  }
+  for (const LogGap& g : gaps)
+    warn.push_back(g.first == g.last
+                       ? format("%s serial %lld is missing from the log", g.channel.c_str(), static_cast<long long>(g.first))
+                       : format("%s serials %lld..%lld are missing from the log", g.channel.c_str(),
+                                static_cast<long long>(g.first), static_cast<long long>(g.last)));
+
+  ex.success = result.success;
+  ex.completion = result.completion;
+  ex.attempts = result.attempts;
+  ex.utility = result.utility;
+  ex.iterations = result.step;
+
+  // Each message by the key it is answered or placed by.
+  const auto looks = messages<look_t>(run.events, channel::kLook, ex.run_id, ctx, warn);
+  const auto queries = messages<forward_query_t>(run.events, channel::kForwardQuery, ex.run_id, ctx, warn);
+  std::map<std::int32_t, const focus_t*> focus_by_seq;
+  const auto focuses = messages<focus_t>(run.events, channel::kFocus, ex.run_id, ctx, warn);
+  for (const auto& [serial, f] : focuses) focus_by_seq.emplace(f.seq, &f);
+  std::map<std::int32_t, const forward_prediction_t*> forward_by_seq;
+  const auto forwards = messages<forward_prediction_t>(run.events, channel::kForwardPrediction, ex.run_id, ctx, warn);
+  for (const auto& [serial, f] : forwards) forward_by_seq.emplace(f.seq, &f);
+  std::map<std::int64_t, const prediction_t*> prediction_by_step;
+  const auto predictions = messages<prediction_t>(run.events, channel::kPrediction, ex.run_id, ctx, warn);
+  for (const auto& [serial, m] : predictions) prediction_by_step.emplace(m.step, &m);
+  std::map<std::int64_t, const decision_t*> decision_by_step;
+  const auto decisions = messages<decision_t>(run.events, channel::kDecision, ex.run_id, ctx, warn);
+  for (const auto& [serial, d] : decisions) decision_by_step.emplace(d.step, &d);
+  std::map<std::int64_t, const scene_t*> action_scene_by_step;
+  const auto scenes = messages<scene_t>(run.events, channel::kScene, ex.run_id, ctx, warn);
+  for (const auto& [serial, s] : scenes) {
+    if (s.cause == scene_t::CAUSE_START) ex.start_goal_distance = s.goal_distance;
+    if (s.cause == scene_t::CAUSE_ACTION) action_scene_by_step.emplace(s.step, &s);
+    if (s.cause == scene_t::CAUSE_START || s.cause == scene_t::CAUSE_ACTION) ex.final_goal_distance = s.goal_distance;
+  }
+
+  std::map<std::int32_t, Request> requests;
+  for (const auto& [serial, l] : looks) requests[l.seq].look = &l;
+  for (const auto& [serial, q] : queries) {
+    Request& r = requests[q.seq];
+    if (r.look) warn.push_back(format("LOOK and FORWARD_QUERY both have seq %d", q.seq));
+    r.query = &q;
+  }
+
+  // The planner's iterations, request by request.
+  std::map<std::int64_t, ExplainedIteration> steps;
+  std::vector<SubGoalImage> images;  // of ex.sub_goals
+  int current = -1;
+  auto iteration = [&](std::int64_t step) -> ExplainedIteration& {
+    auto [it, fresh] = steps.try_emplace(step);
+    if (fresh) {
+      it->second.step = step;
+      it->second.sub_goal = current;
+    }
+    return it->second;
+  };
+  for (const auto& [seq, r] : requests) {
+    ExplainedIteration& it = iteration(r.step());
+    if (r.query) {
+      const forward_query_t& q = *r.query;
+      it.candidates.assign(q.actions.begin(), q.actions.end());
+      auto f = forward_by_seq.find(seq);
+      if (f == forward_by_seq.end()) {
+        warn.push_back(format("iteration %lld: FORWARD_QUERY seq %d has no FORWARD_PREDICTION in the log",
+                              static_cast<long long>(it.step), seq));
+        continue;
+      }
+      if (it.sub_goal < 0) {
+        warn.push_back(format("iteration %lld: forward predictions without a sub-goal in the log",
+                              static_cast<long long>(it.step)));
+        continue;
+      }
+      const SubGoalImage& goal = images[static_cast<std::size_t>(it.sub_goal)];
+      if (q.target_x != goal.x || q.target_y != goal.y)
+        warn.push_back(format("iteration %lld: FORWARD_QUERY seq %d names the target (%.4f, %.4f), the sub-goal is at (%.4f, %.4f)",
+                              static_cast<long long>(it.step), seq, q.target_x, q.target_y, goal.x, goal.y));
+      const forward_prediction_t& fp = *f->second;
+      bool passed = false;  // ActionPlanning stops at the first action that passes
+      for (int i = 0; i < fp.n_actions; ++i) {
+        ExplainedCheck c;
+        c.action = fp.actions[i];
+        c.what_distance = imageDistance(std::vector<double>(fp.what[i].begin(), fp.what[i].end()), goal.image);
+        c.what_ok = c.what_distance < p.image_match;
+        c.where_distance = positionDistance(fp.where_x[i], fp.where_y[i], goal.x, goal.y, p.position_metric);
+        c.where_ok = c.where_distance <= p.position_match;
+        c.checked = !passed;
+        passed = passed || c.passes();
+        it.checks.push_back(c);
+      }
+      continue;
+    }
+    const look_t& l = *r.look;
+    auto fi = focus_by_seq.find(seq);
+    if (fi == focus_by_seq.end()) {
+      warn.push_back(format("iteration %lld: LOOK seq %d has no FOCUS answering it in the log",
+                            static_cast<long long>(it.step), seq));
+      continue;
+    }
+    const focus_t& f = *fi->second;
+    if (f.kind != l.kind)
+      warn.push_back(format("iteration %lld: LOOK seq %d of kind %d is answered by a FOCUS of kind %d",
+                            static_cast<long long>(it.step), seq, l.kind, f.kind));
+    if (l.kind == focus_t::GOAL_SCAN) {
+      ExplainedSubGoal g;
+      g.x = f.x;
+      g.y = f.y;
+      g.first_step = g.last_step = it.step;
+      ex.sub_goals.push_back(g);
+      images.push_back({f.image, f.x, f.y});
+      current = static_cast<int>(ex.sub_goals.size()) - 1;
+      it.sub_goal = current;
+      it.picked = true;
+    } else if (l.kind == focus_t::SCENE_AT) {
+      if (it.sub_goal < 0) {
+        warn.push_back(format("iteration %lld: a look at the scene before any sub-goal", static_cast<long long>(it.step)));
+        continue;
+      }
+      const SubGoalImage& goal = images[static_cast<std::size_t>(it.sub_goal)];
+      ExplainedReachCheck c;
+      c.after_action = it.scanned;  // the look after the scan is the one after the action
+      c.distance = imageDistance(goal.image, f.image);
+      c.reached = c.distance < p.subgoal_match;
+      it.reach_checks.push_back(c);
+    } else {  // SCENE_SCAN: the object, and its affordances from the PREDICTION of the step
+      it.scanned = true;
+      it.object_x = f.x;
+      it.object_y = f.y;
+      auto pr = prediction_by_step.find(it.step);
+      if (pr != prediction_by_step.end() && pr->second->n_actions == kNumActions) {
+        std::array<double, kNumActions> a{};
+        std::copy(pr->second->affordance.begin(), pr->second->affordance.end(), a.begin());
+        it.affordance = a;
+      } else {
+        warn.push_back(format("iteration %lld: no PREDICTION answers the scan in the log", static_cast<long long>(it.step)));
+      }
+    }
+  }
+  for (auto& [step, it] : steps) {
+    auto d = decision_by_step.find(step);
+    if (d != decision_by_step.end() && d->second->acted) {
+      it.executed = d->second->action;
+      it.target_x = d->second->target_x;
+      it.target_y = d->second->target_y;
+      auto s = action_scene_by_step.find(step);
+      if (s != action_scene_by_step.end())
+        it.goal_distance_after = s->second->goal_distance;
+      else
+        warn.push_back(format("iteration %lld: no SCENE after the action in the log", static_cast<long long>(step)));
+    }
+  }
+  for (const auto& [step, d] : decision_by_step)
+    if (!steps.count(step))
+      warn.push_back(format("a DECISION at iteration %lld, where the log has no request of the planner",
+                            static_cast<long long>(step)));
+
+  // The sub-goals' figures, counted as the planner counts them.
+  int executed = 0;
+  for (auto& [step, it] : steps) {
+    ex.steps.push_back(it);
+    executed += it.executed >= 0;
+    if (it.sub_goal < 0) continue;
+    ExplainedSubGoal& g = ex.sub_goals[static_cast<std::size_t>(it.sub_goal)];
+    g.last_step = step;
+    if (!it.reached()) ++g.iterations;  // the iteration it is found reached in is not spent on it
+    g.reached = g.reached || it.reached();
+    g.reached_when_picked = g.reached_when_picked || (it.picked && !it.reach_checks.empty() && it.reach_checks.front().reached);
+    g.actions_taken += it.executed >= 0;
+    for (const ExplainedCheck& c : it.checks) {
+      if (!c.checked) continue;
+      ++g.actions_checked;
+      if (!g.closest || c.what_distance < g.closest->what_distance) {
+        g.closest = c;
+        g.closest_step = step;
+      }
+    }
+  }
+  for (std::size_t i = 0; i < ex.sub_goals.size(); ++i) {
+    ExplainedSubGoal& g = ex.sub_goals[i];
+    if (g.reached) {
+      g.ended = "reached";
+    } else if (i + 1 == ex.sub_goals.size()) {
+      g.ended = "open";
+    } else {
+      // The utility planner moves on once it has weighed an action that
+      // passed; otherwise a sub-goal is given up only when it timed out.
+      const ExplainedIteration& last = *std::find_if(ex.steps.rbegin(), ex.steps.rend(), [&](const ExplainedIteration& it) {
+        return it.sub_goal == static_cast<int>(i);
+      });
+      const bool weighed = std::any_of(last.checks.begin(), last.checks.end(), [](const ExplainedCheck& c) { return c.passes(); });
+      g.ended = p.kind == PlannerKind::Utility && weighed ? "left" : "timeout";
+      if (g.ended == "timeout" && g.iterations < p.subgoal_timeout)
+        warn.push_back(format("sub-goal %zu was given up after %d iterations, before planner.subgoal_timeout (%d)", i,
+                              g.iterations, p.subgoal_timeout));
+    }
+  }
+
+  // How it ended, in the order the planner asks at the end of an iteration.
+  const bool out_of_budget = result.step >= p.budget;
+  const bool out_of_attempts = result.attempts >= p.max_attempts;
+  if (result.success) {
+    ex.end = "solved";
+    if (!(ex.final_goal_distance >= 0 && ex.final_goal_distance < p.success_distance))
+      warn.push_back(format("the EXTRINSIC_RESULT says solved, but the last SCENE's goal distance %.6g is not below "
+                            "planner.success_distance %.6g",
+                            ex.final_goal_distance, p.success_distance));
+  } else if (out_of_budget) {
+    ex.end = "budget";
+    ex.also_out_of_attempts = out_of_attempts;
+  } else if (out_of_attempts) {
+    ex.end = "attempts";
+  } else {
+    ex.end = "unknown";
+    warn.push_back(format("the EXTRINSIC_RESULT says not solved after %lld of %d iterations and %d of %d actions: "
+                          "neither limit was reached",
+                          static_cast<long long>(result.step), p.budget, result.attempts, p.max_attempts));
+  }
+
+  // The rebuilt figures against what the planner reported.
+  if (static_cast<std::int64_t>(ex.steps.size()) != result.step)
+    warn.push_back(format("the log shows %zu iterations, the EXTRINSIC_RESULT %lld", ex.steps.size(),
+                          static_cast<long long>(result.step)));
+  if (executed != result.attempts)
+    warn.push_back(format("the log shows %d executed actions, the EXTRINSIC_RESULT %d", executed, result.attempts));
+  if (ex.sub_goals.size() != result.sub_goals.size())
+    warn.push_back(format("the log shows %zu sub-goals, the EXTRINSIC_RESULT %zu", ex.sub_goals.size(),
+                          result.sub_goals.size()));
+  for (std::size_t i = 0; i < std::min(ex.sub_goals.size(), result.sub_goals.size()); ++i) {
+    const ExplainedSubGoal& g = ex.sub_goals[i];
+    const sub_goal_t& r = result.sub_goals[i];
+    auto differ = [&](const char* what, long long log, long long reported) {
+      if (log != reported)
+        warn.push_back(format("sub-goal %zu: the log shows %s %lld, the EXTRINSIC_RESULT %lld", i, what, log, reported));
+    };
+    if (g.x != r.x || g.y != r.y)
+      warn.push_back(format("sub-goal %zu: the log places it at (%.4f, %.4f), the EXTRINSIC_RESULT at (%.4f, %.4f)", i, g.x,
+                            g.y, r.x, r.y));
+    differ("iterations", g.iterations, r.iterations);
+    differ("actions checked", g.actions_checked, r.actions_checked);
+    differ("actions taken", g.actions_taken, r.actions_taken);
+    differ("reached", g.reached, r.reached);
+  }
+  return ex;
+}
+
+Explanation explainLog(const std::string& log_path, const std::string& run_id, spdlog::logger& log) {
+  if (!fs::exists(log_path)) throw std::runtime_error("no such log folder or file: " + log_path);
+  RecordedLog recorded = readRecordedLog(log_path, log);
+  if (recorded.events.empty())
+    throw std::runtime_error(log_path + ": the log holds no complete event" +
+                             (recorded.torn_bytes > 0 ? " (" + std::to_string(recorded.torn_bytes) +
+                                                            " bytes that are not one: a truncated or not an LCM log)"
+                                                      : std::string()));
+  std::vector<LogGap> missing;
+  const std::string incomplete = manifestIncomplete(log_path, missing);
+  const RunEvents run = runEventsOf(std::move(recorded.events), run_id, log_path);
+  return explainRunEvents(run, log_path, recorded.torn_bytes, incomplete, missing);
+}
+
+// ---- text ---------------------------------------------------------------------------
+
+namespace {
+
+std::string endText(const Explanation& e) {
+  const PlannerConfig& p = e.planner;
+  if (e.end == "solved")
+    return format("solved at iteration %d (counted from 1): the goal distance %.3g fell below planner.success_distance %.3g",
+                  e.completion, e.final_goal_distance, p.success_distance);
+  if (e.end == "budget")
+    return format("not solved: the budget of %d iterations ran out (planner.budget)%s", p.budget,
+                  e.also_out_of_attempts ? format(", and the %d actions of planner.max_attempts with it", p.max_attempts).c_str()
+                                         : "");
+  if (e.end == "attempts")
+    return format("not solved: the %d executed actions of planner.max_attempts ran out, after %lld of %d iterations",
+                  p.max_attempts, static_cast<long long>(e.iterations), p.budget);
+  return "not solved, and neither the budget nor the action limit was reached (see the warnings)";
+}
+
+std::string subGoalText(const Explanation& e, std::size_t i) {
+  const ExplainedSubGoal& g = e.sub_goals[i];
+  std::string how;
+  if (g.reached_when_picked)
+    how = format("reached already when picked, at iteration %lld", static_cast<long long>(g.first_step));
+  else if (g.ended == "reached")
+    how = format("reached at iteration %lld", static_cast<long long>(g.last_step));
+  else if (g.ended == "timeout")
+    how = format("not reached: abandoned after %d iterations (planner.subgoal_timeout %d)", g.iterations,
+                 e.planner.subgoal_timeout);
+  else if (g.ended == "left")
+    how = "not reached: left after weighing an action (Algorithm 3)";
+  else
+    how = "not reached: the test ended with it";
+  return format("  #%zu at (%.4f, %.4f), iterations %lld..%lld: %d spent, %d actions checked, %d taken; %s", i, g.x, g.y,
+                static_cast<long long>(g.first_step), static_cast<long long>(g.last_step), g.iterations,
+                g.actions_checked, g.actions_taken, how.c_str());
+}
+
+std::string closestText(const ExplainedSubGoal& g, const PlannerConfig& p) {
+  if (!g.closest) return "no action was checked";
+  const ExplainedCheck& c = *g.closest;
+  // An action that passed both thresholds is no miss: the sub-goal was lost
+  // after it (the action failed, or the utility planner did not take it).
+  return format("%s: %s at iteration %lld, what %.5f (%s %.5f), where %.4f (%s %.4f)",
+                c.passes() ? "passed" : "closest", actionName(c.action).c_str(),
+                static_cast<long long>(g.closest_step), c.what_distance, c.what_ok ? "<" : "not <", p.image_match,
+                c.where_distance, c.where_ok ? "<=" : "not <=", p.position_match);
+}
+
+}  // namespace
+
+std::string explanationText(const Explanation& e) {
+  const PlannerConfig& p = e.planner;
+  std::string out;
+  out += format("test %s: scenario %s, %s planner (Algorithm %d), %s agent of experiment %s, seed %lld\n", e.run_id.c_str(),
+                e.scenario.c_str(), kindName(p.kind), p.kind == PlannerKind::Utility ? 3 : 2, e.system.c_str(),
+                e.experiment.c_str(), static_cast<long long>(e.seed));
+  out += "  " + endText(e) + "\n";
+  out += format("  %lld iterations, %d actions taken, utility %.3g; goal distance %.3g at the start, %.3g at the end\n",
+                static_cast<long long>(e.iterations), e.attempts, e.utility, e.start_goal_distance, e.final_goal_distance);
+  out += format("  thresholds: what-distance < %.5g (planner.image_match), where-distance (%s) <= %.5g "
+                "(planner.position_match), sub-goal reached < %.5g (planner.subgoal_match), sub-goal timeout %d "
+                "iterations",
+                p.image_match, metricName(p.position_metric), p.position_match, p.subgoal_match, p.subgoal_timeout);
+  if (p.restrict_by_affordance) out += format(", actions checked if afforded > %.3g", p.affordance_threshold);
+  out += "\n";
+  out += format("sub-goals (%zu):\n", e.sub_goals.size());
+  for (std::size_t i = 0; i < e.sub_goals.size(); ++i) {
+    out += subGoalText(e, i) + "\n";
+    if (!e.sub_goals[i].reached) out += "      " + closestText(e.sub_goals[i], p) + "\n";
+  }
+  out += "iterations:\n";
+  for (const ExplainedIteration& it : e.steps) {
+    out += format("  [%lld] ", static_cast<long long>(it.step));
+    if (it.sub_goal < 0)
+      out += "no sub-goal known\n";
+    else if (it.picked)
+      out += format("sub-goal #%d picked at (%.4f, %.4f)\n", it.sub_goal, e.sub_goals[static_cast<std::size_t>(it.sub_goal)].x,
+                    e.sub_goals[static_cast<std::size_t>(it.sub_goal)].y);
+    else
+      out += format("sub-goal #%d\n", it.sub_goal);
+    auto reach = [&](const ExplainedReachCheck& c) {
+      out += format("      scene at the sub-goal%s: distance %.5f, %s\n", c.after_action ? " after the action" : "",
+                    c.distance, c.reached ? "reached" : "not reached");
+    };
+    for (const ExplainedReachCheck& c : it.reach_checks)
+      if (!c.after_action) reach(c);
+    if (it.scanned) {
+      out += format("      object at (%.4f, %.4f)", it.object_x, it.object_y);
+      if (it.affordance) {
+        out += ", affordances:";
+        for (int a = 0; a < kNumActions; ++a)
+          out += format("%s %s %.3f", a ? "," : "", actionName(a).c_str(), (*it.affordance)[static_cast<std::size_t>(a)]);
+      }
+      out += "\n";
+      if (it.candidates.empty()) out += "      no action afforded: nothing checked\n";
+    }
+    for (const ExplainedCheck& c : it.checks)
+      out += format("      %-10s what %.5f %s %.5g %s, where %.4f %s %.5g %s%s\n", actionName(c.action).c_str(),
+                    c.what_distance, c.what_ok ? "<" : ">=", p.image_match, c.what_ok ? "ok" : "no", c.where_distance,
+                    c.where_ok ? "<=" : ">", p.position_match, c.where_ok ? "ok" : "no",
+                    !c.checked ? "  (not compared: an earlier action passed)" : c.passes() ? "  <- passes" : "");
+    if (it.executed >= 0) {
+      out += format("      executed: %s", actionName(it.executed).c_str());
+      if (it.executed == kMove) out += format(" to (%.4f, %.4f)", it.target_x, it.target_y);
+      out += format("; goal distance after: %.3g\n", it.goal_distance_after);
+    } else if (std::any_of(it.checks.begin(), it.checks.end(), [](const ExplainedCheck& c) { return c.passes(); })) {
+      out += "      nothing executed (Algorithm 3 weighed the action's utility)\n";
+    }
+    for (const ExplainedReachCheck& c : it.reach_checks)
+      if (c.after_action) reach(c);
+  }
+  for (const std::string& w : e.warnings) out += "warning: " + w + "\n";
+  return out;
+}
+
+json explanationJson(const Explanation& e, bool with_steps) {
+  const PlannerConfig& p = e.planner;
+  auto check = [](const ExplainedCheck& c) {
+    return json{{"action", c.action},         {"action_name", actionName(c.action)}, {"what_distance", c.what_distance},
+                {"what_ok", c.what_ok},       {"where_distance", c.where_distance},   {"where_ok", c.where_ok},
+                {"checked", c.checked},       {"passes", c.passes()}};
+  };
+  json j = {{"log", e.log},
+            {"run_id", e.run_id},
+            {"experiment", e.experiment},
+            {"system", e.system},
+            {"seed", e.seed},
+            {"scenario", e.scenario},
+            {"planner",
+             {{"kind", kindName(p.kind)},
+              {"image_match", p.image_match},
+              {"position_match", p.position_match},
+              {"position_metric", metricName(p.position_metric)},
+              {"subgoal_match", p.subgoal_match},
+              {"subgoal_timeout", p.subgoal_timeout},
+              {"budget", p.budget},
+              {"max_attempts", p.max_attempts},
+              {"success_distance", p.success_distance},
+              {"restrict_by_affordance", p.restrict_by_affordance},
+              {"affordance_threshold", p.affordance_threshold}}},
+            {"success", e.success},
+            {"end", e.end},
+            {"also_out_of_attempts", e.also_out_of_attempts},
+            {"completion", e.completion},
+            {"iterations", e.iterations},
+            {"attempts", e.attempts},
+            {"utility", e.utility},
+            {"start_goal_distance", e.start_goal_distance},
+            {"final_goal_distance", e.final_goal_distance},
+            {"sub_goals", json::array()},
+            {"warnings", e.warnings}};
+  for (const ExplainedSubGoal& g : e.sub_goals) {
+    json s = {{"x", g.x},
+              {"y", g.y},
+              {"first_step", g.first_step},
+              {"last_step", g.last_step},
+              {"iterations", g.iterations},
+              {"actions_checked", g.actions_checked},
+              {"actions_taken", g.actions_taken},
+              {"reached", g.reached},
+              {"reached_when_picked", g.reached_when_picked},
+              {"ended", g.ended},
+              {"closest", nullptr}};
+    if (g.closest) {
+      s["closest"] = check(*g.closest);
+      s["closest"]["step"] = g.closest_step;
+    }
+    j["sub_goals"].push_back(s);
+  }
+  if (!with_steps) return j;
+  j["steps"] = json::array();
+  for (const ExplainedIteration& it : e.steps) {
+    json s = {{"step", it.step},       {"sub_goal", it.sub_goal}, {"picked", it.picked},
+              {"scanned", it.scanned}, {"reached", it.reached()}, {"reach_checks", json::array()},
+              {"candidates", it.candidates}, {"checks", json::array()}};
+    for (const ExplainedReachCheck& c : it.reach_checks)
+      s["reach_checks"].push_back({{"after_action", c.after_action}, {"distance", c.distance}, {"reached", c.reached}});
+    if (it.scanned) {
+      s["object"] = {{"x", it.object_x}, {"y", it.object_y}};
+      s["affordance"] = it.affordance ? json(*it.affordance) : json(nullptr);
+    }
+    for (const ExplainedCheck& c : it.checks) s["checks"].push_back(check(c));
+    if (it.executed >= 0)
+      s["executed"] = {{"action", it.executed},
+                       {"action_name", actionName(it.executed)},
+                       {"target_x", it.target_x},
+                       {"target_y", it.target_y},
+                       {"goal_distance_after", it.goal_distance_after}};
+    else
+      s["executed"] = nullptr;
+    j["steps"].push_back(s);
+  }
+  return j;
+}
+
+// ---- a folder of run logs -------------------------------------------------------------
+
+namespace {
+
+bool holdsLcm(const fs::path& dir) {
+  std::error_code ec;
+  for (const auto& f : fs::directory_iterator(dir, ec))
+    if (f.path().extension() == ".lcm") return true;
+  return false;
+}
+
+// The phase a log folder's manifest names ("" without a readable one): an
+// intrinsic run's log (tens of MB) need not be read to be skipped.
+std::string manifestPhase(const fs::path& dir) {
+  std::ifstream in(dir / "manifest.json");
+  if (!in) return "";
+  const json m = json::parse(in, nullptr, false);
+  if (m.is_discarded() || !m.contains("config_yaml") || !m["config_yaml"].is_string()) return "";
+  try {
+    const YAML::Node c = YAML::Load(m["config_yaml"].get<std::string>());
+    return c["phase"] ? c["phase"].as<std::string>() : "";
+  } catch (const std::exception&) {
+    return "";
+  }
+}
+
+}  // namespace
+
+bool isLogRoot(const std::string& path) {
+  if (!fs::is_directory(path) || holdsLcm(path)) return false;
+  std::error_code ec;
+  for (const auto& f : fs::directory_iterator(path, ec))
+    if (f.is_directory() && holdsLcm(f.path())) return true;
+  return false;
+}
+
+ExplainSummary explainLogRoot(const std::string& root, spdlog::logger& log) {
+  ExplainSummary s;
+  s.root = root;
+  std::vector<fs::path> dirs;
+  for (const auto& f : fs::directory_iterator(root))
+    if (f.is_directory() && holdsLcm(f.path())) dirs.push_back(f.path());
+  std::sort(dirs.begin(), dirs.end());
+  for (const fs::path& d : dirs) {
+    const std::string phase = manifestPhase(d);
+    if (!phase.empty() && phase != "extrinsic") {
+      s.skipped.emplace_back(d.string(), "phase " + phase);
+      continue;
+    }
+    try {
+      s.tests.push_back(explainLog(d.string(), "", log));
+    } catch (const NotAnExtrinsicTest& e) {
+      s.skipped.emplace_back(d.string(), e.what());
+    } catch (const std::exception& e) {
+      s.errors.emplace_back(d.string(), e.what());
+    }
+  }
+  if (s.tests.empty() && s.errors.empty())
+    throw std::runtime_error(root + ": no extrinsic test log in it (" + std::to_string(s.skipped.size()) +
+                             " other run log(s)); run the experiment with --extrinsic-reps and --keep-logs all");
+  return s;
+}
+
+namespace {
+
+// End reasons in a fixed order, every one named even when none ended so.
+const char* const kEnds[] = {"solved", "budget", "attempts", "unknown"};
+
+std::map<std::string, std::map<std::string, int>> endsBySystem(const ExplainSummary& s) {
+  std::map<std::string, std::map<std::string, int>> out;
+  for (const Explanation& t : s.tests) {
+    ++out[""][t.end];
+    ++out[t.system][t.end];
+  }
+  return out;
+}
+
+std::string countsText(const std::map<std::string, int>& counts) {
+  std::string out;
+  int total = 0;
+  for (const char* end : kEnds) {
+    const auto it = counts.find(end);
+    const int n = it == counts.end() ? 0 : it->second;
+    total += n;
+    if (n == 0 && std::string(end) == "unknown") continue;
+    out += format("%s%s %d", out.empty() ? "" : ", ", end, n);
+  }
+  return out + format(" (%d tests)", total);
+}
+
+}  // namespace
+
+std::string summaryText(const ExplainSummary& s) {
+  std::string out = format("%zu extrinsic test(s) under %s", s.tests.size(), s.root.c_str());
+  if (!s.skipped.empty()) out += format(" (%zu other run log(s) skipped)", s.skipped.size());
+  out += "\n";
+  out += format("%-44s %-6s %-12s %-8s %-9s %10s %8s %7s %9s %8s\n", "test", "system", "scenario", "planner", "end",
+                "completion", "actions", "utility", "sub-goals", "warnings");
+  for (const Explanation& t : s.tests) {
+    int reached = 0;
+    for (const auto& g : t.sub_goals) reached += g.reached;
+    out += format("%-44s %-6s %-12s %-8s %-9s %10d %8d %7.3g %4d/%-4zu %8zu\n", t.run_id.c_str(), t.system.c_str(),
+                  t.scenario.c_str(), kindName(t.planner.kind), t.end.c_str(), t.completion, t.attempts, t.utility,
+                  reached, t.sub_goals.size(), t.warnings.size());
+  }
+  const auto ends = endsBySystem(s);
+  out += "end reasons: " + countsText(ends.count("") ? ends.at("") : std::map<std::string, int>{}) + "\n";
+  for (const auto& [system, counts] : ends)
+    if (!system.empty()) out += "  " + system + ": " + countsText(counts) + "\n";
+  bool header = false;
+  for (const Explanation& t : s.tests) {
+    if (t.success) continue;
+    if (!header)
+      out += "closest misses of the failed tests (each sub-goal not reached: its checked action with the smallest "
+             "what-distance):\n";
+    header = true;
+    int missed = 0;
+    for (std::size_t i = 0; i < t.sub_goals.size(); ++i) {
+      const ExplainedSubGoal& g = t.sub_goals[i];
+      if (g.reached) continue;
+      ++missed;
+      out += format("  %s #%zu at (%.4f, %.4f), %s: %s\n", t.run_id.c_str(), i, g.x, g.y, g.ended.c_str(),
+                    closestText(g, t.planner).c_str());
+    }
+    if (missed == 0)
+      out += format("  %s: every sub-goal it picked was reached; it ended by %s before it picked another\n",
+                    t.run_id.c_str(), t.end.c_str());
+  }
+  for (const Explanation& t : s.tests)
+    for (const std::string& w : t.warnings) out += "warning: " + t.run_id + ": " + w + "\n";
+  for (const auto& [dir, why] : s.errors) out += "error: " + why + "\n";
+  return out;
+}
+
+json summaryJson(const ExplainSummary& s) {
+  json j = {{"root", s.root}, {"tests", json::array()}, {"end_reasons", json::object()}, {"skipped", json::array()},
+            {"errors", json::array()}};
+  for (const Explanation& t : s.tests) j["tests"].push_back(explanationJson(t, /*steps=*/false));
+  for (const auto& [system, counts] : endsBySystem(s)) {
+    json c = json::object();
+    for (const char* end : kEnds) c[end] = counts.count(end) ? counts.at(end) : 0;
+    if (system.empty())
+      j["end_reasons"]["all"] = c;
+    else
+      j["end_reasons"][system] = c;
+  }
+  for (const auto& [dir, why] : s.skipped) j["skipped"].push_back({{"log", dir}, {"why", why}});
+  for (const auto& [dir, why] : s.errors) j["errors"].push_back({{"log", dir}, {"error", why}});
+  return j;
+}
+
+}  // namespace afford

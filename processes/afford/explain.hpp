@@ -1,0 +1,140 @@
+// `afford explain LOG`: why an extrinsic test ended as it did, read from its
+// log. The planner's iterations are rebuilt from the recorded messages (LOOK
+// and FOCUS by seq, FORWARD_QUERY and FORWARD_PREDICTION by seq, PREDICTION,
+// DECISION and SCENE by step), and every comparison the planner made is made
+// again with the planner's own distance functions and the run's thresholds.
+// The rebuilt per-sub-goal figures are checked against the test's
+// EXTRINSIC_RESULT; any difference is a warning. Given a folder of run logs
+// (an experiment's --log-root), it summarises every extrinsic test in it.
+#pragma once
+#include <spdlog/spdlog.h>
+
+#include <array>
+#include <cstdint>
+#include <nlohmann/json.hpp>
+#include <optional>
+#include <stdexcept>
+#include <string>
+#include <vector>
+
+#include "afford/actions.hpp"
+#include "afford/config.hpp"
+#include "afford/replay.hpp"
+
+namespace afford {
+
+// The log is of a run, but not of an extrinsic test (a summary skips it).
+struct NotAnExtrinsicTest : std::runtime_error {
+  using std::runtime_error::runtime_error;
+};
+
+// One candidate action's predicted effect compared with the sub-goal.
+struct ExplainedCheck {
+  int action = 0;
+  double what_distance = 0;   // imageDistance(predicted focus image, sub-goal image)
+  bool what_ok = false;       // < planner.image_match
+  double where_distance = 0;  // positionDistance(predicted place, sub-goal place, planner.position_metric)
+  bool where_ok = false;      // <= planner.position_match
+  // The planner compared it: it stops at the first action that passes both,
+  // so the candidates after that one were predicted but not compared.
+  bool checked = false;
+  bool passes() const { return what_ok && where_ok; }
+};
+
+// A look at the scene at the sub-goal's place: is the sub-goal reached?
+struct ExplainedReachCheck {
+  bool after_action = false;  // false: right after the sub-goal was picked
+  double distance = 0;        // imageDistance(sub-goal image, scene there)
+  bool reached = false;       // < planner.subgoal_match
+};
+
+// One planner iteration (a `step` of the test's messages, counted from 0).
+struct ExplainedIteration {
+  std::int64_t step = 0;
+  int sub_goal = -1;    // index into Explanation::sub_goals (-1: none known)
+  bool picked = false;  // the sub-goal was picked in this iteration
+  std::vector<ExplainedReachCheck> reach_checks;
+  bool scanned = false;  // the scene was scanned for an object
+  double object_x = 0, object_y = 0;
+  std::optional<std::array<double, kNumActions>> affordance;  // from the PREDICTION answering the scan
+  std::vector<int> candidates;                                // actions the FORWARD_QUERY asked about
+  std::vector<ExplainedCheck> checks;                         // the FORWARD_PREDICTION's, in order
+  int executed = -1;                                          // the DECISION's action, -1: none
+  double target_x = -1, target_y = -1;                        // its move target
+  double goal_distance_after = -1;                            // the SCENE after it (-1: none)
+  bool reached() const;
+};
+
+struct ExplainedSubGoal {
+  double x = 0, y = 0;
+  std::int64_t first_step = 0, last_step = 0;
+  int iterations = 0;  // counted as the planner counts them: not the one it was found reached in
+  int actions_checked = 0;
+  int actions_taken = 0;
+  bool reached = false;
+  bool reached_when_picked = false;  // the scene showed it already: no iteration spent on it
+  // How the planner left it: "reached"; "timeout" (not reached in
+  // planner.subgoal_timeout iterations: another was picked); "left" (the
+  // utility planner moves on after each weighed action, Algorithm 3);
+  // "open" (the test ended while it was the sub-goal).
+  std::string ended;
+  // The checked action with the smallest what-distance ("the closest miss"
+  // when the sub-goal was not reached), and the step it was checked in.
+  std::optional<ExplainedCheck> closest;
+  std::int64_t closest_step = -1;
+};
+
+struct Explanation {
+  std::string log;  // where it was read
+  std::string run_id, experiment, system, scenario;
+  std::int64_t seed = 0;
+  PlannerConfig planner;  // the run's: thresholds, budget, action limit
+  bool success = false;
+  int completion = 0;  // EXTRINSIC_RESULT: the iteration, counted from 1, at which it was solved
+  int attempts = 0;    // actions executed
+  double utility = 0;
+  std::int64_t iterations = 0;      // run, by the EXTRINSIC_RESULT
+  double start_goal_distance = -1;  // the SCENE the test began with
+  double final_goal_distance = -1;  // the last SCENE's
+  // "solved" (goal distance below planner.success_distance), "budget"
+  // (planner.budget iterations ran out), "attempts" (planner.max_attempts
+  // actions executed), "unknown" (none of them: a warning says so).
+  std::string end;
+  bool also_out_of_attempts = false;  // "budget", and the action limit was reached too
+  std::vector<ExplainedSubGoal> sub_goals;
+  std::vector<ExplainedIteration> steps;
+  std::vector<std::string> warnings;  // the rebuilt figures against the EXTRINSIC_RESULT, refused messages, gaps
+};
+
+// Explain the extrinsic test whose RUN_CONFIG starts `run.events` (as
+// runEventsOf gives them). `where` names the log in errors; `torn_bytes`,
+// `incomplete` and `manifest_missing` are what the log file and its manifest
+// say beyond the events. Throws NotAnExtrinsicTest, or std::runtime_error
+// naming what is missing.
+Explanation explainRunEvents(const RunEvents& run, const std::string& where, std::int64_t torn_bytes = 0,
+                             const std::string& incomplete = "", const std::vector<LogGap>& manifest_missing = {});
+// Read a run's log folder (or one .lcm file) and explain the test in it: the
+// first run, or `run_id`'s.
+Explanation explainLog(const std::string& log_path, const std::string& run_id, spdlog::logger& log);
+
+std::string explanationText(const Explanation& e);
+// With `steps` false, the per-iteration record is left out (summaries).
+nlohmann::json explanationJson(const Explanation& e, bool steps = true);
+
+// ---- a folder of run logs ------------------------------------------------------------
+
+struct ExplainSummary {
+  std::string root;
+  std::vector<Explanation> tests;                            // in folder-name order
+  std::vector<std::pair<std::string, std::string>> skipped;  // folder, why (runs that are not extrinsic tests)
+  std::vector<std::pair<std::string, std::string>> errors;   // folder, what was wrong
+};
+
+// True when `path` is a folder of run log folders rather than one run's log.
+bool isLogRoot(const std::string& path);
+// Every extrinsic test under `root` (one level down). Throws when there is none.
+ExplainSummary explainLogRoot(const std::string& root, spdlog::logger& log);
+std::string summaryText(const ExplainSummary& s);
+nlohmann::json summaryJson(const ExplainSummary& s);
+
+}  // namespace afford
