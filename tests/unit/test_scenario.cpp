@@ -25,7 +25,8 @@ const char* kBlueSquare = "{shape: square, initial: {colour: blue, position: [0.
 
 TEST(Scenario, TheFiveScenariosOfFigure4Load) {
   EXPECT_EQ(listScenarios(kConfigDir),
-            (std::vector<std::string>{"scenario1", "scenario2", "scenario3", "scenario4", "scenario5", "utility"}));
+            (std::vector<std::string>{"scenario1", "scenario2", "scenario3", "scenario4", "scenario5", "utility",
+                                      "utility-authors"}));
   for (int k = 1; k <= 5; ++k) {
     const Scenario s = loadScenario(kConfigDir, "scenario" + std::to_string(k), kWorld);
     EXPECT_EQ(s.objects.size(), static_cast<std::size_t>(k));
@@ -35,6 +36,16 @@ TEST(Scenario, TheFiveScenariosOfFigure4Load) {
   EXPECT_EQ(s5.objects[0].goal.colour, Colour::Green);
   EXPECT_DOUBLE_EQ(s5.objects[4].goal.y, 0.2);  // the red circle moves to (0.5, 0.2)
   EXPECT_DOUBLE_EQ(s5.objects[4].value, 1.0);
+  // The authors' utility test: scenario 4's objects, with values.
+  const Scenario ua = loadScenario(kConfigDir, "utility-authors", kWorld), s4 = loadScenario(kConfigDir, "scenario4", kWorld);
+  ASSERT_EQ(ua.objects.size(), s4.objects.size());
+  const double values[] = {1, 2, 4, 1};
+  for (std::size_t i = 0; i < ua.objects.size(); ++i) {
+    EXPECT_EQ(ua.objects[i].shape, s4.objects[i].shape);
+    EXPECT_DOUBLE_EQ(ua.objects[i].initial.x, s4.objects[i].initial.x);
+    EXPECT_EQ(ua.objects[i].goal.colour, s4.objects[i].goal.colour);
+    EXPECT_DOUBLE_EQ(ua.objects[i].value, values[i]);
+  }
 }
 
 TEST(Scenario, TheUtilityTestHasTheValuesOfTable8) {
