@@ -58,7 +58,7 @@ void Environment::place(WorldObject& o, double x, double y) const {
 }
 
 template <class Counts>
-bool Environment::placeFree(double x, double y, Counts counts) const {
+bool Environment::placeFree(double x, double y, const Shape* shape, Counts counts) const {
   const int size = config_.world.size_px;
   Pixel lo, hi;  // the window, inclusive
   if (continuous()) {
@@ -69,11 +69,25 @@ bool Environment::placeFree(double x, double y, Counts counts) const {
     lo = {c.col - free_half_, c.row - free_half_};
     hi = {c.col + free_half_, c.row + free_half_};
   }
+  std::vector<std::uint8_t> taken;  // continuous: the counted objects' pixels, to keep the shape off them
+  if (continuous() && shape) taken.assign(static_cast<std::size_t>(size) * size, 0);
   for (std::size_t i = 0; i < objects_.size(); ++i) {
     if (!counts(static_cast<int>(i))) continue;
-    for (const Pixel& p : objects_[i].pixels)
+    for (const Pixel& p : objects_[i].pixels) {
       if (p.col >= lo.col && p.col <= hi.col && p.row >= lo.row && p.row <= hi.row) return false;
+      if (!taken.empty() && p.col >= 0 && p.row >= 0 && p.col < size && p.row < size)
+        taken[static_cast<std::size_t>(p.row) * size + p.col] = 1;
+    }
   }
+  if (taken.empty()) return true;
+  // A rectangle (22.5 px tall) reaches past the 21 x 21 window: it must not
+  // touch another object either, or the eye sees the two as one blob.
+  for (const Pixel& p : shapePixels(*shape, x, y, config_.world))
+    for (int dr = -1; dr <= 1; ++dr)
+      for (int dc = -1; dc <= 1; ++dc) {
+        const int r = p.row + dr, c = p.col + dc;
+        if (r >= 0 && c >= 0 && r < size && c < size && taken[static_cast<std::size_t>(r) * size + c]) return false;
+      }
   return true;
 }
 
@@ -82,8 +96,8 @@ const cv::Mat& Environment::goalScene() const {
   return goal_;
 }
 
-bool Environment::placeFree(double x, double y) const {
-  return placeFree(x, y, [this](int i) { return objects_[i].present; });
+bool Environment::placeFree(double x, double y, const Shape* shape) const {
+  return placeFree(x, y, shape, [this](int i) { return objects_[i].present; });
 }
 
 double Environment::goalUtility() const {
@@ -168,7 +182,7 @@ ActionOutcome Environment::execute(std::int64_t step, int action, double x, doub
   auto aim = [&](double x0, double y0) {
     tx = continuous() ? x0 : toUnit(toPixel(x0, w.size_px), w.size_px);
     ty = continuous() ? y0 : toUnit(toPixel(y0, w.size_px), w.size_px);
-    return placeFree(tx, ty);
+    return placeFree(tx, ty, idx >= 0 ? &objects_[idx].shape : nullptr);
   };
   if (action == kMove) {
     // The window at the target must be free in the scene as it is, the moving
@@ -228,13 +242,13 @@ bool Environment::introduceObjectsAt(std::int64_t step) {
       const auto counts = [&](int j) {
         return j != static_cast<int>(i) && (before[j] || (objects_[j].present && !(continuous() && w.late_overlap)));
       };
-      if (continuous() || !placeFree(o.x, o.y, counts)) {
+      if (continuous() || !placeFree(o.x, o.y, &o.shape, counts)) {
         const KeyedRng rng(config_.seed, step, Purpose::LatePlacement, i);
         for (int k = 0; k < w.max_target_draws; ++k) {
           const double x = rng.uniform(2 * k, w.table_min, w.table_max), y = rng.uniform(2 * k + 1, w.table_min, w.table_max);
           const double px = continuous() ? x : toUnit(toPixel(x, w.size_px), w.size_px);
           const double py = continuous() ? y : toUnit(toPixel(y, w.size_px), w.size_px);
-          if (placeFree(px, py, counts)) {
+          if (placeFree(px, py, &o.shape, counts)) {
             place(o, px, py);
             break;
           }

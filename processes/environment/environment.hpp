@@ -73,13 +73,14 @@ class Environment {
  private:
   // Put an object's centre at (x, y), scene units (snapped to a pixel in the pixel world).
   void place(WorldObject& o, double x, double y) const;
-  // Is a place free for an object? Continuous positions: the focus window
-  // there (windowCorner) holds no pixel of the objects `counts` accepts
-  // (indices into objects_). Pixel world: the square of half-size free_half_
-  // around the place's pixel holds none.
+  // Is a place free for an object of `shape` (nullptr: no object)? Continuous
+  // positions: the focus window there (windowCorner) holds no pixel of the
+  // objects `counts` accepts (indices into objects_), and the shape drawn
+  // there touches none of them. Pixel world: the square of half-size
+  // free_half_ around the place's pixel holds none.
   template <class Counts>
-  bool placeFree(double x, double y, Counts counts) const;
-  bool placeFree(double x, double y) const;  // of every present object
+  bool placeFree(double x, double y, const Shape* shape, Counts counts) const;
+  bool placeFree(double x, double y, const Shape* shape) const;  // of every present object
   bool continuous() const { return config_.world.positions == Positions::Continuous; }
 
   RunConfig config_;

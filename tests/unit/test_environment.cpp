@@ -90,6 +90,29 @@ TEST(Environment, IntrinsicMoveGoesToARandomFreePlaceInTheTable) {
   }
 }
 
+// A rectangle is 22.5 px tall, taller than the 21 x 21 window a move target
+// must have free: moved anywhere, it still touches no other object (touching
+// objects are one blob to the eye, whose gaze then falls between them).
+TEST(Environment, AMovedObjectTouchesNoOtherInTheContinuousWorld) {
+  const RunConfig c = withSettings("base", 4, {"world.positions=continuous"});
+  Environment env(c);
+  int rectangle_moves = 0;
+  for (int step = 0; step < 3000; ++step) {
+    const auto& objs = env.objects();
+    const WorldObject& o = objs[static_cast<std::size_t>(step) % objs.size()];
+    const ActionOutcome out = env.execute(step, kMove, o.x, o.y);
+    if (!out.succeeded) continue;
+    rectangle_moves += o.shape == Shape::Rectangle;
+    for (const auto& other : objs) {
+      if (&other == &o) continue;
+      for (const Pixel& p : o.pixels)
+        for (const Pixel& q : other.pixels)
+          ASSERT_FALSE(std::abs(p.col - q.col) <= 1 && std::abs(p.row - q.row) <= 1) << "step " << step;
+    }
+  }
+  EXPECT_GT(rectangle_moves, 500);
+}
+
 TEST(Environment, MoveTargetsAreRealNumbersInTheContinuousWorldAndPixelsInThePixelWorld) {
   int off_pixel = 0;
   for (int step = 0; step < 20; ++step) {
