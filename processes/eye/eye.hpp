@@ -1,7 +1,7 @@
 // Eye core (paper 2.3.1): bottom-up saliency scan with keyed noise, the
 // change-driven scan of action effects, the focus image and the change tests.
 // Object identity comes from connected blobs on the black background; the
-// fovea is centred on the chosen blob (PARAMETERS.md, "saliency scan").
+// fovea is centred on the chosen blob (docs/parameters.md, "saliency scan").
 // No LCM here.
 #pragma once
 #include <opencv2/core.hpp>

@@ -20,7 +20,7 @@ Predictors::Predictors(const RunConfig& config)
     learning_progress_.emplace_back(dim, false);
     what_.emplace_back(input_size_, dim, true);
     where_.emplace_back(2, a == kMove ? 5 : 3, false);
-    // Learning-progress weights: random sign, fixed magnitude (PARAMETERS.md).
+    // Learning-progress weights: random sign, fixed magnitude (docs/parameters.md).
     const KeyedRng rng(config.seed, 0, Purpose::LearningProgressInit, static_cast<std::uint64_t>(a));
     Eigen::VectorXd& w = learning_progress_.back().weights();
     for (int i = 0; i < dim; ++i)
