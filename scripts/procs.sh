@@ -5,7 +5,7 @@
 #   scripts/procs.sh stop    RUN [PROCESS...]   SIGINT, then SIGKILL after $AFFORD_GRACE s (default 5)
 #   scripts/procs.sh restart RUN PROCESS...     stop, then start again with the same command
 #   scripts/procs.sh kill    RUN PROCESS...     kill -9 (to try a live restart)
-#   scripts/procs.sh status  RUN                pid and liveness, then each process's state,
+#   scripts/procs.sh status  RUN [OPTIONS]      pid and liveness, then each process's state,
 #                                               run id and last step handled (its STATUS)
 #   scripts/procs.sh run     RUN EXPERIMENT [afford experiment options...]
 #                                               drive runs on the group (run ids RUN-<exp>-<sys>-s<seed>)
@@ -138,7 +138,7 @@ case $cmd in
       printf '%-12s %8s  %s\n' "$p" "$(cat "$dir/$p.pid")" "$a"
     done
     echo
-    in_ns "$bin/afford" status --lcm-url "$u"
+    in_ns "$bin/afford" status --lcm-url "$u" "$@"  # e.g. --wait-for eye --state running
     ;;
   run)
     [[ $# -ge 1 ]] || usage

@@ -23,6 +23,18 @@ enter_test() {
   out=$(cd "$3" && pwd)
 }
 
+# wait_until SECONDS COMMAND...: returns as soon as COMMAND succeeds, or 1
+# after SECONDS. For conditions no event announces (a line in a file); the
+# processes on a bus are waited for with `afford status --wait-for`.
+wait_until() {
+  local deadline=$((SECONDS + $1))
+  shift
+  until "$@"; do
+    ((SECONDS < deadline)) || return 1
+    read -r -t 0.02 <> <(:) || true  # a short pause between tries
+  done
+}
+
 # start_xvfb WIDTHxHEIGHT LOGFILE: an X server on a free display; exports DISPLAY.
 start_xvfb() {
   local display=:$((100 + $$ % 400))

@@ -115,6 +115,12 @@ int main(int argc, char** argv) {
   status->add_option("--lcm-url", status_url, "the bus")->capture_default_str();
   status->add_option("--seconds", status_seconds, "how long to listen (processes report every 0.5 s)")
       ->capture_default_str();
+  std::string status_wait, status_state;
+  status->add_option("--wait-for", status_wait,
+                     "processes, comma-separated: list as soon as each has been heard (with --state: in that "
+                     "state); --seconds is then the deadline, and missing it exits 1");
+  status->add_option("--state", status_state, "with --wait-for: the state to wait for")
+      ->check(CLI::IsMember({"waiting", "ready", "running", "done", "failed"}));
   std::string scenario_name, scenario_png;
   auto* scen = app.add_subcommand("scenario", "check a scenario file and draw its goal and initial scenes");
   scen->add_option("name", scenario_name, "scenario (config/scenarios/<name>.yaml)")->required();
@@ -150,15 +156,32 @@ int main(int argc, char** argv) {
             return afford::Turn::take();
           },
           afford::Scope::Any, afford::Order::None);
-      const auto until = std::chrono::steady_clock::now() + std::chrono::duration<double>(status_seconds);
-      while (std::chrono::steady_clock::now() < until) bus.handleTimeout(50);
       const char* states[] = {"waiting", "ready", "running", "done", "failed"};
+      std::vector<std::string> awaited;
+      std::stringstream names(status_wait);
+      for (std::string p; std::getline(names, p, ',');)
+        if (!p.empty()) awaited.push_back(p);
+      auto allHeard = [&] {  // each awaited process's latest STATUS (any pid) says the state asked for
+        for (const auto& p : awaited) {
+          bool ok = false;
+          for (const auto& [key, m] : heard) ok = ok || (m.process == p && (status_state.empty() || status_state == states[m.state]));
+          if (!ok) return false;
+        }
+        return true;
+      };
+      const auto until = std::chrono::steady_clock::now() + std::chrono::duration<double>(status_seconds);
+      while (std::chrono::steady_clock::now() < until && !(awaited.size() && allHeard())) bus.handleTimeout(50);
       std::printf("%-12s %8s  %-8s %10s  %s\n", "process", "pid", "state", "last step", "run");
       for (const auto& [key, m] : heard)
         std::printf("%-12s %8d  %-8s %10lld  %s%s%s\n", m.process.c_str(), m.pid, states[m.state],
                     static_cast<long long>(m.step), m.run_id.empty() ? "-" : m.run_id.c_str(), m.detail.empty() ? "" : "  ",
                     m.detail.c_str());
       if (heard.empty()) std::printf("(no process heard on %s in %.1f s)\n", status_url.c_str(), status_seconds);
+      if (!awaited.empty() && !allHeard()) {
+        std::fprintf(stderr, "afford status: not every one of %s was heard%s within %.1f s on %s\n", status_wait.c_str(),
+                     status_state.empty() ? "" : (" " + status_state).c_str(), status_seconds, status_url.c_str());
+        return 1;
+      }
       return 0;
     }
     if (replay->parsed()) {

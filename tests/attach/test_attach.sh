@@ -15,9 +15,11 @@ done
 "$build/bin/afford-logger" --lcm-url "$url" --log-dir "$out/logs" >"$out/logger.log" 2>&1 &
 lcm-logger --lcm-url="$url" -f "$out/lcm-logger.lcm" >"$out/lcm-logger.log" 2>&1 &  # LCM's own logger too
 plain=$!
-sleep 1
-"$build/bin/afford" status --lcm-url "$url" | tee "$out/status-before.txt"
+"$build/bin/afford" status --lcm-url "$url" --wait-for environment,eye,predictors,motivation,logger --state waiting \
+  --seconds 30 | tee "$out/status-before.txt"
 [[ $(grep -c "waiting" "$out/status-before.txt") -eq 5 ]] || { echo "expected 5 waiting processes"; exit 1; }
+# lcm-logger listens once it has recorded the heartbeats.
+wait_until 30 grep -a -q "STATUS" "$out/lcm-logger.lcm" || { echo "lcm-logger records nothing"; exit 1; }
 
 "$build/bin/afford" experiment base --system IGN --reps 1 --steps 1500 --seed 4 --attach "$url" --quiet \
   --run-prefix byhand --out "$out/attached" --log-root "$out/logs" | tee "$out/attached.txt"
@@ -38,7 +40,7 @@ echo "attached: $(sum "$out/attached")  hosted: $(sum "$out/hosted")"
 "$build/bin/afford" replay "$out/logs/byhand-base-IGN-s4"
 
 # LCM's plain logger heard the same run (among heartbeats): it replays the same way.
-sleep 0.5
+wait_until 30 grep -a -q "RESULT" "$out/lcm-logger.lcm" || { echo "lcm-logger did not record the run's result"; exit 1; }
 kill -INT "$plain"; wait "$plain" || true
 "$build/bin/afford" replay "$out/lcm-logger.lcm" | tee "$out/replay-lcm-logger.txt"
 grep -q "weights_checksum: ${hosted_sum:-x}" "$out/replay-lcm-logger.txt" || { echo "the lcm-logger log replays differently"; exit 1; }

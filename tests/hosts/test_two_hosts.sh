@@ -18,7 +18,7 @@ seed=${AFFORD_HOSTS_SEED:-$((1 + RANDOM % 50))}
 va=afa$$ vb=afb$$
 cleanup() {
   local rc=$?
-  kill $(jobs -p) 2>/dev/null || true  # the hosts' holders too: their namespaces and the veth pair go with them
+  kill $(jobs -p) "${holders[@]}" 2>/dev/null || true  # the hosts' namespaces and the veth pair go with the holders
   wait 2>/dev/null || true
   if ((rc != 0)); then
     echo "--- diagnostics (seed $seed)"
@@ -30,15 +30,13 @@ trap cleanup EXIT
 
 # A host is a network namespace held by a sleeping process; commands enter it
 # with nsenter (not `ip netns exec`, which remounts / and fails in a chroot).
+# The holder says its pid once it is in its namespace.
+holders=()
 newhost() {
-  unshare --net sleep infinity &
-  local pid=$! self
-  self=$(readlink /proc/self/ns/net)
-  for _ in $(seq 200); do
-    [[ $(readlink "/proc/$pid/ns/net" 2>/dev/null) != "$self" ]] && break
-    sleep 0.01
-  done
-  host_pid=$pid
+  local fd
+  exec {fd}< <(unshare --net sh -c 'echo $$; exec sleep infinity')
+  read -r host_pid <&"$fd"
+  holders+=("$host_pid")
 }
 newhost; a=$host_pid
 newhost; b=$host_pid

@@ -11,15 +11,15 @@ procs=$root/scripts/procs.sh
 
 "$procs" start demo | tee "$out/start.txt"
 [[ $(grep -c "started (pid" "$out/start.txt") -eq 6 ]] || { echo "expected 6 processes started"; exit 1; }
-sleep 1
-"$procs" status demo | tee "$out/status.txt"
+"$procs" status demo --wait-for environment,eye,predictors,motivation,planner,logger --state waiting --seconds 30 |
+  tee "$out/status.txt"
 [[ $(grep -c " yes$" "$out/status.txt") -eq 6 ]] || { echo "expected 6 live processes"; exit 1; }
 [[ $(grep -c "waiting" "$out/status.txt") -eq 6 ]] || { echo "expected 6 processes waiting for a run"; exit 1; }
 
 "$procs" run demo base --system FIX --reps 1 --steps 3000 --seed 2 --quiet --out "$out/run" >"$out/run.txt" 2>&1 &
 runner=$!
-for _ in $(seq 100); do grep -q "configured for run" "$out/logs/demo/eye.log" && break; sleep 0.1; done
-sleep 1
+"$procs" status demo --wait-for eye --state running --seconds 30 >/dev/null ||
+  { cat "$out/run.txt"; echo "the eye never ran the run"; exit 1; }
 "$procs" kill demo eye
 "$procs" status demo | grep "^eye" | head -1 | grep -q " no$" || { echo "status does not show the killed eye as dead"; exit 1; }
 "$procs" start demo eye

@@ -39,7 +39,8 @@ command_of() {  # the command that starts process $1, the same before and after 
 declare -A pid
 start() { $(command_of "$1") >>"$out/$1.log" 2>&1 & pid[$1]=$!; }
 for p in "${processes[@]}"; do start "$p"; done
-sleep 1
+"$build/bin/afford" status --lcm-url "$url" --wait-for "$(IFS=,; echo "${processes[*]}")" --state waiting \
+  --seconds 30 >/dev/null || { echo "the processes did not all come up"; exit 1; }
 
 experiment=(experiment base --system IMP --reps 1 --steps "$steps" --seed "$seed" --quiet --scenarios scenario1 --scenarios scenario2)
 extrinsic=(--extrinsic-reps 3)
