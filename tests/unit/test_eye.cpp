@@ -1,8 +1,11 @@
 #include <gtest/gtest.h>
 
+#include <cstdlib>
 #include <set>
+#include <string>
 
 #include "afford/actions.hpp"
+#include "afford/image.hpp"
 #include "environment/environment.hpp"
 #include "eye/eye.hpp"
 #include "tests/support.hpp"
@@ -101,7 +104,43 @@ TEST_F(EyeOnBaseScene, MoveIsSeenWhereTheObjectArrives) {
   EXPECT_TRUE(e.position_changed);
   EXPECT_TRUE(e.affordance);
   EXPECT_EQ(e.after.gaze, toPixel(out.target_x, out.target_y, 150));
-  EXPECT_FALSE(e.image_changed);  // the same circle, seen alone again
+}
+
+// The image a moved circle leaves in the focus: in the pixel world its one
+// footprint, unchanged; in the continuous world (the default) the pixels of
+// its new real-valued centre, which the eye must report as they are.
+TEST(Eye, AMovedCircleLooksAsItsNewPlaceDrawsIt) {
+  for (const char* world : {"pixel", "continuous"}) {
+    SCOPED_TRACE(world);
+    const RunConfig c = test::shippedConfig("base", System::IMP, 1, {std::string("world.positions=") + world});
+    Environment env(c);
+    Eye eye(c);
+    eye.setScene(env.render());
+    std::size_t circle = env.objects().size();
+    for (std::size_t i = 0; i < env.objects().size(); ++i)
+      if (env.objects()[i].centre == Pixel{75, 75}) circle = i;
+    ASSERT_LT(circle, env.objects().size());
+    const WorldObject before = env.objects()[circle];
+    int step = 0;
+    while (!(eye.scan(step).gaze == before.centre)) ASSERT_LT(++step, 500);
+    ASSERT_TRUE(env.execute(step, kMove, before.x, before.y).succeeded);
+    const WorldObject after = env.objects()[circle];
+    const Effect e = eye.scanEffect(step, env.render(), kMove);
+    ASSERT_LE(std::abs(e.after.gaze.col - after.centre.col), 1);
+    ASSERT_LE(std::abs(e.after.gaze.row - after.centre.row), 1);
+    // The circle alone, before and after, in windows placed as the eye placed them.
+    const auto alone = [&](const WorldObject& o, Pixel gaze) {
+      cv::Mat scene = blankScene(150);
+      paintObject(scene, o.shape, o.colour, o.x, o.y, c.world);
+      return cropFocus(scene, gaze, 21);
+    };
+    const double expected = imageChange(alone(before, e.before.gaze), alone(after, e.after.gaze));
+    EXPECT_DOUBLE_EQ(e.image_change, expected);
+    EXPECT_EQ(e.image_changed, expected > c.eye.image_change_threshold);
+    if (std::string(world) == "pixel") {
+      EXPECT_EQ(expected, 0.0);
+    }
+  }
 }
 
 TEST_F(EyeOnBaseScene, NoChangeMeansNoAffordanceAndTheGazeStays) {

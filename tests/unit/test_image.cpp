@@ -98,6 +98,21 @@ TEST(Image, ContinuousCirclesTakeManyPatterns) {
   EXPECT_GT(patterns.size(), 100u);  // the authors' code: 575 over 3000 random places
 }
 
+// The eye centres its gaze on a blob's bounding box (left + width / 2): in the
+// continuous world that must land within a pixel of the real centre, inside
+// the planner's position match of 0.01 units (1.5 px).
+TEST(Image, ContinuousShapesHaveTheirBoundingBoxWithinAPixelOfTheRealCentre) {
+  for (Shape s : {Shape::Square, Shape::Circle, Shape::Rectangle})
+    for (auto [x, y] : randomPlaces(1000)) {
+      int c0 = 1000, c1 = -1000, r0 = 1000, r1 = -1000;
+      for (const Pixel& p : shapePixels(s, x, y, continuousWorld())) {
+        c0 = std::min(c0, p.col), c1 = std::max(c1, p.col), r0 = std::min(r0, p.row), r1 = std::max(r1, p.row);
+      }
+      EXPECT_LE(std::abs(c0 + (c1 - c0 + 1) / 2 - x * 150), 1.0) << toString(s) << " at " << x << "," << y;
+      EXPECT_LE(std::abs(r0 + (r1 - r0 + 1) / 2 - y * 150), 1.0) << toString(s) << " at " << x << "," << y;
+    }
+}
+
 TEST(Image, ACircleCoversThePixelsWithinItsRadiusOfTheRealCentre) {
   const WorldConfig w = continuousWorld();
   const double x = 0.4137, y = 0.6021, r = w.object_size / std::sqrt(M_PI) * w.size_px;
