@@ -10,8 +10,10 @@
 #   scripts/reproduce.sh all             both
 #   scripts/reproduce.sh NAME...         only these experiments (e.g. late3 utility)
 # Environment: JOBS (runs at a time, default: cores), REPS and EXT_REPS (default: the
-# paper's counts), OUT (default out/reproduce). Runs over real processes (udpm); keeps
-# the logs of the first run of each system. The page is written from every experiment
+# paper's counts), OUT (default out/reproduce), KEEP_LOGS (all, first or none; default
+# first: the logs of the first run of each system; all keeps every run's and test's log,
+# which `afford explain LOG_ROOT` summarises, about 1 GB per experiment). Runs over real
+# processes (udpm). The page is written from every experiment
 # folder present under OUT, so parts may run at different times. An experiment with a
 # failed run is still summarised and plotted; the script then exits with status 1.
 set -euo pipefail
@@ -37,7 +39,7 @@ prefix=$(date +%Y%m%d-%H%M%S)
 failed=()
 for exp in "${experiments[@]}"; do
   rm -rf "${out:?}/$exp"
-  args=(--jobs "${JOBS:-$(nproc)}" --keep-logs first --out "$out/$exp" --log-root "$out/logs" --run-prefix "$prefix")
+  args=(--jobs "${JOBS:-$(nproc)}" --keep-logs "${KEEP_LOGS:-first}" --out "$out/$exp" --log-root "$out/logs" --run-prefix "$prefix")
   [[ -n ${REPS:-} ]] && args+=(--reps "$REPS")
   case " ${deterministic[*]} " in
     *" $exp "*) args+=(--system all --extrinsic-reps "${EXT_REPS:-10}") ;;
