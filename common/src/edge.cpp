@@ -57,6 +57,7 @@ void Edge::join(const std::string& run_id, const RunConfig* config) {
   deferred_.clear();
   failed_ = false;
   chains_.clear();
+  refused_.clear();
   history_.clear();
   history_run_ = run_id;
   last_activity_ = Clock::now();
@@ -70,6 +71,7 @@ void Edge::leave() {
   deferred_.clear();
   serials_.reset();
   chains_.clear();
+  refused_.clear();
   failed_ = false;
 }
 
@@ -142,6 +144,12 @@ void Edge::refused(const Pending& p, const std::string& why) {
   // Not the channel's next message after all (a forged or mangled one that
   // passed every check): drop it and whatever waits behind it on its channel,
   // and expect that serial again.
+  const auto again = refused_.find(p.channel);
+  if (again != refused_.end() && again->second == std::make_pair(p.serial, p.digest))
+    return fail(p.channel, "serial " + std::to_string(p.serial) + " was refused (" + why +
+                               "), asked for again, and refused again: its handler refuses the channel's next "
+                               "message itself, so the run cannot go on");
+  refused_[p.channel] = {p.serial, p.digest};
   drop(p.channel, why);
   deferred_.erase(std::remove_if(deferred_.begin(), deferred_.end(),
                                  [&](const Pending& d) { return d.channel == p.channel && d.serial > p.serial; }),

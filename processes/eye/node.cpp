@@ -17,7 +17,6 @@ EyeNode::EyeNode(lcm::LCM& lcm, std::shared_ptr<spdlog::logger> log, const Proto
 void EyeNode::onConfigured(const RunConfig& config) {
   eye_ = std::make_unique<Eye>(config);
   last_scanned_ = last_effect_ = -1;
-  scene_announced_ = false;
   guess_.reset();
   last_look_ = -1;
   last_scene_ = -1;
@@ -139,7 +138,9 @@ Turn EyeNode::onScene(const scene_t& s) {
   } else {
     eye_->setScene(image);
   }
-  scene_announced_ = s.changes_next;
+  if (s.changes_next != objectsAppearAt(s.step + 1))
+    log_->warn("SCENE of step {} says objects appear at the next step: {}, the run's world.objects: {}", s.step,
+               s.changes_next, objectsAppearAt(s.step + 1));
   if (s.scan) scanStep(s.step);
   return Turn::take();
 }
@@ -149,9 +150,16 @@ Turn EyeNode::onDecision(const decision_t& d) {
   // action, the action's scene does. (The planner's decisions are not steps of the eye's.)
   if (config().phase == Phase::Extrinsic) return Turn::take();
   if (d.step > last_scanned_) return Turn::later();  // the focus of that step is still to come
-  if (d.acted || scene_announced_ || d.step != last_scanned_) return Turn::take();
+  if (d.acted || objectsAppearAt(d.step + 1) || d.step != last_scanned_) return Turn::take();
   scanStep(d.step + 1);
   return Turn::take();
+}
+
+bool EyeNode::objectsAppearAt(std::int64_t step) const {
+  if (step <= 0 || step >= config().steps) return false;
+  for (const auto& o : config().world.objects)
+    if (o.appears_at == step) return true;
+  return false;
 }
 
 void EyeNode::scanStep(std::int64_t step) {
@@ -164,7 +172,7 @@ void EyeNode::scanStep(std::int64_t step) {
   last_scanned_ = step;
   handled(step);
   // While motivation decides, prepare the scan a pass would ask for.
-  if (speculate_ && !scene_announced_ && step + 1 < config().steps)
+  if (speculate_ && !objectsAppearAt(step + 1) && step + 1 < config().steps)
     guess_.emplace(step + 1, eye_->peekScan(step + 1));
 }
 

@@ -2,7 +2,8 @@
 // Channels in:  RUN_CONFIG, RUN_CONTROL, SCENE, DECISION, LOOK (extrinsic phase)
 // Channels out: EFFECT (after a scene caused by an action), FOCUS, STATUS
 // Intrinsic phase: a step starts with a scene (start, action, newcomers) or,
-// when the decision was to pass and no scene was announced, with that decision.
+// when the decision was to pass and no objects appear at the next step (the
+// run's world.objects say when), with that decision.
 // Extrinsic phase: the goal scene is memorised for the inner eye; each LOOK is
 // answered with one FOCUS, on the scene it names (the serial of the last SCENE
 // the planner took): a LOOK that overtakes its scene waits for it.
@@ -36,12 +37,14 @@ class EyeNode : public NodeBase {
   Turn onLook(const look_t& msg);
   Turn onExtrinsicScene(const scene_t& msg);
   void scanStep(std::int64_t step);
+  // Late objects appear at `step`: the environment publishes a scene for it
+  // whether or not the step before acted, and that scene starts the step.
+  bool objectsAppearAt(std::int64_t step) const;
   void publishFocus(std::int64_t step, const Focus& f, int8_t kind = 0, int32_t seq = 0);
 
   std::unique_ptr<Eye> eye_;
   std::int64_t last_scanned_ = -1;   // last step whose FOCUS was published
   std::int64_t last_effect_ = -1;    // last step whose EFFECT was published
-  bool scene_announced_ = false;     // the last scene said a scene for the next step follows
   bool speculate_;
   std::int32_t last_look_ = -1;      // extrinsic: last LOOK answered
   std::int64_t last_scene_ = -1;     // extrinsic: step of the last scene

@@ -10,7 +10,9 @@
 #include <sstream>
 
 #include "afford/channels.hpp"
+#include "afford/decision_t.hpp"
 #include "afford/driver.hpp"
+#include "afford/focus_t.hpp"
 #include "afford/run_config_t.hpp"
 #include "afford/scene_t.hpp"
 #include "afford/seal.hpp"
@@ -110,6 +112,53 @@ TEST(Choreography, LateObjectsEnterTheSceneAtTheirStep) {
     }
   }
   EXPECT_EQ(appeared, 1);
+  EXPECT_EQ(run.outcome.weights_checksum, test::runIntrinsic(parseRunConfigText(yaml)).weightsChecksum());
+}
+
+// Late objects arriving right after two passes: no scene was published for
+// the step before theirs (nothing changed), so only the run's world.objects
+// tell the eye to wait for the newcomers' scene instead of scanning the old
+// one. (A run stalled here once: the eye scanned ahead, then refused the
+// newcomers' scene as past, and asked for it again without end.)
+TEST(Choreography, LateObjectsAfterTwoPassesStartTheirStepWithTheirScene) {
+  YAML::Node c = YAML::Load(test::shippedConfigYaml("late1", System::IMP, 4, 400));
+  for (YAML::Node o : c["world"]["objects"])
+    if (o["appears_at"].as<int>() > 0) o["appears_at"] = 10000;  // not in this run
+  InProcessRun probe(YAML::Dump(c), System::IMP, 4, 400);
+  ASSERT_TRUE(probe.outcome.ok) << probe.outcome.error;
+  std::map<std::int64_t, bool> acted;
+  for (const auto& e : probe.events)
+    if (e.channel == channel::kDecision) {
+      decision_t d;
+      d.decode(e.data.data(), 0, static_cast<int>(e.data.size()));
+      acted[d.step] = d.acted;
+    }
+  std::int64_t at = -1;
+  for (std::int64_t j = 50; j < 390 && at < 0; ++j)
+    if (!acted.at(j - 2) && !acted.at(j - 1)) at = j;
+  ASSERT_GT(at, 0) << "no two passes in a row in 400 steps of IMP";
+  for (YAML::Node o : c["world"]["objects"])
+    if (o["appears_at"].as<int>() > 0) o["appears_at"] = at;
+  const std::string yaml = YAML::Dump(c);
+  InProcessRun run(yaml, System::IMP, 4, 400);
+  ASSERT_TRUE(run.outcome.ok) << run.outcome.error;
+  std::int64_t scene_at = -1, focus_at = -1;  // event indices
+  for (std::size_t i = 0; i < run.events.size(); ++i) {
+    const auto& e = run.events[i];
+    if (e.channel == channel::kScene) {
+      scene_t s;
+      s.decode(e.data.data(), 0, static_cast<int>(e.data.size()));
+      if (s.cause == scene_t::CAUSE_OBJECTS_APPEARED) scene_at = static_cast<std::int64_t>(i);
+    }
+    if (e.channel == channel::kFocus) {
+      focus_t f;
+      f.decode(e.data.data(), 0, static_cast<int>(e.data.size()));
+      if (f.step == at && focus_at < 0) focus_at = static_cast<std::int64_t>(i);
+    }
+  }
+  ASSERT_GE(scene_at, 0);
+  EXPECT_GT(focus_at, scene_at) << "the focus of step " << at << " came before the newcomers' scene";
+  EXPECT_EQ(run.log.str().find("dropped message"), std::string::npos) << run.log.str().substr(0, 4000);
   EXPECT_EQ(run.outcome.weights_checksum, test::runIntrinsic(parseRunConfigText(yaml)).weightsChecksum());
 }
 

@@ -19,7 +19,9 @@
 //   7. the handler says Take, Later (its turn has not come: offered again
 //      after the next message taken, with its channel's later messages behind
 //      it) or Refuse (it cannot be the channel's next message: dropped, and
-//      the serial is expected again).
+//      the serial is expected again; the same message refused again, once
+//      asked for, fails the run naming the channel, rather than being asked
+//      for without end).
 //
 // A bad message is dropped with one log line naming the channel and the field.
 // An exception from a handler never leaves the edge: the edge stops taking the
@@ -177,6 +179,7 @@ class Edge {
   struct Pending {
     std::string channel;
     std::int64_t serial = -1;
+    std::int64_t digest = 0;
     std::function<Turn()> call;
   };
   // The digests of a channel's messages taken in order, from serial `first`.
@@ -231,6 +234,10 @@ class Edge {
   bool retrying_ = false;
   std::chrono::steady_clock::time_point last_activity_{};
   std::map<std::string, Chain> chains_;     // what was taken, by channel
+  // The last message refused on each channel (serial, digest): the same one
+  // refused again, after it was asked for, is the channel's genuine message
+  // that its handler will never take, and the run fails rather than ask forever.
+  std::map<std::string, std::pair<std::int64_t, std::int64_t>> refused_;
   std::map<std::string, History> history_;  // what this edge published, by channel
   std::string history_run_;
   bool answering_ = false;
@@ -328,6 +335,7 @@ void Edge::receive(const std::string& channel, const lcm::ReceiveBuffer* rb, con
     Pending p;
     p.channel = channel;
     p.serial = msg->serial;
+    p.digest = msg->digest;
     if constexpr (std::is_invocable_r_v<Turn, const F&, const Msg&, const Envelope&>) {
       // The bytes outlive this callback if the message has to wait its turn.
       auto bytes = std::make_shared<const std::vector<std::uint8_t>>(data, data + size);
