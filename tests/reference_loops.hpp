@@ -73,7 +73,7 @@ inline GoalTestOutcome runGoalTest(const RunConfig& c, const Scenario& s, const 
           r = planner.onView(asView(eye.scanGoal(step)));
           break;
         case PlannerRequest::LookAtSceneAt:
-          r = planner.onView(asView(eye.lookAt(toPixel(r.x, r.y, c.world.size_px))));
+          r = planner.onView(asView(eye.lookAt(r.x, r.y)));
           break;
         case PlannerRequest::ScanScene: {
           object = asView(eye.scan(step));

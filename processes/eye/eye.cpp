@@ -69,9 +69,8 @@ void Eye::setImage(Retina& r, cv::Mat image) const {
   r.gray = meanChannels(r.rgb);
   r.smooth = blur(r.gray, config_.eye.saliency_sigma_px);
   cv::Mat mask = r.gray > 0;
-  cv::Mat centroids;
-  r.n_labels = cv::connectedComponentsWithStats(mask, r.labels, r.stats, centroids, 8, CV_32S);
-  if (!r.focus.image.empty()) r.focus = focusAt(r, r.focus.gaze);
+  r.n_labels = cv::connectedComponentsWithStats(mask, r.labels, r.stats, r.centroids, 8, CV_32S);
+  if (!r.focus.image.empty()) r.focus = refocus(r);
 }
 
 void Eye::setScene(cv::Mat scene) { setImage(outer_, std::move(scene)); }
@@ -94,6 +93,29 @@ Focus Eye::focusAt(const Retina& r, Pixel p) const {
   f.x = toUnit(p.col, config_.world.size_px);
   f.y = toUnit(p.row, config_.world.size_px);
   f.image = cropFocus(r.rgb, p, config_.eye.focus_side);
+  return f;
+}
+
+Focus Eye::focusOn(const Retina& r, double x, double y) const {
+  const int size = config_.world.size_px, side = config_.eye.focus_side;
+  if (config_.world.positions == Positions::Pixel) return focusAt(r, toPixel(x, y, size));
+  const Pixel corner = windowCorner(x, y, side, size);
+  Focus f = focusAt(r, {corner.col + side / 2, corner.row + side / 2});
+  f.x = x;
+  f.y = y;
+  return f;
+}
+
+Focus Eye::focusOnBlob(const Retina& r, int label) const {
+  if (config_.world.positions == Positions::Pixel) return focusAt(r, blobCentre(r, label));
+  const double size = config_.world.size_px;
+  return focusOn(r, r.centroids.at<double>(label, 0) / size, r.centroids.at<double>(label, 1) / size);
+}
+
+Focus Eye::refocus(const Retina& r) const {
+  Focus f = focusAt(r, r.focus.gaze);
+  f.x = r.focus.x;
+  f.y = r.focus.y;
   return f;
 }
 
@@ -150,14 +172,14 @@ const Focus& Eye::scanGoal(std::int64_t step) {
   return inner_.focus;
 }
 
-const Focus& Eye::lookAt(Pixel p) {
-  outer_.focus = focusAt(outer_, p);
+const Focus& Eye::lookAt(double x, double y) {
+  outer_.focus = focusOn(outer_, x, y);
   return outer_.focus;
 }
 
 Focus Eye::peekScan(const Retina& r, std::int64_t step, int purpose) const {
   const int objects = r.n_labels - 1;
-  if (objects == 0) return focusAt(r, r.focus.gaze);
+  if (objects == 0) return refocus(r);
   const int current = labelAt(r, r.focus.gaze);
   int chosen = 0;
   for (int attempt = 0; attempt < config_.eye.max_scan_draws; ++attempt) {
@@ -167,7 +189,7 @@ Focus Eye::peekScan(const Retina& r, std::int64_t step, int purpose) const {
     chosen = label;
     if (objects == 1 || label != current) break;
   }
-  return focusAt(r, chosen > 0 ? blobCentre(r, chosen) : r.focus.gaze);
+  return chosen > 0 ? focusOnBlob(r, chosen) : refocus(r);
 }
 
 Effect Eye::scanEffect(std::int64_t step, cv::Mat after, int action) {
@@ -181,9 +203,9 @@ Effect Eye::scanEffect(std::int64_t step, cv::Mat after, int action) {
     const int i = noisyArgmax(outer_, outer_.smooth, step, static_cast<int>(Purpose::EffectNoise), 0, &change);
     const Pixel p{i % outer_.labels.cols, i / outer_.labels.cols};
     const int label = labelAt(outer_, p);
-    outer_.focus = focusAt(outer_, label > 0 ? blobCentre(outer_, label) : p);
+    outer_.focus = label > 0 ? focusOnBlob(outer_, label) : focusAt(outer_, p);
   } else {
-    outer_.focus = focusAt(outer_, outer_.focus.gaze);  // nothing changed: no reflex, the gaze stays
+    outer_.focus = refocus(outer_);  // nothing changed: no reflex, the gaze stays
   }
   e.after = outer_.focus;
   e.image_change = imageChange(e.before.image, e.after.image);

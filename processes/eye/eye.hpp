@@ -58,8 +58,9 @@ class Eye {
   bool hasGoal() const { return !inner_.rgb.empty(); }
   // Scan: the inner eye's saliency scan of the goal image (a sub-goal).
   const Focus& scanGoal(std::int64_t step);
-  // ScanEnvironmentWithSameFocusAsSubGoal: the outer eye looks at a place of the scene.
-  const Focus& lookAt(Pixel p);
+  // ScanEnvironmentWithSameFocusAsSubGoal: the outer eye looks at a place of
+  // the scene (scene units), with the window it would put there for an object.
+  const Focus& lookAt(double x, double y);
 
  private:
   // One image the eye looks at, its saliency cache and the gaze on it.
@@ -69,6 +70,7 @@ class Eye {
     cv::Mat smooth;     // CV_32F: gray smoothed
     cv::Mat labels;     // CV_32S blob labels
     cv::Mat stats;      // blob bounding boxes
+    cv::Mat centroids;  // blob centroids (CV_64F, pixel indices)
     int n_labels = 1;
     Focus focus;
   };
@@ -76,6 +78,15 @@ class Eye {
   static int labelAt(const Retina& r, Pixel p);
   static Pixel blobCentre(const Retina& r, int label);
   Focus focusAt(const Retina& r, Pixel p) const;
+  // The focus on a place (scene units). Continuous world: the window's corner
+  // is windowCorner(x, y) (the authors' round-half-away(150 (x - 0.07))), and
+  // the place is kept as given; pixel world: the window around the nearest pixel.
+  Focus focusOn(const Retina& r, double x, double y) const;
+  // The focus on a blob: continuous world, on its centroid (the eye's estimate
+  // of the object's real centre); pixel world, on its bounding box's centre.
+  Focus focusOnBlob(const Retina& r, int label) const;
+  // The same place looked at again on a new image.
+  Focus refocus(const Retina& r) const;
   Focus peekScan(const Retina& r, std::int64_t step, int purpose) const;
   // argmax of base + uniform noise (keyed), exact over the whole image.
   int noisyArgmax(const Retina& r, const cv::Mat& base, std::int64_t step, int purpose, std::uint64_t attempt,

@@ -84,7 +84,7 @@ Turn EyeNode::onLook(const look_t& l) {
       publishFocus(l.step, eye_->scanGoal(l.step), l.kind, l.seq);
       break;
     case focus_t::SCENE_AT:
-      publishFocus(l.step, eye_->lookAt(toPixel(l.x, l.y, config().world.size_px)), l.kind, l.seq);
+      publishFocus(l.step, eye_->lookAt(l.x, l.y), l.kind, l.seq);
       break;
     default:
       publishFocus(l.step, eye_->scan(l.step), l.kind, l.seq);
