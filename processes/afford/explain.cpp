@@ -8,6 +8,7 @@
 #include <filesystem>
 #include <fstream>
 #include <map>
+#include <tuple>
 
 #include "afford/channels.hpp"
 #include "afford/decision_t.hpp"
@@ -106,6 +107,7 @@ Explanation explainRunEvents(const RunEvents& run, const std::string& where, std
     throw std::runtime_error(where + ": the configuration in the RUN_CONFIG of run '" + ex.run_id +
                              "' is refused: " + e.what());
   }
+  ex.agent = fs::path(config.extrinsic_checkpoint).parent_path().filename().string();
   if (config.phase != Phase::Extrinsic || !config.scenario)
     throw NotAnExtrinsicTest(where + ": run '" + ex.run_id +
                              "' is not an extrinsic test (its RUN_CONFIG says phase: intrinsic); "
@@ -315,11 +317,29 @@ Explanation explainRunEvents(const RunEvents& run, const std::string& where, std
     for (const ExplainedCheck& c : it.checks) {
       if (!c.checked) continue;
       ++g.actions_checked;
-      if (!g.closest || c.what_distance < g.closest->what_distance) {
+      // An action that passed comes first; then the smallest what-distance.
+      const bool better = !g.closest || (c.passes() && !g.closest->passes()) ||
+                          (c.passes() == g.closest->passes() && c.what_distance < g.closest->what_distance);
+      if (better) {
         g.closest = c;
         g.closest_step = step;
       }
     }
+  }
+  // The object at each sub-goal's place, as the scans found it.
+  for (std::size_t i = 0; i < ex.sub_goals.size(); ++i) {
+    ExplainedSubGoal& g = ex.sub_goals[i];
+    for (const ExplainedIteration& it : ex.steps)  // while it was the sub-goal and not yet reached
+      if (it.sub_goal == static_cast<int>(i) && !it.reached() && it.scanned && it.affordance &&
+          positionDistance(it.object_x, it.object_y, g.x, g.y, p.position_metric) <= p.position_match)
+        g.place_affordance = it.affordance;
+    if (!g.place_affordance) continue;
+    std::array<double, 3> channel{};
+    const std::vector<std::uint8_t>& image = images[i].image;
+    for (std::size_t b = 0; b < image.size(); ++b) channel[b % 3] += image[b];
+    const int dominant = static_cast<int>(std::max_element(channel.begin(), channel.end()) - channel.begin());
+    for (int a = 0; a < kNumActions; ++a)
+      if (kActionChannel[static_cast<std::size_t>(a)] == dominant) g.colour_action = a;
   }
   for (std::size_t i = 0; i < ex.sub_goals.size(); ++i) {
     ExplainedSubGoal& g = ex.sub_goals[i];
@@ -403,6 +423,11 @@ Explanation explainLog(const std::string& log_path, const std::string& run_id, s
   return explainRunEvents(run, log_path, recorded.torn_bytes, incomplete, missing);
 }
 
+bool ExplainedSubGoal::colourActionBlocked(const PlannerConfig& p) const {
+  return p.restrict_by_affordance && place_affordance && colour_action >= 0 &&
+         (*place_affordance)[static_cast<std::size_t>(colour_action)] <= p.affordance_threshold;
+}
+
 // ---- text ---------------------------------------------------------------------------
 
 namespace {
@@ -473,6 +498,12 @@ std::string explanationText(const Explanation& e) {
   for (std::size_t i = 0; i < e.sub_goals.size(); ++i) {
     out += subGoalText(e, i) + "\n";
     if (!e.sub_goals[i].reached) out += "      " + closestText(e.sub_goals[i], p) + "\n";
+    const ExplainedSubGoal& g = e.sub_goals[i];
+    if (g.place_affordance && g.colour_action >= 0)
+      out += format("      the object at its place: %s afforded %.3f%s\n", actionName(g.colour_action).c_str(),
+                    (*g.place_affordance)[static_cast<std::size_t>(g.colour_action)],
+                    g.colourActionBlocked(p) ? format(" (not above %.3g: never asked about)", p.affordance_threshold).c_str()
+                                              : "");
   }
   out += "iterations:\n";
   for (const ExplainedIteration& it : e.steps) {
@@ -531,6 +562,7 @@ json explanationJson(const Explanation& e, bool with_steps) {
             {"experiment", e.experiment},
             {"system", e.system},
             {"seed", e.seed},
+            {"agent", e.agent},
             {"scenario", e.scenario},
             {"planner",
              {{"kind", kindName(p.kind)},
@@ -571,6 +603,9 @@ json explanationJson(const Explanation& e, bool with_steps) {
       s["closest"] = check(*g.closest);
       s["closest"]["step"] = g.closest_step;
     }
+    s["place_affordance"] = g.place_affordance ? json(*g.place_affordance) : json(nullptr);
+    s["colour_action"] = g.colour_action >= 0 ? json(actionName(g.colour_action)) : json(nullptr);
+    s["colour_action_blocked"] = g.colourActionBlocked(p);
     j["sub_goals"].push_back(s);
   }
   if (!with_steps) return j;
@@ -746,6 +781,176 @@ json summaryJson(const ExplainSummary& s) {
       j["end_reasons"][system] = c;
   }
   for (const auto& [dir, why] : s.skipped) j["skipped"].push_back({{"log", dir}, {"why", why}});
+  for (const auto& [dir, why] : s.errors) j["errors"].push_back({{"log", dir}, {"error", why}});
+  return j;
+}
+
+}  // namespace afford
+
+namespace afford {
+
+// ---- per agent and sub-goal -----------------------------------------------------------
+
+std::vector<AgentSubGoal> subGoalsByAgent(const ExplainSummary& s) {
+  using Key = std::tuple<std::string, std::string, std::string, double, double, std::string>;
+  std::map<Key, AgentSubGoal> rows;
+  for (const Explanation& t : s.tests)
+    for (const ExplainedSubGoal& g : t.sub_goals) {
+      AgentSubGoal& r = rows[Key{t.experiment, t.system, t.scenario, g.x, g.y, t.agent}];
+      if (r.tests == 0) {
+        r.experiment = t.experiment, r.system = t.system, r.agent = t.agent, r.scenario = t.scenario;
+        r.x = g.x, r.y = g.y;
+        r.planner = t.planner;
+      }
+      ++r.tests;
+      r.reached += g.reached;
+      if (!g.reached) {
+        if (!g.closest)
+          ++r.not_checked;
+        else if (g.closest->passes())
+          ++r.passed;
+        else if (!g.closest->what_ok)
+          ++r.what_miss;
+        else
+          ++r.where_miss;
+      }
+      if (g.closest) {
+        const ExplainedCheck& c = *g.closest;
+        if (!r.closest || (c.passes() && !r.closest->passes()) ||
+            (c.passes() == r.closest->passes() && c.what_distance < r.closest->what_distance))
+          r.closest = c;
+        r.closest_what_max = std::max(r.closest_what_max, g.closest->what_distance);
+      }
+      if (g.place_affordance) {
+        r.place_affordance = g.place_affordance;
+        r.colour_action = g.colour_action;
+      }
+      r.colour_blocked += !g.reached && g.colourActionBlocked(t.planner);
+    }
+  std::vector<AgentSubGoal> out;
+  for (auto& [key, r] : rows) out.push_back(std::move(r));
+  return out;
+}
+
+std::vector<SystemSubGoal> subGoalsBySystem(const std::vector<AgentSubGoal>& agents) {
+  std::vector<SystemSubGoal> out;
+  for (const AgentSubGoal& a : agents) {  // ordered: one system's sub-goal's agents are adjacent
+    if (out.empty() || out.back().experiment != a.experiment || out.back().system != a.system ||
+        out.back().scenario != a.scenario || out.back().x != a.x || out.back().y != a.y) {
+      out.emplace_back();
+      SystemSubGoal& n = out.back();
+      n.experiment = a.experiment, n.system = a.system, n.scenario = a.scenario, n.x = a.x, n.y = a.y;
+      n.planner = a.planner;
+    }
+    SystemSubGoal& r = out.back();
+    ++r.agents;
+    r.agents_always += a.reached == a.tests;
+    r.agents_never_checked += !a.closest;
+    if (a.closest) {
+      r.agents_what_miss += !a.closest->what_ok;
+      r.agents_where_miss += a.closest->what_ok && !a.closest->where_ok;
+      r.closest_what.insert(std::upper_bound(r.closest_what.begin(), r.closest_what.end(), a.closest->what_distance),
+                            a.closest->what_distance);
+    }
+    r.agents_colour_blocked += a.colour_blocked > 0;
+  }
+  return out;
+}
+
+namespace {
+
+std::string placeText(double x, double y) { return format("(%.3f, %.3f)", x, y); }
+
+double median(const std::vector<double>& sorted) {
+  const std::size_t n = sorted.size();
+  return n % 2 ? sorted[n / 2] : (sorted[n / 2 - 1] + sorted[n / 2]) / 2;
+}
+
+}  // namespace
+
+std::string byAgentText(const ExplainSummary& s) {
+  const std::vector<AgentSubGoal> agents = subGoalsByAgent(s);
+  const std::vector<SystemSubGoal> systems = subGoalsBySystem(agents);
+  std::string out = format("%zu extrinsic test(s) under %s, by system, scenario and sub-goal\n", s.tests.size(), s.root.c_str());
+  out += "closest: each agent's checked action with the smallest what-distance over its tests; a miss is a closest\n"
+         "check not below planner.image_match (what) or not within planner.position_match (where); blocked: the\n"
+         "colour action the object at the sub-goal's place needs was not above planner.affordance_threshold\n\n";
+  out += format("%-16s %-6s %-12s %-16s %6s %6s %10s %10s %10s %5s %6s %8s\n", "experiment", "system", "scenario", "sub-goal",
+                "agents", "always", "closest", "median", "max", "what", "where", "blocked");
+  for (const SystemSubGoal& r : systems) {
+    const bool any = !r.closest_what.empty();
+    out += format("%-16s %-6s %-12s %-16s %6d %6d %10s %10s %10s %5d %6d %8d\n", r.experiment.c_str(), r.system.c_str(),
+                  r.scenario.c_str(), placeText(r.x, r.y).c_str(), r.agents, r.agents_always,
+                  any ? format("%.5f", r.closest_what.front()).c_str() : "-",
+                  any ? format("%.5f", median(r.closest_what)).c_str() : "-",
+                  any ? format("%.5f", r.closest_what.back()).c_str() : "-", r.agents_what_miss, r.agents_where_miss,
+                  r.agents_colour_blocked);
+  }
+  out += "\nper agent (reached k/n; the causes in the tests that did not reach it: no check, what miss, where miss,\n"
+         "passed both; the closest check over its tests; the place's colour action and its affordance):\n";
+  out += format("%-16s %-6s %-12s %-16s %-40s %7s %-15s %-11s %9s %8s %s\n", "experiment", "system", "scenario", "sub-goal",
+                "agent", "reached", "causes n/w/p/b", "closest", "what", "where", "colour action");
+  for (const AgentSubGoal& a : agents) {
+    std::string colour = "-";
+    if (a.place_affordance && a.colour_action >= 0)
+      colour = format("%s %.3f%s", actionName(a.colour_action).c_str(),
+                      (*a.place_affordance)[static_cast<std::size_t>(a.colour_action)],
+                      a.colour_blocked ? format(" blocked in %d", a.colour_blocked).c_str() : "");
+    out += format("%-16s %-6s %-12s %-16s %-40s %3d/%-3d %-15s %-11s %9s %8s %s\n", a.experiment.c_str(), a.system.c_str(),
+                  a.scenario.c_str(), placeText(a.x, a.y).c_str(), a.agent.c_str(), a.reached, a.tests,
+                  format("%d/%d/%d/%d", a.not_checked, a.what_miss, a.where_miss, a.passed).c_str(),
+                  a.closest ? actionName(a.closest->action).c_str() : "-",
+                  a.closest ? format("%.5f", a.closest->what_distance).c_str() : "-",
+                  a.closest ? format("%.4f", a.closest->where_distance).c_str() : "-", colour.c_str());
+  }
+  for (const auto& [dir, why] : s.errors) out += "error: " + why + "\n";
+  return out;
+}
+
+nlohmann::json byAgentJson(const ExplainSummary& s) {
+  const std::vector<AgentSubGoal> agents = subGoalsByAgent(s);
+  json j = {{"root", s.root}, {"tests", s.tests.size()}, {"by_system", json::array()}, {"by_agent", json::array()},
+            {"errors", json::array()}};
+  for (const SystemSubGoal& r : subGoalsBySystem(agents))
+    j["by_system"].push_back({{"experiment", r.experiment},
+                              {"system", r.system},
+                              {"scenario", r.scenario},
+                              {"x", r.x},
+                              {"y", r.y},
+                              {"agents", r.agents},
+                              {"agents_always_reached", r.agents_always},
+                              {"agents_never_checked", r.agents_never_checked},
+                              {"agents_what_miss", r.agents_what_miss},
+                              {"agents_where_miss", r.agents_where_miss},
+                              {"agents_colour_blocked", r.agents_colour_blocked},
+                              {"closest_what", r.closest_what},
+                              {"image_match", r.planner.image_match}});
+  for (const AgentSubGoal& a : agents) {
+    json c = nullptr;
+    if (a.closest)
+      c = {{"action", actionName(a.closest->action)},
+           {"what_distance", a.closest->what_distance},
+           {"what_ok", a.closest->what_ok},
+           {"where_distance", a.closest->where_distance},
+           {"where_ok", a.closest->where_ok}};
+    j["by_agent"].push_back({{"experiment", a.experiment},
+                             {"system", a.system},
+                             {"agent", a.agent},
+                             {"scenario", a.scenario},
+                             {"x", a.x},
+                             {"y", a.y},
+                             {"tests", a.tests},
+                             {"reached", a.reached},
+                             {"not_checked", a.not_checked},
+                             {"what_miss", a.what_miss},
+                             {"where_miss", a.where_miss},
+                             {"passed", a.passed},
+                             {"closest", c},
+                             {"closest_what_max", a.closest ? json(a.closest_what_max) : json(nullptr)},
+                             {"place_affordance", a.place_affordance ? json(*a.place_affordance) : json(nullptr)},
+                             {"colour_action", a.colour_action >= 0 ? json(actionName(a.colour_action)) : json(nullptr)},
+                             {"colour_blocked", a.colour_blocked}});
+  }
   for (const auto& [dir, why] : s.errors) j["errors"].push_back({{"log", dir}, {"error", why}});
   return j;
 }

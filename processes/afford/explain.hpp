@@ -78,15 +78,26 @@ struct ExplainedSubGoal {
   // utility planner moves on after each weighed action, Algorithm 3);
   // "open" (the test ended while it was the sub-goal).
   std::string ended;
-  // The checked action with the smallest what-distance ("the closest miss"
-  // when the sub-goal was not reached), and the step it was checked in.
+  // The checked action that passed both tests, else the one with the
+  // smallest what-distance ("the closest miss"), and the step it was checked in.
   std::optional<ExplainedCheck> closest;
   std::int64_t closest_step = -1;
+  // The object the test scanned at the sub-goal's place (within
+  // planner.position_match) while the sub-goal was open, if it scanned one:
+  // its affordances at the last such scan, and the colour action that would give it the sub-goal's
+  // colour (the dominant channel of the sub-goal image). None for a move's
+  // free target place: colour_action is then -1.
+  std::optional<std::array<double, kNumActions>> place_affordance;
+  int colour_action = -1;
+  // The colour action's affordance is at most planner.affordance_threshold,
+  // with planner.restrict_by_affordance: the planner never asks about it there.
+  bool colourActionBlocked(const PlannerConfig& p) const;
 };
 
 struct Explanation {
   std::string log;  // where it was read
   std::string run_id, experiment, system, scenario;
+  std::string agent;  // the trained agent: the folder of its checkpoint (its intrinsic run's id)
   std::int64_t seed = 0;
   PlannerConfig planner;  // the run's: thresholds, budget, action limit
   bool success = false;
@@ -136,5 +147,45 @@ bool isLogRoot(const std::string& path);
 ExplainSummary explainLogRoot(const std::string& root, spdlog::logger& log);
 std::string summaryText(const ExplainSummary& s);
 nlohmann::json summaryJson(const ExplainSummary& s);
+
+// ---- per agent and sub-goal (afford explain ROOT --by-agent) --------------------------
+
+// One sub-goal of a scenario over every test of one trained agent that picked it.
+struct AgentSubGoal {
+  std::string experiment, system, agent, scenario;
+  double x = 0, y = 0;
+  PlannerConfig planner;  // the thresholds (of the first test)
+  int tests = 0;          // tests that picked it
+  int reached = 0;
+  // Why it was not reached, test by test: no action was checked; the
+  // closest check's what-distance was not below image_match; what passed and
+  // where did not; an action passed both (it failed, or Algorithm 3 left it).
+  int not_checked = 0, what_miss = 0, where_miss = 0, passed = 0;
+  std::optional<ExplainedCheck> closest;  // over the tests: one that passed, else the smallest what-distance
+  double closest_what_max = -1;           // the largest of the tests' closest what-distances
+  std::optional<std::array<double, kNumActions>> place_affordance;  // the last test's that scanned the place
+  int colour_action = -1;
+  int colour_blocked = 0;  // tests not reaching it in which the colour action's affordance kept it from being asked about
+};
+
+// The same sub-goal of the same scenario over all agents of a system.
+struct SystemSubGoal {
+  std::string experiment, system, scenario;
+  double x = 0, y = 0;
+  PlannerConfig planner;
+  int agents = 0;
+  int agents_always = 0;          // reached it in every test
+  int agents_never_checked = 0;   // checked no action for it in any test
+  int agents_what_miss = 0;       // whose closest what-distance over all tests is not below image_match
+  int agents_where_miss = 0;      // whose closest check matched what but not where
+  int agents_colour_blocked = 0;  // whose colour action was not afforded at the place in some test
+  std::vector<double> closest_what;  // each agent's closest what-distance, ascending (agents with a check)
+};
+
+// Keyed and ordered by experiment, system, scenario, sub-goal place, agent.
+std::vector<AgentSubGoal> subGoalsByAgent(const ExplainSummary& s);
+std::vector<SystemSubGoal> subGoalsBySystem(const std::vector<AgentSubGoal>& agents);
+std::string byAgentText(const ExplainSummary& s);
+nlohmann::json byAgentJson(const ExplainSummary& s);
 
 }  // namespace afford

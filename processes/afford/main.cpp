@@ -109,6 +109,10 @@ int main(int argc, char** argv) {
       ->required();
   explain->add_option("--run", explain_run, "the test to explain, in a log that holds several (default: the first)");
   explain->add_flag("--json", explain_json, "print one JSON object (for scripts) instead of text");
+  bool explain_by_agent = false;
+  explain->add_flag("--by-agent", explain_by_agent,
+                    "with a folder of run logs: by system, scenario and sub-goal, then by trained agent, how often it "
+                    "was reached, why not, and each agent's closest predicted effect");
   std::string status_url = "udpm://239.255.76.67:7667?ttl=0";
   double status_seconds = 1.5;
   auto* status = app.add_subcommand("status", "list the processes heard on a bus: pid, state, run, last step");
@@ -217,9 +221,14 @@ int main(int argc, char** argv) {
         if (!explain_run.empty())
           throw afford::ConfigError("--run picks a run in one log, but " + explain_log + " is a folder of run logs");
         const afford::ExplainSummary s = afford::explainLogRoot(explain_log, *log);
-        std::printf("%s", explain_json ? (afford::summaryJson(s).dump(2) + "\n").c_str() : afford::summaryText(s).c_str());
+        if (explain_by_agent)
+          std::printf("%s", explain_json ? (afford::byAgentJson(s).dump(2) + "\n").c_str() : afford::byAgentText(s).c_str());
+        else
+          std::printf("%s", explain_json ? (afford::summaryJson(s).dump(2) + "\n").c_str() : afford::summaryText(s).c_str());
         return s.errors.empty() ? 0 : 1;  // a log that could not be explained is named, and fails the summary
       }
+      if (explain_by_agent)
+        throw afford::ConfigError("--by-agent summarises a folder of run logs, but " + explain_log + " is one run's log");
       const afford::Explanation e = afford::explainLog(explain_log, explain_run, *log);
       std::printf("%s", explain_json ? (afford::explanationJson(e).dump(2) + "\n").c_str() : afford::explanationText(e).c_str());
       return 0;

@@ -302,5 +302,62 @@ TEST_F(Explain, AFolderOfLogsIsSummarised) {
   EXPECT_NE(test::runCommand(test::afford("explain " + root.string())).exit_code, 0);
 }
 
+// By agent: each sub-goal of each scenario over the agent's tests, and over
+// the system's agents; the agent is the folder of the test's checkpoint.
+TEST_F(Explain, AFolderOfLogsIsSummarisedBySubGoalAndAgent) {
+  const fs::path root = fs::path(dir_) / "by-agent";
+  const Recorded solved = record("solved", testYaml("scenario1", 51), 51);
+  const Recorded again = record("solved-again", testYaml("scenario1", 52), 52);
+  // The blue square's turn-green made unaffordable for the planner: never asked about.
+  const Recorded blocked = record("blocked", testYaml("scenario1", 53, {"planner.affordance_threshold=0.9999", "planner.budget=6"}), 53);
+  writeLog(solved.run->events, root / "a");
+  writeLog(again.run->events, root / "b");
+  writeLog(blocked.run->events, root / "c");
+  const ExplainSummary s = explainLogRoot(root.string(), *quiet());
+  ASSERT_EQ(s.tests.size(), 3u);
+  ASSERT_FALSE(s.tests[2].success) << explanationText(s.tests[2]);
+  const std::string agent = fs::path(dir_).filename().string();
+  for (const Explanation& t : s.tests) EXPECT_EQ(t.agent, agent);
+
+  const std::vector<AgentSubGoal> agents = subGoalsByAgent(s);
+  ASSERT_EQ(agents.size(), 1u);  // one agent, one scenario, one sub-goal
+  const AgentSubGoal& a = agents[0];
+  EXPECT_EQ(a.tests, 3);
+  EXPECT_EQ(a.reached, 2);
+  EXPECT_EQ(a.scenario, "scenario1");
+  EXPECT_NEAR(a.x, 0.2, 0.01);
+  EXPECT_NEAR(a.y, 0.5, 0.01);
+  EXPECT_EQ(a.colour_action, kTurnGreen);  // the blue square at the place, to turn green
+  ASSERT_TRUE(a.place_affordance);
+  EXPECT_GT((*a.place_affordance)[kTurnGreen], 0.5);
+  EXPECT_EQ(a.colour_blocked, 1);  // the third test's threshold kept turn green from being asked about
+  ASSERT_TRUE(a.closest);
+  EXPECT_TRUE(a.closest->passes());
+  EXPECT_EQ(a.closest->action, kTurnGreen);
+  EXPECT_EQ(a.not_checked + a.what_miss + a.where_miss + a.passed, 1);
+
+  const std::vector<SystemSubGoal> systems = subGoalsBySystem(agents);
+  ASSERT_EQ(systems.size(), 1u);
+  EXPECT_EQ(systems[0].agents, 1);
+  EXPECT_EQ(systems[0].agents_always, 0);
+  EXPECT_EQ(systems[0].agents_colour_blocked, 1);
+  ASSERT_EQ(systems[0].closest_what.size(), 1u);
+  EXPECT_DOUBLE_EQ(systems[0].closest_what[0], a.closest->what_distance);
+
+  const auto r = test::runCommand("(" + test::afford("explain --by-agent --json " + root.string()) + " 2>/dev/null)");
+  ASSERT_EQ(r.exit_code, 0) << r.output;
+  const nlohmann::json j = nlohmann::json::parse(r.output);
+  ASSERT_EQ(j["by_agent"].size(), 1u);
+  EXPECT_EQ(j["by_agent"][0]["agent"], agent);
+  EXPECT_EQ(j["by_agent"][0]["colour_action"], "turn green");
+  EXPECT_EQ(j["by_system"][0]["agents_colour_blocked"], 1);
+  const auto text = test::runCommand("(" + test::afford("explain --by-agent " + root.string()) + " 2>/dev/null)");
+  EXPECT_NE(text.output.find("turn green"), std::string::npos) << text.output;
+  // --by-agent needs a folder of logs.
+  const auto one = test::runCommand(test::afford("explain --by-agent " + solved.log) + " 2>&1");
+  EXPECT_NE(one.exit_code, 0);
+  EXPECT_NE(one.output.find("--by-agent summarises a folder of run logs"), std::string::npos) << one.output;
+}
+
 }  // namespace
 }  // namespace afford
