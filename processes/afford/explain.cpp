@@ -85,6 +85,15 @@ struct Request {
   std::int64_t step() const { return look ? look->step : query->step; }
 };
 
+// The better of two checks against a sub-goal: one that passed both tests;
+// else one whose predicted place matched (the right object and action, only
+// the image off); else the smaller what-distance.
+bool closerCheck(const ExplainedCheck& a, const ExplainedCheck& b) {
+  if (a.passes() != b.passes()) return a.passes();
+  if (a.where_ok != b.where_ok) return a.where_ok;
+  return a.what_distance < b.what_distance;
+}
+
 struct SubGoalImage {
   std::vector<std::uint8_t> image;
   double x = 0, y = 0;
@@ -317,10 +326,7 @@ Explanation explainRunEvents(const RunEvents& run, const std::string& where, std
     for (const ExplainedCheck& c : it.checks) {
       if (!c.checked) continue;
       ++g.actions_checked;
-      // An action that passed comes first; then the smallest what-distance.
-      const bool better = !g.closest || (c.passes() && !g.closest->passes()) ||
-                          (c.passes() == g.closest->passes() && c.what_distance < g.closest->what_distance);
-      if (better) {
+      if (!g.closest || closerCheck(c, *g.closest)) {
         g.closest = c;
         g.closest_step = step;
       }
@@ -747,8 +753,8 @@ std::string summaryText(const ExplainSummary& s) {
   for (const Explanation& t : s.tests) {
     if (t.success) continue;
     if (!header)
-      out += "closest misses of the failed tests (each sub-goal not reached: its checked action with the smallest "
-             "what-distance):\n";
+      out += "closest misses of the failed tests (each sub-goal not reached: of its checked actions, one whose "
+             "predicted place matched if any, with the smallest what-distance):\n";
     header = true;
     int missed = 0;
     for (std::size_t i = 0; i < t.sub_goals.size(); ++i) {
@@ -794,8 +800,25 @@ namespace afford {
 std::vector<AgentSubGoal> subGoalsByAgent(const ExplainSummary& s) {
   using Key = std::tuple<std::string, std::string, std::string, double, double, std::string>;
   std::map<Key, AgentSubGoal> rows;
-  for (const Explanation& t : s.tests)
+  for (const Explanation& t : s.tests) {
+    // A sub-goal picked again in the same test (after a timeout) counts once:
+    // reached if any pick reached it, with the best check of all its picks.
+    std::map<std::pair<double, double>, ExplainedSubGoal> merged;
+    std::map<std::pair<double, double>, bool> blocked;
     for (const ExplainedSubGoal& g : t.sub_goals) {
+      auto [it, fresh] = merged.try_emplace({g.x, g.y}, g);
+      ExplainedSubGoal& m = it->second;
+      bool& b = blocked[{g.x, g.y}];
+      b = b || g.colourActionBlocked(t.planner);
+      if (fresh) continue;
+      m.reached = m.reached || g.reached;
+      if (g.closest && (!m.closest || closerCheck(*g.closest, *m.closest))) m.closest = g.closest;
+      if (g.place_affordance) {
+        m.place_affordance = g.place_affordance;
+        m.colour_action = g.colour_action;
+      }
+    }
+    for (const auto& [place, g] : merged) {
       AgentSubGoal& r = rows[Key{t.experiment, t.system, t.scenario, g.x, g.y, t.agent}];
       if (r.tests == 0) {
         r.experiment = t.experiment, r.system = t.system, r.agent = t.agent, r.scenario = t.scenario;
@@ -815,18 +838,16 @@ std::vector<AgentSubGoal> subGoalsByAgent(const ExplainSummary& s) {
           ++r.where_miss;
       }
       if (g.closest) {
-        const ExplainedCheck& c = *g.closest;
-        if (!r.closest || (c.passes() && !r.closest->passes()) ||
-            (c.passes() == r.closest->passes() && c.what_distance < r.closest->what_distance))
-          r.closest = c;
+        if (!r.closest || closerCheck(*g.closest, *r.closest)) r.closest = g.closest;
         r.closest_what_max = std::max(r.closest_what_max, g.closest->what_distance);
       }
       if (g.place_affordance) {
         r.place_affordance = g.place_affordance;
         r.colour_action = g.colour_action;
       }
-      r.colour_blocked += !g.reached && g.colourActionBlocked(t.planner);
+      r.colour_blocked += !g.reached && blocked[place];
     }
+  }
   std::vector<AgentSubGoal> out;
   for (auto& [key, r] : rows) out.push_back(std::move(r));
   return out;
@@ -872,8 +893,9 @@ std::string byAgentText(const ExplainSummary& s) {
   const std::vector<AgentSubGoal> agents = subGoalsByAgent(s);
   const std::vector<SystemSubGoal> systems = subGoalsBySystem(agents);
   std::string out = format("%zu extrinsic test(s) under %s, by system, scenario and sub-goal\n", s.tests.size(), s.root.c_str());
-  out += "closest: each agent's checked action with the smallest what-distance over its tests; a miss is a closest\n"
-         "check not below planner.image_match (what) or not within planner.position_match (where); blocked: the\n"
+  out += "closest: each agent's best check over its tests (one that passed; else, of those whose predicted place\n"
+         "matched, the smallest what-distance; else the smallest what-distance); a miss is a closest check not below\n"
+         "planner.image_match (what) or not within planner.position_match (where); blocked: the\n"
          "colour action the object at the sub-goal's place needs was not above planner.affordance_threshold\n\n";
   out += format("%-16s %-6s %-12s %-16s %6s %6s %10s %10s %10s %5s %6s %8s\n", "experiment", "system", "scenario", "sub-goal",
                 "agents", "always", "closest", "median", "max", "what", "where", "blocked");

@@ -78,8 +78,9 @@ struct ExplainedSubGoal {
   // utility planner moves on after each weighed action, Algorithm 3);
   // "open" (the test ended while it was the sub-goal).
   std::string ended;
-  // The checked action that passed both tests, else the one with the
-  // smallest what-distance ("the closest miss"), and the step it was checked in.
+  // The checked action that passed both tests; else, of those whose
+  // predicted place matched, the one with the smallest what-distance; else
+  // the smallest what-distance ("the closest miss"); and the step it was checked in.
   std::optional<ExplainedCheck> closest;
   std::int64_t closest_step = -1;
   // The object the test scanned at the sub-goal's place (within
@@ -155,13 +156,13 @@ struct AgentSubGoal {
   std::string experiment, system, agent, scenario;
   double x = 0, y = 0;
   PlannerConfig planner;  // the thresholds (of the first test)
-  int tests = 0;          // tests that picked it
+  int tests = 0;          // tests that picked it (a test that picked it again counts once)
   int reached = 0;
   // Why it was not reached, test by test: no action was checked; the
   // closest check's what-distance was not below image_match; what passed and
   // where did not; an action passed both (it failed, or Algorithm 3 left it).
   int not_checked = 0, what_miss = 0, where_miss = 0, passed = 0;
-  std::optional<ExplainedCheck> closest;  // over the tests: one that passed, else the smallest what-distance
+  std::optional<ExplainedCheck> closest;  // the best over the tests, as ExplainedSubGoal::closest
   double closest_what_max = -1;           // the largest of the tests' closest what-distances
   std::optional<std::array<double, kNumActions>> place_affordance;  // the last test's that scanned the place
   int colour_action = -1;
