@@ -52,7 +52,9 @@ dirs=()
 for exp in "${deterministic[@]}" "${stochastic[@]}"; do
   [[ -f $out/$exp/summary.json ]] && dirs+=("$out/$exp")
 done
-build/bin/afford report "${dirs[@]}" --out docs/results.md --figures docs/results
+note="The world follows the authors' code: continuous positions, shapes drawn from their real centres, late objects at random free places, the eye's window placed as theirs ([model.md](model.md#positions))."
+[[ -f docs/results-pixel.md ]] && note+=" The same reproduction in the earlier pixel world is kept in [results-pixel.md](results-pixel.md)."
+build/bin/afford report "${dirs[@]}" --out docs/results.md --figures docs/results --note "$note"
 echo "docs/results.md written; this invocation took $((SECONDS - start)) s"
 if [[ ${#failed[@]} -gt 0 ]]; then
   echo "experiments with failed runs (see their summary.json failed_runs): ${failed[*]}" >&2
