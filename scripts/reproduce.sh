@@ -12,7 +12,7 @@
 # Environment: JOBS (runs at a time, default: cores), REPS and EXT_REPS (default: the
 # paper's counts), OUT (default out/reproduce), KEEP_LOGS (all, first or none; default
 # first: the logs of the first run of each system; all keeps every run's and test's log,
-# which `afford explain LOG_ROOT` summarises, about 1 GB per experiment). Runs over real
+# which `afford explain LOG_ROOT` summarises: 14 GB for all eight, besides 13 GB of checkpoints). Runs over real
 # processes (udpm). The page is written from every experiment
 # folder present under OUT, so parts may run at different times. An experiment with a
 # failed run is still summarised and plotted; the script then exits with status 1.

@@ -6,6 +6,7 @@
 
 #include <array>
 #include <cstdio>
+#include <cstdlib>
 #include <filesystem>
 #include <memory>
 #include <string>
@@ -83,10 +84,28 @@ inline int trainingReports(const std::vector<Event>& events) {
   return n;
 }
 
+// The folders tempDir made, removed when the test program exits (a whole
+// suite run made 3.7 GB of them); AFFORD_KEEP_TEST_DIRS=1 keeps them for a look.
+struct TempDirs {
+  std::vector<std::filesystem::path> dirs;
+  ~TempDirs() {
+    if (std::getenv("AFFORD_KEEP_TEST_DIRS")) return;
+    for (const auto& d : dirs) {
+      std::error_code ec;
+      std::filesystem::remove_all(d, ec);
+    }
+  }
+};
+inline TempDirs& tempDirs() {
+  static TempDirs t;
+  return t;
+}
+
 inline std::string tempDir(const std::string& name) {
   const auto dir = std::filesystem::temp_directory_path() / ("afford-test-" + name + "-" + std::to_string(getpid()));
   std::filesystem::remove_all(dir);
   std::filesystem::create_directories(dir);
+  tempDirs().dirs.push_back(dir);
   return dir.string();
 }
 
