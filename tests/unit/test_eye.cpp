@@ -1,5 +1,6 @@
 #include <gtest/gtest.h>
 
+#include <algorithm>
 #include <cstdlib>
 #include <set>
 #include <string>
@@ -164,6 +165,48 @@ TEST_F(EyeOnBaseScene, TheWrongColourDoesNotCountForAnotherColourAction) {
   lookAt({30, 30});
   ASSERT_TRUE(env.execute(5, kTurnBlue, 0.2, 0.2).succeeded);
   EXPECT_FALSE(eye.scanEffect(5, env.render(), kTurnGreen).affordance);
+}
+
+}  // namespace
+}  // namespace afford
+
+namespace afford {
+namespace {
+
+// Late objects may land on each other (world.late_overlap, the authors' code):
+// the eye then sees one blob of two colours. Its focus must still be on that
+// blob, and an action there must act on an object (the one on top).
+TEST(Eye, OverlappingObjectsAreOneBlobTheEyeLooksAtAndActsOn) {
+  for (std::int64_t seed = 1; seed <= 200; ++seed) {
+    const RunConfig c = test::shippedConfig("late1", System::IMP, seed);
+    Environment env(c);
+    env.introduceObjectsAt(2000);
+    const auto& objs = env.objects();
+    int overlapping = -1;  // an object drawn over another
+    for (std::size_t b = 0; b < objs.size() && overlapping < 0; ++b)
+      for (std::size_t a = 0; a < b && overlapping < 0; ++a)
+        for (const Pixel& p : objs[b].pixels)
+          if (objs[a].present && objs[b].present &&
+              std::find(objs[a].pixels.begin(), objs[a].pixels.end(), p) != objs[a].pixels.end()) {
+            overlapping = static_cast<int>(b);
+            break;
+          }
+    if (overlapping < 0) continue;
+    Eye eye(c);
+    eye.setScene(env.render());
+    bool on_pair = false;
+    for (int step = 0; step < 300; ++step) {
+      const Focus& f = eye.scan(step);
+      ASSERT_NE(eye.labelAt(f.gaze), 0) << "seed " << seed << " step " << step;
+      Environment acted = env;
+      const ActionOutcome out = acted.execute(step, kTurnBlue, f.x, f.y);
+      EXPECT_TRUE(out.on_object) << "seed " << seed << " step " << step << " at " << f.x << "," << f.y;
+      on_pair = on_pair || eye.labelAt(f.gaze) == eye.labelAt(objs[static_cast<std::size_t>(overlapping)].centre);
+    }
+    EXPECT_TRUE(on_pair) << "seed " << seed << ": the eye never looked at the overlapping pair";
+    return;
+  }
+  FAIL() << "no seed in 1..200 put two late objects over each other";
 }
 
 }  // namespace
