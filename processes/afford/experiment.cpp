@@ -1030,7 +1030,10 @@ void printTables(const json& summary, const Plan& plan, const ExperimentOptions&
       if (!js.contains("extrinsic") || !js["extrinsic"].contains("completion_steps")) continue;
       const json& cs = js["extrinsic"]["completion_steps"];
       t << "  " << std::left << std::setw(5) << sys << std::right;
-      for (const auto& s : js["extrinsic"]["scenarios"]) t << std::setw(14) << fixed(cs[s.get<std::string>()]["median"].get<double>(), 1);
+      for (const auto& s : js["extrinsic"]["scenarios"]) {
+        const json& c = cs[s.get<std::string>()];  // none solved: no median to show
+        t << std::setw(14) << (c["n"].get<int>() ? fixed(c["median"].get<double>(), 1) : std::string("-"));
+      }
       if (cs.contains("fit"))
         t << "   fit " << fixed(cs["fit"]["a"].get<double>(), 3) << " x^2 " << fixed(cs["fit"]["b"].get<double>(), 3) << " x";
       t << "\n";
