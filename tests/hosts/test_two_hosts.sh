@@ -16,9 +16,23 @@ out=$(cd "$2" && pwd)
 [[ $(id -u) -eq 0 ]] || { echo "needs root (network namespaces, veth)"; exit 1; }
 seed=${AFFORD_HOSTS_SEED:-$((1 + RANDOM % 50))}
 va=afa$$ vb=afb$$
+# Every process on a simulated host: those in the namespace of one of the holders.
+on_hosts() {
+  local h ns p
+  for h in "${holders[@]}"; do
+    ns=$(readlink "/proc/$h/ns/net" 2>/dev/null) || continue
+    for p in /proc/[0-9]*; do
+      [[ ${p#/proc/} != "$h" && $(readlink "$p/ns/net" 2>/dev/null) == "$ns" ]] && echo "${p#/proc/}"
+    done
+  done
+}
 cleanup() {
   local rc=$?
-  kill $(jobs -p) "${holders[@]}" 2>/dev/null || true  # the hosts' namespaces and the veth pair go with the holders
+  # The processes started on the hosts, then the holders: the hosts' namespaces
+  # and the veth pair go with them. (A backgrounded `on` is a subshell, and
+  # killing it left its nsenter'd process running.)
+  kill $(on_hosts) 2>/dev/null || true
+  kill $(jobs -p) "${holders[@]}" 2>/dev/null || true
   wait 2>/dev/null || true
   if ((rc != 0)); then
     echo "--- diagnostics (seed $seed)"
