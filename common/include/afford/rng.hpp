@@ -18,6 +18,7 @@ enum class Purpose : std::uint64_t {
   LearningProgressInit = 5, // predictors: initial learning-progress weights
   LatePlacement = 6,      // environment: free place for a late object whose spot is taken
   GoalScanNoise = 7,      // eye: saliency noise of the inner eye's scan of the goal image
+  RandomTable = 8,        // experiments: the entries of a random affordance table (index = table)
 };
 
 constexpr std::uint64_t splitmix64(std::uint64_t x) {
