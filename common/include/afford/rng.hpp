@@ -19,6 +19,7 @@ enum class Purpose : std::uint64_t {
   LatePlacement = 6,      // environment: free place for a late object whose spot is taken
   GoalScanNoise = 7,      // eye: saliency noise of the inner eye's scan of the goal image
   RandomTable = 8,        // experiments: the entries of a random affordance table (index = table)
+  Replay = 9,             // predictors: which remembered experiences are replayed at a step
 };
 
 constexpr std::uint64_t splitmix64(std::uint64_t x) {
