@@ -13,7 +13,9 @@
 
 namespace afford::test {
 
-// Algorithm 1 for config.steps steps; returns the trained predictors.
+// Algorithm 1 for config.steps steps; returns the trained predictors. With
+// predictors.replay or motivation.revisit, the memory's part too (see(),
+// tried_ago, replay).
 inline Predictors runIntrinsic(const RunConfig& c) {
   Environment env(c);
   Eye eye(c);
@@ -22,8 +24,8 @@ inline Predictors runIntrinsic(const RunConfig& c) {
   eye.setScene(env.render());
   for (std::int64_t t = 0; t < c.steps; ++t) {
     const Focus f = eye.scan(t);
-    const Prediction p = predictors.predict(f.image);
-    const Decision d = motivation.decide(p.affordance, p.learning_progress);
+    const Prediction p = predictors.see(f.image, t);
+    const Decision d = motivation.decide(p.affordance, p.learning_progress, p.remembered ? &p.tried_ago : nullptr);
     const bool more = t + 1 < c.steps;
     if (d.act) {
       const ActionOutcome out = env.execute(t, d.action, f.x, f.y);
@@ -39,8 +41,10 @@ inline Predictors runIntrinsic(const RunConfig& c) {
       x.after_image = e.after.image;
       x.after_x = e.after.x;
       x.after_y = e.after.y;
-      const TrainingReport r = predictors.train(x);
+      const TrainingReport r = predictors.train(x, t, p.look);
       if (motivation.awaitingObservation()) motivation.observeChange(std::abs(r.affordance_after - r.affordance_before));
+    } else {
+      predictors.trainEffects(predictors.replay(t));  // a pass: the step's replay alone
     }
     if (more && env.introduceObjectsAt(t + 1)) eye.setScene(env.render());
   }

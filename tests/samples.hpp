@@ -72,6 +72,7 @@ inline decision_t sample(const decision_t*) {
   m.target_y = -1;
   m.motivation = 0.8;
   m.threshold = 0.7;
+  m.revisit = false;
   m.digest = 0x1234;
   return m;
 }
@@ -212,6 +213,9 @@ inline prediction_t sample(const prediction_t*) {
   m.n_actions = kNumActions;
   m.affordance = {0.9, 0.2, 0.6, 0.1};
   m.learning_progress = {0.01, -0.02, 0.0, 0.03};
+  m.look = 3;
+  m.n_tried = kNumActions;
+  m.tried_ago = {-1, 12, 0, 40};
   m.trained = {sampleTrained()};
   m.n_trained = 1;
   m.digest = 0x1234;
@@ -280,6 +284,10 @@ inline run_result_t sample(const run_result_t*) {
   m.n_actions = kNumActions;
   m.actions_executed = {120, 80, 75, 90};
   m.successes = {60, 40, 20, 30};
+  m.looks = 9;
+  m.replayed = 5600;
+  m.replayed_effects = 300;
+  m.revisits = 40;
   m.trained = {sampleTrained()};
   m.n_trained = 1;
   m.digest = 0x1234;

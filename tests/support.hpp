@@ -22,14 +22,17 @@ namespace afford::test {
 inline ProtocolConfig shippedProtocol() { return loadProtocol(std::string(AFFORD_SOURCE_DIR) + "/config"); }
 
 // The effective config of one run of a shipped experiment.
+// The options of issue 11 (docs/model.md#memory): replay and revisits, with their shipped values.
+inline const std::vector<std::string> kMemoryOptions = {"predictors.replay.enabled=true", "motivation.revisit.enabled=true"};
+
 inline RunConfig shippedConfig(const std::string& experiment = "base", System system = System::IMP,
                                std::int64_t seed = 1, std::vector<std::string> settings = {}) {
   RunRequest req{experiment, system, seed, std::nullopt, std::move(settings)};
   return parseRunConfig(effectiveConfig(std::string(AFFORD_SOURCE_DIR) + "/config", req));
 }
 inline std::string shippedConfigYaml(const std::string& experiment, System system, std::int64_t seed,
-                                     std::int64_t steps) {
-  RunRequest req{experiment, system, seed, steps, {}};
+                                     std::int64_t steps, std::vector<std::string> settings = {}) {
+  RunRequest req{experiment, system, seed, steps, std::move(settings)};
   return emitYaml(effectiveConfig(std::string(AFFORD_SOURCE_DIR) + "/config", req));
 }
 

@@ -78,7 +78,8 @@ wire::object_probe_t_bounds boundsOf(const BoundsContext& c, const object_probe_
 }
 
 wire::prediction_t_bounds boundsOf(const BoundsContext& c, const prediction_t*) {
-  return {nameBytes(c), /*n_actions*/ actions(), /*n_trained*/ trainedReports(), boundsFor<trained_t>(c)};
+  return {nameBytes(c), /*n_actions*/ actions(), /*n_tried*/ actions(), /*n_trained*/ trainedReports(),
+          boundsFor<trained_t>(c)};
 }
 
 wire::process_status_t_bounds boundsOf(const BoundsContext& c, const process_status_t*) {

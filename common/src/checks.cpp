@@ -109,6 +109,17 @@ std::string checkMessage(const prediction_t& m, const BoundsContext& c) {
         !why.empty())
       return why;
   }
+  if (auto why = first({m.n_tried == 0 || m.n_tried == kNumActions
+                            ? ""
+                            : "field n_tried = " + std::to_string(m.n_tried) + " must be 0 or " + std::to_string(kNumActions),
+                        m.n_tried == 0 ? (m.look == -1 ? "" : "field look must be -1 without tried_ago")
+                                       : checkInt("look", m.look, 0, INT32_MAX)});
+      !why.empty())
+    return why;
+  for (int a = 0; a < m.n_tried; ++a)
+    if (auto why = checkInt(("tried_ago[" + std::to_string(a) + "]").c_str(), m.tried_ago[a], -1, c.run ? c.run->steps : INT64_MAX);
+        !why.empty())
+      return why;
   if (auto why = checkInt("n_trained", m.n_trained, 0, 1); !why.empty()) return why;
   for (const auto& t : m.trained)
     if (auto why = checkMessage(t, c); !why.empty()) return "trained[0]: " + why;
@@ -205,6 +216,11 @@ std::string checkMessage(const run_result_t& m, const BoundsContext& c) {
         !why.empty())
       return why;
   }
+  if (auto why = first({checkInt("looks", m.looks, 0, INT32_MAX), checkInt("replayed", m.replayed, 0, INT64_MAX),
+                        checkInt("replayed_effects", m.replayed_effects, 0, INT64_MAX),
+                        checkInt("revisits", m.revisits, 0, INT64_MAX)});
+      !why.empty())
+    return why;
   for (const auto& t : m.trained)
     if (auto why = checkMessage(t, c); !why.empty()) return "trained[0]: " + why;
   return "";

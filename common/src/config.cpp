@@ -327,6 +327,19 @@ RunConfig parseRunConfig(const YAML::Node& root) {
     Reader where = p.map("where_effect");
     c.predictors.where_effect_learning_rate = where.number("learning_rate", 0.0, 10.0);
     where.finish();
+    Reader mem = p.map("memory");
+    c.predictors.memory.look_threshold = mem.number("look_threshold", 0.0, 1.0);
+    c.predictors.memory.look_shift_px = static_cast<int>(mem.integer("look_shift_px", 0, 10));
+    c.predictors.memory.max_looks = static_cast<int>(mem.integer("max_looks", 1, 100'000));
+    c.predictors.memory.per_look_action = static_cast<int>(mem.integer("per_look_action", 1, 100'000));
+    mem.finish();
+    Reader rep = p.map("replay");
+    c.predictors.replay.enabled = rep.choice<bool>("enabled", {{"true", true}, {"false", false}});
+    c.predictors.replay.ratio = static_cast<int>(rep.integer("ratio", 0, 10'000));
+    c.predictors.replay.effects_ratio = static_cast<int>(rep.integer("effects_ratio", 0, 10'000));
+    c.predictors.replay.sampling = rep.choice<ReplaySampling>(
+        "sampling", {{"balanced", ReplaySampling::Balanced}, {"uniform", ReplaySampling::Uniform}});
+    rep.finish();
     p.finish();
   }
   {
@@ -338,6 +351,10 @@ RunConfig parseRunConfig(const YAML::Node& root) {
     c.motivation.imp_threshold_input = m.choice<ImpThresholdInput>(
         "imp_threshold_input",
         {{"signal", ImpThresholdInput::Signal}, {"observed_change", ImpThresholdInput::ObservedChange}});
+    Reader rv = m.map("revisit");
+    c.motivation.revisit.enabled = rv.choice<bool>("enabled", {{"true", true}, {"false", false}});
+    c.motivation.revisit.after_steps = rv.integer("after_steps", 0, 100'000'000);
+    rv.finish();
     m.finish();
   }
   if (r.has("extrinsic")) {
@@ -494,6 +511,29 @@ ExperimentFile loadExperimentChain(const std::string& config_dir, const std::str
       for (const auto& s : kv.second) e.default_systems.push_back(toString(parseSystem(s.Scalar())));
     } else if (key == "extrinsic") {
       e.extrinsic = parseDesign(kv.second, file.string());
+    } else if (key == "tables") {
+      Reader t(kv.second, "tables");
+      e.tables = TablesDesign{static_cast<int>(t.integer("count", 1, 100'000)), t.integer("seed", 0, INT64_MAX)};
+      t.finish();
+    } else if (key == "conditions") {
+      if (!kv.second.IsMap() || kv.second.size() == 0)
+        fail("conditions", "expected a map of condition names to lists of settings (key.path=value), got " +
+                               describe(kv.second) + " (" + file.string() + ")");
+      e.conditions.clear();
+      for (const auto& c : kv.second) {
+        const std::string cname = c.first.Scalar();
+        if (cname.empty() || cname.find_first_not_of("abcdefghijklmnopqrstuvwxyzABCDEFGHIJKLMNOPQRSTUVWXYZ0123456789_") !=
+                                 std::string::npos)
+          fail("conditions." + cname, "a condition's name is part of run ids: letters, digits and _ only");
+        if (!c.second.IsSequence()) fail("conditions." + cname, "expected a list of settings (key.path=value)");
+        std::vector<std::string> settings;
+        for (const auto& v : c.second) {
+          if (!v.IsScalar() || v.Scalar().find('=') == std::string::npos)
+            fail("conditions." + cname, "expected settings of the form key.path=value, got " + describe(v));
+          settings.push_back(v.Scalar());
+        }
+        e.conditions.emplace_back(cname, settings);
+      }
     } else if (key == "systems") {
       if (!e.systems.IsMap()) e.systems = YAML::Node(YAML::NodeType::Map);
       mergeInto(e.systems, kv.second);
@@ -503,6 +543,8 @@ ExperimentFile loadExperimentChain(const std::string& config_dir, const std::str
       mergeInto(e.overlay, over);
     }
   }
+  if (!e.conditions.empty() && !e.tables)
+    fail("conditions", "compares conditions on random tables: it needs a 'tables:' section (" + file.string() + ")");
   return e;
 }
 }  // namespace

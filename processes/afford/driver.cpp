@@ -52,6 +52,10 @@ RunDriver::RunDriver(lcm::LCM& lcm, std::shared_ptr<spdlog::logger> log, const P
         outcome_->checkpoint = m.checkpoint;
         outcome_->executed = m.actions_executed;
         outcome_->successes = m.successes;
+        outcome_->looks = m.looks;
+        outcome_->replayed = m.replayed;
+        outcome_->replayed_effects = m.replayed_effects;
+        outcome_->revisits = m.revisits;
         have_result_ = true;
         return Turn::take();
       },

@@ -68,6 +68,8 @@ struct RunOutcome {
   std::string checkpoint;                     // the predictors' saved weights, if any
   std::vector<TableSnapshot> curve;           // every curve_interval steps, and the end
   std::vector<std::int64_t> executed, successes;
+  int looks = 0;                              // the predictors' memory at the end (issue 11), 0 without one
+  std::int64_t replayed = 0, replayed_effects = 0, revisits = 0;
   std::string log_dir;                        // from the logger, if one took part
   double wall_seconds = 0;                    // whole run, set-up included
   double run_seconds = 0;                     // from START to RESULT: the steps themselves

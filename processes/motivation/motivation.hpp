@@ -1,8 +1,10 @@
 // Motivation core (paper 2.4.1, Algorithm 1 lines 2-3 and 13-16): the IM
 // signal of FIX, IGN and IMP, the act-or-pass decision and the leaky-average
-// threshold of equation 2. No LCM here.
+// threshold of equation 2; beyond the paper, revisits (motivation.revisit,
+// docs/model.md#revisit). No LCM here.
 #pragma once
 #include <array>
+#include <cstdint>
 
 #include "afford/actions.hpp"
 #include "afford/config.hpp"
@@ -14,10 +16,18 @@ double entropyBits(double p);
 
 struct Decision {
   bool act = false;
-  int action = -1;          // the action with the highest IM signal
+  int action = -1;          // the action with the highest IM signal (or the revisited one)
   double motivation = 0;    // its IM signal
   double threshold = 0;     // the threshold it was compared with
+  bool revisit = false;     // the revisit rule chose the action (it was acted on whatever the threshold)
 };
+
+// The action the revisit rule tries on a look, or -1: the first action never
+// tried on it, in the action order (move, turn green, turn red, turn blue);
+// else, if after_steps > 0, the one not tried for longest, once that is
+// after_steps or more (ties: the first in that order). tried_ago: steps since
+// each action was last tried on the look, -1 for never.
+int revisitAction(const std::array<std::int64_t, kNumActions>& tried_ago, std::int64_t after_steps);
 
 class Motivation {
  public:
@@ -26,8 +36,11 @@ class Motivation {
   // Decide for one focused object. Updates the threshold (IGN, IMP) unless the
   // update waits for an observed change (IMP with imp_threshold_input:
   // observed_change after an action).
+  // `tried_ago` (the predictors' memory, needed with motivation.revisit):
+  // a revisit acts without comparing with the threshold, and leaves it as it is.
   Decision decide(const std::array<double, kNumActions>& affordance,
-                  const std::array<double, kNumActions>& learning_progress);
+                  const std::array<double, kNumActions>& learning_progress,
+                  const std::array<std::int64_t, kNumActions>* tried_ago = nullptr);
   // The observed |change| of the affordance output of the executed action.
   void observeChange(double absolute_change);
   bool awaitingObservation() const { return awaiting_; }

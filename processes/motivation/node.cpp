@@ -37,7 +37,13 @@ Turn MotivationNode::onPrediction(const prediction_t& m) {
   std::array<double, kNumActions> aff{}, lp{};
   std::copy(m.affordance.begin(), m.affordance.end(), aff.begin());
   std::copy(m.learning_progress.begin(), m.learning_progress.end(), lp.begin());
-  const Decision d = core_->decide(aff, lp);
+  std::array<std::int64_t, kNumActions> tried{};
+  const bool remembered = m.n_tried == kNumActions;
+  if (remembered) std::copy(m.tried_ago.begin(), m.tried_ago.end(), tried.begin());
+  if (config().motivation.revisit.enabled && !remembered)
+    return Turn::refuse("step " + std::to_string(m.step) + " says nothing of what was tried on the look (n_tried = 0), "
+                        "which motivation.revisit needs: do the predictors keep a memory?");
+  const Decision d = core_->decide(aff, lp, remembered ? &tried : nullptr);
   decision_t out;
   out.run_id = runId();
   out.step = m.step;
@@ -48,6 +54,7 @@ Turn MotivationNode::onPrediction(const prediction_t& m) {
   out.target_x = out.target_y = -1.0;
   out.motivation = d.motivation;
   out.threshold = d.threshold;
+  out.revisit = d.revisit;
   publish(channel::kDecision, out);
   last_ = m.step;
   handled(m.step);

@@ -110,6 +110,7 @@ void PlannerNode::follow(PlannerRequest r) {
       d.y = r.object_y;
       d.target_x = r.x;
       d.target_y = r.y;
+      d.revisit = false;
       d.motivation = d.threshold = 0.0;
       waiting_scene_ = true;
       return publish(channel::kDecision, d);

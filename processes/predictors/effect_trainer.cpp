@@ -13,10 +13,10 @@ EffectTrainer::~EffectTrainer() {
   thread_.join();
 }
 
-void EffectTrainer::push(Experience e) {
+void EffectTrainer::push(std::vector<Memory::Ref> updates) {
   {
     std::lock_guard<std::mutex> lock(mutex_);
-    queue_.push_back(std::move(e));
+    queue_.push_back(std::move(updates));
   }
   changed_.notify_all();
 }
@@ -31,11 +31,11 @@ void EffectTrainer::work() {
   for (;;) {
     changed_.wait(lock, [this] { return stop_ || !queue_.empty(); });
     if (queue_.empty()) return;  // stopping, nothing left
-    Experience e = std::move(queue_.front());
+    std::vector<Memory::Ref> updates = std::move(queue_.front());
     queue_.pop_front();
     busy_ = true;
     lock.unlock();
-    core_.trainEffects(e);
+    core_.trainEffects(updates);
     lock.lock();
     busy_ = false;
     changed_.notify_all();

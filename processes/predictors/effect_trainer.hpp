@@ -20,7 +20,8 @@ class EffectTrainer {
   EffectTrainer(const EffectTrainer&) = delete;
   EffectTrainer& operator=(const EffectTrainer&) = delete;
 
-  void push(Experience e);
+  // The forward-model updates of one executed action (TrainingReport::effect_updates).
+  void push(std::vector<Memory::Ref> updates);
   // Block until every queued update is applied.
   void drain();
 
@@ -30,7 +31,7 @@ class EffectTrainer {
   Predictors& core_;
   std::mutex mutex_;
   std::condition_variable changed_;
-  std::deque<Experience> queue_;
+  std::deque<std::vector<Memory::Ref>> queue_;
   bool busy_ = false, stop_ = false;
   std::thread thread_;
 };

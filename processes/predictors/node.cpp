@@ -47,7 +47,9 @@ void PredictorsNode::onConfigured(const RunConfig& config) {
   last_query_ = -1;
   probes_.clear();
   pending_trained_.reset();
-  pending_effects_.reset();
+  pending_effects_.clear();
+  look_ = -1;
+  revisits_ = 0;
   current_ = -1;
   outcome_ = Outcome::Unknown;
   finished_ = false;
@@ -98,7 +100,9 @@ void PredictorsNode::handleFocus(const focus_t& m) {
 }
 
 void PredictorsNode::publishPrediction(const focus_t& m) {
-  const Prediction p = core_->predict(m.image);
+  // Intrinsic phase: the focus of step m.step, seen once (a memory remembers its look).
+  const Prediction p = extrinsic() ? core_->predict(m.image) : core_->see(m.image, m.step);
+  if (!extrinsic()) look_ = p.look;
   prediction_t out;
   out.run_id = runId();
   out.step = m.step;
@@ -107,6 +111,9 @@ void PredictorsNode::publishPrediction(const focus_t& m) {
   out.n_actions = kNumActions;
   out.affordance.assign(p.affordance.begin(), p.affordance.end());
   out.learning_progress.assign(p.learning_progress.begin(), p.learning_progress.end());
+  out.look = p.remembered ? p.look : -1;
+  if (p.remembered) out.tried_ago.assign(p.tried_ago.begin(), p.tried_ago.end());
+  out.n_tried = static_cast<int8_t>(out.tried_ago.size());
   if (pending_trained_) out.trained.push_back(*pending_trained_);  // the update since the last prediction
   pending_trained_.reset();
   out.n_trained = static_cast<int8_t>(out.trained.size());
@@ -144,9 +151,11 @@ Turn PredictorsNode::onDecision(const decision_t& m) {
   if (m.acted) {
     outcome_ = Outcome::AwaitingEffect;
     action_ = m.action;
+    revisits_ += m.revisit;
     return Turn::take();
   }
   outcome_ = Outcome::Passed;
+  for (auto& u : core_->replay(m.step)) pending_effects_.push_back(std::move(u));  // a step without an action replays too
   if (m.step == config().steps - 1) finish();
   return Turn::take();
 }
@@ -172,7 +181,7 @@ Turn PredictorsNode::onEffect(const effect_t& m) {
   e.after_image = m.image;
   e.after_x = m.after_x;
   e.after_y = m.after_y;
-  const TrainingReport r = core_->trainAffordance(e);
+  TrainingReport r = core_->trainAffordance(e, m.step, look_);
   trained_t t;
   t.run_id = runId();
   t.step = m.step;
@@ -183,7 +192,7 @@ Turn PredictorsNode::onEffect(const effect_t& m) {
   t.learning_progress = r.learning_progress;
   t.effect_trained = r.effect_trained;
   pending_trained_ = t;
-  pending_effects_ = std::move(e);
+  pending_effects_ = std::move(r.effect_updates);
   outcome_ = Outcome::Learned;
   saveActionsCheckpoint();
   if (m.step == config().steps - 1) finish();
@@ -191,12 +200,12 @@ Turn PredictorsNode::onEffect(const effect_t& m) {
 }
 
 void PredictorsNode::trainPendingEffects() {
-  if (!pending_effects_) return;
+  if (pending_effects_.empty()) return;
   if (trainer_)
-    trainer_->push(std::move(*pending_effects_));
+    trainer_->push(std::move(pending_effects_));
   else
-    core_->trainEffects(*pending_effects_);
-  pending_effects_.reset();
+    core_->trainEffects(pending_effects_);
+  pending_effects_.clear();
 }
 
 void PredictorsNode::saveActionsCheckpoint() {
@@ -248,6 +257,10 @@ void PredictorsNode::finish() {
   r.n_actions = kNumActions;
   r.actions_executed.assign(core_->executed().begin(), core_->executed().end());
   r.successes.assign(core_->successes().begin(), core_->successes().end());
+  r.looks = core_->memory() ? core_->memory()->looks() : 0;
+  r.replayed = core_->replayedUpdates();
+  r.replayed_effects = core_->replayedEffectUpdates();
+  r.revisits = revisits_;
   if (pending_trained_) r.trained.push_back(*pending_trained_);
   pending_trained_.reset();
   r.n_trained = static_cast<int8_t>(r.trained.size());

@@ -5,7 +5,8 @@
 // Channels in:  RUN_CONFIG, RUN_CONTROL, PROBE, FOCUS, DECISION, EFFECT,
 //               FORWARD_QUERY (extrinsic phase)
 // Channels out: AFFORDANCE_TABLE (every run.curve_interval steps and at the end),
-//               PREDICTION (with the report of the last update, if any), RESULT,
+//               PREDICTION (with the report of the last update, if any, and with a
+//               memory, what was tried on the focused look), RESULT,
 //               FORWARD_PREDICTION (extrinsic phase), STATUS
 // Extrinsic phase: the predictors load the checkpoint of a trained agent,
 // predict affordances for each scene scan and answer forward queries; they do
@@ -72,8 +73,10 @@ class PredictorsNode : public NodeBase {
   Outcome outcome_ = Outcome::Unknown; // of step current_
   int action_ = -1;                    // executed at step current_
   focus_t focus_;                      // of step current_
+  int look_ = -1;                      // with a memory: the look of step current_'s focus
   std::optional<trained_t> pending_trained_;
-  std::optional<Experience> pending_effects_;  // forward-model update still to make
+  std::vector<Memory::Ref> pending_effects_;  // forward-model updates still to make
+  std::int64_t revisits_ = 0;          // executed actions the motivation's revisit rule chose
   bool finished_ = false;
   std::int32_t last_query_ = -1;  // extrinsic: last FORWARD_QUERY answered
 };

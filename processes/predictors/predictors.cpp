@@ -27,6 +27,17 @@ Predictors::Predictors(const RunConfig& config)
       w[i] = (rng.bits(static_cast<std::uint64_t>(i)) & 1u) ? config.predictors.learning_progress_init
                                                             : -config.predictors.learning_progress_init;
   }
+  if (config.keepsMemory()) memory_ = std::make_unique<Memory>(config.predictors.memory, config.eye.focus_side);
+}
+
+Prediction Predictors::see(const std::vector<std::uint8_t>& focus_image, std::int64_t step) {
+  Prediction p = predict(focus_image);
+  if (memory_) {
+    p.remembered = true;
+    p.look = memory_->see(focus_image, step);
+    p.tried_ago = memory_->triedAgo(p.look, step);
+  }
+  return p;
 }
 
 Prediction Predictors::predict(const std::vector<std::uint8_t>& focus_image) const {
@@ -43,13 +54,13 @@ SparseInput Predictors::whereInput(int action, double x, double y, double tx, do
   return action == kMove ? denseInput({tx, ty, x, y}) : denseInput({x, y});
 }
 
-TrainingReport Predictors::train(const Experience& e) {
-  TrainingReport r = trainAffordance(e);
-  trainEffects(e);
+TrainingReport Predictors::train(const Experience& e, std::int64_t step, int look) {
+  TrainingReport r = trainAffordance(e, step, look);
+  trainEffects(r.effect_updates);
   return r;
 }
 
-TrainingReport Predictors::trainAffordance(const Experience& e) {
+TrainingReport Predictors::trainAffordance(const Experience& e, std::int64_t step, int look) {
   const int a = e.action;
   const SparseInput x = focusInput(e.before_image);
   TrainingReport r;
@@ -64,7 +75,40 @@ TrainingReport Predictors::trainAffordance(const Experience& e) {
   ++executed_[a];
   if (e.affordance) ++successes_[a];
   r.effect_trained = e.affordance;
+  if (!memory_) {
+    if (e.affordance) r.effect_updates.push_back(std::make_shared<const Experience>(e));
+    return r;
+  }
+  if (look < 0) throw std::invalid_argument("an experience to remember needs the look of its focus (Predictors::see)");
+  auto kept = std::make_shared<Experience>(e);
+  if (!kept->affordance) kept->after_image.clear();  // nothing learns from the look after a failure
+  Memory::Ref ref = kept;
+  memory_->record(look, step, ref);
+  if (e.affordance) r.effect_updates.push_back(ref);
+  const std::vector<Memory::Ref> more = replay(step);
+  r.effect_updates.insert(r.effect_updates.end(), more.begin(), more.end());
   return r;
+}
+
+std::vector<Memory::Ref> Predictors::replay(std::int64_t step) {
+  // Replay (docs/model.md#replay): at every step, after the update of the step's own action if there was one,
+  // remembered experiences of any look and action drawn by (seed, step): each one delta-rule step of its
+  // affordance predictor; and forward-model updates from experiences whose effect was seen, for trainEffects.
+  const ReplayConfig& replay = config_.predictors.replay;
+  if (!memory_ || !replay.enabled) return {};
+  for (const Memory::Ref& m : memory_->sample(replay.sampling, config_.seed, step, 0, static_cast<std::size_t>(replay.ratio), false)) {
+    affordance_[m->action].train(focusInput(m->before_image), m->affordance ? 1.0 : 0.0,
+                                 config_.predictors.affordance_learning_rate);
+    ++replayed_;
+  }
+  std::vector<Memory::Ref> effects =
+      memory_->sample(replay.sampling, config_.seed, step, 1, static_cast<std::size_t>(replay.effects_ratio), true);
+  replayed_effects_ += static_cast<std::int64_t>(effects.size());
+  return effects;
+}
+
+void Predictors::trainEffects(const std::vector<Memory::Ref>& updates) {
+  for (const Memory::Ref& e : updates) trainEffects(*e);
 }
 
 void Predictors::trainEffects(const Experience& e) {
@@ -95,7 +139,8 @@ std::array<double, 2> Predictors::whereEffect(int action, double x, double y, do
 
 namespace {
 constexpr char kMagic[8] = {'A', 'F', 'F', 'O', 'R', 'D', 'C', 'K'};
-constexpr std::uint32_t kVersion = 1;
+// 1: weights and counters; 2: then a byte saying whether a memory follows, and the memory.
+constexpr std::uint32_t kVersion = 2;
 }  // namespace
 
 template <class F>
@@ -127,6 +172,13 @@ void Predictors::save(const std::string& path) const {
                        self->affordance_, self->learning_progress_, self->what_, self->where_);
     out.write(reinterpret_cast<const char*>(executed_.data()), sizeof executed_);
     out.write(reinterpret_cast<const char*>(successes_.data()), sizeof successes_);
+    const char has_memory = memory_ ? 1 : 0;
+    out.write(&has_memory, 1);
+    if (memory_) {
+      out.write(reinterpret_cast<const char*>(&replayed_), sizeof replayed_);
+      out.write(reinterpret_cast<const char*>(&replayed_effects_), sizeof replayed_effects_);
+      memory_->save(out);
+    }
     const std::string sum = weightsChecksum();
     out.write(sum.data(), static_cast<std::streamsize>(sum.size()));
     if (!out) throw std::runtime_error("cannot write checkpoint " + tmp);
@@ -143,8 +195,8 @@ void Predictors::load(const std::string& path) {
   in.read(reinterpret_cast<char*>(header), sizeof header);
   if (!in || std::memcmp(magic, kMagic, sizeof magic) != 0)
     throw std::runtime_error("checkpoint " + path + ": not an afford predictors checkpoint");
-  if (header[0] != kVersion)
-    throw std::runtime_error("checkpoint " + path + ": format version " + std::to_string(header[0]) + ", expected " +
+  if (header[0] != 1 && header[0] != kVersion)
+    throw std::runtime_error("checkpoint " + path + ": format version " + std::to_string(header[0]) + ", expected 1 to " +
                              std::to_string(kVersion));
   if (header[1] != static_cast<std::uint32_t>(input_size_))
     throw std::runtime_error("checkpoint " + path + ": focus images of " + std::to_string(header[1]) +
@@ -153,6 +205,20 @@ void Predictors::load(const std::string& path) {
                      affordance_, learning_progress_, what_, where_);
   in.read(reinterpret_cast<char*>(executed_.data()), sizeof executed_);
   in.read(reinterpret_cast<char*>(successes_.data()), sizeof successes_);
+  char has_memory = 0;
+  if (header[0] >= 2) in.read(&has_memory, 1);
+  if (!in) throw std::runtime_error("checkpoint " + path + ": truncated");
+  if (has_memory) {
+    // The memory travels with the weights (issue 11); an agent that kept one is restored with it, whatever this
+    // run's configuration does with it.
+    if (!memory_) memory_ = std::make_unique<Memory>(config_.predictors.memory, config_.eye.focus_side);
+    in.read(reinterpret_cast<char*>(&replayed_), sizeof replayed_);
+    in.read(reinterpret_cast<char*>(&replayed_effects_), sizeof replayed_effects_);
+    memory_->load(in, "checkpoint " + path);
+  } else if (memory_) {
+    throw std::runtime_error("checkpoint " + path + ": it holds no memory, and this run's predictors keep one "
+                             "(predictors.replay, motivation.revisit): was it saved by another configuration?");
+  }
   std::string sum(16, '\0');
   in.read(sum.data(), 16);
   if (!in) throw std::runtime_error("checkpoint " + path + ": truncated");
@@ -166,6 +232,11 @@ std::string Predictors::weightsChecksum() const {
     h.add(learning_progress_[a].weights().data(), sizeof(double) * learning_progress_[a].weights().size());
     h.add(what_[a].weights().data(), sizeof(double) * what_[a].weights().size());
     h.add(where_[a].weights().data(), sizeof(double) * where_[a].weights().size());
+  }
+  if (memory_) {
+    h.add(&replayed_, sizeof replayed_);
+    h.add(&replayed_effects_, sizeof replayed_effects_);
+    memory_->hash(h);
   }
   return h.hex();
 }

@@ -8,9 +8,13 @@
 #include <string>
 #include <vector>
 
+#include <memory>
+
 #include "afford/actions.hpp"
 #include "afford/config.hpp"
 #include "afford/perceptron.hpp"
+#include "predictors/experience.hpp"
+#include "predictors/memory.hpp"
 
 namespace afford {
 
@@ -19,18 +23,13 @@ using PerAction = std::array<double, kNumActions>;
 struct Prediction {
   PerAction affordance{};
   PerAction learning_progress{};
+  // With a memory (see()): the focused look, and the steps since each action
+  // was last tried on it (-1: never).
+  bool remembered = false;
+  int look = -1;
+  Memory::TriedAgo tried_ago{-1, -1, -1, -1};
 };
 
-// One executed action, as the eye reported it.
-struct Experience {
-  int action = 0;
-  std::vector<std::uint8_t> before_image;  // focus image of the scan (object_image)
-  double before_x = 0, before_y = 0;       // object_position
-  double target_x = -1, target_y = -1;     // move target (where-effect input)
-  bool affordance = false;                 // the action's effect was seen
-  std::vector<std::uint8_t> after_image;   // new_object_image
-  double after_x = 0, after_y = 0;         // new_object_position
-};
 
 struct TrainingReport {
   int action = 0;
@@ -38,6 +37,9 @@ struct TrainingReport {
   double affordance_before = 0, affordance_after = 0;
   double learning_progress = 0;            // LP output before its update
   bool effect_trained = false;
+  // The forward-model updates this action calls for, in order: its own if its
+  // effect was seen, then the replayed ones (trainEffects).
+  std::vector<Memory::Ref> effect_updates;
 };
 
 class Predictors {
@@ -45,14 +47,29 @@ class Predictors {
   explicit Predictors(const RunConfig& config);
 
   Prediction predict(const std::vector<std::uint8_t>& focus_image) const;
+  // The intrinsic phase's prediction for the focus of `step`: predict(), and
+  // with a memory, the look it shows (remembered from now on) and what was
+  // tried on it.
+  Prediction see(const std::vector<std::uint8_t>& focus_image, std::int64_t step);
   // Algorithm 1 lines 7-12: trainAffordance() then trainEffects().
-  TrainingReport train(const Experience& e);
-  // Lines 7-9: the affordance predictor, and the learning-progress predictor (IMP).
-  TrainingReport trainAffordance(const Experience& e);
-  // Lines 10-12: what- and where-effect predictors, if the action succeeded.
-  // Nothing in the intrinsic phase reads them, so the node may run this after
-  // publishing the next prediction; each model still sees the same updates in
-  // the same order.
+  TrainingReport train(const Experience& e, std::int64_t step = 0, int look = -1);
+  // Lines 7-9: the affordance predictor, and the learning-progress predictor
+  // (IMP). With a memory, the experience is filed under `look` (what see()
+  // returned for its focus at `step`; required), then the step's replay().
+  TrainingReport trainAffordance(const Experience& e, std::int64_t step = 0, int look = -1);
+  // With predictors.replay, the replay of `step` (every step: after the
+  // step's own update, or after a pass): predictors.replay.ratio remembered
+  // experiences, drawn by (seed, step), each one update of its affordance
+  // predictor; returns the effects_ratio forward-model updates drawn from
+  // experiences whose effect was seen, for trainEffects. Nothing without.
+  std::vector<Memory::Ref> replay(std::int64_t step);
+  // Lines 10-12: what- and where-effect predictors, from a report's
+  // effect_updates. Nothing in the intrinsic phase reads them, so the node
+  // may run this after publishing the next prediction, or on another thread;
+  // each model still sees the same updates in the same order. Touches the
+  // forward models only.
+  void trainEffects(const std::vector<Memory::Ref>& updates);
+  // One update of the forward models, if the experience's effect was seen.
   void trainEffects(const Experience& e);
   // Affordance outputs for each probe image (rows) and action (columns).
   std::vector<PerAction> table(const std::vector<std::vector<std::uint8_t>>& probes) const;
@@ -60,7 +77,9 @@ class Predictors {
   std::vector<double> whatEffect(int action, const std::vector<std::uint8_t>& focus_image) const;
   std::array<double, 2> whereEffect(int action, double x, double y, double target_x, double target_y) const;
 
-  // FNV-1a 64 of every weight, in a fixed order (hex).
+  // FNV-1a 64 of every weight, in a fixed order, then of the memory if there
+  // is one (hex): the predictors' whole state. Without a memory, the weights'
+  // checksum of the paper's agent.
   std::string weightsChecksum() const;
 
   // Checkpoint: every weight and counter, in the checksum's order, in a binary
@@ -71,6 +90,10 @@ class Predictors {
   void load(const std::string& path);
   const std::array<std::int64_t, kNumActions>& executed() const { return executed_; }
   const std::array<std::int64_t, kNumActions>& successes() const { return successes_; }
+  // The memory, if the configuration keeps one (RunConfig::keepsMemory).
+  const Memory* memory() const { return memory_.get(); }
+  std::int64_t replayedUpdates() const { return replayed_; }         // affordance updates replayed
+  std::int64_t replayedEffectUpdates() const { return replayed_effects_; }  // forward-model updates replayed
 
  private:
   SparseInput whereInput(int action, double x, double y, double tx, double ty) const;
@@ -80,6 +103,8 @@ class Predictors {
   std::vector<Unit> affordance_, learning_progress_;
   std::vector<Layer> what_, where_;
   std::array<std::int64_t, kNumActions> executed_{}, successes_{};
+  std::unique_ptr<Memory> memory_;
+  std::int64_t replayed_ = 0, replayed_effects_ = 0;
 };
 
 }  // namespace afford

@@ -79,6 +79,40 @@ TEST(Choreography, ComputesWhatThePlainAlgorithmComputes) {
   }
 }
 
+// The paper's agent is what it was before the memory options of issue 11
+// existed: the weights of these runs were recorded at a5ce55f, the commit
+// before them, and nothing may change them while the options are off.
+TEST(Choreography, ThePapersAgentIsUnchangedByTheMemoryOptions) {
+  const std::map<System, std::string> before = {
+      {System::FIX, "9a85cf039de6aeaa"}, {System::IGN, "fbb9808d891333cd"}, {System::IMP, "2a074f572fa66b79"}};
+  for (const auto& [s, checksum] : before) {
+    InProcessRun run(baseYaml(s, 500, 1), s, 1, 500);
+    ASSERT_TRUE(run.outcome.ok) << run.outcome.error;
+    EXPECT_EQ(run.outcome.weights_checksum, checksum) << toString(s);
+  }
+}
+
+// With replay and revisits, the choreography still computes exactly the plain loop: the predictors see each focus
+// once, file each experience under its look, and replay by (seed, step); the motivation revisits on what they report.
+TEST(Choreography, WithTheMemoryOptionsComputesWhatThePlainAlgorithmComputes) {
+  for (System s : {System::FIX, System::IGN, System::IMP}) {
+    const std::string yaml = test::shippedConfigYaml("base", s, 3, 400, test::kMemoryOptions);
+    InProcessRun run(yaml, s, 3, 400);
+    ASSERT_TRUE(run.outcome.ok) << run.outcome.error;
+    const Predictors plain = test::runIntrinsic(parseRunConfigText(yaml));
+    EXPECT_EQ(run.outcome.weights_checksum, plain.weightsChecksum()) << toString(s);
+    EXPECT_GT(plain.replayedUpdates(), 0) << toString(s);
+    int revisits = 0;
+    for (const auto& e : run.events)
+      if (e.channel == channel::kDecision) {
+        decision_t d;
+        d.decode(e.data.data(), 0, static_cast<int>(e.data.size()));
+        revisits += d.revisit;
+      }
+    EXPECT_GE(revisits, 4) << toString(s);  // at least every action once on the first look
+  }
+}
+
 TEST(Choreography, ProcessesLeftInAnEarlierRunAreStoppedAgain) {
   InProcessRun run(baseYaml(System::IMP, 50), System::IMP, 3, 50, {}, 50, /*leave_stale_run=*/true);
   ASSERT_TRUE(run.outcome.ok) << run.outcome.error;
@@ -188,6 +222,23 @@ TEST(Choreography, AProcessRestartedMidRunCatchesUpAndTheRunIsUnchanged) {
     EXPECT_GE(run.restarted_at, 150) << p;
     EXPECT_LT(run.restarted_at, 399) << p;
     EXPECT_NE(run.log.str().find(std::string("process ") + p + " is free again"), std::string::npos) << run.log.str();
+    EXPECT_EQ(run.outcome.weights_checksum, plain.outcome.weights_checksum) << p;
+    ASSERT_EQ(run.outcome.curve.size(), plain.outcome.curve.size()) << p;
+    for (std::size_t i = 0; i < plain.outcome.curve.size(); ++i)
+      EXPECT_EQ(run.outcome.curve[i].affordance, plain.outcome.curve[i].affordance) << p << " curve point " << i;
+  }
+}
+
+// The memory is part of the predictors' state: a restarted process rebuilds it from the run's messages, and the
+// run ends with the same weights, memory and decisions.
+TEST(Choreography, WithTheMemoryOptionsARestartedProcessCatchesUpAndTheRunIsUnchanged) {
+  const std::string yaml = test::shippedConfigYaml("base", System::IGN, 3, 400, test::kMemoryOptions);
+  InProcessRun plain(yaml, System::IGN, 3, 400);
+  ASSERT_TRUE(plain.outcome.ok) << plain.outcome.error;
+  for (const char* p : {"predictors", "motivation"}) {
+    InProcessRun run(yaml, System::IGN, 3, 400, {}, 50, false, Restart{p, 150});
+    ASSERT_TRUE(run.outcome.ok) << p << ": " << run.outcome.error;
+    ASSERT_TRUE(run.restarted) << p;
     EXPECT_EQ(run.outcome.weights_checksum, plain.outcome.weights_checksum) << p;
     ASSERT_EQ(run.outcome.curve.size(), plain.outcome.curve.size()) << p;
     for (std::size_t i = 0; i < plain.outcome.curve.size(); ++i)
@@ -312,6 +363,8 @@ prediction_t validPrediction(const std::string& run, std::int64_t step) {
   p.n_actions = 4;
   p.affordance = {0.5, 0.5, 0.5, 0.5};
   p.learning_progress = {0, 0, 0, 0};
+  p.look = -1;
+  p.n_tried = 0;
   p.n_trained = 0;
   return p;
 }
@@ -325,6 +378,7 @@ decision_t validDecision(const std::string& run, std::int64_t step) {
   d.x = d.y = 0.5;
   d.target_x = d.target_y = -1;
   d.motivation = d.threshold = 0;
+  d.revisit = false;
   return d;
 }
 template <class Msg>

@@ -265,17 +265,23 @@ AloneOutcome feedAlone(const Recording& rec, const std::string& process, Feed fe
 }
 
 // The recorded runs, made once.
+Recording recordIntrinsic(const std::vector<std::string>& settings) {
+  // late1 with its newcomers brought forward into a short run: scenes of every cause.
+  YAML::Node c = YAML::Load(test::shippedConfigYaml("late1", System::IMP, 7, 260, settings));
+  for (YAML::Node o : c["world"]["objects"])
+    if (o["appears_at"].as<int>() > 0) o["appears_at"] = 200;
+  const std::string yaml = YAML::Dump(c);
+  test::InProcessRun run(yaml, System::IMP, 7, 260);
+  EXPECT_TRUE(run.outcome.ok) << run.outcome.error;
+  return Recording{run.events, false, "test-run"};
+}
 const Recording& intrinsicRecording() {
-  static const Recording rec = [] {
-    // late1 with its newcomers brought forward into a short run: scenes of every cause.
-    YAML::Node c = YAML::Load(test::shippedConfigYaml("late1", System::IMP, 7, 260));
-    for (YAML::Node o : c["world"]["objects"])
-      if (o["appears_at"].as<int>() > 0) o["appears_at"] = 200;
-    const std::string yaml = YAML::Dump(c);
-    test::InProcessRun run(yaml, System::IMP, 7, 260);
-    EXPECT_TRUE(run.outcome.ok) << run.outcome.error;
-    return Recording{run.events, false, "test-run"};
-  }();
+  static const Recording rec = recordIntrinsic({});
+  return rec;
+}
+// With the memory options of issue 11: the predictors' looks, tried_ago and replay, the motivation's revisits.
+const Recording& memoryRecording() {
+  static const Recording rec = recordIntrinsic(test::kMemoryOptions);
   return rec;
 }
 
@@ -300,13 +306,14 @@ struct Case {
   std::string process;
   bool extrinsic;
   Feed feed;
+  bool memory = false;  // the intrinsic run with the memory options
 };
 
 class NodeAlone : public ::testing::TestWithParam<Case> {};
 
 TEST_P(NodeAlone, PublishesTheBytesItPublishedInTheWholeRun) {
   const Case& c = GetParam();
-  const Recording& rec = c.extrinsic ? extrinsicRecording() : intrinsicRecording();
+  const Recording& rec = c.extrinsic ? extrinsicRecording() : c.memory ? memoryRecording() : intrinsicRecording();
   const Split s = split(rec, c.process, takes(c.process));
   ASSERT_FALSE(s.inputs.empty() && c.process != "environment");
   ASSERT_FALSE(s.outputs.empty());
@@ -338,13 +345,14 @@ std::vector<Case> cases() {
   for (Feed f : {Feed::InOrder, Feed::OutOfOrder, Feed::Duplicated, Feed::MissingThenResent}) {
     for (const char* p : {"environment", "eye", "predictors", "motivation"}) out.push_back({p, false, f});
     for (const char* p : {"environment", "eye", "predictors", "planner"}) out.push_back({p, true, f});
+    for (const char* p : {"predictors", "motivation"}) out.push_back({p, false, f, true});
   }
   return out;
 }
 
 INSTANTIATE_TEST_SUITE_P(Each, NodeAlone, ::testing::ValuesIn(cases()), [](const auto& info) {
   const Case& c = info.param;
-  return c.process + (c.extrinsic ? "Extrinsic" : "Intrinsic") + name(c.feed);
+  return c.process + (c.extrinsic ? "Extrinsic" : c.memory ? "IntrinsicWithMemory" : "Intrinsic") + name(c.feed);
 });
 
 }  // namespace

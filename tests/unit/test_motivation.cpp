@@ -75,5 +75,48 @@ TEST(Motivation, ImpWithObservedChangeWaitsForTheObservation) {
   EXPECT_DOUBLE_EQ(m.threshold(), th0 + c.motivation.leak * (0.05 - th0));
 }
 
+// ---- revisits (issue 11, docs/model.md#revisit) ------------------------------------
+
+using Tried = std::array<std::int64_t, kNumActions>;
+
+TEST(Revisit, NeverTriedActionsComeFirstInTheActionOrder) {
+  EXPECT_EQ(revisitAction(Tried{-1, -1, -1, -1}, 1000), kMove);
+  EXPECT_EQ(revisitAction(Tried{3, -1, -1, -1}, 1000), kTurnGreen);
+  EXPECT_EQ(revisitAction(Tried{3, 4, 2, -1}, 1000), kTurnBlue);
+  EXPECT_EQ(revisitAction(Tried{5000, 4, -1, 5000}, 1000), kTurnRed);  // never tried before stale
+}
+
+TEST(Revisit, OtherwiseTheActionNotTriedForLongestOnceItIsStale) {
+  EXPECT_EQ(revisitAction(Tried{999, 10, 20, 30}, 1000), -1);
+  EXPECT_EQ(revisitAction(Tried{1000, 10, 1500, 30}, 1000), kTurnRed);
+  EXPECT_EQ(revisitAction(Tried{1500, 10, 1500, 30}, 1000), kMove);
+  EXPECT_EQ(revisitAction(Tried{1000000, 10, 20, 30}, 0), -1);  // after_steps 0: never-tried only
+}
+
+TEST(Revisit, ARevisitActsWhateverTheThresholdAndLeavesItAsItIs) {
+  for (System s : {System::FIX, System::IGN, System::IMP}) {
+    const RunConfig c = test::shippedConfig("base", s, 1, test::kMemoryOptions);
+    Motivation m(c);
+    const double th = m.threshold();
+    const Tried tried{-1, 5, 5, 5};
+    const Decision d = m.decide(A{0.999, 0.999, 0.001, 0.999}, A{}, &tried);  // nothing to learn by the IM signal
+    EXPECT_TRUE(d.act) << toString(s);
+    EXPECT_TRUE(d.revisit) << toString(s);
+    EXPECT_EQ(d.action, kMove) << toString(s);
+    EXPECT_DOUBLE_EQ(m.threshold(), th) << toString(s);
+    EXPECT_FALSE(m.awaitingObservation()) << toString(s);
+    // Nothing due: the paper's rule decides, and moves the threshold as it does.
+    const Tried recent{5, 5, 5, 5};
+    const Decision p = m.decide(A{0.5, 0.999, 0.001, 0.999}, A{0.01, 0, 0, 0}, &recent);
+    EXPECT_FALSE(p.revisit) << toString(s);
+    EXPECT_EQ(p.action, kMove) << toString(s);
+  }
+}
+
+TEST(Revisit, IsRefusedWithoutWhatWasTriedOnTheLook) {
+  Motivation m(test::shippedConfig("base", System::IGN, 1, test::kMemoryOptions));
+  EXPECT_THROW(m.decide(A{0.5, 0.5, 0.5, 0.5}, A{}), std::invalid_argument);
+}
+
 }  // namespace
 }  // namespace afford

@@ -153,5 +153,94 @@ TEST_F(Fixture, SplitTrainingEqualsWholeTraining) {
   EXPECT_NE(whole.weightsChecksum(), Predictors(imp).weightsChecksum());
 }
 
+// ---- the memory of issue 11 (docs/model.md#memory, #replay) ----------------------------
+
+TEST_F(Fixture, WithoutTheMemoryOptionsThePredictorsKeepNoMemory) {
+  Predictors p(imp);
+  const Prediction seen = p.see(probes[0], 0);
+  EXPECT_FALSE(seen.remembered);
+  EXPECT_EQ(p.memory(), nullptr);
+  const TrainingReport r = p.trainAffordance(experience(kMove, true), 0);
+  ASSERT_EQ(r.effect_updates.size(), 1u);  // its own forward-model update, nothing replayed
+  EXPECT_EQ(p.replayedUpdates(), 0);
+}
+
+TEST_F(Fixture, ReplayKeepsTrainingRememberedExperiencesOfOtherLooks) {
+  // One success on the red square, then many failures on the green one: the red square's affordance is trained
+  // by replay at each of them; without replay it stays where its one update left it.
+  const RunConfig with_replay = test::shippedConfig("base", System::IGN, 1, {"predictors.replay.enabled=true"});
+  Predictors replaying(with_replay), plain(test::shippedConfig("base", System::IGN));
+  for (Predictors* p : {&replaying, &plain}) {
+    p->train(experience(kTurnGreen, true, 0), 0, p->see(probes[0], 0).look);
+    for (int t = 1; t <= 30; ++t) p->train(experience(kTurnGreen, false, 1), t, p->see(probes[1], t).look);
+  }
+  EXPECT_GT(replaying.predict(probes[0]).affordance[kTurnGreen], plain.predict(probes[0]).affordance[kTurnGreen] + 0.1);
+  EXPECT_EQ(replaying.replayedUpdates(), 31 * with_replay.predictors.replay.ratio);
+  EXPECT_EQ(replaying.memory()->looks(), 2);
+}
+
+TEST_F(Fixture, ASuccessCallsForItsOwnForwardModelUpdateThenTheReplayedOnes) {
+  const RunConfig c = test::shippedConfig("base", System::IMP, 1, test::kMemoryOptions);
+  Predictors p(c);
+  const int look = p.see(probes[0], 0).look;
+  const TrainingReport failure = p.trainAffordance(experience(kTurnBlue, false), 0, look);
+  EXPECT_TRUE(failure.effect_updates.empty());
+  const Experience e = experience(kTurnGreen, true);
+  const TrainingReport success = p.trainAffordance(e, 1, look);
+  ASSERT_EQ(success.effect_updates.size(), 1u + c.predictors.replay.effects_ratio);
+  EXPECT_EQ(success.effect_updates[0]->action, kTurnGreen);
+  EXPECT_EQ(success.effect_updates[0]->after_image, e.after_image);
+  for (const auto& u : success.effect_updates) EXPECT_TRUE(u->affordance);
+  EXPECT_EQ(p.replayedEffectUpdates(), c.predictors.replay.effects_ratio);
+  EXPECT_THROW(p.trainAffordance(e, 2), std::invalid_argument);  // a memory files it under a look
+}
+
+TEST_F(Fixture, SeeReportsWhatWasTriedOnTheLook) {
+  Predictors p(test::shippedConfig("base", System::IMP, 1, test::kMemoryOptions));
+  int look = p.see(probes[2], 10).look;
+  p.train(experience(kTurnRed, true, 2), 10, look);
+  const Prediction later = p.see(probes[2], 25);
+  EXPECT_TRUE(later.remembered);
+  EXPECT_EQ(later.look, look);
+  EXPECT_EQ(later.tried_ago, (Memory::TriedAgo{-1, -1, 15, -1}));
+  EXPECT_EQ(later.affordance, p.predict(probes[2]).affordance);
+}
+
+TEST_F(Fixture, TheCheckpointHoldsTheMemoryAndTheChecksumCoversIt) {
+  const RunConfig c = test::shippedConfig("base", System::IMP, 1, test::kMemoryOptions);
+  Predictors trained(c);
+  for (int k = 0; k < 20; ++k) trained.train(experience(k % 4, k % 3 != 0, k % 9), k, trained.see(probes[k % 9], k).look);
+  const std::string dir = test::tempDir("ckpt-memory");
+  trained.save(dir + "/p.ckpt");
+  const std::string saved = trained.weightsChecksum();
+  Predictors fresh(c);
+  fresh.load(dir + "/p.ckpt");
+  EXPECT_EQ(fresh.weightsChecksum(), trained.weightsChecksum());
+  EXPECT_EQ(fresh.memory()->experiences(), 20u);
+  EXPECT_EQ(fresh.see(probes[4], 30).tried_ago, trained.see(probes[4], 30).tried_ago);
+  // The same experiences continue the same way from either.
+  for (Predictors* p : {&fresh, &trained}) p->train(experience(kMove, true, 5), 31, p->see(probes[5], 31).look);
+  EXPECT_EQ(fresh.weightsChecksum(), trained.weightsChecksum());
+  // The checksum says more than the weights: the same weights with another memory differ.
+  Predictors same_weights(c);
+  same_weights.load(dir + "/p.ckpt");
+  same_weights.see(probes[8], 40);  // a look seen later
+  EXPECT_NE(same_weights.weightsChecksum(), trained.weightsChecksum());
+  // Predictors that keep a memory refuse a checkpoint without one; an agent that kept one is restored whole,
+  // whatever the loading run does with it (the extrinsic phase loads it).
+  Predictors paper(imp);
+  paper.save(dir + "/paper.ckpt");
+  Predictors memoryless_into_memory(c);
+  try {
+    memoryless_into_memory.load(dir + "/paper.ckpt");
+    FAIL() << "a checkpoint without a memory was taken by predictors that keep one";
+  } catch (const std::runtime_error& e) {
+    EXPECT_NE(std::string(e.what()).find("holds no memory"), std::string::npos) << e.what();
+  }
+  Predictors into_paper(imp);
+  into_paper.load(dir + "/p.ckpt");
+  EXPECT_EQ(into_paper.weightsChecksum(), saved);
+}
+
 }  // namespace
 }  // namespace afford

@@ -75,12 +75,41 @@ struct EyeConfig {
   int max_scan_draws = 0;                // redraws until the gaze lands on another object
 };
 
+// The agent's memory of past experiences (issue 11, docs/model.md#memory):
+// kept when replay or revisits need it; the paper's agent has none.
+struct MemoryConfig {
+  double look_threshold = 0;    // two focus images show one look below this distance (L1 per value, 0..1)
+  int look_shift_px = 0;        // ... allowing the images to be shifted by up to this many pixels
+  int max_looks = 0;            // looks remembered; a new one replaces the one seen least recently
+  int per_look_action = 0;      // experiences kept per look and action (the newest)
+};
+enum class ReplaySampling {
+  Balanced,  // a remembered (look, action) uniformly, then one of its experiences
+  Uniform,   // any remembered experience
+};
+struct ReplayConfig {
+  bool enabled = false;   // off: no replay, the paper's agent
+  int ratio = 0;          // replayed affordance updates per intrinsic step
+  int effects_ratio = 0;  // replayed forward-model updates per intrinsic step (from experiences whose effect was seen)
+  ReplaySampling sampling = ReplaySampling::Balanced;
+};
+
 struct PredictorsConfig {
   double affordance_learning_rate = 0;
   double learning_progress_learning_rate = 0;
   double learning_progress_init = 0;  // magnitude of the random-sign initial weights
   double what_effect_learning_rate = 0;
   double where_effect_learning_rate = 0;
+  MemoryConfig memory;
+  ReplayConfig replay;
+};
+
+// Revisits (issue 11, docs/model.md#revisit): whatever the IM signal says,
+// try on the focused look an action never tried on it, or not tried for
+// after_steps steps. Off in the paper's agent.
+struct RevisitConfig {
+  bool enabled = false;
+  std::int64_t after_steps = 0;  // 0: only actions never tried on the look
 };
 
 struct MotivationConfig {
@@ -89,6 +118,7 @@ struct MotivationConfig {
   double initial_threshold = 0;          // th_0 (IGN, IMP)
   double act_margin = 0;                // act when motivation + margin >= threshold
   ImpThresholdInput imp_threshold_input = ImpThresholdInput::Signal;
+  RevisitConfig revisit;
 };
 
 // An extrinsic-phase scenario (paper 3.1, Figure 4): objects with the state
@@ -182,6 +212,9 @@ struct RunConfig {
   MotivationConfig motivation;
   PlannerConfig planner;
   ProtocolConfig protocol;
+
+  // The predictors keep a memory of experiences: replay or revisits use it.
+  bool keepsMemory() const { return predictors.replay.enabled || motivation.revisit.enabled; }
 };
 
 // Parse a scenario (types, names, ranges); `path` prefixes the keys in errors.
@@ -220,6 +253,14 @@ struct ExtrinsicDesign {
   std::string analysis;                     // "", utility, forward-models, search-reduction
 };
 
+// Random affordance tables (an experiment file's `tables:`, issue 11): the
+// experiment is run on `count` tables drawn from `seed` (afford/tables.hpp),
+// each replacing the affordances of the world's objects.
+struct TablesDesign {
+  int count = 0;
+  std::int64_t seed = 0;
+};
+
 struct ExperimentFile {
   std::string name;
   std::string description;
@@ -228,6 +269,9 @@ struct ExperimentFile {
   YAML::Node overlay;                      // keys merged over the defaults
   YAML::Node systems;                      // map System -> overlay
   std::optional<ExtrinsicDesign> extrinsic;
+  std::optional<TablesDesign> tables;
+  // Intrinsic conditions compared (`conditions:`, with `tables:`): name -> settings ("key.path=value"), in file order.
+  std::vector<std::pair<std::string, std::vector<std::string>>> conditions;
 };
 
 std::vector<std::string> listExperiments(const std::string& config_dir);

@@ -1,0 +1,20 @@
+// One executed action of the intrinsic phase, as the eye reported it
+// (Algorithm 1 lines 1-6): what the predictors learn from, and what their
+// memory keeps (memory.hpp).
+#pragma once
+#include <cstdint>
+#include <vector>
+
+namespace afford {
+
+struct Experience {
+  int action = 0;
+  std::vector<std::uint8_t> before_image;  // focus image of the scan (object_image)
+  double before_x = 0, before_y = 0;       // object_position
+  double target_x = -1, target_y = -1;     // move target (where-effect input)
+  bool affordance = false;                 // the action's effect was seen
+  std::vector<std::uint8_t> after_image;   // new_object_image
+  double after_x = 0, after_y = 0;         // new_object_position
+};
+
+}  // namespace afford

@@ -1,0 +1,300 @@
+#include "predictors/memory.hpp"
+
+#include <algorithm>
+#include <cstdlib>
+#include <istream>
+#include <limits>
+#include <ostream>
+#include <stdexcept>
+#include <string>
+
+#include "afford/rng.hpp"
+
+namespace afford {
+namespace {
+
+template <class T>
+void put(std::ostream& out, const T& v) {
+  out.write(reinterpret_cast<const char*>(&v), sizeof v);
+}
+template <class T>
+void get(std::istream& in, T& v) {
+  in.read(reinterpret_cast<char*>(&v), sizeof v);
+}
+
+void putBytes(std::ostream& out, const std::vector<std::uint8_t>& b) {
+  put(out, static_cast<std::uint32_t>(b.size()));
+  out.write(reinterpret_cast<const char*>(b.data()), static_cast<std::streamsize>(b.size()));
+}
+std::vector<std::uint8_t> getBytes(std::istream& in, std::size_t max) {
+  std::uint32_t n = 0;
+  get(in, n);
+  if (!in || n > max) throw std::runtime_error("an image of " + std::to_string(n) + " bytes");
+  std::vector<std::uint8_t> b(n);
+  in.read(reinterpret_cast<char*>(b.data()), n);
+  return b;
+}
+
+void putExperience(std::ostream& out, const Experience& e) {
+  put(out, static_cast<std::int32_t>(e.action));
+  put(out, static_cast<std::uint8_t>(e.affordance));
+  for (double v : {e.before_x, e.before_y, e.target_x, e.target_y, e.after_x, e.after_y}) put(out, v);
+  putBytes(out, e.before_image);
+  putBytes(out, e.after_image);
+}
+Experience getExperience(std::istream& in, std::size_t image_bytes) {
+  Experience e;
+  std::int32_t action = 0;
+  std::uint8_t affordance = 0;
+  get(in, action);
+  get(in, affordance);
+  for (double* v : {&e.before_x, &e.before_y, &e.target_x, &e.target_y, &e.after_x, &e.after_y}) get(in, *v);
+  if (!in || !validAction(action)) throw std::runtime_error("an experience of action " + std::to_string(action));
+  e.action = action;
+  e.affordance = affordance != 0;
+  e.before_image = getBytes(in, image_bytes);
+  e.after_image = getBytes(in, image_bytes);
+  return e;
+}
+
+}  // namespace
+
+Memory::Memory(const MemoryConfig& config, int focus_side) : config_(config), side_(focus_side) {
+  if (config.max_looks < 1 || config.per_look_action < 1)
+    throw ConfigError("config key 'predictors.memory': max_looks and per_look_action must be at least 1");
+  looks_.reserve(static_cast<std::size_t>(std::min(config.max_looks, 4096)));
+}
+
+void Memory::setImage(Look& l, const std::vector<std::uint8_t>& image) const {
+  l.image = image;
+  l.nonzero.clear();
+  l.channel_sum = {0, 0, 0};
+  l.border_sum = {0, 0, 0};
+  const int shift = config_.look_shift_px;
+  for (std::size_t i = 0; i < image.size(); ++i)
+    if (image[i]) {
+      l.nonzero.emplace_back(static_cast<int>(i), image[i]);
+      l.channel_sum[i % 3] += image[i];
+      const int pixel = static_cast<int>(i / 3), y = pixel / side_, x = pixel % side_;
+      if (y < shift || y >= side_ - shift || x < shift || x >= side_ - shift) l.border_sum[i % 3] += image[i];
+    }
+}
+
+double Memory::distance(const std::vector<std::uint8_t>& image, int look) const {
+  const Look& l = looks_.at(static_cast<std::size_t>(look));
+  const int side = side_, shift = config_.look_shift_px;
+  long total = 0;
+  for (std::uint8_t v : image) total += v;
+  // sum |a - b'| over all values = sum(a) + sum over b' non-zero of (|a - b'| - a), for b' = b shifted by (dy, dx):
+  // b's pixel (y, x) shows at (y - dy, x - dx), and one shifted out of the window is gone.
+  long best = std::numeric_limits<long>::max();
+  for (int dy = -shift; dy <= shift; ++dy)
+    for (int dx = -shift; dx <= shift; ++dx) {
+      long s = total;
+      for (const auto& [index, value] : l.nonzero) {
+        const int pixel = index / 3, y = pixel / side - dy, x = pixel % side - dx;
+        if (y < 0 || y >= side || x < 0 || x >= side) continue;
+        const int a = image[static_cast<std::size_t>((y * side + x) * 3 + index % 3)];
+        s += std::abs(a - value) - a;
+      }
+      best = std::min(best, s);
+    }
+  return static_cast<double>(best) / (255.0 * static_cast<double>(image.size()));
+}
+
+int Memory::see(const std::vector<std::uint8_t>& image, std::int64_t step) {
+  const std::size_t bytes = static_cast<std::size_t>(3 * side_ * side_);
+  if (image.size() != bytes)
+    throw std::invalid_argument("a focus image of " + std::to_string(image.size()) + " bytes, not " + std::to_string(bytes));
+  std::array<long, 3> sum{0, 0, 0};
+  for (std::size_t i = 0; i < image.size(); ++i) sum[i % 3] += image[i];
+  // Per channel, a shifted look's sum lies between its sum less what lies within `shift` of the border, and its
+  // sum: the L1 distance is at least the gap, so a look whose gap alone is too far is not compared.
+  int nearest = -1;
+  double nearest_distance = config_.look_threshold;
+  for (std::size_t k = 0; k < looks_.size(); ++k) {
+    const Look& l = looks_[k];
+    if (!l.used) continue;
+    long gap = 0;
+    for (int c = 0; c < 3; ++c)
+      gap += std::max({0L, sum[c] - l.channel_sum[c], l.channel_sum[c] - l.border_sum[c] - sum[c]});
+    if (static_cast<double>(gap) / (255.0 * static_cast<double>(bytes)) >= nearest_distance) continue;
+    const double d = distance(image, static_cast<int>(k));
+    if (d < nearest_distance) {
+      nearest = static_cast<int>(k);
+      nearest_distance = d;
+    }
+  }
+  if (nearest < 0) {  // a new look: a free slot, or the one seen least recently
+    for (std::size_t k = 0; k < looks_.size() && nearest < 0; ++k)
+      if (!looks_[k].used) nearest = static_cast<int>(k);
+    if (nearest < 0 && static_cast<int>(looks_.size()) < config_.max_looks) {
+      looks_.emplace_back();
+      nearest = static_cast<int>(looks_.size()) - 1;
+    }
+    if (nearest < 0) {
+      nearest = 0;
+      for (std::size_t k = 1; k < looks_.size(); ++k)
+        if (looks_[k].last_seen < looks_[static_cast<std::size_t>(nearest)].last_seen) nearest = static_cast<int>(k);
+      forget(nearest);
+    }
+    Look& l = looks_[static_cast<std::size_t>(nearest)];
+    l.used = true;
+    setImage(l, image);
+  }
+  looks_[static_cast<std::size_t>(nearest)].last_seen = step;
+  return nearest;
+}
+
+void Memory::forget(int look) { looks_.at(static_cast<std::size_t>(look)) = Look{}; }
+
+Memory::TriedAgo Memory::triedAgo(int look, std::int64_t step) const {
+  const Look& l = looks_.at(static_cast<std::size_t>(look));
+  TriedAgo out;
+  for (int a = 0; a < kNumActions; ++a) out[a] = l.tried_at[a] < 0 ? -1 : step - l.tried_at[a];
+  return out;
+}
+
+void Memory::record(int look, std::int64_t step, Ref experience) {
+  Look& l = looks_.at(static_cast<std::size_t>(look));
+  if (!l.used) throw std::logic_error("an experience of look " + std::to_string(look) + ", which is not remembered");
+  const int a = experience->action;
+  l.tried_at[a] = step;
+  auto& kept = l.experiences[a];
+  kept.push_back(std::move(experience));
+  if (static_cast<int>(kept.size()) > config_.per_look_action) kept.pop_front();
+}
+
+std::vector<Memory::Ref> Memory::sample(ReplaySampling sampling, std::int64_t seed, std::int64_t step,
+                                        std::uint64_t sub, std::size_t count, bool effects_only) const {
+  // The groups that can be drawn, in look and action order, and how many experiences each offers.
+  struct Group {
+    const std::deque<Ref>* kept;
+    std::size_t offered;
+  };
+  std::vector<Group> groups;
+  std::size_t total = 0;
+  for (const Look& l : looks_) {
+    if (!l.used) continue;
+    for (const auto& kept : l.experiences) {
+      std::size_t n = kept.size();
+      if (effects_only) n = static_cast<std::size_t>(std::count_if(kept.begin(), kept.end(), [](const Ref& e) { return e->affordance; }));
+      if (n == 0) continue;
+      groups.push_back({&kept, n});
+      total += n;
+    }
+  }
+  std::vector<Ref> out;
+  if (groups.empty()) return out;
+  // The k-th experience a group offers (with effects_only, the k-th of those with an effect).
+  const auto pick = [effects_only](const std::deque<Ref>& kept, std::size_t k) {
+    for (const Ref& e : kept)
+      if (!effects_only || e->affordance) {
+        if (k == 0) return e;
+        --k;
+      }
+    return kept.back();  // not reached: k < offered
+  };
+  const KeyedRng rng(seed, step, Purpose::Replay, sub);
+  out.reserve(count);
+  for (std::size_t i = 0; i < count; ++i) {
+    if (sampling == ReplaySampling::Balanced) {
+      const Group& g = groups[static_cast<std::size_t>(rng.uniform(2 * i) * static_cast<double>(groups.size()))];
+      out.push_back(pick(*g.kept, static_cast<std::size_t>(rng.uniform(2 * i + 1) * static_cast<double>(g.offered))));
+    } else {
+      std::size_t k = static_cast<std::size_t>(rng.uniform(2 * i) * static_cast<double>(total));
+      for (const Group& g : groups) {
+        if (k < g.offered) {
+          out.push_back(pick(*g.kept, k));
+          break;
+        }
+        k -= g.offered;
+      }
+    }
+  }
+  return out;
+}
+
+int Memory::looks() const {
+  return static_cast<int>(std::count_if(looks_.begin(), looks_.end(), [](const Look& l) { return l.used; }));
+}
+
+std::size_t Memory::experiences() const {
+  std::size_t n = 0;
+  for (const Look& l : looks_)
+    for (const auto& kept : l.experiences) n += kept.size();
+  return n;
+}
+
+void Memory::save(std::ostream& out) const {
+  put(out, static_cast<std::uint32_t>(looks_.size()));
+  for (const Look& l : looks_) {
+    put(out, static_cast<std::uint8_t>(l.used));
+    if (!l.used) continue;
+    putBytes(out, l.image);
+    put(out, l.last_seen);
+    for (std::int64_t t : l.tried_at) put(out, t);
+    for (const auto& kept : l.experiences) {
+      put(out, static_cast<std::uint32_t>(kept.size()));
+      for (const Ref& e : kept) putExperience(out, *e);
+    }
+  }
+}
+
+void Memory::load(std::istream& in, const std::string& what) {
+  const std::size_t bytes = static_cast<std::size_t>(3 * side_ * side_);
+  try {
+    std::uint32_t n = 0;
+    get(in, n);
+    if (!in) throw std::runtime_error("no memory");
+    if (n > static_cast<std::uint32_t>(config_.max_looks))
+      throw std::runtime_error(std::to_string(n) + " looks, more than predictors.memory.max_looks " +
+                               std::to_string(config_.max_looks));
+    std::vector<Look> looks(n);
+    for (Look& l : looks) {
+      std::uint8_t used = 0;
+      get(in, used);
+      if (!in) throw std::runtime_error("a look cut short");
+      if (!used) continue;
+      l.used = true;
+      setImage(l, getBytes(in, bytes));
+      get(in, l.last_seen);
+      for (std::int64_t& t : l.tried_at) get(in, t);
+      for (auto& kept : l.experiences) {
+        std::uint32_t k = 0;
+        get(in, k);
+        if (!in || k > static_cast<std::uint32_t>(config_.per_look_action))
+          throw std::runtime_error(std::to_string(k) + " experiences of a look and action, more than predictors.memory.per_look_action " +
+                                   std::to_string(config_.per_look_action));
+        for (std::uint32_t i = 0; i < k; ++i) kept.push_back(std::make_shared<const Experience>(getExperience(in, bytes)));
+      }
+      if (!in) throw std::runtime_error("a look cut short");
+    }
+    looks_ = std::move(looks);
+  } catch (const std::runtime_error& e) {
+    throw std::runtime_error(what + ": its memory does not fit this run's (" + e.what() + ")");
+  }
+}
+
+void Memory::hash(Fnv1a& h) const {
+  // The same bytes save() writes, without a stream: looks, then their experiences.
+  struct HashBuf : std::streambuf {
+    Fnv1a* h;
+    int_type overflow(int_type c) override {
+      if (c != traits_type::eof()) {
+        const char ch = static_cast<char>(c);
+        h->add(&ch, 1);
+      }
+      return c;
+    }
+    std::streamsize xsputn(const char* s, std::streamsize n) override {
+      h->add(s, static_cast<std::size_t>(n));
+      return n;
+    }
+  } buf;
+  buf.h = &h;
+  std::ostream out(&buf);
+  save(out);
+}
+
+}  // namespace afford
