@@ -27,6 +27,7 @@
 #include "afford/group.hpp"
 #include "afford/logging.hpp"
 #include "afford/node.hpp"
+#include "afford/tables.hpp"
 #include "environment/node.hpp"
 #include "eye/node.hpp"
 #include "logger/node.hpp"
@@ -43,6 +44,9 @@ namespace {
 struct PlannedRun {
   RunSpec spec;
   std::string system;
+  std::vector<std::vector<double>> target;  // the world's affordance table (objects x actions)
+  int table = -1;                            // random tables: which one
+  std::string intrinsic_condition;           // random tables: the condition's name ("" without conditions)
   bool keep_log = false;
   std::size_t index = 0;
   // extrinsic tests: which intrinsic run trained the agent, which scenario, which repetition
@@ -129,6 +133,8 @@ json optionsToJson(const ExperimentOptions& o) {
           {"settings", o.settings},
           {"extrinsic_reps", o.extrinsic_reps},
           {"scenarios", o.scenarios},
+          {"tables", o.tables ? json(*o.tables) : json(nullptr)},
+          {"table_seed", o.table_seed ? json(*o.table_seed) : json(nullptr)},
           // run options: --resume uses them unless given again
           {"jobs", o.jobs},
           {"transport", o.transport},
@@ -154,6 +160,8 @@ ExperimentOptions optionsFromJson(const json& j) {
   o.settings = j.at("settings").get<std::vector<std::string>>();
   o.extrinsic_reps = j.at("extrinsic_reps").get<int>();
   o.scenarios = j.at("scenarios").get<std::vector<std::string>>();
+  if (j.contains("tables") && !j["tables"].is_null()) o.tables = j["tables"].get<int>();
+  if (j.contains("table_seed") && !j["table_seed"].is_null()) o.table_seed = j["table_seed"].get<std::int64_t>();
   o.jobs = j.at("jobs").get<int>();
   o.transport = j.at("transport").get<std::string>();
   const std::string netns = j.at("netns").get<std::string>();
@@ -180,6 +188,10 @@ json outcomeToJson(const RunOutcome& r) {
           {"curve", curve},
           {"executed", r.executed},
           {"successes", r.successes},
+          {"looks", r.looks},
+          {"replayed", r.replayed},
+          {"replayed_effects", r.replayed_effects},
+          {"revisits", r.revisits},
           {"log_dir", r.log_dir},
           {"wall_seconds", r.wall_seconds},
           {"run_seconds", r.run_seconds},
@@ -204,6 +216,10 @@ RunOutcome outcomeFromJson(const json& j) {
     r.curve.push_back({s.at("step").get<std::int64_t>(), s.at("affordance").get<std::vector<std::vector<double>>>()});
   r.executed = j.at("executed").get<std::vector<std::int64_t>>();
   r.successes = j.at("successes").get<std::vector<std::int64_t>>();
+  r.looks = j.value("looks", 0);  // outcomes kept before issue 11 have none of these
+  r.replayed = j.value("replayed", std::int64_t{0});
+  r.replayed_effects = j.value("replayed_effects", std::int64_t{0});
+  r.revisits = j.value("revisits", std::int64_t{0});
   r.log_dir = j.at("log_dir").get<std::string>();
   r.wall_seconds = j.at("wall_seconds").get<double>();
   r.run_seconds = j.at("run_seconds").get<double>();
@@ -468,6 +484,9 @@ struct Plan {
   std::vector<Condition> conditions{Condition{}};  // planner settings compared (default: one, no settings)
   ExtrinsicDesign design;                    // the experiment file's extrinsic section, if any
   ProtocolConfig protocol;                   // the runner's between runs (each run's config has its own)
+  std::optional<TablesDesign> tables;        // random tables (count and seed as run), if any
+  std::vector<AffordanceTable> table_list;   // ... the tables drawn
+  std::vector<std::pair<std::string, std::vector<std::string>>> conditions_run{{"", {}}};  // intrinsic conditions
 };
 
 // Everything that can be wrong with the request is found here, before any process starts.
@@ -492,6 +511,17 @@ Plan planExperiment(const ExperimentOptions& o, bool fresh) {
                                                      : std::vector<std::string>{"FIX", "IGN", "IMP"};
   if (plan.exp.extrinsic) plan.design = *plan.exp.extrinsic;
   plan.tests = o.extrinsic_reps > 0 ? o.extrinsic_reps : plan.design.tests;
+  if ((o.tables || o.table_seed) && !plan.exp.tables)
+    throw ConfigError("--tables and --table-seed are for experiments on random tables (a 'tables:' section, e.g. "
+                      "random-tables); " + o.experiment + " has none");
+  if (plan.exp.tables) {
+    plan.tables = TablesDesign{o.tables.value_or(plan.exp.tables->count), o.table_seed.value_or(plan.exp.tables->seed)};
+    if (plan.tables->count < 1) throw ConfigError("--tables must be at least 1");
+    if (plan.tests > 0)
+      throw ConfigError("random tables have no extrinsic tests: the scenarios assume the paper's Table 1 "
+                        "(leave --extrinsic-reps out)");
+    if (!plan.exp.conditions.empty()) plan.conditions_run = plan.exp.conditions;
+  }
   if (plan.tests > 0) {
     const RunConfig any = parseRunConfig(effectiveConfig(plan.config_dir, RunRequest{o.experiment, System::IMP, o.seed, o.steps, o.settings}));
     plan.scenarios = !o.scenarios.empty() ? o.scenarios
@@ -510,20 +540,50 @@ Plan planExperiment(const ExperimentOptions& o, bool fresh) {
   const std::string prefix = o.run_prefix.empty() ? defaultPrefix() : o.run_prefix;
   auto& runs = plan.runs;
   auto& configs = plan.configs;
+  // Random tables: table k of the series replaces the affordances of the world's objects.
+  if (plan.tables) {
+    const RunConfig any = parseRunConfig(effectiveConfig(plan.config_dir, RunRequest{o.experiment, System::IMP, o.seed, o.steps, o.settings}));
+    for (int k = 0; k < plan.tables->count; ++k) plan.table_list.push_back(randomTable(plan.tables->seed, k, any.world.objects));
+  }
+  const int n_tables = plan.tables ? plan.tables->count : 1;
+  for (int table = 0; table < n_tables; ++table)
+  for (const auto& [condition, condition_settings] : plan.conditions_run)
   for (const auto& sys_name : plan.systems) {
     const System sys = parseSystem(sys_name);
     for (int r = 0; r < reps; ++r) {
-      RunRequest req{o.experiment, sys, o.seed + r, o.steps, o.settings};
-      YAML::Node node = effectiveConfig(plan.config_dir, req);
-      const std::string run_id = prefix + "-" + o.experiment + "-" + sys_name + "-s" + std::to_string(o.seed + r);
+      std::vector<std::string> settings = o.settings;
+      settings.insert(settings.end(), condition_settings.begin(), condition_settings.end());
+      RunRequest req{o.experiment, sys, o.seed + r, o.steps, settings};
+      YAML::Node node;
+      try {
+        node = effectiveConfig(plan.config_dir, req);
+      } catch (const ConfigError& e) {
+        if (condition.empty()) throw;
+        throw ConfigError("condition '" + condition + "' of " + o.experiment + ": " + e.what());
+      }
+      std::string run_id = prefix + "-" + o.experiment + "-";
+      if (plan.tables) {
+        char t[16];
+        std::snprintf(t, sizeof t, "t%02d-", table);
+        run_id += t + condition + (condition.empty() ? "" : "-");
+        for (std::size_t i = 0; i < plan.table_list[table].size(); ++i) {
+          YAML::Node aff = node["world"]["objects"][i]["affordance"];
+          for (int a = 0; a < kNumActions; ++a) aff[a] = plan.table_list[table][i][a];
+        }
+      }
+      run_id += sys_name + "-s" + std::to_string(o.seed + r);
       node["run"]["checkpoint"] = (fs::path(o.log_root) / run_id / "predictors.ckpt").string();
-      node["run"]["record"] = o.keep_logs == "all" || (o.keep_logs == "first" && r == 0);
+      const bool first = r == 0 && table == 0 && condition == plan.conditions_run.front().first;
+      node["run"]["record"] = o.keep_logs == "all" || (o.keep_logs == "first" && first);
       if (plan.design.after_actions > 0) node["run"]["checkpoint_after_actions"] = plan.design.after_actions;
       const RunConfig cfg = parseRunConfig(node);
-      if (r == 0) configs[sys_name] = cfg;
+      if (!configs.count(sys_name)) configs[sys_name] = cfg;
       PlannedRun p;
       p.system = sys_name;
-      p.keep_log = o.keep_logs == "all" || (o.keep_logs == "first" && r == 0);
+      p.table = plan.tables ? table : -1;
+      p.intrinsic_condition = condition;
+      for (const auto& ob : cfg.world.objects) p.target.emplace_back(ob.affordance.begin(), ob.affordance.end());
+      p.keep_log = o.keep_logs == "all" || (o.keep_logs == "first" && first);
       p.spec.run_id = run_id;
       p.spec.experiment = o.experiment;
       p.spec.system = sys_name;
@@ -578,6 +638,9 @@ void refuseChangedPlan(const ExperimentOptions& given, const ExperimentOptions& 
   check("--set", joined(given.settings), joined(stored.settings));
   check("--config-dir", path(given.config_dir), path(stored.config_dir));
   check("--scenarios", joined(given.scenarios), joined(plan.scenarios));
+  if (given.tables) check("--tables", std::to_string(*given.tables), std::to_string(plan.tables ? plan.tables->count : 0));
+  if (given.table_seed)
+    check("--table-seed", std::to_string(*given.table_seed), std::to_string(plan.tables ? plan.tables->seed : 0));
 }
 
 // The runs of one phase (intrinsic runs, or extrinsic tests), in plan order.
@@ -830,6 +893,79 @@ void summariseExtrinsic(json& summary, const Plan& plan, const std::vector<Plann
   }
 }
 
+// Random tables (issue 11): per condition and system, each table's mean
+// absolute error (mean over its runs), their mean, quartiles and the worst
+// table; and random_tables.csv, random_tables_entries.csv.
+json summariseTables(const Plan& plan, const PhaseRuns& phase, const ExperimentOptions& o) {
+  const auto label = [](const std::string& c) { return c.empty() ? std::string("default") : c; };
+  std::vector<std::string> names;
+  for (const auto& ob : plan.configs.begin()->second.world.objects) names.push_back(ob.name);
+  const auto names_of = [&](std::size_t i) { return names[i]; };
+  json rt = {{"seed", plan.tables->seed}, {"count", plan.tables->count}, {"tables", plan.table_list},
+             {"conditions", json::object()}, {"mae", json::object()}};
+  rt["one_way_looks"] = json::array();  // per table: the objects whose look cannot come back once left
+  for (const auto& table : plan.table_list) {
+    json names = json::array();
+    for (std::size_t i : oneWayLooks(table, plan.configs.begin()->second.world.objects)) names.push_back(names_of(i));
+    rt["one_way_looks"].push_back(names);
+  }
+  rt["condition_order"] = json::array();
+  rt["system_order"] = plan.systems;
+  for (const auto& [c, settings] : plan.conditions_run) {
+    rt["conditions"][label(c)] = settings;
+    rt["condition_order"].push_back(label(c));
+  }
+  std::ostringstream csv, entries;
+  csv << "table,condition,system,seed,run_id,mae\n";
+  entries << "table,object,action,afforded\n";
+  for (std::size_t k = 0; k < plan.table_list.size(); ++k)
+    for (std::size_t i = 0; i < plan.table_list[k].size(); ++i)
+      for (int a = 0; a < kNumActions; ++a)
+        entries << k << ",\"" << names[i] << "\"," << kActionNames[a] << "," << plan.table_list[k][i][a] << "\n";
+  for (const auto& [c, settings] : plan.conditions_run)
+    for (const auto& sys : plan.systems) {
+      std::vector<double> sum(plan.table_list.size(), 0.0);
+      std::vector<int> n(plan.table_list.size(), 0);
+      for (const auto& p : plan.runs) {
+        if (p.intrinsic_condition != c || p.system != sys || !phase.finished[p.index]) continue;
+        const RunOutcome& r = phase.outcomes[p.index];
+        if (!r.ok || r.curve.empty()) continue;
+        const double mae = meanAbsError(r.curve.back().affordance, p.target);
+        sum[static_cast<std::size_t>(p.table)] += mae;
+        ++n[static_cast<std::size_t>(p.table)];
+        csv << p.table << "," << label(c) << "," << sys << "," << p.spec.seed << "," << p.spec.run_id << "," << mae << "\n";
+      }
+      json per_table = json::array();
+      std::vector<double> values;
+      int worst = -1;
+      for (std::size_t k = 0; k < sum.size(); ++k) {
+        if (!n[k]) {
+          per_table.push_back(nullptr);
+          continue;
+        }
+        per_table.push_back(sum[k] / n[k]);
+        values.push_back(sum[k] / n[k]);
+        if (worst < 0 || sum[k] / n[k] > per_table[static_cast<std::size_t>(worst)].get<double>()) worst = static_cast<int>(k);
+      }
+      std::vector<double> sorted = values;
+      std::sort(sorted.begin(), sorted.end());
+      double mean = 0;
+      for (double v : values) mean += v / values.size();
+      rt["mae"][label(c)][sys] = {{"per_table", per_table},
+                                  {"tables", values.size()},
+                                  {"mean", values.empty() ? json(nullptr) : json(mean)},
+                                  {"median", quantile(sorted, 0.5)},
+                                  {"q1", quantile(sorted, 0.25)},
+                                  {"q3", quantile(sorted, 0.75)},
+                                  {"min", sorted.empty() ? json(nullptr) : json(sorted.front())},
+                                  {"worst", sorted.empty() ? json(nullptr) : json(sorted.back())},
+                                  {"worst_table", worst}};
+    }
+  writeWhole(fs::path(o.out_dir) / "random_tables.csv", csv.str());
+  writeWhole(fs::path(o.out_dir) / "random_tables_entries.csv", entries.str());
+  return rt;
+}
+
 // summary.json content (docs/results-schema.md) of the finished runs; also writes the CSV files.
 json summarise(const Plan& plan, const ExperimentOptions& o, const PhaseRuns& phase, const std::string& network) {
   const auto& outcomes = phase.outcomes;
@@ -880,7 +1016,24 @@ json summarise(const Plan& plan, const ExperimentOptions& o, const PhaseRuns& ph
         js["curve_gaps"].push_back({{"run_id", p.spec.run_id}, {"snapshots", r.curve.size()}});
       const Table& fin = r.curve.back().affordance;
       finals.push_back(fin);
-      maes.push_back(meanAbsError(fin, target));
+      maes.push_back(meanAbsError(fin, p.target));
+      if (plan.tables) {  // random tables: each run against its own table; no mean table or curve across them
+        js["runs"].push_back({{"run_id", p.spec.run_id},
+                              {"seed", p.spec.seed},
+                              {"table", p.table},
+                              {"condition", p.intrinsic_condition.empty() ? std::string("default") : p.intrinsic_condition},
+                              {"target", p.target},
+                              {"affordance", fin},
+                              {"affordance_mae", maes.back()},
+                              {"weights_checksum", r.weights_checksum},
+                              {"actions_executed", r.executed},
+                              {"successes", r.successes},
+                              {"looks", r.looks},
+                              {"revisits", r.revisits},
+                              {"wall_seconds", r.wall_seconds},
+                              {"steps_per_second", r.run_seconds > 0 ? p.spec.steps / r.run_seconds : 0.0}});
+        continue;
+      }
       js["runs"].push_back({{"run_id", p.spec.run_id},
                             {"seed", p.spec.seed},
                             {"log_dir", r.log_dir.empty() ? json(nullptr) : json(r.log_dir)},
@@ -890,6 +1043,10 @@ json summarise(const Plan& plan, const ExperimentOptions& o, const PhaseRuns& ph
                             {"checkpoint", r.checkpoint},
                             {"actions_executed", r.executed},
                             {"successes", r.successes},
+                            {"looks", r.looks},
+                            {"replayed", r.replayed},
+                            {"replayed_effects", r.replayed_effects},
+                            {"revisits", r.revisits},
                             {"wall_seconds", r.wall_seconds},
                             {"steps_per_second", r.run_seconds > 0 ? p.spec.steps / r.run_seconds : 0.0},
                             {"peak_rss_kb", r.peak_rss_kb},
@@ -907,7 +1064,7 @@ json summarise(const Plan& plan, const ExperimentOptions& o, const PhaseRuns& ph
         ++n;
       }
     }
-    if (!finals.empty()) {
+    if (!finals.empty() && !plan.tables) {
       Table mean = target, mn = target, mx = target;
       for (std::size_t i = 0; i < target.size(); ++i)
         for (int a = 0; a < kNumActions; ++a) {
@@ -945,12 +1102,20 @@ json summarise(const Plan& plan, const ExperimentOptions& o, const PhaseRuns& ph
               << mean[i][a] << "," << mn[i][a] << "," << mx[i][a] << "\n";
       writeWhole(fs::path(o.out_dir) / ("affordance_" + sys + ".csv"), csv.str());
     }
-    writeWhole(fs::path(o.out_dir) / ("curves_" + sys + ".csv"), curves_csv.str());
+    if (!plan.tables) writeWhole(fs::path(o.out_dir) / ("curves_" + sys + ".csv"), curves_csv.str());
+    if (plan.tables) js.erase("target");
     if (reference && reference["affordance_mae"] && reference["affordance_mae"][sys])
       js["reference_affordance_mae"] = reference["affordance_mae"][sys].as<double>();
     summary["systems"][sys] = js;
   }
   if (reference && reference["source"]) summary["reference_source"] = reference["source"].as<std::string>();
+  if (plan.tables) {
+    summary["random_tables"] = summariseTables(plan, phase, o);
+    if (reference && reference["floors"])  // what issue 11 asks of the memory options, shown beside
+      summary["random_tables"]["floors"] = {{"mean", reference["floors"]["mean"].as<double>()},
+                                            {"worst", reference["floors"]["worst"].as<double>()},
+                                            {"source", reference["floors"]["source"].as<std::string>()}};
+  }
   try {  // the paper's extrinsic tables, for the same experiment
     const YAML::Node ext = YAML::LoadFile(config_dir + "/reference.yaml")[o.experiment + "_extrinsic"];
     if (ext && ext["table_metric"])
@@ -975,6 +1140,43 @@ void printTables(const json& summary, const Plan& plan, const ExperimentOptions&
   const auto object_names = summary["objects"].get<std::vector<std::string>>();
   const int reps = summary["repetitions"].get<int>();
   std::ostringstream t;
+  if (summary.contains("random_tables")) {  // no one table to show: the error on each run's own
+    const json& rt = summary["random_tables"];
+    t << "\nRandom affordance tables: " << rt["count"].get<int>() << " tables drawn from seed " << rt["seed"].get<std::int64_t>()
+      << ", " << runs_steps.get<std::int64_t>() << " steps, " << reps
+      << " run(s) per table, system and condition.\nMean absolute error of each run's learned table against its own table";
+    if (rt.contains("floors"))
+      t << "; " << rt["floors"]["source"].get<std::string>();
+    t << "\n\n  condition    system   mean     median   worst (table)\n";
+    std::vector<std::pair<std::string, std::string>> columns;
+    for (const auto& cj : rt["condition_order"])
+      for (const auto& sj : rt["system_order"]) {
+        const std::string c = cj.get<std::string>(), sys = sj.get<std::string>();
+        const json& m = rt["mae"][c][sys];
+        columns.emplace_back(c, sys);
+        const auto num = [](const json& v) { return v.is_null() ? std::string("-") : fixed(v.get<double>(), 3); };
+        t << "  " << std::left << std::setw(13) << c << std::setw(9) << sys << std::setw(9) << num(m["mean"])
+          << std::setw(9) << num(m["median"]) << num(m["worst"])
+          << (m["worst_table"].get<int>() >= 0 ? " (t" + std::to_string(m["worst_table"].get<int>()) + ")" : "") << "\n";
+      }
+    const auto width = [](const std::string& c, const std::string& sys) {
+      return std::max<int>(9, static_cast<int>(c.size() + sys.size()) + 3);
+    };
+    t << "\n  table ";
+    for (const auto& [c, sys] : columns) t << std::right << std::setw(width(c, sys)) << (sys + " " + c);
+    t << "   one-way looks (docs/model.md#revisit)\n";
+    for (int k = 0; k < rt["count"].get<int>(); ++k) {
+      t << "  t" << std::left << std::setw(5) << k << std::right;
+      for (const auto& [c, sys] : columns) {
+        const json& v = rt["mae"][c][sys]["per_table"][static_cast<std::size_t>(k)];
+        t << std::setw(width(c, sys)) << (v.is_null() ? std::string("-") : fixed(v.get<double>(), 3));
+      }
+      std::string one_way;
+      for (const auto& n : rt["one_way_looks"][static_cast<std::size_t>(k)]) one_way += (one_way.empty() ? "" : ", ") + n.get<std::string>();
+      t << "   " << (one_way.empty() ? "-" : one_way);
+      t << "\n";
+    }
+  } else {
   t << "\nLearned affordances after " << runs_steps.get<std::int64_t>() << " steps (mean of " << reps
     << " run(s)); in brackets the paper's table\n";
   for (const auto& sys : plan.systems) {
@@ -992,6 +1194,7 @@ void printTables(const json& summary, const Plan& plan, const ExperimentOptions&
     if (js.contains("reference_affordance_mae"))
       t << " (authors' code: " << fixed(js["reference_affordance_mae"].get<double>(), 3) << ")";
     t << "\n";
+  }
   }
   bool header = false;
   for (const auto& sys : plan.systems) {

@@ -39,6 +39,8 @@ struct ExperimentOptions {
   bool quiet = false;                      // no table at the end
   int extrinsic_reps = 0;                  // tests per scenario from each intrinsic run (0: none)
   std::vector<std::string> scenarios;      // default: every config/scenarios/*.yaml
+  std::optional<int> tables;               // random tables: how many (default: the experiment file's tables.count)
+  std::optional<std::int64_t> table_seed;  // ... and the series they are drawn from (default: its tables.seed)
   std::string attach;                      // run on this bus with processes started by hand (no group, one job)
   bool resume = false;                     // continue the unfinished experiment stored in out_dir
   std::set<std::string> given;             // options given on the command line ("--reps", "name", ...): with

@@ -63,6 +63,12 @@ int main(int argc, char** argv) {
                   "(default: the experiment's extrinsic.tests, else 0: intrinsic phase only)")
       ->capture_default_str();
   exp->add_option("--scenarios", o.scenarios, "scenarios to test (default: all in config/scenarios)");
+  int tables = 0;
+  std::int64_t table_seed = -1;
+  exp->add_option("--tables", tables,
+                  "experiments on random affordance tables (random-tables): how many tables (default: the experiment's)");
+  exp->add_option("--table-seed", table_seed,
+                  "... and the seed of the series they are drawn from (default: the experiment's)");
   exp->add_option("--attach", o.attach,
                   "drive the runs on this LCM URL, with processes started by hand (afford-environment ..., "
                   "and afford-logger for logs): the runner starts none");
@@ -137,7 +143,7 @@ int main(int argc, char** argv) {
     if (list->parsed()) {
       for (const auto& n : afford::listExperiments(config_dir)) {
         const auto e = afford::loadExperiment(config_dir, n);
-        std::printf("%-12s %s\n", n.c_str(), e.description.c_str());
+        std::printf("%-16s %s\n", n.c_str(), e.description.c_str());
       }
       return 0;
     }
@@ -262,6 +268,8 @@ int main(int argc, char** argv) {
                                 "`afford experiment --resume --out DIR` to continue an interrupted one");
     if (reps) o.reps = reps;
     if (steps) o.steps = steps;
+    if (tables) o.tables = tables;
+    if (table_seed >= 0) o.table_seed = table_seed;
     if (system == "all")
       o.systems = {"FIX", "IGN", "IMP"};
     else if (!system.empty())

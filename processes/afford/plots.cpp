@@ -143,6 +143,34 @@ std::vector<std::string> plotExperiment(const std::string& dir_name) {
   const std::string title_base = s.value("experiment", std::string("experiment")) + ", " +
                                  std::to_string(s.value("steps", 0)) + " steps";
 
+  // ---- random tables (issue 11): one box per system and condition, of the tables' errors (as Figure 5's boxes)
+  if (s.contains("random_tables")) {
+    const json& rt = s["random_tables"];
+    const auto conditions = rt.at("condition_order").get<std::vector<std::string>>();
+    const auto order = rt.at("system_order").get<std::vector<std::string>>();
+    static const char* kConditionColour[] = {"#999999", "#009e73", "#e69f00", "#56b4e9", "#cc79a7", "#0072b2"};
+    std::vector<BoxItem> items;
+    std::vector<std::pair<double, std::string>> xtics;
+    std::map<std::string, std::string> colours;
+    for (std::size_t k = 0; k < order.size(); ++k) {
+      xtics.emplace_back(k + 1.0, order[k]);
+      for (std::size_t c = 0; c < conditions.size(); ++c) {
+        BoxItem it;
+        it.x = k + 1 + (static_cast<double>(c) - (conditions.size() - 1) / 2.0) * 0.3;
+        it.series = conditions[c];
+        for (const auto& v : rt["mae"][conditions[c]][order[k]]["per_table"])
+          if (!v.is_null()) it.values.push_back(v.get<double>());
+        items.push_back(it);
+        colours[conditions[c]] = kConditionColour[c % 6];
+      }
+    }
+    written.push_back(boxPlot(dir, "fig_random_tables",
+                              "Mean absolute error on " + std::to_string(rt["count"].get<int>()) +
+                                  " random affordance tables (" + title_base + "); box: quartiles, bars: min-max, x: mean",
+                              "system", "mean absolute error of the learned table", items, xtics, {}, colours));
+    return written;
+  }
+
   // ---- final affordances: box plots (Figures 5, 10)
   {
     const fs::path csv = dir / "fig_affordances.csv", gp = dir / "fig_affordances.gp", png = dir / "fig_affordances.png";

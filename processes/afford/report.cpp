@@ -117,6 +117,81 @@ std::string stochasticSections(const std::vector<json>& all, const std::string& 
 }
 }  // namespace
 
+namespace {
+// Beyond the paper (issue 11): random tables, and the late-object tests with the memory options beside the paper's
+// agent and the paper's tables.
+std::string memorySections(const std::vector<json>& all) {
+  std::ostringstream md;
+  const auto find = [&](const std::string& exp) -> const json* {
+    for (const auto& s : all)
+      if (s["experiment"] == exp) return &s;
+    return nullptr;
+  };
+  bool header = false;
+  const auto heading = [&] {
+    if (!header)
+      md << "\n## Beyond the paper: experience replay and revisits (issue 11)\n\nThe memory options of "
+            "[model.md](model.md#memory): `predictors.replay.enabled` and `motivation.revisit.enabled`, with the "
+            "shipped values of their other keys.\n";
+    header = true;
+  };
+  for (const auto& s : all) {
+    if (!s.contains("random_tables")) continue;
+    heading();
+    const json& rt = s["random_tables"];
+    md << "\n### Random affordance tables (" << s["experiment"].get<std::string>() << ")\n\n" << rt["count"].get<int>()
+       << " tables drawn from seed " << rt["seed"].get<std::int64_t>() << " (entries 0 or 1, every row and column mixed, "
+       << "an object's own colour never afforded), the base test's nine objects, " << s["steps"] << " steps, "
+       << s["repetitions"] << " run(s) per table, system and condition. Mean absolute error of each learned table "
+       << "against its own table, over the tables";
+    if (rt.contains("floors")) md << " (" << rt["floors"]["source"].get<std::string>() << ")";
+    md << ":\n\n| condition | system | mean | median | quartiles | worst (table) |\n|---|---|---|---|---|---|\n";
+    for (const auto& c : rt["condition_order"])
+      for (const auto& sys : rt["system_order"]) {
+        const json& m = rt["mae"][c.get<std::string>()][sys.get<std::string>()];
+        if (m["mean"].is_null()) continue;
+        md << "| " << c.get<std::string>() << " | " << sys.get<std::string>() << " | " << num(m["mean"].get<double>(), 3)
+           << " | " << num(m["median"].get<double>(), 3) << " | " << num(m["q1"].get<double>(), 3) << " - "
+           << num(m["q3"].get<double>(), 3) << " | " << num(m["worst"].get<double>(), 3) << " (t"
+           << m["worst_table"].get<int>() << ") |\n";
+      }
+  }
+  for (const std::string n : {"1", "2", "3"}) {
+    const json* paper_agent = find("late" + n);
+    const json* memory = find("late" + n + "-memory");
+    if (!memory) continue;
+    heading();
+    md << "\n### late" << n << " with the memory options\n\nTable metric per scenario: the paper's, ours with the "
+       << "paper's agent (late" << n << "), ours with replay and revisits (late" << n << "-memory); then the mean "
+       << "absolute error of the learned affordances.\n\n| system | agent | scenario1 | scenario2 | scenario3 | "
+       << "scenario4 | scenario5 | affordance error |\n|---|---|---|---|---|---|---|---|\n";
+    for (const std::string sys : {"FIX", "IGN", "IMP"}) {
+      if (!(*memory)["systems"].contains(sys)) continue;
+      const json& mj = (*memory)["systems"][sys];
+      const auto row = [&](const std::string& agent, const json& js, bool reference) {
+        md << "| " << sys << " | " << agent << " |";
+        for (int k = 1; k <= 5; ++k) {
+          const std::string sc = "scenario" + std::to_string(k);
+          const json* v = nullptr;
+          if (reference && js.contains("reference_table_metric") && js["reference_table_metric"].contains(sc))
+            v = &js["reference_table_metric"][sc];
+          if (!reference && js.contains("extrinsic") && js["extrinsic"].contains("table_metric") &&
+              js["extrinsic"]["table_metric"].contains(sc))
+            v = &js["extrinsic"]["table_metric"][sc];
+          md << " " << (v ? num(v->get<double>(), reference ? 1 : 2) : std::string("-")) << " |";
+        }
+        md << " " << (reference || !js.contains("affordance_mae") ? std::string("-") : num(js["affordance_mae"].get<double>(), 3))
+           << " |\n";
+      };
+      row("paper", mj, true);
+      if (paper_agent && (*paper_agent)["systems"].contains(sys)) row("ours", (*paper_agent)["systems"][sys], false);
+      row("ours, memory", mj, false);
+    }
+  }
+  return md.str();
+}
+}  // namespace
+
 std::string writeReport(const std::vector<std::string>& dirs, const std::string& figures_dir,
                         const std::string& link_prefix, double wall_seconds, const std::string& note,
                         const std::string& config_dir) {
@@ -157,6 +232,7 @@ std::string writeReport(const std::vector<std::string>& dirs, const std::string&
   for (const auto& s : systems) md << " " << s << " |";
   md << "\n|---|---|---|---|---|\n";
   for (const auto& s : all) {
+    if (s.contains("random_tables")) continue;  // no one table: see the random-tables section
     md << "| " << s["experiment"].get<std::string>() << " | " << s["steps"] << " |";
     for (const auto& sys : systems) {
       if (!s["systems"].contains(sys)) {
@@ -254,6 +330,7 @@ std::string writeReport(const std::vector<std::string>& dirs, const std::string&
     }
 
   md << stochasticSections(all, config_dir);
+  md << memorySections(all);
 
   // ---- figures
   md << "\n## Figures\n";

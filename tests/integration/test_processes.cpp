@@ -11,6 +11,7 @@
 #include <thread>
 
 #include "afford/channels.hpp"
+#include "afford/tables.hpp"
 #include "tests/support.hpp"
 
 namespace afford {
@@ -361,8 +362,86 @@ INSTANTIATE_TEST_SUITE_P(
                       "config key 'eye.saliency_noise': missing"},
         BadConfigCase{"UnknownSystem", "experiment base --system XYZ", "unknown system \"XYZ\""},
         BadConfigCase{"BadConditionValue", "experiment utility --set planner.kind=both",
-                      "config key 'planner.kind': unknown value \"both\""}),
+                      "config key 'planner.kind': unknown value \"both\""},
+        BadConfigCase{"BadMemoryValue", "experiment random-tables --set predictors.replay.sampling=random",
+                      "config key 'predictors.replay.sampling': unknown value \"random\""},
+        BadConfigCase{"TablesWithoutRandomTables", "experiment base --tables 3",
+                      "--tables and --table-seed are for experiments on random tables"},
+        BadConfigCase{"ExtrinsicTestsOfRandomTables", "experiment random-tables --extrinsic-reps 2",
+                      "random tables have no extrinsic tests"}),
     [](const auto& info) { return std::string(info.param.name); });
+
+// random-tables (issue 11): every condition on every table, each run measured against its own table, drawn by
+// (seed, index); the memory condition's runs keep a memory, the paper's do not; the figure is drawn.
+TEST(Processes, RandomTablesCompareTheConditionsOnEachTable) {
+  const std::string dir = test::tempDir("random-tables");
+  const auto r = test::runCommand(experimentIn(
+      dir, "random-tables --system IGN --tables 2 --table-seed 9 --steps 300 --transport memq --jobs 2 --keep-logs none"
+           " --run-prefix rt"));
+  ASSERT_EQ(r.exit_code, 0) << r.output;
+  EXPECT_NE(r.output.find("2 tables drawn from seed 9"), std::string::npos) << r.output;
+  const json s = readJson(fs::path(dir) / "summary.json");
+  const json& rt = s["random_tables"];
+  const auto objects = test::shippedConfig("random-tables").world.objects;
+  ASSERT_EQ(rt["tables"].size(), 2u);
+  for (int k = 0; k < 2; ++k) {
+    const AffordanceTable want = randomTable(9, k, objects);
+    for (std::size_t i = 0; i < objects.size(); ++i)
+      for (int a = 0; a < kNumActions; ++a) EXPECT_EQ(rt["tables"][k][i][a].get<double>(), want[i][a]);
+  }
+  EXPECT_EQ(rt["condition_order"], json({"paper", "memory"}));
+  const json& runs = s["systems"]["IGN"]["runs"];
+  ASSERT_EQ(runs.size(), 4u);
+  std::map<std::string, std::vector<double>> per_condition;
+  for (const auto& run : runs) {
+    const int k = run["table"].get<int>();
+    EXPECT_EQ(run["target"], rt["tables"][k]);
+    double mae = 0;
+    for (std::size_t i = 0; i < objects.size(); ++i)
+      for (int a = 0; a < kNumActions; ++a)
+        mae += std::abs(run["affordance"][i][a].get<double>() - run["target"][i][a].get<double>()) / (objects.size() * kNumActions);
+    EXPECT_NEAR(run["affordance_mae"].get<double>(), mae, 1e-12);
+    const std::string c = run["condition"];
+    EXPECT_EQ(run["run_id"].get<std::string>(), "rt-random-tables-t0" + std::to_string(k) + "-" + c + "-IGN-s1");
+    if (c == "memory") {
+      EXPECT_GT(run["looks"].get<int>(), 0);
+      EXPECT_GT(run["revisits"].get<int>(), 0);
+    } else {
+      EXPECT_EQ(run["looks"].get<int>(), 0);
+    }
+    per_condition[c].push_back(mae);
+  }
+  for (const auto& [c, maes] : per_condition) {
+    const json& m = rt["mae"][c]["IGN"];
+    EXPECT_EQ(m["tables"].get<int>(), 2);
+    EXPECT_NEAR(m["worst"].get<double>(), std::max(maes[0], maes[1]), 1e-12) << c;
+  }
+  const std::string csv = slurp(fs::path(dir) / "random_tables.csv");
+  EXPECT_EQ(std::count(csv.begin(), csv.end(), '\n'), 5) << csv;  // a header and 4 runs
+  const auto plot = test::runCommand(test::afford("plot " + dir));
+  EXPECT_EQ(plot.exit_code, 0) << plot.output;
+  EXPECT_TRUE(fs::exists(fs::path(dir) / "fig_random_tables.png")) << plot.output;
+}
+
+// The memory options over real processes: a run's log replays into fresh predictors and motivation to the same
+// weights and memory, decision for decision, and its agent (a checkpoint with a memory) passes an extrinsic test.
+TEST(Processes, AMemoryRunReplaysExactlyAndItsAgentIsTested) {
+  const std::string dir = test::tempDir("memory-replay");
+  const auto r = test::runCommand(experimentIn(
+      dir, "base --system IMP --reps 1 --steps 600 --extrinsic-reps 1 --scenarios scenario1 --keep-logs all --quiet"
+           " --run-prefix mr --set predictors.replay.enabled=true --set motivation.revisit.enabled=true"));
+  ASSERT_EQ(r.exit_code, 0) << r.output;
+  const json s = readJson(fs::path(dir) / "summary.json");
+  const json& run = s["systems"]["IMP"]["runs"][0];
+  EXPECT_GT(run["looks"].get<int>(), 0);
+  EXPECT_EQ(run["replayed"].get<std::int64_t>(), 600 * 64);  // every step replays, passes too (step 0 acts: a revisit)
+  EXPECT_EQ(s["extrinsic_tests"].get<int>(), 1);  // the checkpoint, memory and all, loaded for the test
+  const auto replay = test::runCommand(test::afford("replay " + dir + "/logs/mr-base-IMP-s1"));
+  EXPECT_EQ(replay.exit_code, 0) << replay.output;
+  EXPECT_NE(replay.output.find("weights_checksum: " + run["weights_checksum"].get<std::string>()), std::string::npos)
+      << replay.output;
+  EXPECT_NE(replay.output.find(" 0 differing"), std::string::npos) << replay.output;
+}
 
 TEST(Processes, ARunNeverWritesIntoTheLogFolderOfAnotherRun) {
   const std::string dir = test::tempDir("existing");

@@ -1,5 +1,8 @@
 #include <gtest/gtest.h>
 
+#include <filesystem>
+#include <fstream>
+
 #include "afford/config.hpp"
 #include "tests/support.hpp"
 
@@ -122,6 +125,35 @@ TEST(Config, EmittedYamlParsesToTheSameConfig) {
   EXPECT_EQ(a.steps, b.steps);
   EXPECT_DOUBLE_EQ(a.predictors.what_effect_learning_rate, b.predictors.what_effect_learning_rate);
   EXPECT_EQ(a.world.objects[8].name, b.world.objects[8].name);
+}
+
+// Experiment files on random tables (issue 11): `conditions:` compares settings on them, and nothing else.
+TEST(Config, ConditionsNeedTablesAndNamesFitForRunIds) {
+  const std::string dir = test::tempDir("config-conditions");
+  std::filesystem::copy(kConfigDir, dir, std::filesystem::copy_options::recursive);
+  const auto errorOfFile = [&](const std::string& text) {
+    std::ofstream(dir + "/experiments/trial.yaml") << text;
+    try {
+      loadExperiment(dir, "trial");
+    } catch (const ConfigError& e) {
+      return std::string(e.what());
+    }
+    return std::string();
+  };
+  EXPECT_NE(errorOfFile("extends: base\nconditions: {a: [motivation.leak=0.2]}\n").find("config key 'conditions': compares "
+                                                                                             "conditions on random tables"),
+            std::string::npos);
+  EXPECT_NE(errorOfFile("extends: base\ntables: {count: 2, seed: 1}\nconditions: {\"a b\": []}\n").find("config key 'conditions.a b'"),
+            std::string::npos);
+  EXPECT_NE(errorOfFile("extends: base\ntables: {count: 2, seed: 1}\nconditions: {a: [motivation]}\n").find("key.path=value"),
+            std::string::npos);
+  EXPECT_NE(errorOfFile("extends: base\ntables: {count: 0, seed: 1}\n").find("config key 'tables.count'"), std::string::npos);
+  const ExperimentFile e = loadExperiment(kConfigDir, "random-tables");
+  ASSERT_TRUE(e.tables);
+  EXPECT_EQ(e.tables->count, 20);
+  ASSERT_EQ(e.conditions.size(), 2u);
+  EXPECT_EQ(e.conditions[0].first, "paper");
+  EXPECT_EQ(e.conditions[1].second, test::kMemoryOptions);
 }
 
 }  // namespace
