@@ -54,4 +54,15 @@ struct BoundaryOptions {
 };
 int boundariesBench(const BoundaryOptions& o);
 
+struct ReplayOptions {
+  std::string experiment = "base";
+  std::string system = "IMP";
+  int steps = 6000;
+  int reps = 3;                                    // seeds 1..reps, the same with the options off and on
+  std::vector<std::string> transports{"udpm", "memq"};
+  double floor = 0.7;                              // issue 11: steps/s with replay at least 0.7 of without
+  std::string out = "out/bench-replay";
+};
+int replayBench(const ReplayOptions& o);
+
 }  // namespace afford::bench

@@ -1,6 +1,7 @@
 // afford-bench: benchmarks of afford (docs/performance.md). Without a mode:
 // intrinsic steps per second over udpm and memq; `boundaries`: the cost of
-// starting and ending runs (extrinsic tests, short runs, the main job).
+// starting and ending runs (extrinsic tests, short runs, the main job);
+// `replay`: the cost of the memory options of issue 11.
 #include <CLI/CLI.hpp>
 
 #include <cstdio>
@@ -31,7 +32,27 @@ int main(int argc, char** argv) {
       ->check(CLI::IsMember({"extrinsic", "short", "main"}))
       ->capture_default_str();
   b->add_option("--out", bo.out, "working folder")->capture_default_str();
+  ReplayOptions ro;
+  auto* r = app.add_subcommand("replay", "what the memory options of issue 11 cost: steps per second with replay and "
+                                         "revisits against without, predictors' memory, checkpoint size");
+  r->add_option("--experiment", ro.experiment, "experiment to run")->capture_default_str();
+  r->add_option("--system", ro.system, "FIX, IGN or IMP")->check(CLI::IsMember({"FIX", "IGN", "IMP"}))->capture_default_str();
+  r->add_option("--steps", ro.steps, "steps per run")->capture_default_str();
+  r->add_option("--reps", ro.reps, "runs per transport and setting (seeds 1..reps)")->capture_default_str();
+  r->add_option("--transports", ro.transports, "udpm, memq or both")
+      ->delimiter(',')
+      ->check(CLI::IsMember({"udpm", "memq"}))
+      ->capture_default_str();
+  r->add_option("--floor", ro.floor, "the least ratio of steps per second, on / off, that passes")->capture_default_str();
+  r->add_option("--out", ro.out, "working folder")->capture_default_str();
   CLI11_PARSE(app, argc, argv);
+  if (r->parsed()) {
+    if (ro.steps < 1 || ro.reps < 1) {
+      std::fprintf(stderr, "afford-bench replay: --steps and --reps must be at least 1\n");
+      return 2;
+    }
+    return replayBench(ro);
+  }
   if (bo.tests < 1 || bo.train_steps < 1 || bo.runs < 1 || bo.run_steps < 1) {
     std::fprintf(stderr, "afford-bench boundaries: --tests, --train-steps, --runs and --run-steps must be at least 1\n");
     return 2;

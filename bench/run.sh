@@ -8,6 +8,9 @@
 #     run boundaries, logs kept and not: extrinsic tests per second and their
 #     wall times, short runs per minute, the main job's wall time; PASS/FAIL
 #     against the floors (exit 1 on a FAIL).
+#   bench/run.sh replay [--experiment E] [--system S] [--steps N] [--reps R] [--transports udpm,memq] [--out DIR]
+#     the memory options of issue 11 (replay, revisits): steps per second on / off per transport (floor 0.7,
+#     exit 1 below it), the predictors' peak memory, the checkpoint's size.
 set -euo pipefail
 cd "$(dirname "$0")/.."
 [[ -x build/bin/afford-bench ]] || scripts/setup.sh

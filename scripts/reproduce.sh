@@ -7,7 +7,11 @@
 #   scripts/reproduce.sh stochastic      stochastic, utility, forward-models, search-reduction
 #                                        with the counts of their files (Table 7, 8;
 #                                        Figures 11-14); about 15 min on 2 cores
-#   scripts/reproduce.sh all             both
+#   scripts/reproduce.sh beyond          beyond the paper (issue 11): late1-3 with experience
+#                                        replay and revisits, beside the paper's agent, and
+#                                        random-tables (every system, 20 tables, with and without
+#                                        them); about 25 min on 2 cores
+#   scripts/reproduce.sh all             all three
 #   scripts/reproduce.sh NAME...         only these experiments (e.g. late3 utility)
 # Environment: JOBS (runs at a time, default: cores), REPS and EXT_REPS (default: the
 # paper's counts), OUT (default out/reproduce), KEEP_LOGS (all, first or none; default
@@ -20,15 +24,18 @@ set -euo pipefail
 cd "$(dirname "$0")/.."
 deterministic=(base late1 late2 late3)
 stochastic=(stochastic utility forward-models search-reduction)
+beyond=(late1-memory late2-memory late3-memory random-tables)
 [[ $# -eq 0 ]] && set -- deterministic
 experiments=()
 for what in "$@"; do
   case $what in
     deterministic) experiments+=("${deterministic[@]}") ;;
     stochastic) experiments+=("${stochastic[@]}") ;;
-    all) experiments+=("${deterministic[@]}" "${stochastic[@]}") ;;
-    base|late1|late2|late3|stochastic|utility|forward-models|search-reduction) experiments+=("$what") ;;
-    *) echo "usage: scripts/reproduce.sh deterministic|stochastic|all|EXPERIMENT..." >&2; exit 2 ;;
+    beyond) experiments+=("${beyond[@]}") ;;
+    all) experiments+=("${deterministic[@]}" "${stochastic[@]}" "${beyond[@]}") ;;
+    base|late1|late2|late3|stochastic|utility|forward-models|search-reduction|late1-memory|late2-memory|late3-memory|random-tables)
+      experiments+=("$what") ;;
+    *) echo "usage: scripts/reproduce.sh deterministic|stochastic|beyond|all|EXPERIMENT..." >&2; exit 2 ;;
   esac
 done
 scripts/setup.sh
@@ -41,15 +48,15 @@ for exp in "${experiments[@]}"; do
   rm -rf "${out:?}/$exp"
   args=(--jobs "${JOBS:-$(nproc)}" --keep-logs "${KEEP_LOGS:-first}" --out "$out/$exp" --log-root "$out/logs" --run-prefix "$prefix")
   [[ -n ${REPS:-} ]] && args+=(--reps "$REPS")
-  case " ${deterministic[*]} " in
+  case " ${deterministic[*]} late1-memory late2-memory late3-memory " in
     *" $exp "*) args+=(--system all --extrinsic-reps "${EXT_REPS:-10}") ;;
-    *) [[ -n ${EXT_REPS:-} && $exp != stochastic ]] && args+=(--extrinsic-reps "$EXT_REPS") ;;
+    *) [[ -n ${EXT_REPS:-} && $exp != stochastic && $exp != random-tables ]] && args+=(--extrinsic-reps "$EXT_REPS") ;;
   esac
   build/bin/afford experiment "$exp" "${args[@]}" || failed+=("$exp")
   build/bin/afford plot "$out/$exp"
 done
 dirs=()
-for exp in "${deterministic[@]}" "${stochastic[@]}"; do
+for exp in "${deterministic[@]}" "${stochastic[@]}" "${beyond[@]}"; do
   [[ -f $out/$exp/summary.json ]] && dirs+=("$out/$exp")
 done
 note="The world follows the authors' code: continuous positions, shapes drawn from their real centres, late objects at random free places, the eye's window placed as theirs ([model.md](model.md#positions))."

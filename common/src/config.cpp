@@ -336,7 +336,7 @@ RunConfig parseRunConfig(const YAML::Node& root) {
     Reader rep = p.map("replay");
     c.predictors.replay.enabled = rep.choice<bool>("enabled", {{"true", true}, {"false", false}});
     c.predictors.replay.ratio = static_cast<int>(rep.integer("ratio", 0, 10'000));
-    c.predictors.replay.effects_ratio = static_cast<int>(rep.integer("effects_ratio", 0, 10'000));
+    c.predictors.replay.effects_ratio = rep.number("effects_ratio", 0.0, 10'000.0);
     c.predictors.replay.sampling = rep.choice<ReplaySampling>(
         "sampling", {{"balanced", ReplaySampling::Balanced}, {"uniform", ReplaySampling::Uniform}});
     rep.finish();

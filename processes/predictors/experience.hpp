@@ -5,6 +5,8 @@
 #include <cstdint>
 #include <vector>
 
+#include "afford/perceptron.hpp"
+
 namespace afford {
 
 struct Experience {
@@ -15,6 +17,14 @@ struct Experience {
   bool affordance = false;                 // the action's effect was seen
   std::vector<std::uint8_t> after_image;   // new_object_image
   double after_x = 0, after_y = 0;         // new_object_position
+  // before_image as the perceptrons take it (focusInput), when the memory keeps
+  // the experience: replay does not convert it again. Empty: not made yet.
+  SparseInput before_input;
 };
+
+// e.before_input, or the conversion of e.before_image when it was not kept.
+inline SparseInput inputOf(const Experience& e) {
+  return e.before_input.index.empty() ? focusInput(e.before_image) : e.before_input;
+}
 
 }  // namespace afford

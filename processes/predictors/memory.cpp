@@ -13,6 +13,12 @@
 namespace afford {
 namespace {
 
+std::uint64_t imageHash(const std::vector<std::uint8_t>& image) {
+  std::uint64_t h = 0xCBF29CE484222325ull;
+  for (std::uint8_t b : image) h = (h ^ b) * 0x100000001B3ull;
+  return h;
+}
+
 template <class T>
 void put(std::ostream& out, const T& v) {
   out.write(reinterpret_cast<const char*>(&v), sizeof v);
@@ -106,6 +112,12 @@ int Memory::see(const std::vector<std::uint8_t>& image, std::int64_t step) {
   const std::size_t bytes = static_cast<std::size_t>(3 * side_ * side_);
   if (image.size() != bytes)
     throw std::invalid_argument("a focus image of " + std::to_string(image.size()) + " bytes, not " + std::to_string(bytes));
+  const std::uint64_t hash = imageHash(image);
+  for (auto [it, end] = by_image_.equal_range(hash); it != end; ++it)
+    if (looks_[static_cast<std::size_t>(it->second)].image == image) {
+      looks_[static_cast<std::size_t>(it->second)].last_seen = step;
+      return it->second;
+    }
   std::array<long, 3> sum{0, 0, 0};
   for (std::size_t i = 0; i < image.size(); ++i) sum[i % 3] += image[i];
   // Per channel, a shifted look's sum lies between its sum less what lies within `shift` of the border, and its
@@ -141,12 +153,21 @@ int Memory::see(const std::vector<std::uint8_t>& image, std::int64_t step) {
     Look& l = looks_[static_cast<std::size_t>(nearest)];
     l.used = true;
     setImage(l, image);
+    by_image_.emplace(hash, nearest);
   }
   looks_[static_cast<std::size_t>(nearest)].last_seen = step;
   return nearest;
 }
 
-void Memory::forget(int look) { looks_.at(static_cast<std::size_t>(look)) = Look{}; }
+void Memory::forget(int look) {
+  Look& l = looks_.at(static_cast<std::size_t>(look));
+  for (auto [it, end] = by_image_.equal_range(imageHash(l.image)); it != end; ++it)
+    if (it->second == look) {
+      by_image_.erase(it);
+      break;
+    }
+  l = Look{};
+}
 
 Memory::TriedAgo Memory::triedAgo(int look, std::int64_t step) const {
   const Look& l = looks_.at(static_cast<std::size_t>(look));
@@ -161,8 +182,12 @@ void Memory::record(int look, std::int64_t step, Ref experience) {
   const int a = experience->action;
   l.tried_at[a] = step;
   auto& kept = l.experiences[a];
+  l.with_effect[a] += experience->affordance;
   kept.push_back(std::move(experience));
-  if (static_cast<int>(kept.size()) > config_.per_look_action) kept.pop_front();
+  if (static_cast<int>(kept.size()) > config_.per_look_action) {
+    l.with_effect[a] -= kept.front()->affordance;
+    kept.pop_front();
+  }
 }
 
 std::vector<Memory::Ref> Memory::sample(ReplaySampling sampling, std::int64_t seed, std::int64_t step,
@@ -172,19 +197,19 @@ std::vector<Memory::Ref> Memory::sample(ReplaySampling sampling, std::int64_t se
     const std::deque<Ref>* kept;
     std::size_t offered;
   };
+  std::vector<Ref> out;
+  if (count == 0) return out;
   std::vector<Group> groups;
   std::size_t total = 0;
   for (const Look& l : looks_) {
     if (!l.used) continue;
-    for (const auto& kept : l.experiences) {
-      std::size_t n = kept.size();
-      if (effects_only) n = static_cast<std::size_t>(std::count_if(kept.begin(), kept.end(), [](const Ref& e) { return e->affordance; }));
+    for (int a = 0; a < kNumActions; ++a) {
+      const std::size_t n = effects_only ? static_cast<std::size_t>(l.with_effect[a]) : l.experiences[a].size();
       if (n == 0) continue;
-      groups.push_back({&kept, n});
+      groups.push_back({&l.experiences[a], n});
       total += n;
     }
   }
-  std::vector<Ref> out;
   if (groups.empty()) return out;
   // The k-th experience a group offers (with effects_only, the k-th of those with an effect).
   const auto pick = [effects_only](const std::deque<Ref>& kept, std::size_t k) {
@@ -266,11 +291,19 @@ void Memory::load(std::istream& in, const std::string& what) {
         if (!in || k > static_cast<std::uint32_t>(config_.per_look_action))
           throw std::runtime_error(std::to_string(k) + " experiences of a look and action, more than predictors.memory.per_look_action " +
                                    std::to_string(config_.per_look_action));
-        for (std::uint32_t i = 0; i < k; ++i) kept.push_back(std::make_shared<const Experience>(getExperience(in, bytes)));
+        for (std::uint32_t i = 0; i < k; ++i) {
+          auto e = std::make_shared<Experience>(getExperience(in, bytes));
+          e->before_input = focusInput(e->before_image);
+          l.with_effect[static_cast<std::size_t>(&kept - &l.experiences[0])] += e->affordance;
+          kept.push_back(std::move(e));
+        }
       }
       if (!in) throw std::runtime_error("a look cut short");
     }
     looks_ = std::move(looks);
+    by_image_.clear();
+    for (std::size_t k = 0; k < looks_.size(); ++k)
+      if (looks_[k].used) by_image_.emplace(imageHash(looks_[k].image), static_cast<int>(k));
   } catch (const std::runtime_error& e) {
     throw std::runtime_error(what + ": its memory does not fit this run's (" + e.what() + ")");
   }

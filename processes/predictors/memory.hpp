@@ -21,6 +21,7 @@
 #include <deque>
 #include <iosfwd>
 #include <memory>
+#include <unordered_map>
 #include <vector>
 
 #include "afford/actions.hpp"
@@ -76,6 +77,7 @@ class Memory {
     std::int64_t last_seen = -1;
     TriedAgo tried_at{-1, -1, -1, -1};           // step each action was last tried on it
     std::array<std::deque<Ref>, kNumActions> experiences;  // newest last
+    std::array<int, kNumActions> with_effect{};           // of those, how many had their effect
   };
   void forget(int look);
   void setImage(Look& l, const std::vector<std::uint8_t>& image) const;
@@ -83,6 +85,10 @@ class Memory {
   MemoryConfig config_;
   int side_;
   std::vector<Look> looks_;
+  // FNV-1a of each remembered look's first image -> the looks with that hash: an image equal to a look's first
+  // image is that look (distance 0; two looks are never within the threshold of each other's first image), found
+  // without a search. Squares and rectangles look exactly alike wherever they are.
+  std::unordered_multimap<std::uint64_t, int> by_image_;
 };
 
 }  // namespace afford

@@ -248,7 +248,7 @@ void PredictorsNode::finish() {
   r.checkpoint = config().checkpoint;
   if (!r.checkpoint.empty()) {
     try {
-      core_->save(r.checkpoint);
+      core_->save(r.checkpoint, r.weights_checksum);
     } catch (const std::exception& e) {
       log_->error("{}", e.what());
       r.checkpoint.clear();

@@ -1,5 +1,7 @@
 #include "predictors/predictors.hpp"
 
+#include <algorithm>
+#include <cmath>
 #include <cstdio>
 #include <cstring>
 #include <filesystem>
@@ -82,27 +84,32 @@ TrainingReport Predictors::trainAffordance(const Experience& e, std::int64_t ste
   if (look < 0) throw std::invalid_argument("an experience to remember needs the look of its focus (Predictors::see)");
   auto kept = std::make_shared<Experience>(e);
   if (!kept->affordance) kept->after_image.clear();  // nothing learns from the look after a failure
+  kept->before_input = x;
   Memory::Ref ref = kept;
   memory_->record(look, step, ref);
   if (e.affordance) r.effect_updates.push_back(ref);
-  const std::vector<Memory::Ref> more = replay(step);
+  const std::vector<Memory::Ref> more = replay(step, e.affordance);
   r.effect_updates.insert(r.effect_updates.end(), more.begin(), more.end());
   return r;
 }
 
-std::vector<Memory::Ref> Predictors::replay(std::int64_t step) {
+std::vector<Memory::Ref> Predictors::replay(std::int64_t step, bool own_effect) {
   // Replay (docs/model.md#replay): at every step, after the update of the step's own action if there was one,
   // remembered experiences of any look and action drawn by (seed, step): each one delta-rule step of its
-  // affordance predictor; and forward-model updates from experiences whose effect was seen, for trainEffects.
+  // affordance predictor; and forward-model updates from experiences whose effect was seen, for trainEffects,
+  // making up effects_ratio with the step's own.
   const ReplayConfig& replay = config_.predictors.replay;
   if (!memory_ || !replay.enabled) return {};
   for (const Memory::Ref& m : memory_->sample(replay.sampling, config_.seed, step, 0, static_cast<std::size_t>(replay.ratio), false)) {
-    affordance_[m->action].train(focusInput(m->before_image), m->affordance ? 1.0 : 0.0,
-                                 config_.predictors.affordance_learning_rate);
+    affordance_[m->action].train(m->before_input, m->affordance ? 1.0 : 0.0, config_.predictors.affordance_learning_rate);
     ++replayed_;
   }
+  // Step t's share of effects_ratio: floor((t + 1) r) - floor(t r), which adds up to r per step.
+  const auto share = static_cast<int>(std::floor(static_cast<double>(step + 1) * replay.effects_ratio) -
+                                      std::floor(static_cast<double>(step) * replay.effects_ratio));
+  const int more = std::max(0, share - (own_effect ? 1 : 0));
   std::vector<Memory::Ref> effects =
-      memory_->sample(replay.sampling, config_.seed, step, 1, static_cast<std::size_t>(replay.effects_ratio), true);
+      memory_->sample(replay.sampling, config_.seed, step, 1, static_cast<std::size_t>(more), true);
   replayed_effects_ += static_cast<std::int64_t>(effects.size());
   return effects;
 }
@@ -116,7 +123,7 @@ void Predictors::trainEffects(const Experience& e) {
   const int a = e.action;
   Eigen::VectorXd target(input_size_);
   for (int i = 0; i < input_size_; ++i) target[i] = e.after_image[i] / 255.0;
-  what_[a].train(focusInput(e.before_image), target, config_.predictors.what_effect_learning_rate);
+  what_[a].train(inputOf(e), target, config_.predictors.what_effect_learning_rate);
   where_[a].train(whereInput(a, e.before_x, e.before_y, e.target_x, e.target_y), Eigen::Vector2d(e.after_x, e.after_y),
                   config_.predictors.where_effect_learning_rate);
 }
@@ -154,7 +161,7 @@ static void forEachWeightArray(F&& f, std::vector<Unit>& aff, std::vector<Unit>&
   }
 }
 
-void Predictors::save(const std::string& path) const {
+void Predictors::save(const std::string& path, const std::string& checksum) const {
   // A file of this process's own, renamed into place: a reader never sees half
   // a checkpoint, and two writers of the same path do not clobber each other.
   const std::string tmp = path + ".tmp." + std::to_string(getpid());
@@ -179,7 +186,7 @@ void Predictors::save(const std::string& path) const {
       out.write(reinterpret_cast<const char*>(&replayed_effects_), sizeof replayed_effects_);
       memory_->save(out);
     }
-    const std::string sum = weightsChecksum();
+    const std::string sum = checksum.empty() ? weightsChecksum() : checksum;
     out.write(sum.data(), static_cast<std::streamsize>(sum.size()));
     if (!out) throw std::runtime_error("cannot write checkpoint " + tmp);
   }

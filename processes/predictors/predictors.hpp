@@ -60,9 +60,11 @@ class Predictors {
   // With predictors.replay, the replay of `step` (every step: after the
   // step's own update, or after a pass): predictors.replay.ratio remembered
   // experiences, drawn by (seed, step), each one update of its affordance
-  // predictor; returns the effects_ratio forward-model updates drawn from
-  // experiences whose effect was seen, for trainEffects. Nothing without.
-  std::vector<Memory::Ref> replay(std::int64_t step);
+  // predictor; returns the forward-model updates, drawn from experiences whose
+  // effect was seen, that make up effects_ratio with the step's own
+  // (`own_effect`: the step's action had its effect), for trainEffects.
+  // Nothing without replay.
+  std::vector<Memory::Ref> replay(std::int64_t step, bool own_effect = false);
   // Lines 10-12: what- and where-effect predictors, from a report's
   // effect_updates. Nothing in the intrinsic phase reads them, so the node
   // may run this after publishing the next prediction, or on another thread;
@@ -86,7 +88,9 @@ class Predictors {
   // file that ends with the checksum. save() writes atomically (temp + rename);
   // load() throws std::runtime_error naming the file and the problem (missing,
   // wrong format, other dimensions, checksum mismatch).
-  void save(const std::string& path) const;
+  // `checksum`: weightsChecksum() if the caller has it already (it takes a
+  // pass over every weight), "" to compute it.
+  void save(const std::string& path, const std::string& checksum = "") const;
   void load(const std::string& path);
   const std::array<std::int64_t, kNumActions>& executed() const { return executed_; }
   const std::array<std::int64_t, kNumActions>& successes() const { return successes_; }

@@ -179,20 +179,22 @@ TEST_F(Fixture, ReplayKeepsTrainingRememberedExperiencesOfOtherLooks) {
   EXPECT_EQ(replaying.memory()->looks(), 2);
 }
 
-TEST_F(Fixture, ASuccessCallsForItsOwnForwardModelUpdateThenTheReplayedOnes) {
-  const RunConfig c = test::shippedConfig("base", System::IMP, 1, test::kMemoryOptions);
-  Predictors p(c);
+TEST_F(Fixture, EachStepMakesEffectsRatioForwardModelUpdatesItsOwnFirst) {
+  std::vector<std::string> options = test::kMemoryOptions;
+  options.push_back("predictors.replay.effects_ratio=3");
+  Predictors p(test::shippedConfig("base", System::IMP, 1, options));
   const int look = p.see(probes[0], 0).look;
   const TrainingReport failure = p.trainAffordance(experience(kTurnBlue, false), 0, look);
-  EXPECT_TRUE(failure.effect_updates.empty());
+  EXPECT_TRUE(failure.effect_updates.empty());  // nothing remembered with an effect yet
   const Experience e = experience(kTurnGreen, true);
   const TrainingReport success = p.trainAffordance(e, 1, look);
-  ASSERT_EQ(success.effect_updates.size(), 1u + c.predictors.replay.effects_ratio);
+  ASSERT_EQ(success.effect_updates.size(), 3u);  // its own, and 2 remembered
   EXPECT_EQ(success.effect_updates[0]->action, kTurnGreen);
   EXPECT_EQ(success.effect_updates[0]->after_image, e.after_image);
   for (const auto& u : success.effect_updates) EXPECT_TRUE(u->affordance);
-  EXPECT_EQ(p.replayedEffectUpdates(), c.predictors.replay.effects_ratio);
-  EXPECT_THROW(p.trainAffordance(e, 2), std::invalid_argument);  // a memory files it under a look
+  EXPECT_EQ(p.replay(2).size(), 3u);  // a pass: all 3 remembered
+  EXPECT_EQ(p.replayedEffectUpdates(), 5);
+  EXPECT_THROW(p.trainAffordance(e, 3), std::invalid_argument);  // a memory files it under a look
 }
 
 TEST_F(Fixture, SeeReportsWhatWasTriedOnTheLook) {

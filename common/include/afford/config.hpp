@@ -90,7 +90,7 @@ enum class ReplaySampling {
 struct ReplayConfig {
   bool enabled = false;   // off: no replay, the paper's agent
   int ratio = 0;          // replayed affordance updates per intrinsic step
-  int effects_ratio = 0;  // replayed forward-model updates per intrinsic step (from experiences whose effect was seen)
+  double effects_ratio = 0;  // forward-model updates per intrinsic step, on average: the step's own, remembered ones for the rest
   ReplaySampling sampling = ReplaySampling::Balanced;
 };
 
