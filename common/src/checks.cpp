@@ -131,7 +131,10 @@ std::string checkMessage(const decision_t& m, const BoundsContext& c) {
                 m.acted || m.action == decision_t::NONE ? "" : "field action must be -1 when acted is false",
                 checkRange("x", m.x, 0.0, 1.0), checkRange("y", m.y, 0.0, 1.0), checkTarget("target_x", m.target_x),
                 checkTarget("target_y", m.target_y), checkFinite("motivation", m.motivation),
-                checkFinite("threshold", m.threshold)});
+                checkFinite("threshold", m.threshold),
+                m.revisit == 0 || (m.revisit == 1 && m.acted) ? ""
+                : m.revisit == 1 ? "field revisit must be false when acted is false"
+                                 : "field revisit = " + std::to_string(m.revisit) + " is not a boolean"});
 }
 
 std::string checkMessage(const effect_t& m, const BoundsContext& c) {

@@ -2,6 +2,7 @@
 
 #include <nlohmann/json.hpp>
 
+#include <algorithm>
 #include <atomic>
 #include <chrono>
 #include <cmath>
@@ -541,9 +542,11 @@ Plan planExperiment(const ExperimentOptions& o, bool fresh) {
   auto& runs = plan.runs;
   auto& configs = plan.configs;
   // Random tables: table k of the series replaces the affordances of the world's objects.
+  std::vector<ObjectSpec> drawn_for;  // the objects the tables are drawn for
   if (plan.tables) {
-    const RunConfig any = parseRunConfig(effectiveConfig(plan.config_dir, RunRequest{o.experiment, System::IMP, o.seed, o.steps, o.settings}));
-    for (int k = 0; k < plan.tables->count; ++k) plan.table_list.push_back(randomTable(plan.tables->seed, k, any.world.objects));
+    drawn_for = parseRunConfig(effectiveConfig(plan.config_dir, RunRequest{o.experiment, System::IMP, o.seed, o.steps, o.settings}))
+                    .world.objects;
+    for (int k = 0; k < plan.tables->count; ++k) plan.table_list.push_back(randomTable(plan.tables->seed, k, drawn_for));
   }
   const int n_tables = plan.tables ? plan.tables->count : 1;
   for (int table = 0; table < n_tables; ++table)
@@ -563,6 +566,12 @@ Plan planExperiment(const ExperimentOptions& o, bool fresh) {
       }
       std::string run_id = prefix + "-" + o.experiment + "-";
       if (plan.tables) {
+        const auto objects = parseRunConfig(node).world.objects;
+        const auto same = [](const ObjectSpec& a, const ObjectSpec& b) { return a.shape == b.shape && a.colour == b.colour; };
+        if (objects.size() != drawn_for.size() || !std::equal(objects.begin(), objects.end(), drawn_for.begin(), same))
+          throw ConfigError("condition '" + condition + "' of " + o.experiment +
+                            " changes world.objects, for which the random tables are drawn (their colours decide which "
+                            "entries are 0): a condition may not change the objects' number, shapes or colours");
         char t[16];
         std::snprintf(t, sizeof t, "t%02d-", table);
         run_id += t + condition + (condition.empty() ? "" : "-");
@@ -1017,41 +1026,32 @@ json summarise(const Plan& plan, const ExperimentOptions& o, const PhaseRuns& ph
       const Table& fin = r.curve.back().affordance;
       finals.push_back(fin);
       maes.push_back(meanAbsError(fin, p.target));
+      json entry = {{"run_id", p.spec.run_id},
+                    {"seed", p.spec.seed},
+                    {"affordance", fin},
+                    {"affordance_mae", maes.back()},
+                    {"weights_checksum", r.weights_checksum},
+                    {"actions_executed", r.executed},
+                    {"successes", r.successes},
+                    {"looks", r.looks},
+                    {"replayed", r.replayed},
+                    {"replayed_effects", r.replayed_effects},
+                    {"revisits", r.revisits},
+                    {"wall_seconds", r.wall_seconds},
+                    {"steps_per_second", r.run_seconds > 0 ? p.spec.steps / r.run_seconds : 0.0}};
       if (plan.tables) {  // random tables: each run against its own table; no mean table or curve across them
-        js["runs"].push_back({{"run_id", p.spec.run_id},
-                              {"seed", p.spec.seed},
-                              {"table", p.table},
-                              {"condition", p.intrinsic_condition.empty() ? std::string("default") : p.intrinsic_condition},
-                              {"target", p.target},
-                              {"affordance", fin},
-                              {"affordance_mae", maes.back()},
-                              {"weights_checksum", r.weights_checksum},
-                              {"actions_executed", r.executed},
-                              {"successes", r.successes},
-                              {"looks", r.looks},
-                              {"revisits", r.revisits},
-                              {"wall_seconds", r.wall_seconds},
-                              {"steps_per_second", r.run_seconds > 0 ? p.spec.steps / r.run_seconds : 0.0}});
+        entry["table"] = p.table;
+        entry["condition"] = p.intrinsic_condition.empty() ? std::string("default") : p.intrinsic_condition;
+        entry["target"] = p.target;
+        js["runs"].push_back(entry);
         continue;
       }
-      js["runs"].push_back({{"run_id", p.spec.run_id},
-                            {"seed", p.spec.seed},
-                            {"log_dir", r.log_dir.empty() ? json(nullptr) : json(r.log_dir)},
-                            {"affordance", fin},
-                            {"affordance_mae", maes.back()},
-                            {"weights_checksum", r.weights_checksum},
-                            {"checkpoint", r.checkpoint},
-                            {"actions_executed", r.executed},
-                            {"successes", r.successes},
-                            {"looks", r.looks},
-                            {"replayed", r.replayed},
-                            {"replayed_effects", r.replayed_effects},
-                            {"revisits", r.revisits},
-                            {"wall_seconds", r.wall_seconds},
-                            {"steps_per_second", r.run_seconds > 0 ? p.spec.steps / r.run_seconds : 0.0},
-                            {"peak_rss_kb", r.peak_rss_kb},
-                            {"log_bytes", r.log_bytes},
-                            {"log_bytes_per_step", static_cast<double>(r.log_bytes) / p.spec.steps}});
+      entry["log_dir"] = r.log_dir.empty() ? json(nullptr) : json(r.log_dir);
+      entry["checkpoint"] = r.checkpoint;
+      entry["peak_rss_kb"] = r.peak_rss_kb;
+      entry["log_bytes"] = r.log_bytes;
+      entry["log_bytes_per_step"] = static_cast<double>(r.log_bytes) / p.spec.steps;
+      js["runs"].push_back(entry);
       for (const auto& snap : r.curve) {
         auto& [sum, n] = curve_sum[snap.step];
         if (sum.empty()) sum = Table(snap.affordance.size(), std::vector<double>(kNumActions, 0.0));

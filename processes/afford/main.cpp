@@ -4,6 +4,7 @@
 #include <CLI/CLI.hpp>
 #include <lcm/lcm-cpp.hpp>
 #include <chrono>
+#include <limits>
 #include <map>
 #include <opencv2/core.hpp>
 #include <opencv2/imgcodecs.hpp>
@@ -64,11 +65,14 @@ int main(int argc, char** argv) {
       ->capture_default_str();
   exp->add_option("--scenarios", o.scenarios, "scenarios to test (default: all in config/scenarios)");
   int tables = 0;
-  std::int64_t table_seed = -1;
-  exp->add_option("--tables", tables,
-                  "experiments on random affordance tables (random-tables): how many tables (default: the experiment's)");
-  exp->add_option("--table-seed", table_seed,
-                  "... and the seed of the series they are drawn from (default: the experiment's)");
+  std::int64_t table_seed = 0;
+  auto* tables_option = exp->add_option("--tables", tables,
+                                        "experiments on random affordance tables (random-tables): how many tables "
+                                        "(default: the experiment's)")
+                            ->check(CLI::Range(1, 100000));
+  auto* table_seed_option = exp->add_option("--table-seed", table_seed,
+                                            "... and the seed of the series they are drawn from (default: the experiment's)")
+                                ->check(CLI::Range(std::int64_t{0}, std::numeric_limits<std::int64_t>::max()));
   exp->add_option("--attach", o.attach,
                   "drive the runs on this LCM URL, with processes started by hand (afford-environment ..., "
                   "and afford-logger for logs): the runner starts none");
@@ -268,8 +272,8 @@ int main(int argc, char** argv) {
                                 "`afford experiment --resume --out DIR` to continue an interrupted one");
     if (reps) o.reps = reps;
     if (steps) o.steps = steps;
-    if (tables) o.tables = tables;
-    if (table_seed >= 0) o.table_seed = table_seed;
+    if (tables_option->count()) o.tables = tables;
+    if (table_seed_option->count()) o.table_seed = table_seed;
     if (system == "all")
       o.systems = {"FIX", "IGN", "IMP"};
     else if (!system.empty())

@@ -26,23 +26,23 @@ Turn MotivationNode::onPrediction(const prediction_t& m) {
   if (m.step >= config().steps)
     return Turn::refuse("step " + std::to_string(m.step) + " is beyond the run's last step");
   if (m.step != last_ + 1) return Turn::later();  // an earlier prediction is still to come
+  // Every refusal comes before the core changes: a refused message is asked for again, and must find it as it was.
+  const bool remembered = m.n_tried == kNumActions;
+  if (config().motivation.revisit.enabled && !remembered)
+    return Turn::refuse("step " + std::to_string(m.step) + " says nothing of what was tried on the look (n_tried = 0), "
+                        "which motivation.revisit needs: do the predictors keep a memory?");
+  if (core_->awaitingObservation() && (m.n_trained != 1 || m.trained[0].step != m.step - 1))
+    return Turn::refuse("step " + std::to_string(m.step) + " lacks the report of step " + std::to_string(m.step - 1) +
+                        "'s update");
   // IMP with observed_change: the threshold takes the observed change of
   // the affordance output that the last action caused.
-  if (core_->awaitingObservation()) {
-    if (m.n_trained != 1 || m.trained[0].step != m.step - 1)
-      return Turn::refuse("step " + std::to_string(m.step) + " lacks the report of step " + std::to_string(m.step - 1) +
-                          "'s update");
+  if (core_->awaitingObservation())
     core_->observeChange(std::abs(m.trained[0].affordance_after - m.trained[0].affordance_before));
-  }
   std::array<double, kNumActions> aff{}, lp{};
   std::copy(m.affordance.begin(), m.affordance.end(), aff.begin());
   std::copy(m.learning_progress.begin(), m.learning_progress.end(), lp.begin());
   std::array<std::int64_t, kNumActions> tried{};
-  const bool remembered = m.n_tried == kNumActions;
   if (remembered) std::copy(m.tried_ago.begin(), m.tried_ago.end(), tried.begin());
-  if (config().motivation.revisit.enabled && !remembered)
-    return Turn::refuse("step " + std::to_string(m.step) + " says nothing of what was tried on the look (n_tried = 0), "
-                        "which motivation.revisit needs: do the predictors keep a memory?");
   const Decision d = core_->decide(aff, lp, remembered ? &tried : nullptr);
   decision_t out;
   out.run_id = runId();

@@ -32,12 +32,24 @@ void putBytes(std::ostream& out, const std::vector<std::uint8_t>& b) {
   put(out, static_cast<std::uint32_t>(b.size()));
   out.write(reinterpret_cast<const char*>(b.data()), static_cast<std::streamsize>(b.size()));
 }
-std::vector<std::uint8_t> getBytes(std::istream& in, std::size_t max) {
+// A damaged file: cut short (truncated), or holding what no memory holds (corrupt).
+struct Damaged : std::runtime_error {
+  using std::runtime_error::runtime_error;
+};
+void need(const std::istream& in, const std::string& what) {
+  if (!in) throw Damaged("truncated in " + what);
+}
+
+// An image of exactly `want` bytes (or, with `or_none`, of none).
+std::vector<std::uint8_t> getBytes(std::istream& in, std::size_t want, bool or_none, const std::string& what) {
   std::uint32_t n = 0;
   get(in, n);
-  if (!in || n > max) throw std::runtime_error("an image of " + std::to_string(n) + " bytes");
+  need(in, what);
+  if (n != want && !(or_none && n == 0))
+    throw Damaged(what + " of " + std::to_string(n) + " bytes, not " + std::to_string(want));
   std::vector<std::uint8_t> b(n);
   in.read(reinterpret_cast<char*>(b.data()), n);
+  need(in, what);
   return b;
 }
 
@@ -48,18 +60,22 @@ void putExperience(std::ostream& out, const Experience& e) {
   putBytes(out, e.before_image);
   putBytes(out, e.after_image);
 }
-Experience getExperience(std::istream& in, std::size_t image_bytes) {
+// An experience of `action` (the slot it is filed under), with images of `image_bytes`: an after-image only when
+// its effect was seen.
+Experience getExperience(std::istream& in, int action, std::size_t image_bytes, const std::string& what) {
   Experience e;
-  std::int32_t action = 0;
+  std::int32_t a = 0;
   std::uint8_t affordance = 0;
-  get(in, action);
+  get(in, a);
   get(in, affordance);
   for (double* v : {&e.before_x, &e.before_y, &e.target_x, &e.target_y, &e.after_x, &e.after_y}) get(in, *v);
-  if (!in || !validAction(action)) throw std::runtime_error("an experience of action " + std::to_string(action));
-  e.action = action;
+  need(in, what);
+  if (a != action) throw Damaged(what + " of action " + std::to_string(a) + ", filed under action " + std::to_string(action));
+  if (affordance > 1) throw Damaged(what + " whose effect is " + std::to_string(affordance) + ", not 0 or 1");
+  e.action = a;
   e.affordance = affordance != 0;
-  e.before_image = getBytes(in, image_bytes);
-  e.after_image = getBytes(in, image_bytes);
+  e.before_image = getBytes(in, image_bytes, false, what + "'s image");
+  e.after_image = getBytes(in, e.affordance ? image_bytes : 0, false, what + "'s image after");
   return e;
 }
 
@@ -252,6 +268,11 @@ std::size_t Memory::experiences() const {
 }
 
 void Memory::save(std::ostream& out) const {
+  // The settings it was kept with, then the looks and their experiences.
+  put(out, config_.look_threshold);
+  put(out, static_cast<std::int32_t>(config_.look_shift_px));
+  put(out, static_cast<std::int32_t>(config_.max_looks));
+  put(out, static_cast<std::int32_t>(config_.per_look_action));
   put(out, static_cast<std::uint32_t>(looks_.size()));
   for (const Look& l : looks_) {
     put(out, static_cast<std::uint8_t>(l.used));
@@ -269,43 +290,60 @@ void Memory::save(std::ostream& out) const {
 void Memory::load(std::istream& in, const std::string& what) {
   const std::size_t bytes = static_cast<std::size_t>(3 * side_ * side_);
   try {
+    MemoryConfig c;
+    std::int32_t shift = 0, max_looks = 0, per = 0;
+    get(in, c.look_threshold);
+    get(in, shift);
+    get(in, max_looks);
+    get(in, per);
+    need(in, "its settings");
+    if (!(c.look_threshold >= 0 && c.look_threshold <= 1) || shift < 0 || shift > 10 || max_looks < 1 ||
+        max_looks > 100'000 || per < 1 || per > 100'000)
+      throw Damaged("settings out of range");
+    c.look_shift_px = shift;
+    c.max_looks = max_looks;
+    c.per_look_action = per;
     std::uint32_t n = 0;
     get(in, n);
-    if (!in) throw std::runtime_error("no memory");
-    if (n > static_cast<std::uint32_t>(config_.max_looks))
-      throw std::runtime_error(std::to_string(n) + " looks, more than predictors.memory.max_looks " +
-                               std::to_string(config_.max_looks));
-    std::vector<Look> looks(n);
-    for (Look& l : looks) {
+    need(in, "its looks");
+    if (n > static_cast<std::uint32_t>(c.max_looks))
+      throw Damaged(std::to_string(n) + " looks, more than its max_looks " + std::to_string(c.max_looks));
+    Memory restored(c, side_);
+    restored.looks_.resize(n);
+    for (std::uint32_t k = 0; k < n; ++k) {
+      Look& l = restored.looks_[k];
+      const std::string look = "look " + std::to_string(k);
       std::uint8_t used = 0;
       get(in, used);
-      if (!in) throw std::runtime_error("a look cut short");
+      need(in, look);
+      if (used > 1) throw Damaged(look + " marked " + std::to_string(used));
       if (!used) continue;
       l.used = true;
-      setImage(l, getBytes(in, bytes));
+      restored.setImage(l, getBytes(in, bytes, false, look + "'s image"));
       get(in, l.last_seen);
       for (std::int64_t& t : l.tried_at) get(in, t);
-      for (auto& kept : l.experiences) {
-        std::uint32_t k = 0;
-        get(in, k);
-        if (!in || k > static_cast<std::uint32_t>(config_.per_look_action))
-          throw std::runtime_error(std::to_string(k) + " experiences of a look and action, more than predictors.memory.per_look_action " +
-                                   std::to_string(config_.per_look_action));
-        for (std::uint32_t i = 0; i < k; ++i) {
-          auto e = std::make_shared<Experience>(getExperience(in, bytes));
+      need(in, look);
+      for (int a = 0; a < kNumActions; ++a) {
+        std::uint32_t m = 0;
+        get(in, m);
+        need(in, look);
+        if (m > static_cast<std::uint32_t>(c.per_look_action))
+          throw Damaged(look + " with " + std::to_string(m) + " experiences of action " + std::to_string(a) +
+                        ", more than its per_look_action " + std::to_string(c.per_look_action));
+        for (std::uint32_t i = 0; i < m; ++i) {
+          auto e = std::make_shared<Experience>(
+              getExperience(in, a, bytes, look + "'s experience " + std::to_string(i) + " of action " + std::to_string(a)));
           e->before_input = focusInput(e->before_image);
-          l.with_effect[static_cast<std::size_t>(&kept - &l.experiences[0])] += e->affordance;
-          kept.push_back(std::move(e));
+          l.with_effect[static_cast<std::size_t>(a)] += e->affordance;
+          l.experiences[static_cast<std::size_t>(a)].push_back(std::move(e));
         }
       }
-      if (!in) throw std::runtime_error("a look cut short");
     }
-    looks_ = std::move(looks);
-    by_image_.clear();
-    for (std::size_t k = 0; k < looks_.size(); ++k)
-      if (looks_[k].used) by_image_.emplace(imageHash(looks_[k].image), static_cast<int>(k));
-  } catch (const std::runtime_error& e) {
-    throw std::runtime_error(what + ": its memory does not fit this run's (" + e.what() + ")");
+    for (std::size_t k = 0; k < restored.looks_.size(); ++k)
+      if (restored.looks_[k].used) restored.by_image_.emplace(imageHash(restored.looks_[k].image), static_cast<int>(k));
+    *this = std::move(restored);
+  } catch (const Damaged& e) {
+    throw std::runtime_error(what + ": its memory is damaged (" + e.what() + ")");
   }
 }
 

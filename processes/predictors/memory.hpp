@@ -36,11 +36,12 @@ class Memory {
   using Ref = std::shared_ptr<const Experience>;  // immutable: the forward-model worker may hold it
   using TriedAgo = std::array<std::int64_t, kNumActions>;
 
-  // Throws ConfigError for an image size that is not 3 x side x side.
+  // Throws ConfigError for max_looks or per_look_action below 1.
   Memory(const MemoryConfig& config, int focus_side);
 
   // The look of a focus image seen at `step`: the nearest remembered look
   // within look_threshold, or a new one. Returns its index (stable while it is remembered).
+  // Throws std::invalid_argument for an image that is not 3 x side x side bytes.
   int see(const std::vector<std::uint8_t>& image, std::int64_t step);
   // The distance see() compares with look_threshold (0..1).
   double distance(const std::vector<std::uint8_t>& image, int look) const;
@@ -61,9 +62,13 @@ class Memory {
   int looks() const;              // looks remembered
   std::size_t experiences() const;  // experiences remembered
 
-  // The whole memory, in a fixed order (checkpoints, checksums).
+  // The whole memory, in a fixed order (checkpoints, checksums): the settings
+  // it was kept with, then its looks and their experiences.
   void save(std::ostream& out) const;
-  // Throws std::runtime_error naming `what` if the stream does not hold a memory of this configuration.
+  // Restores a saved memory whole, with the settings it was kept with (not
+  // necessarily this one's). Throws std::runtime_error naming `what` if the
+  // stream is cut short or holds what no memory holds (images of another
+  // size, an experience filed under another action, counts beyond its limits).
   void load(std::istream& in, const std::string& what);
   void hash(Fnv1a& h) const;
 

@@ -151,7 +151,7 @@ Turn PredictorsNode::onDecision(const decision_t& m) {
   if (m.acted) {
     outcome_ = Outcome::AwaitingEffect;
     action_ = m.action;
-    revisits_ += m.revisit;
+    revisits_ += m.revisit ? 1 : 0;
     return Turn::take();
   }
   outcome_ = Outcome::Passed;

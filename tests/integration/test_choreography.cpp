@@ -436,6 +436,20 @@ std::vector<BadInput> badInputs() {
          d.action = 9;
          l.publish("DECISION", &d);
        }},
+      {"RevisitWithoutAnAction", "DECISION", "field revisit must be false when acted is false",
+       [](lcm::LCM& l, const std::string& run, std::int64_t s, const Bytes&) {
+         decision_t d = validDecision(run, s);
+         d.revisit = true;
+         l.publish("DECISION", &d);
+       }},
+      {"TriedAgoOfOneAction", "PREDICTION", "field n_tried = 1 must be 0 or 4",
+       [](lcm::LCM& l, const std::string& run, std::int64_t s, const Bytes&) {
+         prediction_t p = validPrediction(run, s);
+         p.look = 0;
+         p.n_tried = 1;
+         p.tried_ago = {3};
+         l.publish("PREDICTION", &p);
+       }},
       {"ObjectPositionOutOfRange", "EFFECT", "field after_x = 1.5 is out of range",
        [](lcm::LCM& l, const std::string& run, std::int64_t s, const Bytes&) {
          effect_t e;
