@@ -3,14 +3,14 @@
 # docs/results.md (our tables and figures beside the paper's).
 #   scripts/reproduce.sh deterministic   base, late1, late2, late3: 10 intrinsic runs per
 #                                        system, 10 tests of each scenario per run (Tables
-#                                        1, 2, 4-6; Figures 5-10); about 20 min on 2 cores
+#                                        1, 2, 4-6; Figures 5-10); about 10 min on 2 cores
 #   scripts/reproduce.sh stochastic      stochastic, utility, forward-models, search-reduction
 #                                        with the counts of their files (Table 7, 8;
-#                                        Figures 11-14); about 15 min on 2 cores
+#                                        Figures 11-14); about 7 min on 2 cores
 #   scripts/reproduce.sh beyond          beyond the paper (issue 11): late1-3 with experience
 #                                        replay and revisits, beside the paper's agent, and
 #                                        random-tables (every system, 20 tables, with and without
-#                                        them); about 25 min on 2 cores
+#                                        them); about 13 min on 2 cores
 #   scripts/reproduce.sh all             all three
 #   scripts/reproduce.sh NAME...         only these experiments (e.g. late3 utility)
 # Environment: JOBS (runs at a time, default: cores), REPS and EXT_REPS (default: the
