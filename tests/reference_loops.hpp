@@ -25,7 +25,7 @@ inline Predictors runIntrinsic(const RunConfig& c) {
   for (std::int64_t t = 0; t < c.steps; ++t) {
     const Focus f = eye.scan(t);
     const Prediction p = predictors.see(f.image, t);
-    const Decision d = motivation.decide(p.affordance, p.learning_progress, p.remembered ? &p.tried_ago : nullptr);
+    const Decision d = motivation.decide(p.affordance, p.learning_progress, p.remembered ? &p.tried_ago : nullptr, t);
     const bool more = t + 1 < c.steps;
     if (d.act) {
       const ActionOutcome out = env.execute(t, d.action, f.x, f.y);

@@ -354,6 +354,8 @@ RunConfig parseRunConfig(const YAML::Node& root) {
     Reader rv = m.map("revisit");
     c.motivation.revisit.enabled = rv.choice<bool>("enabled", {{"true", true}, {"false", false}});
     c.motivation.revisit.after_steps = rv.integer("after_steps", 0, 100'000'000);
+    c.motivation.revisit.order =
+        rv.choice<RevisitOrder>("order", {{"actions", RevisitOrder::Actions}, {"random", RevisitOrder::Random}});
     rv.finish();
     m.finish();
   }

@@ -1,5 +1,7 @@
 #include "motivation/motivation.hpp"
 
+#include "afford/rng.hpp"
+
 #include <cmath>
 #include <stdexcept>
 #include <utility>
@@ -16,21 +18,32 @@ Motivation::Motivation(const RunConfig& config)
       threshold_(config.system == System::FIX ? config.motivation.fixed_threshold
                                               : config.motivation.initial_threshold) {}
 
-int revisitAction(const std::array<std::int64_t, kNumActions>& tried_ago, std::int64_t after_steps) {
-  int never = -1, stalest = -1;
-  for (int a = 0; a < kNumActions; ++a) {
-    if (tried_ago[a] < 0) {
-      if (never < 0) never = a;  // the action order: move first (a move keeps the look), then the colours
-    } else if (after_steps > 0 && tried_ago[a] >= after_steps && (stalest < 0 || tried_ago[a] > tried_ago[stalest])) {
-      stalest = a;
+int revisitAction(const std::array<std::int64_t, kNumActions>& tried_ago, const RevisitConfig& revisit,
+                  std::int64_t seed, std::int64_t step) {
+  std::array<int, kNumActions> order{};
+  for (int a = 0; a < kNumActions; ++a) order[a] = a;  // move first: a move keeps the look
+  if (revisit.order == RevisitOrder::Random) {
+    // A successful colour change leaves the look, and may lead where the look never comes back from: the objects
+    // that enter a look should not all leave it the same way. Fisher-Yates over the colours, keyed by the step.
+    const KeyedRng rng(seed, step, Purpose::Revisit);
+    for (int i = kNumActions - 1; i > 1; --i) {
+      const int j = 1 + static_cast<int>(rng.bits(static_cast<std::uint64_t>(i)) % static_cast<std::uint64_t>(i));
+      std::swap(order[i], order[j]);
     }
   }
-  return never >= 0 ? never : stalest;
+  int stalest = -1;
+  for (const int a : order)
+    if (tried_ago[a] < 0) return a;
+  for (int a = 0; a < kNumActions; ++a)
+    if (revisit.after_steps > 0 && tried_ago[a] >= revisit.after_steps &&
+        (stalest < 0 || tried_ago[a] > tried_ago[stalest]))
+      stalest = a;
+  return stalest;
 }
 
 Decision Motivation::decide(const std::array<double, kNumActions>& affordance,
                             const std::array<double, kNumActions>& learning_progress,
-                            const std::array<std::int64_t, kNumActions>* tried_ago) {
+                            const std::array<std::int64_t, kNumActions>* tried_ago, std::int64_t step) {
   Decision d;
   for (int a = 0; a < kNumActions; ++a) {
     const double signal =
@@ -43,7 +56,7 @@ Decision Motivation::decide(const std::array<double, kNumActions>& affordance,
   d.threshold = threshold_;
   if (config_.motivation.revisit.enabled) {
     if (!tried_ago) throw std::invalid_argument("motivation.revisit needs what was tried on the look (the predictors' memory)");
-    const int a = revisitAction(*tried_ago, config_.motivation.revisit.after_steps);
+    const int a = revisitAction(*tried_ago, config_.motivation.revisit, config_.seed, step);
     if (a >= 0) {
       // Not an IM-driven choice: the threshold, the opportunity cost of the IM signal's choices, stays as it is.
       d.act = d.revisit = true;

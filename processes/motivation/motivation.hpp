@@ -27,7 +27,12 @@ struct Decision {
 // else, if after_steps > 0, the one not tried for longest, once that is
 // after_steps or more (ties: the first in that order). tried_ago: steps since
 // each action was last tried on the look, -1 for never.
-int revisitAction(const std::array<std::int64_t, kNumActions>& tried_ago, std::int64_t after_steps);
+// The action a revisit tries on the focused look, or -1: one never tried on it
+// (by `order`: the action order, or move then the colours in an order drawn
+// from (seed, step, Purpose::Revisit)), else the one tried longest ago if that
+// is after_steps or more.
+int revisitAction(const std::array<std::int64_t, kNumActions>& tried_ago, const RevisitConfig& revisit,
+                  std::int64_t seed, std::int64_t step);
 
 class Motivation {
  public:
@@ -40,7 +45,7 @@ class Motivation {
   // a revisit acts without comparing with the threshold, and leaves it as it is.
   Decision decide(const std::array<double, kNumActions>& affordance,
                   const std::array<double, kNumActions>& learning_progress,
-                  const std::array<std::int64_t, kNumActions>* tried_ago = nullptr);
+                  const std::array<std::int64_t, kNumActions>* tried_ago = nullptr, std::int64_t step = 0);
   // The observed |change| of the affordance output of the executed action.
   void observeChange(double absolute_change);
   bool awaitingObservation() const { return awaiting_; }

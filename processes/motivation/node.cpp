@@ -43,7 +43,7 @@ Turn MotivationNode::onPrediction(const prediction_t& m) {
   std::copy(m.learning_progress.begin(), m.learning_progress.end(), lp.begin());
   std::array<std::int64_t, kNumActions> tried{};
   if (remembered) std::copy(m.tried_ago.begin(), m.tried_ago.end(), tried.begin());
-  const Decision d = core_->decide(aff, lp, remembered ? &tried : nullptr);
+  const Decision d = core_->decide(aff, lp, remembered ? &tried : nullptr, m.step);
   decision_t out;
   out.run_id = runId();
   out.step = m.step;

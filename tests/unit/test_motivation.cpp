@@ -1,5 +1,7 @@
 #include <gtest/gtest.h>
 
+#include <map>
+
 #include "motivation/motivation.hpp"
 #include "tests/support.hpp"
 
@@ -79,18 +81,43 @@ TEST(Motivation, ImpWithObservedChangeWaitsForTheObservation) {
 
 using Tried = std::array<std::int64_t, kNumActions>;
 
+RevisitConfig revisitAfter(std::int64_t after_steps, RevisitOrder order = RevisitOrder::Actions) {
+  RevisitConfig r;
+  r.enabled = true;
+  r.after_steps = after_steps;
+  r.order = order;
+  return r;
+}
+
 TEST(Revisit, NeverTriedActionsComeFirstInTheActionOrder) {
-  EXPECT_EQ(revisitAction(Tried{-1, -1, -1, -1}, 1000), kMove);
-  EXPECT_EQ(revisitAction(Tried{3, -1, -1, -1}, 1000), kTurnGreen);
-  EXPECT_EQ(revisitAction(Tried{3, 4, 2, -1}, 1000), kTurnBlue);
-  EXPECT_EQ(revisitAction(Tried{5000, 4, -1, 5000}, 1000), kTurnRed);  // never tried before stale
+  const RevisitConfig r = revisitAfter(1000);
+  EXPECT_EQ(revisitAction(Tried{-1, -1, -1, -1}, r, 1, 0), kMove);
+  EXPECT_EQ(revisitAction(Tried{3, -1, -1, -1}, r, 1, 0), kTurnGreen);
+  EXPECT_EQ(revisitAction(Tried{3, 4, 2, -1}, r, 1, 0), kTurnBlue);
+  EXPECT_EQ(revisitAction(Tried{5000, 4, -1, 5000}, r, 1, 0), kTurnRed);  // never tried before stale
 }
 
 TEST(Revisit, OtherwiseTheActionNotTriedForLongestOnceItIsStale) {
-  EXPECT_EQ(revisitAction(Tried{999, 10, 20, 30}, 1000), -1);
-  EXPECT_EQ(revisitAction(Tried{1000, 10, 1500, 30}, 1000), kTurnRed);
-  EXPECT_EQ(revisitAction(Tried{1500, 10, 1500, 30}, 1000), kMove);
-  EXPECT_EQ(revisitAction(Tried{1000000, 10, 20, 30}, 0), -1);  // after_steps 0: never-tried only
+  EXPECT_EQ(revisitAction(Tried{999, 10, 20, 30}, revisitAfter(1000), 1, 0), -1);
+  EXPECT_EQ(revisitAction(Tried{1000, 10, 1500, 30}, revisitAfter(1000), 1, 0), kTurnRed);
+  EXPECT_EQ(revisitAction(Tried{1500, 10, 1500, 30}, revisitAfter(1000), 1, 0), kMove);
+  EXPECT_EQ(revisitAction(Tried{1000000, 10, 20, 30}, revisitAfter(0), 1, 0), -1);  // after_steps 0: never-tried only
+}
+
+// order: random keeps move first, draws every never-tried colour first at some steps, and the same (seed, step)
+// always gives the same action.
+TEST(Revisit, ARandomOrderKeepsMoveFirstAndVariesTheColoursByStep) {
+  const RevisitConfig r = revisitAfter(1000, RevisitOrder::Random);
+  std::map<int, int> first;
+  for (std::int64_t step = 0; step < 300; ++step) {
+    EXPECT_EQ(revisitAction(Tried{-1, -1, -1, -1}, r, 7, step), kMove);
+    const int a = revisitAction(Tried{3, -1, -1, -1}, r, 7, step);
+    EXPECT_EQ(a, revisitAction(Tried{3, -1, -1, -1}, r, 7, step));
+    ++first[a];
+    EXPECT_EQ(revisitAction(Tried{3, 4, -1, 9}, r, 7, step), kTurnRed);  // the only one never tried
+  }
+  EXPECT_EQ(first.size(), 3u);
+  for (int a : {kTurnGreen, kTurnRed, kTurnBlue}) EXPECT_GT(first[a], 60) << a;
 }
 
 TEST(Revisit, ARevisitActsWhateverTheThresholdAndLeavesItAsItIs) {

@@ -107,9 +107,14 @@ struct PredictorsConfig {
 // Revisits (issue 11, docs/model.md#revisit): whatever the IM signal says,
 // try on the focused look an action never tried on it, or not tried for
 // after_steps steps. Off in the paper's agent.
+enum class RevisitOrder {
+  Actions,  // never-tried actions in the action order: move, turn green, turn red, turn blue
+  Random,   // move first (it keeps the look), then the never-tried colours in an order drawn per step
+};
 struct RevisitConfig {
   bool enabled = false;
   std::int64_t after_steps = 0;  // 0: only actions never tried on the look
+  RevisitOrder order = RevisitOrder::Actions;
 };
 
 struct MotivationConfig {

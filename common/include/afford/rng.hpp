@@ -20,6 +20,7 @@ enum class Purpose : std::uint64_t {
   GoalScanNoise = 7,      // eye: saliency noise of the inner eye's scan of the goal image
   RandomTable = 8,        // experiments: the entries of a random affordance table (index = table)
   Replay = 9,             // predictors: which remembered experiences are replayed at a step
+  Revisit = 10,           // motivation: the order of never-tried colour changes (revisit.order: random)
 };
 
 constexpr std::uint64_t splitmix64(std::uint64_t x) {
