@@ -6,6 +6,8 @@
 #include <set>
 #include <sstream>
 
+#include "afford/image.hpp"
+
 namespace afford {
 namespace {
 
@@ -131,6 +133,41 @@ ObjectSpec parseObject(const YAML::Node& node, const std::string& path, const Wo
   std::copy(aff.begin(), aff.end(), o.affordance.begin());
   r.finish();
   return o;
+}
+
+// The world's layout: the objects present at the start may not overlap or
+// touch (the eye would see one blob), and two objects of one look (shape and
+// colour) must have one affordance row (the environment acts by look).
+void checkWorldLayout(const WorldConfig& w) {
+  const int size = w.size_px;
+  std::vector<int> owner(static_cast<std::size_t>(size) * size, -1);
+  for (std::size_t i = 0; i < w.objects.size(); ++i) {
+    const ObjectSpec& o = w.objects[i];
+    for (std::size_t j = 0; j < i; ++j) {
+      const ObjectSpec& p = w.objects[j];
+      if (o.shape == p.shape && o.colour == p.colour && o.affordance != p.affordance)
+        fail("world.objects[" + std::to_string(i) + "].affordance",
+             "'" + o.name + "' looks like '" + p.name + "' (world.objects[" + std::to_string(j) +
+                 "]), a " + toString(o.colour) + " " + toString(o.shape) +
+                 ", but has another affordance row: the environment acts by look, so one look has one row");
+    }
+    if (o.appears_at != 0) continue;  // late objects are placed where they are free when they come
+    for (const Pixel& px : shapePixels(o.shape, o.x, o.y, w))
+      for (int dr = -1; dr <= 1; ++dr)
+        for (int dc = -1; dc <= 1; ++dc) {
+          const int r = px.row + dr, c = px.col + dc;
+          if (r < 0 || c < 0 || r >= size || c >= size) continue;
+          const int other = owner[static_cast<std::size_t>(r) * size + c];
+          if (other >= 0 && other != static_cast<int>(i))
+            fail("world.objects[" + std::to_string(i) + "].position",
+                 "'" + o.name + "' at (" + std::to_string(o.x) + ", " + std::to_string(o.y) + ") overlaps or touches '" +
+                     w.objects[static_cast<std::size_t>(other)].name + "' (world.objects[" + std::to_string(other) +
+                     "]): objects present together must be apart, or the eye sees them as one");
+        }
+    for (const Pixel& px : shapePixels(o.shape, o.x, o.y, w))
+      if (px.row >= 0 && px.col >= 0 && px.row < size && px.col < size)
+        owner[static_cast<std::size_t>(px.row) * size + px.col] = static_cast<int>(i);
+  }
 }
 
 // Names of the .yaml files of config_dir/sub, sorted.
@@ -293,6 +330,7 @@ RunConfig parseRunConfig(const YAML::Node& root) {
     for (std::size_t i = 0; i < objs.size(); ++i)
       c.world.objects.push_back(parseObject(objs[i], "world.objects[" + std::to_string(i) + "]", c.world));
     w.finish();
+    checkWorldLayout(c.world);
   }
   {
     Reader e = r.map("eye");

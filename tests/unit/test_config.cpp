@@ -77,6 +77,41 @@ TEST(Config, ObjectOutsideTheTableIsNamedWithItsIndex) {
   EXPECT_NE(e.find("'world.objects[3].position[0]'"), std::string::npos) << e;
 }
 
+// Objects present together may not overlap or touch: the eye would see one blob.
+TEST(Config, ObjectsThatTouchAreNamedWithBoth) {
+  YAML::Node root = baseTree();
+  ASSERT_EQ(errorOf(root), "");
+  const double x = root["world"]["objects"][0]["position"][0].as<double>();
+  const double y = root["world"]["objects"][0]["position"][1].as<double>();
+  root["world"]["objects"][4]["position"][0] = x + 0.05;  // 7.5 px: the 15-px shapes overlap
+  root["world"]["objects"][4]["position"][1] = y;
+  std::string e = errorOf(root);
+  EXPECT_NE(e.find("'world.objects[4].position'"), std::string::npos) << e;
+  EXPECT_NE(e.find("world.objects[0]"), std::string::npos) << e;
+  root["world"]["objects"][4]["position"][0] = x + 0.13;  // 19.5 px between centres: apart
+  e = errorOf(root);
+  EXPECT_EQ(e, "");
+  root["world"]["objects"][4]["appears_at"] = 100;  // a late object is placed where it is free when it comes
+  root["world"]["objects"][4]["position"][0] = x;
+  EXPECT_EQ(errorOf(root), "");
+}
+
+// The environment acts by look, so two objects of one look need one affordance row.
+TEST(Config, OneLookWithTwoAffordanceRowsIsNamed) {
+  YAML::Node root = baseTree();
+  YAML::Node copy = YAML::Clone(root["world"]["objects"][0]);
+  copy["name"] = "second red square";
+  copy["position"][0] = 0.2;
+  copy["position"][1] = 0.8;
+  copy["appears_at"] = 50;
+  root["world"]["objects"].push_back(copy);
+  ASSERT_EQ(errorOf(root), "");
+  root["world"]["objects"][9]["affordance"][0] = 1.0 - root["world"]["objects"][0]["affordance"][0].as<double>();
+  const std::string e = errorOf(root);
+  EXPECT_NE(e.find("'world.objects[9].affordance'"), std::string::npos) << e;
+  EXPECT_NE(e.find("world.objects[0]"), std::string::npos) << e;
+}
+
 TEST(Config, UnknownKeyIsRejected) {
   YAML::Node root = baseTree();
   root["motivation"]["leek"] = 0.2;
