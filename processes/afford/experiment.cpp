@@ -1182,9 +1182,12 @@ void printTables(const json& summary, const Plan& plan, const ExperimentOptions&
   for (const auto& sys : plan.systems) {
     const json& js = summary["systems"][sys];
     if (!js.contains("affordance")) continue;
-    t << "\n" << sys << "            move        turn green  turn red    turn blue\n";
+    std::size_t name_width = 17;
+    for (const auto& n : object_names) name_width = std::max(name_width, n.size() + 1);
+    t << "\n" << std::left << std::setw(static_cast<int>(name_width) + 2) << sys
+      << "move        turn green  turn red    turn blue\n";
     for (std::size_t i = 0; i < object_names.size(); ++i) {
-      t << "  " << std::left << std::setw(17) << object_names[i];
+      t << "  " << std::left << std::setw(static_cast<int>(name_width)) << object_names[i];
       for (int a = 0; a < kNumActions; ++a)
         t << std::setw(12)
           << (fixed(js["affordance"][i][a].get<double>(), 2) + " (" + fixed(js["target"][i][a].get<double>(), 1) + ")");

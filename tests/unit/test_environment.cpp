@@ -113,6 +113,31 @@ TEST(Environment, AMovedObjectTouchesNoOtherInTheContinuousWorld) {
   EXPECT_GT(rectangle_moves, 500);
 }
 
+// Twenty objects on the larger table (config/experiments/large-world.yaml): every move goes to a place whose focus
+// window holds no other object, and no two objects ever overlap or touch; a move finds a free place nearly always.
+TEST(Environment, TwentyObjectsStayApartAndMovesFindFreePlaces) {
+  const RunConfig c = withSettings("large-world", 3, {});
+  ASSERT_EQ(c.world.objects.size(), 20u);
+  Environment env(c);
+  int moves = 0, tries = 0;
+  for (int step = 0; step < 2000; ++step) {
+    const auto& objs = env.objects();
+    const WorldObject& o = objs[static_cast<std::size_t>(step * 7) % objs.size()];
+    ++tries;
+    const ActionOutcome out = env.execute(step, kMove, o.x, o.y);
+    if (!out.succeeded) continue;
+    ++moves;
+    for (const auto& other : objs) {
+      if (&other == &o) continue;
+      ASSERT_FALSE(inWindow(other, o.x, o.y, c)) << "step " << step << ": " << toString(other.shape);
+      for (const Pixel& p : o.pixels)
+        for (const Pixel& q : other.pixels)
+          ASSERT_FALSE(std::abs(p.col - q.col) <= 1 && std::abs(p.row - q.row) <= 1) << "step " << step;
+    }
+  }
+  EXPECT_GT(moves, tries * 99 / 100) << moves << " of " << tries;
+}
+
 TEST(Environment, MoveTargetsAreRealNumbersInTheContinuousWorldAndPixelsInThePixelWorld) {
   int off_pixel = 0;
   for (int step = 0; step < 20; ++step) {

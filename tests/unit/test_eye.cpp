@@ -54,6 +54,20 @@ TEST(Eye, ScanMovesToAnotherObjectEveryTimeAndVisitsThemAll) {
   EXPECT_EQ(visited.size(), 9u);
 }
 
+// ... and so in the twenty-object world, whose blobs the eye tells apart.
+TEST(Eye, ScanVisitsAllTwentyObjectsOfTheLargerWorld) {
+  const RunConfig c = test::shippedConfig("large-world", System::IMP, 1);
+  Environment env(c);
+  Eye eye(c);
+  eye.setScene(env.render());
+  std::set<std::pair<int, int>> visited;
+  for (int step = 0; step < 1000; ++step) {
+    const Focus f = eye.scan(step);
+    visited.insert({f.gaze.col, f.gaze.row});
+  }
+  EXPECT_EQ(visited.size(), 20u);
+}
+
 TEST(Eye, ThePapersNoiseThenSmoothOrderAlsoLandsOnObjects) {
   const RunConfig c = test::shippedConfig("base", System::IMP, 1, {"eye.saliency_order=noise_then_smooth"});
   Environment env(c);
