@@ -209,6 +209,7 @@ Scenario parseScenario(const YAML::Node& node, const std::string& path, const Wo
     so.initial = parseState(o, "initial", world);
     so.goal = parseState(o, "goal", world);
     so.value = o.has("value") ? o.number("value", 0.0, 1e6) : 1.0;
+    so.actions = o.has("actions") ? static_cast<int>(o.integer("actions", 1, 8)) : 1;
     o.finish();
     s.objects.push_back(so);
   }

@@ -38,9 +38,10 @@ void validateScenario(const Scenario& s, const WorldConfig& w) {
   for (int i = 0; i < n; ++i) {
     const ScenarioObject& a = s.objects[i];
     const bool moves = !(px(a.initial) == px(a.goal));
-    if (moves && a.initial.colour != a.goal.colour)
+    if (moves && a.initial.colour != a.goal.colour && a.actions < 2)
       throw ConfigError("config key '" + key(i, "goal") +
-                        "': differs from the initial state in both colour and position; one action changes one of them");
+                        "': differs from the initial state in both colour and position; one action changes one of "
+                        "them (say `actions: 2` for a goal that needs two)");
     for (int j = i + 1; j < n; ++j) {
       const ScenarioObject& b = s.objects[j];
       if (overlap(a.shape, px(a.initial), b.shape, px(b.initial), w, half))

@@ -1,6 +1,13 @@
 #include <gtest/gtest.h>
 
+#include <map>
+#include <set>
+#include <stdexcept>
+
+#include "afford/actions.hpp"
 #include "afford/config.hpp"
+#include "afford/generate.hpp"
+#include "environment/environment.hpp"
 #include "tests/support.hpp"
 
 namespace afford {
@@ -83,6 +90,97 @@ TEST(Scenario, AGoalTwoActionsAwayIsRefused) {
   const std::string e = errorOf(one("{shape: square, initial: {colour: blue, position: [0.2, 0.5]}, goal: {colour: green, position: [0.5, 0.5]}}"));
   EXPECT_NE(e.find("'objects[0].goal'"), std::string::npos) << e;
   EXPECT_NE(e.find("both colour and position"), std::string::npos) << e;
+}
+
+TEST(Scenario, AGoalTwoActionsAwayPassesWhenItSaysSo) {
+  EXPECT_EQ(errorOf(one("{shape: square, initial: {colour: blue, position: [0.2, 0.5]}, "
+                        "goal: {colour: green, position: [0.5, 0.5]}, actions: 2}")),
+            "");
+  const std::string e = errorOf(one("{shape: square, initial: {colour: blue, position: [0.2, 0.5]}, "
+                                    "goal: {colour: blue, position: [0.5, 0.5]}, actions: 9}"));
+  EXPECT_NE(e.find("'objects[0].actions'"), std::string::npos) << e;
+}
+
+// ---- generated scenarios (issue 12) ------------------------------------------
+
+int countSubGoals(const Scenario& s, int* two_actions) {
+  int k = 0;
+  *two_actions = 0;
+  for (const auto& o : s.objects) {
+    const bool turns = o.goal.colour != o.initial.colour, moves = o.goal.x != o.initial.x || o.goal.y != o.initial.y;
+    k += turns || moves;
+    *two_actions += turns && moves;
+  }
+  return k;
+}
+
+// Many draws on the twenty-object world: the counts asked for, valid layouts, and a true plan that the environment
+// carries out to the goal image, each action afforded by the table.
+TEST(GeneratedScenario, HasTheCountsAskedForAndItsTruePlanReachesTheGoal) {
+  const RunConfig c = test::shippedConfig("large-world", System::IMP, 1);
+  std::map<std::string, int> kinds;  // of the one-action sub-goals: every kind is drawn
+  for (int k = 1; k <= 10; ++k)
+    for (int m : {0, k / 2, k}) {
+      const ScenarioSpec spec{20, k, m};
+      for (std::int64_t i = 0; i < 3; ++i) {
+        const GeneratedScenario g = generateScenario(c, spec, 17, i);
+        const Scenario& s = g.scenario;
+        ASSERT_EQ(s.objects.size(), 20u);
+        EXPECT_EQ(s.name, generatedName(spec, 17, i));
+        int two = 0;
+        EXPECT_EQ(countSubGoals(s, &two), k) << s.name;
+        for (const auto& o : s.objects)
+          if (o.actions == 1 && o.goal.colour != o.initial.colour) ++kinds["turn"];
+          else if (o.actions == 1 && (o.goal.x != o.initial.x || o.goal.y != o.initial.y)) ++kinds["move"];
+        EXPECT_EQ(two, m) << s.name;
+        EXPECT_NO_THROW(validateScenario(s, c.world)) << s.name;
+        EXPECT_EQ(static_cast<int>(g.plan.size()), k + m) << s.name;
+        Environment env(c, s);
+        EXPECT_GT(env.goalDistance(), c.planner.success_distance) << s.name;
+        std::int64_t step = 0;
+        for (const PlannedAction& a : g.plan) {
+          const WorldObject& before = env.objects()[static_cast<std::size_t>(a.object)];
+          EXPECT_DOUBLE_EQ(c.world.objects[static_cast<std::size_t>(env.tableRow(before))].affordance[a.action], 1.0);
+          std::optional<std::pair<double, double>> target;
+          if (a.action == kMove) target = std::make_pair(a.target_x, a.target_y);
+          EXPECT_TRUE(env.execute(step++, a.action, a.x, a.y, target).succeeded) << s.name << " step " << step;
+        }
+        EXPECT_LT(env.goalDistance(), c.planner.success_distance) << s.name;
+      }
+    }
+  EXPECT_GT(kinds["turn"], 20);
+  EXPECT_GT(kinds["move"], 20);
+}
+
+TEST(GeneratedScenario, IsKeyedBySeedAndIndex) {
+  const RunConfig c = test::shippedConfig("large-world", System::IMP, 1);
+  const ScenarioSpec spec{12, 5, 2};
+  auto places = [&](std::int64_t seed, std::int64_t index) {
+    std::vector<double> out;
+    for (const auto& o : generateScenario(c, spec, seed, index).scenario.objects)
+      out.insert(out.end(), {o.initial.x, o.initial.y, o.goal.x, o.goal.y, static_cast<double>(o.goal.colour)});
+    return out;
+  };
+  EXPECT_EQ(places(3, 4), places(3, 4));
+  EXPECT_NE(places(3, 4), places(3, 5));
+  EXPECT_NE(places(3, 4), places(4, 4));
+}
+
+TEST(GeneratedScenario, ABadSpecIsNamedAndAFullTableSaysSo) {
+  const RunConfig base = test::shippedConfig();
+  auto error = [&](const ScenarioSpec& spec) -> std::string {
+    try {
+      generateScenario(base, spec, 1, 0);
+    } catch (const std::exception& e) {
+      return e.what();
+    }
+    return "";
+  };
+  EXPECT_NE(error({3, 4, 0}).find("sub_goals = 4"), std::string::npos);
+  EXPECT_NE(error({3, 2, 3}).find("multi_step = 3"), std::string::npos);
+  EXPECT_NE(error({0, 0, 0}).find("objects = 0"), std::string::npos);
+  EXPECT_EQ(error({5, 5, 2}), "");  // the base world holds the paper's five
+  EXPECT_NE(error({20, 10, 0}).find("fits the world's table"), std::string::npos);
 }
 
 TEST(Scenario, AGoalWhereAnotherObjectStartsIsRefused) {

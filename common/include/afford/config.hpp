@@ -136,6 +136,7 @@ struct ScenarioObject {
   Shape shape = Shape::Square;
   ObjectState initial, goal;
   double value = 0;  // utility of reaching this object's goal (utility planner)
+  int actions = 1;   // actions its goal needs: 1, or 2 and more for a goal that changes colour and place (issue 12)
 };
 struct Scenario {
   std::string name;

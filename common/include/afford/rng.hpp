@@ -21,6 +21,7 @@ enum class Purpose : std::uint64_t {
   RandomTable = 8,        // experiments: the entries of a random affordance table (index = table)
   Replay = 9,             // predictors: which remembered experiences are replayed at a step
   Revisit = 10,           // motivation: the order of never-tried colour changes (revisit.order: random)
+  ScenarioGeneration = 11,  // experiments: a generated scenario (step = its index, sub-key = the attempt)
 };
 
 constexpr std::uint64_t splitmix64(std::uint64_t x) {
