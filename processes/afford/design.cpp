@@ -63,7 +63,8 @@ json describe(const std::vector<double>& v) {
 
 // Samples of one system, scenario and condition: per test, and per agent (means).
 struct Samples {
-  std::vector<double> utility, checked_per_sub_goal;
+  std::vector<double> utility, checked_per_sub_goal, completion;
+  int sub_goals = 0;
   std::map<std::size_t, std::vector<double>> agent_utility, agent_checked;
   int tests = 0, ok = 0, successes = 0;
 };
@@ -77,6 +78,8 @@ Samples collect(const std::vector<TestRecord>& tests, const std::string& system,
     if (!t.ok) continue;  // failed on the infrastructure: not a result
     ++s.ok;
     s.successes += t.success;
+    s.sub_goals = t.sub_goals;
+    if (t.success) s.completion.push_back(t.completion);
     s.utility.push_back(t.utility);
     s.agent_utility[t.agent].push_back(t.utility);
     if (t.active_sub_goals > 0) {
@@ -119,6 +122,14 @@ double quantile(const std::vector<double>& sorted, double q) {
   return i + 1 < sorted.size() ? sorted[i] * (1 - f) + sorted[i + 1] * f : sorted[i];
 }
 
+std::optional<QuadraticFit> fitCompletion(const std::vector<std::pair<double, double>>& points) {
+  double sxx = 0, sxy = 0, sx3 = 0, sx4 = 0, sx2y = 0;  // normal equations of y = a x^2 + b x
+  for (const auto& [x, y] : points) sxx += x * x, sx3 += x * x * x, sx4 += x * x * x * x, sxy += x * y, sx2y += x * x * y;
+  const double det = sx4 * sxx - sx3 * sx3;
+  if (std::abs(det) <= 1e-12 * std::max(1.0, sx4 * sxx)) return std::nullopt;
+  return QuadraticFit{(sx2y * sxx - sxy * sx3) / det, (sx4 * sxy - sx3 * sx2y) / det};
+}
+
 WelchResult welchTest(const std::vector<double>& a, const std::vector<double>& b) {
   if (a.size() < 2 || b.size() < 2) throw std::invalid_argument("Welch's t-test needs at least two values per sample");
   WelchResult r;
@@ -145,19 +156,25 @@ void summariseDesign(json& summary, const std::vector<TestRecord>& tests, const 
     json list = json::array();
     for (std::size_t c = 0; c < conditions.size(); ++c) {
       json per = json::object();
+      std::vector<std::pair<double, double>> solved;  // (sub-goals, completion) of every solved test
       for (const auto& sc : scenarios) {
         const Samples s = collect(tests, sys, sc, static_cast<int>(c));
+        for (double y : s.completion) solved.emplace_back(s.sub_goals, y);
         per[sc] = {{"tests", s.tests},
                    {"tests_completed", s.ok},
                    {"success_rate", s.ok ? static_cast<double>(s.successes) / s.ok : 0.0},
                    {"utility", describe(s.utility)},
                    {"utility_agent_means", agentMeans(s.agent_utility)},
                    {"actions_checked_per_sub_goal", describe(s.checked_per_sub_goal)},
-                   {"actions_checked_agent_means", agentMeans(s.agent_checked)}};
+                   {"actions_checked_agent_means", agentMeans(s.agent_checked)},
+                   {"sub_goals", s.sub_goals},
+                   {"completion_steps", describe(s.completion)}};
       }
       json settings = json::object();
       for (const auto& [k, v] : conditions[c].settings) settings[k] = v;
-      list.push_back({{"label", conditions[c].label}, {"settings", settings}, {"scenarios", per}});
+      json entry = {{"label", conditions[c].label}, {"settings", settings}, {"scenarios", per}};
+      if (const auto fit = fitCompletion(solved)) entry["completion_fit"] = {{"a", fit->a}, {"b", fit->b}};
+      list.push_back(entry);
     }
     summary["systems"][sys]["extrinsic"]["conditions"] = list;
   }

@@ -6,6 +6,7 @@
 #include <nlohmann/json.hpp>
 
 #include <cstddef>
+#include <optional>
 #include <string>
 #include <utility>
 #include <vector>
@@ -29,6 +30,14 @@ std::vector<Condition> conditionsOf(const ExtrinsicDesign& d);
 // one used for every median and quartile of the summaries and figures.
 double quantile(const std::vector<double>& sorted, double q);
 
+// The least-squares fit y = a x^2 + b x (no intercept: no sub-goal, no step) of
+// (x, y) points, as the paper fits completion steps against sub-goals
+// (Figure 6); nullopt if the points do not determine it (fewer than two x).
+struct QuadraticFit {
+  double a = 0, b = 0;
+};
+std::optional<QuadraticFit> fitCompletion(const std::vector<std::pair<double, double>>& points);
+
 // Welch's two-sided t-test of two samples with unequal variances.
 struct WelchResult {
   double t = 0, df = 0, p = 1;
@@ -50,6 +59,8 @@ struct TestRecord {
   int attempts = 0;        // actions executed
   int active_sub_goals = 0;  // sub-goals picked that were not already reached
   int actions_checked = 0;
+  int completion = 0;        // the step at which the scene matched the goal (solved tests)
+  int sub_goals = 0;         // the scenario's sub-goals (its objects)
 };
 
 // summary["systems"][S]["extrinsic"]["conditions"]: per condition and

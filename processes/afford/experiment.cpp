@@ -852,7 +852,7 @@ void summariseExtrinsic(json& summary, const Plan& plan, const std::vector<Plann
       summary["systems"][sys]["extrinsic"] = ex;
       continue;
     }
-    double sxx = 0, sxy = 0, sx3 = 0, sx4 = 0, sx2y = 0;  // least squares of y = a x^2 + b x
+    std::vector<std::pair<double, double>> solved;  // (sub-goals, completion) of every solved test
     for (const auto& scenario : plan.scenarios) {
       std::map<std::size_t, std::pair<int, int>> per_run;  // intrinsic run -> (successes, tests)
       std::vector<double> steps;
@@ -873,8 +873,7 @@ void summariseExtrinsic(json& summary, const Plan& plan, const std::vector<Plann
         sub_goal_count += static_cast<int>(r.extrinsic.sub_goals.size());
         if (ok) {
           steps.push_back(r.extrinsic.completion);
-          const double x = plan.sub_goals.at(scenario), y = r.extrinsic.completion;
-          sxx += x * x, sx3 += x * x * x, sx4 += x * x * x * x, sxy += x * y, sx2y += x * x * y;
+          solved.emplace_back(plan.sub_goals.at(scenario), r.extrinsic.completion);
         }
       }
       int good_runs = 0;
@@ -894,10 +893,7 @@ void summariseExtrinsic(json& summary, const Plan& plan, const std::vector<Plann
                                           {"mean", mean}};
       ex["actions_checked_per_sub_goal"][scenario] = sub_goal_count ? checked / sub_goal_count : 0.0;
     }
-    // Normal equations of y = a x^2 + b x.
-    const double det = sx4 * sxx - sx3 * sx3;
-    if (std::abs(det) > 1e-12)
-      ex["completion_steps"]["fit"] = {{"a", (sx2y * sxx - sxy * sx3) / det}, {"b", (sx4 * sxy - sx3 * sx2y) / det}};
+    if (const auto fit = fitCompletion(solved)) ex["completion_steps"]["fit"] = {{"a", fit->a}, {"b", fit->b}};
     summary["systems"][sys]["extrinsic"] = ex;
   }
 }
@@ -1433,6 +1429,8 @@ int runExperiment(const ExperimentOptions& request, spdlog::logger& log) {
       rec.success = r.ok && r.extrinsic.success;
       rec.utility = r.extrinsic.utility;
       rec.attempts = r.extrinsic.attempts;
+      rec.completion = r.extrinsic.completion;
+      rec.sub_goals = plan.sub_goals.at(t.scenario);
       for (const auto& g : r.extrinsic.sub_goals) {
         rec.actions_checked += g.actions_checked;
         rec.active_sub_goals += g.iterations > 0;

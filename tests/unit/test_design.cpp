@@ -84,6 +84,50 @@ TEST(Design, UtilityAnalysisComparesThePlannersPerBudget) {
   EXPECT_EQ(cond["utility_agent_means"].size(), 2u);
 }
 
+TEST(Design, TheCompletionFitRecoversAQuadraticAndNeedsTwoSubGoalCounts) {
+  std::vector<std::pair<double, double>> points;
+  for (int x = 1; x <= 5; ++x) points.emplace_back(x, 1.364 * x * x - 0.808 * x);
+  const auto fit = fitCompletion(points);
+  ASSERT_TRUE(fit);
+  EXPECT_NEAR(fit->a, 1.364, 1e-9);
+  EXPECT_NEAR(fit->b, -0.808, 1e-9);
+  EXPECT_FALSE(fitCompletion({{3, 9}, {3, 10}, {3, 8}}));  // one sub-goal count: a and b are not determined
+  EXPECT_FALSE(fitCompletion({}));
+}
+
+// With several conditions each gets its own completion steps per scenario and its own fit over its solved tests.
+TEST(Design, EachConditionHasItsOwnCompletionFit) {
+  ExtrinsicDesign d;
+  d.vary = {{"eye.attention", {"a", "b"}}};
+  const auto cs = conditionsOf(d);
+  std::vector<TestRecord> tests;
+  for (int c = 0; c < 2; ++c)
+    for (int k = 1; k <= 4; ++k)
+      for (int i = 0; i < 3; ++i) {
+        TestRecord t;
+        t.system = "IMP";
+        t.agent = static_cast<std::size_t>(i);
+        t.scenario = "s" + std::to_string(k);
+        t.condition = c;
+        t.ok = true;
+        t.sub_goals = k;
+        t.success = i < 2;  // the third test of each fails: it does not count
+        t.completion = t.success ? (c == 0 ? k * k : 2 * k) : 0;
+        tests.push_back(t);
+      }
+  nlohmann::json summary;
+  summariseDesign(summary, tests, cs, d, {"IMP"}, {"s1", "s2", "s3", "s4"});
+  const auto& conds = summary["systems"]["IMP"]["extrinsic"]["conditions"];
+  EXPECT_NEAR(conds[0]["completion_fit"]["a"].get<double>(), 1.0, 1e-9);
+  EXPECT_NEAR(conds[0]["completion_fit"]["b"].get<double>(), 0.0, 1e-9);
+  EXPECT_NEAR(conds[1]["completion_fit"]["a"].get<double>(), 0.0, 1e-9);
+  EXPECT_NEAR(conds[1]["completion_fit"]["b"].get<double>(), 2.0, 1e-9);
+  const auto& s3 = conds[0]["scenarios"]["s3"];
+  EXPECT_EQ(s3["sub_goals"], 3);
+  EXPECT_EQ(s3["completion_steps"]["n"], 2);
+  EXPECT_NEAR(s3["completion_steps"]["median"].get<double>(), 9.0, 1e-12);
+}
+
 TEST(Design, AnAnalysisWithoutItsConditionsSaysWhatIsMissing) {
   ExtrinsicDesign d;
   d.vary = {{"planner.kind", {"goal", "utility"}}};
