@@ -54,10 +54,14 @@ check_process() {
   die "unknown process '$1' (one of: ${all[*]})"
 }
 url() { [[ -f $dir/lcm-url ]] || die "no group '$run' (scripts/procs.sh start $run first)"; cat "$dir/lcm-url"; }
-running() {  # pid $1 exists and is not a zombie (a killed process nobody has reaped yet)
-  [[ -r /proc/$1/stat ]] && [[ $(awk '{print $3}' "/proc/$1/stat" 2>/dev/null) != Z ]]
+# running PID PROCESS: PID is afford-PROCESS and not a zombie (a killed process nobody has reaped yet). The
+# name matters: pids are reused (pid_max can be 32768), and a busy machine may give a dead process's pid to
+# another one within seconds.
+running() {
+  [[ -r /proc/$1/stat ]] && [[ $(awk '{print $3}' "/proc/$1/stat" 2>/dev/null) != Z ]] &&
+    [[ $(tr '\0' '\n' <"/proc/$1/cmdline" 2>/dev/null | head -n 1) == */afford-$2 ]]
 }
-alive() { [[ -f $dir/$1.pid ]] && running "$(cat "$dir/$1.pid")"; }
+alive() { [[ -f $dir/$1.pid ]] && running "$(cat "$dir/$1.pid")" "$1"; }
 
 start_one() {
   local p=$1 u=$2
@@ -74,8 +78,11 @@ start_one() {
   else
     ip netns exec "$netns" "${line[@]}" >>"$dir/$p.log" 2>&1 </dev/null &
   fi
-  echo $! >"$dir/$p.pid"
-  echo "$p started (pid $!, output in $dir/$p.log)"
+  local pid=$!
+  echo "$pid" >"$dir/$p.pid"
+  # Until the child has exec'd afford-$p (`running` knows it by name), it is not yet the process.
+  for _ in $(seq 250); do running "$pid" "$p" || [[ ! -e /proc/$pid ]] && break; sleep 0.02; done
+  echo "$p started (pid $pid, output in $dir/$p.log)"
 }
 
 stop_one() {
@@ -85,8 +92,8 @@ stop_one() {
   local pid
   pid=$(cat "$dir/$p.pid")
   kill -INT "$pid"
-  for _ in $(seq $((grace * 10))); do running "$pid" || break; sleep 0.1; done
-  if running "$pid"; then
+  for _ in $(seq $((grace * 10))); do running "$pid" "$p" || break; sleep 0.1; done
+  if running "$pid" "$p"; then
     kill -KILL "$pid"
     echo "$p (pid $pid) did not stop within ${grace} s: killed"
   else
@@ -125,7 +132,7 @@ case $cmd in
       alive "$p" || { echo "$p is not running"; continue; }
       pid=$(cat "$dir/$p.pid")
       kill -KILL "$pid"
-      for _ in $(seq 50); do running "$pid" || break; sleep 0.1; done
+      for _ in $(seq 50); do running "$pid" "$p" || break; sleep 0.1; done
       echo "$p (pid $pid) killed with SIGKILL"
     done
     ;;
