@@ -14,7 +14,7 @@ packages=(
   libgtest-dev libgmock-dev
   default-jdk-headless default-jre libjchart2d-java
   iproute2 iptables util-linux procps gnuplot-nox
-  xvfb imagemagick
+  xvfb imagemagick x11-utils
   clang libclang-rt-14-dev llvm  # scripts/fuzz.sh: libFuzzer, ASan, UBSan, llvm-symbolizer
 )
 

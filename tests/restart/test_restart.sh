@@ -57,7 +57,8 @@ runner=$!
 # from the STATUS heartbeats (a time would land after the run on a fast
 # machine, or between runs on a slow one).
 if [[ $victim == planner ]]; then
-  for _ in $(seq 6000); do grep -q "configured for run '.*-e1'" "$out/planner.log" && break; sleep 0.01; done
+  wait_until 60 grep -q "configured for run '.*-e1'" "$out/planner.log" ||
+    { cat "$out/attached.txt"; echo "the planner never took the second test"; exit 1; }
   delay=${AFFORD_KILL_DELAY_MS:-$((20 + RANDOM % 200))}
   sleep "$(printf '%d.%03d' $((delay / 1000)) $((delay % 1000)))"
   moment="${delay} ms into its second test"
@@ -78,8 +79,7 @@ kill -0 "$runner" 2>/dev/null || { cat "$out/attached.txt"; echo "the run ended 
 kill -9 "${pid[$victim]}"
 wait "${pid[$victim]}" 2>/dev/null || true
 echo "killed $victim $moment" | tee "$out/kill.txt"
-sleep 0.5
-start "$victim"
+start "$victim"  # at once: the process is gone (waited for above), and its peers must cope with a quick return
 wait "$runner" || { cat "$out/attached.txt"; echo "the run with a restarted $victim failed"; exit 1; }
 grep -q "free again" "$out/attached.txt" || { cat "$out/attached.txt"; echo "the runner never re-sent the run"; exit 1; }
 grep -o "process $victim is free again.* at step [0-9]*" "$out/attached.txt" | head -1

@@ -20,13 +20,17 @@ java -cp "$build/share/afford-lcmtypes.jar:$build/share/afford-spycheck.jar:/usr
   RUN_CONFIG,RUN_CONTROL,STATUS,SCENE,FOCUS,PREDICTION,DECISION,EFFECT,AFFORDANCE_TABLE,RESULT,LOOK,FORWARD_QUERY,FORWARD_PREDICTION,EXTRINSIC_RESULT \
   >"$out/decoded.txt" 2>&1 &
 check=$!
-sleep 3  # the listeners are up before the run's first message
+# The listeners are up before the run's first message: SpyCheck says so, and lcm-spy's window is mapped.
+wait_until 60 grep -q "^listening on" "$out/decoded.txt" || { cat "$out/decoded.txt"; echo "SpyCheck never listened"; exit 1; }
+wait_until 60 bash -c 'xwininfo -root -tree | grep -qi "spy"' || { cat "$out/spy.log"; echo "lcm-spy never showed its window"; exit 1; }
 # An intrinsic run and one extrinsic test on that bus, in this namespace.
 "$build/bin/afford" experiment base --system IMP --reps 1 --steps 3000 --extrinsic-reps 1 --scenarios scenario3 \
   --netns off --base-port "$port" --keep-logs none --quiet --out "$out/run" --log-root "$out/logs" \
   --run-prefix spy >"$out/run.log" 2>&1 &
 run=$!
-sleep 4
+# Mid-run: once the environment runs the run.
+"$build/bin/afford" status --lcm-url "$url" --wait-for environment --state running --seconds 60 >/dev/null ||
+  { cat "$out/run.log"; echo "the run never started"; exit 1; }
 import -window root "$out/spy-during-run.png"
 wait "$run" || { echo "the run failed:"; cat "$out/run.log"; exit 1; }
 status=0

@@ -51,6 +51,8 @@ public class SpyCheck implements LCMSubscriber {
     SpyCheck check = new SpyCheck();
     LCM lcm = new LCM(args[0]);
     lcm.subscribe(".*", check);
+    System.out.println("listening on " + args[0]);  // the test starts the run on this line
+    System.out.flush();
     Thread.sleep((long) (Double.parseDouble(args[1]) * 1000));
     lcm.unsubscribe(".*", check);
     int status = 0;
