@@ -70,7 +70,6 @@ inline GoalTestOutcome runGoalTest(const RunConfig& c, const Scenario& s, const 
   auto asView = [](const Focus& f) { return View{f.image, f.x, f.y}; };
   for (int step = 0; step < c.planner.budget && planner.attempts() < c.planner.max_attempts; ++step) {
     PlannerRequest r = planner.startIteration();
-    View object;
     while (r.kind != PlannerRequest::IterationDone) {
       switch (r.kind) {
         case PlannerRequest::LookAtGoal:
@@ -79,21 +78,31 @@ inline GoalTestOutcome runGoalTest(const RunConfig& c, const Scenario& s, const 
         case PlannerRequest::LookAtSceneAt:
           r = planner.onView(asView(eye.lookAt(r.x, r.y)));
           break;
-        case PlannerRequest::ScanScene: {
-          object = asView(eye.scan(step));
+        case PlannerRequest::ScanScene:
+        case PlannerRequest::AttendObject: {
+          const View object = asView(r.kind == PlannerRequest::ScanScene ? eye.scan(step) : eye.attend(r.x, r.y));
           r = planner.onObject(object, predictors.predict(object.image).affordance);
+          break;
+        }
+        case PlannerRequest::LookAtDifferences: {
+          std::vector<SeenDifference> diffs;
+          for (const Difference& d : eye.goalDifferences(c.planner.subgoal_match))
+            diffs.push_back({d.x, d.y, d.in_goal, d.image});
+          r = planner.onDifferences(diffs);
           break;
         }
         case PlannerRequest::Forward: {
           std::vector<ForwardPrediction> preds;
           for (int a : r.actions) {
-            const auto where = predictors.whereEffect(a, object.x, object.y, r.x, r.y);
+            const auto where = predictors.whereEffect(a, r.object_x, r.object_y, r.x, r.y);
             // (the what-effect travels as float32 in FORWARD_PREDICTION)
             std::vector<double> what;
-            for (double v : predictors.whatEffect(a, object.image)) what.push_back(static_cast<float>(v));
+            for (double v : predictors.whatEffect(a, r.image)) what.push_back(static_cast<float>(v));
             preds.push_back({a, what, where[0], where[1]});
           }
-          r = planner.onForward(preds);
+          std::optional<std::array<double, kNumActions>> input;
+          if (!r.prefix.empty()) input = predictors.predict(r.image).affordance;
+          r = planner.onForward(preds, input);
           break;
         }
         case PlannerRequest::Act: {

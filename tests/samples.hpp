@@ -18,7 +18,11 @@ namespace afford::test {
 
 // The run the samples belong to.
 inline const RunConfig& sampleConfig() {
-  static const RunConfig c = shippedConfig();
+  static const RunConfig c = [] {
+    RunConfig r = shippedConfig();
+    r.planner.max_depth = 2;  // so that a query may carry an imagined action (forward_query_t.prefix)
+    return r;
+  }();
   return c;
 }
 
@@ -120,13 +124,18 @@ inline focus_t sample(const focus_t*) {
   m.step = 42;
   m.serial = 43;
   m.prev_digest = 0x5eed0000 + 43;
-  m.kind = focus_t::SCENE_SCAN;
-  m.seq = 0;
+  m.kind = focus_t::GOAL_DIFF;  // the kind with differences (top-down attention)
+  m.seq = 3;
   m.x = 0.3;
   m.y = 0.6;
   m.side = sampleConfig().eye.focus_side;
   m.image = focusImage();
   m.size = static_cast<int32_t>(m.image.size());
+  m.diff_x = {0.2, 0.7};
+  m.diff_y = {0.5, 0.35};
+  m.diff_in = {focus_t::DIFF_GOAL, focus_t::DIFF_SCENE};
+  m.diff_image = {focusImage(), focusImage()};
+  m.n_diffs = static_cast<int32_t>(m.diff_x.size());
   m.digest = 0x1234;
   return m;
 }
@@ -148,6 +157,8 @@ inline forward_prediction_t sample(const forward_prediction_t*) {
   }
   m.where_x = {0.5, 0.3};
   m.where_y = {0.4, 0.6};
+  m.input_affordance = {0.9, 0.1, 0.8, 0.2};  // the query's image was imagined
+  m.n_input = static_cast<int8_t>(m.input_affordance.size());
   m.digest = 0x1234;
   return m;
 }
@@ -167,6 +178,8 @@ inline forward_query_t sample(const forward_query_t*) {
   m.size = static_cast<int32_t>(m.image.size());
   m.actions = {kMove, kTurnBlue};
   m.n_actions = static_cast<int32_t>(m.actions.size());
+  m.prefix = {kTurnGreen};  // the object of `image` is imagined after turning it green
+  m.n_prefix = static_cast<int8_t>(m.prefix.size());
   m.digest = 0x1234;
   return m;
 }

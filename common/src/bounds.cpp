@@ -40,6 +40,15 @@ Max sceneBytes(const BoundsContext& c) {
   const auto px = static_cast<uLong>(c.run ? c.run->world.size_px : c.protocol->limits.scene_side);
   return Max(static_cast<std::int64_t>(compressBound(3 * px * px)));
 }
+// Places where a goal and a scene differ: each object of the scenario (or of
+// the world) at most twice, where the goal shows it and where the scene does.
+Max differences(const BoundsContext& c) {
+  if (!c.run) return Max(2 * c.protocol->limits.objects);
+  const std::size_t n = c.run->scenario ? c.run->scenario->objects.size() : c.run->world.objects.size();
+  return Max(2 * static_cast<std::int64_t>(n));
+}
+// Actions imagined before a query: a plan's length less one (planner.search.max_depth is at most 4).
+Max imagined(const BoundsContext& c) { return Max(c.run ? c.run->planner.max_depth - 1 : 3); }
 // At most one sub-goal record per planner iteration.
 Max subGoals(const BoundsContext& c) { return Max(c.run ? c.run->planner.budget : c.protocol->limits.sub_goals); }
 
@@ -60,15 +69,15 @@ wire::extrinsic_result_t_bounds boundsOf(const BoundsContext& c, const extrinsic
 }
 
 wire::focus_t_bounds boundsOf(const BoundsContext& c, const focus_t*) {
-  return {nameBytes(c), /*size*/ focusImageBytes(c)};
+  return {nameBytes(c), /*size*/ focusImageBytes(c), /*n_diffs*/ differences(c)};
 }
 
 wire::forward_prediction_t_bounds boundsOf(const BoundsContext& c, const forward_prediction_t*) {
-  return {nameBytes(c), /*n_actions*/ actions(), /*size*/ focusImageBytes(c)};
+  return {nameBytes(c), /*n_actions*/ actions(), /*size*/ focusImageBytes(c), /*n_input*/ actions()};
 }
 
 wire::forward_query_t_bounds boundsOf(const BoundsContext& c, const forward_query_t*) {
-  return {nameBytes(c), /*size*/ focusImageBytes(c), /*n_actions*/ actions()};
+  return {nameBytes(c), /*size*/ focusImageBytes(c), /*n_actions*/ actions(), /*n_prefix*/ imagined(c)};
 }
 
 wire::look_t_bounds boundsOf(const BoundsContext& c, const look_t*) { return {nameBytes(c)}; }

@@ -63,7 +63,8 @@ std::string checkFocusSize(const char* field, long size, const BoundsContext& c)
   return checkInt(field, size, 3, 3L * c.protocol->limits.focus_side * c.protocol->limits.focus_side);
 }
 std::string checkKind(int kind) {
-  return kind == focus_t::SCENE_SCAN || kind == focus_t::GOAL_SCAN || kind == focus_t::SCENE_AT
+  return kind == focus_t::SCENE_SCAN || kind == focus_t::GOAL_SCAN || kind == focus_t::SCENE_AT ||
+                 kind == focus_t::GOAL_DIFF || kind == focus_t::SCENE_OBJECT
              ? ""
              : "field kind = " + std::to_string(kind) + " is unknown";
 }
@@ -93,9 +94,25 @@ std::string checkMessage(const scene_t& m, const BoundsContext& c) {
 }
 
 std::string checkMessage(const focus_t& m, const BoundsContext& c) {
-  return first({checkStep(m.step, c), checkSerial(m.serial), checkKind(m.kind),
-                checkInt("seq", m.seq, 0, INT32_MAX), checkFocus("side", m.side, "size", m.size, c),
-                checkRange("x", m.x, 0.0, 1.0), checkRange("y", m.y, 0.0, 1.0)});
+  if (auto why = first({checkStep(m.step, c), checkSerial(m.serial), checkKind(m.kind),
+                        checkInt("seq", m.seq, 0, INT32_MAX), checkFocus("side", m.side, "size", m.size, c),
+                        checkRange("x", m.x, 0.0, 1.0), checkRange("y", m.y, 0.0, 1.0),
+                        m.n_diffs == 0 || m.kind == focus_t::GOAL_DIFF ? ""
+                                                                       : "field n_diffs must be 0 for a focus of kind " +
+                                                                             std::to_string(m.kind)});
+      !why.empty())
+    return why;
+  for (int i = 0; i < m.n_diffs; ++i) {
+    const std::string at = "[" + std::to_string(i) + "]";
+    if (auto why = first({checkRange(("diff_x" + at).c_str(), m.diff_x[i], 0.0, 1.0),
+                          checkRange(("diff_y" + at).c_str(), m.diff_y[i], 0.0, 1.0),
+                          m.diff_in[i] == focus_t::DIFF_GOAL || m.diff_in[i] == focus_t::DIFF_SCENE
+                              ? ""
+                              : "field diff_in" + at + " = " + std::to_string(m.diff_in[i]) + " is unknown"});
+        !why.empty())
+      return why;
+  }
+  return "";
 }
 
 std::string checkMessage(const prediction_t& m, const BoundsContext& c) {
@@ -163,23 +180,32 @@ std::string checkMessage(const object_probe_t& m, const BoundsContext& c) {
 std::string checkMessage(const look_t& m, const BoundsContext& c) {
   return first({checkStep(m.step, c), checkSerial(m.serial), checkKind(m.kind), checkInt("seq", m.seq, 0, INT32_MAX),
                 checkInt("scene", m.scene, 0, INT64_MAX),
-                m.kind != focus_t::SCENE_AT ? "" : checkRange("x", m.x, 0.0, 1.0),
-                m.kind != focus_t::SCENE_AT ? "" : checkRange("y", m.y, 0.0, 1.0)});
+                m.kind != focus_t::SCENE_AT && m.kind != focus_t::SCENE_OBJECT ? "" : checkRange("x", m.x, 0.0, 1.0),
+                m.kind != focus_t::SCENE_AT && m.kind != focus_t::SCENE_OBJECT ? "" : checkRange("y", m.y, 0.0, 1.0)});
 }
 
 std::string checkMessage(const forward_query_t& m, const BoundsContext& c) {
   return first({checkStep(m.step, c), checkSerial(m.serial), checkInt("seq", m.seq, 0, INT32_MAX),
                 checkFocusSize("size", m.size, c), checkRange("x", m.x, 0.0, 1.0), checkRange("y", m.y, 0.0, 1.0),
                 checkTarget("target_x", m.target_x), checkTarget("target_y", m.target_y),
-                checkInt("n_actions", m.n_actions, 0, kNumActions), checkActions(m.actions)});
+                checkInt("n_actions", m.n_actions, 0, kNumActions), checkActions(m.actions),
+                checkInt("n_prefix", m.n_prefix, 0, c.run ? c.run->planner.max_depth - 1 : 3),
+                checkActions(m.prefix)});
 }
 
 std::string checkMessage(const forward_prediction_t& m, const BoundsContext& c) {
   if (auto why = first({checkStep(m.step, c), checkSerial(m.serial), checkInt("seq", m.seq, 0, INT32_MAX),
                         checkFocusSize("size", m.size, c), checkInt("n_actions", m.n_actions, 0, kNumActions),
-                        checkActions(m.actions)});
+                        checkActions(m.actions),
+                        m.n_input == 0 || m.n_input == kNumActions
+                            ? ""
+                            : "field n_input = " + std::to_string(m.n_input) + " must be 0 or " + std::to_string(kNumActions)});
       !why.empty())
     return why;
+  for (int a = 0; a < m.n_input; ++a)
+    if (auto why = checkRange(("input_affordance[" + std::to_string(a) + "]").c_str(), m.input_affordance[a], 0.0, 1.0);
+        !why.empty())
+      return why;
   for (int i = 0; i < m.n_actions; ++i) {
     if (auto why = first({checkFinite("where_x", m.where_x[i]), checkFinite("where_y", m.where_y[i])}); !why.empty())
       return why;

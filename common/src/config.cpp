@@ -349,6 +349,8 @@ RunConfig parseRunConfig(const YAML::Node& root) {
     c.eye.image_change_threshold = e.number("image_change_threshold", 0.0, 1.0);
     c.eye.position_change_threshold = e.number("position_change_threshold", 0.0, 1.0);
     c.eye.max_scan_draws = static_cast<int>(e.integer("max_scan_draws", 1, 100000));
+    c.eye.attention =
+        e.choice<Attention>("attention", {{"bottom_up", Attention::BottomUp}, {"top_down", Attention::TopDown}});
     e.finish();
   }
   {
@@ -421,6 +423,11 @@ RunConfig parseRunConfig(const YAML::Node& root) {
     c.planner.affordance_threshold = p.number("affordance_threshold", 0.0, 1.0);
     c.planner.success_distance = p.number("success_distance", 0.0, 1.0);
     c.planner.kind = p.choice<PlannerKind>("kind", {{"goal", PlannerKind::Goal}, {"utility", PlannerKind::Utility}});
+    c.planner.attention = c.eye.attention;
+    Reader search = p.map("search");
+    c.planner.max_depth = static_cast<int>(search.integer("max_depth", 1, 4));
+    c.planner.max_queries = static_cast<int>(search.integer("max_queries", 1, 10000));
+    search.finish();
     Reader u = p.map("utility");
     c.planner.evaluation_iterations = static_cast<int>(u.integer("evaluation_iterations", 0, 1'000'000));
     c.planner.raise_leak = u.number("raise_leak", 0.0, 1.0);
@@ -499,9 +506,58 @@ namespace {
 ExtrinsicDesign parseDesign(const YAML::Node& node, const std::string& file) {
   Reader r(node, "extrinsic");
   ExtrinsicDesign d;
-  const YAML::Node sc = r.raw("scenarios");
-  if (!sc.IsSequence() || sc.size() == 0) fail("extrinsic.scenarios", "expected a non-empty list of scenario names");
-  for (const auto& n : sc) d.scenarios.push_back(n.Scalar());
+  if (r.has("generate")) {
+    Reader g = r.map("generate");
+    GenerateDesign gen;
+    auto counts = [&](const char* key) {
+      std::vector<int> out;
+      const YAML::Node n = g.raw(key);
+      const std::string path = g.keyPath(key);
+      if (n.IsScalar())
+        out.push_back(static_cast<int>(g.integer(key, 1, 256)));
+      else if (n.IsSequence() && n.size() > 0)
+        for (std::size_t i = 0; i < n.size(); ++i) {
+          int v = 0;
+          try {
+            v = n[i].as<int>();
+          } catch (const YAML::Exception&) {
+            fail(path + "[" + std::to_string(i) + "]", "expected a whole number, got " + describe(n[i]));
+          }
+          if (v < 1 || v > 256) fail(path + "[" + std::to_string(i) + "]", "expected 1 to 256, got " + std::to_string(v));
+          out.push_back(v);
+        }
+      else
+        fail(path, "expected a number or a non-empty list of numbers, got " + describe(n));
+      return out;
+    };
+    gen.sub_goals = counts("sub_goals");
+    if (g.has("objects")) gen.objects = counts("objects");
+    if (g.has("multi_step")) {
+      if (g.raw("multi_step").IsScalar() && g.raw("multi_step").Scalar() == "all")
+        gen.all_multi_step = true;
+      else
+        gen.multi_step = static_cast<int>(g.integer("multi_step", 0, 256));
+    }
+    gen.per_point = g.has("per_point") ? static_cast<int>(g.integer("per_point", 1, 10000)) : 1;
+    gen.seed = g.has("seed") ? g.integer("seed", 0, std::numeric_limits<std::int32_t>::max()) : 1;
+    for (int k : gen.sub_goals) {
+      for (int n : gen.objects)
+        if (n < k)
+          fail(g.keyPath("objects"), "every point needs at least as many objects as sub-goals: " + std::to_string(n) +
+                                         " objects for " + std::to_string(k) + " sub-goals");
+      if (!gen.all_multi_step && gen.multi_step > k)
+        fail(g.keyPath("multi_step"), std::to_string(gen.multi_step) + " two-action sub-goals is more than the " +
+                                          std::to_string(k) + " sub-goals of a point (say 'all' for m = k)");
+    }
+    g.finish();
+    d.generate = gen;
+  }
+  if (r.has("scenarios") || !d.generate) {
+    const YAML::Node sc = r.has("scenarios") ? r.raw("scenarios") : YAML::Node();
+    if (!sc.IsSequence() || sc.size() == 0)
+      fail("extrinsic.scenarios", "expected a non-empty list of scenario names (or extrinsic.generate)");
+    for (const auto& n : sc) d.scenarios.push_back(n.Scalar());
+  }
   d.tests = r.has("tests") ? static_cast<int>(r.integer("tests", 1, 100000)) : 0;  // 0: only with --extrinsic-reps
   d.after_actions = r.has("after_actions") ? r.integer("after_actions", 1, 100'000'000) : 0;
   if (r.has("vary")) {
@@ -644,6 +700,44 @@ YAML::Node extrinsicConfig(const std::string& config_dir, const RunRequest& requ
   root["extrinsic"]["checkpoint"] = checkpoint;
   root["extrinsic"]["scenario"] = loadFile(std::filesystem::path(config_dir) / "scenarios" / (scenario + ".yaml"));
   parseRunConfig(root);
+  return root;
+}
+
+YAML::Node scenarioNode(const Scenario& scenario) {
+  YAML::Node root(YAML::NodeType::Map);
+  root["name"] = scenario.name;
+  if (!scenario.description.empty()) root["description"] = scenario.description;
+  auto state = [](const ObjectState& s) {
+    YAML::Node n(YAML::NodeType::Map);
+    n["colour"] = toString(s.colour);
+    YAML::Node pos(YAML::NodeType::Sequence);
+    pos.push_back(s.x);
+    pos.push_back(s.y);
+    pos.SetStyle(YAML::EmitterStyle::Flow);
+    n["position"] = pos;
+    return n;
+  };
+  for (const ScenarioObject& o : scenario.objects) {
+    YAML::Node n(YAML::NodeType::Map);
+    n["shape"] = toString(o.shape);
+    n["initial"] = state(o.initial);
+    n["goal"] = state(o.goal);
+    n["value"] = o.value;
+    if (o.actions != 1) n["actions"] = o.actions;
+    root["objects"].push_back(n);
+  }
+  return root;
+}
+
+YAML::Node extrinsicConfig(const std::string& config_dir, const RunRequest& request, const std::string& checkpoint,
+                           const Scenario& scenario) {
+  YAML::Node root = effectiveConfig(config_dir, request);
+  const RunConfig base = parseRunConfig(root);
+  root["phase"] = "extrinsic";
+  root["run"]["steps"] = base.planner.budget;
+  root["extrinsic"]["checkpoint"] = checkpoint;
+  root["extrinsic"]["scenario"] = scenarioNode(scenario);
+  parseRunConfig(root);  // validates the scenario in this world
   return root;
 }
 

@@ -170,6 +170,16 @@ std::vector<std::uint8_t> cropFocus(const cv::Mat& scene, Pixel centre, int side
   return out;
 }
 
+double imageDistance(const std::vector<std::uint8_t>& a, const std::vector<std::uint8_t>& b) {
+  if (a.size() != b.size() || a.empty()) return 1.0;
+  double sum = 0;
+  for (std::size_t i = 0; i < a.size(); ++i) {
+    const double d = (static_cast<int>(a[i]) - static_cast<int>(b[i])) / 255.0;
+    sum += d * d;
+  }
+  return std::sqrt(sum) / static_cast<double>(a.size());
+}
+
 double imageChange(const std::vector<std::uint8_t>& a, const std::vector<std::uint8_t>& b) {
   if (a.size() != b.size() || a.empty()) return 1.0;
   long sum = 0;

@@ -3,6 +3,7 @@
 #include <gsl/gsl_cdf.h>
 
 #include <algorithm>
+#include <array>
 #include <cmath>
 #include <map>
 #include <stdexcept>
@@ -64,7 +65,7 @@ json describe(const std::vector<double>& v) {
 // Samples of one system, scenario and condition: per test, and per agent (means).
 struct Samples {
   std::vector<double> utility, checked_per_sub_goal, completion;
-  int sub_goals = 0;
+  int sub_goals = 0, objects = 0, multi_step = 0;
   std::map<std::size_t, std::vector<double>> agent_utility, agent_checked;
   int tests = 0, ok = 0, successes = 0;
 };
@@ -79,6 +80,8 @@ Samples collect(const std::vector<TestRecord>& tests, const std::string& system,
     ++s.ok;
     s.successes += t.success;
     s.sub_goals = t.sub_goals;
+    s.objects = t.objects;
+    s.multi_step = t.multi_step;
     if (t.success) s.completion.push_back(t.completion);
     s.utility.push_back(t.utility);
     s.agent_utility[t.agent].push_back(t.utility);
@@ -157,9 +160,19 @@ void summariseDesign(json& summary, const std::vector<TestRecord>& tests, const 
     for (std::size_t c = 0; c < conditions.size(); ++c) {
       json per = json::object();
       std::vector<std::pair<double, double>> solved;  // (sub-goals, completion) of every solved test
+      struct Point {
+        int tests = 0, ok = 0, successes = 0;
+        std::vector<double> completion;
+      };
+      std::map<std::array<int, 3>, Point> points;  // by (sub-goals, objects, two-action sub-goals)
       for (const auto& sc : scenarios) {
         const Samples s = collect(tests, sys, sc, static_cast<int>(c));
         for (double y : s.completion) solved.emplace_back(s.sub_goals, y);
+        Point& p = points[{s.sub_goals, s.objects, s.multi_step}];
+        p.tests += s.tests;
+        p.ok += s.ok;
+        p.successes += s.successes;
+        p.completion.insert(p.completion.end(), s.completion.begin(), s.completion.end());
         per[sc] = {{"tests", s.tests},
                    {"tests_completed", s.ok},
                    {"success_rate", s.ok ? static_cast<double>(s.successes) / s.ok : 0.0},
@@ -168,11 +181,26 @@ void summariseDesign(json& summary, const std::vector<TestRecord>& tests, const 
                    {"actions_checked_per_sub_goal", describe(s.checked_per_sub_goal)},
                    {"actions_checked_agent_means", agentMeans(s.agent_checked)},
                    {"sub_goals", s.sub_goals},
+                   {"objects", s.objects},
+                   {"multi_step", s.multi_step},
                    {"completion_steps", describe(s.completion)}};
+      }
+      json point_list = json::array();
+      for (const auto& [key, p] : points) {
+        std::vector<double> per_sub_goal;
+        for (double y : p.completion) per_sub_goal.push_back(y / key[0]);
+        point_list.push_back({{"sub_goals", key[0]},
+                              {"objects", key[1]},
+                              {"multi_step", key[2]},
+                              {"tests", p.tests},
+                              {"tests_completed", p.ok},
+                              {"success_rate", p.ok ? static_cast<double>(p.successes) / p.ok : 0.0},
+                              {"completion_steps", describe(p.completion)},
+                              {"steps_per_sub_goal", describe(per_sub_goal)}});
       }
       json settings = json::object();
       for (const auto& [k, v] : conditions[c].settings) settings[k] = v;
-      json entry = {{"label", conditions[c].label}, {"settings", settings}, {"scenarios", per}};
+      json entry = {{"label", conditions[c].label}, {"settings", settings}, {"scenarios", per}, {"points", point_list}};
       if (const auto fit = fitCompletion(solved)) entry["completion_fit"] = {{"a", fit->a}, {"b", fit->b}};
       list.push_back(entry);
     }

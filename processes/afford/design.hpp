@@ -61,11 +61,14 @@ struct TestRecord {
   int actions_checked = 0;
   int completion = 0;        // the step at which the scene matched the goal (solved tests)
   int sub_goals = 0;         // the scenario's sub-goals (its objects)
+  int objects = 0;           // the scenario's objects
+  int multi_step = 0;        // its sub-goals that need two actions
 };
 
 // summary["systems"][S]["extrinsic"]["conditions"]: per condition and
 // scenario, success, utility and actions checked per sub-goal (over tests and
-// over agents' means); then the design's analysis at the top level
+// over agents' means); per condition and point (sub-goals, objects, two-action
+// sub-goals), success and completion steps over the point's scenarios; then the design's analysis at the top level
 // (docs/results-schema.md).
 void summariseDesign(nlohmann::json& summary, const std::vector<TestRecord>& tests,
                      const std::vector<Condition>& conditions, const ExtrinsicDesign& design,

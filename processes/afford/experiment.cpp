@@ -25,6 +25,7 @@
 #include "afford/config.hpp"
 #include "afford/design.hpp"
 #include "afford/driver.hpp"
+#include "afford/generate.hpp"
 #include "afford/group.hpp"
 #include "afford/logging.hpp"
 #include "afford/node.hpp"
@@ -481,6 +482,8 @@ struct Plan {
   std::vector<std::string> systems;          // the systems run
   std::vector<std::string> scenarios;        // extrinsic tests, if any
   std::map<std::string, int> sub_goals;      // objects (sub-goals) per scenario
+  std::map<std::string, Scenario> generated;  // scenarios drawn for the design (extrinsic.generate), by name
+  std::map<std::string, ScenarioSpec> specs;  // ... and what each was drawn as
   int tests = 0;                             // extrinsic tests per agent, condition and scenario
   std::vector<Condition> conditions{Condition{}};  // planner settings compared (default: one, no settings)
   ExtrinsicDesign design;                    // the experiment file's extrinsic section, if any
@@ -526,16 +529,36 @@ Plan planExperiment(const ExperimentOptions& o, bool fresh) {
   if (plan.tests > 0) {
     const RunConfig any = parseRunConfig(effectiveConfig(plan.config_dir, RunRequest{o.experiment, System::IMP, o.seed, o.steps, o.settings}));
     plan.scenarios = !o.scenarios.empty() ? o.scenarios
-                     : !plan.design.scenarios.empty() ? plan.design.scenarios
-                                                       : listScenarios(plan.config_dir);
+                     : !plan.design.scenarios.empty() || plan.design.generate ? plan.design.scenarios
+                                                                              : listScenarios(plan.config_dir);
     for (const auto& name : plan.scenarios)
       plan.sub_goals[name] = static_cast<int>(loadScenario(plan.config_dir, name, any.world).objects.size());
+    if (o.scenarios.empty() && plan.design.generate) {  // drawn here, kept in the plan: nothing is written to config/
+      const GenerateDesign& gen = *plan.design.generate;
+      for (const ScenarioSpec& spec : designPoints(gen))
+        for (int i = 0; i < gen.per_point; ++i) {
+          GeneratedScenario g;
+          try {
+            g = generateScenario(any, spec, gen.seed, i);
+          } catch (const std::exception& e) {
+            throw ConfigError("extrinsic.generate: " + std::string(e.what()));
+          }
+          const std::string name = g.scenario.name;
+          plan.scenarios.push_back(name);
+          plan.sub_goals[name] = spec.sub_goals;
+          plan.specs[name] = spec;
+          plan.generated[name] = std::move(g.scenario);
+        }
+    }
     plan.conditions = conditionsOf(plan.design);
     for (const Condition& c : plan.conditions) {  // every combination must make a valid extrinsic config
       std::vector<std::string> settings = o.settings;
       for (const auto& [k, v] : c.settings) settings.push_back(k + "=" + v);
-      extrinsicConfig(plan.config_dir, RunRequest{o.experiment, System::IMP, o.seed, o.steps, settings}, "unchecked",
-                      plan.scenarios.front());
+      const RunRequest req{o.experiment, System::IMP, o.seed, o.steps, settings};
+      if (plan.generated.count(plan.scenarios.front()))
+        extrinsicConfig(plan.config_dir, req, "unchecked", plan.generated.at(plan.scenarios.front()));
+      else
+        extrinsicConfig(plan.config_dir, req, "unchecked", plan.scenarios.front());
     }
   }
   const std::string prefix = o.run_prefix.empty() ? defaultPrefix() : o.run_prefix;
@@ -806,7 +829,9 @@ std::vector<PlannedRun> planExtrinsic(const Plan& plan, const std::vector<RunOut
           std::vector<std::string> settings = o.settings;
           for (const auto& [key, value] : plan.conditions[c].settings) settings.push_back(key + "=" + value);
           const RunRequest req{o.experiment, parseSystem(p.system), seed, std::nullopt, settings};
-          YAML::Node node = extrinsicConfig(plan.config_dir, req, checkpoint, t.scenario);
+          const auto gen = plan.generated.find(t.scenario);
+          YAML::Node node = gen != plan.generated.end() ? extrinsicConfig(plan.config_dir, req, checkpoint, gen->second)
+                                                        : extrinsicConfig(plan.config_dir, req, checkpoint, t.scenario);
           node["run"]["record"] = t.keep_log;
           t.spec.run_id = p.spec.run_id + (plan.conditions.size() > 1 ? "-c" + std::to_string(c) : "") + "-" +
                           t.scenario + "-e" + std::to_string(e);
@@ -1431,6 +1456,12 @@ int runExperiment(const ExperimentOptions& request, spdlog::logger& log) {
       rec.attempts = r.extrinsic.attempts;
       rec.completion = r.extrinsic.completion;
       rec.sub_goals = plan.sub_goals.at(t.scenario);
+      if (const auto spec = plan.specs.find(t.scenario); spec != plan.specs.end()) {
+        rec.objects = spec->second.objects;
+        rec.multi_step = spec->second.multi_step;
+      } else {
+        rec.objects = rec.sub_goals;
+      }
       for (const auto& g : r.extrinsic.sub_goals) {
         rec.actions_checked += g.actions_checked;
         rec.active_sub_goals += g.iterations > 0;
@@ -1442,6 +1473,12 @@ int runExperiment(const ExperimentOptions& request, spdlog::logger& log) {
     for (const auto& [k, v] : plan.design.vary) vary[k] = v;
     summary["extrinsic_design"] = {{"scenarios", plan.scenarios}, {"tests", plan.tests}, {"vary", vary},
                                    {"analysis", plan.design.analysis}, {"after_actions", plan.design.after_actions}};
+    if (plan.design.generate) {
+      const GenerateDesign& g = *plan.design.generate;
+      summary["extrinsic_design"]["generate"] = {
+          {"sub_goals", g.sub_goals}, {"objects", g.objects}, {"per_point", g.per_point}, {"seed", g.seed},
+          {"multi_step", g.all_multi_step ? json("all") : json(g.multi_step)}};
+    }
     if (plan.design.after_actions > 0) summary["after_actions"] = plan.design.after_actions;
     if (!untested.empty()) summary["untested_agents"] = untested;
     if (g_signal) {

@@ -75,6 +75,15 @@ std::vector<Change> changesOf(const Look& l, const std::vector<Look>& looks, boo
 
 }  // namespace
 
+std::vector<ScenarioSpec> designPoints(const GenerateDesign& design) {
+  std::vector<ScenarioSpec> points;
+  for (int k : design.sub_goals) {
+    const std::vector<int> ns = design.objects.empty() ? std::vector<int>{k} : design.objects;
+    for (int n : ns) points.push_back({n, k, design.all_multi_step ? k : design.multi_step});
+  }
+  return points;
+}
+
 std::string generatedName(const ScenarioSpec& spec, std::int64_t seed, std::int64_t index) {
   return "gen-k" + std::to_string(spec.sub_goals) + "-m" + std::to_string(spec.multi_step) + "-n" +
          std::to_string(spec.objects) + "-s" + std::to_string(seed) + "-i" + std::to_string(index);
@@ -132,9 +141,19 @@ GeneratedScenario generateScenario(const RunConfig& config, const ScenarioSpec& 
                              " object(s)";
     bool room = true;
     std::vector<Change> changes;
+    std::vector<std::pair<Shape, Colour>> asked;  // the looks two-action sub-goals ask for: no other object starts so
     for (int i = 0; i < spec.objects && room; ++i) {
       const bool has_goal = i < spec.sub_goals, two_actions = i < spec.multi_step;
-      const Look& l = has_goal ? *(two_actions ? two : one)[pick((two_actions ? two : one).size())] : looks[pick(looks.size())];
+      std::vector<const Look*> choices;
+      for (const Look* l : has_goal ? (two_actions ? two : one) : std::vector<const Look*>{})
+        choices.push_back(l);
+      if (!has_goal)
+        for (const Look& l : looks) choices.push_back(&l);
+      std::vector<const Look*> allowed;
+      for (const Look* l : choices)
+        if (std::find(asked.begin(), asked.end(), std::make_pair(l->shape, l->colour)) == asked.end()) allowed.push_back(l);
+      if (allowed.empty()) allowed = choices;  // the check below draws the scenario again
+      const Look& l = *allowed[pick(allowed.size())];
       ScenarioObject o;
       o.shape = l.shape;
       o.value = 1.0;
@@ -149,6 +168,7 @@ GeneratedScenario generateScenario(const RunConfig& config, const ScenarioSpec& 
         const std::vector<Change> options = changesOf(l, looks, two_actions);
         ch = options[pick(options.size())];
         o.goal.colour = ch.colour;
+        if (two_actions) asked.emplace_back(l.shape, ch.colour);
       }
       changes.push_back(ch);
       g.scenario.objects.push_back(o);
@@ -178,6 +198,15 @@ GeneratedScenario generateScenario(const RunConfig& config, const ScenarioSpec& 
     } catch (const ConfigError&) {
       continue;  // a layout the validation refuses (shapes' reach): draw again
     }
+    // A two-action sub-goal must need its two actions: if another object
+    // starts with the look it asks for, one move of that object would reach it.
+    const auto& objs = g.scenario.objects;
+    const bool one_move_reaches = std::any_of(objs.begin(), objs.end(), [&](const ScenarioObject& o) {
+      return o.actions >= 2 && std::any_of(objs.begin(), objs.end(), [&](const ScenarioObject& other) {
+               return &other != &o && other.shape == o.shape && other.initial.colour == o.goal.colour;
+             });
+    });
+    if (one_move_reaches) continue;
     // The true plan, played in the environment.
     g.plan.clear();
     for (std::size_t i = 0; i < g.scenario.objects.size(); ++i) {

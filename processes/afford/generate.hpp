@@ -31,7 +31,8 @@ struct GeneratedScenario {
 // The index-th scenario of `seed` for the world of `config` (its looks, table
 // and geometry). Objects take the looks of world.objects; a one-action
 // sub-goal is an afforded colour change or move, a two-action one a colour
-// change and a move in an order the table affords; only entries of 1 count.
+// change and a move in an order the table affords (and no other object starts
+// with the look it asks for, which one move would bring); only entries of 1 count.
 // Places are apart and free as validateScenario and the environment require,
 // and the true plan, played in the environment, reaches the goal image
 // (goal distance below planner.success_distance); a draw that fails any of
@@ -40,6 +41,10 @@ struct GeneratedScenario {
 // the world has no room or no looks for it.
 GeneratedScenario generateScenario(const RunConfig& config, const ScenarioSpec& spec, std::int64_t seed,
                                    std::int64_t index);
+
+// The points of a design's `extrinsic.generate`: every k of sub_goals with
+// every n of objects (n = k without objects), k slowest.
+std::vector<ScenarioSpec> designPoints(const GenerateDesign& design);
 
 // gen-k<k>-m<m>-n<n>-s<seed>-i<index>
 std::string generatedName(const ScenarioSpec& spec, std::int64_t seed, std::int64_t index);

@@ -26,6 +26,7 @@
 
 #include "afford/config.hpp"
 #include "afford/experiment.hpp"
+#include "afford/generate.hpp"
 #include "afford/logging.hpp"
 
 int main(int argc, char** argv) {
@@ -137,8 +138,17 @@ int main(int argc, char** argv) {
       ->check(CLI::IsMember({"waiting", "ready", "running", "done", "failed"}));
   std::string scenario_name, scenario_png;
   auto* scen = app.add_subcommand("scenario", "check a scenario file and draw its goal and initial scenes");
-  scen->add_option("name", scenario_name, "scenario (config/scenarios/<name>.yaml)")->required();
+  std::vector<int> scenario_generate;
+  std::int64_t scenario_seed = 1, scenario_index = 0;
+  std::string scenario_experiment = "base";
+  scen->add_option("name", scenario_name, "scenario (config/scenarios/<name>.yaml)");
   scen->add_option("--png", scenario_png, "write the picture to this PNG file");
+  scen->add_option("--generate", scenario_generate,
+                   "draw one instead: SUB_GOALS TWO_ACTION OBJECTS (k m n), printed as a scenario file")
+      ->expected(3);
+  scen->add_option("--seed", scenario_seed, "with --generate: the seed of the draw");
+  scen->add_option("--index", scenario_index, "with --generate: which scenario of the seed");
+  scen->add_option("--experiment", scenario_experiment, "the experiment whose world the scenario is for (default: base)");
 
   CLI11_PARSE(app, argc, argv);
   cv::setNumThreads(0);  // small images: OpenCV's thread pool only adds wake-ups
@@ -248,11 +258,20 @@ int main(int argc, char** argv) {
       return 0;
     }
     if (scen->parsed()) {
-      const afford::WorldConfig world =
-          afford::parseRunConfig(afford::effectiveConfig(config_dir, {"base", afford::System::IMP, 1, std::nullopt, {}}))
-              .world;
-      const afford::Scenario s = afford::loadScenario(config_dir, scenario_name, world);
-      std::printf("%s: %zu object(s), valid. %s\n", s.name.c_str(), s.objects.size(), s.description.c_str());
+      const afford::RunConfig run =
+          afford::parseRunConfig(afford::effectiveConfig(config_dir, {scenario_experiment, afford::System::IMP, 1, std::nullopt, {}}));
+      const afford::WorldConfig& world = run.world;
+      afford::Scenario s;
+      if (!scenario_generate.empty()) {
+        if (!scenario_name.empty()) throw afford::ConfigError("afford scenario: give a scenario name or --generate, not both");
+        const afford::ScenarioSpec spec{scenario_generate[2], scenario_generate[0], scenario_generate[1]};
+        s = afford::generateScenario(run, spec, scenario_seed, scenario_index).scenario;
+        std::printf("%s", afford::emitYaml(afford::scenarioNode(s)).c_str());
+      } else {
+        if (scenario_name.empty()) throw afford::ConfigError("afford scenario: name a scenario, or --generate K M N");
+        s = afford::loadScenario(config_dir, scenario_name, world);
+        std::printf("%s: %zu object(s), valid. %s\n", s.name.c_str(), s.objects.size(), s.description.c_str());
+      }
       if (!scenario_png.empty() && !cv::imwrite(scenario_png, afford::scenarioPicture(s, world)))
         throw std::runtime_error("cannot write " + scenario_png);
       return 0;

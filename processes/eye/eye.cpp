@@ -4,6 +4,7 @@
 
 #include <cmath>
 #include <limits>
+#include <tuple>
 
 #include "afford/actions.hpp"
 #include "afford/rng.hpp"
@@ -174,6 +175,23 @@ const Focus& Eye::scanGoal(std::int64_t step) {
 
 const Focus& Eye::lookAt(double x, double y) {
   outer_.focus = focusOn(outer_, x, y);
+  return outer_.focus;
+}
+
+std::vector<Difference> Eye::goalDifferences(double match) const {
+  std::vector<Difference> out;
+  for (const auto& [from, other, in_goal] : {std::tuple{&inner_, &outer_, true}, std::tuple{&outer_, &inner_, false}})
+    for (int label = 1; label < from->n_labels; ++label) {
+      Focus here = focusOnBlob(*from, label);
+      const Focus there = focusOn(*other, here.x, here.y);
+      if (imageDistance(here.image, there.image) >= match) out.push_back({here.x, here.y, in_goal, std::move(here.image)});
+    }
+  return out;
+}
+
+const Focus& Eye::attend(double x, double y) {
+  const int label = labelAt(outer_, toPixel(x, y, config_.world.size_px));
+  outer_.focus = label > 0 ? focusOnBlob(outer_, label) : focusOn(outer_, x, y);
   return outer_.focus;
 }
 

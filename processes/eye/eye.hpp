@@ -28,6 +28,13 @@ struct Effect {
   bool affordance = false;           // the performed action's own effect was seen
 };
 
+// A place where the goal image and the scene differ (top-down attention).
+struct Difference {
+  double x = 0, y = 0;              // the blob's place, scene units
+  bool in_goal = false;             // a goal blob (a sub-goal) or a scene blob (an object to act on)
+  std::vector<std::uint8_t> image;  // the window there on the image that shows the blob
+};
+
 class Eye {
  public:
   explicit Eye(const RunConfig& config);
@@ -37,6 +44,8 @@ class Eye {
   bool hasScene() const { return !outer_.rgb.empty(); }
   const cv::Mat& scene() const { return outer_.rgb; }
   const Focus& focus() const { return outer_.focus; }
+  // The window at the gaze on the current scene (the gaze does not move).
+  Focus atGaze() const { return refocus(outer_); }
 
   // Saliency scan (Algorithm 1, Scan): noise keyed by (seed, step), redrawn
   // until the gaze lands on another object than the current one.
@@ -61,6 +70,16 @@ class Eye {
   // ScanEnvironmentWithSameFocusAsSubGoal: the outer eye looks at a place of
   // the scene (scene units), with the window it would put there for an object.
   const Focus& lookAt(double x, double y);
+
+  // Top-down attention (issue 12). The places where goal and scene differ:
+  // every goal blob whose window differs from the scene's window at its place
+  // (imageDistance >= match), then every scene blob whose window differs from
+  // the goal's at its place, each in label order (row-major first pixel). No
+  // noise, and the gaze stays.
+  std::vector<Difference> goalDifferences(double match) const;
+  // The outer eye attends the object under (x, y): its blob, focused as a scan
+  // would (focusOnBlob); with no object there, the window at (x, y).
+  const Focus& attend(double x, double y);
 
  private:
   // One image the eye looks at, its saliency cache and the gaze on it.

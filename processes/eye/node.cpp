@@ -30,6 +30,10 @@ void EyeNode::onStop() {
 }
 
 void EyeNode::publishFocus(std::int64_t step, const Focus& f, int8_t kind, int32_t seq) {
+  publish(channel::kFocus, focusMessage(step, f, kind, seq));
+}
+
+focus_t EyeNode::focusMessage(std::int64_t step, const Focus& f, int8_t kind, int32_t seq) const {
   focus_t m;
   m.run_id = runId();
   m.step = step;
@@ -40,7 +44,8 @@ void EyeNode::publishFocus(std::int64_t step, const Focus& f, int8_t kind, int32
   m.side = config().eye.focus_side;
   m.image = f.image;
   m.size = static_cast<int32_t>(f.image.size());
-  publish(channel::kFocus, m);
+  m.n_diffs = 0;
+  return m;
 }
 
 Turn EyeNode::onExtrinsicScene(const scene_t& s) {
@@ -77,9 +82,31 @@ Turn EyeNode::onLook(const look_t& l) {
     scenes_.erase(scenes_.begin(), std::next(it));  // LOOKs come in order: no later one names these
   }
   if (!eye_->hasScene() || !eye_->hasGoal()) return Turn::later();  // the goal and the scene come first
+  // Top-down attention looks at the differences and attends objects; a
+  // multi-step plan attends its object again after the plan's first action.
+  if (l.kind == focus_t::GOAL_DIFF && config().eye.attention != Attention::TopDown)
+    return Turn::refuse("a look at the differences is top-down attention, and this run has eye.attention: bottom_up");
+  if (l.kind == focus_t::SCENE_OBJECT && config().eye.attention != Attention::TopDown && config().planner.max_depth < 2)
+    return Turn::refuse("a look at an object is top-down attention or multi-step planning, and this run has "
+                        "eye.attention: bottom_up and planner.search.max_depth: 1");
   last_look_ = l.seq;
   handled(l.step);
   switch (l.kind) {
+    case focus_t::GOAL_DIFF: {
+      focus_t m = focusMessage(l.step, eye_->atGaze(), l.kind, l.seq);
+      for (Difference& d : eye_->goalDifferences(config().planner.subgoal_match)) {
+        m.diff_x.push_back(d.x);
+        m.diff_y.push_back(d.y);
+        m.diff_in.push_back(d.in_goal ? int8_t{focus_t::DIFF_GOAL} : int8_t{focus_t::DIFF_SCENE});
+        m.diff_image.push_back(std::move(d.image));
+      }
+      m.n_diffs = static_cast<int32_t>(m.diff_x.size());
+      publish(channel::kFocus, m);
+      break;
+    }
+    case focus_t::SCENE_OBJECT:
+      publishFocus(l.step, eye_->attend(l.x, l.y), l.kind, l.seq);
+      break;
     case focus_t::GOAL_SCAN:
       publishFocus(l.step, eye_->scanGoal(l.step), l.kind, l.seq);
       break;

@@ -14,6 +14,7 @@
 #include <utility>
 
 #include "afford/decision_t.hpp"
+#include "afford/focus_t.hpp"
 #include "afford/look_t.hpp"
 #include "afford/node.hpp"
 #include "afford/scene_t.hpp"
@@ -41,6 +42,7 @@ class EyeNode : public NodeBase {
   // whether or not the step before acted, and that scene starts the step.
   bool objectsAppearAt(std::int64_t step) const;
   void publishFocus(std::int64_t step, const Focus& f, int8_t kind = 0, int32_t seq = 0);
+  focus_t focusMessage(std::int64_t step, const Focus& f, int8_t kind, int32_t seq) const;
 
   std::unique_ptr<Eye> eye_;
   std::int64_t last_scanned_ = -1;   // last step whose FOCUS was published

@@ -85,19 +85,27 @@ void PlannerNode::follow(PlannerRequest r) {
       object_.reset();
       affordance_.reset();
       return look(focus_t::SCENE_SCAN);
+    case PlannerRequest::AttendObject:
+      object_.reset();
+      affordance_.reset();
+      return look(focus_t::SCENE_OBJECT, r.x, r.y);
+    case PlannerRequest::LookAtDifferences:
+      return look(focus_t::GOAL_DIFF);
     case PlannerRequest::Forward: {
       forward_query_t q;
       q.run_id = runId();
       q.step = step_;
       q.seq = ++seq_;
-      q.x = object_->x;
-      q.y = object_->y;
+      q.x = r.object_x;
+      q.y = r.object_y;
       q.target_x = r.x;
       q.target_y = r.y;
-      q.image = object_->image;
+      q.image = r.image;
       q.size = static_cast<int32_t>(q.image.size());
       for (int a : r.actions) q.actions.push_back(static_cast<int8_t>(a));
       q.n_actions = static_cast<int32_t>(q.actions.size());
+      for (int a : r.prefix) q.prefix.push_back(static_cast<int8_t>(a));
+      q.n_prefix = static_cast<int8_t>(q.prefix.size());
       return publish(channel::kForwardQuery, q);
     }
     case PlannerRequest::Act: {
@@ -125,13 +133,23 @@ Turn PlannerNode::onFocus(const focus_t& f) {
   if (f.seq > seq_) return Turn::later();  // the answer to a request not made yet here
   if (f.seq < seq_) return Turn::refuse("request " + std::to_string(f.seq) + " was answered already");
   handled(f.step);
-  if (f.kind == focus_t::SCENE_SCAN) {
-    if (last_.kind != PlannerRequest::ScanScene || object_) return Turn::refuse("a scan the planner did not ask for");
+  if (f.kind == focus_t::SCENE_SCAN || f.kind == focus_t::SCENE_OBJECT) {
+    const auto asked = f.kind == focus_t::SCENE_SCAN ? PlannerRequest::ScanScene : PlannerRequest::AttendObject;
+    if (last_.kind != asked || object_) return Turn::refuse("an object the planner did not ask for");
     object_ = f;
     tryObject();
     return Turn::take();
   }
-  if (last_.kind != PlannerRequest::LookAtGoal && last_.kind != PlannerRequest::LookAtSceneAt)
+  if (f.kind == focus_t::GOAL_DIFF) {
+    if (last_.kind != PlannerRequest::LookAtDifferences) return Turn::refuse("differences the planner did not ask for");
+    std::vector<SeenDifference> diffs;
+    for (int i = 0; i < f.n_diffs; ++i)
+      diffs.push_back({f.diff_x[i], f.diff_y[i], f.diff_in[i] == focus_t::DIFF_GOAL, f.diff_image[i]});
+    follow(core_->onDifferences(diffs));
+    return Turn::take();
+  }
+  if ((f.kind == focus_t::GOAL_SCAN && last_.kind != PlannerRequest::LookAtGoal) ||
+      (f.kind == focus_t::SCENE_AT && last_.kind != PlannerRequest::LookAtSceneAt))
     return Turn::refuse("a look the planner did not ask for");
   follow(core_->onView({f.image, f.x, f.y}));
   return Turn::take();
@@ -142,7 +160,8 @@ Turn PlannerNode::onPrediction(const prediction_t& p) {
   // Every scene scan's prediction is taken, in order: one that comes before
   // its scan was asked for waits.
   if (p.step < step_) return Turn::refuse("step " + std::to_string(p.step) + " is in the past");
-  if (last_.kind != PlannerRequest::ScanScene || p.step != step_ || affordance_) return Turn::later();
+  const bool objectAsked = last_.kind == PlannerRequest::ScanScene || last_.kind == PlannerRequest::AttendObject;
+  if (!objectAsked || p.step != step_ || affordance_) return Turn::later();
   affordance_.emplace();
   std::copy(p.affordance.begin(), p.affordance.end(), affordance_->begin());
   tryObject();
@@ -161,7 +180,15 @@ Turn PlannerNode::onForward(const forward_prediction_t& m) {
   std::vector<ForwardPrediction> preds;
   for (int i = 0; i < m.n_actions; ++i)
     preds.push_back({m.actions[i], std::vector<double>(m.what[i].begin(), m.what[i].end()), m.where_x[i], m.where_y[i]});
-  follow(core_->onForward(preds));
+  std::optional<std::array<double, kNumActions>> input;
+  if (!last_.prefix.empty()) {  // the query imagined its object: its affordances come with the answer
+    if (m.n_input != kNumActions)
+      return Turn::refuse("query " + std::to_string(m.seq) + " asked about an imagined object, and the answer has " +
+                          std::to_string(m.n_input) + " input_affordance values, not " + std::to_string(kNumActions));
+    input.emplace();
+    std::copy(m.input_affordance.begin(), m.input_affordance.end(), input->begin());
+  }
+  follow(core_->onForward(preds, input));
   return Turn::take();
 }
 

@@ -1,19 +1,10 @@
 #include "planner/planner.hpp"
 
+#include <algorithm>
 #include <cmath>
 #include <stdexcept>
 
 namespace afford {
-
-double imageDistance(const std::vector<std::uint8_t>& a, const std::vector<std::uint8_t>& b) {
-  if (a.size() != b.size() || a.empty()) return 1.0;
-  double sum = 0;
-  for (std::size_t i = 0; i < a.size(); ++i) {
-    const double d = (static_cast<int>(a[i]) - static_cast<int>(b[i])) / 255.0;
-    sum += d * d;
-  }
-  return std::sqrt(sum) / static_cast<double>(a.size());
-}
 
 double imageDistance(const std::vector<double>& predicted, const std::vector<std::uint8_t>& b) {
   if (predicted.size() != b.size() || b.empty()) return 1.0;
@@ -23,6 +14,23 @@ double imageDistance(const std::vector<double>& predicted, const std::vector<std
     sum += d * d;
   }
   return std::sqrt(sum) / static_cast<double>(b.size());
+}
+
+std::vector<std::uint8_t> quantiseImage(const std::vector<double>& what) {
+  std::vector<std::uint8_t> out(what.size());
+  for (std::size_t i = 0; i < what.size(); ++i)
+    out[i] = static_cast<std::uint8_t>(std::lround(std::clamp(what[i], 0.0, 1.0) * 255.0));
+  return out;
+}
+
+double silhouetteDistance(const std::vector<std::uint8_t>& a, const std::vector<std::uint8_t>& b) {
+  if (a.size() != b.size() || a.size() < 3) return 1.0;
+  std::size_t differ = 0;
+  for (std::size_t i = 0; i + 2 < a.size(); i += 3) {
+    const bool in_a = a[i] || a[i + 1] || a[i + 2], in_b = b[i] || b[i + 1] || b[i + 2];
+    differ += in_a != in_b;
+  }
+  return static_cast<double>(differ) / static_cast<double>(a.size() / 3);
 }
 
 double positionDistance(double px, double py, double qx, double qy, PositionMetric metric) {
@@ -66,13 +74,99 @@ PlannerRequest Planner::done() {
 PlannerRequest Planner::startIteration() {
   if (wait_ != Wait::Nothing) throw std::logic_error("Planner: an iteration is already under way");
   ++iterations_;
+  queries_ = 0;
   const bool timed_out = iterations_on_sub_goal_ >= config_.subgoal_timeout;
+  if (active_ && !timed_out && continue_at_) {  // a plan under way: the same object, where it should be now
+    const View at = *continue_at_;
+    continue_at_.reset();
+    wait_ = Wait::Object;
+    return request(PlannerRequest::AttendObject, at.x, at.y);
+  }
+  continue_at_.reset();
+  if (config_.attention == Attention::TopDown) {
+    if (!differences_known_) {
+      wait_ = Wait::Differences;
+      return request(PlannerRequest::LookAtDifferences);
+    }
+    if (active_ && timed_out) {  // too long on this one: not actionable until the differences are looked at again
+      targets_[static_cast<std::size_t>(target_)].status = Status::NotActionable;
+      active_ = false;
+    }
+    return active_ ? attendCandidate() : nextTarget();
+  }
   if (!active_ || timed_out) {  // Algorithm 2: select a non-achieved sub-goal
     wait_ = Wait::SubGoal;
     return request(PlannerRequest::LookAtGoal);
   }
   wait_ = Wait::Object;
   return request(PlannerRequest::ScanScene);
+}
+
+PlannerRequest Planner::onDifferences(const std::vector<SeenDifference>& differences) {
+  if (wait_ != Wait::Differences) throw std::logic_error("Planner: differences it did not ask for");
+  targets_.clear();
+  objects_.clear();
+  for (const SeenDifference& d : differences)
+    (d.in_goal ? targets_ : objects_).push_back({d.x, d.y, d.image, Status::Pending, {}});
+  differences_known_ = true;
+  active_ = false;
+  if (targets_.empty()) {  // the goal shows nothing the scene does not: look again next iteration
+    differences_known_ = false;
+    return done();
+  }
+  return nextTarget();
+}
+
+PlannerRequest Planner::nextTarget() {
+  for (std::size_t i = 0; i < targets_.size(); ++i) {
+    if (targets_[i].status != Status::Pending) continue;  // inhibition of return
+    target_ = static_cast<int>(i);
+    sub_goal_ = {targets_[i].image, targets_[i].x, targets_[i].y};
+    iterations_on_sub_goal_ = 0;
+    records_.push_back({sub_goal_.x, sub_goal_.y, 0, 0, 0, false});
+    wait_ = Wait::SceneAtSubGoal;
+    return request(PlannerRequest::LookAtSceneAt, sub_goal_.x, sub_goal_.y);
+  }
+  // Every remembered sub-goal is done or not actionable: look at the differences again.
+  differences_known_ = false;
+  wait_ = Wait::Differences;
+  return request(PlannerRequest::LookAtDifferences);
+}
+
+PlannerRequest Planner::attendCandidate() {
+  Remembered& t = targets_[static_cast<std::size_t>(target_)];
+  const auto at = [&](const Remembered& a, const Remembered& b) {
+    return positionDistance(a.x, a.y, b.x, b.y, PositionMetric::Euclidean) <= config_.position_match;
+  };
+  // The object where the sub-goal is first (a colour to change); then objects
+  // no other pending sub-goal waits for in place; then the ones it does (an
+  // object taken from there would leave that sub-goal without its object);
+  // within each, the most alike in shape, then memory order.
+  int best = -1, best_rank = 0;
+  double best_shape = 0;
+  for (std::size_t i = 0; i < objects_.size(); ++i) {
+    const Remembered& o = objects_[i];
+    if (o.status == Status::Done || std::count(t.tried.begin(), t.tried.end(), static_cast<int>(i))) continue;
+    const bool wanted_elsewhere = std::any_of(targets_.begin(), targets_.end(), [&](const Remembered& other) {
+      return &other != &t && other.status == Status::Pending && at(o, other);
+    });
+    const int rank = at(o, t) ? 0 : wanted_elsewhere ? 2 : 1;
+    const double shape = silhouetteDistance(o.image, t.image);
+    if (best < 0 || rank < best_rank || (rank == best_rank && shape < best_shape)) {
+      best = static_cast<int>(i);
+      best_rank = rank;
+      best_shape = shape;
+    }
+  }
+  if (best < 0) {  // no object left to try: not actionable
+    t.status = Status::NotActionable;
+    return leaveSubGoal();
+  }
+  candidate_ = best;
+  t.tried.push_back(best);
+  wait_ = Wait::Object;
+  return request(PlannerRequest::AttendObject, objects_[static_cast<std::size_t>(best)].x,
+                 objects_[static_cast<std::size_t>(best)].y);
 }
 
 PlannerRequest Planner::onView(const View& v) {
@@ -88,44 +182,96 @@ PlannerRequest Planner::onView(const View& v) {
       active_ = imageDistance(sub_goal_.image, v.image) >= config_.subgoal_match;
       if (!active_) {
         records_.back().reached = true;
+        if (target_ >= 0) targets_[static_cast<std::size_t>(target_)].status = Status::Done;
         return done();
       }
+      if (config_.attention == Attention::TopDown) return attendCandidate();
       wait_ = Wait::Object;
       return request(PlannerRequest::ScanScene);
     case Wait::SceneAfterAction:
       active_ = imageDistance(sub_goal_.image, v.image) >= config_.subgoal_match;
-      if (!active_) records_.back().reached = true;
+      if (!active_) {
+        records_.back().reached = true;
+        continue_at_.reset();
+        if (target_ >= 0) {  // the sub-goal and the object that reached it: done, not looked at again
+          targets_[static_cast<std::size_t>(target_)].status = Status::Done;
+          objects_[static_cast<std::size_t>(candidate_)].status = Status::Done;
+        }
+      } else if (continue_at_ && target_ >= 0) {  // the plan goes on with this object, wherever it went
+        Remembered& o = objects_[static_cast<std::size_t>(candidate_)];
+        o.x = continue_at_->x;
+        o.y = continue_at_->y;
+      }
       return done();
     default:
       throw std::logic_error("Planner: a view it did not ask for");
   }
 }
 
-PlannerRequest Planner::onObject(const View& object, const std::array<double, kNumActions>& affordance) {
-  if (wait_ != Wait::Object) throw std::logic_error("Planner: an object it did not ask for");
-  object_ = object;
-  affordance_ = affordance;
+PlannerRequest Planner::forward(const std::vector<std::uint8_t>& image, double x, double y, std::vector<int> actions,
+                                std::vector<int> prefix) {
   PlannerRequest r = request(PlannerRequest::Forward, sub_goal_.x, sub_goal_.y);
-  r.object_x = object.x;
-  r.object_y = object.y;
-  for (int a = 0; a < kNumActions; ++a)
-    if (!config_.restrict_by_affordance || affordance[a] > config_.affordance_threshold) r.actions.push_back(a);
-  if (r.actions.empty()) return done();  // nothing this object affords
+  r.object_x = x;
+  r.object_y = y;
+  r.image = image;
+  r.actions = std::move(actions);
+  r.prefix = std::move(prefix);
+  ++queries_;
   wait_ = Wait::Forward;
   return r;
 }
 
-PlannerRequest Planner::onForward(const std::vector<ForwardPrediction>& predictions) {
+PlannerRequest Planner::onObject(const View& object, const std::array<double, kNumActions>& affordance) {
+  if (wait_ != Wait::Object) throw std::logic_error("Planner: an object it did not ask for");
+  object_ = object;
+  affordance_ = affordance;
+  std::vector<int> actions;
+  for (int a = 0; a < kNumActions; ++a)
+    if (!config_.restrict_by_affordance || affordance[a] > config_.affordance_threshold) actions.push_back(a);
+  if (actions.empty()) return done();  // nothing this object affords
+  frontier_.clear();
+  frontier_next_ = 0;
+  querying_ = SearchNode{{}, object.image, object.x, object.y, {}};
+  return forward(object.image, object.x, object.y, std::move(actions), {});
+}
+
+PlannerRequest Planner::onForward(const std::vector<ForwardPrediction>& predictions,
+                                  const std::optional<std::array<double, kNumActions>>& input_affordance) {
   if (wait_ != Wait::Forward) throw std::logic_error("Planner: predictions it did not ask for");
-  // ActionPlanning: the first candidate whose predicted effect is the sub-goal.
+  const SearchNode node = querying_;
+  const bool imagined = !node.actions.empty();
+  if (imagined && !input_affordance) throw std::logic_error("Planner: predictions for an imagined object without its affordances");
+  // ActionPlanning: the first candidate whose predicted effect is the sub-goal;
+  // breadth first, so the first plan found is a shortest one.
   for (const ForwardPrediction& p : predictions) {
+    // An imagined object is restricted by what it would afford (the first step by the PREDICTION).
+    if (imagined && config_.restrict_by_affordance && (*input_affordance)[p.action] <= config_.affordance_threshold)
+      continue;
     ++records_.back().actions_checked;
     const bool image_ok = imageDistance(p.what, sub_goal_.image) < config_.image_match;
     const bool place_ok = positionDistance(p.where_x, p.where_y, sub_goal_.x, sub_goal_.y, config_.position_metric) <=
                           config_.position_match;
-    if (image_ok && place_ok) return config_.kind == PlannerKind::Utility ? weighUtility(p) : act(p);
+    if (image_ok && place_ok) return actOnPlan(imagined ? node.first : p, node.actions.size() + 1);
+    if (static_cast<int>(node.actions.size()) + 1 < config_.max_depth) {
+      SearchNode child{node.actions, quantiseImage(p.what), std::clamp(p.where_x, 0.0, 1.0),
+                       std::clamp(p.where_y, 0.0, 1.0), imagined ? node.first : p};
+      child.actions.push_back(p.action);
+      frontier_.push_back(std::move(child));
+    }
+  }
+  if (frontier_next_ < frontier_.size() && queries_ < config_.max_queries) {
+    querying_ = frontier_[frontier_next_++];
+    std::vector<int> all(kNumActions);
+    for (int a = 0; a < kNumActions; ++a) all[static_cast<std::size_t>(a)] = a;
+    return forward(querying_.image, querying_.x, querying_.y, std::move(all), querying_.actions);
   }
   return done();
+}
+
+PlannerRequest Planner::actOnPlan(const ForwardPrediction& first, std::size_t length) {
+  // More to do after this action: next iteration, the object where the first action should leave it.
+  if (length > 1) continue_at_ = View{{}, std::clamp(first.where_x, 0.0, 1.0), std::clamp(first.where_y, 0.0, 1.0)};
+  return config_.kind == PlannerKind::Utility ? weighUtility(first) : act(first);
 }
 
 PlannerRequest Planner::act(const ForwardPrediction& p) {

@@ -12,11 +12,11 @@
 
 #include "afford/actions.hpp"
 #include "afford/config.hpp"
+#include "afford/image.hpp"
 
 namespace afford {
 
-// ||a - b||_2 / n for images in [0, 1] (bytes are value / 255).
-double imageDistance(const std::vector<std::uint8_t>& a, const std::vector<std::uint8_t>& b);
+// imageDistance of afford/image.hpp, for a predicted image in [0, 1].
 double imageDistance(const std::vector<double>& predicted, const std::vector<std::uint8_t>& b);
 // ||p - q||_2 for positions in scene units (planner.position_metric: euclidean),
 // or half of it (half_euclidean, afford before issue 10).
@@ -34,12 +34,30 @@ struct ForwardPrediction {
   double where_x = 0, where_y = 0;  // predicted position after the action
 };
 
+// A place where the goal image and the scene differ (top-down attention):
+// the eye's answer to LookAtDifferences.
+struct SeenDifference {
+  double x = 0, y = 0;
+  bool in_goal = false;              // a sub-goal the goal shows, or an object the scene shows
+  std::vector<std::uint8_t> image;   // the window there
+};
+
+// The byte image a what-effect stands for when the search imagines the next
+// step from it: round(clamp(v, 0, 1) * 255), as the node and the reference loop send it.
+std::vector<std::uint8_t> quantiseImage(const std::vector<double>& what);
+// The share of pixels on which two focus images disagree about an object
+// being there (any channel above 0): 0 for the same silhouette.
+double silhouetteDistance(const std::vector<std::uint8_t>& a, const std::vector<std::uint8_t>& b);
+
 struct PlannerRequest {
   enum Kind {
     LookAtGoal,     // inner eye: saliency scan of the goal image -> onView
     LookAtSceneAt,  // outer eye: look at (x, y) in the scene -> onView
     ScanScene,      // outer eye: saliency scan of the scene -> onObject (with the object's affordances)
-    Forward,        // predictors: what/where effects of `actions` on the object, move target (x, y) -> onForward
+    LookAtDifferences,  // eye (top-down): where goal and scene differ -> onDifferences
+    AttendObject,   // outer eye: the object at (x, y) -> onObject (with the object's affordances)
+    Forward,        // predictors: what/where effects of `actions` on `image` at (object_x, object_y), imagined
+                    // after `prefix`; move target (x, y) -> onForward (with `image`'s affordances if imagined)
     Act,            // environment: execute `action` on the object at (object_x, object_y); move to (x, y) -> onActed
     IterationDone,  // this iteration of Algorithm 2 is over
   } kind = IterationDone;
@@ -47,6 +65,8 @@ struct PlannerRequest {
   double object_x = -1, object_y = -1;
   std::vector<int> actions;
   int action = -1;
+  std::vector<std::uint8_t> image;  // Forward: the object's image, as seen or imagined
+  std::vector<int> prefix;          // Forward: the actions imagined before (multi-step search)
 };
 
 // What the planner did for one sub-goal (a sub-goal is one pick from the goal image).
@@ -74,7 +94,10 @@ class Planner {
   PlannerRequest startIteration();
   PlannerRequest onView(const View& v);
   PlannerRequest onObject(const View& object, const std::array<double, kNumActions>& affordance);
-  PlannerRequest onForward(const std::vector<ForwardPrediction>& predictions);
+  // `input_affordance`: for an imagined object (a request with a prefix), what it affords.
+  PlannerRequest onForward(const std::vector<ForwardPrediction>& predictions,
+                           const std::optional<std::array<double, kNumActions>>& input_affordance = std::nullopt);
+  PlannerRequest onDifferences(const std::vector<SeenDifference>& differences);
   PlannerRequest onActed();
 
   int attempts() const { return attempts_; }
@@ -87,10 +110,18 @@ class Planner {
   const std::vector<SubGoalRecord>& subGoals() const { return records_; }
 
  private:
-  enum class Wait { Nothing, SubGoal, SceneAtSubGoal, Object, Forward, Acted, SceneAfterAction };
+  enum class Wait { Nothing, SubGoal, SceneAtSubGoal, Object, Forward, Acted, SceneAfterAction, Differences };
   PlannerRequest request(PlannerRequest::Kind kind, double x = -1, double y = -1) const;
   PlannerRequest done();
+  PlannerRequest forward(const std::vector<std::uint8_t>& image, double x, double y, std::vector<int> actions,
+                         std::vector<int> prefix);
 
+  // Top-down attention: the next sub-goal of the memory, or a new look at the differences.
+  PlannerRequest nextTarget();
+  // ... the next object to try for it, or leave it as not actionable.
+  PlannerRequest attendCandidate();
+  // A plan of one action or more was found: act on its first one.
+  PlannerRequest actOnPlan(const ForwardPrediction& first, std::size_t length);
   PlannerRequest act(const ForwardPrediction& p);
   // Algorithm 3 once ActionPlanning found `p` for the sub-goal and object.
   PlannerRequest weighUtility(const ForwardPrediction& p);
@@ -108,6 +139,32 @@ class Planner {
   int attempts_ = 0;
   View sub_goal_, object_;
   std::vector<SubGoalRecord> records_;
+
+  // Multi-step search: breadth first over imagined objects, actions in order.
+  struct SearchNode {
+    std::vector<int> actions;  // the plan so far
+    std::vector<std::uint8_t> image;
+    double x = 0, y = 0;
+    ForwardPrediction first;   // the prediction for the plan's first action
+  };
+  std::vector<SearchNode> frontier_;   // nodes still to query, in order (front first)
+  std::size_t frontier_next_ = 0;
+  SearchNode querying_;                // the node whose query is under way
+  int queries_ = 0;                    // forward queries this iteration
+  std::optional<View> continue_at_;    // a longer plan's first action was taken: the object is expected here
+
+  // Top-down attention (docs/model.md#top-down-attention): the memory of
+  // what the look at the differences showed, and what became of it.
+  enum class Status { Pending, Done, NotActionable };
+  struct Remembered {
+    double x = 0, y = 0;
+    std::vector<std::uint8_t> image;
+    Status status = Status::Pending;
+    std::vector<int> tried;  // targets: the objects tried for it
+  };
+  bool differences_known_ = false;
+  std::vector<Remembered> targets_, objects_;
+  int target_ = -1, candidate_ = -1;
 };
 
 }  // namespace afford

@@ -67,7 +67,9 @@ Turn PredictorsNode::onProbe(const object_probe_t& m) {
 }
 
 Turn PredictorsNode::onFocus(const focus_t& m) {
-  if (m.kind != focus_t::SCENE_SCAN) return Turn::take();  // the planner's looks at the goal or at a place
+  // The objects the planner attends (a scan, or top-down the object at a
+  // place) get a prediction; its looks at the goal or at a place do not.
+  if (m.kind != focus_t::SCENE_SCAN && m.kind != focus_t::SCENE_OBJECT) return Turn::take();
   if (extrinsic()) {
     if (m.step < current_) return Turn::refuse("step " + std::to_string(m.step) + " is in the past");
     current_ = m.step;
@@ -138,6 +140,11 @@ Turn PredictorsNode::onForwardQuery(const forward_query_t& q) {
     out.where_x.push_back(where[0]);
     out.where_y.push_back(where[1]);
   }
+  if (q.n_prefix > 0) {  // an imagined object: what it would afford next (multi-step search)
+    const Prediction p = core_->predict(q.image);
+    out.input_affordance.assign(p.affordance.begin(), p.affordance.end());
+  }
+  out.n_input = static_cast<int8_t>(out.input_affordance.size());
   publish(channel::kForwardPrediction, out);
   handled(q.step);
   return Turn::take();

@@ -382,6 +382,7 @@ focus_t validFocus(const std::string& run, std::int64_t step) {
   f.side = 21;
   f.size = 1323;
   f.image.assign(1323, 0);
+  f.n_diffs = 0;
   return f;
 }
 prediction_t validPrediction(const std::string& run, std::int64_t step) {

@@ -63,6 +63,11 @@ struct WorldConfig {
   std::vector<ObjectSpec> objects;         // in the order of the paper's tables
 };
 
+// How the extrinsic phase finds sub-goals and objects (issue 12): the paper's
+// bottom-up saliency scans, or a top-down look at where scene and goal differ,
+// remembered by the planner.
+enum class Attention { BottomUp, TopDown };
+
 struct EyeConfig {
   int focus_side = 0;                     // pixels
   double saliency_noise = 0;            // uniform noise half-width
@@ -73,6 +78,7 @@ struct EyeConfig {
   double image_change_threshold = 0;    // tau_i
   double position_change_threshold = 0; // tau_p
   int max_scan_draws = 0;                // redraws until the gaze lands on another object
+  Attention attention = Attention::BottomUp;  // extrinsic phase (issue 12)
 };
 
 // The agent's memory of past experiences (issue 11, docs/model.md#memory):
@@ -160,6 +166,11 @@ struct PlannerConfig {
   double affordance_threshold = 0;   // (paper 2.4.3, 3.2.4)
   double success_distance = 0;      // whole scene matches the goal image (authors' code)
   PlannerKind kind = PlannerKind::Goal;  // Algorithm 2 or Algorithm 3
+  Attention attention = Attention::BottomUp;  // eye.attention: the eye and the planner read one key
+  // Multi-step search (issue 12): plans of up to max_depth actions through the
+  // forward models, at most max_queries forward queries per iteration.
+  int max_depth = 1;                 // 1: the paper's one-step planner
+  int max_queries = 0;
   // Utility-based planner (paper 2.4.4, Algorithm 3).
   int evaluation_iterations = 0;     // iterations that only estimate the potential utility
   double raise_leak = 0;             // nu of the leaky average raising the potential utility
@@ -251,8 +262,20 @@ ProtocolConfig loadProtocol(const std::string& config_dir);
 // The extrinsic tests an experiment file declares (`extrinsic:`): which
 // scenarios, how many tests per trained agent, and the planner settings to
 // compare (`vary`: every combination is a condition, tested from every agent).
+// Generated scenarios (`extrinsic.generate`, issue 12): per_point scenarios for
+// every point (k sub-goals on n objects, m of them two-action), drawn from seed.
+struct GenerateDesign {
+  std::vector<int> sub_goals;   // k of each point
+  std::vector<int> objects;     // n of each point; empty: n = k (every object has a sub-goal)
+  int multi_step = 0;           // m of each point (at most k)
+  bool all_multi_step = false;  // m = k
+  int per_point = 1;
+  std::int64_t seed = 1;
+};
+
 struct ExtrinsicDesign {
   std::vector<std::string> scenarios;
+  std::optional<GenerateDesign> generate;   // scenarios drawn for the tests, beside `scenarios`
   int tests = 0;                            // per trained agent, condition and scenario
   std::int64_t after_actions = 0;           // test the weights saved after this many actions (0: the final ones)
   std::vector<std::pair<std::string, std::vector<std::string>>> vary;  // config key -> values (YAML text)
@@ -301,6 +324,12 @@ std::string emitYaml(const YAML::Node& node);
 // run.steps is the planner's budget. Validated before returning.
 YAML::Node extrinsicConfig(const std::string& config_dir, const RunRequest& request, const std::string& checkpoint,
                            const std::string& scenario);
+
+// The same with a scenario given whole (a generated one), inlined as it is.
+YAML::Node extrinsicConfig(const std::string& config_dir, const RunRequest& request, const std::string& checkpoint,
+                           const Scenario& scenario);
+// A scenario as its file would say it (parseScenario reads it back equal).
+YAML::Node scenarioNode(const Scenario& scenario);
 
 // Overlay `over` onto `base` (maps merged recursively, everything else replaced).
 void mergeInto(YAML::Node base, const YAML::Node& over);

@@ -69,5 +69,8 @@ std::vector<std::uint8_t> cropFocus(const cv::Mat& scene, Pixel centre, int side
 
 // L1(a - b) / n over bytes scaled to [0, 1]: the paper's image change measure.
 double imageChange(const std::vector<std::uint8_t>& a, const std::vector<std::uint8_t>& b);
+// ||a - b||_2 / n for images in [0, 1] (bytes are value / 255): the planner's
+// image distance (paper 2.4.3); 1 for images of different sizes.
+double imageDistance(const std::vector<std::uint8_t>& a, const std::vector<std::uint8_t>& b);
 
 }  // namespace afford
