@@ -10,7 +10,8 @@
 #   scripts/reproduce.sh beyond          beyond the paper (issue 11): late1-3 with experience
 #                                        replay and revisits, beside the paper's agent, and
 #                                        random-tables (every system, 20 tables, with and without
-#                                        them); about 13 min on 2 cores
+#                                        them); (issue 12) attention, multi-step, world-size on
+#                                        generated scenarios; about 16 min on 2 cores
 #   scripts/reproduce.sh all             all three
 #   scripts/reproduce.sh NAME...         only these experiments (e.g. late3 utility)
 # Environment: JOBS (runs at a time, default: cores), REPS and EXT_REPS (default: the
@@ -24,7 +25,7 @@ set -euo pipefail
 cd "$(dirname "$0")/.."
 deterministic=(base late1 late2 late3)
 stochastic=(stochastic utility forward-models search-reduction)
-beyond=(late1-memory late2-memory late3-memory random-tables)
+beyond=(late1-memory late2-memory late3-memory random-tables attention multi-step world-size)
 [[ $# -eq 0 ]] && set -- deterministic
 experiments=()
 for what in "$@"; do
@@ -33,9 +34,11 @@ for what in "$@"; do
     stochastic) experiments+=("${stochastic[@]}") ;;
     beyond) experiments+=("${beyond[@]}") ;;
     all) experiments+=("${deterministic[@]}" "${stochastic[@]}" "${beyond[@]}") ;;
-    base|late1|late2|late3|stochastic|utility|forward-models|search-reduction|late1-memory|late2-memory|late3-memory|random-tables)
-      experiments+=("$what") ;;
-    *) echo "usage: scripts/reproduce.sh deterministic|stochastic|beyond|all|EXPERIMENT..." >&2; exit 2 ;;
+    *)
+      case " ${deterministic[*]} ${stochastic[*]} ${beyond[*]} " in
+        *" $what "*) experiments+=("$what") ;;
+        *) echo "usage: scripts/reproduce.sh deterministic|stochastic|beyond|all|EXPERIMENT... (unknown: $what)" >&2; exit 2 ;;
+      esac ;;
   esac
 done
 scripts/setup.sh

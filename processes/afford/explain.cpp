@@ -203,6 +203,7 @@ Explanation explainRunEvents(const RunEvents& run, const std::string& where, std
   // The planner's iterations, request by request.
   std::map<std::int64_t, ExplainedIteration> steps;
   std::vector<SubGoalImage> images;  // of ex.sub_goals
+  std::vector<SubGoalImage> differences;  // top-down: the sub-goals of the last look at the differences
   int current = -1;
   auto iteration = [&](std::int64_t step) -> ExplainedIteration& {
     auto [it, fresh] = steps.try_emplace(step);
@@ -216,6 +217,9 @@ Explanation explainRunEvents(const RunEvents& run, const std::string& where, std
     ExplainedIteration& it = iteration(r.step());
     if (r.query) {
       const forward_query_t& q = *r.query;
+      // Multi-step search: the queries about imagined objects (a prefix of
+      // actions) lead to the first one's action; its checks are the ones explained.
+      if (q.n_prefix > 0) continue;
       it.candidates.assign(q.actions.begin(), q.actions.end());
       auto f = forward_by_seq.find(seq);
       if (f == forward_by_seq.end()) {
@@ -258,17 +262,32 @@ Explanation explainRunEvents(const RunEvents& run, const std::string& where, std
     if (f.kind != l.kind)
       warn.push_back(format("iteration %lld: LOOK seq %d of kind %d is answered by a FOCUS of kind %d",
                             static_cast<long long>(it.step), seq, l.kind, f.kind));
-    if (l.kind == focus_t::GOAL_SCAN) {
+    // Top-down attention: a look at the scene at a place of the differences,
+    // before any object in the iteration, picks that sub-goal (its image: the goal's there).
+    const SubGoalImage* top_down_pick = nullptr;
+    if (l.kind == focus_t::SCENE_AT && !it.scanned && !it.picked)
+      for (const SubGoalImage& d : differences)
+        if (d.x == l.x && d.y == l.y) top_down_pick = &d;
+    if (l.kind == focus_t::GOAL_DIFF) {
+      differences.clear();
+      for (int i = 0; i < f.n_diffs; ++i)
+        if (f.diff_in[i] == focus_t::DIFF_GOAL) differences.push_back({f.diff_image[i], f.diff_x[i], f.diff_y[i]});
+      continue;
+    }
+    if (l.kind == focus_t::GOAL_SCAN || top_down_pick) {
+      const SubGoalImage picked = top_down_pick ? *top_down_pick : SubGoalImage{f.image, f.x, f.y};
       ExplainedSubGoal g;
-      g.x = f.x;
-      g.y = f.y;
+      g.x = picked.x;
+      g.y = picked.y;
       g.first_step = g.last_step = it.step;
       ex.sub_goals.push_back(g);
-      images.push_back({f.image, f.x, f.y});
+      images.push_back(picked);
       current = static_cast<int>(ex.sub_goals.size()) - 1;
       it.sub_goal = current;
       it.picked = true;
-    } else if (l.kind == focus_t::SCENE_AT) {
+      if (l.kind == focus_t::GOAL_SCAN) continue;
+    }
+    if (l.kind == focus_t::SCENE_AT) {
       if (it.sub_goal < 0) {
         warn.push_back(format("iteration %lld: a look at the scene before any sub-goal", static_cast<long long>(it.step)));
         continue;
@@ -279,7 +298,7 @@ Explanation explainRunEvents(const RunEvents& run, const std::string& where, std
       c.distance = imageDistance(goal.image, f.image);
       c.reached = c.distance < p.subgoal_match;
       it.reach_checks.push_back(c);
-    } else {  // SCENE_SCAN: the object, and its affordances from the PREDICTION of the step
+    } else {  // SCENE_SCAN or SCENE_OBJECT: the object, and its affordances from the PREDICTION of the step
       it.scanned = true;
       it.object_x = f.x;
       it.object_y = f.y;

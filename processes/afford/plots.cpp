@@ -407,6 +407,67 @@ std::vector<std::string> plotExperiment(const std::string& dir_name) {
                               {{1, "affordance > 0.5 only"}, {2, "all actions"}}, {{1.5, pText(r["p_value"])}},
                               {{"restricted", "#009e73"}, {"not restricted", "#999999"}}));
   }
+
+  // ---- generated scenarios (issue 12): completion steps and success per point, one line per condition
+  if (s.contains("extrinsic_design") && s["extrinsic_design"].contains("generate")) {
+    const json& gen = s["extrinsic_design"]["generate"];
+    const bool by_objects = gen["objects"].size() > 1;  // else by sub-goals
+    const std::string xname = by_objects ? "objects" : "sub_goals";
+    static const char* kColour[] = {"#0072b2", "#d55e00", "#009e73", "#cc79a7", "#e69f00", "#56b4e9"};
+    for (const auto& sys : systems) {
+      const json& js = s["systems"][sys];
+      if (!js.contains("extrinsic") || !js["extrinsic"].contains("conditions")) continue;
+      const json& conds = js["extrinsic"]["conditions"];
+      const std::string stem = "fig_generated" + (systems.size() > 1 ? "_" + sys : std::string());
+      const fs::path csv = dir / (stem + ".csv"), gp = dir / (stem + ".gp"), png = dir / (stem + ".png");
+      std::ofstream out(csv);
+      out << "condition,label,sub_goals,objects,multi_step,x,tests,success_rate,completion_n,q1,median,q3,"
+             "steps_per_sub_goal_median,fit_a,fit_b\n";
+      double top = 1, xmin = 1e9, xmax = 0;
+      for (std::size_t c = 0; c < conds.size(); ++c) {
+        const json& cd = conds[c];
+        const double a = cd.contains("completion_fit") ? cd["completion_fit"]["a"].get<double>() : 0;
+        const double b = cd.contains("completion_fit") ? cd["completion_fit"]["b"].get<double>() : 0;
+        for (const auto& p : cd["points"]) {
+          const double x = p[xname].get<double>() + (static_cast<double>(c) - (conds.size() - 1) / 2.0) * 0.12;
+          const json& cs = p["completion_steps"];
+          top = std::max(top, cs["q3"].get<double>());
+          xmin = std::min(xmin, p[xname].get<double>());
+          xmax = std::max(xmax, p[xname].get<double>());
+          out << c << ",\"" << cd["label"].get<std::string>() << "\"," << p["sub_goals"] << "," << p["objects"] << ","
+              << p["multi_step"] << "," << x << "," << p["tests_completed"] << "," << p["success_rate"] << ","
+              << cs["n"] << "," << cs["q1"] << "," << cs["median"] << "," << cs["q3"] << ","
+              << p["steps_per_sub_goal"]["median"] << "," << a << "," << b << "\n";
+        }
+      }
+      out.close();
+      std::ofstream g(gp);
+      g << "set terminal pngcairo size 1200,520 font 'DejaVu Sans,11' noenhanced\nset output " << quoted(png.string())
+        << "\nset datafile separator ','\nset multiplot layout 1,2 title "
+        << quoted(s.value("experiment", std::string("")) + ", " + sys + ": generated scenarios, " +
+                  std::to_string(gen["per_point"].get<int>()) + " per point, seed " + std::to_string(gen["seed"].get<std::int64_t>()))
+        << "\nset grid\nset key left top\nset xrange [" << xmin - 0.6 << ":" << xmax + 0.6 << "]\n"
+        << "set xlabel " << quoted(by_objects ? "objects in the scene" : "sub-goals") << "\n"
+        << "set title 'completion steps of solved tests (median, quartiles)'\nset ylabel 'steps'\nset yrange [0:"
+        << top * 1.1 << "]\nplot ";
+      for (std::size_t c = 0; c < conds.size(); ++c) {
+        const std::string colour = kColour[c % 6];
+        g << (c ? ", " : "") << quoted(csv.string()) << " using ($1 == " << c << " ? $6 : NaN):11:10:12 with yerrorlines lc rgb '"
+          << colour << "' pt 7 title " << quoted(conds[c]["label"].get<std::string>());
+        if (!by_objects && conds[c].contains("completion_fit"))
+          g << ", " << conds[c]["completion_fit"]["a"].get<double>() << "*x**2 + (" << conds[c]["completion_fit"]["b"].get<double>()
+            << ")*x lc rgb '" << colour << "' dt 2 notitle";
+      }
+      g << "\nset key right bottom\nset title 'tests solved'\nset ylabel 'share solved'\nset yrange [0:1.05]\nplot ";
+      for (std::size_t c = 0; c < conds.size(); ++c)
+        g << (c ? ", " : "") << quoted(csv.string()) << " using ($1 == " << c << " ? $6 : NaN):8 with linespoints lc rgb '"
+          << kColour[c % 6] << "' pt 7 title " << quoted(conds[c]["label"].get<std::string>());
+      g << "\nunset multiplot\n";
+      g.close();
+      runGnuplot(gp);
+      written.push_back(png.string());
+    }
+  }
   return written;
 }
 

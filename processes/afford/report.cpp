@@ -190,6 +190,62 @@ std::string memorySections(const std::vector<json>& all) {
   }
   return md.str();
 }
+// Issue 12: designs of generated scenarios (top-down attention, multi-step
+// plans, larger worlds), per condition and point, with the floors of reference.yaml.
+std::string generatedSections(const std::vector<json>& all, const std::string& config_dir) {
+  YAML::Node ref;
+  try {
+    ref = YAML::LoadFile(config_dir + "/reference.yaml")["generated"];
+  } catch (const YAML::Exception&) {
+  }
+  std::ostringstream md;
+  bool header = false;
+  for (const auto& s : all) {
+    if (!s.contains("extrinsic_design") || !s["extrinsic_design"].contains("generate")) continue;
+    if (!header)
+      md << "\n## Beyond the paper: top-down attention, multi-step plans, larger worlds (issue 12)\n\nScenarios drawn by "
+            "the generator ([scenarios.md](scenarios.md#generated-scenarios)): k sub-goals on n objects, m of them needing "
+            "a colour change and a move; the options are `eye.attention` and `planner.search.max_depth` "
+            "([model.md](model.md#top-down-attention)). Completion steps are planner iterations of solved tests; "
+            "steps per sub-goal are completion / k.\n";
+    header = true;
+    const std::string exp = s["experiment"];
+    const json& gen = s["extrinsic_design"]["generate"];
+    md << "\n### " << exp << "\n\n" << s.value("description", std::string("")) << ". " << gen["per_point"].get<int>()
+       << " scenarios per point (seed " << gen["seed"].get<std::int64_t>() << "), " << s["repetitions"]
+       << " trained agent(s) per system, one test of each scenario per agent and condition.\n";
+    if (ref && ref[exp] && ref[exp]["floors"]) md << "\nFloors (" << ref[exp]["source"].as<std::string>() << "): "
+                                                  << ref[exp]["floors"].as<std::string>() << ".\n";
+    for (const auto& [sys, js] : s["systems"].items()) {
+      if (!js.contains("extrinsic") || !js["extrinsic"].contains("conditions")) continue;
+      md << "\n| " << sys << ": condition | k | n | m | tests | solved | completion median (quartiles) | steps per sub-goal |\n"
+         << "|---|---|---|---|---|---|---|---|\n";
+      for (const auto& c : js["extrinsic"]["conditions"])
+        for (const auto& p : c["points"]) {
+          const json& cs = p["completion_steps"];
+          md << "| " << c["label"].get<std::string>() << " | " << p["sub_goals"] << " | " << p["objects"] << " | "
+             << p["multi_step"] << " | " << p["tests_completed"] << " | " << num(p["success_rate"].get<double>()) << " | ";
+          if (cs["n"].get<int>() > 0)
+            md << num(cs["median"].get<double>(), 1) << " (" << num(cs["q1"].get<double>(), 1) << " - "
+               << num(cs["q3"].get<double>(), 1) << ") | " << num(p["steps_per_sub_goal"]["median"].get<double>()) << " |\n";
+          else
+            md << "- | - |\n";
+        }
+      bool fits = false;
+      for (const auto& c : js["extrinsic"]["conditions"]) fits |= c.contains("completion_fit");
+      if (fits && gen["objects"].empty()) {
+        md << "\nCompletion fit a x^2 + b x over the solved tests (the paper's bottom-up IMP: 1.364 x^2 - 0.808 x):\n\n"
+              "| condition | a | b |\n|---|---|---|\n";
+        for (const auto& c : js["extrinsic"]["conditions"])
+          if (c.contains("completion_fit"))
+            md << "| " << c["label"].get<std::string>() << " | " << num(c["completion_fit"]["a"].get<double>(), 3) << " | "
+               << num(c["completion_fit"]["b"].get<double>(), 3) << " |\n";
+      }
+    }
+  }
+  return md.str();
+}
+
 }  // namespace
 
 std::string writeReport(const std::vector<std::string>& dirs, const std::string& figures_dir,
@@ -331,6 +387,7 @@ std::string writeReport(const std::vector<std::string>& dirs, const std::string&
 
   md << stochasticSections(all, config_dir);
   md << memorySections(all);
+  md << generatedSections(all, config_dir);
 
   // ---- figures
   md << "\n## Figures\n";

@@ -27,7 +27,8 @@ TEST(Config, EveryShippedExperimentParsesForEverySystem) {
   for (const auto& name : listExperiments(kConfigDir))
     for (System s : {System::FIX, System::IGN, System::IMP}) {
       const RunConfig c = test::shippedConfig(name, s);
-      EXPECT_EQ(c.world.objects.size(), name == "large-world" ? 20u : 9u) << name;  // the paper's nine, or twenty
+      const bool large = name == "large-world" || name == "world-size";
+      EXPECT_EQ(c.world.objects.size(), large ? 20u : 9u) << name;  // the paper's nine, or twenty
       EXPECT_EQ(c.system, s);
     }
 }
@@ -189,6 +190,56 @@ TEST(Config, ConditionsNeedTablesAndNamesFitForRunIds) {
   ASSERT_EQ(e.conditions.size(), 2u);
   EXPECT_EQ(e.conditions[0].first, "paper");
   EXPECT_EQ(e.conditions[1].second, test::kMemoryOptions);
+}
+
+}  // namespace
+}  // namespace afford
+
+namespace afford {
+namespace {
+
+// Designs of generated scenarios (issue 12): the points, and errors naming the key.
+TEST(Config, GeneratedDesignsNameTheirPointsAndTheirErrors) {
+  const ExperimentFile attention = loadExperiment(std::string(AFFORD_SOURCE_DIR) + "/config", "attention");
+  ASSERT_TRUE(attention.extrinsic && attention.extrinsic->generate);
+  EXPECT_TRUE(attention.extrinsic->scenarios.empty());
+  EXPECT_EQ(attention.extrinsic->generate->sub_goals.size(), 10u);
+  EXPECT_TRUE(attention.extrinsic->generate->objects.empty());
+  const std::string dir = test::tempDir("config-generate");
+  std::filesystem::copy(std::string(AFFORD_SOURCE_DIR) + "/config", dir, std::filesystem::copy_options::recursive);
+  const auto errorOfFile = [&](const std::string& text) {
+    std::ofstream(dir + "/experiments/trial.yaml") << text;
+    try {
+      loadExperiment(dir, "trial");
+    } catch (const ConfigError& e) {
+      return std::string(e.what());
+    }
+    return std::string();
+  };
+  EXPECT_EQ(errorOfFile("extends: base\nextrinsic: {generate: {sub_goals: [2, 3], multi_step: all}}\n"), "");
+  EXPECT_NE(errorOfFile("extends: base\nextrinsic: {generate: {sub_goals: [2, x]}}\n").find("extrinsic.generate.sub_goals[1]"),
+            std::string::npos);
+  EXPECT_NE(errorOfFile("extends: base\nextrinsic: {generate: {sub_goals: 5, objects: [4]}}\n").find("extrinsic.generate.objects"),
+            std::string::npos);
+  EXPECT_NE(errorOfFile("extends: base\nextrinsic: {generate: {sub_goals: 2, multi_step: 3}}\n").find("extrinsic.generate.multi_step"),
+            std::string::npos);
+  EXPECT_NE(errorOfFile("extends: base\nextrinsic: {generate: {sub_goals: 2, typo: 1}}\n").find("extrinsic.generate.typo"),
+            std::string::npos);
+  EXPECT_NE(errorOfFile("extends: base\nextrinsic: {tests: 1}\n").find("extrinsic.scenarios"), std::string::npos);
+}
+
+// A scenario written out by scenarioNode reads back as it was.
+TEST(Config, AScenarioNodeReadsBackEqual) {
+  const RunConfig c = test::shippedConfig();
+  Scenario s;
+  s.name = "round-trip";
+  s.objects.push_back({Shape::Circle, {Colour::Blue, 0.31234567890123, 0.7}, {Colour::Green, 0.55, 0.25}, 1, 2});
+  const Scenario back = parseScenario(scenarioNode(s), "", c.world);
+  ASSERT_EQ(back.objects.size(), 1u);
+  EXPECT_EQ(back.name, "round-trip");
+  EXPECT_EQ(back.objects[0].initial.x, 0.31234567890123);
+  EXPECT_EQ(back.objects[0].goal.colour, Colour::Green);
+  EXPECT_EQ(back.objects[0].actions, 2);
 }
 
 }  // namespace

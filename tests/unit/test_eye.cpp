@@ -225,3 +225,57 @@ TEST(Eye, OverlappingObjectsAreOneBlobTheEyeLooksAtAndActsOn) {
 
 }  // namespace
 }  // namespace afford
+
+namespace afford {
+namespace {
+
+// Top-down attention (issue 12): the look at the differences of a scenario
+// with a colour change, a move and a distractor.
+TEST(EyeDifferences, ListTheChangedAndMovedObjectsAndNotTheDistractor) {
+  const RunConfig c = test::shippedConfig();
+  Scenario s;
+  s.objects.push_back({Shape::Square, {Colour::Red, 0.3, 0.3}, {Colour::Green, 0.3, 0.3}, 1, 1});     // colour
+  s.objects.push_back({Shape::Circle, {Colour::Blue, 0.7, 0.3}, {Colour::Blue, 0.5, 0.7}, 1, 1});     // move
+  s.objects.push_back({Shape::Rectangle, {Colour::Green, 0.3, 0.7}, {Colour::Green, 0.3, 0.7}, 1, 1});  // stays
+  const Environment env(c, s);
+  Eye eye(c);
+  eye.setGoal(env.goalScene());
+  eye.setScene(env.render());
+  const Focus before = eye.focus();
+  const std::vector<Difference> d = eye.goalDifferences(c.planner.subgoal_match);
+  auto near = [](const Difference& x, double px, double py) { return std::abs(x.x - px) < 0.01 && std::abs(x.y - py) < 0.01; };
+  std::vector<Difference> goal, scene;
+  for (const Difference& x : d) (x.in_goal ? goal : scene).push_back(x);
+  ASSERT_EQ(goal.size(), 2u);   // the green square and the circle's new place
+  ASSERT_EQ(scene.size(), 2u);  // the red square and the circle's old place
+  EXPECT_TRUE(std::any_of(goal.begin(), goal.end(), [&](const Difference& x) { return near(x, 0.3, 0.3); }));
+  EXPECT_TRUE(std::any_of(goal.begin(), goal.end(), [&](const Difference& x) { return near(x, 0.5, 0.7); }));
+  EXPECT_TRUE(std::any_of(scene.begin(), scene.end(), [&](const Difference& x) { return near(x, 0.3, 0.3); }));
+  EXPECT_TRUE(std::any_of(scene.begin(), scene.end(), [&](const Difference& x) { return near(x, 0.7, 0.3); }));
+  for (const Difference& x : d) EXPECT_FALSE(near(x, 0.3, 0.7)) << "the rectangle is as the goal has it";
+  // The goal's window at the square's place shows it green, the scene's red.
+  for (const Difference& x : d)
+    if (near(x, 0.3, 0.3)) EXPECT_GT(imageDistance(x.image, std::vector<std::uint8_t>(x.image.size(), 0)), 0.0);
+  for (const Difference& x : goal)
+    for (const Difference& y : scene)
+      if (near(x, 0.3, 0.3) && near(y, 0.3, 0.3)) EXPECT_GE(imageDistance(x.image, y.image), c.planner.subgoal_match);
+  EXPECT_EQ(eye.focus().gaze.col, before.gaze.col);  // looking at the differences does not move the gaze...
+  // ...but attending an object does: the window on the blob under the place.
+  const Focus& f = eye.attend(0.7, 0.3);
+  EXPECT_NEAR(f.x, 0.7, 1.0 / 150);
+  EXPECT_NEAR(f.y, 0.3, 1.0 / 150);
+}
+
+TEST(EyeDifferences, NoneWhenTheSceneIsTheGoal) {
+  const RunConfig c = test::shippedConfig();
+  Scenario s;
+  s.objects.push_back({Shape::Square, {Colour::Red, 0.3, 0.3}, {Colour::Red, 0.3, 0.3}, 1, 1});
+  const Environment env(c, s);
+  Eye eye(c);
+  eye.setGoal(env.goalScene());
+  eye.setScene(env.render());
+  EXPECT_TRUE(eye.goalDifferences(c.planner.subgoal_match).empty());
+}
+
+}  // namespace
+}  // namespace afford
