@@ -23,6 +23,18 @@ std::string errorOf(const YAML::Node& root) {
 
 YAML::Node baseTree() { return effectiveConfig(kConfigDir, RunRequest{"base", System::IMP, 1, std::nullopt, {}}); }
 
+// The error of loading an experiment file "trial" with this text from a copy
+// of the config folder at `dir` ("" if it loads).
+std::string experimentFileError(const std::string& dir, const std::string& text) {
+  std::ofstream(dir + "/experiments/trial.yaml") << text;
+  try {
+    loadExperiment(dir, "trial");
+  } catch (const ConfigError& e) {
+    return std::string(e.what());
+  }
+  return std::string();
+}
+
 TEST(Config, EveryShippedExperimentParsesForEverySystem) {
   for (const auto& name : listExperiments(kConfigDir))
     for (System s : {System::FIX, System::IGN, System::IMP}) {
@@ -167,15 +179,7 @@ TEST(Config, EmittedYamlParsesToTheSameConfig) {
 TEST(Config, ConditionsNeedTablesAndNamesFitForRunIds) {
   const std::string dir = test::tempDir("config-conditions");
   std::filesystem::copy(kConfigDir, dir, std::filesystem::copy_options::recursive);
-  const auto errorOfFile = [&](const std::string& text) {
-    std::ofstream(dir + "/experiments/trial.yaml") << text;
-    try {
-      loadExperiment(dir, "trial");
-    } catch (const ConfigError& e) {
-      return std::string(e.what());
-    }
-    return std::string();
-  };
+  const auto errorOfFile = [&](const std::string& text) { return experimentFileError(dir, text); };
   EXPECT_NE(errorOfFile("extends: base\nconditions: {a: [motivation.leak=0.2]}\n").find("config key 'conditions': compares "
                                                                                              "conditions on random tables"),
             std::string::npos);
@@ -207,15 +211,7 @@ TEST(Config, GeneratedDesignsNameTheirPointsAndTheirErrors) {
   EXPECT_TRUE(attention.extrinsic->generate->objects.empty());
   const std::string dir = test::tempDir("config-generate");
   std::filesystem::copy(std::string(AFFORD_SOURCE_DIR) + "/config", dir, std::filesystem::copy_options::recursive);
-  const auto errorOfFile = [&](const std::string& text) {
-    std::ofstream(dir + "/experiments/trial.yaml") << text;
-    try {
-      loadExperiment(dir, "trial");
-    } catch (const ConfigError& e) {
-      return std::string(e.what());
-    }
-    return std::string();
-  };
+  const auto errorOfFile = [&](const std::string& text) { return experimentFileError(dir, text); };
   EXPECT_EQ(errorOfFile("extends: base\nextrinsic: {generate: {sub_goals: [2, 3], multi_step: all}}\n"), "");
   EXPECT_NE(errorOfFile("extends: base\nextrinsic: {generate: {sub_goals: [2, x]}}\n").find("extrinsic.generate.sub_goals[1]"),
             std::string::npos);
