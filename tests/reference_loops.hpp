@@ -85,10 +85,7 @@ inline GoalTestOutcome runGoalTest(const RunConfig& c, const Scenario& s, const 
           break;
         }
         case PlannerRequest::LookAtDifferences: {
-          std::vector<SeenDifference> diffs;
-          for (const Difference& d : eye.goalDifferences(c.planner.subgoal_match))
-            diffs.push_back({d.x, d.y, d.in_goal, d.image});
-          r = planner.onDifferences(diffs);
+          r = planner.onDifferences(eye.goalDifferences(c.planner.subgoal_match));
           break;
         }
         case PlannerRequest::Forward: {

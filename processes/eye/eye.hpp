@@ -28,13 +28,6 @@ struct Effect {
   bool affordance = false;           // the performed action's own effect was seen
 };
 
-// A place where the goal image and the scene differ (top-down attention).
-struct Difference {
-  double x = 0, y = 0;              // the blob's place, scene units
-  bool in_goal = false;             // a goal blob (a sub-goal) or a scene blob (an object to act on)
-  std::vector<std::uint8_t> image;  // the window there on the image that shows the blob
-};
-
 class Eye {
  public:
   explicit Eye(const RunConfig& config);

@@ -142,7 +142,7 @@ Turn PlannerNode::onFocus(const focus_t& f) {
   }
   if (f.kind == focus_t::GOAL_DIFF) {
     if (last_.kind != PlannerRequest::LookAtDifferences) return Turn::refuse("differences the planner did not ask for");
-    std::vector<SeenDifference> diffs;
+    std::vector<Difference> diffs;
     for (int i = 0; i < f.n_diffs; ++i)
       diffs.push_back({f.diff_x[i], f.diff_y[i], f.diff_in[i] == focus_t::DIFF_GOAL, f.diff_image[i]});
     follow(core_->onDifferences(diffs));

@@ -102,11 +102,11 @@ PlannerRequest Planner::startIteration() {
   return request(PlannerRequest::ScanScene);
 }
 
-PlannerRequest Planner::onDifferences(const std::vector<SeenDifference>& differences) {
+PlannerRequest Planner::onDifferences(const std::vector<Difference>& differences) {
   if (wait_ != Wait::Differences) throw std::logic_error("Planner: differences it did not ask for");
   targets_.clear();
   objects_.clear();
-  for (const SeenDifference& d : differences)
+  for (const Difference& d : differences)
     (d.in_goal ? targets_ : objects_).push_back({d.x, d.y, d.image, Status::Pending, {}});
   differences_known_ = true;
   active_ = false;

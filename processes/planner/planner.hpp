@@ -34,14 +34,6 @@ struct ForwardPrediction {
   double where_x = 0, where_y = 0;  // predicted position after the action
 };
 
-// A place where the goal image and the scene differ (top-down attention):
-// the eye's answer to LookAtDifferences.
-struct SeenDifference {
-  double x = 0, y = 0;
-  bool in_goal = false;              // a sub-goal the goal shows, or an object the scene shows
-  std::vector<std::uint8_t> image;   // the window there
-};
-
 // The byte image a what-effect stands for when the search imagines the next
 // step from it: round(clamp(v, 0, 1) * 255), as the node and the reference loop send it.
 std::vector<std::uint8_t> quantiseImage(const std::vector<double>& what);
@@ -97,7 +89,7 @@ class Planner {
   // `input_affordance`: for an imagined object (a request with a prefix), what it affords.
   PlannerRequest onForward(const std::vector<ForwardPrediction>& predictions,
                            const std::optional<std::array<double, kNumActions>>& input_affordance = std::nullopt);
-  PlannerRequest onDifferences(const std::vector<SeenDifference>& differences);
+  PlannerRequest onDifferences(const std::vector<Difference>& differences);
   PlannerRequest onActed();
 
   int attempts() const { return attempts_; }

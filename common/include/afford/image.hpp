@@ -69,6 +69,14 @@ std::vector<std::uint8_t> cropFocus(const cv::Mat& scene, Pixel centre, int side
 
 // L1(a - b) / n over bytes scaled to [0, 1]: the paper's image change measure.
 double imageChange(const std::vector<std::uint8_t>& a, const std::vector<std::uint8_t>& b);
+// A place where the goal image and the scene differ (top-down attention,
+// issue 12): what the eye finds and the planner remembers.
+struct Difference {
+  double x = 0, y = 0;              // the blob's place, scene units
+  bool in_goal = false;             // a goal blob (a sub-goal) or a scene blob (an object to act on)
+  std::vector<std::uint8_t> image;  // the window there on the image that shows the blob
+};
+
 // ||a - b||_2 / n for images in [0, 1] (bytes are value / 255): the planner's
 // image distance (paper 2.4.3); 1 for images of different sizes.
 double imageDistance(const std::vector<std::uint8_t>& a, const std::vector<std::uint8_t>& b);
