@@ -27,7 +27,7 @@ bin=${AFFORD_BIN:-$root/build/bin}
 logs=${AFFORD_LOGS:-$root/logs}
 netns=${AFFORD_NETNS:-afford}
 grace=${AFFORD_GRACE:-5}
-all=(environment eye predictors motivation planner logger)
+mapfile -t all < <("$bin/afford" processes)  # the registry of processes
 
 usage() { sed -n '2,23p' "$0" | sed 's/^# \{0,1\}//'; exit 2; }
 die() { echo "procs.sh: $*" >&2; exit 1; }

@@ -17,8 +17,9 @@
 # Environment: JOBS (runs at a time, default: cores), REPS and EXT_REPS (default: the
 # paper's counts), OUT (default out/reproduce), KEEP_LOGS (all, first or none; default
 # first: the logs of the first run of each system; all keeps every run's and test's log,
-# which `afford explain LOG_ROOT` summarises: 14 GB for all eight, besides 13 GB of checkpoints). Runs over real
-# processes (udpm). The page is written from every experiment
+# which `afford explain LOG_ROOT` summarises), KEEP_CHECKPOINTS (all, first or none; default all).
+# Trained agents are stored by content in OUT/logs/agents and reused by the experiments that
+# share them (REUSE=0 trains every one again). Runs over real processes (udpm). The page is written from every experiment
 # folder present under OUT, so parts may run at different times. An experiment with a
 # failed run is still summarised and plotted; the script then exits with status 1.
 set -euo pipefail
@@ -41,6 +42,13 @@ for what in "$@"; do
       esac ;;
   esac
 done
+# Experiments that share their intrinsic runs train each agent once (the store in
+# $out/logs/agents): forward-models keeps the checkpoint after 4000 actions that the
+# others do not, so it goes first and stochastic, utility and search-reduction take its agents.
+ordered=()
+for exp in "${experiments[@]}"; do [[ $exp == forward-models ]] && ordered+=("$exp"); done
+for exp in "${experiments[@]}"; do [[ $exp != forward-models ]] && ordered+=("$exp"); done
+experiments=("${ordered[@]}")
 scripts/setup.sh
 out=${OUT:-out/reproduce}
 mkdir -p "$out"
@@ -49,7 +57,9 @@ prefix=$(date +%Y%m%d-%H%M%S)
 failed=()
 for exp in "${experiments[@]}"; do
   rm -rf "${out:?}/$exp"
-  args=(--jobs "${JOBS:-$(nproc)}" --keep-logs "${KEEP_LOGS:-first}" --out "$out/$exp" --log-root "$out/logs" --run-prefix "$prefix")
+  args=(--jobs "${JOBS:-$(nproc)}" --keep-logs "${KEEP_LOGS:-first}" --keep-checkpoints "${KEEP_CHECKPOINTS:-all}"
+        --out "$out/$exp" --log-root "$out/logs" --run-prefix "$prefix")
+  [[ ${REUSE:-1} == 0 ]] && args+=(--no-reuse-agents)
   [[ -n ${REPS:-} ]] && args+=(--reps "$REPS")
   case " ${deterministic[*]} late1-memory late2-memory late3-memory " in
     *" $exp "*) args+=(--system all --extrinsic-reps "${EXT_REPS:-10}") ;;

@@ -16,24 +16,16 @@
 #include "afford/focus_t.hpp"
 #include "afford/run_config_t.hpp"
 #include "afford/seal.hpp"
-#include "environment/node.hpp"
-#include "eye/node.hpp"
-#include "motivation/node.hpp"
-#include "planner/node.hpp"
-#include "predictors/node.hpp"
+#include "afford/host.hpp"
+#include "afford/processes.hpp"
 #include "tests/support.hpp"
 
 namespace afford::test {
 
-// A node of the named process on `lcm` (nullptr for an unknown name).
+// A node of the named process on `lcm`, as the executables run it (threads of its own).
 inline std::unique_ptr<NodeBase> makeNode(const std::string& p, lcm::LCM& lcm, std::shared_ptr<spdlog::logger> log,
                                           const ProtocolConfig& protocol) {
-  if (p == "environment") return std::make_unique<EnvironmentNode>(lcm, std::move(log), protocol);
-  if (p == "eye") return std::make_unique<EyeNode>(lcm, std::move(log), protocol);
-  if (p == "predictors") return std::make_unique<PredictorsNode>(lcm, std::move(log), protocol);
-  if (p == "motivation") return std::make_unique<MotivationNode>(lcm, std::move(log), protocol);
-  if (p == "planner") return std::make_unique<PlannerNode>(lcm, std::move(log), protocol);
-  return nullptr;
+  return afford::makeNode(p, lcm, std::move(log), protocol, HostOptions{/*single_thread=*/false, "logs"});
 }
 
 // Publishes something malformed into a running run: (lcm, run id, current
@@ -65,13 +57,11 @@ struct InProcessRun {
       l->set_level(spdlog::level::info);
       return l;
     };
-    std::map<std::string, std::unique_ptr<NodeBase>> nodes;
+    // Both deciders: the run's configuration says which one decides.
+    InProcessHost host(lcm, shippedProtocol(), logger, HostOptions{/*single_thread=*/false, "logs"});
+    host.start(runProcesses(/*extrinsic=*/false, /*recorded=*/false));
+    host.start("planner");
     const ProtocolConfig protocol = shippedProtocol();
-    auto start = [&](const std::string& p) {
-      nodes[p].reset();  // unsubscribes: what was queued for it is lost, as in a kill
-      nodes[p] = makeNode(p, lcm, logger(p), protocol);
-    };
-    for (const char* p : {"environment", "eye", "predictors", "motivation", "planner"}) start(p);
     RunDriver driver(lcm, logger("runner"), protocol);
     struct Tap {
       InProcessRun* run;
@@ -102,20 +92,20 @@ struct InProcessRun {
     spec.steps = steps;
     spec.config_yaml = yaml;
     spec.extrinsic = YAML::Load(yaml)["phase"].as<std::string>() == "extrinsic";
-    spec.processes = {"environment", "eye", "predictors", spec.extrinsic ? "planner" : "motivation"};
+    spec.processes = runProcesses(spec.extrinsic, /*recorded=*/false);
     spec.stall_seconds = 20;
     auto maybeRestart = [&] {
       if (restart.process.empty() || restarted) return;
-      const NodeBase& v = *nodes.at(restart.process);
+      const NodeBase& v = host.node(restart.process);
       if (v.runId() != spec.run_id || v.lastStep() < restart.at) return;
       restarted_at = v.lastStep();
-      start(restart.process);
+      host.start(restart.process);  // the old node unsubscribes: what was queued for it is lost, as in a kill
       restarted = true;
     };
     auto pump = [&] {
       while (lcm.handleTimeout(0) > 0) maybeRestart();  // one message at a time
       lcm.handleTimeout(2);
-      for (auto& [name, node] : nodes) node->tick();
+      host.tick();
     };
     if (leave_stale_run) {
       // The processes take an earlier run whose STOP never comes (a lost datagram).
@@ -132,12 +122,7 @@ struct InProcessRun {
     }
     outcome = driver.run(spec, pump, [] { return std::string(); });
     // The STOP the runner sent, and what the processes publish on it, into `events`.
-    auto inRun = [&] {
-      for (auto& [name, node] : nodes)
-        if (!node->runId().empty()) return true;
-      return false;
-    };
-    for (int i = 0; i < 500 && inRun(); ++i) pump();
+    for (int i = 0; i < 500 && host.inRun(); ++i) pump();
   }
 
   int count(const std::string& channel) const {

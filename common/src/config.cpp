@@ -579,14 +579,24 @@ ExtrinsicDesign parseDesign(const YAML::Node& node, const std::string& file) {
   return d;
 }
 
-ExperimentFile loadExperimentChain(const std::string& config_dir, const std::string& name, int depth) {
-  const auto file = namedFile(config_dir, "experiments", "experiment", name);
+ExperimentFile loadExperimentChain(const std::string& config_dir, const std::string& name, int depth,
+                                   const std::filesystem::path& from = {}) {
+  const bool path = isExperimentPath(name);
+  std::filesystem::path file;
+  if (path) {
+    file = std::filesystem::path(name).is_relative() && !from.empty() ? from.parent_path() / name : std::filesystem::path(name);
+    if (!std::filesystem::is_regular_file(file))
+      throw ConfigError("experiment file " + file.string() + " does not exist" +
+                        (from.empty() ? std::string() : " (named by 'extends' in " + from.string() + ")"));
+  } else {
+    file = namedFile(config_dir, "experiments", "experiment", name);
+  }
   YAML::Node root = loadFile(file);
   if (!root.IsMap()) throw ConfigError("config file " + file.string() + ": expected a map");
   ExperimentFile e;
   if (root["extends"].IsDefined()) {  // start from another experiment's world, runs and systems
     if (depth > 8) throw ConfigError("config file " + file.string() + ": 'extends' chain too long (a cycle?)");
-    e = loadExperimentChain(config_dir, root["extends"].Scalar(), depth + 1);
+    e = loadExperimentChain(config_dir, root["extends"].Scalar(), depth + 1, file);
     e.overlay = YAML::Clone(e.overlay);
     e.systems = YAML::Clone(e.systems);
     e.extrinsic.reset();
@@ -594,7 +604,8 @@ ExperimentFile loadExperimentChain(const std::string& config_dir, const std::str
   } else {
     e.overlay = YAML::Node(YAML::NodeType::Map);
   }
-  e.name = name;
+  e.name = path ? file.stem().string() : name;
+  e.file = path ? std::filesystem::absolute(file).lexically_normal().string() : std::string();
   for (const auto& kv : root) {
     const std::string key = kv.first.Scalar();
     if (key == "extends") continue;
@@ -650,6 +661,11 @@ ExperimentFile loadExperiment(const std::string& config_dir, const std::string& 
   return loadExperimentChain(config_dir, name, 0);
 }
 
+bool isExperimentPath(const std::string& name) {
+  return name.find('/') != std::string::npos ||
+         (name.size() > 5 && name.compare(name.size() - 5, 5, ".yaml") == 0);
+}
+
 YAML::Node effectiveConfig(const std::string& config_dir, const RunRequest& request) {
   YAML::Node root = loadFile(std::filesystem::path(config_dir) / "defaults.yaml");
   const ExperimentFile e = loadExperiment(config_dir, request.experiment);
@@ -659,7 +675,7 @@ YAML::Node effectiveConfig(const std::string& config_dir, const RunRequest& requ
     if (!e.systems[sys].IsMap()) fail("systems." + sys, "expected a map of overrides");
     mergeInto(root, e.systems[sys]);
   }
-  root["experiment"] = request.experiment;
+  root["experiment"] = e.name;
   root["system"] = sys;
   root["seed"] = request.seed;
   if (request.steps) root["run"]["steps"] = *request.steps;

@@ -3,28 +3,11 @@
 #include <algorithm>
 
 #include "afford/channels.hpp"
+#include "afford/processes.hpp"
 
 namespace afford {
 
 using Clock = std::chrono::steady_clock;
-
-std::string publisherOf(const std::string& channel, bool extrinsic) {
-  if (channel == channel::kScene || channel == channel::kProbe) return "environment";
-  if (channel == channel::kFocus || channel == channel::kEffect) return "eye";
-  if (channel == channel::kPrediction || channel == channel::kAffordanceTable || channel == channel::kResult ||
-      channel == channel::kForwardPrediction)
-    return "predictors";
-  if (channel == channel::kDecision) return extrinsic ? "planner" : "motivation";
-  if (channel == channel::kLook || channel == channel::kForwardQuery || channel == channel::kExtrinsicResult)
-    return "planner";
-  return "";
-}
-
-bool isProcessName(const std::string& name) {
-  for (const char* p : {"environment", "eye", "predictors", "motivation", "planner", "logger"})
-    if (name == p) return true;
-  return false;
-}
 
 bool peekRunId(const void* data, std::size_t size, int max_bytes, std::string& out) {
   const auto* p = static_cast<const std::uint8_t*>(data);

@@ -5,6 +5,7 @@
 
 #include "afford/affordance_table_t.hpp"
 #include "afford/channels.hpp"
+#include "afford/processes.hpp"
 #include "afford/extrinsic_result_t.hpp"
 #include "afford/node.hpp"
 #include "afford/process_status_t.hpp"

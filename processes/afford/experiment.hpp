@@ -28,6 +28,8 @@ struct ExperimentOptions {
   std::string out_dir = "out";
   std::string transport = "udpm";          // udpm | memq
   std::string keep_logs = "all";           // all | first | none
+  std::string keep_checkpoints = "all";    // all | first | none: the intrinsic runs' checkpoints kept at the end
+  bool reuse_agents = true;                // take stored agents of the same content key (afford/agents.hpp)
   std::string log_root = "logs";
   std::string run_prefix;                  // default: wall-clock stamp (names only)
   std::string config_dir;                  // default: the source tree's config/

@@ -15,6 +15,8 @@
 
 #include "afford/affordance_table_t.hpp"
 #include "afford/channels.hpp"
+#include "afford/host.hpp"
+#include "afford/processes.hpp"
 #include "afford/config.hpp"
 #include "afford/edge.hpp"
 #include "afford/extrinsic_result_t.hpp"
@@ -22,9 +24,6 @@
 #include "afford/run_config_t.hpp"
 #include "afford/run_result_t.hpp"
 #include "logger/logger.hpp"
-#include "motivation/node.hpp"
-#include "planner/node.hpp"
-#include "predictors/node.hpp"
 
 namespace afford {
 namespace fs = std::filesystem;
@@ -254,20 +253,10 @@ ReplayResult replayRun(const ReplayOptions& o, spdlog::logger& log) {
     r->name = name;
     r->bus = std::make_unique<lcm::LCM>("memq://");
     auto logger = makeLogger("replay-" + name, "warn");
-    if (name == "predictors") {
-      r->node = std::make_unique<PredictorsNode>(*r->bus, logger, config.protocol, /*async_effects=*/false);
-      r->outputs = {channel::kPrediction, channel::kAffordanceTable, channel::kResult, channel::kForwardPrediction,
-                    channel::kStatus};
-    } else if (name == "motivation") {
-      r->node = std::make_unique<MotivationNode>(*r->bus, logger, config.protocol);
-      r->outputs = {channel::kDecision, channel::kStatus};
-    } else if (name == "planner") {
-      r->node = std::make_unique<PlannerNode>(*r->bus, logger, config.protocol);
-      r->outputs = {channel::kLook, channel::kForwardQuery, channel::kDecision, channel::kExtrinsicResult,
-                    channel::kStatus};
-    } else {
+    if (name != "predictors" && name != "motivation" && name != "planner")
       throw std::runtime_error("--into: unknown process \"" + name + "\" (predictors, motivation or planner)");
-    }
+    r->node = makeNode(name, *r->bus, logger, config.protocol, HostOptions{/*single_thread=*/true, ""});
+    for (const auto& ch : channelsOf(name, result.extrinsic)) r->outputs.insert(ch);
     // What the replayed process publishes, taken through the edge like any subscriber.
     r->tap = std::make_unique<Edge>(*r->bus, logger, "replay", config.protocol);
     r->tap->join(result.run_id, &config);

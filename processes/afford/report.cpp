@@ -10,6 +10,8 @@
 #include <stdexcept>
 
 #include <yaml-cpp/yaml.h>
+
+#include "afford/reference.hpp"
 #include <cmath>
 
 namespace afford {
@@ -40,34 +42,32 @@ std::string pValue(const json& p) {
   return buf;
 }
 
-std::string claim(const YAML::Node& ref, const std::string& key) {
-  const YAML::Node c = ref[key + "_claims"];
+std::string claim(const Reference& ref, const std::string& key) {
+  const YAML::Node c = ref.entry(key + "_claims");
   if (!c || !c["claim"]) return "";
-  std::string source = c["source"].as<std::string>();
+  std::string source = ref.text(c["source"], key + "_claims.source");
   if (source.rfind("paper ", 0) == 0) source = source.substr(6);
-  return "\nThe paper (" + source + "): " + c["claim"].as<std::string>() + ".\n";
+  return "\nThe paper (" + source + "): " + ref.text(c["claim"], key + "_claims.claim") + ".\n";
 }
 
 // Section 3.2 of the paper: stochastic affordances (Figure 11) and the planner tests (Figures 12-14).
-std::string stochasticSections(const std::vector<json>& all, const std::string& config_dir) {
-  YAML::Node ref;
-  try {
-    ref = YAML::LoadFile(config_dir + "/reference.yaml");
-  } catch (const YAML::Exception&) {
-  }
+std::string stochasticSections(const std::vector<json>& all, const Reference& ref) {
+  const double turn_blue = ref.required("thresholds.stochastic_checks.turn_blue");
+  const double move_red = ref.required("thresholds.stochastic_checks.move_red");
   std::ostringstream md;
   for (const auto& s : all) {
     const std::string exp = s["experiment"];
     if (exp == "stochastic") {
       md << "\n## Stochastic affordances (paper 3.2.1, Table 7, Figure 11)\n" << claim(ref, exp)
-         << "\n| system | mean absolute error vs Table 7 | IMP check: turn blue (0.8) | move, red objects (0.6) |\n|---|---|---|---|\n";
+         << "\n| system | mean absolute error vs Table 7 | IMP check: turn blue (" << num(turn_blue, 1)
+         << ") | move, red objects (" << num(move_red, 1) << ") |\n|---|---|---|---|\n";
       for (const auto& [sys, js] : s["systems"].items()) {
         if (!js.contains("affordance")) continue;
         double blue = 0, move = 0;
         int nb = 0, nm = 0;
         for (std::size_t i = 0; i < js["target"].size(); ++i) {
-          if (std::abs(js["target"][i][3].get<double>() - 0.8) < 1e-9) blue += js["affordance"][i][3].get<double>(), ++nb;
-          if (std::abs(js["target"][i][0].get<double>() - 0.6) < 1e-9) move += js["affordance"][i][0].get<double>(), ++nm;
+          if (std::abs(js["target"][i][3].get<double>() - turn_blue) < 1e-9) blue += js["affordance"][i][3].get<double>(), ++nb;
+          if (std::abs(js["target"][i][0].get<double>() - move_red) < 1e-9) move += js["affordance"][i][0].get<double>(), ++nm;
         }
         md << "| " << sys << " | " << num(js["affordance_mae"].get<double>(), 3);
         if (js.contains("reference_affordance_mae"))
@@ -192,12 +192,8 @@ std::string memorySections(const std::vector<json>& all) {
 }
 // Issue 12: designs of generated scenarios (top-down attention, multi-step
 // plans, larger worlds), per condition and point, with the floors of reference.yaml.
-std::string generatedSections(const std::vector<json>& all, const std::string& config_dir) {
-  YAML::Node ref;
-  try {
-    ref = YAML::LoadFile(config_dir + "/reference.yaml")["generated"];
-  } catch (const YAML::Exception&) {
-  }
+std::string generatedSections(const std::vector<json>& all, const Reference& reference) {
+  const YAML::Node ref = reference.entry("generated");
   std::ostringstream md;
   bool header = false;
   for (const auto& s : all) {
@@ -214,8 +210,10 @@ std::string generatedSections(const std::vector<json>& all, const std::string& c
     md << "\n### " << exp << "\n\n" << s.value("description", std::string("")) << ". " << gen["per_point"].get<int>()
        << " scenarios per point (seed " << gen["seed"].get<std::int64_t>() << "), " << s["repetitions"]
        << " trained agent(s) per system, one test of each scenario per agent and condition.\n";
-    if (ref && ref[exp] && ref[exp]["floors"]) md << "\nFloors (" << ref[exp]["source"].as<std::string>() << "): "
-                                                  << ref[exp]["floors"].as<std::string>() << ".\n";
+    if (ref && ref[exp] && ref[exp]["floors"])
+      md << "\nFloors (" << reference.text(ref[exp]["source"], "generated." + exp + ".source") << "): "
+         << reference.text(ref[exp]["floors"], "generated." + exp + ".floors") << ".\n";
+
     for (const auto& [sys, js] : s["systems"].items()) {
       if (!js.contains("extrinsic") || !js["extrinsic"].contains("conditions")) continue;
       md << "\n| " << sys << ": condition | k | n | m | tests | solved | completion median (quartiles) | steps per sub-goal |\n"
@@ -251,6 +249,7 @@ std::string generatedSections(const std::vector<json>& all, const std::string& c
 std::string writeReport(const std::vector<std::string>& dirs, const std::string& figures_dir,
                         const std::string& link_prefix, double wall_seconds, const std::string& note,
                         const std::string& config_dir) {
+  const Reference reference(config_dir);  // before anything is written: a broken file fails the report
   std::vector<json> all;
   for (const auto& d : dirs) all.push_back(load(d));
   std::ostringstream md;
@@ -385,9 +384,9 @@ std::string writeReport(const std::vector<std::string>& dirs, const std::string&
          << " |\n";
     }
 
-  md << stochasticSections(all, config_dir);
+  md << stochasticSections(all, reference);
   md << memorySections(all);
-  md << generatedSections(all, config_dir);
+  md << generatedSections(all, reference);
 
   // ---- figures
   md << "\n## Figures\n";

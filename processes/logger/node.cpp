@@ -6,6 +6,7 @@
 
 #include "afford/affordance_table_t.hpp"
 #include "afford/channels.hpp"
+#include "afford/processes.hpp"
 #include "afford/decision_t.hpp"
 #include "afford/effect_t.hpp"
 #include "afford/extrinsic_result_t.hpp"

@@ -8,6 +8,10 @@
 #include <fstream>
 #include <stdexcept>
 #include <unistd.h>
+#include <zlib.h>
+
+#include <iterator>
+#include <sstream>
 
 #include "afford/checksum.hpp"
 #include "afford/rng.hpp"
@@ -146,6 +150,9 @@ std::array<double, 2> Predictors::whereEffect(int action, double x, double y, do
 
 namespace {
 constexpr char kMagic[8] = {'A', 'F', 'F', 'O', 'R', 'D', 'C', 'K'};
+// A checkpoint as written since issue 13: this magic, the size of the plain
+// checkpoint (uint64), then the plain checkpoint (kMagic ...) deflated by zlib.
+constexpr char kPackedMagic[8] = {'A', 'F', 'F', 'O', 'R', 'D', 'C', 'Z'};
 // 1: weights and counters; 2: then a byte saying whether a memory follows, and the memory.
 constexpr std::uint32_t kVersion = 2;
 }  // namespace
@@ -162,6 +169,32 @@ static void forEachWeightArray(F&& f, std::vector<Unit>& aff, std::vector<Unit>&
 }
 
 void Predictors::save(const std::string& path, const std::string& checksum) const {
+  // The checkpoint's bytes, then deflated: most of the forward models' weights
+  // stay at their start, and a checkpoint shrinks about twentyfold, losslessly.
+  std::ostringstream raw(std::ios::binary);
+  raw.write(kMagic, sizeof kMagic);
+  const std::uint32_t header[2] = {kVersion, static_cast<std::uint32_t>(input_size_)};
+  raw.write(reinterpret_cast<const char*>(header), sizeof header);
+  auto self = const_cast<Predictors*>(this);
+  forEachWeightArray([&](double* d, Eigen::Index n) { raw.write(reinterpret_cast<const char*>(d), n * sizeof(double)); },
+                     self->affordance_, self->learning_progress_, self->what_, self->where_);
+  raw.write(reinterpret_cast<const char*>(executed_.data()), sizeof executed_);
+  raw.write(reinterpret_cast<const char*>(successes_.data()), sizeof successes_);
+  const char has_memory = memory_ ? 1 : 0;
+  raw.write(&has_memory, 1);
+  if (memory_) {
+    raw.write(reinterpret_cast<const char*>(&replayed_), sizeof replayed_);
+    raw.write(reinterpret_cast<const char*>(&replayed_effects_), sizeof replayed_effects_);
+    memory_->save(raw);
+  }
+  const std::string sum = checksum.empty() ? weightsChecksum() : checksum;
+  raw.write(sum.data(), static_cast<std::streamsize>(sum.size()));
+  const std::string bytes = raw.str();
+  uLongf packed_size = compressBound(static_cast<uLong>(bytes.size()));
+  std::string packed(packed_size, '\0');
+  if (compress2(reinterpret_cast<Bytef*>(packed.data()), &packed_size, reinterpret_cast<const Bytef*>(bytes.data()),
+                static_cast<uLong>(bytes.size()), Z_BEST_SPEED) != Z_OK)
+    throw std::runtime_error("cannot compress checkpoint " + path);
   // A file of this process's own, renamed into place: a reader never sees half
   // a checkpoint, and two writers of the same path do not clobber each other.
   const std::string tmp = path + ".tmp." + std::to_string(getpid());
@@ -171,31 +204,42 @@ void Predictors::save(const std::string& path, const std::string& checksum) cons
   {
     std::ofstream out(tmp, std::ios::binary);
     if (!out) throw std::runtime_error("cannot write checkpoint " + tmp);
-    out.write(kMagic, sizeof kMagic);
-    const std::uint32_t header[2] = {kVersion, static_cast<std::uint32_t>(input_size_)};
-    out.write(reinterpret_cast<const char*>(header), sizeof header);
-    auto self = const_cast<Predictors*>(this);
-    forEachWeightArray([&](double* d, Eigen::Index n) { out.write(reinterpret_cast<const char*>(d), n * sizeof(double)); },
-                       self->affordance_, self->learning_progress_, self->what_, self->where_);
-    out.write(reinterpret_cast<const char*>(executed_.data()), sizeof executed_);
-    out.write(reinterpret_cast<const char*>(successes_.data()), sizeof successes_);
-    const char has_memory = memory_ ? 1 : 0;
-    out.write(&has_memory, 1);
-    if (memory_) {
-      out.write(reinterpret_cast<const char*>(&replayed_), sizeof replayed_);
-      out.write(reinterpret_cast<const char*>(&replayed_effects_), sizeof replayed_effects_);
-      memory_->save(out);
-    }
-    const std::string sum = checksum.empty() ? weightsChecksum() : checksum;
-    out.write(sum.data(), static_cast<std::streamsize>(sum.size()));
+    const std::uint64_t size = bytes.size();
+    out.write(kPackedMagic, sizeof kPackedMagic);
+    out.write(reinterpret_cast<const char*>(&size), sizeof size);
+    out.write(packed.data(), static_cast<std::streamsize>(packed_size));
     if (!out) throw std::runtime_error("cannot write checkpoint " + tmp);
   }
   if (std::rename(tmp.c_str(), path.c_str()) != 0) throw std::runtime_error("cannot rename " + tmp + " to " + path);
 }
 
 void Predictors::load(const std::string& path) {
-  std::ifstream in(path, std::ios::binary);
-  if (!in) throw std::runtime_error("checkpoint " + path + ": cannot be read");
+  std::ifstream file(path, std::ios::binary);
+  if (!file) throw std::runtime_error("checkpoint " + path + ": cannot be read");
+  char packed_magic[sizeof kPackedMagic];
+  file.read(packed_magic, sizeof packed_magic);
+  if (file && std::memcmp(packed_magic, kPackedMagic, sizeof kPackedMagic) == 0) {
+    std::uint64_t size = 0;
+    file.read(reinterpret_cast<char*>(&size), sizeof size);
+    if (!file || size > (std::uint64_t{1} << 34))
+      throw std::runtime_error("checkpoint " + path + ": truncated or of an impossible size");
+    const std::string packed((std::istreambuf_iterator<char>(file)), std::istreambuf_iterator<char>());
+    std::string bytes(size, '\0');
+    uLongf unpacked = static_cast<uLongf>(size);
+    if (uncompress(reinterpret_cast<Bytef*>(bytes.data()), &unpacked, reinterpret_cast<const Bytef*>(packed.data()),
+                   static_cast<uLong>(packed.size())) != Z_OK ||
+        unpacked != size)
+      throw std::runtime_error("checkpoint " + path + ": its compressed data is corrupt or truncated");
+    std::istringstream in(bytes, std::ios::binary);
+    loadFrom(in, path);
+    return;
+  }
+  file.clear();
+  file.seekg(0);  // a checkpoint written before compression (format 1 or 2, plain)
+  loadFrom(file, path);
+}
+
+void Predictors::loadFrom(std::istream& in, const std::string& path) {
   char magic[8];
   std::uint32_t header[2];
   in.read(magic, sizeof magic);

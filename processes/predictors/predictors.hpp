@@ -84,8 +84,9 @@ class Predictors {
   // checksum of the paper's agent.
   std::string weightsChecksum() const;
 
-  // Checkpoint: every weight and counter, in the checksum's order, in a binary
-  // file that ends with the checksum. save() writes atomically (temp + rename);
+  // Checkpoint: every weight and counter, in the checksum's order, then the
+  // checksum, deflated by zlib (lossless: the same weights come back, and the
+  // same decisions; checkpoints written plain before still load). save() writes atomically (temp + rename);
   // load() throws std::runtime_error naming the file and the problem (missing,
   // wrong format, other dimensions, checksum mismatch).
   // `checksum`: weightsChecksum() if the caller has it already (it takes a
@@ -101,6 +102,7 @@ class Predictors {
 
  private:
   SparseInput whereInput(int action, double x, double y, double tx, double ty) const;
+  void loadFrom(std::istream& in, const std::string& path);  // the plain format, from its magic on
 
   RunConfig config_;
   int input_size_;

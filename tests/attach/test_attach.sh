@@ -9,7 +9,8 @@ source "$root/tests/netns.sh"
 enter_test "$0" "$@"
 
 url="udpm://239.255.76.67:7992?ttl=0&recv_buf_size=2097152"
-for p in environment eye predictors motivation; do
+mapfile -t processes < <("$build/bin/afford" processes --phase intrinsic --no-logger)  # the registry's
+for p in "${processes[@]}"; do
   "$build/bin/afford-$p" --lcm-url "$url" >"$out/$p.log" 2>&1 &
 done
 "$build/bin/afford-logger" --lcm-url "$url" --log-dir "$out/logs" >"$out/logger.log" 2>&1 &
@@ -29,7 +30,7 @@ wait_until 30 grep -a -q "STATUS" "$out/lcm-logger.lcm" || { echo "lcm-logger re
   --run-prefix byhand --out "$out/attached" --log-root "$out/logs" | tee "$out/attached.txt"
 "$build/bin/afford" status --lcm-url "$url" | tee "$out/status-after.txt"
 [[ $(grep -c "waiting" "$out/status-after.txt") -eq 5 ]] || { echo "expected 5 processes free again"; exit 1; }
-for p in environment eye predictors motivation logger; do  # each served the run, in its own output
+for p in "${processes[@]}" logger; do  # each served the run, in its own output
   grep -q "configured for run 'byhand-base-IGN-s4'" "$out/$p.log" || { echo "$p did not serve the run"; exit 1; }
 done
 

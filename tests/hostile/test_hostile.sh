@@ -21,7 +21,7 @@ seed=${AFFORD_HOSTILE_SEED:-$((1 + RANDOM % 100000))}
 kinds=()
 [[ -n ${AFFORD_HOSTILE_KINDS:-} ]] && kinds=(--kinds $AFFORD_HOSTILE_KINDS)
 url="udpm://239.255.76.67:7995?ttl=0&recv_buf_size=2097152"
-processes=(environment eye predictors motivation planner logger)
+mapfile -t processes < <("$build/bin/afford" processes)  # the registry's
 echo "flood: $messages messages, seed $seed"
 
 declare -A pid peak rss
@@ -34,7 +34,7 @@ start_group() {  # $1: label; the processes' output in $out/$1-<process>.log
   done
   # Every process on the bus before the run is driven (afford status lists them).
   for _ in $(seq 100); do
-    (($("$build/bin/afford" status --lcm-url "$url" --seconds 0.6 | grep -c -E "^($(IFS='|'; echo "${processes[*]}")) ") >= 6)) && return 0
+    (($("$build/bin/afford" status --lcm-url "$url" --seconds 0.6 | grep -c -E "^($(IFS='|'; echo "${processes[*]}")) ") >= ${#processes[@]})) && return 0
   done
   echo "the processes did not come up"; return 1
 }

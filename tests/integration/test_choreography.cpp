@@ -215,7 +215,7 @@ TEST(Choreography, AProcessRestartedMidRunCatchesUpAndTheRunIsUnchanged) {
   const std::string yaml = baseYaml(System::IMP, 400);
   InProcessRun plain(yaml, System::IMP, 3, 400);
   ASSERT_TRUE(plain.outcome.ok) << plain.outcome.error;
-  for (const char* p : {"environment", "eye", "predictors", "motivation"}) {
+  for (const std::string& p : runProcesses(/*extrinsic=*/false, /*recorded=*/false)) {
     InProcessRun run(yaml, System::IMP, 3, 400, {}, 50, false, Restart{p, 150});
     ASSERT_TRUE(run.outcome.ok) << p << ": " << run.outcome.error;
     ASSERT_TRUE(run.restarted) << p;

@@ -22,6 +22,7 @@
 #include <vector>
 
 #include "afford/channels.hpp"
+#include "afford/processes.hpp"
 #include "afford/edge.hpp"
 #include "afford/process_status_t.hpp"
 #include "afford/resend_t.hpp"
@@ -343,8 +344,8 @@ TEST_P(NodeAlone, PublishesTheBytesItPublishedInTheWholeRun) {
 std::vector<Case> cases() {
   std::vector<Case> out;
   for (Feed f : {Feed::InOrder, Feed::OutOfOrder, Feed::Duplicated, Feed::MissingThenResent}) {
-    for (const char* p : {"environment", "eye", "predictors", "motivation"}) out.push_back({p, false, f});
-    for (const char* p : {"environment", "eye", "predictors", "planner"}) out.push_back({p, true, f});
+    for (bool extrinsic : {false, true})
+      for (const std::string& p : runProcesses(extrinsic, /*recorded=*/false)) out.push_back({p, extrinsic, f});
     for (const char* p : {"predictors", "motivation"}) out.push_back({p, false, f, true});
   }
   return out;

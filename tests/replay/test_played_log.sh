@@ -10,7 +10,7 @@ source "$root/tests/netns.sh"
 enter_test "$0" "$@"
 url="udpm://239.255.76.67:7999?ttl=0&recv_buf_size=2097152"
 logs="$out/logs"  # the logger's folder and the runner's --log-root: log and checkpoint side by side
-processes=(environment eye predictors motivation logger)
+mapfile -t processes < <("$build/bin/afford" processes --phase intrinsic)  # the registry's
 declare -A pid
 for p in "${processes[@]}"; do
   extra=()
@@ -23,7 +23,7 @@ for _ in $(seq 100); do
 done
 
 run() {  # $1: run prefix
-  "$build/bin/afford" experiment base --system IMP --reps 1 --steps 400 --quiet --attach "$url" --run-prefix "$1" \
+  "$build/bin/afford" experiment base --system IMP --reps 1 --steps 400 --quiet --attach "$url" --run-prefix "$1" --no-reuse-agents \
     --out "$out/$1" --log-root "$logs" >"$out/$1.txt" 2>&1 || { cat "$out/$1.txt"; echo "run $1 failed"; exit 1; }
 }
 run first

@@ -29,7 +29,7 @@ trap diagnose EXIT
 
 url="udpm://239.255.76.67:7993?ttl=0&recv_buf_size=2097152"
 steps=3000
-processes=(environment eye predictors motivation planner logger)
+mapfile -t processes < <("$build/bin/afford" processes)  # the registry's
 command_of() {  # the command that starts process $1, the same before and after the kill
   case $1 in
     logger) echo "$build/bin/afford-logger --lcm-url $url --log-dir $out/logs" ;;

@@ -1,4 +1,8 @@
 #include <gtest/gtest.h>
+#include <zlib.h>
+
+#include <cstring>
+#include <iterator>
 
 #include <cmath>
 #include <filesystem>
@@ -117,6 +121,50 @@ TEST_F(Fixture, CheckpointRestoresEveryWeight) {
   EXPECT_EQ(fresh.weightsChecksum(), trained.weightsChecksum());
   EXPECT_EQ(fresh.executed(), trained.executed());
   EXPECT_EQ(fresh.whatEffect(kTurnRed, probes[4]), trained.whatEffect(kTurnRed, probes[4]));
+}
+
+// Checkpoints are deflated (issue 13): the same weights come back, bit for
+// bit, from a file a fraction of the plain one's size, and a plain checkpoint
+// (as written before) still loads.
+TEST_F(Fixture, CheckpointsAreCompressedLosslesslyAndPlainOnesStillLoad) {
+  Predictors trained(imp);
+  for (int k = 0; k < 200; ++k) trained.train(experience(k % 4, k % 3 != 0, k % 9));
+  const std::string dir = test::tempDir("ckpt-packed");
+  trained.save(dir + "/p.ckpt");
+  std::ifstream in(dir + "/p.ckpt", std::ios::binary);
+  const std::string file((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());
+  ASSERT_GT(file.size(), 16u);
+  ASSERT_EQ(file.substr(0, 8), "AFFORDCZ");
+  std::uint64_t size = 0;
+  std::memcpy(&size, file.data() + 8, sizeof size);
+  std::string plain(size, '\0');
+  uLongf plain_size = static_cast<uLongf>(size);
+  ASSERT_EQ(uncompress(reinterpret_cast<Bytef*>(plain.data()), &plain_size,
+                       reinterpret_cast<const Bytef*>(file.data() + 16), static_cast<uLong>(file.size() - 16)),
+            Z_OK);
+  ASSERT_EQ(plain_size, size);
+  EXPECT_EQ(plain.substr(0, 8), "AFFORDCK");
+  EXPECT_EQ(plain.substr(plain.size() - 16), trained.weightsChecksum());  // the plain format ends with the checksum
+  EXPECT_LT(file.size() * 5, plain.size()) << "compressed " << file.size() << " of " << plain.size() << " bytes";
+  std::ofstream(dir + "/plain.ckpt", std::ios::binary) << plain;
+  for (const char* name : {"/p.ckpt", "/plain.ckpt"}) {
+    Predictors fresh(imp);
+    fresh.load(dir + name);
+    EXPECT_EQ(fresh.weightsChecksum(), trained.weightsChecksum()) << name;
+    EXPECT_EQ(fresh.executed(), trained.executed()) << name;
+    EXPECT_EQ(fresh.whatEffect(kTurnRed, probes[4]), trained.whatEffect(kTurnRed, probes[4])) << name;
+  }
+  // A flipped byte in the compressed data is refused, naming the file.
+  std::string bad = file;
+  bad[bad.size() / 2] = static_cast<char>(bad[bad.size() / 2] ^ 0x5a);
+  std::ofstream(dir + "/bad.ckpt", std::ios::binary) << bad;
+  Predictors p(imp);
+  try {
+    p.load(dir + "/bad.ckpt");
+    FAIL() << "a corrupt compressed checkpoint was loaded";
+  } catch (const std::runtime_error& e) {
+    EXPECT_NE(std::string(e.what()).find("bad.ckpt"), std::string::npos) << e.what();
+  }
 }
 
 TEST_F(Fixture, BadCheckpointsAreRefusedNamingTheFile) {

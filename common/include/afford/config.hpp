@@ -292,6 +292,7 @@ struct TablesDesign {
 
 struct ExperimentFile {
   std::string name;
+  std::string file;                        // an experiment file outside the config folder (--config FILE), else ""
   std::string description;
   int repetitions = 1;
   std::vector<std::string> default_systems;  // systems run when none is named (empty: all three)
@@ -304,7 +305,12 @@ struct ExperimentFile {
 };
 
 std::vector<std::string> listExperiments(const std::string& config_dir);
+// `name`: an experiment of <config_dir>/experiments, or the path of an
+// experiment file anywhere (it has a '/' or ends in .yaml; its name is the
+// file's stem). `extends:` names an experiment of the config folder, or a
+// path relative to the extending file's folder.
 ExperimentFile loadExperiment(const std::string& config_dir, const std::string& name);
+bool isExperimentPath(const std::string& name);
 
 struct RunRequest {
   std::string experiment;

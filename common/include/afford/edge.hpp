@@ -90,10 +90,6 @@ enum class Order {
   None,     // as they come (types without a serial)
 };
 
-// The publisher of each run channel (one per channel and run); "" for others.
-std::string publisherOf(const std::string& channel, bool extrinsic);
-// One of the project's processes (environment, eye, predictors, motivation, planner, logger)?
-bool isProcessName(const std::string& name);
 
 // The run id a message starts with, read without decoding it; false if the
 // buffer cannot hold one of at most `max_bytes`.

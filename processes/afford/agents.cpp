@@ -1,0 +1,99 @@
+#include "afford/agents.hpp"
+
+#include <unistd.h>
+#include <yaml-cpp/yaml.h>
+
+#include <filesystem>
+#include <fstream>
+
+#include "afford/checksum.hpp"
+#include "afford/config.hpp"
+#include "afford/group.hpp"
+#include "afford/processes.hpp"
+#include "afford/store.hpp"
+
+namespace afford {
+namespace fs = std::filesystem;
+using nlohmann::json;
+
+const std::string& codeFingerprint() {
+  static const std::string fingerprint = [] {
+    Fnv1a h;
+    const fs::path bin = executableDir();
+    std::vector<fs::path> files{fs::read_symlink("/proc/self/exe")};
+    for (const ProcessInfo& p : processRegistry()) files.push_back(bin / ("afford-" + std::string(p.name)));
+    std::vector<char> buf(1 << 20);
+    for (const auto& f : files) {
+      std::ifstream in(f, std::ios::binary);
+      while (in.read(buf.data(), static_cast<std::streamsize>(buf.size())) || in.gcount() > 0)
+        h.add(buf.data(), static_cast<std::size_t>(in.gcount()));
+    }
+    return h.hex();
+  }();
+  return fingerprint;
+}
+
+std::string agentKey(const std::string& config_yaml) {
+  YAML::Node node = YAML::Load(config_yaml);
+  node.remove("experiment");
+  node.remove("planner");
+  if (node["run"]) {
+    node["run"].remove("checkpoint");
+    node["run"].remove("record");
+    node["run"].remove("checkpoint_after_actions");
+  }
+  const std::string text = std::string(AFFORD_VERSION) + "\n" + codeFingerprint() + "\n" + emitYaml(node);
+  Fnv1a h;
+  h.add(text.data(), text.size());
+  return h.hex();
+}
+
+AgentStore::AgentStore(std::string root) : root_(std::move(root)) {}
+
+std::optional<RunOutcome> AgentStore::find(const std::string& key, std::int64_t after_actions) const {
+  const fs::path dir = fs::path(root_) / key;
+  const fs::path file = dir / "outcome.json";
+  if (!fs::exists(file)) return std::nullopt;
+  json j;
+  try {
+    std::ifstream in(file);
+    j = json::parse(in);
+  } catch (const std::exception& e) {
+    throw ConfigError("the stored agent " + file.string() + " cannot be read (" + e.what() +
+                      "): remove its folder (afford clean) or run with --no-reuse-agents");
+  }
+  RunOutcome r = outcomeFromJson(j.at("outcome"));
+  r.reused_from = j.at("run_id").get<std::string>();
+  r.checkpoint = (dir / "predictors.ckpt").string();
+  if (!fs::exists(r.checkpoint)) return std::nullopt;
+  if (after_actions > 0 && !fs::exists(actionsCheckpoint(r.checkpoint, after_actions))) return std::nullopt;
+  return r;
+}
+
+void AgentStore::keep(const std::string& key, const std::string& run_id, const std::string& experiment,
+                      const RunOutcome& r) const {
+  if (!r.ok || r.checkpoint.empty() || !fs::exists(r.checkpoint)) return;
+  const fs::path dir = fs::path(root_) / key;
+  if (fs::exists(dir)) return;  // kept already (the same agent)
+  const fs::path part = fs::path(root_) / (key + ".part." + std::to_string(getpid()));
+  fs::remove_all(part);
+  fs::create_directories(part);
+  const fs::path from = fs::path(r.checkpoint).parent_path();
+  const std::string stem = fs::path(r.checkpoint).stem().string();
+  for (const auto& f : fs::directory_iterator(from)) {  // predictors.ckpt and predictors.after-N-actions.ckpt
+    const std::string name = f.path().filename().string();
+    if (f.path().extension() != ".ckpt" || name.rfind(stem, 0) != 0) continue;
+    const fs::path to = part / ("predictors" + name.substr(stem.size()));
+    std::error_code ec;
+    fs::create_hard_link(f.path(), to, ec);
+    if (ec) fs::copy_file(f.path(), to);
+  }
+  RunOutcome kept = r;
+  kept.reused_from.clear();
+  writeWhole(part / "outcome.json", json{{"run_id", run_id}, {"experiment", experiment}, {"key", key}, {"outcome", outcomeToJson(kept)}}.dump() + "\n");
+  std::error_code ec;
+  fs::rename(part, dir, ec);
+  if (ec) fs::remove_all(part);  // another runner kept the same agent first
+}
+
+}  // namespace afford

@@ -1,0 +1,38 @@
+// The subcommands of `afford`, one file each (commands/<name>.cpp). Each adds
+// its options to the application and returns what runs it once the command
+// line is parsed; the front door (main.cpp) runs the one that was given.
+#pragma once
+#include <CLI/CLI.hpp>
+#include <spdlog/spdlog.h>
+
+#include <functional>
+#include <string>
+#include <vector>
+
+namespace afford {
+
+// What every subcommand shares: the config folder (--config-dir) and the log.
+struct FrontDoor {
+  std::string config_dir;
+  std::string program;  // argv[0]
+  spdlog::logger* log = nullptr;
+};
+
+struct Command {
+  CLI::App* sub = nullptr;
+  std::function<int()> run;  // the exit status
+};
+
+Command experimentCommand(CLI::App& app, const FrontDoor& door);
+Command experimentsCommand(CLI::App& app, const FrontDoor& door);
+Command configCommand(CLI::App& app, const FrontDoor& door);
+Command plotCommand(CLI::App& app, const FrontDoor& door);
+Command reportCommand(CLI::App& app, const FrontDoor& door);
+Command replayCommand(CLI::App& app, const FrontDoor& door);
+Command explainCommand(CLI::App& app, const FrontDoor& door);
+Command statusCommand(CLI::App& app, const FrontDoor& door);
+Command scenarioCommand(CLI::App& app, const FrontDoor& door);
+Command processesCommand(CLI::App& app, const FrontDoor& door);
+Command cleanCommand(CLI::App& app, const FrontDoor& door);
+
+}  // namespace afford

@@ -1,0 +1,105 @@
+// afford experiment NAME ...: run an experiment's repetitions and summarise them.
+#include <filesystem>
+#include <limits>
+#include <memory>
+
+#include "afford/commands.hpp"
+#include "afford/config.hpp"
+#include "afford/experiment.hpp"
+
+namespace afford {
+
+Command experimentCommand(CLI::App& app, const FrontDoor& door) {
+  struct Args {
+    ExperimentOptions o;
+    std::string system, netns = "auto", file;
+    int reps = 0, tables = 0;
+    std::int64_t steps = 0, table_seed = 0;
+  };
+  auto a = std::make_shared<Args>();
+  ExperimentOptions& o = a->o;
+  auto* exp = app.add_subcommand("experiment", "run an experiment's repetitions and summarise them");
+  exp->add_option("name", o.experiment, "experiment (see `afford experiments`); optional with --resume");
+  exp->add_option("--system", a->system, "FIX, IGN, IMP or all (default: the experiment's systems, else all)");
+  exp->add_option("--reps", a->reps, "repetitions per system (default: the experiment's)");
+  exp->add_option("--steps", a->steps, "intrinsic steps per run (default: the experiment's)");
+  exp->add_option("--jobs,-j", o.jobs, "runs at a time")->capture_default_str();
+  exp->add_option("--seed", o.seed, "seed of the first repetition (then seed+1, ...)")->capture_default_str();
+  exp->add_option("--out", o.out_dir, "folder for summary.json and CSV files")->capture_default_str();
+  exp->add_option("--transport", o.transport, "udpm (real processes) or memq (one process)")->capture_default_str();
+  exp->add_option("--keep-logs", o.keep_logs, "which runs keep an LCM log: all, first or none")->capture_default_str();
+  exp->add_option("--keep-checkpoints", o.keep_checkpoints,
+                  "which intrinsic runs keep their checkpoints once the experiment is over: all, first or none")
+      ->capture_default_str();
+  exp->add_flag("--reuse-agents,!--no-reuse-agents", o.reuse_agents,
+                "take the trained agent of an earlier run with the same configuration and seed, stored in "
+                "<log-root>/agents, instead of training it again (default: on)");
+  exp->add_option("--config", a->file,
+                  "an experiment file anywhere, instead of NAME (it may extend a shipped one: extends: base)");
+  exp->add_option("--log-root", o.log_root, "folder of the run logs (<log-root>/<run-id>/)")->capture_default_str();
+  exp->add_option("--run-prefix", o.run_prefix, "first part of every run id (default: date-time)");
+  exp->add_option("--set", o.settings, "override a config value, e.g. --set motivation.leak=0.2 (repeatable)");
+  exp->add_option("--netns", a->netns, "auto, on or off: run the process group in a private network namespace")
+      ->capture_default_str();
+  exp->add_option("--base-port", o.base_port, "UDP port of the first job slot (one port per slot)")
+      ->capture_default_str();
+  exp->add_option("--process-log-level", o.process_log_level, "log level of the processes")->capture_default_str();
+  exp->add_option("--stall-seconds", o.stall_seconds, "fail a run after this long without progress")
+      ->capture_default_str();
+  exp->add_flag("--quiet", o.quiet, "do not print the table at the end");
+  exp->add_option("--extrinsic-reps", o.extrinsic_reps,
+                  "extrinsic tests of each scenario (and planner condition) from every trained agent "
+                  "(default: the experiment's extrinsic.tests, else 0: intrinsic phase only)")
+      ->capture_default_str();
+  exp->add_option("--scenarios", o.scenarios, "scenarios to test (default: all in config/scenarios)");
+  auto* tables_option = exp->add_option("--tables", a->tables,
+                                        "experiments on random affordance tables (random-tables): how many tables "
+                                        "(default: the experiment's)")
+                            ->check(CLI::Range(1, 100000));
+  auto* table_seed_option =
+      exp->add_option("--table-seed", a->table_seed,
+                      "... and the seed of the series they are drawn from (default: the experiment's)")
+          ->check(CLI::Range(std::int64_t{0}, std::numeric_limits<std::int64_t>::max()));
+  exp->add_option("--attach", o.attach,
+                  "drive the runs on this LCM URL, with processes started by hand (afford-environment ..., "
+                  "and afford-logger for logs): the runner starts none");
+  exp->add_flag("--resume", o.resume,
+                "continue the interrupted experiment of --out: the runs not finished, with its stored options");
+  return {exp, [&app, exp, a, &door, tables_option, table_seed_option] {
+            ExperimentOptions& o = a->o;
+            o.config_dir = door.config_dir;
+            o.program = door.program;
+            for (const CLI::Option* opt : exp->get_options())
+              if (opt->count() > 0) o.given.insert(opt->get_name());
+            if (app.count("--config-dir") > 0) o.given.insert("--config-dir");
+            if (!a->file.empty()) {
+              if (!o.experiment.empty())
+                throw ConfigError("give an experiment NAME or --config FILE, not both");
+              if (!isExperimentPath(a->file)) a->file = "./" + a->file;  // a file, even without '/' or .yaml
+              o.experiment = std::filesystem::absolute(a->file).lexically_normal().string();
+              o.given.insert("name");
+            }
+            if (!o.resume && o.experiment.empty())
+              throw ConfigError("which experiment? `afford experiment NAME` (see `afford experiments`), or "
+                                "`afford experiment --resume --out DIR` to continue an interrupted one");
+            if (a->reps) o.reps = a->reps;
+            if (a->steps) o.steps = a->steps;
+            if (tables_option->count()) o.tables = a->tables;
+            if (table_seed_option->count()) o.table_seed = a->table_seed;
+            if (a->system == "all")
+              o.systems = {"FIX", "IGN", "IMP"};
+            else if (!a->system.empty())
+              o.systems = {toString(parseSystem(a->system))};
+            if (a->netns == "auto")
+              o.netns = NetnsMode::Auto;
+            else if (a->netns == "on")
+              o.netns = NetnsMode::On;
+            else if (a->netns == "off")
+              o.netns = NetnsMode::Off;
+            else
+              throw ConfigError("--netns must be auto, on or off, not \"" + a->netns + "\"");
+            return runExperiment(o, *door.log);
+          }};
+}
+
+}  // namespace afford

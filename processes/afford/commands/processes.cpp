@@ -1,0 +1,39 @@
+// afford processes: the registry of processes (afford/processes.hpp), for scripts and people.
+#include <cstdio>
+#include <memory>
+
+#include "afford/commands.hpp"
+#include "afford/processes.hpp"
+
+namespace afford {
+
+Command processesCommand(CLI::App& app, const FrontDoor&) {
+  struct Args {
+    std::string phase = "all";
+    bool recorded = true, channels = false;
+  };
+  auto a = std::make_shared<Args>();
+  auto* cmd = app.add_subcommand("processes", "list the processes of a run, one per line (for scripts), or with "
+                                              "the channels each publishes");
+  cmd->add_option("--phase", a->phase, "intrinsic, extrinsic or all")
+      ->check(CLI::IsMember({"intrinsic", "extrinsic", "all"}))
+      ->capture_default_str();
+  cmd->add_flag("!--no-logger", a->recorded, "leave the logger out (a run that is not recorded)");
+  cmd->add_flag("--channels", a->channels, "each process with what it does and the channels it publishes");
+  return {cmd, [a] {
+            for (const ProcessInfo& p : processRegistry()) {
+              const bool in = a->phase == "all" || (a->phase == "intrinsic" ? p.intrinsic : p.extrinsic);
+              if (!in || (p.recorder && !a->recorded)) continue;
+              if (!a->channels) {
+                std::printf("%s\n", p.name);
+                continue;
+              }
+              std::string chans;
+              for (const char* c : p.publishes) chans += std::string(chans.empty() ? "" : " ") + c;
+              std::printf("%-12s %-60s %s\n", p.name, p.summary, chans.empty() ? "-" : chans.c_str());
+            }
+            return 0;
+          }};
+}
+
+}  // namespace afford

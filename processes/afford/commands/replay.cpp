@@ -1,0 +1,56 @@
+// afford replay LOG: feed a recorded run into fresh learning processes and compare.
+#include <cstdio>
+#include <memory>
+#include <sstream>
+
+#include "afford/commands.hpp"
+#include "afford/replay.hpp"
+
+namespace afford {
+
+Command replayCommand(CLI::App& app, const FrontDoor& door) {
+  struct Args {
+    ReplayOptions options;
+    std::string into;
+  };
+  auto a = std::make_shared<Args>();
+  auto* replay = app.add_subcommand("replay", "feed a recorded run into fresh learning processes and compare");
+  replay->add_option("log", a->options.log_dir, "the run's log folder (logs/<run-id>) or one .lcm file")->required();
+  replay->add_option("--run", a->options.run_id, "the run to replay, in a log that holds several (default: the first)");
+  replay->add_option("--into", a->into,
+                     "processes to replay, comma-separated: predictors, motivation, planner "
+                     "(default: predictors and the run's decider)");
+  return {replay, [a, &door] {
+            std::stringstream ss(a->into);
+            for (std::string p; std::getline(ss, p, ',');)
+              if (!p.empty()) a->options.into.push_back(p);
+            const ReplayResult r = replayRun(a->options, *door.log);
+            std::printf("run: %s (%s)\nevents: %lld%s\n", r.run_id.c_str(), r.extrinsic ? "extrinsic" : "intrinsic",
+                        static_cast<long long>(r.events), r.torn_bytes ? " (then an incomplete event, skipped)" : "");
+            if (!r.incomplete.empty()) std::printf("the log is incomplete: %s\n", r.incomplete.c_str());
+            for (const auto& g : r.gaps)
+              std::printf("missing from the recording: %s serial%s %lld%s\n", g.channel.c_str(),
+                          g.first == g.last ? "" : "s", static_cast<long long>(g.first),
+                          g.first == g.last ? "" : (".." + std::to_string(g.last)).c_str());
+            if (r.dropped)
+              std::printf("refused: %lld recorded message(s) (corrupted; see the warnings)\n",
+                          static_cast<long long>(r.dropped));
+            if (!r.weights_checksum.empty() || !r.recorded_checksum.empty())
+              std::printf("weights_checksum: %s\nrecorded: %s\n",
+                          r.weights_checksum.empty() ? "(not reached: the replay stopped before the end)"
+                                                     : r.weights_checksum.c_str(),
+                          r.recorded_checksum.empty() ? "(none in the log)" : r.recorded_checksum.c_str());
+            std::printf("decisions: %lld replayed, %lld recorded, %lld differing\n", static_cast<long long>(r.decisions),
+                        static_cast<long long>(r.decisions_recorded), static_cast<long long>(r.decisions_differing));
+            if (r.ok())
+              std::printf("replay equals the record\n");
+            else if (!r.consistent())
+              std::printf("REPLAY DIFFERS FROM THE RECORD\n");
+            else
+              std::printf("replay equals the record as far as it goes, but the record is %s\n",
+                          r.gaps.empty() ? "incomplete" : "missing messages (above)");
+            return r.ok() ? 0 : 1;
+          }};
+}
+
+}  // namespace afford

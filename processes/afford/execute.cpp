@@ -1,0 +1,221 @@
+#include "afford/execute.hpp"
+
+#include <sys/resource.h>
+#include <sys/syscall.h>
+#include <unistd.h>
+
+#include <atomic>
+#include <mutex>
+#include <thread>
+
+#include "afford/group.hpp"
+#include "afford/host.hpp"
+#include "afford/logging.hpp"
+#include "afford/processes.hpp"
+#include "afford/store.hpp"
+
+namespace afford {
+namespace fs = std::filesystem;
+using nlohmann::json;
+
+namespace {
+
+// Handle what is pending (up to a batch), or wait briefly for something.
+void pumpLcm(lcm::LCM& lcm) {
+  int handled = 0;
+  while (handled < 512 && lcm.handleTimeout(0) > 0) ++handled;
+  if (handled == 0) lcm.handleTimeout(5);
+}
+
+RunOutcome runInProcess(const PlannedRun& run, const ExperimentOptions& o, const ProtocolConfig& protocol, int slot) {
+  lcm::LCM lcm("memq://");
+  const std::string tag = o.jobs > 1 ? "#" + std::to_string(slot) : "";
+  const std::string level = o.process_log_level == "info" ? "warn" : o.process_log_level;
+  InProcessHost host(lcm, protocol, [&](const std::string& p) { return makeLogger(p + tag, level); },
+                     HostOptions{/*single_thread=*/true, o.log_root});
+  host.start(run.spec.processes);  // the motivation decides in the intrinsic phase, the planner in the extrinsic one
+  RunDriver driver(lcm, makeLogger("runner" + tag, level), protocol);
+  auto pump = [&] {
+    pumpLcm(lcm);
+    host.tick();
+  };
+  RunOutcome r = driver.run(run.spec, pump, [] { return std::string(); });
+  r.peak_rss_kb["all (one process)"] = peakRssKb(getpid());
+  return r;
+}
+
+struct Slot {
+  int index = 0;
+  std::string url;
+  std::unique_ptr<ProcessGroup> group;   // environment, eye, predictors, and motivation or planner
+  bool extrinsic = false;                // which of the two the group has
+  std::unique_ptr<ProcessGroup> logger;  // started with the slot's first recorded run, kept for the others
+  // One bus connection and driver for all the slot's runs: the driver keeps
+  // what each process last said, so a run starts as soon as they are free.
+  std::unique_ptr<lcm::LCM> lcm;
+  std::unique_ptr<RunDriver> driver;
+};
+
+RunOutcome runOverUdpm(const PlannedRun& run, const ExperimentOptions& o, const ProtocolConfig& protocol, Slot& slot,
+                       const std::string& bin) {
+  const std::string out = (fs::path(o.out_dir) / "processes" / ("slot" + std::to_string(slot.index))).string();
+  const bool attached = !o.attach.empty();  // the user started the processes; none are ours to start
+  // The runner listens before it starts any process: it hears each one's first STATUS.
+  if (!slot.lcm) {
+    // This thread only watches the runs (see kWatcherNice); LCM's receive
+    // thread, created on the first handle(), inherits the priority.
+    setpriority(PRIO_PROCESS, static_cast<id_t>(syscall(SYS_gettid)), kWatcherNice);
+    slot.lcm = std::make_unique<lcm::LCM>(slot.url);
+    if (!slot.lcm->good()) {
+      slot.lcm.reset();
+      RunOutcome r;
+      r.error = "cannot open LCM at " + slot.url;
+      return r;
+    }
+    slot.driver = std::make_unique<RunDriver>(*slot.lcm, makeLogger("runner", "warn"), protocol);
+  }
+  if (!attached && (!slot.group || !slot.group->health().empty() || slot.extrinsic != run.spec.extrinsic)) {
+    slot.group.reset();
+    slot.extrinsic = run.spec.extrinsic;
+    slot.group = std::make_unique<ProcessGroup>(
+        bin, runProcesses(run.spec.extrinsic, /*recorded=*/false),
+        slot.url, out, std::vector<std::string>{});
+  }
+  // The logger serves the slot's runs one after another; those not to be kept
+  // say so in their configuration (run.record), and it stays free during them.
+  if (run.keep_log && !attached && (!slot.logger || !slot.logger->health().empty()))
+    slot.logger = std::make_unique<ProcessGroup>(bin, std::vector<std::string>{"logger"}, slot.url, out,
+                                                 std::vector<std::string>{"--log-dir", o.log_root});
+  lcm::LCM& lcm = *slot.lcm;
+  RunDriver& driver = *slot.driver;
+  auto health = [&]() {
+    std::string h = slot.group ? slot.group->health() : std::string();
+    if (h.empty() && slot.logger && run.keep_log) h = slot.logger->health();
+    return h;
+  };
+  RunOutcome r = driver.run(run.spec, [&] { pumpLcm(lcm); }, health);
+  if (slot.group) r.peak_rss_kb = slot.group->peakRssKb();
+  if (slot.logger && run.keep_log)
+    for (const auto& [name, kb] : slot.logger->peakRssKb()) r.peak_rss_kb[name] = kb;
+  if (!r.ok) {  // a broken group is not reused
+    slot.group.reset();
+    slot.logger.reset();
+  }
+  return r;
+}
+
+}  // namespace
+
+// The outcomes kept by an earlier invocation (--resume); none on a fresh start.
+PhaseRuns keptRuns(const std::vector<PlannedRun>& runs, const fs::path& out) {
+  PhaseRuns phase;
+  phase.outcomes.resize(runs.size());
+  phase.finished.assign(runs.size(), 0);
+  for (std::size_t i = 0; i < runs.size(); ++i)
+    if (auto r = keptOutcome(out, runs[i].spec.run_id)) {
+      phase.outcomes[i] = std::move(*r);
+      phase.finished[i] = 1;
+    }
+  return phase;
+}
+
+// A run that did not finish may have left its folder (an incomplete log): it
+// is never reused nor deleted, but moved aside as <run-id>.cut-<k>, and the
+// run starts afresh.
+void moveUnfinishedAside(const std::vector<PlannedRun>& runs, const PhaseRuns& phase, const ExperimentOptions& o,
+                         json& state, spdlog::logger& log) {
+  bool moved = false;
+  for (std::size_t i = 0; i < runs.size(); ++i) {
+    const fs::path dir = fs::path(o.log_root) / runs[i].spec.run_id;
+    if (phase.finished[i] || !fs::exists(dir)) continue;
+    fs::path aside;
+    for (int k = 1; fs::exists(aside = dir.string() + ".cut-" + std::to_string(k)); ++k) {
+    }
+    fs::rename(dir, aside);
+    state["moved_aside"].push_back({{"run_id", runs[i].spec.run_id}, {"to", aside.string()}});
+    log.info("run '{}' did not finish: its folder is now {}; the run starts again", runs[i].spec.run_id, aside.string());
+    moved = true;
+  }
+  if (moved) writeWhole(statePath(o.out_dir), state.dump(2) + "\n");
+}
+
+// Run every planned run not finished yet, J at a time, and keep each outcome
+// in DIR/runs/ as it comes. After a SIGINT or SIGTERM no run starts; a run it
+// stopped is cut, not finished.
+void executeRuns(const std::vector<PlannedRun>& runs, PhaseRuns& phase, const ExperimentOptions& o,
+                 const ProtocolConfig& protocol, const std::string& bin, spdlog::logger& log) {
+  std::vector<std::size_t> todo;
+  for (std::size_t i = 0; i < runs.size(); ++i)
+    if (!phase.finished[i]) todo.push_back(i);
+  std::atomic<std::size_t> next{0};
+  std::size_t done = phase.finishedCount();
+  std::mutex mutex;
+  auto worker = [&](int slot_index) {
+    Slot slot;
+    slot.index = slot_index;
+    // A 2 MB receive buffer per socket (the kernel's default is 208 KB): every process hears every
+    // datagram of its slot, and one descheduled for a while must not lose any (the kernel caps the
+    // request at net.core.rmem_max).
+    slot.url = "udpm://239.255.76.67:" + std::to_string(o.base_port + slot_index) + "?ttl=0&recv_buf_size=2097152";
+    if (!o.attach.empty()) slot.url = o.attach;
+    for (std::size_t k; !stopRequested() && (k = next.fetch_add(1)) < todo.size();) {
+      const std::size_t i = todo[k];
+      const std::string& id = runs[i].spec.run_id;
+      RunOutcome r;
+      try {
+        r = o.transport == "memq" ? runInProcess(runs[i], o, protocol, slot_index)
+                                  : runOverUdpm(runs[i], o, protocol, slot, bin);
+      } catch (const std::exception& e) {
+        r.ok = false;
+        r.error = "run '" + id + "': " + e.what();
+      }
+      // A run that fails while the processes are being stopped failed because of it: cut too.
+      const bool cut = r.interrupted || (!r.ok && stopRequested());
+      if (r.ok && !r.log_dir.empty()) {
+        std::error_code ec;
+        for (const auto& f : fs::directory_iterator(r.log_dir, ec))
+          if (f.path().extension() == ".lcm") r.log_bytes += fs::file_size(f.path(), ec);
+      }
+      if (!cut) try {
+          keepOutcome(o.out_dir, id, r);
+          // What `afford clean` reads to tell the experiment of a run's folder (a folder without a log has no manifest).
+          if (const fs::path dir = fs::path(o.log_root) / id; fs::is_directory(dir))
+            writeWhole(dir / "run.json", json{{"run_id", id},
+                                              {"experiment", runs[i].spec.experiment},
+                                              {"out_dir", fs::absolute(o.out_dir).string()}}
+                                             .dump() + "\n");
+        } catch (const std::exception& e) {
+          log.error("cannot keep the outcome of run '{}' ({}): --resume would run it again", id, e.what());
+        }
+      std::lock_guard<std::mutex> lock(mutex);
+      if (cut) {
+        const std::string prefix = "run '" + id + "': ";
+        std::string where = r.error.rfind(prefix, 0) == 0 ? r.error.substr(prefix.size()) : r.error;
+        // (The step is the last one the processes reported, in their heartbeats.)
+        if (const std::string none = "at step -1"; where.size() > none.size() && where.substr(where.size() - none.size()) == none)
+          where = where.substr(0, where.size() - none.size()) + "before any step was reported";
+        phase.cut[i] = where;
+        log.warn("{}: {}", id, phase.cut[i]);
+        continue;
+      }
+      phase.outcomes[i] = std::move(r);
+      phase.finished[i] = 1;
+      const RunOutcome& out = phase.outcomes[i];
+      ++done;
+      if (out.ok && runs[i].spec.extrinsic)
+        log.info("[{}/{}] {}: {}, {} action(s), utility {}", done, runs.size(), id,
+                 out.extrinsic.success ? "solved in " + std::to_string(out.extrinsic.completion) + " steps" : "not solved",
+                 out.extrinsic.attempts, out.extrinsic.utility);
+      else if (out.ok)
+        log.info("[{}/{}] {} done in {:.1f} s, weights {}", done, runs.size(), id, out.wall_seconds,
+                 out.weights_checksum);
+      else
+        log.error("[{}/{}] {}", done, runs.size(), out.error);
+    }
+  };
+  std::vector<std::thread> threads;
+  for (int j = 0; j < std::min<int>(o.jobs, static_cast<int>(todo.size())); ++j) threads.emplace_back(worker, j);
+  for (auto& t : threads) t.join();
+}
+
+}  // namespace afford

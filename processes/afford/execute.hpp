@@ -1,0 +1,45 @@
+// Hosting an experiment's runs: J at a time, each job slot on its own LCM URL
+// with its own group of processes (udpm), or every process in this one
+// (memq, afford/host.hpp). Each finished run's outcome is kept as it comes.
+#pragma once
+#include <spdlog/spdlog.h>
+
+#include <cstddef>
+#include <filesystem>
+#include <map>
+#include <string>
+#include <vector>
+
+#include <nlohmann/json.hpp>
+
+#include "afford/driver.hpp"
+#include "afford/experiment.hpp"
+#include "afford/plan.hpp"
+
+namespace afford {
+
+// The runs of one phase (intrinsic runs, or extrinsic tests), in plan order.
+struct PhaseRuns {
+  std::vector<RunOutcome> outcomes;
+  std::vector<char> finished;              // its outcome is final (it succeeded or failed) and kept in DIR/runs/
+  std::map<std::size_t, std::string> cut;  // run index -> where a signal stopped it
+  std::size_t finishedCount() const { return static_cast<std::size_t>(std::count(finished.begin(), finished.end(), 1)); }
+};
+
+
+// The outcomes kept by an earlier invocation (--resume); none on a fresh start.
+PhaseRuns keptRuns(const std::vector<PlannedRun>& runs, const std::filesystem::path& out);
+
+// A run that did not finish may have left its folder (an incomplete log): it
+// is never reused nor deleted, but moved aside as <run-id>.cut-<k>, and the
+// run starts afresh.
+void moveUnfinishedAside(const std::vector<PlannedRun>& runs, const PhaseRuns& phase, const ExperimentOptions& o,
+                         nlohmann::json& state, spdlog::logger& log);
+
+// Run every planned run not finished yet, J at a time, and keep each outcome
+// in DIR/runs/ as it comes. After a SIGINT or SIGTERM no run starts; a run it
+// stopped is cut, not finished.
+void executeRuns(const std::vector<PlannedRun>& runs, PhaseRuns& phase, const ExperimentOptions& o,
+                 const ProtocolConfig& protocol, const std::string& bin, spdlog::logger& log);
+
+}  // namespace afford

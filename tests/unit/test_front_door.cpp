@@ -1,0 +1,111 @@
+// The front door's shared parts: the registry of processes, the in-process
+// host, and config/reference.yaml (the paper's numbers and thresholds).
+#include <gtest/gtest.h>
+#include <lcm/lcm-cpp.hpp>
+#include <spdlog/sinks/null_sink.h>
+
+#include <filesystem>
+#include <fstream>
+#include <set>
+
+#include "afford/channels.hpp"
+#include "afford/config.hpp"
+#include "afford/host.hpp"
+#include "afford/processes.hpp"
+#include "afford/reference.hpp"
+#include "tests/support.hpp"
+
+namespace afford {
+namespace {
+
+const std::string kConfigDir = std::string(AFFORD_SOURCE_DIR) + "/config";
+
+TEST(Registry, EachRunChannelHasOnePublisherPerPhase) {
+  for (bool extrinsic : {false, true}) {
+    std::set<std::string> published;
+    for (const std::string& p : runProcesses(extrinsic, true))
+      for (const std::string& ch : channelsOf(p, extrinsic)) {
+        if (ch == channel::kStatus) continue;
+        EXPECT_TRUE(published.insert(ch).second) << ch << " published twice";
+        EXPECT_EQ(publisherOf(ch, extrinsic), p) << ch;
+      }
+    // Every channel with a serial is published by someone of the phase, or belongs to the other phase.
+    for (const char* ch : channel::kWithSerial)
+      if (!published.count(ch)) {
+        EXPECT_EQ(publisherOf(ch, extrinsic), "") << ch;
+      }
+  }
+  EXPECT_EQ(publisherOf(channel::kDecision, false), "motivation");
+  EXPECT_EQ(publisherOf(channel::kDecision, true), "planner");
+  EXPECT_EQ(publisherOf(channel::kRunConfig, false), "");  // the runner's
+}
+
+TEST(Registry, ThePhasesTakeTheirDeciderAndTheLoggerOnlyWhenRecorded) {
+  EXPECT_EQ(runProcesses(false, false), (std::vector<std::string>{"environment", "eye", "predictors", "motivation"}));
+  EXPECT_EQ(runProcesses(true, true), (std::vector<std::string>{"environment", "eye", "predictors", "planner", "logger"}));
+  EXPECT_TRUE(isProcessName("logger"));
+  EXPECT_FALSE(isProcessName("runner"));
+  EXPECT_TRUE(channelsOf("runner", false).empty());
+}
+
+TEST(Host, HostsEveryRegisteredProcessAndRefusesOthersByName) {
+  lcm::LCM lcm("memq://");
+  const auto null = [](const std::string& n) {
+    return std::make_shared<spdlog::logger>(n, std::make_shared<spdlog::sinks::null_sink_mt>());
+  };
+  InProcessHost host(lcm, loadProtocol(kConfigDir), null, HostOptions{true, test::tempDir("host-logs")});
+  for (const ProcessInfo& p : processRegistry()) {
+    host.start(p.name);
+    EXPECT_EQ(host.node(p.name).runId(), "") << p.name;
+  }
+  host.tick();
+  EXPECT_FALSE(host.inRun());
+  try {
+    host.start("runner");
+    FAIL() << "an unknown process was hosted";
+  } catch (const std::invalid_argument& e) {
+    EXPECT_NE(std::string(e.what()).find("unknown process \"runner\""), std::string::npos) << e.what();
+  }
+}
+
+std::string referenceError(const std::string& text, const std::string& key = "") {
+  const std::string dir = test::tempDir("reference");
+  std::ofstream(dir + "/reference.yaml") << text;
+  try {
+    const Reference r(dir);
+    if (!key.empty()) r.required(key);
+  } catch (const ConfigError& e) {
+    return e.what();
+  }
+  return "";
+}
+
+TEST(Reference, TheShippedFileHoldsThePapersThresholds) {
+  const Reference r(kConfigDir);
+  EXPECT_DOUBLE_EQ(r.required("thresholds.table_metric.solved_share"), 0.9);
+  EXPECT_DOUBLE_EQ(r.required("thresholds.stochastic_checks.turn_blue"), 0.8);
+  EXPECT_DOUBLE_EQ(r.required("thresholds.stochastic_checks.move_red"), 0.6);
+  EXPECT_EQ(r.numbers(r.entry("base_extrinsic")["table_metric"]["FIX"], "x").size(), 5u);
+}
+
+TEST(Reference, ABrokenFileIsAnErrorNamingItAndTheKey) {
+  EXPECT_NE(referenceError("base: [unclosed\n").find("reference.yaml: cannot be read"), std::string::npos);
+  EXPECT_NE(referenceError("- a list\n").find("reference.yaml: expected a map"), std::string::npos);
+  EXPECT_NE(referenceError("thresholds: {}\n", "thresholds.table_metric.solved_share")
+                .find("key thresholds.table_metric.solved_share is missing"),
+            std::string::npos);
+  EXPECT_NE(referenceError("thresholds: {table_metric: {solved_share: most}}\n", "thresholds.table_metric.solved_share")
+                .find("key thresholds.table_metric.solved_share: expected a number"),
+            std::string::npos);
+  EXPECT_NE(referenceError("", "x").find("expected a map"), std::string::npos);
+  const std::string missing = test::tempDir("reference-missing");
+  try {
+    Reference r(missing);
+    FAIL() << "a missing reference.yaml was read";
+  } catch (const ConfigError& e) {
+    EXPECT_NE(std::string(e.what()).find(missing + "/reference.yaml"), std::string::npos) << e.what();
+  }
+}
+
+}  // namespace
+}  // namespace afford
