@@ -57,11 +57,11 @@ struct InProcessRun {
       l->set_level(spdlog::level::info);
       return l;
     };
+    const ProtocolConfig protocol = shippedProtocol();
     // Both deciders: the run's configuration says which one decides.
-    InProcessHost host(lcm, shippedProtocol(), logger, HostOptions{/*single_thread=*/false, "logs"});
+    InProcessHost host(lcm, protocol, logger, HostOptions{/*single_thread=*/false, "logs"});
     host.start(runProcesses(/*extrinsic=*/false, /*recorded=*/false));
     host.start("planner");
-    const ProtocolConfig protocol = shippedProtocol();
     RunDriver driver(lcm, logger("runner"), protocol);
     struct Tap {
       InProcessRun* run;

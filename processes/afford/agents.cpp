@@ -16,6 +16,16 @@ namespace afford {
 namespace fs = std::filesystem;
 using nlohmann::json;
 
+std::vector<fs::path> checkpointFiles(const std::string& checkpoint) {
+  std::vector<fs::path> out;
+  const fs::path dir = fs::path(checkpoint).parent_path();
+  const std::string stem = fs::path(checkpoint).stem().string();
+  std::error_code ec;
+  for (const auto& f : fs::directory_iterator(dir, ec))
+    if (f.path().extension() == ".ckpt" && f.path().filename().string().rfind(stem, 0) == 0) out.push_back(f.path());
+  return out;
+}
+
 const std::string& codeFingerprint() {
   static const std::string fingerprint = [] {
     Fnv1a h;
@@ -78,15 +88,12 @@ void AgentStore::keep(const std::string& key, const std::string& run_id, const s
   const fs::path part = fs::path(root_) / (key + ".part." + std::to_string(getpid()));
   fs::remove_all(part);
   fs::create_directories(part);
-  const fs::path from = fs::path(r.checkpoint).parent_path();
-  const std::string stem = fs::path(r.checkpoint).stem().string();
-  for (const auto& f : fs::directory_iterator(from)) {  // predictors.ckpt and predictors.after-N-actions.ckpt
-    const std::string name = f.path().filename().string();
-    if (f.path().extension() != ".ckpt" || name.rfind(stem, 0) != 0) continue;
-    const fs::path to = part / ("predictors" + name.substr(stem.size()));
+  const std::size_t stem = fs::path(r.checkpoint).stem().string().size();
+  for (const fs::path& f : checkpointFiles(r.checkpoint)) {
+    const fs::path to = part / ("predictors" + f.filename().string().substr(stem));
     std::error_code ec;
-    fs::create_hard_link(f.path(), to, ec);
-    if (ec) fs::copy_file(f.path(), to);
+    fs::create_hard_link(f, to, ec);
+    if (ec) fs::copy_file(f, to);
   }
   RunOutcome kept = r;
   kept.reused_from.clear();

@@ -8,12 +8,18 @@
 // attention, multi-step) train each agent once.
 #pragma once
 #include <cstdint>
+#include <filesystem>
 #include <optional>
 #include <string>
+#include <vector>
 
 #include "afford/driver.hpp"
 
 namespace afford {
+
+// A run's checkpoint files: `checkpoint` (predictors.ckpt) and those written
+// after an action count beside it (predictors.after-N-actions.ckpt), as they exist.
+std::vector<std::filesystem::path> checkpointFiles(const std::string& checkpoint);
 
 // FNV-1a of the executables (afford and every afford-<process>): another build is other code.
 const std::string& codeFingerprint();

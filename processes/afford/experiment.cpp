@@ -103,13 +103,10 @@ void removeCheckpoints(const Plan& plan, const PhaseRuns& phase, json& summary, 
     const RunOutcome& r = phase.outcomes[p.index];
     if (p.keep_checkpoint || !phase.finished[p.index] || r.checkpoint.empty() || !r.reused_from.empty()) continue;
     const fs::path dir = fs::path(r.checkpoint).parent_path();
-    const std::string stem = fs::path(r.checkpoint).stem().string();
     std::error_code ec;
-    for (const auto& f : fs::directory_iterator(dir, ec)) {
-      const std::string name = f.path().filename().string();
-      if (f.path().extension() != ".ckpt" || name.rfind(stem, 0) != 0) continue;
-      freed += fs::file_size(f.path(), ec);
-      fs::remove(f.path(), ec);
+    for (const fs::path& f : checkpointFiles(r.checkpoint)) {
+      freed += fs::file_size(f, ec);
+      fs::remove(f, ec);
     }
     if (fs::is_directory(dir, ec) && std::distance(fs::directory_iterator(dir, ec), fs::directory_iterator()) ==
                                          (fs::exists(dir / "run.json") ? 1 : 0))
