@@ -34,5 +34,6 @@ Command statusCommand(CLI::App& app, const FrontDoor& door);
 Command scenarioCommand(CLI::App& app, const FrontDoor& door);
 Command processesCommand(CLI::App& app, const FrontDoor& door);
 Command cleanCommand(CLI::App& app, const FrontDoor& door);
+Command mergeCommand(CLI::App& app, const FrontDoor& door);
 
 }  // namespace afford

@@ -139,14 +139,14 @@ void moveUnfinishedAside(const std::vector<PlannedRun>& runs, const PhaseRuns& p
   if (moved) writeWhole(statePath(o.out_dir), state.dump(2) + "\n");
 }
 
-// Run every planned run not finished yet, J at a time, and keep each outcome
+// Run every planned run not finished yet (nor run elsewhere), J at a time, and keep each outcome
 // in DIR/runs/ as it comes. After a SIGINT or SIGTERM no run starts; a run it
 // stopped is cut, not finished.
 void executeRuns(const std::vector<PlannedRun>& runs, PhaseRuns& phase, const ExperimentOptions& o,
                  const ProtocolConfig& protocol, const std::string& bin, spdlog::logger& log) {
   std::vector<std::size_t> todo;
   for (std::size_t i = 0; i < runs.size(); ++i)
-    if (!phase.finished[i]) todo.push_back(i);
+    if (!phase.finished[i] && (phase.elsewhere.empty() || !phase.elsewhere[i])) todo.push_back(i);
   std::atomic<std::size_t> next{0};
   std::size_t done = phase.finishedCount();
   std::mutex mutex;

@@ -23,6 +23,7 @@ struct PhaseRuns {
   std::vector<RunOutcome> outcomes;
   std::vector<char> finished;              // its outcome is final (it succeeded or failed) and kept in DIR/runs/
   std::map<std::size_t, std::string> cut;  // run index -> where a signal stopped it
+  std::vector<char> elsewhere;             // --shard: runs another shard runs (empty: none)
   std::size_t finishedCount() const { return static_cast<std::size_t>(std::count(finished.begin(), finished.end(), 1)); }
 };
 
@@ -36,7 +37,7 @@ PhaseRuns keptRuns(const std::vector<PlannedRun>& runs, const std::filesystem::p
 void moveUnfinishedAside(const std::vector<PlannedRun>& runs, const PhaseRuns& phase, const ExperimentOptions& o,
                          nlohmann::json& state, spdlog::logger& log);
 
-// Run every planned run not finished yet, J at a time, and keep each outcome
+// Run every planned run not finished yet (nor run elsewhere), J at a time, and keep each outcome
 // in DIR/runs/ as it comes. After a SIGINT or SIGTERM no run starts; a run it
 // stopped is cut, not finished.
 void executeRuns(const std::vector<PlannedRun>& runs, PhaseRuns& phase, const ExperimentOptions& o,

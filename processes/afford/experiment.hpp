@@ -33,7 +33,8 @@ struct ExperimentOptions {
   std::string log_root = "logs";
   std::string run_prefix;                  // default: wall-clock stamp (names only)
   std::string config_dir;                  // default: the source tree's config/
-  std::vector<std::string> settings;       // key.path=value overrides
+  std::vector<std::string> settings;       // key.path=value overrides; key.path=v1,v2,... sweeps (afford/sweep.hpp)
+  std::string sweep_file;                  // a YAML map of config keys to lists of values, swept too
   NetnsMode netns = NetnsMode::Auto;
   int base_port = 7700;
   std::string process_log_level = "info";  // for the processes (udpm) / in-process nodes (memq: warn)
@@ -44,6 +45,9 @@ struct ExperimentOptions {
   std::optional<int> tables;               // random tables: how many (default: the experiment file's tables.count)
   std::optional<std::int64_t> table_seed;  // ... and the series they are drawn from (default: its tables.seed)
   std::string attach;                      // run on this bus with processes started by hand (no group, one job)
+  int shard_index = 0, shard_count = 0;    // --shard i/n: run intrinsic run k (and its tests) iff k mod n == i
+  std::vector<std::string> merged_from;    // afford merge: the shards' folders (nothing is run)
+  std::string merged_network;              // ... and the network they ran over
   bool resume = false;                     // continue the unfinished experiment stored in out_dir
   std::set<std::string> given;             // options given on the command line ("--reps", "name", ...): with
                                            // resume, plan options must match the stored ones, run options override

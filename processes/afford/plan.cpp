@@ -20,8 +20,7 @@ std::string defaultPrefix() {
 }
 
 // Everything that can be wrong with the request is found here, before any process starts.
-// `fresh`: no run may have a log folder yet (a resumed experiment has some).
-Plan planExperiment(const ExperimentOptions& o, bool fresh) {
+Plan planExperiment(const ExperimentOptions& o) {
   Plan plan;
   plan.config_dir = o.config_dir.empty() ? std::string(AFFORD_SOURCE_DIR) + "/config" : o.config_dir;
   plan.exp = loadExperiment(plan.config_dir, o.experiment);
@@ -159,13 +158,16 @@ Plan planExperiment(const ExperimentOptions& o, bool fresh) {
     }
   }
 
+  return plan;
+}
+
+void refuseUsedLogFolders(const std::vector<PlannedRun>& runs, const std::vector<char>& elsewhere,
+                          const std::string& log_root) {
   // The run's folder holds its log and its checkpoint: a run never writes into another's.
   for (const auto& p : runs)
-    if (fresh && fs::exists(fs::path(o.log_root) / p.spec.run_id))
-      throw ConfigError("the log folder " + (fs::path(o.log_root) / p.spec.run_id).string() +
+    if ((elsewhere.empty() || !elsewhere[p.index]) && fs::exists(fs::path(log_root) / p.spec.run_id))
+      throw ConfigError("the log folder " + (fs::path(log_root) / p.spec.run_id).string() +
                         " exists already: choose another --run-prefix or --log-root");
-
-  return plan;
 }
 
 std::string joined(const std::vector<std::string>& v) {
@@ -198,6 +200,11 @@ void refuseChangedPlan(const ExperimentOptions& given, const ExperimentOptions& 
   check("--log-root", path(given.log_root), path(stored.log_root));
   check("--run-prefix", given.run_prefix, stored.run_prefix);
   check("--set", joined(given.settings), joined(stored.settings));
+  check("--sweep", given.sweep_file.empty() ? "" : path(given.sweep_file), stored.sweep_file.empty() ? "" : path(stored.sweep_file));
+  const auto shard = [](const ExperimentOptions& x) {
+    return x.shard_count ? std::to_string(x.shard_index) + "/" + std::to_string(x.shard_count) : std::string("none");
+  };
+  check("--shard", shard(given), shard(stored));
   check("--config-dir", path(given.config_dir), path(stored.config_dir));
   check("--scenarios", joined(given.scenarios), joined(plan.scenarios));
   if (given.tables) check("--tables", std::to_string(*given.tables), std::to_string(plan.tables ? plan.tables->count : 0));

@@ -61,8 +61,12 @@ struct Plan {
 // The run ids' first part when none is given: the wall clock (names only).
 std::string defaultPrefix();
 
-// `fresh`: no run may have a log folder yet (a resumed experiment has some).
-Plan planExperiment(const ExperimentOptions& o, bool fresh);
+Plan planExperiment(const ExperimentOptions& o);
+
+// A fresh experiment's runs (those of this shard: `elsewhere[i]` false) may
+// not have a log folder yet (a resumed experiment's have).
+void refuseUsedLogFolders(const std::vector<PlannedRun>& runs, const std::vector<char>& elsewhere,
+                          const std::string& log_root);
 
 // The tests of every condition and scenario from each intrinsic run that left
 // a checkpoint. An agent without the checkpoint the design asks for (not

@@ -128,6 +128,57 @@ int conditionWith(const json& system, const std::string& key, const std::string&
   throw std::runtime_error("summary.json has no condition with " + key + "=" + value);
 }
 
+// A sweep (issue 13): each condition's own figures in its folder, and
+// figures comparing the conditions: the runs' final errors, and the tests'
+// success rates over the scenarios, per condition and system.
+std::vector<std::string> plotSweep(const fs::path& dir, const json& s) {
+  std::vector<std::string> written;
+  const json& conditions = s["sweep"]["conditions"];
+  std::string keys;
+  for (auto& [k, _] : s["sweep"]["keys"].items()) keys += (keys.empty() ? "" : ", ") + k;
+  for (std::size_t at = 0; (at = keys.find('_', at)) != std::string::npos; at += 2) keys.insert(at, "\\");  // not a subscript
+  std::vector<std::string> systems;
+  for (const auto& c : conditions)
+    for (auto& [sys, _] : s["conditions"][c["name"].get<std::string>()]["systems"].items())
+      if (std::find(systems.begin(), systems.end(), sys) == systems.end()) systems.push_back(sys);
+  std::vector<std::pair<double, std::string>> xtics;
+  std::map<std::string, std::string> colours;
+  for (const auto& sys : systems) colours[sys] = kSystemColour(sys);
+  std::vector<BoxItem> mae, success;
+  for (std::size_t k = 0; k < conditions.size(); ++k) {
+    const std::string name = conditions[k]["name"];
+    for (const auto& f : plotExperiment((dir / conditions[k]["folder"].get<std::string>()).string())) written.push_back(f);
+    std::string tic;  // the values only: the keys are in the axis label
+    for (const auto& kv : conditions[k]["settings"]) {
+      const std::string setting = kv;
+      tic += (tic.empty() ? "" : ", ") + setting.substr(setting.find('=') + 1);
+    }
+    xtics.emplace_back(k + 1.0, tic);
+    const json& cs = s["conditions"][name];
+    for (std::size_t j = 0; j < systems.size(); ++j) {
+      if (!cs["systems"].contains(systems[j])) continue;
+      const json& js = cs["systems"][systems[j]];
+      const double x = k + 1 + (static_cast<double>(j) - (systems.size() - 1) / 2.0) * 0.28;
+      BoxItem e{x, systems[j], {}}, t{x, systems[j], {}};
+      for (const auto& r : js["runs"]) e.values.push_back(r["affordance_mae"].get<double>());
+      if (js.contains("extrinsic"))
+        for (const auto& c : js["extrinsic"]["conditions"])
+          for (auto& [scn, sc] : c["scenarios"].items()) t.values.push_back(sc["success_rate"].get<double>());
+      mae.push_back(e);
+      if (!t.values.empty()) success.push_back(t);
+    }
+  }
+  const std::string title = s.value("experiment", std::string("experiment")) + ", " +
+                            std::to_string(s.value("steps", 0)) + " steps, swept over " + keys;
+  written.push_back(boxPlot(dir, "fig_sweep_mae", "Final mean absolute error per run (" + title + ")", keys,
+                            "mean absolute error of the learned table", mae, xtics, {}, colours));
+  if (!success.empty())
+    written.push_back(boxPlot(dir, "fig_sweep_success",
+                              "Extrinsic success rate per scenario (" + title + ")", keys, "success rate", success,
+                              xtics, {}, colours));
+  return written;
+}
+
 }  // namespace
 
 std::vector<std::string> plotExperiment(const std::string& dir_name) {
@@ -135,6 +186,7 @@ std::vector<std::string> plotExperiment(const std::string& dir_name) {
   std::ifstream in(dir / "summary.json");
   if (!in) throw std::runtime_error("no summary.json in " + dir.string());
   const json s = json::parse(in);
+  if (s.contains("sweep")) return plotSweep(dir, s);
   const auto objects = s.at("objects").get<std::vector<std::string>>();
   const auto actions = s.at("actions").get<std::vector<std::string>>();
   std::vector<std::string> systems;

@@ -6,6 +6,9 @@
 //                        one line per object (paper Figures 7 to 9)
 //   fig_completion.png   completion steps by number of sub-goals, box plots and
 //                        the fit a x^2 + b x (paper Figure 6)
+// A sweep's folder: each condition's figures in its own folder, and
+//   fig_sweep_mae.png     the runs' final errors per condition and system
+//   fig_sweep_success.png the tests' success rate per scenario, per condition
 #pragma once
 #include <string>
 #include <vector>

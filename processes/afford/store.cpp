@@ -46,6 +46,8 @@ json optionsToJson(const ExperimentOptions& o) {
           {"run_prefix", o.run_prefix},
           {"config_dir", o.config_dir},
           {"settings", o.settings},
+          {"sweep_file", o.sweep_file},
+          {"shard", o.shard_count ? json{{"index", o.shard_index}, {"count", o.shard_count}} : json(nullptr)},
           {"extrinsic_reps", o.extrinsic_reps},
           {"scenarios", o.scenarios},
           {"tables", o.tables ? json(*o.tables) : json(nullptr)},
@@ -75,6 +77,11 @@ ExperimentOptions optionsFromJson(const json& j) {
   o.run_prefix = j.at("run_prefix").get<std::string>();
   o.config_dir = j.at("config_dir").get<std::string>();
   o.settings = j.at("settings").get<std::vector<std::string>>();
+  o.sweep_file = j.value("sweep_file", std::string());  // stored before issue 13: no sweeps, no shards
+  if (j.contains("shard") && !j["shard"].is_null()) {
+    o.shard_index = j["shard"].at("index").get<int>();
+    o.shard_count = j["shard"].at("count").get<int>();
+  }
   o.extrinsic_reps = j.at("extrinsic_reps").get<int>();
   o.scenarios = j.at("scenarios").get<std::vector<std::string>>();
   if (j.contains("tables") && !j["tables"].is_null()) o.tables = j["tables"].get<int>();

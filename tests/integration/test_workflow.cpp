@@ -1,12 +1,16 @@
 // The researcher's workflow (issue 13), through the `afford` command in one
 // process (memq): trained agents reused by content, --keep-checkpoints, an
-// experiment file outside the config folder (--config), `afford clean`.
+// experiment file outside the config folder (--config), `afford clean`,
+// sweeps (--set key=v1,v2, --sweep FILE), shards (--shard i/n) and
+// `afford merge`.
 #include <gtest/gtest.h>
 
 #include <array>
 #include <cstdio>
 #include <filesystem>
 #include <fstream>
+#include <iterator>
+#include <set>
 #include <nlohmann/json.hpp>
 
 #include "tests/support.hpp"
@@ -143,6 +147,150 @@ TEST(Workflow, CleanListsByExperimentAndRemovesOnlyWithDelete) {
   Output everything = run("clean --all --delete" + logs);
   ASSERT_EQ(everything.status, 0) << everything.text;
   EXPECT_TRUE(fs::is_empty(dir + "/logs"));
+}
+
+// What may differ between two runs of the same plan: timings, memory, paths.
+json withoutTimingsAndPaths(json j) {
+  static const std::set<std::string> drop = {"wall_seconds", "steps_per_second", "run_seconds", "peak_rss_kb",
+                                             "log_dir", "checkpoint", "merged_from", "shard", "network"};
+  if (j.is_object()) {
+    json out = json::object();
+    for (auto& [k, v] : j.items())
+      if (!drop.count(k)) out[k] = withoutTimingsAndPaths(v);
+    return out;
+  }
+  if (j.is_array())
+    for (auto& v : j) v = withoutTimingsAndPaths(v);
+  return j;
+}
+
+std::string readText(const fs::path& p) {
+  std::ifstream in(p);
+  return std::string(std::istreambuf_iterator<char>(in), {});
+}
+
+// Each condition of a 2 x 2 sweep is the experiment with those values set:
+// the same weights as a run given the condition's values alone, summarised in
+// a folder of its own and in one summary.json and CSV files that name it.
+TEST(Workflow, ASweepRunsTheCrossProductAndEachConditionIsItsSettings) {
+  const std::string dir = test::tempDir("sweep");
+  const std::string logs = " --log-root " + dir + "/logs";
+  Output a = run("experiment base" + kSmall + " --keep-logs none --set motivation.leak=0.1,0.3"
+                 " --set predictors.affordance.learning_rate=0.05,0.1 -j 2 --out " + dir + "/sweep --run-prefix s" + logs);
+  ASSERT_EQ(a.status, 0) << a.text;
+  const json s = readJson(dir + "/sweep/summary.json");
+  ASSERT_EQ(s["sweep"]["conditions"].size(), 4u);
+  const std::string c = "motivation.leak=0.3,predictors.affordance.learning_rate=0.05";
+  EXPECT_EQ(s["sweep"]["conditions"][2]["name"], c);
+  ASSERT_TRUE(s["conditions"].contains(c));
+  for (const auto& r : s["conditions"][c]["systems"]["IMP"]["runs"]) EXPECT_EQ(r["sweep_condition"], c);
+  EXPECT_EQ(s["conditions"][c]["systems"]["IMP"]["runs"][0]["run_id"], "s-c2-base-IMP-s1");
+  // Its own folder is an experiment folder like any other.
+  const json own = readJson(dir + "/sweep/conditions/" + c + "/summary.json");
+  EXPECT_EQ(own["systems"]["IMP"]["runs"][1]["weights_checksum"],
+            s["conditions"][c]["systems"]["IMP"]["runs"][1]["weights_checksum"]);
+  // The condition alone gives the same agents and tests.
+  Output alone = run("experiment base" + kSmall + " --keep-logs none --no-reuse-agents --set motivation.leak=0.3"
+                     " --set predictors.affordance.learning_rate=0.05 --out " + dir + "/alone --run-prefix x" + logs);
+  ASSERT_EQ(alone.status, 0) << alone.text;
+  const json one = readJson(dir + "/alone/summary.json");
+  EXPECT_EQ(checksums(one), checksums(s["conditions"][c]));
+  EXPECT_EQ(one["systems"]["IMP"]["extrinsic"], s["conditions"][c]["systems"]["IMP"]["extrinsic"]);
+  // The conditions differ (the sweep is not four copies of one run).
+  EXPECT_NE(checksums(s["conditions"][s["sweep"]["conditions"][0]["name"].get<std::string>()]), checksums(one));
+  // One CSV of every condition, its first column naming it.
+  const std::string csv = readText(dir + "/sweep/curves_IMP.csv");
+  EXPECT_EQ(csv.rfind("sweep_condition,system,", 0), 0u) << csv.substr(0, 80);
+  for (const auto& cond : s["sweep"]["conditions"])
+    EXPECT_NE(csv.find("\"" + cond["name"].get<std::string>() + "\",IMP,"), std::string::npos) << cond["name"];
+
+  // Figures: each condition's own, and the conditions side by side.
+  Output plotted = run("plot " + dir + "/sweep");
+  ASSERT_EQ(plotted.status, 0) << plotted.text;
+  EXPECT_TRUE(fs::exists(dir + "/sweep/fig_sweep_mae.png"));
+  EXPECT_TRUE(fs::exists(dir + "/sweep/fig_sweep_success.png"));
+  EXPECT_TRUE(fs::exists(dir + "/sweep/conditions/" + c + "/fig_affordances.png"));
+  EXPECT_NE(readText(dir + "/sweep/fig_sweep_mae.csv").find("IMP,3,2,"), std::string::npos);  // condition 3, 2 runs
+
+  // A sweep file asks for the same conditions.
+  std::ofstream(dir + "/sweep.yaml") << "motivation.leak: [0.1, 0.3]\npredictors.affordance.learning_rate: [0.05, 0.1]\n";
+  Output f = run("experiment base" + kSmall + " --keep-logs none --sweep " + dir + "/sweep.yaml --out " + dir +
+                 "/file --run-prefix f" + logs);
+  ASSERT_EQ(f.status, 0) << f.text;
+  EXPECT_NE(f.text.find("8 of 8 intrinsic run(s) reuse"), std::string::npos) << f.text;  // the same 8 agents
+  const json sf = readJson(dir + "/file/summary.json");
+  EXPECT_EQ(sf["sweep"]["conditions"], s["sweep"]["conditions"]);
+  EXPECT_EQ(checksums(sf["conditions"][c]), checksums(one));
+
+  // Bad sweeps are errors naming the key.
+  Output twice = run("experiment base" + kSmall + " --set motivation.leak=0.1,0.2 --sweep " + dir +
+                     "/sweep.yaml --out " + dir + "/bad");
+  EXPECT_EQ(twice.status, 2);
+  EXPECT_NE(twice.text.find("config key 'motivation.leak' is swept twice"), std::string::npos) << twice.text;
+  Output unknown = run("experiment base" + kSmall + " --set eye.colour=1,2 --out " + dir + "/bad");
+  EXPECT_EQ(unknown.status, 2);
+  EXPECT_NE(unknown.text.find("sweep condition 'eye.colour=1': config key 'eye.colour': unknown key"), std::string::npos)
+      << unknown.text;
+  EXPECT_FALSE(fs::exists(dir + "/bad"));
+}
+
+// Four shards, then `afford merge`: the summary and CSV files of one machine
+// running it all, apart from timings and paths; a sweep shards too.
+TEST(Workflow, ShardsMergeIntoTheSummaryOfTheWholeExperiment) {
+  const std::string dir = test::tempDir("shards");
+  const std::string plan = "experiment base --transport memq --system all --reps 2 --steps 300 --extrinsic-reps 1 "
+                           "--scenarios scenario1 scenario2 --quiet --keep-logs none --run-prefix p";
+  Output whole = run(plan + " --out " + dir + "/whole --log-root " + dir + "/logs-whole");
+  ASSERT_EQ(whole.status, 0) << whole.text;
+  std::string shards;
+  for (int i = 0; i < 4; ++i) {
+    const std::string out = dir + "/shard" + std::to_string(i);
+    Output s = run(plan + " --shard " + std::to_string(i) + "/4 --out " + out + " --log-root " + dir + "/logs");
+    ASSERT_EQ(s.status, 0) << s.text;
+    EXPECT_NE(s.text.find("shard " + std::to_string(i) + "/4: " + (i < 2 ? "2" : "1") + " of the 6"), std::string::npos)
+        << s.text;
+    shards += " " + out;
+  }
+  Output missing = run("merge" + shards.substr(0, shards.rfind(' ')) + " --out " + dir + "/merged");
+  EXPECT_EQ(missing.status, 2);
+  EXPECT_NE(missing.text.find("shard(s) 3/4 missing"), std::string::npos) << missing.text;
+  EXPECT_FALSE(fs::exists(dir + "/merged"));
+  Output m = run("merge" + shards + " --quiet --out " + dir + "/merged");
+  ASSERT_EQ(m.status, 0) << m.text;
+  const json a = readJson(dir + "/whole/summary.json"), b = readJson(dir + "/merged/summary.json");
+  EXPECT_EQ(b["merged_from"].size(), 4u);
+  EXPECT_EQ(withoutTimingsAndPaths(a), withoutTimingsAndPaths(b));
+  for (const char* f : {"curves_FIX.csv", "affordance_IGN.csv", "curves_IMP.csv"})
+    EXPECT_EQ(readText(dir + "/whole/" + f), readText(dir + "/merged/" + f)) << f;
+
+  // Shards of another experiment do not merge with these.
+  Output other = run("experiment base --transport memq --system IMP --reps 2 --steps 300 --quiet --keep-logs none "
+                     "--run-prefix q --shard 3/4 --out " + dir + "/other --log-root " + dir + "/logs");
+  ASSERT_EQ(other.status, 0) << other.text;
+  Output mixed = run("merge" + shards.substr(0, shards.rfind(' ')) + " " + dir + "/other --out " + dir + "/mixed");
+  EXPECT_EQ(mixed.status, 2);
+  EXPECT_NE(mixed.text.find("are shards of different experiments"), std::string::npos) << mixed.text;
+  Output no_prefix = run("experiment base --transport memq --shard 0/2 --out " + dir + "/np");
+  EXPECT_EQ(no_prefix.status, 2);
+  EXPECT_NE(no_prefix.text.find("--shard needs --run-prefix"), std::string::npos) << no_prefix.text;
+  Output bad = run("experiment base --transport memq --shard 2/2 --run-prefix z --out " + dir + "/np");
+  EXPECT_EQ(bad.status, 2);
+  EXPECT_NE(bad.text.find("--shard must be i/n with 0 <= i < n"), std::string::npos) << bad.text;
+
+  // A sweep in two shards.
+  const std::string sweep = "experiment base" + kSmall + " --keep-logs none --no-reuse-agents --set motivation.leak=0.1,0.3 "
+                            "--log-root " + dir + "/sweep-logs";
+  ASSERT_EQ(run(sweep + " --run-prefix w --out " + dir + "/sweep").status, 0);
+  ASSERT_EQ(run(sweep + " --run-prefix v --shard 0/2 --out " + dir + "/sw0").status, 0);
+  ASSERT_EQ(run(sweep + " --run-prefix v --shard 1/2 --out " + dir + "/sw1").status, 0);
+  Output sm = run("merge " + dir + "/sw0 " + dir + "/sw1 --quiet --out " + dir + "/sw");
+  ASSERT_EQ(sm.status, 0) << sm.text;
+  const json sw = readJson(dir + "/sw/summary.json"), full = readJson(dir + "/sweep/summary.json");
+  for (const auto& cond : full["sweep"]["conditions"]) {
+    const std::string name = cond["name"];
+    EXPECT_EQ(checksums(sw["conditions"][name]), checksums(full["conditions"][name])) << name;
+    EXPECT_EQ(sw["conditions"][name]["systems"]["IMP"]["extrinsic"], full["conditions"][name]["systems"]["IMP"]["extrinsic"]);
+  }
 }
 
 }  // namespace

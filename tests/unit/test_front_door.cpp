@@ -13,12 +13,33 @@
 #include "afford/host.hpp"
 #include "afford/processes.hpp"
 #include "afford/reference.hpp"
+#include "afford/sweep.hpp"
 #include "tests/support.hpp"
 
 namespace afford {
 namespace {
 
 const std::string kConfigDir = std::string(AFFORD_SOURCE_DIR) + "/config";
+
+TEST(Sweep, ValuesSplitAtTopLevelCommasOnly) {
+  EXPECT_EQ(sweepValues("0.1,0.2,0.4"), (std::vector<std::string>{"0.1", "0.2", "0.4"}));
+  EXPECT_EQ(sweepValues("[1, 2]"), (std::vector<std::string>{"[1, 2]"}));
+  EXPECT_EQ(sweepValues("[1,2],[3,4]"), (std::vector<std::string>{"[1,2]", "[3,4]"}));
+  EXPECT_EQ(sweepValues("{a: 1, b: 2},\"x,y\""), (std::vector<std::string>{"{a: 1, b: 2}", "\"x,y\""}));
+  EXPECT_EQ(sweepValues("0.2"), (std::vector<std::string>{"0.2"}));
+}
+
+TEST(Sweep, ConditionsAreTheCrossProductLastKeyFastest) {
+  const Sweep s = planSweep({"a.b=1,2", "c=x", "d.e=3,4,5"}, "");
+  EXPECT_EQ(s.fixed, (std::vector<std::string>{"c=x"}));
+  ASSERT_EQ(s.conditions.size(), 6u);
+  EXPECT_EQ(s.conditions[0].name, "a.b=1,d.e=3");
+  EXPECT_EQ(s.conditions[1].settings, (std::vector<std::string>{"a.b=1", "d.e=4"}));
+  EXPECT_EQ(s.conditions[5].name, "a.b=2,d.e=5");
+  EXPECT_TRUE(planSweep({"a=1", "b=[1,2]"}, "").conditions.empty());  // one value each: no sweep
+  EXPECT_THROW(planSweep({"a=1,2", "a=3,4"}, ""), ConfigError);
+  EXPECT_THROW(planSweep({"a=1,", "b=2"}, ""), ConfigError);  // an empty value
+}
 
 TEST(Registry, EachRunChannelHasOnePublisherPerPhase) {
   for (bool extrinsic : {false, true}) {

@@ -12,7 +12,7 @@ namespace afford {
 Command experimentCommand(CLI::App& app, const FrontDoor& door) {
   struct Args {
     ExperimentOptions o;
-    std::string system, netns = "auto", file;
+    std::string system, netns = "auto", file, shard;
     int reps = 0, tables = 0;
     std::int64_t steps = 0, table_seed = 0;
   };
@@ -38,7 +38,14 @@ Command experimentCommand(CLI::App& app, const FrontDoor& door) {
                   "an experiment file anywhere, instead of NAME (it may extend a shipped one: extends: base)");
   exp->add_option("--log-root", o.log_root, "folder of the run logs (<log-root>/<run-id>/)")->capture_default_str();
   exp->add_option("--run-prefix", o.run_prefix, "first part of every run id (default: date-time)");
-  exp->add_option("--set", o.settings, "override a config value, e.g. --set motivation.leak=0.2 (repeatable)");
+  exp->add_option("--set", o.settings,
+                  "override a config value, e.g. --set motivation.leak=0.2 (repeatable); several values sweep it: "
+                  "--set motivation.leak=0.1,0.2,0.4 runs each (the cross product of every swept key)");
+  exp->add_option("--sweep", o.sweep_file,
+                  "a YAML file mapping config keys to lists of values, swept as --set key=v1,v2 would");
+  exp->add_option("--shard", a->shard,
+                  "i/n: run only intrinsic runs k with k mod n == i (and their tests); `afford merge` joins the "
+                  "n shards' folders (needs --run-prefix)");
   exp->add_option("--netns", a->netns, "auto, on or off: run the process group in a private network namespace")
       ->capture_default_str();
   exp->add_option("--base-port", o.base_port, "UDP port of the first job slot (one port per slot)")
@@ -82,6 +89,21 @@ Command experimentCommand(CLI::App& app, const FrontDoor& door) {
             if (!o.resume && o.experiment.empty())
               throw ConfigError("which experiment? `afford experiment NAME` (see `afford experiments`), or "
                                 "`afford experiment --resume --out DIR` to continue an interrupted one");
+            if (!o.sweep_file.empty()) o.sweep_file = std::filesystem::absolute(o.sweep_file).lexically_normal().string();
+            if (!a->shard.empty()) {
+              const auto slash = a->shard.find('/');
+              try {
+                std::size_t used = 0, used2 = 0;
+                if (slash == std::string::npos) throw std::invalid_argument("no /");
+                o.shard_index = std::stoi(a->shard.substr(0, slash), &used);
+                o.shard_count = std::stoi(a->shard.substr(slash + 1), &used2);
+                if (used != slash || used2 != a->shard.size() - slash - 1) throw std::invalid_argument("trailing");
+              } catch (const std::exception&) {
+                throw ConfigError("--shard must be i/n (e.g. 0/4), not \"" + a->shard + "\"");
+              }
+              if (o.shard_count < 1 || o.shard_index < 0 || o.shard_index >= o.shard_count)
+                throw ConfigError("--shard must be i/n with 0 <= i < n, not \"" + a->shard + "\"");
+            }
             if (a->reps) o.reps = a->reps;
             if (a->steps) o.steps = a->steps;
             if (tables_option->count()) o.tables = a->tables;

@@ -1,0 +1,109 @@
+// afford merge DIR... --out OUT: join the folders of an experiment's shards
+// (`afford experiment ... --shard i/n`) into the folder one machine running
+// the whole experiment would have written. Nothing is run: every run's outcome
+// comes from the shard that ran it, and the summary is made from them all.
+#include <filesystem>
+#include <fstream>
+#include <map>
+#include <memory>
+#include <set>
+
+#include <nlohmann/json.hpp>
+
+#include "afford/commands.hpp"
+#include "afford/config.hpp"
+#include "afford/experiment.hpp"
+#include "afford/store.hpp"
+
+namespace afford {
+namespace fs = std::filesystem;
+using nlohmann::json;
+
+namespace {
+
+// What a shard was asked, apart from which shard it is and how it ran.
+json planOptions(json options) {
+  for (const char* k : {"shard", "jobs", "transport", "netns", "base_port", "process_log_level", "stall_seconds",
+                        "quiet", "attach", "reuse_agents"})
+    options.erase(k);
+  return options;
+}
+
+ExperimentOptions mergeOptions(const std::vector<std::string>& dirs, const std::string& out) {
+  if (dirs.empty()) throw ConfigError("afford merge: give the shards' folders");
+  std::map<int, std::string> seen;  // shard index -> folder
+  json first_plan;
+  ExperimentOptions o;
+  int count = 0;
+  for (const auto& dir : dirs) {
+    if (fs::exists(out) && fs::exists(dir) && fs::equivalent(dir, out))
+      throw ConfigError("afford merge: --out " + out + " is one of the shards; choose another folder");
+    if (!fs::exists(statePath(dir)))
+      throw ConfigError("afford merge: " + dir + " holds no experiment (no " + statePath(dir).string() + ")");
+    const json state = readState(dir);
+    const json& options = state.at("options");
+    if (!options.contains("shard") || options["shard"].is_null())
+      throw ConfigError("afford merge: " + dir + " is not a shard (it ran without --shard)");
+    const int index = options["shard"].at("index").get<int>(), n = options["shard"].at("count").get<int>();
+    if (state.value("state", "") != "finished")
+      throw ConfigError("afford merge: shard " + std::to_string(index) + "/" + std::to_string(n) + " in " + dir +
+                        " did not finish (" + state.value("state", "?") + "): resume it with `" +
+                        state.value("resume", std::string("afford experiment --resume --out ") + dir) + "`");
+    if (seen.empty()) {
+      count = n;
+      first_plan = planOptions(options);
+      o = optionsFromJson(options);
+      std::ifstream in(fs::path(dir) / "summary.json");
+      if (in) o.merged_network = json::parse(in, nullptr, false).value("network", std::string());
+    } else {
+      if (n != count)
+        throw ConfigError("afford merge: " + dir + " is shard " + std::to_string(index) + " of " + std::to_string(n) +
+                          ", " + seen.begin()->second + " one of " + std::to_string(count));
+      const json plan = planOptions(options);
+      for (const auto& [key, value] : first_plan.items())
+        if (plan.value(key, json()) != value)
+          throw ConfigError("afford merge: " + dir + " and " + seen.begin()->second + " are shards of different "
+                            "experiments (option '" + key + "': " + plan.value(key, json()).dump() + " vs " +
+                            value.dump() + ")");
+    }
+    if (seen.count(index))
+      throw ConfigError("afford merge: " + dir + " and " + seen[index] + " are both shard " + std::to_string(index) +
+                        "/" + std::to_string(n));
+    seen[index] = dir;
+  }
+  std::string missing;
+  for (int i = 0; i < count; ++i)
+    if (!seen.count(i)) missing += (missing.empty() ? "" : ", ") + std::to_string(i) + "/" + std::to_string(count);
+  if (!missing.empty()) throw ConfigError("afford merge: shard(s) " + missing + " missing: give every shard's folder");
+  o.shard_index = o.shard_count = 0;
+  o.out_dir = out;
+  o.resume = false;
+  o.reuse_agents = false;  // the shards stored their agents
+  for (const auto& [i, dir] : seen) o.merged_from.push_back(fs::absolute(dir).lexically_normal().string());
+  return o;
+}
+
+}  // namespace
+
+Command mergeCommand(CLI::App& app, const FrontDoor& door) {
+  struct Args {
+    std::vector<std::string> dirs;
+    std::string out = "out";
+    bool quiet = false;
+  };
+  auto a = std::make_shared<Args>();
+  auto* merge = app.add_subcommand(
+      "merge", "join the folders of an experiment's shards (afford experiment --shard i/n) into one, as if one "
+               "machine had run it all");
+  merge->add_option("dirs", a->dirs, "the shards' output folders (every shard, once)")->required();
+  merge->add_option("--out", a->out, "folder for the merged summary.json and CSV files")->capture_default_str();
+  merge->add_flag("--quiet", a->quiet, "do not print the table at the end");
+  return {merge, [a, &door] {
+            ExperimentOptions o = mergeOptions(a->dirs, a->out);
+            o.quiet = a->quiet;
+            o.program = door.program;
+            return runExperiment(o, *door.log);
+          }};
+}
+
+}  // namespace afford
