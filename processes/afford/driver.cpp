@@ -81,6 +81,8 @@ Turn RunDriver::onStatus(const process_status_t& m) {
   s = {m.run_id, m.step, m.state, m.pid, m.config_digest, m.detail, Clock::now()};
   edge_.claim(m);
   if (phase_ == Phase::Idle || !spec_) return Turn::take();
+  if (on_step_ && phase_ == Phase::Running && m.run_id == spec_->run_id && m.step >= 0 && ours(m.process))
+    on_step_(m.step);
   // The logger closed the log: it says DONE with the log's folder, then, free
   // again, the run it left (its DONE may have been lost on the way).
   const bool closed = m.state == process_status_t::DONE && m.run_id == spec_->run_id;

@@ -87,6 +87,8 @@ class RunDriver {
   // returns "" or why a process is gone. A SIGINT or SIGTERM (stopRequested())
   // cuts the run: it is stopped, its log closed, and the outcome says so.
   RunOutcome run(const RunSpec& spec, const std::function<void()>& pump, const std::function<std::string()>& health);
+  // Told the step each process of the run reports in its heartbeat, as it comes (progress display).
+  void onStep(std::function<void(std::int64_t)> f) { on_step_ = std::move(f); }
 
  private:
   using Clock = std::chrono::steady_clock;
@@ -119,6 +121,7 @@ class RunDriver {
   RunOutcome* outcome_ = nullptr;
   bool have_result_ = false;
   bool logger_done_ = false;
+  std::function<void(std::int64_t)> on_step_;
 };
 
 }  // namespace afford

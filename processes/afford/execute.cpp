@@ -5,6 +5,7 @@
 #include <unistd.h>
 
 #include <atomic>
+#include <functional>
 #include <mutex>
 #include <thread>
 
@@ -12,6 +13,7 @@
 #include "afford/host.hpp"
 #include "afford/logging.hpp"
 #include "afford/processes.hpp"
+#include "afford/progress.hpp"
 #include "afford/store.hpp"
 
 namespace afford {
@@ -27,7 +29,10 @@ void pumpLcm(lcm::LCM& lcm) {
   if (handled == 0) lcm.handleTimeout(5);
 }
 
-RunOutcome runInProcess(const PlannedRun& run, const ExperimentOptions& o, const ProtocolConfig& protocol, int slot) {
+using OnStep = std::function<void(std::int64_t)>;
+
+RunOutcome runInProcess(const PlannedRun& run, const ExperimentOptions& o, const ProtocolConfig& protocol, int slot,
+                        const OnStep& on_step) {
   lcm::LCM lcm("memq://");
   const std::string tag = o.jobs > 1 ? "#" + std::to_string(slot) : "";
   const std::string level = o.process_log_level == "info" ? "warn" : o.process_log_level;
@@ -35,6 +40,7 @@ RunOutcome runInProcess(const PlannedRun& run, const ExperimentOptions& o, const
                      HostOptions{/*single_thread=*/true, o.log_root});
   host.start(run.spec.processes);  // the motivation decides in the intrinsic phase, the planner in the extrinsic one
   RunDriver driver(lcm, makeLogger("runner" + tag, level), protocol);
+  driver.onStep(on_step);
   auto pump = [&] {
     pumpLcm(lcm);
     host.tick();
@@ -57,7 +63,7 @@ struct Slot {
 };
 
 RunOutcome runOverUdpm(const PlannedRun& run, const ExperimentOptions& o, const ProtocolConfig& protocol, Slot& slot,
-                       const std::string& bin) {
+                       const std::string& bin, const OnStep& on_step) {
   const std::string out = (fs::path(o.out_dir) / "processes" / ("slot" + std::to_string(slot.index))).string();
   const bool attached = !o.attach.empty();  // the user started the processes; none are ours to start
   // The runner listens before it starts any process: it hears each one's first STATUS.
@@ -88,6 +94,7 @@ RunOutcome runOverUdpm(const PlannedRun& run, const ExperimentOptions& o, const 
                                                  std::vector<std::string>{"--log-dir", o.log_root});
   lcm::LCM& lcm = *slot.lcm;
   RunDriver& driver = *slot.driver;
+  driver.onStep(on_step);
   auto health = [&]() {
     std::string h = slot.group ? slot.group->health() : std::string();
     if (h.empty() && slot.logger && run.keep_log) h = slot.logger->health();
@@ -150,6 +157,14 @@ void executeRuns(const std::vector<PlannedRun>& runs, PhaseRuns& phase, const Ex
   std::atomic<std::size_t> next{0};
   std::size_t done = phase.finishedCount();
   std::mutex mutex;
+  const int slots = std::min<int>(o.jobs, static_cast<int>(todo.size()));
+  std::vector<std::int64_t> steps;
+  for (std::size_t i : todo) steps.push_back(runs[i].spec.steps);
+  std::size_t planned = runs.size();
+  for (std::size_t i = 0; i < runs.size(); ++i) planned -= !phase.elsewhere.empty() && phase.elsewhere[i];
+  Progress progress(ProgressOptions{o.progress, o.progress_every},
+                    !runs.empty() && runs.front().spec.extrinsic ? "extrinsic tests" : "intrinsic runs", slots,
+                    std::move(steps), done, planned);
   auto worker = [&](int slot_index) {
     Slot slot;
     slot.index = slot_index;
@@ -162,9 +177,11 @@ void executeRuns(const std::vector<PlannedRun>& runs, PhaseRuns& phase, const Ex
       const std::size_t i = todo[k];
       const std::string& id = runs[i].spec.run_id;
       RunOutcome r;
+      progress.started(slot_index, id, runs[i].spec.steps);
+      const OnStep on_step = [&progress, slot_index](std::int64_t step) { progress.step(slot_index, step); };
       try {
-        r = o.transport == "memq" ? runInProcess(runs[i], o, protocol, slot_index)
-                                  : runOverUdpm(runs[i], o, protocol, slot, bin);
+        r = o.transport == "memq" ? runInProcess(runs[i], o, protocol, slot_index, on_step)
+                                  : runOverUdpm(runs[i], o, protocol, slot, bin, on_step);
       } catch (const std::exception& e) {
         r.ok = false;
         r.error = "run '" + id + "': " + e.what();
@@ -187,6 +204,7 @@ void executeRuns(const std::vector<PlannedRun>& runs, PhaseRuns& phase, const Ex
         } catch (const std::exception& e) {
           log.error("cannot keep the outcome of run '{}' ({}): --resume would run it again", id, e.what());
         }
+      progress.ended(slot_index, !cut);
       std::lock_guard<std::mutex> lock(mutex);
       if (cut) {
         const std::string prefix = "run '" + id + "': ";
@@ -195,13 +213,14 @@ void executeRuns(const std::vector<PlannedRun>& runs, PhaseRuns& phase, const Ex
         if (const std::string none = "at step -1"; where.size() > none.size() && where.substr(where.size() - none.size()) == none)
           where = where.substr(0, where.size() - none.size()) + "before any step was reported";
         phase.cut[i] = where;
-        log.warn("{}: {}", id, phase.cut[i]);
+        progress.say([&] { log.warn("{}: {}", id, phase.cut[i]); });
         continue;
       }
       phase.outcomes[i] = std::move(r);
       phase.finished[i] = 1;
       const RunOutcome& out = phase.outcomes[i];
       ++done;
+      progress.say([&] {
       if (out.ok && runs[i].spec.extrinsic)
         log.info("[{}/{}] {}: {}, {} action(s), utility {}", done, runs.size(), id,
                  out.extrinsic.success ? "solved in " + std::to_string(out.extrinsic.completion) + " steps" : "not solved",
@@ -211,10 +230,11 @@ void executeRuns(const std::vector<PlannedRun>& runs, PhaseRuns& phase, const Ex
                  out.weights_checksum);
       else
         log.error("[{}/{}] {}", done, runs.size(), out.error);
+      });
     }
   };
   std::vector<std::thread> threads;
-  for (int j = 0; j < std::min<int>(o.jobs, static_cast<int>(todo.size())); ++j) threads.emplace_back(worker, j);
+  for (int j = 0; j < slots; ++j) threads.emplace_back(worker, j);
   for (auto& t : threads) t.join();
 }
 

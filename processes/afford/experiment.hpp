@@ -40,6 +40,8 @@ struct ExperimentOptions {
   std::string process_log_level = "info";  // for the processes (udpm) / in-process nodes (memq: warn)
   double stall_seconds = 30;
   bool quiet = false;                      // no table at the end
+  std::string progress = "auto";           // auto | terminal | lines | none (afford/progress.hpp)
+  double progress_every = -1;              // seconds between progress draws (< 0: by mode)
   int extrinsic_reps = 0;                  // tests per scenario from each intrinsic run (0: none)
   std::vector<std::string> scenarios;      // default: every config/scenarios/*.yaml
   std::optional<int> tables;               // random tables: how many (default: the experiment file's tables.count)

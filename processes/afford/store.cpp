@@ -60,6 +60,8 @@ json optionsToJson(const ExperimentOptions& o) {
           {"process_log_level", o.process_log_level},
           {"stall_seconds", o.stall_seconds},
           {"quiet", o.quiet},
+          {"progress", o.progress},
+          {"progress_every", o.progress_every},
           {"attach", o.attach}};
 }
 
@@ -94,6 +96,8 @@ ExperimentOptions optionsFromJson(const json& j) {
   o.process_log_level = j.at("process_log_level").get<std::string>();
   o.stall_seconds = j.at("stall_seconds").get<double>();
   o.quiet = j.at("quiet").get<bool>();
+  o.progress = j.value("progress", std::string("auto"));  // stored before issue 13: the default
+  o.progress_every = j.value("progress_every", -1.0);
   o.attach = j.at("attach").get<std::string>();
   return o;
 }
@@ -262,6 +266,8 @@ ExperimentOptions resumedOptions(const ExperimentOptions& given, const json& sta
   if (has("--process-log-level")) o.process_log_level = given.process_log_level;
   if (has("--stall-seconds")) o.stall_seconds = given.stall_seconds;
   if (has("--quiet")) o.quiet = given.quiet;
+  if (has("--progress")) o.progress = given.progress;
+  if (has("--progress-every")) o.progress_every = given.progress_every;
   if (has("--attach")) o.attach = given.attach;
   if (has("--reuse-agents")) o.reuse_agents = given.reuse_agents;
   const std::string cwd = state.at("cwd").get<std::string>();

@@ -11,6 +11,7 @@
 #include <fstream>
 #include <iterator>
 #include <set>
+#include <sstream>
 #include <nlohmann/json.hpp>
 
 #include "tests/support.hpp"
@@ -147,6 +148,36 @@ TEST(Workflow, CleanListsByExperimentAndRemovesOnlyWithDelete) {
   Output everything = run("clean --all --delete" + logs);
   ASSERT_EQ(everything.status, 0) << everything.text;
   EXPECT_TRUE(fs::is_empty(dir + "/logs"));
+}
+
+// Without a terminal, progress comes as plain lines: each job slot's run and
+// step out of its total (from the processes' heartbeats), and the time left.
+TEST(Workflow, ProgressLinesNameEachSlotsRunStepAndTheTimeLeft) {
+  const std::string dir = test::tempDir("progress");
+  Output a = run("experiment base --transport memq --system IMP --reps 3 --steps 3000 -j 2 --quiet --keep-logs none "
+                 "--no-reuse-agents --progress lines --progress-every 0 --run-prefix g --out " + dir + "/out --log-root " +
+                 dir + "/logs");
+  ASSERT_EQ(a.status, 0) << a.text;
+  bool mid_run = false, left = false;
+  std::istringstream lines(a.text);
+  for (std::string line; std::getline(lines, line);) {
+    if (line.rfind("progress: intrinsic runs: ", 0) != 0) continue;
+    const auto at = line.find("g-base-IMP-s1 step ");
+    if (at != std::string::npos) {
+      const long step = std::stol(line.substr(at + 19));
+      EXPECT_NE(line.find("/3000 ("), std::string::npos) << line;
+      mid_run |= step > 0 && step < 3000;
+    }
+    left |= line.find(" of 3 done") != std::string::npos && line.find(" left (") != std::string::npos;
+    EXPECT_NE(line.find("slot 1: "), std::string::npos) << line;  // a part per job slot
+  }
+  EXPECT_TRUE(mid_run) << a.text;
+  EXPECT_TRUE(left) << a.text;
+  Output quiet = run("experiment base --transport memq --system IMP --reps 1 --steps 300 --quiet --keep-logs none "
+                     "--no-reuse-agents --progress none --progress-every 0 --run-prefix h --out " + dir +
+                     "/q --log-root " + dir + "/logs");
+  ASSERT_EQ(quiet.status, 0) << quiet.text;
+  EXPECT_EQ(quiet.text.find("progress:"), std::string::npos) << quiet.text;
 }
 
 // What may differ between two runs of the same plan: timings, memory, paths.

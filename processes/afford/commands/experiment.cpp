@@ -54,6 +54,13 @@ Command experimentCommand(CLI::App& app, const FrontDoor& door) {
   exp->add_option("--stall-seconds", o.stall_seconds, "fail a run after this long without progress")
       ->capture_default_str();
   exp->add_flag("--quiet", o.quiet, "do not print the table at the end");
+  exp->add_option("--progress", o.progress,
+                  "progress of the runs under way (a line per job slot, and the time left): auto (redrawn in place "
+                  "on a terminal, else plain lines), terminal, lines or none")
+      ->capture_default_str()
+      ->check(CLI::IsMember({"auto", "terminal", "lines", "none"}));
+  exp->add_option("--progress-every", o.progress_every,
+                  "seconds between progress lines (default: 0.25 on a terminal, 30 otherwise)");
   exp->add_option("--extrinsic-reps", o.extrinsic_reps,
                   "extrinsic tests of each scenario (and planner condition) from every trained agent "
                   "(default: the experiment's extrinsic.tests, else 0: intrinsic phase only)")

@@ -24,7 +24,7 @@ namespace {
 // What a shard was asked, apart from which shard it is and how it ran.
 json planOptions(json options) {
   for (const char* k : {"shard", "jobs", "transport", "netns", "base_port", "process_log_level", "stall_seconds",
-                        "quiet", "attach", "reuse_agents"})
+                        "quiet", "attach", "reuse_agents", "progress", "progress_every"})
     options.erase(k);
   return options;
 }

@@ -1,0 +1,66 @@
+// Progress of a phase's runs as they go: a line per job slot (the run, its
+// step out of its total, steps per second) and one for the phase (runs done,
+// an estimate of the time left). On a terminal the lines are redrawn in place
+// (log lines print above them); otherwise they are printed as plain lines at
+// most every few seconds. Drawing is driven by events (a run starts, a
+// process reports its step in its STATUS heartbeat, a run ends); the clock
+// only paces the drawing and measures rates, it decides nothing.
+#pragma once
+#include <chrono>
+#include <cstdint>
+#include <cstdio>
+#include <functional>
+#include <mutex>
+#include <string>
+#include <vector>
+
+namespace afford {
+
+struct ProgressOptions {
+  std::string mode = "auto";  // auto (terminal if stderr is one, else lines), terminal, lines, none
+  double every = -1;          // seconds between draws (< 0: 0.25 on a terminal, 30 as lines)
+};
+
+class Progress {
+ public:
+  // `phase`: what the runs are ("intrinsic runs", "extrinsic tests"); `steps`:
+  // each run still to do, its steps; `done`/`planned`: the phase's runs.
+  Progress(const ProgressOptions& options, std::string phase, int slots, std::vector<std::int64_t> steps,
+           std::size_t done, std::size_t planned, std::FILE* out = stderr);
+  ~Progress();
+  Progress(const Progress&) = delete;
+  Progress& operator=(const Progress&) = delete;
+
+  void started(int slot, const std::string& run_id, std::int64_t steps);
+  void step(int slot, std::int64_t step);
+  void ended(int slot, bool finished);
+  // Print something (a log line) above the board.
+  void say(const std::function<void()>& print);
+
+ private:
+  using Clock = std::chrono::steady_clock;
+  struct Slot {
+    std::string run_id;
+    std::int64_t step = 0, steps = 0;
+    Clock::time_point since{};
+  };
+  void draw(bool force);
+  void erase();
+  std::vector<std::string> lines() const;
+
+  std::mutex mutex_;
+  std::FILE* out_;
+  bool terminal_ = false, enabled_ = true;
+  double every_ = 30;
+  std::string phase_;
+  std::vector<Slot> slots_;
+  std::int64_t total_steps_ = 0, done_steps_ = 0;
+  std::size_t done_ = 0, planned_ = 0;
+  Clock::time_point began_ = Clock::now(), drawn_at_{};
+  int drawn_lines_ = 0;
+};
+
+// "1 h 02 min", "4 min 10 s", "12 s".
+std::string durationText(double seconds);
+
+}  // namespace afford
