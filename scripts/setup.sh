@@ -15,6 +15,7 @@ packages=(
   default-jdk-headless default-jre libjchart2d-java
   iproute2 iptables util-linux procps gnuplot-nox
   xvfb imagemagick x11-utils
+  slurmctld slurmd slurm-client munge  # scripts/slurm-submit.sh; tests/cluster/slurm-local.sh
   clang libclang-rt-14-dev llvm  # scripts/fuzz.sh: libFuzzer, ASan, UBSan, llvm-symbolizer
 )
 

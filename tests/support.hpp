@@ -9,8 +9,11 @@
 #include <cstdlib>
 #include <filesystem>
 #include <memory>
+#include <set>
 #include <string>
 #include <vector>
+
+#include <nlohmann/json.hpp>
 
 #include "afford/config.hpp"
 #include "afford/prediction_t.hpp"
@@ -19,6 +22,22 @@
 namespace afford::test {
 
 // The protocol of the shipped defaults (what processes use between runs).
+// A summary.json without what may differ between two runs of the same plan:
+// timings, memory, paths, the network, and which shards it came from.
+inline nlohmann::json withoutTimingsAndPaths(nlohmann::json j) {
+  static const std::set<std::string> drop = {"wall_seconds", "steps_per_second", "run_seconds", "peak_rss_kb",
+                                             "log_dir", "checkpoint", "merged_from", "shard", "network"};
+  if (j.is_object()) {
+    nlohmann::json out = nlohmann::json::object();
+    for (auto& [k, v] : j.items())
+      if (!drop.count(k)) out[k] = withoutTimingsAndPaths(v);
+    return out;
+  }
+  if (j.is_array())
+    for (auto& v : j) v = withoutTimingsAndPaths(v);
+  return j;
+}
+
 inline ProtocolConfig shippedProtocol() { return loadProtocol(std::string(AFFORD_SOURCE_DIR) + "/config"); }
 
 // The effective config of one run of a shipped experiment.

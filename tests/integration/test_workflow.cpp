@@ -180,21 +180,6 @@ TEST(Workflow, ProgressLinesNameEachSlotsRunStepAndTheTimeLeft) {
   EXPECT_EQ(quiet.text.find("progress:"), std::string::npos) << quiet.text;
 }
 
-// What may differ between two runs of the same plan: timings, memory, paths.
-json withoutTimingsAndPaths(json j) {
-  static const std::set<std::string> drop = {"wall_seconds", "steps_per_second", "run_seconds", "peak_rss_kb",
-                                             "log_dir", "checkpoint", "merged_from", "shard", "network"};
-  if (j.is_object()) {
-    json out = json::object();
-    for (auto& [k, v] : j.items())
-      if (!drop.count(k)) out[k] = withoutTimingsAndPaths(v);
-    return out;
-  }
-  if (j.is_array())
-    for (auto& v : j) v = withoutTimingsAndPaths(v);
-  return j;
-}
-
 std::string readText(const fs::path& p) {
   std::ifstream in(p);
   return std::string(std::istreambuf_iterator<char>(in), {});
@@ -290,7 +275,7 @@ TEST(Workflow, ShardsMergeIntoTheSummaryOfTheWholeExperiment) {
   ASSERT_EQ(m.status, 0) << m.text;
   const json a = readJson(dir + "/whole/summary.json"), b = readJson(dir + "/merged/summary.json");
   EXPECT_EQ(b["merged_from"].size(), 4u);
-  EXPECT_EQ(withoutTimingsAndPaths(a), withoutTimingsAndPaths(b));
+  EXPECT_EQ(test::withoutTimingsAndPaths(a), test::withoutTimingsAndPaths(b));
   for (const char* f : {"curves_FIX.csv", "affordance_IGN.csv", "curves_IMP.csv"})
     EXPECT_EQ(readText(dir + "/whole/" + f), readText(dir + "/merged/" + f)) << f;
 
