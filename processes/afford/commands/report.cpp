@@ -1,7 +1,5 @@
 // afford report DIR...: a markdown report of experiment output folders, plotted.
 #include <cstdio>
-#include <filesystem>
-#include <fstream>
 #include <memory>
 
 #include "afford/commands.hpp"
@@ -10,24 +8,21 @@
 namespace afford {
 
 Command reportCommand(CLI::App& app, const FrontDoor& door) {
-  struct Args {
-    std::vector<std::string> dirs;
-    std::string out = "docs/results.md", figures = "docs/results", note;
-    double wall = 0;
-  };
-  auto a = std::make_shared<Args>();
-  auto* report = app.add_subcommand("report", "write docs/results.md from experiment output folders (plotted)");
-  report->add_option("dirs", a->dirs, "experiment output folders")->required();
-  report->add_option("--out", a->out, "the markdown file")->capture_default_str();
-  report->add_option("--figures", a->figures, "where the figures are copied")->capture_default_str();
-  report->add_option("--wall-seconds", a->wall, "wall time of the reproduction, to report");
-  report->add_option("--note", a->note, "a paragraph on how the runs were made");
-  return {report, [a, &door] {
-            const std::string link =
-                std::filesystem::relative(a->figures, std::filesystem::path(a->out).parent_path()).string();
-            const std::string md = writeReport(a->dirs, a->figures, link, a->wall, a->note, door.config_dir);
-            std::ofstream(a->out) << md;
-            std::printf("%s\n", a->out.c_str());
+  auto r = std::make_shared<ReportRequest>();
+  auto* report = app.add_subcommand(
+      "report", "a markdown report of experiment output folders (plotted): what each ran, its tables and figures");
+  report->add_option("dirs", r->dirs, "experiment output folders (each an `afford experiment --out`)")->required();
+  report->add_option("--out", r->out, "the markdown file; links in it are relative to its folder")->capture_default_str();
+  report->add_option("--figures", r->figures,
+                     "where each folder's figures are copied, into <label>/ (default: --out without its extension, "
+                     "e.g. report/ beside report.md)");
+  report->add_option("--wall-seconds", r->wall_seconds, "a wall time to report (the caller's, e.g. of a whole reproduction)");
+  report->add_option("--note", r->note, "a paragraph on how the runs were made, put under the table of what ran");
+  return {report, [r, &door] {
+            r->config_dir = door.config_dir;
+            r->docs_dir = std::string(AFFORD_SOURCE_DIR) + "/docs";
+            const ReportWritten w = writeReport(*r);
+            std::printf("%s\n", w.out.c_str());
             return 0;
           }};
 }

@@ -1,0 +1,297 @@
+// afford report (processes/afford/report.cpp): a report of any set of
+// experiment folders, here two folders of the base test written by hand
+// (summary.json and experiment.json as docs/results-schema.md describes them,
+// a figure and its CSV each), reported into a nested folder.
+#include <gtest/gtest.h>
+#include <nlohmann/json.hpp>
+
+#include <filesystem>
+#include <fstream>
+#include <regex>
+#include <sstream>
+
+#include "afford/report.hpp"
+#include "tests/support.hpp"
+
+namespace afford {
+namespace {
+
+namespace fs = std::filesystem;
+using nlohmann::json;
+
+const std::string kConfigDir = std::string(AFFORD_SOURCE_DIR) + "/config";
+const std::string kDocsDir = std::string(AFFORD_SOURCE_DIR) + "/docs";
+
+std::string slurp(const fs::path& p) {
+  std::ifstream in(p, std::ios::binary);
+  std::ostringstream s;
+  s << in.rdbuf();
+  return s.str();
+}
+
+void spit(const fs::path& p, const std::string& text) {
+  fs::create_directories(p.parent_path());
+  std::ofstream(p, std::ios::binary) << text;
+}
+
+// What one hand-made experiment folder ran.
+struct Made {
+  std::string version;
+  std::vector<std::string> systems;
+  int reps = 2;
+  std::int64_t first_seed = 1;
+  std::int64_t steps = 300;
+  int tests_per_scenario = 1;  // of scenario1, per trained agent
+  std::vector<std::string> settings;
+  std::string experiment_file;  // --config FILE: no reference numbers
+  bool interrupted = false;
+};
+
+Made made(const std::string& version, std::vector<std::string> systems, int reps, std::int64_t first_seed,
+          std::int64_t steps, int tests_per_scenario, std::vector<std::string> settings = {}) {
+  Made m;
+  m.version = version;
+  m.systems = std::move(systems);
+  m.reps = reps;
+  m.first_seed = first_seed;
+  m.steps = steps;
+  m.tests_per_scenario = tests_per_scenario;
+  m.settings = std::move(settings);
+  return m;
+}
+
+// summary.json of an `afford experiment base` with those counts (docs/results-schema.md).
+json summaryOf(const Made& m) {
+  const json table = json::array({{1, 1, 0, 1}, {1, 0, 1, 1}, {1, 1, 1, 0}, {1, 1, 0, 1}, {1, 0, 1, 1},
+                                  {1, 1, 1, 0}, {1, 1, 0, 1}, {1, 0, 1, 1}, {1, 1, 1, 0}});
+  json s = {{"experiment", "base"},
+            {"description", "base test, deterministic affordances (paper Table 1)"},
+            {"steps", m.steps},
+            {"repetitions", m.reps},
+            {"seed", m.first_seed},
+            {"transport", "memq"},
+            {"network", "in-process memq://"},
+            {"afford_version", m.version},
+            {"objects", {"red square", "green square", "blue square", "red circle", "green circle", "blue circle",
+                         "red rectangle", "green rectangle", "blue rectangle"}},
+            {"actions", {"move", "turn green", "turn red", "turn blue"}},
+            {"systems", json::object()},
+            {"wall_seconds", 90.0},
+            {"extrinsic_tests", m.reps * m.tests_per_scenario * static_cast<int>(m.systems.size())},
+            {"extrinsic_design",
+             {{"scenarios", {"scenario1"}}, {"tests", m.tests_per_scenario}, {"after_actions", 0}, {"analysis", ""},
+              {"vary", json::object()}}}};
+  if (m.experiment_file.empty()) {
+    s["reference_source"] = "authors' code";
+    s["reference_extrinsic_source"] = "paper Table 2 (base test)";
+    s["reference_completion_fit"] = {{"a", 1.364}, {"b", -0.808}};
+  } else {
+    s["experiment_file"] = m.experiment_file;
+  }
+  for (const auto& sys : m.systems) {
+    json js = {{"target", table}, {"affordance", table}, {"affordance_mae", 0.04}, {"runs", json::array()}};
+    if (m.experiment_file.empty()) {
+      js["reference_affordance_mae"] = 0.026;
+      js["reference_table_metric"] = {{"scenario1", 1.0}};
+    }
+    for (int r = 0; r < m.reps; ++r) {
+      const std::int64_t seed = m.first_seed + r;
+      js["runs"].push_back({{"run_id", "t-base-" + sys + "-s" + std::to_string(seed)},
+                            {"seed", seed},
+                            {"log_dir", nullptr},
+                            {"affordance", table},
+                            {"affordance_mae", 0.04},
+                            {"weights_checksum", "0123456789abcdef"}});
+    }
+    js["extrinsic"] = {{"scenarios", {"scenario1"}},
+                       {"tests_per_scenario", m.tests_per_scenario},
+                       {"table_metric", {{"scenario1", 1.0}}},
+                       {"table_metric_solved_share", 0.9},
+                       {"success_rate", {{"scenario1", 1.0}}},
+                       {"completion_steps",
+                        {{"scenario1", {{"n", 2}, {"sub_goals", 1}, {"median", 1}, {"q1", 1}, {"q3", 1}, {"min", 1},
+                                        {"max", 1}, {"mean", 1.0}}}}},
+                       {"actions_checked_per_sub_goal", {{"scenario1", 2.0}}}};
+    s["systems"][sys] = js;
+  }
+  if (m.interrupted)
+    s["interrupted"] = {{"signal", "SIGINT"}, {"phase", "intrinsic"}, {"finished", m.reps - 1}, {"planned", m.reps},
+                        {"cut", json::array()}, {"not_started", json::array()}, {"extrinsic_tests_to_come", true},
+                        {"resume", "afford experiment --resume --out x"}, {"resume_in", "/"}};
+  return s;
+}
+
+// An experiment folder: summary.json, experiment.json (its options), a figure and its CSV, whose bytes name the folder.
+std::string makeFolder(const fs::path& dir, const Made& m) {
+  spit(dir / "summary.json", summaryOf(m).dump(2));
+  const json options = {{"experiment", "base"}, {"systems", m.systems}, {"reps", m.reps}, {"seed", m.first_seed},
+                        {"settings", m.settings}, {"extrinsic_reps", m.tests_per_scenario}};
+  spit(dir / "experiment.json", json({{"experiment", "base"}, {"state", "finished"}, {"options", options}}).dump(2));
+  spit(dir / "fig_affordances.png", "PNG of " + dir.string());
+  spit(dir / "fig_affordances.csv", "csv of " + dir.string());
+  return dir.string();
+}
+
+// Two folders of the base test, with different counts, seeds, versions and --set.
+struct TwoBaseFolders : ::testing::Test {
+  fs::path root = test::tempDir("report");
+  std::string a = makeFolder(root / "runs" / "a", made("0.1.0+aaaaaaa", {"IMP"}, 2, 1, 300, 1));
+  std::string b = makeFolder(root / "runs" / "b", made("0.1.0+bbbbbbb", {"FIX", "IMP"}, 3, 5, 400, 2, {"motivation.leak=0.2"}));
+  fs::path out = root / "reports" / "deep" / "mine.md";
+
+  ReportWritten report() const {
+    ReportRequest r;
+    r.dirs = {a, b};
+    r.out = out.string();
+    r.config_dir = kConfigDir;
+    r.docs_dir = kDocsDir;
+    return writeReport(r);
+  }
+};
+
+// The table row of the folder labelled `label`.
+std::string rowOf(const std::string& md, const std::string& label) {
+  const auto at = md.find("\n| " + label + " |");
+  if (at == std::string::npos) return "";
+  return md.substr(at + 1, md.find('\n', at + 1) - at - 1);
+}
+
+TEST_F(TwoBaseFolders, TheHeaderSaysWhatEachFolderRan) {
+  const ReportWritten w = report();
+  const std::string md = slurp(out);
+  const std::string ra = rowOf(md, w.labels[0]), rb = rowOf(md, w.labels[1]);
+  // experiment | folder | systems | repetitions | runs | seeds | steps | extrinsic tests | afford | wall time
+  EXPECT_EQ(ra, "| base-a | `../../runs/a` | IMP | 2 | 2 | 1-2 | 300 | 2 (1 per scenario and agent) | 0.1.0+aaaaaaa | 1.5 min |");
+  EXPECT_EQ(rb, "| base-b | `../../runs/b` | FIX, IMP | 3 | 6 | 5-7 | 400 | 12 (2 per scenario and agent) | 0.1.0+bbbbbbb | 1.5 min |");
+  EXPECT_NE(md.find("| all | | | | 8 | | | 14 | | 3.0 min |"), std::string::npos) << md;
+  EXPECT_NE(md.find("- **base-a**: base test, deterministic affordances (paper Table 1); no `--set`; extrinsic scenarios: scenario1.\n"),
+            std::string::npos) << md;
+  EXPECT_NE(md.find("- **base-b**: base test, deterministic affordances (paper Table 1); `--set motivation.leak=0.2`;"),
+            std::string::npos) << md;
+  // Nothing said that these folders do not say.
+  EXPECT_EQ(md.find("reproduce.sh"), std::string::npos) << md;
+  EXPECT_EQ(md.find("the paper's counts"), std::string::npos) << md;
+  EXPECT_EQ(md.find("incomplete"), std::string::npos) << md;
+}
+
+TEST_F(TwoBaseFolders, FoldersOfOneExperimentHaveTheirOwnHeadingsAndFigureFolders) {
+  const ReportWritten w = report();
+  ASSERT_EQ(w.labels, (std::vector<std::string>{"base-a", "base-b"}));
+  const std::string md = slurp(out);
+  for (const auto& label : w.labels) {
+    EXPECT_NE(md.find("\n### " + label + " ("), std::string::npos) << label << "\n" << md;  // the extrinsic table
+    EXPECT_NE(md.find("\n### " + label + "\n"), std::string::npos) << label << "\n" << md;  // its figures
+  }
+  EXPECT_EQ(fs::path(w.figures), out.parent_path() / "mine");  // beside the report, named after it
+  for (const auto& [label, dir] : {std::pair{w.labels[0], a}, std::pair{w.labels[1], b}}) {
+    const fs::path figs = fs::path(w.figures) / label;
+    EXPECT_EQ(slurp(figs / "fig_affordances.png"), "PNG of " + dir) << label;
+    EXPECT_EQ(slurp(figs / "fig_affordances.csv"), "csv of " + dir) << label;
+  }
+}
+
+TEST_F(TwoBaseFolders, EveryLinkIsRelativeAndResolvesFromTheReportsFolder) {
+  report();
+  const std::string md = slurp(out);
+  const std::regex link(R"(\]\(([^)\s]+)\))");
+  int links = 0, figures = 0;
+  bool discussion = false;
+  for (auto it = std::sregex_iterator(md.begin(), md.end(), link); it != std::sregex_iterator(); ++it) {
+    std::string target = (*it)[1].str();
+    target = target.substr(0, target.find('#'));
+    ++links;
+    EXPECT_FALSE(fs::path(target).is_absolute()) << target;
+    EXPECT_TRUE(fs::is_regular_file(out.parent_path() / target)) << target;
+    figures += fs::path(target).extension() == ".png";
+    discussion |= fs::path(target).filename() == "results-discussion.md";
+  }
+  EXPECT_EQ(figures, 2);
+  EXPECT_TRUE(discussion) << md;  // the paper's numbers are beside ours
+  EXPECT_GE(links, 3);
+}
+
+TEST_F(TwoBaseFolders, AFolderWithoutSummaryIsAnErrorNamingItAndNothingIsWritten) {
+  const fs::path missing = root / "runs" / "not-an-experiment";
+  fs::create_directories(missing);
+  ReportRequest r;
+  r.dirs = {a, missing.string(), b};
+  r.out = out.string();
+  r.config_dir = kConfigDir;
+  try {
+    writeReport(r);
+    FAIL() << "a folder without summary.json was reported";
+  } catch (const std::runtime_error& e) {
+    EXPECT_NE(std::string(e.what()).find(missing.string()), std::string::npos) << e.what();
+    EXPECT_NE(std::string(e.what()).find("summary.json"), std::string::npos) << e.what();
+  }
+  EXPECT_FALSE(fs::exists(root / "reports"));  // neither the report, nor its folder, nor a figure
+}
+
+TEST_F(TwoBaseFolders, ABrokenSummaryIsAnErrorNamingItsFolderAndTheJsonError) {
+  spit(fs::path(b) / "summary.json", "{\"experiment\": \"base\",");
+  ReportRequest r;
+  r.dirs = {a, b};
+  r.out = out.string();
+  r.config_dir = kConfigDir;
+  try {
+    writeReport(r);
+    FAIL() << "a broken summary.json was reported";
+  } catch (const std::runtime_error& e) {
+    EXPECT_NE(std::string(e.what()).find("folder " + b), std::string::npos) << e.what();
+    EXPECT_NE(std::string(e.what()).find("parse error"), std::string::npos) << e.what();
+  }
+  EXPECT_FALSE(fs::exists(root / "reports"));
+}
+
+TEST(Report, AnInterruptedFolderIsMarkedIncomplete) {
+  const fs::path root = test::tempDir("report-interrupted");
+  Made m = made("0.1.0+ccccccc", {"IMP"}, 3, 1, 300, 1);
+  m.interrupted = true;
+  ReportRequest r;
+  r.dirs = {makeFolder(root / "base", m)};
+  r.out = (root / "r.md").string();
+  r.config_dir = kConfigDir;
+  writeReport(r);
+  const std::string md = slurp(root / "r.md");
+  EXPECT_NE(md.find("**incomplete**: interrupted by SIGINT in the intrinsic phase, 2 of 3 runs finished, the extrinsic "
+                    "tests not begun"),
+            std::string::npos)
+      << md;
+}
+
+TEST(Report, AnExperimentFileOfOursHasNoLinkToThePapersDiscussion) {
+  const fs::path root = test::tempDir("report-own");
+  Made m = made("0.1.0+ddddddd", {"IMP"}, 2, 1, 300, 1);
+  m.experiment_file = "/home/me/slow-leak.yaml";
+  ReportRequest r;
+  r.dirs = {makeFolder(root / "mine", m)};
+  r.out = (root / "r.md").string();
+  r.config_dir = kConfigDir;
+  r.docs_dir = kDocsDir;
+  writeReport(r);
+  const std::string md = slurp(root / "r.md");
+  EXPECT_EQ(md.find("results-discussion.md"), std::string::npos) << md;
+  EXPECT_EQ(md.find("Numbers in brackets are the paper's"), std::string::npos) << md;
+  EXPECT_NE(md.find("experiment file `/home/me/slow-leak.yaml`"), std::string::npos) << md;
+}
+
+TEST(Report, LabelsAreTheExperimentUnlessFoldersShareIt) {
+  EXPECT_EQ(folderLabels({"base", "late1"}, {"out/x", "out/y"}), (std::vector<std::string>{"base", "late1"}));
+  EXPECT_EQ(folderLabels({"base", "base", "late1"}, {"out/a", "out/b/", "out/c"}),
+            (std::vector<std::string>{"base-a", "base-b", "late1"}));
+  // The same folder name twice, or the experiment's own: numbered in the order given.
+  EXPECT_EQ(folderLabels({"base", "base", "base"}, {"x/base", "y/base", "z/base"}),
+            (std::vector<std::string>{"base", "base-2", "base-3"}));
+  // Never a path: what is not a letter, digit, '.', '-' or '_' becomes '-', and no label starts with '.'.
+  EXPECT_EQ(folderLabels({"base", "base"}, {"out/my run", "out/..hidden"}),
+            (std::vector<std::string>{"base-my-run", "base-hidden"}));
+}
+
+TEST(Report, FiguresGoBesideTheReportNamedAfterIt) {
+  EXPECT_EQ(defaultFiguresDir("report.md"), "report");
+  EXPECT_EQ(defaultFiguresDir("docs/results.md"), "docs/results");
+  EXPECT_EQ(defaultFiguresDir("out/summary"), "out/summary-figures");  // never the report itself
+}
+
+}  // namespace
+}  // namespace afford
