@@ -402,9 +402,9 @@ int runExperiment(const ExperimentOptions& request, spdlog::logger& log) {
   // The summaries as they stand: each part's, and a sweep's own (DIR/summary.json).
   const auto whole = [&]() {
     if (parts.size() == 1) return summaries.front();
+    json s = sweepSummary(parts, summaries, sweep, o);  // names each condition in its summary too
     for (std::size_t k = 0; k < parts.size(); ++k)
       writeWhole(fs::path(parts[k].o.out_dir) / "summary.json", summaries[k].dump(2) + "\n");
-    json s = sweepSummary(parts, summaries, sweep, o);
     s["wall_seconds"] = std::chrono::duration<double>(std::chrono::steady_clock::now() - began).count();
     return s;
   };

@@ -38,6 +38,7 @@ struct Folder {
   json state;         // experiment.json; null when the folder has none
   std::string label;  // unique among the report's folders: headings and figure subfolder
   std::string shown;  // the folder's path relative to the report's folder
+  std::string sweep;  // a sweep's condition: the sweep's folder (its comparison figures), else ""
 };
 
 json readJson(const fs::path& file, const std::string& dir) {
@@ -206,6 +207,8 @@ Ran whatRan(const Folder& f, bool one_network) {
     for (const auto& v : f.state["options"]["settings"]) sets.push_back("`--set " + v.get<std::string>() + "`");
     m.push_back(sets.empty() ? "no `--set`" : joined(sets));
   }
+  if (s.contains("sweep_condition") && s["sweep_condition"].is_string())
+    m.push_back("sweep condition `" + s["sweep_condition"].get<std::string>() + "`");
   if (s.contains("experiment_file") && s["experiment_file"].is_string())
     m.push_back("experiment file `" + s["experiment_file"].get<std::string>() + "`");
   if (r.tests > 0 && design.contains("scenarios") && !design.contains("generate")) {
@@ -678,7 +681,23 @@ Rendered render(const std::vector<Folder>& folders, const Reference& reference, 
 
   // ---- figures, each folder's into its own <figures>/<label>/
   md << "\n## Figures\n";
+  std::set<std::string> sweeps_shown;
   for (const auto& f : folders) {
+    if (!f.sweep.empty() && sweeps_shown.insert(f.sweep).second) {  // the conditions side by side, once per sweep
+      const std::string label = f.summary["experiment"].get<std::string>() + "-sweep-" + folderName(f.sweep);
+      bool heading = false;
+      for (const char* name : {"fig_sweep_mae", "fig_sweep_success"}) {
+        const fs::path png = fs::path(f.sweep) / (std::string(name) + ".png");
+        if (!fs::exists(png)) continue;
+        if (!heading) md << "\n### " << label << ": the sweep's conditions compared\n\n";
+        heading = true;
+        const fs::path target = where.figures / sanitize(label);
+        out.copies.push_back({png, target / png.filename()});
+        const fs::path csv = fs::path(f.sweep) / (std::string(name) + ".csv");
+        if (fs::exists(csv)) out.copies.push_back({csv, target / csv.filename()});
+        md << "![" << label << " " << png.filename().string() << "](" << linkPath(relativeTo(target / png.filename(), where.out_dir)) << ")\n";
+      }
+    }
     std::vector<std::string> pngs;
     for (const auto& e : fs::directory_iterator(f.dir))
       if (e.path().extension() == ".png" && e.path().filename().string().rfind("fig_", 0) == 0)
@@ -742,7 +761,32 @@ ReportWritten writeReport(const ReportRequest& request) {
   if (request.dirs.empty()) throw std::runtime_error("report: no experiment folder given");
   const Reference reference(request.config_dir);  // before anything is written: a broken file fails the report
   std::vector<Folder> folders;
-  for (const auto& d : request.dirs) folders.push_back({d, loadSummary(d), loadState(d), "", ""});
+  std::vector<std::string> dirs;  // per folder (a sweep's conditions one by one)
+  for (const auto& d : request.dirs) {
+    const json top = fs::exists(fs::path(d) / "summary.json") ? readJson(fs::path(d) / "summary.json", d) : json();
+    if (!top.is_object() || !top.contains("sweep")) {
+      folders.push_back({d, loadSummary(d), loadState(d), "", "", ""});
+      dirs.push_back(d);
+      continue;
+    }
+    // A sweep: each condition's folder is an experiment folder of its own, its settings those of the
+    // sweep's command with the condition's.
+    const json state = loadState(d);
+    if (!top["sweep"].contains("conditions") || !top["sweep"]["conditions"].is_array())
+      throw std::runtime_error("report: " + (fs::path(d) / "summary.json").string() + " (folder " + d +
+                               ") has a sweep without conditions (docs/results-schema.md)");
+    for (const auto& c : top["sweep"]["conditions"]) {
+      const std::string dir = (fs::path(d) / c.at("folder").get<std::string>()).string();
+      json cs = state;
+      if (cs.is_object() && cs.contains("options")) {
+        json sets = top.value("settings", json::array());
+        for (const auto& v : c.at("settings")) sets.push_back(v);
+        cs["options"]["settings"] = sets;
+      }
+      folders.push_back({dir, loadSummary(dir), cs, "", "", d});
+      dirs.push_back(dir);
+    }
+  }
 
   const fs::path out = fs::absolute(request.out).lexically_normal();
   if (out.filename().empty()) throw std::runtime_error("report: --out " + request.out + " names a folder, not a file");
@@ -756,7 +800,7 @@ ReportWritten writeReport(const ReportRequest& request) {
 
   std::vector<std::string> experiments;
   for (const auto& f : folders) experiments.push_back(f.summary["experiment"].get<std::string>());
-  const auto labels = folderLabels(experiments, request.dirs);
+  const auto labels = folderLabels(experiments, dirs);
   for (std::size_t i = 0; i < folders.size(); ++i) {
     folders[i].label = labels[i];
     folders[i].shown = relativeTo(fs::absolute(folders[i].dir).lexically_normal(), where.out_dir);

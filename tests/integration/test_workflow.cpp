@@ -228,6 +228,15 @@ TEST(Workflow, ASweepRunsTheCrossProductAndEachConditionIsItsSettings) {
   EXPECT_TRUE(fs::exists(dir + "/sweep/conditions/" + c + "/fig_affordances.png"));
   EXPECT_NE(readText(dir + "/sweep/fig_sweep_mae.csv").find("IMP,3,2,"), std::string::npos);  // condition 3, 2 runs
 
+  // The report takes the sweep's folder: each condition as an experiment folder, and the comparison.
+  Output report = run("report " + dir + "/sweep --out " + dir + "/report/r.md");
+  ASSERT_EQ(report.status, 0) << report.text;
+  const std::string md = readText(dir + "/report/r.md");
+  EXPECT_NE(md.find("`--set motivation.leak=0.3`, `--set predictors.affordance.learning_rate=0.05`"), std::string::npos) << md;
+  EXPECT_NE(md.find("sweep condition `" + c + "`"), std::string::npos) << md;
+  EXPECT_TRUE(fs::exists(dir + "/report/r/base-sweep-sweep/fig_sweep_mae.png"));
+  EXPECT_TRUE(fs::exists(dir + "/report/r/base-motivation.leak-0.3-predictors.affordance.learning_rate-0.05/fig_affordances.png"));
+
   // A sweep file asks for the same conditions.
   std::ofstream(dir + "/sweep.yaml") << "motivation.leak: [0.1, 0.3]\npredictors.affordance.learning_rate: [0.05, 0.1]\n";
   Output f = run("experiment base" + kSmall + " --keep-logs none --sweep " + dir + "/sweep.yaml --out " + dir +
