@@ -19,7 +19,8 @@
 # first: the logs of the first run of each system; all keeps every run's and test's log,
 # which `afford explain LOG_ROOT` summarises), KEEP_CHECKPOINTS (all, first or none; default all).
 # Trained agents are stored by content in OUT/logs/agents and reused by the experiments that
-# share them (REUSE=0 trains every one again). Runs over real processes (udpm). The page is written from every experiment
+# share them (REUSE=0 trains every one again). Runs over real processes (udpm); TRANSPORT=memq
+# hosts the same nodes in one process per job slot (the same results, faster: docs/performance.md). The page is written from every experiment
 # folder present under OUT, so parts may run at different times. An experiment with a
 # failed run is still summarised and plotted; the script then exits with status 1.
 set -euo pipefail
@@ -58,7 +59,7 @@ failed=()
 for exp in "${experiments[@]}"; do
   rm -rf "${out:?}/$exp"
   args=(--jobs "${JOBS:-$(nproc)}" --keep-logs "${KEEP_LOGS:-first}" --keep-checkpoints "${KEEP_CHECKPOINTS:-all}"
-        --out "$out/$exp" --log-root "$out/logs" --run-prefix "$prefix")
+        --out "$out/$exp" --log-root "$out/logs" --run-prefix "$prefix" --transport "${TRANSPORT:-udpm}")
   [[ ${REUSE:-1} == 0 ]] && args+=(--no-reuse-agents)
   [[ -n ${REPS:-} ]] && args+=(--reps "$REPS")
   case " ${deterministic[*]} late1-memory late2-memory late3-memory " in
