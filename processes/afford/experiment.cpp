@@ -197,7 +197,7 @@ void summariseTests(json& summary, const Part& part, const std::vector<PlannedRu
 // shard that ran it; a run no shard finished is an error naming it (before
 // anything is written).
 PhaseRuns gatherShards(const std::vector<Part>& parts, const std::vector<PlannedRun>& runs,
-                       const std::vector<std::string>& shards, const ExperimentOptions& o, PhaseRuns* tests_out) {
+                       const std::vector<std::string>& shards, PhaseRuns* tests_out) {
   const auto gather = [&](const std::vector<PlannedRun>& list, const std::string& what) {
     PhaseRuns phase;
     phase.outcomes.resize(list.size());
@@ -234,7 +234,6 @@ PhaseRuns gatherShards(const std::vector<Part>& parts, const std::vector<Planned
     std::vector<std::size_t> offsets;
     *tests_out = gather(concatRuns(part_tests, offsets), "extrinsic test(s)");
   }
-  (void)o;
   return intrinsic;
 }
 
@@ -265,7 +264,7 @@ json sweepSummary(const std::vector<Part>& parts, std::vector<json>& summaries, 
     std::sort(files.begin(), files.end());
     for (const auto& f : files) {
       std::ifstream in(f);
-      std::string line, rows;
+      std::string line;
       if (!std::getline(in, line)) continue;
       auto& [header, all] = csvs[f.filename().string()];
       header = "sweep_condition," + line;
@@ -326,7 +325,7 @@ int runExperiment(const ExperimentOptions& request, spdlog::logger& log) {
       elsewhere.push_back(static_cast<int>(i % static_cast<std::size_t>(o.shard_count)) != o.shard_index);
   if (!o.resume && !merging) refuseUsedLogFolders(runs, elsewhere, o.log_root);
   PhaseRuns merged_tests;
-  const PhaseRuns merged = merging ? gatherShards(parts, runs, o.merged_from, o, &merged_tests) : PhaseRuns{};
+  const PhaseRuns merged = merging ? gatherShards(parts, runs, o.merged_from, &merged_tests) : PhaseRuns{};
   std::string network = "in-process memq://";
   std::string bin;
   if (merging) {

@@ -18,6 +18,7 @@
 #include <stdexcept>
 
 #include "afford/reference.hpp"
+#include "afford/store.hpp"
 
 namespace afford {
 namespace fs = std::filesystem;
@@ -717,17 +718,6 @@ Rendered render(const std::vector<Folder>& folders, const Reference& reference, 
   return out;
 }
 
-void writeFile(const fs::path& path, const std::string& text) {
-  const fs::path part = path.string() + ".part";
-  {
-    std::ofstream f(part, std::ios::binary | std::ios::trunc);
-    f << text;
-    f.close();
-    if (!f) throw std::runtime_error("report: cannot write " + part.string());
-  }
-  fs::rename(part, path);
-}
-
 }  // namespace
 
 std::string defaultFiguresDir(const std::string& out) {
@@ -827,7 +817,7 @@ ReportWritten writeReport(const ReportRequest& request) {
     fs::create_directories(c.to.parent_path());
     fs::copy_file(c.from, c.to, fs::copy_options::overwrite_existing);
   }
-  writeFile(out, rendered.markdown);
+  writeWhole(out, rendered.markdown);  // beside it, then renamed over it
   return {out.string(), where.figures.string(), labels};
 }
 
