@@ -30,8 +30,10 @@
 # different DIRs (each has its own ports, munge socket and ClusterName).
 #
 # Note for callers: `sbatch --wait` polls the controller after 2 s, 8 s, then
-# every 32 s, so it returns up to ~30 s after a job ended; a test in a hurry
-# polls `squeue -h -j ID` (empty once the job has ended) instead.
+# every 32 s, so it returns up to ~30 s after a job ended. On this idle node
+# `salloc --dependency=afterany:ID true` returns within about a second of job
+# ID's end, when the controller grants it (the state is then in
+# `scontrol show job ID`).
 set -Eeuo pipefail
 # Any command failing where it is not checked still names itself.
 trap 'echo "slurm-local: error: \"$BASH_COMMAND\" failed (line $LINENO, status $?)" >&2' ERR
@@ -81,29 +83,44 @@ alive() {
   echo "$pid"
 }
 
-# started PIDFILE NAME LOG: waits (30 s at most) for a daemon that has just
-# forked into the background to write its pid file; fails if it does not.
-started() {
-  local deadline=$((SECONDS + 30))
-  until alive "$1" "$2" >/dev/null; do
-    ((SECONDS < deadline)) || fail "$2 did not start (no live pid in $1 after 30 s)" "$3"
-    sleep 0.1
-  done
+# await_exit SECONDS PID...: true once none of the pids runs (a zombie counts
+# as gone), false after SECONDS. The processes are not this shell's children,
+# so it waits on a pidfd of each (Linux 5.3; perl-base is in every Debian).
+await_exit() {
+  perl -e '
+    my $left = shift; my %open; my $all = "";
+    for my $pid (@ARGV) {
+      my $fd = syscall(434, $pid + 0, 0);  # pidfd_open; fails once the pid is gone
+      next if $fd < 0;
+      $open{$fd} = 1; vec($all, $fd, 1) = 1;
+    }
+    my $end = time + $left;
+    while (%open) {
+      $left = $end - time;
+      exit 1 if $left <= 0;
+      my $ready = $all;
+      next if select($ready, undef, undef, $left) <= 0;  # EINTR or the timeout: look again
+      for my $fd (keys %open) {
+        next unless vec($ready, $fd, 1);
+        delete $open{$fd}; vec($all, $fd, 1) = 0;  # readable: that process has exited
+      }
+    }
+    exit 0' "$@"
 }
 
-# wait_gone SECONDS PID...: true once none of the pids exists.
-wait_gone() {
-  local deadline=$((SECONDS + $1)) pid left
-  shift
-  while :; do
-    left=0
-    for pid in "$@"; do
-      running "$pid" && left=1 # a zombie counts as gone
-    done
-    ((left)) || return 0
-    ((SECONDS < deadline)) || return 1
-    sleep 0.2
-  done
+# await_line LOG REGEX PID SECONDS WHAT: returns once LOG has a line matching
+# REGEX (read as it is written); fails naming WHAT if the process PID exits
+# first or SECONDS pass.
+await_line() {
+  local fd tail_pid found=0
+  exec {fd}< <(exec timeout "$4" tail -n +1 -F --pid="$3" "$1" 2>/dev/null)
+  tail_pid=$!
+  grep -m1 -qE "$2" <&"$fd" && found=1
+  exec {fd}<&-
+  kill "$tail_pid" 2>/dev/null || true
+  ((found)) && return 0
+  running "$3" || fail "$5: the process exited" "$1"
+  fail "$5: not seen within $4 s" "$1"
 }
 
 # cluster_pids: processes of this DIR's cluster, found by what they hold:
@@ -195,19 +212,20 @@ slurmd_log=$dir/log/slurmd.log
 # ------------------------------------------------------------------- stop --
 
 stop() {
-  local pids=() jobs=() strays=() pid name file waited
+  local pids=() jobs=() strays=() stepds=() pid name file
   # Jobs first, while the controller can still end them cleanly (a stepd
-  # killed under a running job would leave the job's processes behind).
+  # killed under a running job would leave the job's processes behind): each
+  # job's slurmstepd exits once its job has ended.
   if alive "$ctld_pid" slurmctld >/dev/null && [[ -f $conf ]]; then
     mapfile -t jobs < <(SLURM_CONF=$conf squeue -h -o %A 2>/dev/null || true)
     if ((${#jobs[@]})); then
+      for pid in $(cluster_pids); do
+        [[ $(cat "/proc/$pid/comm" 2>/dev/null) == slurmstepd ]] && stepds+=("$pid")
+      done
       say "cancelling jobs ${jobs[*]}"
       SLURM_CONF=$conf scancel --quiet "${jobs[@]}" 2>/dev/null || true
-      # squeue lists a job until it has ended (also while completing).
-      waited=$((SECONDS + 20))
-      while [[ -n $(SLURM_CONF=$conf squeue -h -o %A 2>/dev/null) ]] && ((SECONDS < waited)); do
-        sleep 0.2
-      done
+      ((${#stepds[@]} == 0)) || await_exit 20 "${stepds[@]}" ||
+        say "the jobs' slurmstepd processes ${stepds[*]} did not end within 20 s of scancel"
     fi
   fi
 
@@ -219,10 +237,10 @@ stop() {
       say "stopping $name (pid $pid)"
       kill -TERM "$pid" 2>/dev/null || true
       pids+=("$pid")
-      if ! wait_gone 20 "$pid"; then
+      if ! await_exit 20 "$pid"; then
         say "$name (pid $pid) ignored SIGTERM for 20 s; killing it"
         kill -KILL "$pid" 2>/dev/null || true
-        wait_gone 5 "$pid" || fail "$name (pid $pid) does not exit" \
+        await_exit 5 "$pid" || fail "$name (pid $pid) does not exit" \
           "$ctld_log" "$slurmd_log" "$munged_log"
       fi
     fi
@@ -235,7 +253,7 @@ stop() {
     mapfile -t strays < <(with_descendants "${strays[@]}")
     say "killing leftover processes of this cluster: ${strays[*]}"
     kill -KILL "${strays[@]}" 2>/dev/null || true
-    wait_gone 5 "${strays[@]}" || fail "processes ${strays[*]} of this cluster do not exit"
+    await_exit 5 "${strays[@]}" || fail "processes ${strays[*]} of this cluster do not exit"
   fi
   rm -f "$socket" "$socket.lock"
   if ((${#pids[@]} + ${#strays[@]} == 0)); then
@@ -276,6 +294,7 @@ mkdir -p "$dir/etc" "$dir/state" "$dir/spool" "$dir/log" "$run"
 mkdir -m 0755 "$munge_dir" # munged wants it not group/world-writable
 for log in "$munged_log" "$ctld_log" "$slurmd_log"; do
   [[ -f $log ]] && mv -f "$log" "$log.old"
+  : >"$log" # there from the start, for await_line's tail to follow
 done
 
 # --- munge: a key and a daemon of our own, on a socket inside DIR.
@@ -287,12 +306,10 @@ munged --force --key-file="$munge_dir/munge.key" --socket="$socket" \
   --pid-file="$munged_pid" --log-file="$munged_log" \
   --seed-file="$munge_dir/munged.seed" --num-threads=2 \
   </dev/null >>"$munged_log" 2>&1 || fail "munged did not start" "$munged_log"
-started "$munged_pid" munged "$munged_log"
-deadline=$((SECONDS + 10))
-until munge -n -S "$socket" 2>/dev/null | unmunge -S "$socket" >/dev/null 2>&1; do
-  ((SECONDS < deadline)) || fail "munged does not answer on $socket within 10 s" "$munged_log"
-  sleep 0.1
-done
+# munged returns once its child has created the socket and written its pid.
+alive "$munged_pid" munged >/dev/null || fail "munged did not start (no live pid in $munged_pid)" "$munged_log"
+munge -n -S "$socket" 2>/dev/null | unmunge -S "$socket" >/dev/null 2>&1 ||
+  fail "munged does not answer on $socket" "$munged_log"
 
 # --- addresses. Slurm 22.05 resolves every address, 127.0.0.1 and the
 # wildcard it binds to included, as AF_INET with AI_ADDRCONFIG, and glibc then
@@ -395,24 +412,30 @@ EOF
 : >"$dir/etc/plugstack.conf" # not /etc/slurm's
 export SLURM_CONF=$conf
 
-# --- the controller, then the node daemon. Both fork and write pid files.
-slurmctld -f "$conf" </dev/null >>"$ctld_log" 2>&1 || fail "slurmctld did not start" "$ctld_log"
-started "$ctld_pid" slurmctld "$ctld_log"
-slurmd -f "$conf" -N "$node" </dev/null >>"$slurmd_log" 2>&1 || fail "slurmd did not start" "$slurmd_log"
-started "$slurmd_pid" slurmd "$slurmd_log"
+# --- the controller, then the node daemon, in the foreground (-D) as
+# background jobs of their own session: their pids are known at once, and
+# their logs say when each is ready.
+setsid slurmctld -D -f "$conf" </dev/null >/dev/null 2>&1 &
+ctld=$!
+await_line "$ctld_log" "Running as primary controller" "$ctld" 30 "slurmctld (pid $ctld) taking its role"
+setsid slurmd -D -f "$conf" -N "$node" </dev/null >/dev/null 2>&1 &
+slurmd=$!
+await_line "$slurmd_log" "slurmd started on" "$slurmd" 30 "slurmd (pid $slurmd) starting"
 
-# --- wait for the node to be idle; stop early if a daemon died.
-deadline=$((SECONDS + 60))
-state=
-while :; do
-  alive "$munged_pid" munged >/dev/null || fail "munged exited" "$munged_log"
-  alive "$ctld_pid" slurmctld >/dev/null || fail "slurmctld exited" "$ctld_log"
-  alive "$slurmd_pid" slurmd >/dev/null || fail "slurmd exited" "$slurmd_log"
-  state=$(sinfo -h -N -n "$node" -o %T 2>/dev/null | head -1) || true
-  [[ $state == idle ]] && break
-  ((SECONDS < deadline)) ||
-    fail "node $node not idle within 60 s (state '${state:-unknown}')" "$ctld_log" "$slurmd_log"
-  sleep 0.2
+# --- the node is up once a job can be given it: salloc returns when the
+# controller grants the allocation (it tells salloc), and its `true` ends the
+# job at once. Should a daemon exit first, that ends the wait.
+timeout 60 salloc --quiet --job-name=slurm-local-ready true </dev/null >/dev/null 2>"$dir/log/ready.err" &
+ready=$!
+wait -n -p first "$ready" "$ctld" "$slurmd" && status=0 || status=$?
+case ${first:-} in
+  "$ready") ((status == 0)) || fail "node $node not given a job within 60 s (salloc status $status)" \
+    "$dir/log/ready.err" "$ctld_log" "$slurmd_log" ;;
+  "$ctld") fail "slurmctld exited" "$ctld_log" ;;
+  *) fail "slurmd exited" "$slurmd_log" ;;
+esac
+for file in "$ctld_pid:slurmctld" "$slurmd_pid:slurmd"; do
+  alive "${file%:*}" "${file##*:}" >/dev/null || fail "${file##*:} has not written its pid to ${file%:*}"
 done
 
 cat >"$dir/env.sh" <<EOF
