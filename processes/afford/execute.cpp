@@ -4,6 +4,7 @@
 #include <sys/syscall.h>
 #include <unistd.h>
 
+#include <algorithm>
 #include <atomic>
 #include <functional>
 #include <mutex>
@@ -31,36 +32,63 @@ void pumpLcm(lcm::LCM& lcm) {
 
 using OnStep = std::function<void(std::int64_t)>;
 
-RunOutcome runInProcess(const PlannedRun& run, const ExperimentOptions& o, const ProtocolConfig& protocol, int slot,
-                        const OnStep& on_step) {
-  lcm::LCM lcm("memq://");
-  const std::string tag = o.jobs > 1 ? "#" + std::to_string(slot) : "";
-  const std::string level = o.process_log_level == "info" ? "warn" : o.process_log_level;
-  InProcessHost host(lcm, protocol, [&](const std::string& p) { return makeLogger(p + tag, level); },
-                     HostOptions{/*single_thread=*/true, o.log_root});
-  host.start(run.spec.processes);  // the motivation decides in the intrinsic phase, the planner in the extrinsic one
-  RunDriver driver(lcm, makeLogger("runner" + tag, level), protocol);
-  driver.onStep(on_step);
-  auto pump = [&] {
-    pumpLcm(lcm);
-    host.tick();
-  };
-  RunOutcome r = driver.run(run.spec, pump, [] { return std::string(); });
-  r.peak_rss_kb["all (one process)"] = peakRssKb(getpid());
-  return r;
-}
-
 struct Slot {
   int index = 0;
   std::string url;
   std::unique_ptr<ProcessGroup> group;   // environment, eye, predictors, and motivation or planner
-  bool extrinsic = false;                // which of the two the group has
+  bool extrinsic = false;                // which of the two the group (or the host) has
   std::unique_ptr<ProcessGroup> logger;  // started with the slot's first recorded run, kept for the others
   // One bus connection and driver for all the slot's runs: the driver keeps
   // what each process last said, so a run starts as soon as they are free.
   std::unique_ptr<lcm::LCM> lcm;
   std::unique_ptr<RunDriver> driver;
+  // Over memq, the slot's nodes in this process, kept between its runs as a
+  // udpm slot keeps its processes (declared after the bus they are on).
+  std::unique_ptr<InProcessHost> host;
+  std::vector<std::string> hosted;  // the processes the host runs
 };
+
+RunOutcome runInProcess(const PlannedRun& run, const ExperimentOptions& o, const ProtocolConfig& protocol, Slot& slot,
+                        const OnStep& on_step) {
+  const std::string tag = o.jobs > 1 ? "#" + std::to_string(slot.index) : "";
+  const std::string level = o.process_log_level == "info" ? "warn" : o.process_log_level;
+  if (!slot.lcm) {
+    slot.lcm = std::make_unique<lcm::LCM>("memq://");
+    slot.driver = std::make_unique<RunDriver>(*slot.lcm, makeLogger("runner" + tag, level), protocol);
+  }
+  // The motivation decides in the intrinsic phase, the planner in the extrinsic one: the other phase, a new host.
+  if (!slot.host || slot.extrinsic != run.spec.extrinsic) {
+    slot.host.reset();
+    slot.hosted.clear();
+    slot.extrinsic = run.spec.extrinsic;
+    slot.host = std::make_unique<InProcessHost>(
+        *slot.lcm, protocol, [tag, level](const std::string& p) { return makeLogger(p + tag, level); },
+        HostOptions{/*single_thread=*/true, o.log_root});
+  }
+  // The logger, once started with a recorded run, stays free during the runs not recorded (run.record).
+  for (const std::string& p : run.spec.processes)
+    if (std::find(slot.hosted.begin(), slot.hosted.end(), p) == slot.hosted.end()) {
+      slot.host->start(p);
+      slot.hosted.push_back(p);
+    }
+  InProcessHost& host = *slot.host;
+  lcm::LCM& lcm = *slot.lcm;
+  slot.driver->onStep(on_step);
+  RunOutcome r = slot.driver->run(
+      run.spec,
+      [&] {
+        pumpLcm(lcm);
+        host.tick();
+      },
+      [] { return std::string(); });
+  r.peak_rss_kb["all (one process)"] = peakRssKb(getpid());
+  if (!r.ok) {  // a host whose run failed is not reused
+    slot.host.reset();
+    slot.hosted.clear();
+  }
+  return r;
+}
+
 
 RunOutcome runOverUdpm(const PlannedRun& run, const ExperimentOptions& o, const ProtocolConfig& protocol, Slot& slot,
                        const std::string& bin, const OnStep& on_step) {
@@ -180,7 +208,7 @@ void executeRuns(const std::vector<PlannedRun>& runs, PhaseRuns& phase, const Ex
       progress.started(slot_index, id, runs[i].spec.steps);
       const OnStep on_step = [&progress, slot_index](std::int64_t step) { progress.step(slot_index, step); };
       try {
-        r = o.transport == "memq" ? runInProcess(runs[i], o, protocol, slot_index, on_step)
+        r = o.transport == "memq" ? runInProcess(runs[i], o, protocol, slot, on_step)
                                   : runOverUdpm(runs[i], o, protocol, slot, bin, on_step);
       } catch (const std::exception& e) {
         r.ok = false;

@@ -6,7 +6,9 @@
 #include <chrono>
 #include <filesystem>
 #include <fstream>
+#include <map>
 #include <nlohmann/json.hpp>
+#include <regex>
 #include <set>
 #include <thread>
 
@@ -116,6 +118,39 @@ TEST(Processes, UdpmAndMemqRunsGiveByteIdenticalLogsAndWeights) {
     for (std::size_t i = 0; i < messages.size(); ++i)
       ASSERT_EQ(messages[i], other[i]) << channel << " message " << i;
   }
+}
+
+// A CSV's lines without their last column (wall_seconds).
+std::vector<std::string> withoutLastColumn(const fs::path& csv) {
+  std::vector<std::string> out;
+  std::ifstream in(csv);
+  for (std::string line; std::getline(in, line);) out.push_back(line.substr(0, line.rfind(',')));
+  return out;
+}
+
+// A memq job slot keeps its nodes from one run or test to the next, as a udpm
+// slot keeps its processes: intrinsic runs, the switch to the extrinsic phase,
+// a logger started for the first recorded run only, the agents' predictions
+// kept between tests. Every run and test must still come out as over udpm.
+TEST(Processes, AMemqSlotServesItsRunsAndTestsInTurnAsUdpmProcessesDo) {
+  std::map<std::string, std::string> out;
+  for (const auto& [transport, port] : {std::pair<std::string, int>{"udpm", 7850}, {"memq", 7860}}) {
+    out[transport] = test::tempDir("slot-" + transport);
+    const auto r = test::runCommand(experimentIn(
+        out[transport], "base --system IMP --reps 3 --steps 400 --extrinsic-reps 2 --scenarios scenario1 scenario3"
+                        " --jobs 1 --keep-logs first --no-reuse-agents --quiet --run-prefix " + transport +
+                        " --transport " + transport + " --base-port " + std::to_string(port)));
+    ASSERT_EQ(r.exit_code, 0) << r.output;
+  }
+  const json a = readJson(fs::path(out["udpm"]) / "summary.json"), b = readJson(fs::path(out["memq"]) / "summary.json");
+  ASSERT_EQ(a["systems"]["IMP"]["runs"].size(), 3u);
+  for (std::size_t i = 0; i < 3; ++i)
+    EXPECT_EQ(a["systems"]["IMP"]["runs"][i]["weights_checksum"], b["systems"]["IMP"]["runs"][i]["weights_checksum"]) << i;
+  std::vector<std::string> ta = withoutLastColumn(fs::path(out["udpm"]) / "extrinsic_IMP.csv"),
+                           tb = withoutLastColumn(fs::path(out["memq"]) / "extrinsic_IMP.csv");
+  ASSERT_EQ(ta.size(), 13u);  // the header and 3 agents x 2 scenarios x 2 tests
+  for (auto& line : tb) line = std::regex_replace(line, std::regex("memq-base"), "udpm-base");  // the run ids' prefix
+  EXPECT_EQ(ta, tb);
 }
 
 TEST(Processes, RealProcessesSolveAnExtrinsicScenario) {
