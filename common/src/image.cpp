@@ -131,11 +131,25 @@ cv::Mat scenarioPicture(const Scenario& s, const WorldConfig& world) {
 std::vector<std::uint8_t> encodeScene(const cv::Mat& scene) {
   CV_Assert(scene.type() == CV_8UC3 && scene.isContinuous());
   const uLong raw = static_cast<uLong>(scene.total() * 3);
-  std::vector<std::uint8_t> out(compressBound(raw));
-  uLongf n = out.size();
-  if (compress2(out.data(), &n, scene.data, raw, Z_BEST_SPEED) != Z_OK)
-    throw std::runtime_error("zlib compression of the scene failed");
-  out.resize(n);
+  // What compress2(..., Z_BEST_SPEED) writes, byte for byte, from one deflate
+  // state per thread, reset for each scene rather than built afresh (its
+  // ~300 KB of tables were allocated, zeroed and freed on every step).
+  struct Deflater {
+    z_stream z{};
+    bool ok = deflateInit(&z, Z_BEST_SPEED) == Z_OK;
+    ~Deflater() {
+      if (ok) deflateEnd(&z);
+    }
+  };
+  thread_local Deflater d;
+  if (!d.ok || deflateReset(&d.z) != Z_OK) throw std::runtime_error("zlib compression of the scene failed (no deflate state)");
+  std::vector<std::uint8_t> out(deflateBound(&d.z, raw));
+  d.z.next_in = scene.data;
+  d.z.avail_in = static_cast<uInt>(raw);
+  d.z.next_out = out.data();
+  d.z.avail_out = static_cast<uInt>(out.size());
+  if (deflate(&d.z, Z_FINISH) != Z_STREAM_END) throw std::runtime_error("zlib compression of the scene failed");
+  out.resize(d.z.total_out);
   return out;
 }
 

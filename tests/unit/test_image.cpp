@@ -6,6 +6,8 @@
 #include <set>
 #include <tuple>
 
+#include <zlib.h>
+
 #include "afford/image.hpp"
 #include "tests/support.hpp"
 
@@ -158,6 +160,25 @@ TEST(Image, SceneEncodingIsLossless) {
   EXPECT_LT(bytes.size(), 2000u);  // 67.5 KB raw
   const cv::Mat back = decodeScene(bytes, 150, 150);
   EXPECT_EQ(cv::norm(scene, back, cv::NORM_L1), 0.0);
+}
+
+// The bytes of a scene message (and so of every log) are those zlib's
+// compress2 at its fastest level writes, whatever scenes came before on the
+// thread (the encoder keeps one deflate state per thread and resets it).
+TEST(Image, SceneEncodingIsCompress2sOutputByteForByte) {
+  std::mt19937 gen(5);
+  std::uniform_real_distribution<double> where(0.2, 0.8);
+  for (int k = 0; k < 6; ++k) {
+    cv::Mat scene = blankScene(150);
+    for (int o = 0; o <= k; ++o)
+      paintObject(scene, static_cast<Shape>(o % 3), static_cast<Colour>(o % 3), where(gen), where(gen), world());
+    const uLong raw = static_cast<uLong>(scene.total() * 3);
+    std::vector<std::uint8_t> expected(compressBound(raw));
+    uLongf n = expected.size();
+    ASSERT_EQ(compress2(expected.data(), &n, scene.data, raw, Z_BEST_SPEED), Z_OK);
+    expected.resize(n);
+    EXPECT_EQ(encodeScene(scene), expected) << "scene " << k;
+  }
 }
 
 TEST(Image, CorruptOrMisSizedSceneDataIsRejected) {
