@@ -2,7 +2,10 @@
 
 #include <algorithm>
 #include <cmath>
+#include <deque>
 #include <filesystem>
+#include <map>
+#include <mutex>
 #include <set>
 #include <sstream>
 
@@ -447,13 +450,28 @@ std::string actionsCheckpoint(const std::string& checkpoint, std::int64_t action
 }
 
 RunConfig parseRunConfigText(const std::string& yaml_text) {
+  // Every node of a run parses the run's text, and in one process (memq,
+  // replay) they do so in turn: the last few texts parsed are kept with their
+  // configuration (a text that is refused is not kept, and is refused again).
+  static std::mutex mutex;
+  static std::deque<std::pair<std::string, RunConfig>> recent;
+  constexpr std::size_t kKept = 8;
+  {
+    const std::lock_guard<std::mutex> lock(mutex);
+    for (const auto& [text, config] : recent)
+      if (text == yaml_text) return config;
+  }
   YAML::Node root;
   try {
     root = YAML::Load(yaml_text);
   } catch (const YAML::Exception& e) {
     throw ConfigError(std::string("config is not valid YAML: ") + e.what());
   }
-  return parseRunConfig(root);
+  RunConfig config = parseRunConfig(root);
+  const std::lock_guard<std::mutex> lock(mutex);
+  recent.emplace_front(yaml_text, config);
+  if (recent.size() > kKept) recent.pop_back();
+  return config;
 }
 
 void mergeInto(YAML::Node base, const YAML::Node& over) {
@@ -472,8 +490,30 @@ std::vector<std::string> listExperiments(const std::string& config_dir) { return
 
 namespace {
 YAML::Node loadFile(const std::filesystem::path& file) {
+  // Planning reads the same few files for each of thousands of runs: a file is
+  // parsed again only when its size or time of change differs from the last.
+  struct Parsed {
+    std::uintmax_t size;
+    std::filesystem::file_time_type mtime;
+    YAML::Node node;
+  };
+  static std::mutex mutex;
+  static std::map<std::string, Parsed> parsed;
+  std::error_code ec;
+  const auto size = std::filesystem::file_size(file, ec);
+  const auto mtime = ec ? std::filesystem::file_time_type() : std::filesystem::last_write_time(file, ec);
+  if (!ec) {
+    const std::lock_guard<std::mutex> lock(mutex);
+    if (auto it = parsed.find(file.string()); it != parsed.end() && it->second.size == size && it->second.mtime == mtime)
+      return YAML::Clone(it->second.node);
+  }
   try {
-    return YAML::LoadFile(file.string());
+    YAML::Node node = YAML::LoadFile(file.string());
+    if (!ec) {
+      const std::lock_guard<std::mutex> lock(mutex);
+      parsed[file.string()] = Parsed{size, mtime, YAML::Clone(node)};
+    }
+    return node;
   } catch (const YAML::BadFile&) {
     throw ConfigError("cannot read config file " + file.string());
   } catch (const YAML::Exception& e) {

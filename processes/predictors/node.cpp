@@ -125,6 +125,7 @@ void PredictorsNode::publishPrediction(const focus_t& m) {
 Turn PredictorsNode::onForwardQuery(const forward_query_t& q) {
   if (!extrinsic()) return Turn::refuse("no forward queries in the intrinsic phase");
   if (q.seq <= last_query_) return Turn::refuse("query " + std::to_string(q.seq) + " was answered already");
+  if (!loaded_) return Turn::refuse("no agent is loaded");  // (configured for an extrinsic run, one is)
   last_query_ = q.seq;
   forward_prediction_t out;
   out.run_id = runId();
@@ -134,8 +135,14 @@ Turn PredictorsNode::onForwardQuery(const forward_query_t& q) {
   out.actions = q.actions;
   out.size = q.size;
   for (int a : q.actions) {
-    const std::vector<double> what = core_->whatEffect(a, q.image);
-    out.what.emplace_back(what.begin(), what.end());
+    // Extrinsic: core_ is loaded_->core, whose weights stay as loaded.
+    auto key = std::make_pair(a, q.image);
+    auto it = loaded_->what.find(key);
+    if (it == loaded_->what.end()) {
+      if (loaded_->what.size() >= kWhatKept) loaded_->what.clear();
+      it = loaded_->what.emplace(std::move(key), core_->whatEffect(a, q.image)).first;
+    }
+    out.what.emplace_back(it->second.begin(), it->second.end());
     const auto where = core_->whereEffect(a, q.x, q.y, q.target_x, q.target_y);
     out.where_x.push_back(where[0]);
     out.where_y.push_back(where[1]);

@@ -65,7 +65,12 @@ class PredictorsNode : public NodeBase {
     std::uintmax_t size = 0;
     std::filesystem::file_time_type mtime;
     std::shared_ptr<Predictors> core;
+    // The what-effect predictions already made with these weights, by action
+    // and focus image: a planner asks the same ones step after step, test after
+    // test. Bounded: emptied when it reaches kWhatKept.
+    std::map<std::pair<int, std::vector<std::uint8_t>>, std::vector<double>> what;
   };
+  static constexpr std::size_t kWhatKept = 2048;  // of 1323 doubles each: at most ~22 MB
   std::optional<Loaded> loaded_;
   std::unique_ptr<EffectTrainer> trainer_;  // declared after core_: stops before it goes
   std::vector<std::vector<std::uint8_t>> probes_;
