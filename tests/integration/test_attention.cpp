@@ -84,7 +84,9 @@ TEST(Attention, TopDownNeedsAboutOneIterationPerSubGoal) {
     EXPECT_EQ(solved_top, 3) << k << " sub-goals";
     EXPECT_GE(solved_top, solved_bottom) << k << " sub-goals";
     EXPECT_LE(top_down / 3, 1.5 * k) << k << " sub-goals: mean iterations";
-    if (k == 8) EXPECT_GT(bottom_up / solved_bottom, 2.0 * top_down / 3) << "bottom-up should need far more";
+    if (k == 8) {
+      EXPECT_GT(bottom_up / solved_bottom, 2.0 * top_down / 3) << "bottom-up should need far more";
+    }
   }
 }
 
@@ -134,7 +136,9 @@ TEST(Attention, TheProcessesComputeThePlainLoopAlsoAfterARestart) {
     const test::InProcessRun run(yaml, System::IMP, 80, parseRunConfigText(yaml).planner.budget, {}, 50, false,
                                  test::Restart{c.restart, 2});
     ASSERT_TRUE(run.outcome.ok) << what << ": " << run.outcome.error << "\n" << run.log.str().substr(0, 3000);
-    if (*c.restart) EXPECT_TRUE(run.restarted) << what;
+    if (*c.restart) {
+      EXPECT_TRUE(run.restarted) << what;
+    }
     const test::GoalTestOutcome ref = plain(yaml);
     EXPECT_TRUE(ref.success) << what;
     expectSame(run.outcome.extrinsic, ref, what);

@@ -255,10 +255,14 @@ TEST(EyeDifferences, ListTheChangedAndMovedObjectsAndNotTheDistractor) {
   for (const Difference& x : d) EXPECT_FALSE(near(x, 0.3, 0.7)) << "the rectangle is as the goal has it";
   // The goal's window at the square's place shows it green, the scene's red.
   for (const Difference& x : d)
-    if (near(x, 0.3, 0.3)) EXPECT_GT(imageDistance(x.image, std::vector<std::uint8_t>(x.image.size(), 0)), 0.0);
+    if (near(x, 0.3, 0.3)) {
+      EXPECT_GT(imageDistance(x.image, std::vector<std::uint8_t>(x.image.size(), 0)), 0.0);
+    }
   for (const Difference& x : goal)
     for (const Difference& y : scene)
-      if (near(x, 0.3, 0.3) && near(y, 0.3, 0.3)) EXPECT_GE(imageDistance(x.image, y.image), c.planner.subgoal_match);
+      if (near(x, 0.3, 0.3) && near(y, 0.3, 0.3)) {
+        EXPECT_GE(imageDistance(x.image, y.image), c.planner.subgoal_match);
+      }
   EXPECT_EQ(eye.focus().gaze.col, before.gaze.col);  // looking at the differences does not move the gaze...
   // ...but attending an object does: the window on the blob under the place.
   const Focus& f = eye.attend(0.7, 0.3);
