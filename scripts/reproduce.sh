@@ -3,15 +3,15 @@
 # docs/results.md (our tables and figures beside the paper's).
 #   scripts/reproduce.sh deterministic   base, late1, late2, late3: 10 intrinsic runs per
 #                                        system, 10 tests of each scenario per run (Tables
-#                                        1, 2, 4-6; Figures 5-10); about 10 min on 2 cores
+#                                        1, 2, 4-6; Figures 5-10); about 5 min on 2 cores
 #   scripts/reproduce.sh stochastic      stochastic, utility, forward-models, search-reduction
 #                                        with the counts of their files (Table 7, 8;
-#                                        Figures 11-14); about 7 min on 2 cores
+#                                        Figures 11-14); about 2 min on 2 cores
 #   scripts/reproduce.sh beyond          beyond the paper (issue 11): late1-3 with experience
 #                                        replay and revisits, beside the paper's agent, and
 #                                        random-tables (every system, 20 tables, with and without
 #                                        them); (issue 12) attention, multi-step, world-size on
-#                                        generated scenarios; about 16 min on 2 cores
+#                                        generated scenarios; about 8 min on 2 cores
 #   scripts/reproduce.sh all             all three
 #   scripts/reproduce.sh NAME...         only these experiments (e.g. late3 utility)
 # Environment: JOBS (runs at a time, default: cores), REPS and EXT_REPS (default: the
@@ -19,8 +19,10 @@
 # first: the logs of the first run of each system; all keeps every run's and test's log,
 # which `afford explain LOG_ROOT` summarises), KEEP_CHECKPOINTS (all, first or none; default all).
 # Trained agents are stored by content in OUT/logs/agents and reused by the experiments that
-# share them (REUSE=0 trains every one again). Runs over real processes (udpm); TRANSPORT=memq
-# hosts the same nodes in one process per job slot (the same results, faster: docs/performance.md). The page is written from every experiment
+# share them (REUSE=0 trains every one again). TRANSPORT (default memq) is how each job slot
+# hosts the processes: memq, the same nodes in the afford process on LCM's in-process bus, each
+# slot's kept from run to run (about 15 min for `all` on 2 cores); udpm, real processes over UDP
+# multicast (the same results, about twice as long: docs/performance.md). The page is written from every experiment
 # folder present under OUT, so parts may run at different times. An experiment with a
 # failed run is still summarised and plotted; the script then exits with status 1.
 set -euo pipefail
@@ -59,7 +61,7 @@ failed=()
 for exp in "${experiments[@]}"; do
   rm -rf "${out:?}/$exp"
   args=(--jobs "${JOBS:-$(nproc)}" --keep-logs "${KEEP_LOGS:-first}" --keep-checkpoints "${KEEP_CHECKPOINTS:-all}"
-        --out "$out/$exp" --log-root "$out/logs" --run-prefix "$prefix" --transport "${TRANSPORT:-udpm}")
+        --out "$out/$exp" --log-root "$out/logs" --run-prefix "$prefix" --transport "${TRANSPORT:-memq}")
   [[ ${REUSE:-1} == 0 ]] && args+=(--no-reuse-agents)
   [[ -n ${REPS:-} ]] && args+=(--reps "$REPS")
   case " ${deterministic[*]} late1-memory late2-memory late3-memory " in
