@@ -459,7 +459,10 @@ int runExperiment(const ExperimentOptions& request, spdlog::logger& log) {
     }
   }
   stamp(extrinsic.finishedCount());
-  for (std::size_t k = 0; k < parts.size(); ++k) removeCheckpoints(parts[k].plan, part_phase[k], summaries[k], log);
+  // A shard keeps every checkpoint: the merge plans the tests again from the
+  // checkpoint files (an after-N-actions one included), then removes them.
+  if (!o.shard_count)
+    for (std::size_t k = 0; k < parts.size(); ++k) removeCheckpoints(parts[k].plan, part_phase[k], summaries[k], log);
   const json summary = whole();
   writeWhole(out / "summary.json", summary.dump(2) + "\n");
   state["state"] = "finished";

@@ -259,6 +259,32 @@ TEST(Workflow, ASweepRunsTheCrossProductAndEachConditionIsItsSettings) {
   EXPECT_FALSE(fs::exists(dir + "/bad"));
 }
 
+// The forward-model design tests the checkpoints saved after 4000 actions. With
+// --keep-checkpoints none, shards keep theirs until the merge has planned the
+// tests from them; the merge then removes them, as one machine does.
+TEST(Workflow, ShardsOfTheForwardModelDesignMergeWithTheirTestsWhateverCheckpointsAreKept) {
+  const std::string dir = test::tempDir("shards-fm");
+  const std::string plan = "experiment forward-models --transport memq --system FIX --reps 2 --steps 4500 "
+                           "--extrinsic-reps 1 --scenarios scenario1 --quiet --keep-logs none --keep-checkpoints none "
+                           "--no-reuse-agents --run-prefix f";
+  Output whole = run(plan + " --out " + dir + "/whole --log-root " + dir + "/logs-whole");
+  ASSERT_EQ(whole.status, 0) << whole.text;
+  std::string shards;
+  for (int i = 0; i < 2; ++i) {
+    const std::string out = dir + "/shard" + std::to_string(i);
+    Output s = run(plan + " --shard " + std::to_string(i) + "/2 --out " + out + " --log-root " + dir + "/logs");
+    ASSERT_EQ(s.status, 0) << s.text;
+    shards += " " + out;
+  }
+  Output m = run("merge" + shards + " --quiet --out " + dir + "/merged");
+  ASSERT_EQ(m.status, 0) << m.text;
+  const json a = readJson(dir + "/whole/summary.json"), b = readJson(dir + "/merged/summary.json");
+  EXPECT_GT(b["extrinsic_tests"].get<int>(), 0);
+  EXPECT_FALSE(b.contains("untested_agents") && !b["untested_agents"].empty()) << b["untested_agents"];
+  EXPECT_EQ(test::withoutTimingsAndPaths(a), test::withoutTimingsAndPaths(b));
+  for (const auto& entry : b["systems"]["FIX"]["runs"]) EXPECT_TRUE(entry["checkpoint"].is_null()) << entry["run_id"];
+}
+
 // Four shards, then `afford merge`: the summary and CSV files of one machine
 // running it all, apart from timings and paths; a sweep shards too.
 TEST(Workflow, ShardsMergeIntoTheSummaryOfTheWholeExperiment) {
