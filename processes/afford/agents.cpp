@@ -84,17 +84,31 @@ void AgentStore::keep(const std::string& key, const std::string& run_id, const s
                       const RunOutcome& r) const {
   if (!r.ok || r.checkpoint.empty() || !fs::exists(r.checkpoint)) return;
   const fs::path dir = fs::path(root_) / key;
-  if (fs::exists(dir)) return;  // kept already (the same agent)
-  const fs::path part = fs::path(root_) / (key + ".part." + std::to_string(getpid()));
+  // Unique among runners sharing the log root, on this host or another.
+  char host[256] = {};
+  gethostname(host, sizeof host - 1);
+  const std::string mine = std::string(".part.") + host + "." + std::to_string(getpid());
+  // Each checkpoint file of the run, as predictors<suffix> in `folder` (a hard link where it can).
+  const std::size_t stem = fs::path(r.checkpoint).stem().string().size();
+  auto link = [&](const fs::path& folder, bool only_missing) {
+    for (const fs::path& f : checkpointFiles(r.checkpoint)) {
+      const fs::path to = folder / ("predictors" + f.filename().string().substr(stem));
+      if (only_missing && fs::exists(to)) continue;
+      const fs::path tmp = only_missing ? fs::path(to.string() + mine) : to;  // renamed into place: never half a file
+      std::error_code ec;
+      fs::create_hard_link(f, tmp, ec);
+      if (ec) fs::copy_file(f, tmp, fs::copy_options::overwrite_existing);
+      if (only_missing) fs::rename(tmp, to);
+    }
+  };
+  if (fs::exists(dir)) {  // kept already (the same agent): add what it lacks, e.g. an after-N-actions checkpoint
+    link(dir, true);
+    return;
+  }
+  const fs::path part = fs::path(root_) / (key + mine);
   fs::remove_all(part);
   fs::create_directories(part);
-  const std::size_t stem = fs::path(r.checkpoint).stem().string().size();
-  for (const fs::path& f : checkpointFiles(r.checkpoint)) {
-    const fs::path to = part / ("predictors" + f.filename().string().substr(stem));
-    std::error_code ec;
-    fs::create_hard_link(f, to, ec);
-    if (ec) fs::copy_file(f, to);
-  }
+  link(part, false);
   RunOutcome kept = r;
   kept.reused_from.clear();
   writeWhole(part / "outcome.json", json{{"run_id", run_id}, {"experiment", experiment}, {"key", key}, {"outcome", outcomeToJson(kept)}}.dump() + "\n");

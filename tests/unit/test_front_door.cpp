@@ -8,6 +8,7 @@
 #include <fstream>
 #include <set>
 
+#include "afford/agents.hpp"
 #include "afford/channels.hpp"
 #include "afford/config.hpp"
 #include "afford/host.hpp"
@@ -20,6 +21,39 @@ namespace afford {
 namespace {
 
 const std::string kConfigDir = std::string(AFFORD_SOURCE_DIR) + "/config";
+
+// An agent stored without an after-N-actions checkpoint (a run that did not ask
+// for one) gets it from a later run of the same agent that made it, and is
+// then found by an experiment that needs it; the files it had stay as they were.
+TEST(AgentStore, AKeptAgentGainsTheCheckpointsItLacked) {
+  namespace fs = std::filesystem;
+  const std::string dir = test::tempDir("store"), root = dir + "/agents";
+  auto runWith = [&](const std::string& name, bool after) {
+    fs::create_directories(dir + "/" + name);
+    RunOutcome r;
+    r.ok = true;
+    r.weights_checksum = "0123456789abcdef";
+    r.checkpoint = dir + "/" + name + "/predictors.ckpt";
+    std::ofstream(r.checkpoint) << name;
+    if (after) std::ofstream(actionsCheckpoint(r.checkpoint, 4000)) << name << " after 4000";
+    return r;
+  };
+  AgentStore store(root);
+  store.keep("k", "first", "stochastic", runWith("first", false));
+  ASSERT_TRUE(store.find("k", 0));
+  EXPECT_FALSE(store.find("k", 4000)) << "it has no after-4000 checkpoint yet";
+  store.keep("k", "second", "forward-models", runWith("second", true));
+  const auto found = store.find("k", 4000);
+  ASSERT_TRUE(found);
+  EXPECT_EQ(found->reused_from, "first");
+  std::ifstream whole(found->checkpoint), after(actionsCheckpoint(found->checkpoint, 4000));
+  EXPECT_EQ(std::string(std::istreambuf_iterator<char>(whole), {}), "first");
+  EXPECT_EQ(std::string(std::istreambuf_iterator<char>(after), {}), "second after 4000");
+  for (const auto& f : fs::directory_iterator(root))
+    EXPECT_EQ(f.path().filename(), "k") << "no temporary folder or file is left";
+  for (const auto& f : fs::directory_iterator(root + "/k"))
+    EXPECT_EQ(f.path().string().find(".part."), std::string::npos) << f.path();
+}
 
 TEST(Sweep, ValuesSplitAtTopLevelCommasOnly) {
   EXPECT_EQ(sweepValues("0.1,0.2,0.4"), (std::vector<std::string>{"0.1", "0.2", "0.4"}));
