@@ -1,7 +1,7 @@
 #!/usr/bin/env bash
 # Submit an afford experiment to a Slurm cluster: a job array of N shards
 # (`afford experiment ... --shard i/N`, one job per shard, each with the cores
-# Slurm gives it), then a job that depends on them all (afterok) and merges
+# Slurm gives it), then a job that runs once they have all ended (afterany) and merges
 # their folders into the whole experiment's (`afford merge`). docs/cluster.md.
 #
 # Usage: scripts/slurm-submit.sh [options] -- EXPERIMENT-ARGUMENTS...
@@ -86,7 +86,7 @@ echo "slurm-submit: shards: job array $array (${shards} tasks), output in $out/s
 wait_arg=(); ((wait)) && wait_arg=(--wait)
 echo "slurm-submit: merge: a job after them all; the experiment's summary will be $out/summary.json"
 set +e
-merge=$(sbatch --parsable --chdir="$PWD" --dependency="afterok:$array" --kill-on-invalid-dep=yes "${wait_arg[@]}" \
+merge=$(sbatch --parsable --chdir="$PWD" --dependency="afterany:$array" "${wait_arg[@]}" \
   "${sbatch_args[@]}" "$out/slurm/merge.sbatch")
 status=$?
 set -e
