@@ -293,7 +293,6 @@ int runExperiment(const ExperimentOptions& request, spdlog::logger& log) {
   // Everything is checked before anything is written or started.
   json state;
   ExperimentOptions o = request;
-  const bool merging = !request.merged_from.empty();
   if (request.resume) {
     state = unfinishedState(request);
     o = resumedOptions(request, state);
@@ -304,6 +303,7 @@ int runExperiment(const ExperimentOptions& request, spdlog::logger& log) {
                         "(scripts/slurm-submit.sh gives one)");
     if (o.run_prefix.empty()) o.run_prefix = defaultPrefix();  // stored: --resume plans the same run ids
   }
+  const bool merging = !o.merged_from.empty();  // (a resumed merge too: its shards are gathered again)
   if (o.shard_count && (o.shard_count < 1 || o.shard_index < 0 || o.shard_index >= o.shard_count))
     throw ConfigError("--shard must be i/n with 0 <= i < n, not " + std::to_string(o.shard_index) + "/" +
                       std::to_string(o.shard_count));

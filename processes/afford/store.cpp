@@ -48,6 +48,8 @@ json optionsToJson(const ExperimentOptions& o) {
           {"settings", o.settings},
           {"sweep_file", o.sweep_file},
           {"shard", o.shard_count ? json{{"index", o.shard_index}, {"count", o.shard_count}} : json(nullptr)},
+          {"merged_from", o.merged_from},  // a merge resumes as one: it gathers its shards again
+          {"merged_network", o.merged_network},
           {"extrinsic_reps", o.extrinsic_reps},
           {"scenarios", o.scenarios},
           {"tables", o.tables ? json(*o.tables) : json(nullptr)},
@@ -84,6 +86,8 @@ ExperimentOptions optionsFromJson(const json& j) {
     o.shard_index = j["shard"].at("index").get<int>();
     o.shard_count = j["shard"].at("count").get<int>();
   }
+  o.merged_from = j.value("merged_from", std::vector<std::string>());
+  o.merged_network = j.value("merged_network", std::string());
   o.extrinsic_reps = j.at("extrinsic_reps").get<int>();
   o.scenarios = j.at("scenarios").get<std::vector<std::string>>();
   if (j.contains("tables") && !j["tables"].is_null()) o.tables = j["tables"].get<int>();

@@ -313,6 +313,15 @@ TEST(Workflow, ShardsMergeIntoTheSummaryOfTheWholeExperiment) {
   EXPECT_EQ(test::withoutTimingsAndPaths(a), test::withoutTimingsAndPaths(b));
   for (const char* f : {"curves_FIX.csv", "affordance_IGN.csv", "curves_IMP.csv"})
     EXPECT_EQ(readText(dir + "/whole/" + f), readText(dir + "/merged/" + f)) << f;
+  // A merge cut short (its state left running, no summary yet) resumes as a merge: it gathers the shards again.
+  json state = readJson(dir + "/merged/experiment.json");
+  state["state"] = "running";
+  std::ofstream(dir + "/merged/experiment.json") << state.dump(2);
+  fs::remove(dir + "/merged/summary.json");
+  Output again = run("experiment --resume --quiet --out " + dir + "/merged");
+  ASSERT_EQ(again.status, 0) << again.text;
+  EXPECT_NE(again.text.find("merging 4 shard(s)"), std::string::npos) << again.text;
+  EXPECT_EQ(test::withoutTimingsAndPaths(readJson(dir + "/merged/summary.json")), test::withoutTimingsAndPaths(a));
 
   // Shards of another experiment do not merge with these.
   Output other = run("experiment base --transport memq --system IMP --reps 2 --steps 300 --quiet --keep-logs none "
