@@ -6,6 +6,7 @@
 #include <filesystem>
 #include <set>
 
+#include "afford/checksum.hpp"
 #include "afford/config.hpp"
 
 namespace afford {
@@ -42,6 +43,14 @@ namespace {
 std::string folderOf(const std::string& name) {
   std::string f;
   for (char c : name) f += std::isalnum(static_cast<unsigned char>(c)) || std::string("._=,-").find(c) != std::string::npos ? c : '_';
+  // A file name holds at most 255 bytes: a long condition keeps its start and
+  // a hash of the whole name (summary.json maps each condition to its folder).
+  constexpr std::size_t kLongest = 160;
+  if (f.size() > kLongest) {
+    Fnv1a h;
+    h.add(name.data(), name.size());
+    f = f.substr(0, kLongest - 17) + "-" + h.hex();
+  }
   return f;
 }
 
@@ -80,7 +89,10 @@ Sweep planSweep(const std::vector<std::string>& settings, const std::string& swe
       throw ConfigError("sweep file " + sweep_file + ": expected a map of config keys to lists of values "
                         "(e.g. motivation.leak: [0.1, 0.2])");
     for (const auto& kv : doc) {
-      const std::string key = kv.first.as<std::string>();
+      if (!kv.first.IsScalar())
+        throw ConfigError("sweep file " + sweep_file + ": a key that is not a config key name (line " +
+                          std::to_string(kv.first.Mark().line + 1) + ")");
+      const std::string key = kv.first.Scalar();
       const YAML::Node& v = kv.second;
       std::vector<std::string> values;
       if (v.IsSequence()) {

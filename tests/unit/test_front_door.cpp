@@ -75,6 +75,34 @@ TEST(Sweep, ConditionsAreTheCrossProductLastKeyFastest) {
   EXPECT_THROW(planSweep({"a=1,", "b=2"}, ""), ConfigError);  // an empty value
 }
 
+// A condition's folder is a file name: long ones keep their start and a hash
+// of the whole name, so they stay distinct and within the file system's 255 bytes.
+TEST(Sweep, LongConditionsGetShortDistinctFolders) {
+  const std::string long_a(150, 'a'), long_b(150, 'b');
+  const Sweep s = planSweep({"planner.x=[" + long_a + "1]," + "[" + long_a + "2]", "motivation.y=" + long_b + ",c"}, "");
+  ASSERT_EQ(s.conditions.size(), 4u);
+  std::set<std::string> folders;
+  for (const auto& c : s.conditions) {
+    EXPECT_LE(c.folder.size(), 160u) << c.folder;
+    folders.insert(c.folder);
+  }
+  EXPECT_EQ(folders.size(), 4u);
+  EXPECT_EQ(planSweep({"a.b=[1],[2]", "c=x,y"}, "").conditions[1].folder, "a.b=_1_,c=y");  // short ones: as they were
+}
+
+// A sweep file whose key is a list or a map is refused naming the file and the line.
+TEST(Sweep, ASweepFileKeyThatIsNoNameIsRefusedNamingTheFile) {
+  const std::string file = test::tempDir("sweep-key") + "/sweep.yaml";
+  std::ofstream(file) << "motivation.leak: [0.1, 0.2]\n? [a, b]\n: [1, 2]\n";
+  try {
+    planSweep({}, file);
+    FAIL() << "accepted";
+  } catch (const ConfigError& e) {
+    EXPECT_NE(std::string(e.what()).find("sweep file " + file), std::string::npos) << e.what();
+    EXPECT_NE(std::string(e.what()).find("line 2"), std::string::npos) << e.what();
+  }
+}
+
 TEST(Registry, EachRunChannelHasOnePublisherPerPhase) {
   for (bool extrinsic : {false, true}) {
     std::set<std::string> published;
