@@ -4,7 +4,6 @@
 #include <sys/syscall.h>
 #include <unistd.h>
 
-#include <algorithm>
 #include <atomic>
 #include <functional>
 #include <mutex>
@@ -45,7 +44,6 @@ struct Slot {
   // Over memq, the slot's nodes in this process, kept between its runs as a
   // udpm slot keeps its processes (declared after the bus they are on).
   std::unique_ptr<InProcessHost> host;
-  std::vector<std::string> hosted;  // the processes the host runs
 };
 
 RunOutcome runInProcess(const PlannedRun& run, const ExperimentOptions& o, const ProtocolConfig& protocol, Slot& slot,
@@ -59,7 +57,6 @@ RunOutcome runInProcess(const PlannedRun& run, const ExperimentOptions& o, const
   // The motivation decides in the intrinsic phase, the planner in the extrinsic one: the other phase, a new host.
   if (!slot.host || slot.extrinsic != run.spec.extrinsic) {
     slot.host.reset();
-    slot.hosted.clear();
     slot.extrinsic = run.spec.extrinsic;
     slot.host = std::make_unique<InProcessHost>(
         *slot.lcm, protocol, [tag, level](const std::string& p) { return makeLogger(p + tag, level); },
@@ -67,10 +64,7 @@ RunOutcome runInProcess(const PlannedRun& run, const ExperimentOptions& o, const
   }
   // The logger, once started with a recorded run, stays free during the runs not recorded (run.record).
   for (const std::string& p : run.spec.processes)
-    if (std::find(slot.hosted.begin(), slot.hosted.end(), p) == slot.hosted.end()) {
-      slot.host->start(p);
-      slot.hosted.push_back(p);
-    }
+    if (!slot.host->hosts(p)) slot.host->start(p);
   InProcessHost& host = *slot.host;
   lcm::LCM& lcm = *slot.lcm;
   slot.driver->onStep(on_step);
@@ -82,13 +76,9 @@ RunOutcome runInProcess(const PlannedRun& run, const ExperimentOptions& o, const
       },
       [] { return std::string(); });
   r.peak_rss_kb["all (one process)"] = peakRssKb(getpid());
-  if (!r.ok) {  // a host whose run failed is not reused
-    slot.host.reset();
-    slot.hosted.clear();
-  }
+  if (!r.ok) slot.host.reset();  // a host whose run failed is not reused
   return r;
 }
-
 
 RunOutcome runOverUdpm(const PlannedRun& run, const ExperimentOptions& o, const ProtocolConfig& protocol, Slot& slot,
                        const std::string& bin, const OnStep& on_step) {
@@ -211,6 +201,7 @@ void executeRuns(const std::vector<PlannedRun>& runs, PhaseRuns& phase, const Ex
         r = o.transport == "memq" ? runInProcess(runs[i], o, protocol, slot, on_step)
                                   : runOverUdpm(runs[i], o, protocol, slot, bin, on_step);
       } catch (const std::exception& e) {
+        slot.host.reset();  // (memq) nodes left mid-run are not reused
         r.ok = false;
         r.error = "run '" + id + "': " + e.what();
       }

@@ -43,6 +43,8 @@ class InProcessHost {
   void tick();
   // Some node is still in a run.
   bool inRun() const;
+  // A node of this process has been started.
+  bool hosts(const std::string& process) const { return nodes_.count(process) > 0; }
 
  private:
   lcm::LCM& lcm_;
