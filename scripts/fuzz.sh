@@ -26,12 +26,13 @@ done
 }
 build=$(cd "$build" && pwd)
 clangxx=$(command -v clang++ || command -v clang++-14 || true)
-[[ -n $clangxx ]] || { echo "fuzz.sh: clang++ not found (scripts/setup.sh installs it)" >&2; exit 1; }
+clang=$(command -v clang || command -v clang-14 || true)
+[[ -n $clangxx && -n $clang ]] || { echo "fuzz.sh: clang not found (scripts/setup.sh installs it)" >&2; exit 1; }
 
 fuzz=$build/fuzz
 mkdir -p "$fuzz"
 echo "fuzz.sh: building the fuzz target in $fuzz"
-cmake -S "$root/tests/fuzz" -B "$fuzz" -DCMAKE_CXX_COMPILER="$clangxx" -DAFFORD_MAIN_BUILD="$build" \
+cmake -S "$root/tests/fuzz" -B "$fuzz" -DCMAKE_C_COMPILER="$clang" -DCMAKE_CXX_COMPILER="$clangxx" -DAFFORD_MAIN_BUILD="$build" \
   >"$fuzz/configure.log" 2>&1 || { cat "$fuzz/configure.log"; exit 1; }
 cmake --build "$fuzz" -j2 >"$fuzz/build.log" 2>&1 || { cat "$fuzz/build.log"; exit 1; }
 echo "fuzz.sh: built in $SECONDS s"

@@ -1,14 +1,15 @@
 #!/usr/bin/env bash
-# Install every Debian package afford needs (idempotent), then configure and build a
-# Release build into build/ (executables in build/bin/).
+# Install every Debian package afford needs (idempotent), fetch LCM's source
+# (scripts/fetch-lcm.sh), then configure and build a Release build into build/
+# (executables in build/bin/).
 # Usage: scripts/setup.sh [--no-build]
 # Works as root on a fresh Debian bookworm with only the compiler toolchain.
 set -euo pipefail
 cd "$(dirname "$0")/.."
 
 packages=(
-  build-essential cmake pkg-config git ca-certificates
-  liblcm-dev liblcm-bin liblcm-java libglib2.0-dev
+  build-essential cmake pkg-config git ca-certificates patch
+  liblcm-bin liblcm-java libglib2.0-dev  # lcm-gen, the LCM tools and lcm.jar; liblcm itself is built (below)
   libeigen3-dev libopencv-dev libspdlog-dev libfmt-dev
   libcli11-dev libyaml-cpp-dev nlohmann-json3-dev zlib1g-dev libgsl-dev
   libgtest-dev libgmock-dev
@@ -30,6 +31,9 @@ if ((${#missing[@]})); then
   $sudo apt-get update -qq
   $sudo apt-get install -y -qq --no-install-recommends "${missing[@]}" >/dev/null
 fi
+
+# LCM's source, which the build patches (third_party/lcm/README.md).
+scripts/fetch-lcm.sh
 
 [[ ${1:-} == --no-build ]] && exit 0
 cmake -S . -B build -DCMAKE_BUILD_TYPE=Release >/dev/null

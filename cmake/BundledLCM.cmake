@@ -1,0 +1,79 @@
+# LCM 1.3.1 built from source with the project's patches (third_party/lcm/README.md).
+#
+# afford_bundled_lcm(TARGET): a static library TARGET of liblcm, from the tarball that
+# scripts/fetch-lcm.sh keeps in third_party/lcm/dist/, extracted into the build tree and
+# patched there with third_party/lcm/patches/*.patch in order. Its include directory
+# gives <lcm/lcm-cpp.hpp>, <lcm/lcm_coretypes.h> and <lcm/eventlog.h>. A changed patch
+# re-extracts and re-patches at the next build. The wire format is LCM's own: Debian's
+# lcm-spy, lcm-logger and lcm-logplayer interoperate with it.
+set(AFFORD_LCM_VERSION 1.3.1)
+set(AFFORD_LCM_TARBALL_NAME lcm_1.3.1+repack1.orig.tar.gz)
+set(AFFORD_LCM_TARBALL_SHA256 abf293e54aff3d073cb4f9d4d5a261eab0e5ffea02e13fd601715c11612b85e8)
+
+function(afford_bundled_lcm target)
+  get_filename_component(root ${CMAKE_CURRENT_FUNCTION_LIST_DIR}/.. ABSOLUTE)
+  set(tarball ${root}/third_party/lcm/dist/${AFFORD_LCM_TARBALL_NAME})
+  if(NOT EXISTS ${tarball})
+    message(FATAL_ERROR "${tarball} is missing: run scripts/fetch-lcm.sh (scripts/setup.sh does) to fetch "
+                        "LCM ${AFFORD_LCM_VERSION}'s source, which afford builds with its own patches")
+  endif()
+  file(SHA256 ${tarball} got)
+  if(NOT got STREQUAL AFFORD_LCM_TARBALL_SHA256)
+    message(FATAL_ERROR "${tarball} has SHA-256 ${got}, not ${AFFORD_LCM_TARBALL_SHA256}: remove it and run "
+                        "scripts/fetch-lcm.sh again")
+  endif()
+  file(GLOB patches ${root}/third_party/lcm/patches/*.patch)
+  list(SORT patches)
+  set_property(DIRECTORY APPEND PROPERTY CMAKE_CONFIGURE_DEPENDS ${tarball} ${patches})
+
+  # Extract and patch again whenever the tarball or a patch changes.
+  set(deps ${CMAKE_BINARY_DIR}/_deps)
+  set(src ${deps}/lcm-${AFFORD_LCM_VERSION})
+  set(stamp_text ${got})
+  foreach(p ${patches})
+    file(SHA256 ${p} h)
+    string(APPEND stamp_text "\n${h}")
+  endforeach()
+  set(stamp ${deps}/lcm-${AFFORD_LCM_VERSION}.stamp)
+  set(old_stamp "")
+  if(EXISTS ${stamp})
+    file(READ ${stamp} old_stamp)
+  endif()
+  if(NOT old_stamp STREQUAL stamp_text OR NOT EXISTS ${src}/lcm/lcm.c)
+    file(REMOVE_RECURSE ${src} ${stamp})
+    file(ARCHIVE_EXTRACT INPUT ${tarball} DESTINATION ${deps})
+    find_program(PATCH_EXECUTABLE patch REQUIRED)
+    foreach(p ${patches})
+      execute_process(COMMAND ${PATCH_EXECUTABLE} -p1 --forward --batch --silent -i ${p}
+                      WORKING_DIRECTORY ${src} RESULT_VARIABLE rc OUTPUT_VARIABLE out ERROR_VARIABLE out)
+      if(NOT rc EQUAL 0)
+        message(FATAL_ERROR "patch ${p} does not apply to LCM ${AFFORD_LCM_VERSION}:\n${out}")
+      endif()
+    endforeach()
+    file(WRITE ${stamp} "${stamp_text}")
+    list(LENGTH patches n)
+    message(STATUS "LCM ${AFFORD_LCM_VERSION}: extracted into ${src} and patched (${n} patches)")
+  endif()
+
+  find_package(PkgConfig REQUIRED)
+  pkg_check_modules(AFFORD_GLIB REQUIRED IMPORTED_TARGET glib-2.0 gthread-2.0)
+  find_package(Threads REQUIRED)
+  add_library(${target} STATIC
+    ${src}/lcm/lcm.c
+    ${src}/lcm/lcm_udpm.c
+    ${src}/lcm/lcm_mpudpm.c
+    ${src}/lcm/lcm_file.c
+    ${src}/lcm/lcm_memq.c
+    ${src}/lcm/lcm_tcpq.c
+    ${src}/lcm/ringbuffer.c
+    ${src}/lcm/udpm_util.c
+    ${src}/lcm/eventlog.c
+    ${src}/lcm/lcmtypes/channel_to_port_t.c
+    ${src}/lcm/lcmtypes/channel_port_map_update_t.c)
+  set_target_properties(${target} PROPERTIES C_STANDARD 99 C_EXTENSIONS ON POSITION_INDEPENDENT_CODE ON)
+  # Upstream's code, built as upstream builds it: its warnings are not ours to fix here.
+  target_compile_options(${target} PRIVATE -w)
+  target_compile_definitions(${target} PRIVATE GLIB_DISABLE_DEPRECATION_WARNINGS)
+  target_include_directories(${target} PUBLIC ${src})
+  target_link_libraries(${target} PUBLIC PkgConfig::AFFORD_GLIB Threads::Threads)
+endfunction()

@@ -1,0 +1,314 @@
+// The project's patches to LCM 1.3.1 (third_party/lcm/patches), each by the
+// datagrams it is about: a real udpm receiver of the patched liblcm, in a
+// private network namespace of this test process (root), fed crafted
+// datagrams from raw sockets. Each test fails (or crashes) without its patch.
+// After the datagrams under test, a message on another channel is sent from
+// the same socket; once it has arrived, everything sent before it has been
+// handled by the receiver (datagrams of one socket arrive in order on loopback).
+#include <arpa/inet.h>
+#include <gtest/gtest.h>
+#include <lcm/lcm-cpp.hpp>
+#include <netinet/in.h>
+#include <sched.h>
+#include <sys/socket.h>
+#include <unistd.h>
+
+#include <chrono>
+#include <cstdint>
+#include <cstdlib>
+#include <cstring>
+#include <fstream>
+#include <map>
+#include <string>
+#include <thread>
+#include <vector>
+
+#include "tests/support.hpp"
+
+namespace afford {
+namespace {
+
+using Bytes = std::vector<std::uint8_t>;
+constexpr int kPort = 7471;
+constexpr std::uint32_t kShort = 0x4c433032, kLong = 0x4c433033;
+
+void put32(Bytes& b, std::uint32_t v) {
+  for (int i = 3; i >= 0; --i) b.push_back(static_cast<std::uint8_t>(v >> (8 * i)));
+}
+void put16(Bytes& b, std::uint16_t v) {
+  b.push_back(static_cast<std::uint8_t>(v >> 8));
+  b.push_back(static_cast<std::uint8_t>(v));
+}
+Bytes pattern(std::size_t n, std::uint8_t seed) {
+  Bytes b(n);
+  for (std::size_t i = 0; i < n; ++i) b[i] = static_cast<std::uint8_t>(seed + i * 7);
+  return b;
+}
+
+// A fragment datagram; `channel` only in fragment 0.
+Bytes fragment(std::uint32_t seqno, std::uint32_t size, std::uint32_t offset, std::uint16_t no, std::uint16_t count,
+               const std::string& channel, const Bytes& payload) {
+  Bytes b;
+  put32(b, kLong);
+  put32(b, seqno);
+  put32(b, size);
+  put32(b, offset);
+  put16(b, no);
+  put16(b, count);
+  if (no == 0) {
+    b.insert(b.end(), channel.begin(), channel.end());
+    b.push_back(0);
+  }
+  b.insert(b.end(), payload.begin(), payload.end());
+  return b;
+}
+
+// One sender: a socket of its own (LCM reassembles per sender address).
+class Sender {
+ public:
+  Sender() {
+    fd_ = socket(AF_INET, SOCK_DGRAM, 0);
+    const unsigned char ttl = 0, loop = 1;
+    setsockopt(fd_, IPPROTO_IP, IP_MULTICAST_TTL, &ttl, sizeof ttl);
+    setsockopt(fd_, IPPROTO_IP, IP_MULTICAST_LOOP, &loop, sizeof loop);
+    to_.sin_family = AF_INET;
+    to_.sin_port = htons(kPort);
+    inet_pton(AF_INET, "239.255.76.67", &to_.sin_addr);
+  }
+  ~Sender() { close(fd_); }
+  void send(const Bytes& b) {
+    ASSERT_EQ(sendto(fd_, b.data(), b.size(), 0, reinterpret_cast<const sockaddr*>(&to_), sizeof to_),
+              static_cast<ssize_t>(b.size()));
+  }
+  // A whole message in fragments of at most `per` payload bytes, as an LCM sender cuts it.
+  void sendFragmented(std::uint32_t seqno, const std::string& channel, const Bytes& data, std::uint32_t per = 60000) {
+    const std::uint32_t first = per - static_cast<std::uint32_t>(channel.size() + 1);
+    const auto count = static_cast<std::uint16_t>(1 + (data.size() - first + per - 1) / per);
+    std::uint32_t offset = 0;
+    for (std::uint16_t no = 0; no < count; ++no) {
+      const std::uint32_t len = std::min<std::uint32_t>(no == 0 ? first : per, static_cast<std::uint32_t>(data.size()) - offset);
+      send(fragment(seqno, static_cast<std::uint32_t>(data.size()), offset, no, count, channel,
+                    Bytes(data.begin() + offset, data.begin() + offset + len)));
+      offset += len;
+    }
+  }
+  void sendShort(const std::string& channel, const Bytes& payload, bool terminate = true) {
+    Bytes b;
+    put32(b, kShort);
+    put32(b, seqno_++);
+    b.insert(b.end(), channel.begin(), channel.end());
+    if (terminate) b.push_back(0);
+    b.insert(b.end(), payload.begin(), payload.end());
+    send(b);
+  }
+
+ private:
+  int fd_ = -1;
+  sockaddr_in to_{};
+  std::uint32_t seqno_ = 1;
+};
+
+class LcmPatches : public ::testing::Test {
+ protected:
+  static void SetUpTestSuite() {
+    // A network namespace of this process's own: loopback with a multicast route, nothing leaves it.
+    ASSERT_EQ(unshare(CLONE_NEWNET), 0) << "unshare(CLONE_NEWNET) needs root: " << std::strerror(errno);
+    ASSERT_EQ(std::system("ip link set lo up multicast on && ip route add 224.0.0.0/4 dev lo"), 0);
+  }
+
+  // A receiver of the patched liblcm on `options`, taking channels BAD and SYNC.
+  void listen(const std::string& options) {
+    lcm_ = std::make_unique<lcm::LCM>("udpm://239.255.76.67:" + std::to_string(kPort) + "?ttl=0" + options);
+    ASSERT_TRUE(lcm_->good());
+    lcm_->subscribe("BAD", &LcmPatches::onBad, this);
+    lcm_->subscribe("SYNC", &LcmPatches::onSync, this);
+  }
+  void onBad(const lcm::ReceiveBuffer* rb, const std::string&) {
+    const auto* d = static_cast<const std::uint8_t*>(rb->data);
+    bad_.emplace_back(d, d + rb->data_size);
+  }
+  void onSync(const lcm::ReceiveBuffer* rb, const std::string&) {
+    if (rb->data_size == 4) synced_ = static_cast<const std::uint8_t*>(rb->data)[3];
+  }
+  // Everything `s` sent so far has been handled once its SYNC message has come back.
+  void sync(Sender& s) {
+    const std::uint8_t mark = ++mark_;
+    const auto until = std::chrono::steady_clock::now() + std::chrono::seconds(10);
+    // Said again while unheard: a full socket buffer may have dropped it (recovery from loss only).
+    while (synced_ != mark && std::chrono::steady_clock::now() < until) {
+      s.sendShort("SYNC", {0, 0, 0, mark});
+      lcm_->handleTimeout(100);
+    }
+    ASSERT_EQ(synced_, mark) << "the receiver did not hear the SYNC message (did its receive thread die?)";
+    while (lcm_->handleTimeout(0) > 0) {
+    }
+  }
+
+  std::unique_ptr<lcm::LCM> lcm_;
+  std::vector<Bytes> bad_;
+  std::uint8_t mark_ = 0, synced_ = 0;
+};
+
+long residentKb() {
+  std::ifstream in("/proc/self/status");
+  for (std::string line; std::getline(in, line);)
+    if (line.rfind("VmRSS:", 0) == 0) return std::stol(line.substr(6));
+  return -1;
+}
+
+// 0001: LCM 1.3.1 copied ~4 GB here (upstream issue 628) and the receive thread died.
+TEST_F(LcmPatches, AFragmentShorterThanItsHeaderIsDroppedAfterAFirstFragment) {
+  listen("");
+  Sender s;
+  for (std::size_t n : {8, 12, 16, 19}) {
+    s.send(fragment(9, 200000, 0, 0, 4, "BAD", pattern(1000, 1)));
+    Bytes b = fragment(9, 200000, 1000, 1, 4, "", {});  // an offset that makes the wrapped size pass
+    b.resize(n);
+    s.send(b);
+  }
+  sync(s);
+  EXPECT_TRUE(bad_.empty());
+}
+
+// 0001: a channel name running to the datagram's end made the payload size negative.
+TEST_F(LcmPatches, AChannelNameThatDoesNotEndInTheDatagramIsDropped) {
+  listen("");
+  Sender s;
+  // A dropped datagram's buffer is received into again: zeros after "BAD" would end the name there.
+  s.sendShort("ZZ", Bytes(2000, 0));
+  s.sendShort("BAD", {}, /*terminate=*/false);
+  Bytes first = fragment(3, 100000, 0, 0, 2, "BAD", {});
+  first.pop_back();  // no terminating zero
+  s.send(first);
+  sync(s);
+  EXPECT_TRUE(bad_.empty());
+}
+
+// 0002: an offset near 4 GB wrapped the 32-bit range check.
+TEST_F(LcmPatches, AFragmentWhoseOffsetWrapsIsDropped) {
+  listen("");
+  Sender s;
+  s.send(fragment(5, 200000, 0, 0, 4, "BAD", pattern(1000, 2)));
+  s.send(fragment(5, 200000, 0xFFFFFFF0u, 1, 4, "", pattern(3000, 3)));
+  s.send(fragment(6, 200000, 0, 0, 0, "BAD", pattern(100, 4)));     // zero fragments
+  s.send(fragment(7, 200000, 0, 9, 4, "", pattern(100, 5)));        // a fragment number beyond the count
+  sync(s);
+  EXPECT_TRUE(bad_.empty());
+}
+
+// 0003: a fragment taken twice made a message complete with another missing.
+TEST_F(LcmPatches, EachFragmentCountsOnceAndOverlapsAreDropped) {
+  listen("");
+  Sender s;
+  const Bytes data = pattern(150000, 6);
+  const std::uint32_t first = 60000 - 4;
+  s.send(fragment(11, 150000, 0, 0, 3, "BAD", Bytes(data.begin(), data.begin() + first)));
+  const Bytes second(data.begin() + first, data.begin() + first + 60000);
+  s.send(fragment(11, 150000, first, 1, 3, "", second));
+  s.send(fragment(11, 150000, first, 1, 3, "", second));  // again
+  sync(s);
+  EXPECT_TRUE(bad_.empty()) << "completed without its third fragment";
+  s.send(fragment(11, 150000, first + 60000, 2, 3, "", Bytes(data.begin() + first + 60000, data.end())));
+  sync(s);
+  ASSERT_EQ(bad_.size(), 1u);
+  EXPECT_EQ(bad_[0], data);
+
+  // Every fragment once, but one overlapping another (their sizes add up to more than the
+  // message), or one short (less): the message is not passed on with bytes it never got.
+  const Bytes third(data.begin() + first + 60000, data.end());
+  s.send(fragment(12, 150000, 0, 0, 3, "BAD", Bytes(data.begin(), data.begin() + first)));
+  s.send(fragment(12, 150000, first - 1000, 1, 3, "", Bytes(data.begin() + first - 1000, data.begin() + first + 60000)));
+  s.send(fragment(12, 150000, first + 60000, 2, 3, "", third));
+  s.send(fragment(13, 150000, 0, 0, 3, "BAD", Bytes(data.begin(), data.begin() + first)));
+  s.send(fragment(13, 150000, first, 1, 3, "", Bytes(second.begin(), second.end() - 1000)));
+  s.send(fragment(13, 150000, first + 60000, 2, 3, "", third));
+  sync(s);
+  EXPECT_EQ(bad_.size(), 1u) << "a message whose fragments overlap or leave a gap was passed on";
+}
+
+// 0005: the store's bounds hold with the new message in it.
+TEST_F(LcmPatches, IncompleteMessagesHoldAtMostTheFragmentBufferTogether) {
+  listen("&max_message_size=100000&fragment_buffer_size=150000");
+  Sender a, b;
+  const Bytes data = pattern(100000, 7);
+  const std::uint32_t first = 60000 - 4;
+  a.send(fragment(1, 100000, 0, 0, 2, "BAD", Bytes(data.begin(), data.begin() + first)));
+  b.send(fragment(1, 100000, 0, 0, 2, "BAD", Bytes(data.begin(), data.begin() + first)));  // evicts a's
+  a.send(fragment(1, 100000, first, 1, 2, "", Bytes(data.begin() + first, data.end())));
+  b.send(fragment(1, 100000, first, 1, 2, "", Bytes(data.begin() + first, data.end())));
+  sync(a);
+  sync(b);
+  ASSERT_EQ(bad_.size(), 1u) << "both incomplete messages were kept, beyond fragment_buffer_size";
+  EXPECT_EQ(bad_[0], data);
+}
+
+// 0005: an incomplete message expires after fragment_timeout_ms.
+TEST_F(LcmPatches, AnIncompleteMessageExpires) {
+  listen("&fragment_timeout_ms=50");
+  Sender s;
+  const Bytes data = pattern(100000, 8);
+  const std::uint32_t first = 60000 - 4;
+  s.send(fragment(2, 100000, 0, 0, 2, "BAD", Bytes(data.begin(), data.begin() + first)));
+  sync(s);
+  // The behaviour under test is time itself: the rest arrives well after the timeout.
+  std::this_thread::sleep_for(std::chrono::milliseconds(200));
+  s.send(fragment(2, 100000, first, 1, 2, "", Bytes(data.begin() + first, data.end())));
+  sync(s);
+  EXPECT_TRUE(bad_.empty()) << "a message completed after its first fragment had expired";
+}
+
+// 0005: sparse claims of huge messages from many senders stay bounded in memory.
+TEST_F(LcmPatches, SparseClaimsOfHugeMessagesStayWithinTheFragmentBuffer) {
+  listen("&fragment_buffer_size=2097152&max_message_size=1048576");
+  std::vector<std::unique_ptr<Sender>> senders;
+  for (int i = 0; i < 64; ++i) senders.push_back(std::make_unique<Sender>());
+  sync(*senders[0]);
+  const long before = residentKb();
+  for (int round = 0; round < 4; ++round)
+    for (auto& s : senders) {
+      const std::uint32_t size = 1040000;
+      s->send(fragment(static_cast<std::uint32_t>(round), size, 0, 0, 17, "BAD", pattern(100, 9)));
+      for (std::uint32_t k = 1; k < 17; ++k)
+        s->send(fragment(static_cast<std::uint32_t>(round), size, k * 61000, static_cast<std::uint16_t>(k), 17, "", {1}));
+      sync(*s);  // each sender's datagrams handled before the next one's (the socket buffer holds a few hundred)
+    }
+  const long grown = residentKb() - before;
+  EXPECT_LT(grown, 16 * 1024) << "64 senders' incomplete 1 MB messages made the receiver " << grown << " kB larger";
+  EXPECT_TRUE(bad_.empty());
+}
+
+// 0006: max_message_size drops a larger message, short or fragmented.
+TEST_F(LcmPatches, AMessageLargerThanMaxMessageSizeIsDropped) {
+  listen("&max_message_size=70000");
+  Sender s;
+  s.sendFragmented(20, "BAD", pattern(69000, 10));
+  s.sendFragmented(21, "BAD", pattern(100000, 11));
+  sync(s);
+  ASSERT_EQ(bad_.size(), 1u);
+  EXPECT_EQ(bad_[0].size(), 69000u);
+  listen("&max_message_size=1000");
+  s.sendShort("BAD", pattern(2000, 12));
+  s.sendShort("BAD", pattern(900, 13));
+  sync(s);
+  ASSERT_EQ(bad_.size(), 2u);
+  EXPECT_EQ(bad_[1].size(), 900u);
+}
+
+// 0007: a data length of 0x7FFFFFFF overflowed 'datalen + 1' and the reader wrote through a null pointer.
+TEST(LcmEventLog, AnEventClaimingTheLargestLengthIsRefused) {
+  const std::string file = test::tempDir("lcm-eventlog") + "/huge.lcm";
+  Bytes b;
+  put32(b, 0xEDA1DA01u);
+  for (int i = 0; i < 16; ++i) b.push_back(0);  // event number, time
+  put32(b, 3);
+  put32(b, 0x7FFFFFFFu);
+  for (char c : std::string("BAD")) b.push_back(static_cast<std::uint8_t>(c));
+  b.resize(3000, 0xAB);
+  std::ofstream(file, std::ios::binary).write(reinterpret_cast<const char*>(b.data()), static_cast<std::streamsize>(b.size()));
+  lcm::LogFile log(file, "r");
+  ASSERT_TRUE(log.good());
+  EXPECT_EQ(log.readNextEvent(), nullptr);
+}
+
+}  // namespace
+}  // namespace afford
