@@ -65,4 +65,12 @@ struct ReplayOptions {
 };
 int replayBench(const ReplayOptions& o);
 
+struct AuthOptions {
+  int steps = 6000;
+  int reps = 3;                                    // seeds 1..reps, each without and with a key
+  double floor = 0.9;                              // issue 23: steps/s with a key at least 0.9 of without
+  std::string out = "out/bench-auth";
+};
+int authBench(const AuthOptions& o);
+
 }  // namespace afford::bench

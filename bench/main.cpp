@@ -1,7 +1,8 @@
 // afford-bench: benchmarks of afford (docs/performance.md). Without a mode:
 // intrinsic steps per second over udpm and memq; `boundaries`: the cost of
 // starting and ending runs (extrinsic tests, short runs, the main job);
-// `replay`: the cost of the memory options of issue 11.
+// `replay`: the cost of the memory options of issue 11; `auth`: the cost of an
+// authenticated bus.
 #include <CLI/CLI.hpp>
 
 #include <cstdio>
@@ -45,7 +46,22 @@ int main(int argc, char** argv) {
       ->capture_default_str();
   r->add_option("--floor", ro.floor, "the least ratio of steps per second, on / off, that passes")->capture_default_str();
   r->add_option("--out", ro.out, "working folder")->capture_default_str();
+  AuthOptions ao;
+  auto* a = app.add_subcommand("auth", "what an authenticated bus costs: steps per second over udpm with a bus key "
+                                       "against without, and the time to tag a message");
+  a->add_option("--steps", ao.steps, "steps per run")->capture_default_str();
+  a->add_option("--reps", ao.reps, "runs each way (seeds 1..reps, alternating)")->capture_default_str();
+  a->add_option("--floor", ao.floor, "the least ratio of steps per second, with / without, that passes")
+      ->capture_default_str();
+  a->add_option("--out", ao.out, "working folder")->capture_default_str();
   CLI11_PARSE(app, argc, argv);
+  if (a->parsed()) {
+    if (ao.steps < 1 || ao.reps < 1) {
+      std::fprintf(stderr, "afford-bench auth: --steps and --reps must be at least 1\n");
+      return 2;
+    }
+    return authBench(ao);
+  }
   if (r->parsed()) {
     if (ro.steps < 1 || ro.reps < 1) {
       std::fprintf(stderr, "afford-bench replay: --steps and --reps must be at least 1\n");

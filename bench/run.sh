@@ -11,6 +11,9 @@
 #   bench/run.sh replay [--experiment E] [--system S] [--steps N] [--reps R] [--transports udpm,memq] [--out DIR]
 #     the memory options of issue 11 (replay, revisits): steps per second on / off per transport (floor 0.7,
 #     exit 1 below it), the predictors' peak memory, the checkpoint's size.
+#   bench/run.sh auth [--steps N] [--reps R] [--floor F] [--out DIR]
+#     an authenticated bus: steps per second over udpm with a bus key against without (floor 0.9,
+#     exit 1 below it), and the time to tag one message by size.
 #   bench/run.sh loss [--reps R] [--seed S] [--rates "0.01 0.05 0.20"] [--out DIR]
 #     packet loss: how much longer a run takes when datagrams are dropped at random (floor: 5% loss at
 #     most 3 times as long, median over seeds; exit 1 above it). Root; a private network namespace.

@@ -16,6 +16,11 @@
 # logs/RUN/<process>.pid, its command line to logs/RUN/<process>.cmd; the bus
 # to logs/RUN/lcm-url. The bus is $AFFORD_URL (default below) at `start`.
 #
+# The group's bus is keyed (docs/security.md): `start` makes logs/RUN/bus.key
+# (a new random key) if there is none, and every process, `status`, `run` and
+# `exec` use it, so a process must carry the key's tags to be heard. lcm-spy
+# still decodes every channel. AFFORD_PROCS_KEY=off starts a group without a key.
+#
 # Multicast needs a route. By default the group lives in the named network
 # namespace "afford" (created at the first start: loopback only, multicast
 # routed over lo), which every terminal can enter, so no datagram leaves the
@@ -29,13 +34,16 @@ netns=${AFFORD_NETNS:-afford}
 grace=${AFFORD_GRACE:-5}
 mapfile -t all < <("$bin/afford" processes)  # the registry of processes
 
-usage() { sed -n '2,23p' "$0" | sed 's/^# \{0,1\}//'; exit 2; }
+usage() { sed -n '2,28p' "$0" | sed 's/^# \{0,1\}//'; exit 2; }
 die() { echo "procs.sh: $*" >&2; exit 1; }
 [[ $# -ge 2 ]] || usage
 cmd=$1 run=$2
 shift 2
-[[ $run =~ ^[A-Za-z0-9._-]+$ ]] || die "run id '$run': use letters, digits, '.', '_' or '-'"
+[[ $run =~ ^[A-Za-z0-9_-][A-Za-z0-9._-]*$ ]] || die "run id '$run': use letters, digits, '.', '_' or '-' (not first '.')"
 dir=$logs/$run
+key=$dir/bus.key
+# The group's key, for every command that speaks on its bus (processes read $AFFORD_BUS_KEY).
+[[ -f $key && ${AFFORD_PROCS_KEY:-on} != off ]] && export AFFORD_BUS_KEY=$key
 
 in_ns() {  # run "$@" in the group's namespace
   if [[ $netns == none ]]; then "$@"; else ip netns exec "$netns" "$@"; fi
@@ -68,7 +76,9 @@ start_one() {
   check_process "$p"
   alive "$p" && { echo "$p is running already (pid $(cat "$dir/$p.pid"))"; return 0; }
   local line=("$bin/afford-$p" --lcm-url "$u")
+  [[ -n ${AFFORD_BUS_KEY:-} ]] && line+=(--bus-key "$AFFORD_BUS_KEY")
   [[ $p == logger ]] && line+=(--log-dir "$logs")
+  [[ $p == predictors ]] && line+=(--checkpoint-dir "$logs")
   printf '%q ' "${line[@]}" >"$dir/$p.cmd"
   echo "=== $(date -Is) start: $(cat "$dir/$p.cmd")" >>"$dir/$p.log"
   # A simple command in the background, so that $! is the process itself
@@ -106,11 +116,17 @@ case $cmd in
     mkdir -p "$dir"
     ensure_ns
     [[ -f $dir/lcm-url ]] || echo "${AFFORD_URL:-udpm://239.255.76.67:7700?ttl=0&recv_buf_size=2097152}" >"$dir/lcm-url"
+    if [[ ${AFFORD_PROCS_KEY:-on} != off ]]; then
+      [[ -f $key ]] || "$bin/afford" bus-key "$key" >/dev/null
+      export AFFORD_BUS_KEY=$key
+    fi
     u=$(url)
     procs=("$@")
     [[ ${#procs[@]} -gt 0 ]] || procs=("${all[@]}")
     for p in "${procs[@]}"; do start_one "$p" "$u"; done
     if [[ $netns == none ]]; then echo "bus: $u"; else echo "bus: $u (network namespace '$netns')"; fi
+    [[ -n ${AFFORD_BUS_KEY:-} ]] && echo "key: $AFFORD_BUS_KEY (every process of the group needs it: --bus-key)"
+    true
     ;;
   stop)
     url >/dev/null

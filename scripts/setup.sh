@@ -11,10 +11,10 @@ packages=(
   build-essential cmake pkg-config git ca-certificates patch
   liblcm-bin liblcm-java libglib2.0-dev  # lcm-gen, the LCM tools and lcm.jar; liblcm itself is built (below)
   libeigen3-dev libopencv-dev libspdlog-dev libfmt-dev
-  libcli11-dev libyaml-cpp-dev nlohmann-json3-dev zlib1g-dev libgsl-dev
+  libcli11-dev libyaml-cpp-dev nlohmann-json3-dev zlib1g-dev libgsl-dev libsodium-dev
   libgtest-dev libgmock-dev
   default-jdk-headless default-jre libjchart2d-java
-  iproute2 iptables util-linux procps gnuplot-nox
+  iproute2 iptables util-linux procps gnuplot-nox time
   xvfb imagemagick x11-utils
   slurmctld slurmd slurm-client munge  # scripts/slurm-submit.sh; tests/cluster/slurm-local.sh
   clang libclang-rt-14-dev llvm  # scripts/fuzz.sh: libFuzzer, ASan, UBSan, llvm-symbolizer

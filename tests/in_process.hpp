@@ -22,10 +22,14 @@
 
 namespace afford::test {
 
+// The folder the hosted predictors read checkpoints from (as --checkpoint-dir
+// gives it to the process): the tests' checkpoints are in tempDir folders.
+inline std::string checkpointRoot() { return std::filesystem::temp_directory_path().string(); }
+
 // A node of the named process on `lcm`, as the executables run it (threads of its own).
 inline std::unique_ptr<NodeBase> makeNode(const std::string& p, lcm::LCM& lcm, std::shared_ptr<spdlog::logger> log,
                                           const ProtocolConfig& protocol) {
-  return afford::makeNode(p, lcm, std::move(log), protocol, HostOptions{/*single_thread=*/false, "logs"});
+  return afford::makeNode(p, lcm, std::move(log), protocol, HostOptions{/*single_thread=*/false, checkpointRoot()});
 }
 
 // Publishes something malformed into a running run: (lcm, run id, current
@@ -59,7 +63,7 @@ struct InProcessRun {
     };
     const ProtocolConfig protocol = shippedProtocol();
     // Both deciders: the run's configuration says which one decides.
-    InProcessHost host(lcm, protocol, logger, HostOptions{/*single_thread=*/false, "logs"});
+    InProcessHost host(lcm, protocol, logger, HostOptions{/*single_thread=*/false, checkpointRoot()});
     host.start(runProcesses(/*extrinsic=*/false, /*recorded=*/false));
     host.start("planner");
     RunDriver driver(lcm, logger("runner"), protocol);

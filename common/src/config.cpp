@@ -281,7 +281,26 @@ ProtocolConfig parseProtocol(const YAML::Node& node, const std::string& path) {
   c.limits.focus_side = static_cast<int>(l.integer("focus_side", 3, 4096));
   c.limits.scene_side = static_cast<int>(l.integer("scene_side", 32, 8192));
   c.limits.sub_goals = static_cast<int>(l.integer("sub_goals", 1, 1'000'000));
+  c.limits.run_id_bytes = static_cast<int>(l.integer("run_id_bytes", 16, 240));
+  c.limits.peers = static_cast<int>(l.integer("peers", 8, 100'000));
+  c.limits.control_messages = static_cast<int>(l.integer("control_messages", 4, 100'000));
+  if (c.limits.run_id_bytes > c.limits.name_bytes)
+    fail(l.keyPath("run_id_bytes"), "must be at most name_bytes (" + std::to_string(c.limits.name_bytes) + ")");
   l.finish();
+  Reader b = p.map("bus");
+  c.bus.max_message_bytes = static_cast<int>(b.integer("max_message_bytes", 65'536, 1 << 30));
+  c.bus.fragment_bytes = static_cast<int>(b.integer("fragment_bytes", 65'536, 1 << 30));
+  c.bus.fragment_timeout_ms = static_cast<int>(b.integer("fragment_timeout_ms", 10, 600'000));
+  if (c.bus.fragment_bytes < c.bus.max_message_bytes)
+    fail(b.keyPath("fragment_bytes"), "must be at least max_message_bytes (" + std::to_string(c.bus.max_message_bytes) +
+                                          "): one whole message is reassembled in it");
+  // The largest message a limit allows must fit on the bus (its other fields take a few KB at most).
+  const long largest_text = std::max<long>(c.limits.config_bytes, c.limits.text_bytes);
+  if (largest_text + 64 * 1024 > c.bus.max_message_bytes)
+    fail(b.keyPath("max_message_bytes"), "must exceed limits.config_bytes and limits.text_bytes by 64 KiB (" +
+                                             std::to_string(largest_text + 64 * 1024) +
+                                             "): a RUN_CONFIG or STATUS at its limit must fit on the bus");
+  b.finish();
   p.finish();
   return c;
 }

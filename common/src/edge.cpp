@@ -76,7 +76,33 @@ bool Edge::inScope(const std::string& channel, const std::string& run_id, Scope 
 }
 
 void Edge::drop(const std::string& channel, const std::string& why) {
+  ++drops_.refused;
   log_->warn("{}: dropped message: {}", channel, why);
+}
+
+bool Edge::untag(const std::string& channel, const lcm::ReceiveBuffer* rb, std::size_t& size) {
+  if (!key_) return true;
+  if (!key_->verify(channel, rb->data, rb->data_size)) {
+    ++drops_.untagged;
+    log_->warn("{}: dropped message: no valid tag of this bus's key ({} bytes)", channel, rb->data_size);
+    return false;
+  }
+  size = rb->data_size - BusKey::kTagBytes;
+  return true;
+}
+
+void Edge::transmit(const std::string& channel, const std::vector<std::uint8_t>& bytes) {
+  const std::size_t size = bytes.size() + (key_ ? BusKey::kTagBytes : 0);
+  if (size > static_cast<std::size_t>(protocol_->bus.max_message_bytes))
+    throw std::runtime_error(channel + ": a message of " + std::to_string(size) +
+                             " bytes is larger than protocol.bus.max_message_bytes (" +
+                             std::to_string(protocol_->bus.max_message_bytes) + "): no receiver would take it");
+  if (!key_) {
+    lcm_.publish(channel, bytes.data(), static_cast<unsigned>(bytes.size()));
+    return;
+  }
+  const std::vector<std::uint8_t> tagged = key_->tagged(channel, bytes.data(), bytes.size());
+  lcm_.publish(channel, tagged.data(), static_cast<unsigned>(tagged.size()));
 }
 
 bool Edge::blocked(const std::string& channel) const {
@@ -256,6 +282,7 @@ void Edge::onResend(const resend_t& r) {
   History& h = it->second;
   const auto n = static_cast<std::int64_t>(h.messages.size());
   const std::int64_t first = std::max<std::int64_t>(0, r.first);
+  if (first >= n) return;  // nothing published there (also keeps the sum below from overflowing)
   const std::int64_t last = std::min({r.last, first + protocol_->resend_cap - 1, n - 1});
   if (first > last) return;
   const auto now = Clock::now();
@@ -272,8 +299,7 @@ void Edge::onResend(const resend_t& r) {
       continue;
     }
     if (h.in_window >= protocol_->resend_budget) break;  // a storm of requests costs at most the budget
-    const auto& bytes = h.messages[static_cast<std::size_t>(i)];
-    lcm_.publish(r.channel, bytes.data(), static_cast<unsigned>(bytes.size()));
+    transmit(r.channel, h.messages[static_cast<std::size_t>(i)]);
     at = now;
     ++h.in_window;
     ++sent;
@@ -290,10 +316,12 @@ bool Edge::newerStatus(const process_status_t& st) {
     it->second = {st.beat, ++beat_order_};
     return true;
   }
-  constexpr std::size_t kMostProcesses = 256;  // forged pids cannot grow it further
-  if (beats_.size() >= kMostProcesses)
+  // Forged pids cannot grow it further: the one heard from longest ago is forgotten.
+  if (beats_.size() >= static_cast<std::size_t>(protocol_->limits.peers)) {
     beats_.erase(std::min_element(beats_.begin(), beats_.end(),
                                   [](const auto& a, const auto& b) { return a.second.order < b.second.order; }));
+    ++drops_.peers_forgotten;
+  }
   beats_[key] = {st.beat, ++beat_order_};
   return true;
 }

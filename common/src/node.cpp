@@ -8,6 +8,7 @@
 #include <algorithm>
 #include <csignal>
 
+#include "afford/bus.hpp"
 #include "afford/channels.hpp"
 #include "afford/logging.hpp"
 
@@ -241,7 +242,10 @@ int processMain(int argc, char** argv, const ProcessSpec& spec, const std::funct
   std::string url = "udpm://239.255.76.67:7667?ttl=0";
   std::string level = "info";
   std::string config_dir = defaultConfigDir();
+  std::string key_file;
   app.add_option("--lcm-url", url, "LCM provider URL of the run (one UDP port per run)")->capture_default_str();
+  app.add_option("--bus-key", key_file,
+                 "key file of a keyed bus (default: the file $AFFORD_BUS_KEY names; none: messages untagged)");
   app.add_option("--log-level", level, "trace, debug, info, warn, error or off")->capture_default_str();
   app.add_option("--config-dir", config_dir, "folder whose defaults.yaml gives the protocol used between runs")
       ->capture_default_str();
@@ -263,6 +267,13 @@ int processMain(int argc, char** argv, const ProcessSpec& spec, const std::funct
     log->error("--config-dir: {}", e.what());
     return 2;
   }
+  std::shared_ptr<const BusKey> key;
+  try {
+    key = busKeyFrom(key_file);
+  } catch (const std::exception& e) {
+    log->error("{}", e.what());
+    return 2;
+  }
   installStopHandlers();
   boundHeapGrowth();
   // Log lines are written once per pass of the loop, not one write each: a
@@ -270,11 +281,14 @@ int processMain(int argc, char** argv, const ProcessSpec& spec, const std::funct
   static char log_buffer[1 << 16];
   std::setvbuf(stderr, log_buffer, _IOFBF, sizeof log_buffer);
   cv::setNumThreads(0);  // images are 150 x 150: a thread pool only adds wake-ups
-  lcm::LCM lcm(url);
-  if (!lcm.good()) {
-    log->error("cannot open LCM at '{}' (is there a multicast route? see README: network namespace)", url);
+  std::unique_ptr<lcm::LCM> bus;
+  try {
+    bus = openBus(url, protocol.bus);
+  } catch (const std::exception& e) {
+    log->error("{}", e.what());
     return 1;
   }
+  lcm::LCM& lcm = *bus;
   std::unique_ptr<NodeBase> node;
   try {
     node = make_node(lcm, log, protocol);
@@ -282,7 +296,8 @@ int processMain(int argc, char** argv, const ProcessSpec& spec, const std::funct
     log->error("cannot start: {}", e.what());
     return 1;
   }
-  log->info("listening on {}", url);
+  node->useBusKey(key);
+  log->info("listening on {}{}", url, key ? " (keyed: messages without this key's tag are dropped)" : "");
   while (!stopRequested()) {
     // Everything pending, then the node's own business: a burst is taken off
     // LCM's queue at once (what waits there is held in memory).
@@ -297,8 +312,10 @@ int processMain(int argc, char** argv, const ProcessSpec& spec, const std::funct
     std::fflush(stderr);  // the log lines of the burst, in one write
   }
   node->leaveRun();
+  const EdgeDrops drops = node->drops();
   node.reset();
-  log->info("stopped");
+  log->info("stopped; {} messages dropped at the edge{}", drops.refused + drops.untagged,
+            key ? " (" + std::to_string(drops.untagged) + " without a valid tag)" : std::string());
   return 0;
 }
 

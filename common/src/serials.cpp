@@ -1,6 +1,7 @@
 #include "afford/serials.hpp"
 
 #include <algorithm>
+#include <cstdint>
 
 namespace afford {
 
@@ -13,7 +14,8 @@ void SerialTracker::expect(const std::string& channel, std::int64_t next) {
 SerialTracker::Verdict SerialTracker::offer(const std::string& channel, std::int64_t serial) {
   Channel& c = channels_[channel];
   if (serial < c.expected) return Verdict::Repeat;
-  c.evidence = std::max(c.evidence, serial + 1);
+  // (a serial of INT64_MAX claims no more than that: 1 + it would overflow)
+  c.evidence = std::max(c.evidence, serial == INT64_MAX ? serial : serial + 1);
   if (serial > c.expected) return Verdict::Gap;
   ++c.expected;
   return Verdict::Accept;

@@ -35,5 +35,6 @@ Command scenarioCommand(CLI::App& app, const FrontDoor& door);
 Command processesCommand(CLI::App& app, const FrontDoor& door);
 Command cleanCommand(CLI::App& app, const FrontDoor& door);
 Command mergeCommand(CLI::App& app, const FrontDoor& door);
+Command busKeyCommand(CLI::App& app, const FrontDoor& door);
 
 }  // namespace afford

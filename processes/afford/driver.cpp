@@ -1,5 +1,7 @@
 #include "afford/driver.hpp"
 
+#include "afford/names.hpp"
+
 #include <algorithm>
 #include <filesystem>
 
@@ -50,7 +52,12 @@ RunDriver::RunDriver(lcm::LCM& lcm, std::shared_ptr<spdlog::logger> log, const P
       [this](const run_result_t& m) {
         if (!outcome_) return Turn::take();
         outcome_->weights_checksum = m.weights_checksum;
-        outcome_->checkpoint = m.checkpoint;
+        // Only the checkpoint the run was configured with (the predictors report it, or "" if they could not write it).
+        if (m.checkpoint.empty() || m.checkpoint == config_.checkpoint)
+          outcome_->checkpoint = m.checkpoint;
+        else
+          log_->warn("RESULT of run '{}' names the checkpoint '{}', not the run's: not taken", m.run_id,
+                     printable(m.checkpoint));
         outcome_->executed = m.actions_executed;
         outcome_->successes = m.successes;
         outcome_->looks = m.looks;
@@ -61,6 +68,14 @@ RunDriver::RunDriver(lcm::LCM& lcm, std::shared_ptr<spdlog::logger> log, const P
         return Turn::take();
       },
       Scope::Run, Order::Serial);
+}
+
+bool RunDriver::isRunFolder(const std::string& folder) const {
+  namespace fs = std::filesystem;
+  std::error_code ec;
+  return spec_ && !folder.empty() &&
+         fs::weakly_canonical(fs::absolute(folder, ec), ec) ==
+             fs::weakly_canonical(fs::absolute(fs::path(spec_->log_root) / spec_->run_id, ec), ec);
 }
 
 bool RunDriver::ours(const std::string& process) const {
@@ -89,7 +104,12 @@ Turn RunDriver::onStatus(const process_status_t& m) {
   const bool left = phase_ == Phase::Stopping && m.state == process_status_t::WAITING && m.run_id.empty() &&
                     m.counts_run == spec_->run_id && std::filesystem::is_directory(m.detail);
   if (m.process == "logger" && (closed || left) && outcome_) {
-    outcome_->log_dir = m.detail;
+    // The run's log folder is the one under the runner's --log-root, whatever a message names.
+    if (isRunFolder(m.detail))
+      outcome_->log_dir = m.detail;
+    else if (!logger_done_)
+      log_->info("the logger closed the log of run '{}' in '{}', not in {}/: not kept as the run's log folder",
+                 spec_->run_id, printable(m.detail), spec_->log_root);
     logger_done_ = true;
   }
   if (ours(m.process)) nudge(m.process, s);

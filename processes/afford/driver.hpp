@@ -38,6 +38,9 @@ struct RunSpec {
   std::vector<std::string> processes;  // names expected to take part
   bool extrinsic = false;              // ends with EXTRINSIC_RESULT instead of RESULT
   double stall_seconds = 30;           // no progress for this long fails the run
+  // Where the run's log and checkpoint go (<log_root>/<run_id>/): a folder or
+  // file a message names elsewhere is not taken (a forged STATUS or RESULT).
+  std::string log_root = "logs";
 };
 
 struct TableSnapshot {
@@ -89,6 +92,8 @@ class RunDriver {
   RunOutcome run(const RunSpec& spec, const std::function<void()>& pump, const std::function<std::string()>& health);
   // Told the step each process of the run reports in its heartbeat, as it comes (progress display).
   void onStep(std::function<void(std::int64_t)> f) { on_step_ = std::move(f); }
+  // A keyed bus (afford/auth.hpp): set before the first run.
+  void useBusKey(std::shared_ptr<const BusKey> key) { edge_.useKey(std::move(key)); }
 
  private:
   using Clock = std::chrono::steady_clock;
@@ -107,6 +112,8 @@ class RunDriver {
   void nudge(const std::string& process, const Seen& s);
   void sendControl(const std::string& run_id, int8_t command);
   bool ours(const std::string& process) const;
+  // Is `folder` the run's own (<log_root>/<run_id>)?
+  bool isRunFolder(const std::string& folder) const;
 
   lcm::LCM& lcm_;
   std::shared_ptr<spdlog::logger> log_;

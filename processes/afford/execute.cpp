@@ -1,5 +1,7 @@
 #include "afford/execute.hpp"
 
+#include "afford/bus.hpp"
+
 #include <sys/resource.h>
 #include <sys/syscall.h>
 #include <unistd.h>
@@ -89,27 +91,34 @@ RunOutcome runOverUdpm(const PlannedRun& run, const ExperimentOptions& o, const 
     // This thread only watches the runs (see kWatcherNice); LCM's receive
     // thread, created on the first handle(), inherits the priority.
     setpriority(PRIO_PROCESS, static_cast<id_t>(syscall(SYS_gettid)), kWatcherNice);
-    slot.lcm = std::make_unique<lcm::LCM>(slot.url);
-    if (!slot.lcm->good()) {
-      slot.lcm.reset();
+    try {
+      slot.lcm = openBus(slot.url, protocol.bus);
+    } catch (const std::exception& e) {
       RunOutcome r;
-      r.error = "cannot open LCM at " + slot.url;
+      r.error = e.what();
       return r;
     }
     slot.driver = std::make_unique<RunDriver>(*slot.lcm, makeLogger("runner", "warn"), protocol);
+    slot.driver->useBusKey(busKeyFrom(o.bus_key));
   }
+  // The processes' own arguments: the bus's key (if given here; they read $AFFORD_BUS_KEY themselves), and
+  // the folder each writes in.
+  std::vector<std::string> common;
+  if (!o.bus_key.empty()) common = {"--bus-key", fs::absolute(o.bus_key).string()};
   if (!attached && (!slot.group || !slot.group->health().empty() || slot.extrinsic != run.spec.extrinsic)) {
     slot.group.reset();
     slot.extrinsic = run.spec.extrinsic;
-    slot.group = std::make_unique<ProcessGroup>(
-        bin, runProcesses(run.spec.extrinsic, /*recorded=*/false),
-        slot.url, out, std::vector<std::string>{});
+    slot.group = std::make_unique<ProcessGroup>(bin, runProcesses(run.spec.extrinsic, /*recorded=*/false), slot.url,
+                                                out, common,
+                                                std::map<std::string, std::vector<std::string>>{
+                                                    {"predictors", {"--checkpoint-dir", o.log_root}}});
   }
   // The logger serves the slot's runs one after another; those not to be kept
   // say so in their configuration (run.record), and it stays free during them.
   if (run.keep_log && !attached && (!slot.logger || !slot.logger->health().empty()))
-    slot.logger = std::make_unique<ProcessGroup>(bin, std::vector<std::string>{"logger"}, slot.url, out,
-                                                 std::vector<std::string>{"--log-dir", o.log_root});
+    slot.logger = std::make_unique<ProcessGroup>(
+        bin, std::vector<std::string>{"logger"}, slot.url, out, common,
+        std::map<std::string, std::vector<std::string>>{{"logger", {"--log-dir", o.log_root}}});
   lcm::LCM& lcm = *slot.lcm;
   RunDriver& driver = *slot.driver;
   driver.onStep(on_step);

@@ -1,5 +1,7 @@
 #include "afford/experiment.hpp"
 
+#include "afford/auth.hpp"
+
 #include <nlohmann/json.hpp>
 #include <unistd.h>
 
@@ -304,6 +306,11 @@ int runExperiment(const ExperimentOptions& request, spdlog::logger& log) {
     if (o.run_prefix.empty()) o.run_prefix = defaultPrefix();  // stored: --resume plans the same run ids
   }
   const bool merging = !o.merged_from.empty();  // (a resumed merge too: its shards are gathered again)
+  try {
+    busKeyFrom(o.bus_key);  // a key file that cannot be read fails here, not in the first run
+  } catch (const std::exception& e) {
+    throw ConfigError(e.what());
+  }
   if (o.shard_count && (o.shard_count < 1 || o.shard_index < 0 || o.shard_index >= o.shard_count))
     throw ConfigError("--shard must be i/n with 0 <= i < n, not " + std::to_string(o.shard_index) + "/" +
                       std::to_string(o.shard_count));

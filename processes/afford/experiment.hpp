@@ -47,6 +47,7 @@ struct ExperimentOptions {
   std::optional<int> tables;               // random tables: how many (default: the experiment file's tables.count)
   std::optional<std::int64_t> table_seed;  // ... and the series they are drawn from (default: its tables.seed)
   std::string attach;                      // run on this bus with processes started by hand (no group, one job)
+  std::string bus_key;                     // key file of a keyed bus (afford/auth.hpp; "": $AFFORD_BUS_KEY, or none)
   int shard_index = 0, shard_count = 0;    // --shard i/n: run intrinsic run k (and its tests) iff k mod n == i
   std::vector<std::string> merged_from;    // afford merge: the shards' folders (nothing is run)
   std::string merged_network;              // ... and the network they ran over

@@ -444,7 +444,7 @@ Explanation explainLog(const std::string& log_path, const std::string& run_id, s
                                                       : std::string()));
   std::vector<LogGap> missing;
   const std::string incomplete = manifestIncomplete(log_path, missing);
-  const RunEvents run = runEventsOf(std::move(recorded.events), run_id, log_path);
+  const RunEvents run = runEventsOf(std::move(recorded.events), run_id, log_path, log);
   return explainRunEvents(run, log_path, recorded.torn_bytes, incomplete, missing);
 }
 

@@ -24,7 +24,8 @@ std::string executableDir() {
 }
 
 ProcessGroup::ProcessGroup(const std::string& bin_dir, const std::vector<std::string>& names, const std::string& lcm_url,
-                           const std::string& output_dir, const std::vector<std::string>& logger_args) {
+                           const std::string& output_dir, const std::vector<std::string>& common_args,
+                           const std::map<std::string, std::vector<std::string>>& own_args) {
   std::filesystem::create_directories(output_dir);
   for (const auto& name : names) {
     Child c;
@@ -36,7 +37,8 @@ ProcessGroup::ProcessGroup(const std::string& bin_dir, const std::vector<std::st
       throw std::runtime_error("process executable " + exe + " is missing (build it: cmake --build build)");
     }
     std::vector<std::string> args{exe, "--lcm-url", lcm_url};
-    if (name == "logger") args.insert(args.end(), logger_args.begin(), logger_args.end());
+    args.insert(args.end(), common_args.begin(), common_args.end());
+    if (const auto it = own_args.find(name); it != own_args.end()) args.insert(args.end(), it->second.begin(), it->second.end());
     const pid_t parent = getpid();
     const pid_t pid = fork();
     if (pid < 0) {

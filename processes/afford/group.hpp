@@ -27,9 +27,10 @@ struct Child {
 
 class ProcessGroup {
  public:
-  // Starts build/bin/afford-<name> --lcm-url URL [extra...] for each name.
+  // Starts build/bin/afford-<name> --lcm-url URL [common_args...] [args[name]...] for each name.
   ProcessGroup(const std::string& bin_dir, const std::vector<std::string>& names, const std::string& lcm_url,
-               const std::string& output_dir, const std::vector<std::string>& logger_args);
+               const std::string& output_dir, const std::vector<std::string>& common_args = {},
+               const std::map<std::string, std::vector<std::string>>& args = {});
   ~ProcessGroup();
   ProcessGroup(const ProcessGroup&) = delete;
   ProcessGroup& operator=(const ProcessGroup&) = delete;

@@ -18,7 +18,8 @@ std::unique_ptr<NodeBase> makeNode(const std::string& p, lcm::LCM& lcm, std::sha
   if (p == "environment") return std::make_unique<EnvironmentNode>(lcm, std::move(log), protocol);
   if (p == "eye") return std::make_unique<EyeNode>(lcm, std::move(log), protocol, /*speculate=*/!options.single_thread);
   if (p == "predictors")
-    return std::make_unique<PredictorsNode>(lcm, std::move(log), protocol, /*async_effects=*/!options.single_thread);
+    return std::make_unique<PredictorsNode>(lcm, std::move(log), protocol, /*async_effects=*/!options.single_thread,
+                                            options.log_root);
   if (p == "motivation") return std::make_unique<MotivationNode>(lcm, std::move(log), protocol);
   if (p == "planner") return std::make_unique<PlannerNode>(lcm, std::move(log), protocol);
   if (p == "logger") return std::make_unique<LoggerNode>(lcm, std::move(log), protocol, options.log_root);

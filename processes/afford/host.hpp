@@ -23,7 +23,7 @@ struct HostOptions {
   // One thread runs every node: the eye does not speculate and the
   // predictors learn from effects in line (no idle time to fill).
   bool single_thread = true;
-  std::string log_root = "logs";  // the logger's folder of run logs
+  std::string log_root = "logs";  // the logger's folder of run logs, and the predictors' of checkpoints
 };
 
 using LoggerFactory = std::function<std::shared_ptr<spdlog::logger>(const std::string& process)>;

@@ -20,7 +20,8 @@ int main(int argc, char** argv) {
       afford::experimentCommand(app, door), afford::experimentsCommand(app, door), afford::configCommand(app, door),
       afford::plotCommand(app, door),       afford::reportCommand(app, door),      afford::replayCommand(app, door),
       afford::explainCommand(app, door),    afford::statusCommand(app, door),      afford::scenarioCommand(app, door),
-      afford::processesCommand(app, door),  afford::cleanCommand(app, door),      afford::mergeCommand(app, door)};
+      afford::processesCommand(app, door),  afford::cleanCommand(app, door),      afford::mergeCommand(app, door),
+      afford::busKeyCommand(app, door)};
   CLI11_PARSE(app, argc, argv);
   cv::setNumThreads(0);  // small images: OpenCV's thread pool only adds wake-ups
   try {

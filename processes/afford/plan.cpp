@@ -1,5 +1,7 @@
 #include "afford/plan.hpp"
 
+#include "afford/names.hpp"
+
 #include <algorithm>
 #include <ctime>
 #include <filesystem>
@@ -20,6 +22,17 @@ std::string defaultPrefix() {
 }
 
 // Everything that can be wrong with the request is found here, before any process starts.
+namespace {
+// A run id names folders and files, and every process drops messages of one that is not a safe name
+// (afford/names.hpp): refuse it here, before anything runs, naming what it is made of.
+void checkRunId(const std::string& id, const Plan& plan) {
+  if (const std::string why = runIdProblem(id, plan.protocol.limits.run_id_bytes); !why.empty())
+    throw ConfigError("run id '" + printable(id) + "' " + why +
+                      ": it is made of --run-prefix, the experiment's name, its conditions' and scenarios' names; "
+                      "change the one that has it");
+}
+}  // namespace
+
 Plan planExperiment(const ExperimentOptions& o) {
   Plan plan;
   plan.config_dir = o.config_dir.empty() ? std::string(AFFORD_SOURCE_DIR) + "/config" : o.config_dir;
@@ -132,6 +145,12 @@ Plan planExperiment(const ExperimentOptions& o) {
         }
       }
       run_id += sys_name + "-s" + std::to_string(o.seed + r);
+      checkRunId(run_id, plan);
+      // ... and the longest of its extrinsic tests' ids (planExtrinsic)
+      for (const auto& scenario : plan.scenarios)
+        checkRunId(run_id + (plan.conditions.size() > 1 ? "-c" + std::to_string(plan.conditions.size() - 1) : "") + "-" +
+                       scenario + "-e" + std::to_string(std::max(0, plan.tests - 1)),
+                   plan);
       node["run"]["checkpoint"] = (fs::path(o.log_root) / run_id / "predictors.ckpt").string();
       const bool first = r == 0 && table == 0 && condition == plan.conditions_run.front().first;
       node["run"]["record"] = o.keep_logs == "all" || (o.keep_logs == "first" && first);
@@ -153,6 +172,7 @@ Plan planExperiment(const ExperimentOptions& o) {
       p.spec.config_yaml = emitYaml(node);
       p.spec.processes = runProcesses(/*extrinsic=*/false, p.keep_log);
       p.spec.stall_seconds = o.stall_seconds;
+      p.spec.log_root = o.log_root;
       p.index = runs.size();
       runs.push_back(std::move(p));
     }
@@ -262,6 +282,7 @@ std::vector<PlannedRun> planExtrinsic(const Plan& plan, const std::vector<RunOut
           t.spec.extrinsic = true;
           t.spec.processes = runProcesses(/*extrinsic=*/true, t.keep_log);
           t.spec.stall_seconds = o.stall_seconds;
+          t.spec.log_root = o.log_root;
           t.index = tests.size();
           tests.push_back(std::move(t));
         }

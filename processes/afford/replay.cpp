@@ -1,7 +1,5 @@
 #include "afford/replay.hpp"
 
-#include <lcm/eventlog.h>
-
 #include <algorithm>
 #include <cstdio>
 #include <filesystem>
@@ -38,27 +36,6 @@ bool ReplayResult::ok() const {
          (recorded_checksum.empty() || !weights_checksum.empty());
 }
 
-std::vector<LogEvent> readLogFile(const fs::path& file, std::int64_t& torn) {
-  lcm_eventlog_t* in = lcm_eventlog_create(file.c_str(), "r");
-  if (!in) throw std::runtime_error("cannot open the log " + file.string());
-  std::vector<LogEvent> out;
-  const auto size = static_cast<std::int64_t>(fs::file_size(file));
-  for (;;) {
-    const long before = std::ftell(in->f);
-    lcm_eventlog_event_t* e = lcm_eventlog_read_next_event(in);
-    if (!e) {
-      if (before >= 0 && before < size) torn += size - before;
-      break;
-    }
-    out.push_back({std::string(e->channel, e->channellen),
-                   std::vector<std::uint8_t>(static_cast<std::uint8_t*>(e->data),
-                                             static_cast<std::uint8_t*>(e->data) + e->datalen)});
-    lcm_eventlog_free_event(e);
-  }
-  lcm_eventlog_destroy(in);
-  return out;
-}
-
 std::vector<fs::path> logSegments(const fs::path& dir) {
   if (fs::is_regular_file(dir)) return {dir};
   if (!fs::is_directory(dir)) throw std::runtime_error("no run log at " + dir.string());
@@ -70,44 +47,79 @@ std::vector<fs::path> logSegments(const fs::path& dir) {
   return files;
 }
 
-RecordedLog readRecordedLog(const fs::path& log_path, spdlog::logger& log) {
+LogLimits logLimits(const ProtocolConfig& protocol) {
+  LogLimits l;
+  l.event_bytes = protocol.bus.max_message_bytes;
+  return l;
+}
+
+RecordedLog readRecordedLog(const fs::path& log_path, spdlog::logger& log, const BusKey* key) {
+  const LogLimits limits = logLimits(loadProtocol(defaultConfigDir()));
   RecordedLog out;
   for (const auto& f : logSegments(log_path)) {
-    std::int64_t torn = 0;
-    auto part = readLogFile(f, torn);
-    if (torn > 0) log.warn("{}: the last event is incomplete ({} bytes): reading up to the one before", f.string(), torn);
-    out.torn_bytes += torn;
-    out.events.insert(out.events.end(), std::make_move_iterator(part.begin()), std::make_move_iterator(part.end()));
+    LogFileContents part = readLogFile(f, limits);
+    if (key) {  // a recording of a keyed bus: only what carries the key's tag, without it
+      std::vector<LogEvent> tagged;
+      for (LogEvent& e : part.events) {
+        if (key->verify(e.channel, e.data.data(), e.data.size())) {
+          e.data.resize(e.data.size() - BusKey::kTagBytes);
+          tagged.push_back(std::move(e));
+        } else if (out.untagged++ < 10) {
+          log.warn("{}: offset {}: a {} event without a valid tag of the key: skipped", f.string(), e.offset,
+                   e.channel);
+        }
+      }
+      part.events = std::move(tagged);
+    }
+    for (const LogProblem& p : part.problems) log.warn("{}: offset {}: {}: skipped", f.string(), p.offset, p.what);
+    if (part.problem_count > static_cast<std::int64_t>(part.problems.size()))
+      log.warn("{}: {} more malformed parts skipped", f.string(),
+               part.problem_count - static_cast<std::int64_t>(part.problems.size()));
+    if (part.torn_bytes > 0)
+      log.warn("{}: the last event is incomplete ({} bytes): reading up to the one before", f.string(), part.torn_bytes);
+    out.torn_bytes += part.torn_bytes;
+    out.malformed += part.problem_count;
+    out.skipped_bytes += part.skipped_bytes;
+    out.events.insert(out.events.end(), std::make_move_iterator(part.events.begin()),
+                      std::make_move_iterator(part.events.end()));
   }
   return out;
 }
 
-RunEvents runEventsOf(std::vector<LogEvent> events, const std::string& run_id, const std::string& where) {
+RunEvents runEventsOf(std::vector<LogEvent> events, const std::string& run_id, const std::string& where,
+                      spdlog::logger& log) {
   // Our logger's logs start with the RUN_CONFIG; a plain lcm-logger recording
-  // may hold heartbeats before it and other runs after it.
+  // may hold heartbeats before it, other runs around it, and forged datagrams.
   const ProtocolConfig observer = loadProtocol(defaultConfigDir());
   RunEvents out;
-  std::size_t begin = events.size(), end = events.size();
-  for (std::size_t i = 0; i < events.size(); ++i) {
+  std::size_t begin = events.size();
+  for (std::size_t i = 0; i < events.size() && begin == events.size(); ++i) {
     if (events[i].channel != channel::kRunConfig) continue;
     run_config_t rc;
     std::string why;
-    if (!decodeChecked(events[i].data.data(), events[i].data.size(), BoundsContext{&observer, nullptr}, rc, why))
-      throw std::runtime_error(where + ": the RUN_CONFIG of event " + std::to_string(i) + " is refused: " + why);
-    if (begin == events.size()) {
-      if (!run_id.empty() && rc.run_id != run_id) continue;
-      begin = i;
-      out.config = rc;
-    } else if (rc.run_id != out.config.run_id) {
-      end = i;
-      break;
+    if (!decodeChecked(events[i].data.data(), events[i].data.size(), BoundsContext{&observer, nullptr}, rc, why)) {
+      ++out.refused_configs;
+      log.warn("{}: the RUN_CONFIG event at offset {} is refused ({}): skipped", where, events[i].offset, why);
+      continue;
     }
+    if (!run_id.empty() && rc.run_id != run_id) continue;
+    begin = i;
+    out.config = rc;
   }
   if (begin == events.size())
-    throw std::runtime_error(where + (run_id.empty() ? std::string(": no RUN_CONFIG in the log, so nothing says how the run was configured")
-                                                     : ": no RUN_CONFIG of run '" + run_id + "' in the log"));
-  out.events = std::vector<LogEvent>(std::make_move_iterator(events.begin() + static_cast<std::ptrdiff_t>(begin)),
-                                     std::make_move_iterator(events.begin() + static_cast<std::ptrdiff_t>(end)));
+    throw std::runtime_error(
+        where + (run_id.empty() ? std::string(": no RUN_CONFIG that the edge accepts in the log, so nothing says how "
+                                              "the run was configured")
+                                : ": no RUN_CONFIG of run '" + run_id + "' that the edge accepts in the log"));
+  // The run's own events from there on: those whose run id is the run's.
+  const int name_bytes = observer.limits.name_bytes;
+  out.events.push_back(std::move(events[begin]));
+  for (std::size_t i = begin + 1; i < events.size(); ++i) {
+    std::string id;
+    if (!peekRunId(events[i].data.data(), events[i].data.size(), name_bytes, id)) continue;
+    if (id == out.config.run_id || (id.empty() && events[i].channel == channel::kStatus))
+      out.events.push_back(std::move(events[i]));
+  }
   return out;
 }
 
@@ -214,12 +226,16 @@ std::string manifestIncomplete(const fs::path& log, std::vector<LogGap>& missing
 
 ReplayResult replayRun(const ReplayOptions& o, spdlog::logger& log) {
   ReplayResult result;
-  RecordedLog recorded = readRecordedLog(o.log_dir, log);
+  const std::shared_ptr<const BusKey> key = o.bus_key.empty() ? nullptr : busKeyFrom(o.bus_key);
+  RecordedLog recorded = readRecordedLog(o.log_dir, log, key.get());
   result.torn_bytes = recorded.torn_bytes;
+  result.malformed = recorded.malformed;
+  result.untagged = recorded.untagged;
   std::vector<LogGap> manifest_missing;
   result.incomplete = manifestIncomplete(o.log_dir, manifest_missing);
   // The run: from its RUN_CONFIG (the first one, or the one of --run) to the next run's.
-  RunEvents run = runEventsOf(std::move(recorded.events), o.run_id, o.log_dir);
+  RunEvents run = runEventsOf(std::move(recorded.events), o.run_id, o.log_dir, log);
+  result.refused_configs = run.refused_configs;
   std::vector<LogEvent> events = std::move(run.events);
   run_config_t config_msg = std::move(run.config);
   result.run_id = config_msg.run_id;
@@ -245,6 +261,10 @@ ReplayResult replayRun(const ReplayOptions& o, spdlog::logger& log) {
     if (!known) result.gaps.push_back(g);
   }
 
+  const fs::path log_folder = fs::is_directory(o.log_dir) ? fs::path(o.log_dir) : fs::path(o.log_dir).parent_path();
+  fs::path run_folder = fs::absolute(log_folder).lexically_normal();
+  if (!run_folder.has_filename()) run_folder = run_folder.parent_path();  // a trailing '/'
+  const std::string log_root = run_folder.parent_path().string();
   std::vector<std::string> into = o.into;
   if (into.empty()) into = {"predictors", result.extrinsic ? "planner" : "motivation"};
   std::vector<std::unique_ptr<Replayed>> procs;
@@ -255,7 +275,8 @@ ReplayResult replayRun(const ReplayOptions& o, spdlog::logger& log) {
     auto logger = makeLogger("replay-" + name, "warn");
     if (name != "predictors" && name != "motivation" && name != "planner")
       throw std::runtime_error("--into: unknown process \"" + name + "\" (predictors, motivation or planner)");
-    r->node = makeNode(name, *r->bus, logger, config.protocol, HostOptions{/*single_thread=*/true, ""});
+    // The predictors load an extrinsic run's agent only from the log root the log is in.
+    r->node = makeNode(name, *r->bus, logger, config.protocol, HostOptions{/*single_thread=*/true, log_root});
     for (const auto& ch : channelsOf(name, result.extrinsic)) r->outputs.insert(ch);
     // What the replayed process publishes, taken through the edge like any subscriber.
     r->tap = std::make_unique<Edge>(*r->bus, logger, "replay", config.protocol);

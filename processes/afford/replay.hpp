@@ -14,32 +14,35 @@
 #include <string>
 #include <vector>
 
+#include "afford/auth.hpp"
 #include "afford/bounds.hpp"
+#include "afford/logfile.hpp"
 #include "afford/run_config_t.hpp"
 
 namespace afford {
 
 // ---- reading a run's log (also used by `afford explain`) ------------------------
 
-struct LogEvent {
-  std::string channel;
-  std::vector<std::uint8_t> data;
-};
-
-// Every complete event of one log file, in order; `torn` gets the bytes of an
-// incomplete last event. Throws std::runtime_error naming the file it cannot open.
-std::vector<LogEvent> readLogFile(const std::filesystem::path& file, std::int64_t& torn);
 // A run log's segments in order (log.00.lcm, log.01.lcm, ...), or the one file
 // given; throws naming the path when there is no log there.
 std::vector<std::filesystem::path> logSegments(const std::filesystem::path& log);
 
-// Every complete event of a log's segments, in order; a segment whose last
-// event is incomplete is warned of and read up to the one before.
+// Every well-formed event of a log's segments, in order, read by the project's
+// log reader (afford/logfile.hpp) with the caps of the config folder's
+// protocol: a malformed event is skipped and warned of with its file and
+// offset; a segment whose last event is incomplete is warned of and read up
+// to the one before.
 struct RecordedLog {
   std::vector<LogEvent> events;
-  std::int64_t torn_bytes = 0;  // of incomplete last events
+  std::int64_t torn_bytes = 0;      // of incomplete last events
+  std::int64_t malformed = 0;       // malformed parts skipped
+  std::int64_t skipped_bytes = 0;   // ... and their bytes
+  std::int64_t untagged = 0;        // events without a valid tag of the key given, skipped
 };
-RecordedLog readRecordedLog(const std::filesystem::path& log_path, spdlog::logger& log);
+// With a bus key (an lcm-logger recording of a keyed bus), every event must end
+// with its tag, which is taken off; one without a valid tag is skipped and counted.
+RecordedLog readRecordedLog(const std::filesystem::path& log_path, spdlog::logger& log,
+                            const BusKey* key = nullptr);
 
 struct LogGap {
   std::string channel;
@@ -55,15 +58,19 @@ std::vector<LogGap> recordingGaps(const std::vector<LogEvent>& events, const std
 // serials it says the logger never got.
 std::string manifestIncomplete(const std::filesystem::path& log, std::vector<LogGap>& missing);
 
-// The events of one run in a log: from its RUN_CONFIG (the first one, or the one
-// of `run_id`) up to the next run's.
+// The events of one run in a log: its RUN_CONFIG (the first one the edge
+// accepts, or the first of `run_id`), then every later event of that run id
+// (other runs' events, and events without a run id, are left out: a recording
+// of a bus may interleave runs, or hold a forged datagram).
 struct RunEvents {
   run_config_t config;
-  std::vector<LogEvent> events;  // events.front() is the RUN_CONFIG
+  std::vector<LogEvent> events;      // events.front() is the RUN_CONFIG
+  std::int64_t refused_configs = 0;  // RUN_CONFIG events the edge refuses, skipped (warned of)
 };
-// Throws std::runtime_error naming `where` when the log holds no (such)
-// RUN_CONFIG or a RUN_CONFIG it refuses.
-RunEvents runEventsOf(std::vector<LogEvent> events, const std::string& run_id, const std::string& where);
+// Throws std::runtime_error naming `where` only when the run cannot be
+// rebuilt: the log holds no (such) RUN_CONFIG that the edge accepts.
+RunEvents runEventsOf(std::vector<LogEvent> events, const std::string& run_id, const std::string& where,
+                      spdlog::logger& log);
 
 struct ReplayOptions {
   std::string log_dir;                    // a run's folder: log.NN.lcm segments (or one .lcm file)
@@ -71,11 +78,15 @@ struct ReplayOptions {
   // (the motivation in the intrinsic phase, the planner in the extrinsic one)
   std::vector<std::string> into;
   std::string run_id;                     // the run to replay in a log of several (default: the first)
+  std::string bus_key;                    // key file: the recording is of a keyed bus (tags checked and taken off)
 };
 
 struct ReplayResult {
   std::int64_t events = 0;            // of the replayed run in the log
   std::int64_t torn_bytes = 0;        // an incomplete last event (a writer killed mid-write)
+  std::int64_t malformed = 0;         // malformed parts of the log file skipped (named with their offsets)
+  std::int64_t refused_configs = 0;   // RUN_CONFIG events refused and skipped
+  std::int64_t untagged = 0;          // with --bus-key: events without a valid tag, skipped
   std::string run_id;
   bool extrinsic = false;
   std::string weights_checksum;       // the replayed predictors' final weights ("" without them)

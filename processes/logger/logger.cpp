@@ -38,30 +38,33 @@ bool peekRunHeader(const void* data, std::uint32_t size, RunHeader& out) {
   return true;
 }
 
-RecordedSoFar readRecorded(const std::string& dir) {
+RecordedSoFar readRecorded(const std::string& dir, const LogLimits& limits) {
   RecordedSoFar r;
   for (int segment = 0;; ++segment) {
     char name[32];
     std::snprintf(name, sizeof name, "log.%02d.lcm", segment);
     const fs::path path = fs::path(dir) / name;
     if (!fs::exists(path)) break;
-    lcm::LogFile in(path.string(), "r");
-    if (!in.good()) throw std::runtime_error("cannot read " + path.string());
-    while (const lcm::LogEvent* ev = in.readNextEvent()) {
+    LogReader in(path, limits);
+    for (LogEvent ev; in.next(ev);) {
       ++r.events;
       RunHeader h;
-      if (isSerialChannel(ev->channel) && peekRunHeader(ev->data, static_cast<std::uint32_t>(ev->datalen), h)) {
-        std::int64_t& next = r.next_serial[ev->channel];
-        if (h.serial + 1 > next && ev->datalen >= 8) {
+      const auto size = static_cast<std::uint32_t>(ev.data.size());
+      if (isSerialChannel(ev.channel) && peekRunHeader(ev.data.data(), size, h)) {
+        std::int64_t& next = r.next_serial[ev.channel];
+        if (h.serial >= next && h.serial < INT64_MAX && size >= 8) {
           next = h.serial + 1;
-          r.last_digest[ev->channel] = static_cast<std::int64_t>(
-              bigEndian(static_cast<const unsigned char*>(ev->data) + ev->datalen - 8, 8));
+          r.last_digest[ev.channel] = static_cast<std::int64_t>(bigEndian(ev.data.data() + size - 8, 8));
         }
-        if (ev->channel == channel::kResult || ev->channel == channel::kExtrinsicResult) r.ended = true;
+        if (ev.channel == channel::kResult || ev.channel == channel::kExtrinsicResult) r.ended = true;
       } else {
-        r.untracked[ev->channel].insert(std::string(static_cast<const char*>(ev->data), ev->datalen));
+        r.untracked[ev.channel].insert(std::string(reinterpret_cast<const char*>(ev.data.data()), ev.data.size()));
       }
     }
+    for (const LogProblem& p : in.problems()) r.problems.push_back({p.offset, path.string() + ": " + p.what});
+    if (in.tornBytes() > 0)
+      r.problems.push_back({fs::file_size(path) - in.tornBytes(),
+                            path.string() + ": an incomplete last event of " + std::to_string(in.tornBytes()) + " bytes"});
   }
   return r;
 }
@@ -87,8 +90,7 @@ RunLog::RunLog(const std::string& dir, nlohmann::json manifest) : dir_(dir), man
     std::snprintf(name, sizeof name, "log.%02d.lcm", segment++);
   } while (fs::exists(fs::path(dir_) / name));
   path_ = (fs::path(dir_) / name).string();
-  file_ = std::make_unique<lcm::LogFile>(path_, "w");
-  if (!file_->good()) throw std::runtime_error("cannot open log file " + path_ + " for writing");
+  file_ = std::make_unique<LogWriter>(path_);  // throws naming the file
   manifest_["segments"].push_back(name);
   writeManifest();
 }
@@ -102,14 +104,7 @@ RunLog::~RunLog() {
 
 void RunLog::write(const std::string& channel, const void* data, std::uint32_t size, std::int64_t utime) {
   if (closed_) return;
-  lcm::LogEvent ev;
-  ev.eventnum = events_;
-  ev.timestamp = utime;
-  ev.channel = channel;
-  ev.datalen = static_cast<int32_t>(size);
-  ev.data = const_cast<void*>(data);
-  if (file_->writeEvent(&ev) != 0 || std::fflush(file_->getFilePtr()) != 0)
-    throw std::runtime_error("cannot write to log file " + path_ + ": " + std::strerror(errno));
+  file_->write(channel, data, size, utime);  // flushed; throws naming the file (a full disk)
   ++events_;
   bytes_ += size;
 }
@@ -124,14 +119,21 @@ void RunLog::sawProcess(const std::string& name, int pid) {
 void RunLog::close(const std::string& incomplete, const nlohmann::json& missing) {
   if (closed_) return;
   closed_ = true;
-  std::fflush(file_->getFilePtr());
+  std::string close_error;
+  try {
+    file_->close();
+  } catch (const std::exception& e) {
+    close_error = e.what();
+  }
   file_.reset();
-  manifest_["complete"] = incomplete.empty();
-  if (!incomplete.empty()) {
-    manifest_["incomplete"] = incomplete;
+  const std::string why = incomplete.empty() && !close_error.empty() ? "a write failed: " + close_error : incomplete;
+  manifest_["complete"] = why.empty();
+  if (!why.empty()) {
+    manifest_["incomplete"] = why;
     manifest_["missing"] = missing;
   }
   writeManifest();
+  if (!close_error.empty()) throw std::runtime_error(close_error);
 }
 
 void RunLog::writeManifest() {

@@ -1,12 +1,11 @@
 // Logger core: one run's events into a standard LCM log file
-// (logs/<run-id>/log.00.lcm, readable by lcm-logplayer and lcm::LogFile) and
+// (logs/<run-id>/log.00.lcm, readable by lcm-logplayer and afford/logfile.hpp) and
 // a manifest (logs/<run-id>/manifest.json) with the effective config, seed,
 // version, the processes that took part, and whether the log is complete
 // (`complete`; else `incomplete` says why and `missing` lists what is missing).
 // Every event is flushed as it is written, so a killed logger loses nothing
 // it had received.
 #pragma once
-#include <lcm/lcm-cpp.hpp>
 #include <nlohmann/json.hpp>
 
 #include <cstdint>
@@ -14,6 +13,9 @@
 #include <memory>
 #include <set>
 #include <string>
+#include <vector>
+
+#include "afford/logfile.hpp"
 
 namespace afford {
 
@@ -35,8 +37,10 @@ struct RecordedSoFar {
   std::map<std::string, std::set<std::string>> untracked;   // the others: contents
   std::int64_t events = 0;
   bool ended = false;  // the run's end (RESULT or EXTRINSIC_RESULT) is in them
+  std::vector<LogProblem> problems;  // malformed parts of them, skipped (a file's name in `what`)
 };
-RecordedSoFar readRecorded(const std::string& dir);
+// Read with the project's log reader (afford/logfile.hpp) and its caps.
+RecordedSoFar readRecorded(const std::string& dir, const LogLimits& limits);
 
 class RunLog {
  public:
@@ -51,6 +55,8 @@ class RunLog {
   void write(const std::string& channel, const void* data, std::uint32_t size, std::int64_t utime);
   // A process seen on the bus (name -> pid), recorded in the manifest.
   void sawProcess(const std::string& name, int pid);
+  // Set a count the manifest reports (e.g. "control_dropped"); written with the next manifest.
+  void count(const std::string& key, std::int64_t value) { manifest_[key] = value; }
   // Flush and write the final manifest: complete when `incomplete` is empty,
   // else that reason and the serials still missing per channel.
   void close(const std::string& incomplete = "", const nlohmann::json& missing = nlohmann::json::object());
@@ -63,7 +69,7 @@ class RunLog {
   void writeManifest();
 
   std::string dir_, path_;
-  std::unique_ptr<lcm::LogFile> file_;
+  std::unique_ptr<LogWriter> file_;
   nlohmann::json manifest_;
   std::map<std::string, int> processes_;
   std::int64_t events_ = 0, bytes_ = 0;

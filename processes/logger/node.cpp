@@ -51,18 +51,28 @@ void LoggerNode::onConfigured(const RunConfig& config) {
   nlohmann::json manifest = {
       {"run_id", m.run_id},         {"experiment", m.experiment}, {"system", m.system},
       {"seed", m.seed},             {"steps", config.steps},      {"afford_version", AFFORD_VERSION},
-      {"config_yaml", m.config_yaml}, {"segments", nlohmann::json::array()}, {"complete", false}};
+      {"config_yaml", m.config_yaml}, {"segments", nlohmann::json::array()}, {"complete", false},
+      {"bus_keyed", edge().key() != nullptr}};  // recorded without the tags either way
   const std::string dir = (std::filesystem::path(log_root_) / m.run_id).string();
   written_.clear();
+  control_written_ = 0;
+  control_dropped_ = 0;
   left_.clear();
   ended_ = false;
   write_error_.clear();
   // A logger restarted during the run: go on where the earlier segments end.
-  const RecordedSoFar before = readRecorded(dir);
+  LogLimits limits;
+  limits.event_bytes = config.protocol.bus.max_message_bytes;
+  const RecordedSoFar before = readRecorded(dir, limits);
+  for (const LogProblem& p : before.problems)
+    log_->warn("an earlier segment of run '{}': offset {}: {}: skipped", m.run_id, p.offset, p.what);
   log_file_ = std::make_unique<RunLog>(dir, manifest);  // refuses a folder that holds a complete log
   log_file_->sawProcess(process(), static_cast<int>(getpid()));
   for (const auto& [channel, next] : before.next_serial) edge().expectSerial(channel, next, before.last_digest.at(channel));
-  for (const auto& [channel, contents] : before.untracked) written_[channel] = contents;
+  for (const auto& [channel, contents] : before.untracked) {
+    written_[channel] = contents;
+    control_written_ += static_cast<std::int64_t>(contents.size());
+  }
   ended_ = before.ended;
   if (before.events > 0)
     log_->info("recording run '{}' into {}, after {} events in earlier segments", m.run_id, log_file_->path(),
@@ -74,7 +84,20 @@ void LoggerNode::onConfigured(const RunConfig& config) {
 void LoggerNode::onControl(const Envelope& e) {
   if (!log_file_) return;
   std::string content(reinterpret_cast<const char*>(e.data), e.size);
-  if (!written_[e.channel].insert(std::move(content)).second) return;  // said again: recorded once
+  std::set<std::string>& written = written_[e.channel];
+  if (written.count(content)) return;  // said again: recorded once
+  // A run has a handful of these (its config, START, STOP); a flood of distinct
+  // ones is forged, and neither its memory nor the log grows with it.
+  if (control_written_ >= config().protocol.limits.control_messages) {
+    if (control_dropped_++ == 0)
+      log_->warn("{}: run '{}' has had {} distinct RUN_CONFIG and RUN_CONTROL messages "
+                 "(protocol.limits.control_messages): more are not recorded, only counted",
+                 e.channel, runId(), control_written_);
+    log_file_->count("control_dropped", control_dropped_);
+    return;
+  }
+  written.insert(std::move(content));
+  ++control_written_;
   write(e);
 }
 

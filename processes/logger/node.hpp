@@ -1,6 +1,7 @@
 // Logger process node: records every channel of a run.
 // Channels in:  RUN_CONFIG and RUN_CONTROL of the run (each distinct message
-//               once), every run channel (channel::kWithSerial) through the
+//               once, at most protocol.limits.control_messages of them; the
+//               manifest counts those dropped beyond), every run channel (channel::kWithSerial) through the
 //               edge like any receiver, STATUS (for the manifest and the
 //               publishers' message counts; not recorded: it follows the wall
 //               clock), RESEND (not recorded).
@@ -49,6 +50,8 @@ class LoggerNode : public NodeBase {
   std::string log_root_;
   std::unique_ptr<RunLog> log_file_;
   std::map<std::string, std::set<std::string>> written_;  // RUN_CONFIG, RUN_CONTROL: contents recorded
+  std::int64_t control_written_ = 0;  // ... how many (at most protocol.limits.control_messages)
+  std::int64_t control_dropped_ = 0;  // ... and how many distinct ones were not recorded beyond it
   std::map<std::string, bool> left_;  // processes of the run -> their final counts are in
   bool ended_ = false;                // the run's end (RESULT, EXTRINSIC_RESULT) is in the log
   std::string write_error_;           // the first write that failed

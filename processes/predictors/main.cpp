@@ -2,10 +2,16 @@
 #include "predictors/node.hpp"
 
 int main(int argc, char** argv) {
+  std::string checkpoint_root = "logs";
   return afford::processMain(
       argc, argv, {"predictors", "afford predictors: affordance, learning-progress, what- and where-effect"},
-      [](afford::CLIHook&) {},
-      [](lcm::LCM& lcm, std::shared_ptr<spdlog::logger> log, const afford::ProtocolConfig& protocol) {
-        return std::make_unique<afford::PredictorsNode>(lcm, std::move(log), protocol);
+      [&](afford::CLIHook& cli) {
+        cli.option("--checkpoint-dir", checkpoint_root,
+                   "the only folder checkpoints are written in (<dir>/<run-id>/) and read from (an experiment's "
+                   "--log-root)");
+      },
+      [&](lcm::LCM& lcm, std::shared_ptr<spdlog::logger> log, const afford::ProtocolConfig& protocol) {
+        return std::make_unique<afford::PredictorsNode>(lcm, std::move(log), protocol, /*async_effects=*/true,
+                                                        checkpoint_root);
       });
 }

@@ -2,14 +2,17 @@
 
 #include "afford/affordance_table_t.hpp"
 #include "afford/channels.hpp"
+#include "afford/names.hpp"
 #include "afford/prediction_t.hpp"
 #include "afford/run_result_t.hpp"
 
 namespace afford {
 
 PredictorsNode::PredictorsNode(lcm::LCM& lcm, std::shared_ptr<spdlog::logger> log, const ProtocolConfig& protocol,
-                               bool async_effects)
-    : NodeBase(lcm, "predictors", std::move(log), protocol), async_effects_(async_effects) {
+                               bool async_effects, std::string checkpoint_root)
+    : NodeBase(lcm, "predictors", std::move(log), protocol),
+      async_effects_(async_effects),
+      checkpoint_root_(std::move(checkpoint_root)) {
   subscribe<object_probe_t>(channel::kProbe, [this](const object_probe_t& m) { return onProbe(m); });
   subscribe<focus_t>(channel::kFocus, [this](const focus_t& m) { return onFocus(m); });
   subscribe<decision_t>(channel::kDecision, [this](const decision_t& m) { return onDecision(m); });
@@ -17,7 +20,34 @@ PredictorsNode::PredictorsNode(lcm::LCM& lcm, std::shared_ptr<spdlog::logger> lo
   subscribe<forward_query_t>(channel::kForwardQuery, [this](const forward_query_t& m) { return onForwardQuery(m); });
 }
 
+void PredictorsNode::checkCheckpointPath(const RunConfig& config) const {
+  namespace fs = std::filesystem;
+  const std::string where = "this process's checkpoint folder " + checkpoint_root_ + " (--checkpoint-dir)";
+  if (config.phase == Phase::Extrinsic) {
+    const fs::path file = config.extrinsic_checkpoint;
+    std::error_code ec;
+    if (!insideFolder(file, checkpoint_root_))
+      throw ConfigError("extrinsic.checkpoint: '" + printable(file.string()) + "' is not inside " + where +
+                        ": a run's configuration does not choose what the predictors read");
+    if (!fs::is_regular_file(file, ec)) throw ConfigError("extrinsic.checkpoint: '" + printable(file.string()) + "' is not a file");
+    return;
+  }
+  if (config.checkpoint.empty()) return;
+  const fs::path file = config.checkpoint;
+  const fs::path own = fs::path(checkpoint_root_) / runId();
+  std::error_code ec;
+  const bool in_own = insideFolder(file, checkpoint_root_) &&
+                      fs::weakly_canonical(fs::absolute(file.parent_path(), ec), ec) ==
+                          fs::weakly_canonical(fs::absolute(own, ec), ec) &&
+                      file.extension() == ".ckpt";
+  if (!in_own)
+    throw ConfigError("run.checkpoint: '" + printable(file.string()) + "' is not a .ckpt file in " + own.string() +
+                      "/: the predictors write only into the run's own folder in " + where +
+                      "; a run's configuration does not choose where");
+}
+
 void PredictorsNode::onConfigured(const RunConfig& config) {
+  checkCheckpointPath(config);
   trainer_.reset();
   if (config.phase == Phase::Extrinsic) {
     namespace fs = std::filesystem;

@@ -10,7 +10,9 @@
 //               FORWARD_PREDICTION (extrinsic phase), STATUS
 // Extrinsic phase: the predictors load the checkpoint of a trained agent,
 // predict affordances for each scene scan and answer forward queries; they do
-// not learn.
+// not learn. Checkpoints are written and read only inside the process's
+// checkpoint folder (--checkpoint-dir, default logs/), a run's own in
+// <root>/<run-id>/.
 #pragma once
 #include <filesystem>
 #include <map>
@@ -34,8 +36,11 @@ class PredictorsNode : public NodeBase {
   // `async_effects`: make the forward-model updates on a worker thread
   // (EffectTrainer) instead of inline after the next prediction. Same results;
   // it pays where a second core is free, not in a single-threaded memq host.
+  // `checkpoint_root`: the only folder the predictors write checkpoints in (as
+  // <root>/<run-id>/NAME.ckpt) and load them from (--checkpoint-dir): a run's
+  // configuration names the file, but a path elsewhere is refused.
   PredictorsNode(lcm::LCM& lcm, std::shared_ptr<spdlog::logger> log, const ProtocolConfig& protocol,
-                 bool async_effects = true);
+                 bool async_effects = true, std::string checkpoint_root = "logs");
 
  private:
   enum class Outcome { Unknown, Passed, AwaitingEffect, Learned };
@@ -56,7 +61,11 @@ class PredictorsNode : public NodeBase {
   void finish();
   void trainPendingEffects();
 
+  // Is the run's checkpoint (to write, or to load) where this process may use one? Throws ConfigError if not.
+  void checkCheckpointPath(const RunConfig& config) const;
+
   bool async_effects_;
+  std::string checkpoint_root_;
   std::shared_ptr<Predictors> core_;
   // Extrinsic runs do not change the predictors: the agent loaded for one test
   // serves the next one that names the same, unchanged checkpoint file.

@@ -19,6 +19,7 @@
 #include "afford/focus_t.hpp"
 #include "afford/image.hpp"
 #include "afford/logging.hpp"
+#include "afford/bus.hpp"
 #include "afford/edge.hpp"
 #include "afford/node.hpp"
 #include "afford/prediction_t.hpp"
@@ -89,6 +90,8 @@ int main(int argc, char** argv) {
   std::string config_dir = afford::defaultConfigDir();
   app.add_option("--config-dir", config_dir, "folder whose defaults.yaml gives what is accepted before a run is heard")
       ->capture_default_str();
+  std::string key_file;
+  app.add_option("--bus-key", key_file, "key file of a keyed bus (default: the file $AFFORD_BUS_KEY names)");
   CLI11_PARSE(app, argc, argv);
   auto log = afford::makeLogger("viewer", level);
   afford::ProtocolConfig protocol;
@@ -98,15 +101,21 @@ int main(int argc, char** argv) {
     log->error("--config-dir: {}", e.what());
     return 2;
   }
-  afford::installStopHandlers();
-  lcm::LCM lcm(url);
-  if (!lcm.good()) {
-    log->error("cannot open LCM at '{}'", url);
+  std::shared_ptr<const afford::BusKey> key;
+  std::unique_ptr<lcm::LCM> bus;
+  try {
+    key = afford::busKeyFrom(key_file);
+    bus = afford::openBus(url, protocol.bus);
+  } catch (const std::exception& e) {
+    log->error("{}", e.what());
     return 1;
   }
+  lcm::LCM& lcm = *bus;
+  afford::installStopHandlers();
   if (!png_dir.empty()) std::filesystem::create_directories(png_dir);
   afford::Viewer viewer;
   afford::Edge edge(lcm, log, "viewer", protocol);
+  edge.useKey(key);
   edge.warnOtherRuns(false);
   Listener listener{viewer, *log, edge, {}};
   using afford::Order;

@@ -11,7 +11,9 @@ enter_test "$0" "$@"
 url="udpm://239.255.76.67:7992?ttl=0&recv_buf_size=2097152"
 mapfile -t processes < <("$build/bin/afford" processes --phase intrinsic --no-logger)  # the registry's
 for p in "${processes[@]}"; do
-  "$build/bin/afford-$p" --lcm-url "$url" >"$out/$p.log" 2>&1 &
+  extra=()
+  [[ $p == predictors ]] && extra=(--checkpoint-dir "$out/logs")  # where the runner's --log-root puts checkpoints
+  "$build/bin/afford-$p" --lcm-url "$url" "${extra[@]}" >"$out/$p.log" 2>&1 &
 done
 "$build/bin/afford-logger" --lcm-url "$url" --log-dir "$out/logs" >"$out/logger.log" 2>&1 &
 # LCM's own logger too. It cannot ask for what it missed, as our processes do,

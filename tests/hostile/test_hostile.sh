@@ -21,65 +21,26 @@ seed=${AFFORD_HOSTILE_SEED:-$((1 + RANDOM % 100000))}
 kinds=()
 [[ -n ${AFFORD_HOSTILE_KINDS:-} ]] && kinds=(--kinds $AFFORD_HOSTILE_KINDS)
 url="udpm://239.255.76.67:7995?ttl=0&recv_buf_size=2097152"
-mapfile -t processes < <("$build/bin/afford" processes)  # the registry's
+source "$root/tests/group.sh"
 echo "flood: $messages messages, seed $seed"
 
-declare -A pid peak rss
-start_group() {  # $1: label; the processes' output in $out/$1-<process>.log
-  for p in "${processes[@]}"; do
-    local extra=()
-    [[ $p == logger ]] && extra=(--log-dir "$out/$1-logs")
-    "$build/bin/afford-$p" --lcm-url "$url" "${extra[@]}" >>"$out/$1-$p.log" 2>&1 &
-    pid[$p]=$!
-  done
-  # Every process on the bus before the run is driven (afford status lists them).
-  for _ in $(seq 100); do
-    (($("$build/bin/afford" status --lcm-url "$url" --seconds 0.6 | grep -c -E "^($(IFS='|'; echo "${processes[*]}")) ") >= ${#processes[@]})) && return 0
-  done
-  echo "the processes did not come up"; return 1
-}
-stop_group() {  # records each process's peak memory, checks it is alive, stops it
-  local label=$1 dead=0
-  for p in "${processes[@]}"; do
-    if ! kill -0 "${pid[$p]}" 2>/dev/null; then
-      echo "process $p is not alive after the $label experiment"; dead=1; continue
-    fi
-    peak[$label-$p]=$(awk '/VmHWM/ {print $2}' "/proc/${pid[$p]}/status")
-    rss[$label-$p]=$(awk "/VmRSS/ {print \$2}" "/proc/${pid[$p]}/status")
-    kill -INT "${pid[$p]}"
-  done
-  wait 2>/dev/null || true
-  return $dead
-}
 experiment() {  # $1: label
   "$build/bin/afford" experiment base --system IMP --reps 1 --steps 3000 --seed 7 --extrinsic-reps 2 \
     --scenarios scenario2 --scenarios scenario4 --quiet --attach "$url" --run-prefix flood \
     --out "$out/$1" --log-root "$out/$1-logs" >"$out/$1.txt" 2>&1
 }
-diagnose() {
-  local rc=$?
-  kill $(jobs -p) 2>/dev/null || true
-  ((rc == 0)) && return
-  echo "--- diagnostics (seed $seed)"
-  tail -n 5 "$out/hostile.txt" "$out/flood.txt" 2>/dev/null || true
-  for p in "${processes[@]}"; do
-    grep -h -E "\] \[(error|critical)\]" "$out/hostile-$p.log" 2>/dev/null | tail -n 4 | sed "s/^/$p: /" || true
-  done
-}
-trap diagnose EXIT
+group_diagnose hostile "seed $seed" "$out/hostile.txt" "$out/flood.txt"
 
-start_group clean
-experiment clean || { cat "$out/clean.txt"; echo "the undisturbed experiment failed"; exit 1; }
-stop_group clean
+group_undisturbed
 
-start_group hostile
+group_start hostile
 experiment hostile &
 runner=$!
 "$build/bin/afford-hostile" --lcm-url "$url" --messages "$messages" --seed "$seed" "${kinds[@]}" >"$out/flood.txt" 2>&1
 cat "$out/flood.txt"
 kill -0 "$runner" 2>/dev/null && echo "the flood ended while the experiment still ran" || echo "NOTE: the experiment ended before the flood did"
 wait "$runner" || { cat "$out/hostile.txt"; echo "the experiment under the flood failed"; exit 1; }
-stop_group hostile
+group_stop hostile
 
 # The same results, but for what the clock, the host or the paths decide.
 same_results "$out/clean" "$out/hostile" || exit 1
@@ -95,7 +56,7 @@ worst=0
 for p in "${processes[@]}"; do
   c=${peak[clean-$p]} h=${peak[hostile-$p]}
   pct=$(((h - c) * 100 / c))
-  printf "peak memory %-11s undisturbed %6d kB, flooded %6d kB (%+d%%); resident at the end %d / %d kB\n" "$p" "$c" "$h" "$pct" "${rss[clean-$p]}" "${rss[hostile-$p]}"
+  printf "peak memory %-11s undisturbed %6d kB, flooded %6d kB (%+d%%); resident at the end %d / %d kB\n" "$p" "$c" "$h" "$pct" "${resident[clean-$p]}" "${resident[hostile-$p]}"
   ((pct > worst)) && worst=$pct
 done
 ((worst <= 20)) || { echo "a process's peak memory grew by more than 20% under the flood"; exit 1; }

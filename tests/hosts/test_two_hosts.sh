@@ -72,7 +72,8 @@ echo "hosts: A (10.77.0.1) and B (10.77.0.2), seed $seed"
 url="udpm://239.255.76.67:7997?ttl=1&recv_buf_size=2097152"
 for p in environment eye; do on "$a" "$build/bin/afford-$p" --lcm-url "$url" >"$out/$p.log" 2>&1 & done
 on "$a" "$build/bin/afford-logger" --lcm-url "$url" --log-dir "$out/logs" >"$out/logger.log" 2>&1 &
-for p in predictors motivation planner; do on "$b" "$build/bin/afford-$p" --lcm-url "$url" >"$out/$p.log" 2>&1 & done
+on "$b" "$build/bin/afford-predictors" --lcm-url "$url" --checkpoint-dir "$out/logs" >"$out/predictors.log" 2>&1 &
+for p in motivation planner; do on "$b" "$build/bin/afford-$p" --lcm-url "$url" >"$out/$p.log" 2>&1 & done
 
 # Host A hears all six: the processes of host B across the link.
 for _ in $(seq 100); do

@@ -361,6 +361,30 @@ TEST(Choreography, AnExtrinsicRunWithABadCheckpointIsRefusedNamingTheFile) {
   EXPECT_NE(run.outcome.error.find("/nonexistent/predictors.ckpt"), std::string::npos) << run.outcome.error;
 }
 
+// A run's configuration names its checkpoint files, but cannot choose where
+// the predictors write or read: a path outside their checkpoint folder (or,
+// for the one they write, outside the run's own folder in it) is refused
+// naming the key, and nothing is written there.
+TEST(Choreography, ACheckpointPathOutsideThePredictorsFolderIsRefusedAndNothingIsWritten) {
+  const std::string elsewhere = test::tempDir("elsewhere");
+  for (const std::string& path : {elsewhere + "/predictors.ckpt", test::checkpointRoot() + "/../x/predictors.ckpt",
+                                   std::string("relative/../../predictors.ckpt")}) {
+    YAML::Node root = YAML::Load(baseYaml(System::IMP, 50));
+    root["run"]["checkpoint"] = path;
+    InProcessRun run(emitYaml(root), System::IMP, 3, 50);
+    EXPECT_FALSE(run.outcome.ok) << path;
+    EXPECT_NE(run.outcome.error.find("run.checkpoint"), std::string::npos) << run.outcome.error;
+    EXPECT_FALSE(std::filesystem::exists(path)) << path;
+  }
+  const std::string config_dir = std::string(AFFORD_SOURCE_DIR) + "/config";
+  const std::string yaml = emitYaml(
+      extrinsicConfig(config_dir, RunRequest{"base", System::IMP, 1, std::nullopt, {}}, "/etc/passwd", "scenario1"));
+  InProcessRun run(yaml, System::IMP, 1, 125);
+  EXPECT_FALSE(run.outcome.ok);
+  EXPECT_NE(run.outcome.error.find("extrinsic.checkpoint: '/etc/passwd' is not inside"), std::string::npos)
+      << run.outcome.error;
+}
+
 // ---- bad input: each kind is dropped with one line naming channel and reason,
 // and the run ends exactly as without it.
 

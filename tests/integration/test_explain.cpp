@@ -234,7 +234,7 @@ TEST_F(Explain, BadInputIsNamedAndFails) {
   ASSERT_EQ(t.run->events.front().channel, channel::kRunConfig);
   const auto no_config = cli(writeLog(headless, bad / "no-config"));
   EXPECT_NE(no_config.exit_code, 0);
-  EXPECT_NE(no_config.output.find("no RUN_CONFIG in the log"), std::string::npos) << no_config.output;
+  EXPECT_NE(no_config.output.find("no RUN_CONFIG that the edge accepts in the log"), std::string::npos) << no_config.output;
 
   // Cut before the EXTRINSIC_RESULT, at an event boundary and in the middle of an event.
   const std::size_t half = t.run->events.size() / 2;
@@ -357,6 +357,44 @@ TEST_F(Explain, AFolderOfLogsIsSummarisedBySubGoalAndAgent) {
   const auto one = test::runCommand(test::afford("explain --by-agent " + solved.log) + " 2>&1");
   EXPECT_NE(one.exit_code, 0);
   EXPECT_NE(one.output.find("--by-agent summarises a folder of run logs"), std::string::npos) << one.output;
+}
+
+// A recording of a bus that carried a forged RUN_CONFIG and a log with a
+// malformed event (a header claiming 0x7FFFFFFF bytes, as in the 3 KB file
+// that crashed LCM's reader): replay skips both, names the event's offset,
+// and replays the run to its recorded weights.
+TEST(ReplayOfAForgedRecording, SkipsWhatItCannotTakeAndReplaysTheRun) {
+  InProcessRun run(test::baseYaml(System::IMP, 200), System::IMP, 3, 200);
+  ASSERT_TRUE(run.outcome.ok) << run.outcome.error;
+  const fs::path dir = fs::path(test::tempDir("replay-forged")) / "forged";
+  std::vector<test::Event> events;
+  // Before the run's own: a RUN_CONFIG with the right fingerprint and nothing else right.
+  std::vector<std::uint8_t> junk(300, 0x41);
+  const std::int64_t hash = run_config_t::getHash();
+  for (int i = 0; i < 8; ++i) junk[static_cast<std::size_t>(i)] = static_cast<std::uint8_t>(hash >> (56 - 8 * i));
+  events.push_back({channel::kRunConfig, junk});
+  events.insert(events.end(), run.events.begin(), run.events.end());
+  writeLog(events, dir);
+  // A malformed event spliced in after the tenth.
+  const fs::path file = dir / "log.00.lcm";
+  std::ifstream in(file, std::ios::binary);
+  std::vector<char> bytes((std::istreambuf_iterator<char>(in)), {});
+  std::size_t at = 0;
+  for (std::size_t i = 0; i < 10; ++i) at += 28 + events[i].channel.size() + events[i].data.size();
+  std::vector<char> bad = {'\xED', '\xA1', '\xDA', '\x01'};
+  bad.resize(20, 0);
+  for (char c : {'\x00', '\x00', '\x00', '\x05', '\x7F', '\xFF', '\xFF', '\xFF'}) bad.push_back(c);
+  for (char c : std::string("SCENE")) bad.push_back(c);
+  bytes.insert(bytes.begin() + static_cast<std::ptrdiff_t>(at), bad.begin(), bad.end());
+  std::ofstream(file, std::ios::binary | std::ios::trunc).write(bytes.data(), static_cast<std::streamsize>(bytes.size()));
+
+  const auto r = test::runCommand(test::afford("replay " + dir.string()));
+  EXPECT_EQ(r.exit_code, 0) << r.output;
+  EXPECT_NE(r.output.find("offset " + std::to_string(at) + ": data length 2147483647"), std::string::npos) << r.output;
+  EXPECT_NE(r.output.find("skipped: 1 malformed part"), std::string::npos) << r.output;
+  EXPECT_NE(r.output.find("skipped: 1 RUN_CONFIG event(s) the edge refuses"), std::string::npos) << r.output;
+  EXPECT_NE(r.output.find("weights_checksum: " + run.outcome.weights_checksum), std::string::npos) << r.output;
+  EXPECT_NE(r.output.find("replay equals the record"), std::string::npos) << r.output;
 }
 
 }  // namespace

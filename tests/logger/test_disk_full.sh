@@ -22,7 +22,9 @@ mount -t tmpfs -o size=256k tmpfs "$disk"
 trap 'kill $(jobs -p) 2>/dev/null || true; wait 2>/dev/null || true; umount -l "$disk" 2>/dev/null || true' EXIT
 
 for p in $("$build/bin/afford" processes --phase intrinsic --no-logger); do
-  "$build/bin/afford-$p" --lcm-url "$url" >"$out/$p.log" 2>&1 &
+  extra=()
+  [[ $p == predictors ]] && extra=(--checkpoint-dir "$out/checkpoints")  # the runner's --log-root
+  "$build/bin/afford-$p" --lcm-url "$url" "${extra[@]}" >"$out/$p.log" 2>&1 &
 done
 "$build/bin/afford-logger" --lcm-url "$url" --log-dir "$disk/logs" >"$out/logger.log" 2>&1 &
 logger=$!

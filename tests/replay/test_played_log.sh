@@ -15,6 +15,7 @@ declare -A pid
 for p in "${processes[@]}"; do
   extra=()
   [[ $p == logger ]] && extra=(--log-dir "$logs")
+  [[ $p == predictors ]] && extra=(--checkpoint-dir "$logs")
   "$build/bin/afford-$p" --lcm-url "$url" "${extra[@]}" >"$out/$p.log" 2>&1 &
   pid[$p]=$!
 done

@@ -33,6 +33,7 @@ mapfile -t processes < <("$build/bin/afford" processes)  # the registry's
 command_of() {  # the command that starts process $1, the same before and after the kill
   case $1 in
     logger) echo "$build/bin/afford-logger --lcm-url $url --log-dir $out/logs" ;;
+    predictors) echo "$build/bin/afford-predictors --lcm-url $url --checkpoint-dir $out/logs" ;;
     *) echo "$build/bin/afford-$1 --lcm-url $url" ;;
   esac
 }

@@ -1,7 +1,9 @@
 #!/usr/bin/env bash
 # lcm-spy on a live run, under Xvfb: every message on every channel decodes
 # with the project's types (as lcm-spy decodes them), and a screenshot of the
-# spy window is kept as a test artefact.
+# spy window is kept as a test artefact. The bus is keyed (docs/security.md),
+# as the groups of scripts/procs.sh are: the tags that trail every message do
+# not keep lcm-spy from decoding them.
 #   tests/spy/test_spy.sh BUILD_DIR ARTEFACT_DIR
 # Runs in a private network namespace of its own (root), so its multicast
 # stays on this machine's loopback.
@@ -13,6 +15,8 @@ start_xvfb 1280x900 "$out/xvfb.log"
 
 port=7990
 url="udpm://239.255.76.67:$port?ttl=0"
+"$build/bin/afford" bus-key "$out/bus.key" >/dev/null
+export AFFORD_BUS_KEY=$out/bus.key  # the runner, the processes it starts, afford status
 
 "$root/scripts/spy.sh" "$url" >"$out/spy.log" 2>&1 &
 java -cp "$build/share/afford-lcmtypes.jar:$build/share/afford-spycheck.jar:/usr/share/java/lcm.jar" \

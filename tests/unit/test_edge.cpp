@@ -1,7 +1,10 @@
 // The message edge's handling of a handler that refuses: a refused message is
 // expected again (it may have been a forged one); the same message refused
 // again, once asked for, fails the run naming the channel instead of asking
-// for it without end.
+// for it without end. And the bus below it: a keyed bus takes only tagged
+// messages, a run id that is no safe name is dropped, a RESEND at the largest
+// serials and a message larger than the bus takes are handled, forged process
+// ids are bounded.
 #include <gtest/gtest.h>
 #include <spdlog/sinks/null_sink.h>
 
@@ -10,6 +13,8 @@
 #include "afford/channels.hpp"
 #include "afford/edge.hpp"
 #include "afford/image.hpp"
+#include "afford/process_status_t.hpp"
+#include "afford/resend_t.hpp"
 #include "afford/scene_t.hpp"
 #include "tests/support.hpp"
 
@@ -97,6 +102,155 @@ TEST_F(Refusing, AMessageRefusedOnceIsTakenWhenItsTurnComesRight) {
   EXPECT_FALSE(eye.failed()) << failure;
   EXPECT_EQ(offered_step1, 2);
   EXPECT_EQ(taken, (std::vector<std::int64_t>{0, 1, 2}));
+}
+
+// ---- the bus below the edge: keys, names, overflows, bounds ---------------------------
+
+struct EdgeOnTheBus : ::testing::Test {
+  lcm::LCM lcm{"memq://"};
+  RunConfig config = test::shippedConfig();
+  ProtocolConfig protocol = test::shippedProtocol();
+  std::string dir = test::tempDir("edge-key");
+  Edge sender{lcm, quiet("environment"), "environment", protocol};
+  Edge receiver{lcm, quiet("eye"), "eye", protocol};
+  std::vector<std::int64_t> taken;
+
+  void SetUp() override {
+    sender.join("run-1", &config);
+    receiver.join("run-1", &config);
+    receiver.subscribe<scene_t>(
+        channel::kScene,
+        [this](const scene_t& m) {
+          taken.push_back(m.step);
+          return Turn::take();
+        },
+        Scope::Run, Order::None);
+  }
+  std::shared_ptr<const BusKey> newKey(const std::string& name) {
+    BusKey::writeNew(dir + "/" + name);
+    return std::make_shared<const BusKey>(BusKey::fromFile(dir + "/" + name));
+  }
+  void pump() {
+    while (lcm.handleTimeout(0) > 0) {
+    }
+  }
+  void raw(const std::string& channel, const std::vector<std::uint8_t>& b) {
+    lcm.publish(channel, b.data(), static_cast<unsigned>(b.size()));
+  }
+};
+
+TEST_F(EdgeOnTheBus, OnAKeyedBusOnlyMessagesWithTheKeysTagAreTaken) {
+  const auto key = newKey("bus.key");
+  sender.useKey(key);
+  receiver.useKey(key);
+  scene_t s0 = sceneOf("run-1", 0);
+  sender.send(channel::kScene, s0);  // tagged
+  pump();
+  EXPECT_EQ(taken, std::vector<std::int64_t>{0});
+
+  // A perfect message otherwise (fingerprint, run id, digest): untagged, tagged by another key,
+  // or tagged for another channel.
+  scene_t s1 = sceneOf("run-1", 1);
+  const std::vector<std::uint8_t> plain = sealed(s1);
+  raw(channel::kScene, plain);
+  raw(channel::kScene, newKey("other.key")->tagged(channel::kScene, plain.data(), plain.size()));
+  raw(channel::kScene, key->tagged(channel::kFocus, plain.data(), plain.size()));
+  pump();
+  EXPECT_EQ(taken, std::vector<std::int64_t>{0});
+  EXPECT_EQ(receiver.drops().untagged, 3);
+  EXPECT_EQ(receiver.drops().refused, 0) << "no untagged message reached the checks behind the tag";
+  raw(channel::kScene, key->tagged(channel::kScene, plain.data(), plain.size()));
+  pump();
+  EXPECT_EQ(taken, (std::vector<std::int64_t>{0, 1}));
+}
+
+TEST_F(EdgeOnTheBus, ATaggedMessageIsRefusedWhereThereIsNoKey) {
+  sender.useKey(newKey("bus.key"));
+  scene_t s0 = sceneOf("run-1", 0);
+  sender.send(channel::kScene, s0);
+  pump();
+  EXPECT_TRUE(taken.empty());
+  EXPECT_EQ(receiver.drops().refused, 1);
+}
+
+TEST_F(EdgeOnTheBus, ARunIdThatIsNoSafeNameIsDroppedBeforeDecoding) {
+  Edge observer{lcm, quiet("viewer"), "viewer", protocol};
+  std::vector<std::string> runs;
+  observer.subscribe<scene_t>(
+      channel::kScene,
+      [&](const scene_t& m) {
+        runs.push_back(m.run_id);
+        return Turn::take();
+      },
+      Scope::Any, Order::None);
+  for (const std::string id : {"../../x", "a/b", "..", ".hidden", "ok-run"}) {
+    scene_t s = sceneOf(id, 0);
+    raw(channel::kScene, sealed(s));
+  }
+  pump();
+  EXPECT_EQ(runs, std::vector<std::string>{"ok-run"});
+  EXPECT_EQ(observer.drops().refused, 4);
+}
+
+TEST_F(EdgeOnTheBus, AResendAskingFromTheLargestSerialIsAnsweredWithNothing) {
+  scene_t s0 = sceneOf("run-1", 0);
+  sender.publish(channel::kScene, s0);
+  sender.answerResends();
+  pump();
+  taken.clear();
+  resend_t r;
+  r.run_id = "run-1";
+  r.step = 0;
+  r.channel = channel::kScene;
+  r.requester = "test";
+  for (const auto& [first, last] : std::vector<std::pair<std::int64_t, std::int64_t>>{
+           {INT64_MAX, INT64_MAX}, {INT64_MAX - 1, INT64_MAX}, {0, INT64_MAX}}) {
+    r.first = first;
+    r.last = last;
+    raw(channel::kResend, sealed(r));
+  }
+  pump();
+  EXPECT_EQ(taken, std::vector<std::int64_t>{0}) << "serial 0 once (the request from 0), nothing beyond the history";
+}
+
+TEST_F(EdgeOnTheBus, AMessageLargerThanTheBusTakesIsNotSent) {
+  config.protocol.bus.max_message_bytes = 10000;
+  scene_t s = sceneOf("run-1", 0);
+  s.data.assign(20000, 7);
+  s.size = static_cast<int32_t>(s.data.size());
+  try {
+    sender.publish(channel::kScene, s);
+    ADD_FAILURE() << "a 20 KB message was sent on a bus of 10 KB messages";
+  } catch (const std::exception& e) {
+    EXPECT_NE(std::string(e.what()).find("protocol.bus.max_message_bytes"), std::string::npos) << e.what();
+  }
+}
+
+TEST_F(EdgeOnTheBus, ForgedProcessIdsCannotGrowWhatAReceiverRemembers) {
+  Edge runner{lcm, quiet("runner"), "runner", protocol};
+  int heard = 0;
+  runner.subscribe<process_status_t>(
+      channel::kStatus,
+      [&](const process_status_t&) {
+        ++heard;
+        return Turn::take();
+      },
+      Scope::Any, Order::None);
+  process_status_t st;
+  st.step = -1;
+  st.process = "eye";
+  st.beat = 1;
+  st.state = process_status_t::WAITING;
+  st.config_digest = 0;
+  st.n_channels = 0;
+  const int forged = protocol.limits.peers * 3;
+  for (int pid = 1; pid <= forged; ++pid) {
+    st.pid = pid;
+    raw(channel::kStatus, sealed(st));
+    pump();
+  }
+  EXPECT_EQ(heard, forged);
+  EXPECT_EQ(runner.drops().peers_forgotten, forged - protocol.limits.peers);
 }
 
 }  // namespace

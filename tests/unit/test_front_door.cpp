@@ -9,6 +9,7 @@
 #include <set>
 
 #include "afford/agents.hpp"
+#include "afford/plan.hpp"
 #include "afford/channels.hpp"
 #include "afford/config.hpp"
 #include "afford/host.hpp"
@@ -101,6 +102,30 @@ TEST(Sweep, ASweepFileKeyThatIsNoNameIsRefusedNamingTheFile) {
     EXPECT_NE(std::string(e.what()).find("sweep file " + file), std::string::npos) << e.what();
     EXPECT_NE(std::string(e.what()).find("line 2"), std::string::npos) << e.what();
   }
+}
+
+// Every process drops messages of a run id that is not a safe name: the runner refuses one before anything runs.
+TEST(Plan, ARunIdThatIsNoSafeNameIsRefusedBeforeAnythingRuns) {
+  ExperimentOptions o;
+  o.experiment = "base";
+  o.systems = {"IMP"};
+  o.reps = 1;
+  o.steps = 10;
+  for (const std::string& prefix : std::vector<std::string>{"a b", "../x", ".hidden", std::string(200, 'p')}) {
+    o.run_prefix = prefix;
+    try {
+      planExperiment(o);
+      ADD_FAILURE() << "run prefix '" << prefix << "' was taken";
+    } catch (const ConfigError& e) {
+      EXPECT_NE(std::string(e.what()).find("--run-prefix"), std::string::npos) << e.what();
+    }
+  }
+  o.run_prefix = "fine-1.0_x";
+  EXPECT_NO_THROW(planExperiment(o));
+  o.run_prefix = "fine";
+  o.extrinsic_reps = 1;
+  o.scenarios = {"scenario1"};
+  EXPECT_NO_THROW(planExperiment(o));
 }
 
 TEST(Registry, EachRunChannelHasOnePublisherPerPhase) {

@@ -9,6 +9,10 @@
 #include "afford/seal.hpp"
 #include "afford/wire_bounds.hpp"
 #include "logger/logger.hpp"
+#include "logger/node.hpp"
+#include "afford/run_config_t.hpp"
+#include "afford/run_control_t.hpp"
+#include <spdlog/sinks/null_sink.h>
 #include "tests/samples.hpp"
 #include "tests/support.hpp"
 
@@ -107,6 +111,55 @@ TEST(RunHeader, TheSerialChannelsAreThoseOfTheSerialTypes) {
   for (const char* c : channel::kWithSerial) EXPECT_TRUE(isSerialChannel(c)) << c;
   for (const char* c : {channel::kRunConfig, channel::kRunControl, channel::kStatus, channel::kResend})
     EXPECT_FALSE(isSerialChannel(c)) << c;
+}
+
+// A flood of distinct RUN_CONTROL messages of the run (each a perfect message)
+// is recorded up to protocol.limits.control_messages, then only counted: the
+// logger's memory and the log stay bounded, and the manifest says how many.
+TEST(LoggerNode, RecordsAtMostTheControlMessagesItsLimitAllowsAndCountsTheRest) {
+  const std::string root = test::tempDir("logger-control");
+  lcm::LCM lcm("memq://");
+  const ProtocolConfig protocol = test::shippedProtocol();
+  auto quiet = std::make_shared<spdlog::logger>("logger", std::make_shared<spdlog::sinks::null_sink_mt>());
+  LoggerNode logger(lcm, quiet, protocol, root);
+  Edge runner(lcm, quiet, "runner", protocol);
+  auto pump = [&] {
+    while (lcm.handleTimeout(0) > 0) {
+    }
+    logger.tick();
+  };
+  const std::string yaml = test::shippedConfigYaml("base", System::IMP, 1, 100);
+  run_config_t rc;
+  rc.run_id = "flooded";
+  rc.step = 0;
+  rc.seed = 1;
+  rc.experiment = "base";
+  rc.system = "IMP";
+  rc.config_yaml = yaml;
+  runner.send(channel::kRunConfig, rc);
+  pump();
+  ASSERT_EQ(logger.runId(), "flooded");
+  const int flood = 5 * protocol.limits.control_messages;
+  run_control_t c;
+  c.run_id = "flooded";
+  c.command = run_control_t::START;
+  for (int i = 0; i < flood; ++i) {
+    c.step = i;
+    runner.send(channel::kRunControl, c);
+    pump();
+  }
+  c.command = run_control_t::STOP;
+  c.step = 100;
+  runner.send(channel::kRunControl, c);
+  pump();
+  ASSERT_TRUE(logger.runId().empty()) << "the logger did not leave the run";
+  int recorded = 0;
+  for (const auto& e : test::readLog(root + "/flooded/log.00.lcm"))
+    recorded += e.channel == channel::kRunConfig || e.channel == channel::kRunControl;
+  EXPECT_EQ(recorded, protocol.limits.control_messages);
+  const auto m = manifestOf(fs::path(root) / "flooded");
+  // Recorded: the config and control_messages - 1 STARTs; the STOP and the other STARTs counted.
+  EXPECT_EQ(m["control_dropped"], flood + 1 - (protocol.limits.control_messages - 1));
 }
 
 }  // namespace

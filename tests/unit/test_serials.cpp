@@ -127,5 +127,14 @@ TEST(Serials, ExpectResumesAChannelWhereAnEarlierSegmentEnded) {
   EXPECT_EQ(t.offer("SCENE", 0), V::Accept);
 }
 
+TEST(Serials, TheLargestSerialClaimsNoMoreThanItself) {
+  SerialTracker t = tracker();
+  EXPECT_EQ(t.offer("FOCUS", INT64_MAX), V::Gap);  // 1 + it would overflow
+  EXPECT_EQ(t.missing(), INT64_MAX);
+  EXPECT_EQ(t.offer("FOCUS", INT64_MAX), V::Gap);
+  t.claim("FOCUS", 1);  // the publisher's count replaces the forged evidence
+  EXPECT_EQ(t.missing(), 1);
+}
+
 }  // namespace
 }  // namespace afford

@@ -456,7 +456,12 @@ TEST_F(Lcmwire, RefusesADimensionThatIsNotAnEarlierIntegerField) {
            {"  double x[m];\n", "a_t.lcm:5: dimension 'm' of field 'x' is neither an earlier field nor a constant"},
            {"  double n;\n  double x[n];\n",
             "a_t.lcm:6: dimension 'n' of field 'x' names 'double n', not a scalar integer"},
-           {"  int8_t n;\n  double x[-1];\n", "a_t.lcm:6: dimension '-' of field 'x' must name an earlier integer"}}) {
+           {"  int8_t n;\n  double x[-1];\n", "a_t.lcm:6: dimension '-' of field 'x' must name an earlier integer"},
+           {"  double x[999999999];\n",
+            "a_t.lcm:5: constant dimension 999999999 of field 'x' is larger than 1048576, the most lcmwire accepts"},
+           {"  double x[1048577];\n", "a_t.lcm:5: constant dimension 1048577 of field 'x' is larger than 1048576"},
+           {"  double x[1024][1025];\n",
+            "a_t.lcm:5: the constant dimensions of field 'x' hold 1049600 elements, more than 1048576"}}) {
     const auto r = generate("a_t.lcm", head + body + tail);
     EXPECT_NE(r.exit_code, 0) << body;
     EXPECT_NE(r.output.find(what), std::string::npos) << r.output;

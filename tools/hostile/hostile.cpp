@@ -17,15 +17,34 @@
 //   status      a real STATUS whose counts lie (x1000, +1, huge), re-sealed; or a
 //               STATUS of a process that does not exist
 //   config      a RUN_CONFIG of another run, or with text that is not YAML
+//   paths       names and paths that climb out of a folder: the run's own
+//               RUN_CONFIG with a run id such as ../../DIR/x or /DIR/x, or with
+//               a fresh run id and run.checkpoint (or extrinsic.checkpoint) in
+//               DIR (--outside DIR); and the logger's STATUS (DONE) naming DIR
+//               as the run's log folder
+//   control     distinct RUN_CONTROL messages of the run (START at any step):
+//               a flood the logger must not record without bound
+//   statusflood STATUS of made-up processes and pids: a flood that receivers
+//               must not remember without bound
+//   forge       perfect forgeries: the next serial of a run channel with the
+//               digest chain right (a field changed), a STOP of the run, a
+//               FAILED STATUS of one of its processes; on an unauthenticated
+//               bus these would be taken (docs/security.md); on a keyed bus
+//               (--tagged) they carry a tag of another key and must all be dropped
 //
 // "Re-sealed": the tool recomputes the trailing digest, as a forger who knows
 // the protocol would, so the message reaches the checks behind the digest.
-// What it does not do: forge a message the real publisher is about to send
-// (the next serial with the right chain digest), or STOP the run: no receiver
-// on an unauthenticated bus can tell those from the real ones
-// (docs/processes-and-channels.md, "What the edge cannot tell").
+// Only `forge` forges a message the real publisher is about to send (the next
+// serial with the right chain digest), or STOPs the run: no receiver on an
+// unauthenticated bus can tell those from the real ones (docs/security.md).
+// --tagged: the bus is keyed; the tool takes the trailing 32-byte tag off what
+// it hears, and adds a tag of a key of its own (--forge-key, else a random
+// one) to what it sends.
 #include <CLI/CLI.hpp>
 #include <lcm/lcm-cpp.hpp>
+#include <yaml-cpp/yaml.h>
+
+#include <algorithm>
 
 #include <chrono>
 #include <cmath>
@@ -38,12 +57,15 @@
 #include <thread>
 #include <vector>
 
+#include "afford/auth.hpp"
 #include "afford/channels.hpp"
+#include "afford/config.hpp"
 #include "afford/node.hpp"
 #include "afford/seal.hpp"
 #include "afford/bounds.hpp"
 #include "afford/edge.hpp"
 #include "afford/wire.hpp"
+#include "logger/logger.hpp"
 
 namespace {
 
@@ -86,7 +108,9 @@ Channel channelOf() {
 
 class Hostile {
  public:
-  Hostile(lcm::LCM& lcm, std::uint64_t seed) : lcm_(lcm), rng_(seed) {
+  Hostile(lcm::LCM& lcm, std::uint64_t seed, std::string outside, std::shared_ptr<const afford::BusKey> forge_key,
+          bool tagged)
+      : lcm_(lcm), rng_(seed), outside_(std::move(outside)), forge_key_(std::move(forge_key)), tagged_(tagged) {
     using namespace afford;
     channels_[channel::kScene] = channelOf<scene_t>();
     channels_[channel::kFocus] = channelOf<focus_t>();
@@ -103,6 +127,7 @@ class Hostile {
     channels_[channel::kStatus] = channelOf<process_status_t>();
     channels_[channel::kResend] = channelOf<resend_t>();
     channels_[channel::kRunConfig] = channelOf<run_config_t>();
+    channels_[channel::kRunControl] = channelOf<run_control_t>();
     for (const auto& [name, c] : channels_) lcm_.subscribe(name, &Hostile::onMessage, this)->setQueueCapacity(100000);
   }
 
@@ -142,6 +167,30 @@ class Hostile {
         publish(afford::channel::kResend, s);
       }
       return;
+    } else if (k == "paths") {
+      return sendPaths();
+    } else if (k == "control") {
+      afford::run_control_t c;
+      c.run_id = run_;
+      c.step = static_cast<std::int64_t>(pick(0, 1'000'000'000));
+      c.command = afford::run_control_t::START;
+      b = afford::sealed(c);
+      ch = afford::channel::kRunControl;
+    } else if (k == "statusflood") {
+      afford::process_status_t st;
+      st.run_id = "";
+      st.step = -1;
+      const char* names[] = {"environment", "eye", "predictors", "motivation", "planner", "logger"};
+      st.process = coin(0.5) ? std::string(names[pick(0, 5)]) : "ghost" + std::to_string(pick(0, 1'000'000));
+      st.pid = static_cast<std::int32_t>(pick(100000, 2'000'000'000));
+      st.beat = static_cast<std::int64_t>(pick(0, 1000));
+      st.state = afford::process_status_t::WAITING;
+      st.config_digest = 0;
+      st.n_channels = 0;
+      b = afford::sealed(st);
+      ch = afford::channel::kStatus;
+    } else if (k == "forge") {
+      return sendForgery();
     } else if (k == "config") {
       afford::run_config_t c;
       c.run_id = coin(0.5) ? run_ + "-not" : run_;
@@ -176,19 +225,146 @@ class Hostile {
     publish(ch, b);
   }
 
+  // The run's own RUN_CONFIG with a path-climbing run id, or with checkpoints
+  // outside; the logger's DONE naming a folder outside.
+  void sendPaths() {
+    if (run_.empty() || config_.run_id.empty() || outside_.empty()) return;
+    const std::string n = std::to_string(pick(0, 999999));
+    const int which = static_cast<int>(pick(0, 5));
+    if (which == 5) {
+      afford::process_status_t st;
+      st.run_id = run_;
+      st.step = 0;
+      st.process = "logger";
+      st.pid = static_cast<std::int32_t>(pick(100000, 2'000'000'000));
+      st.beat = std::numeric_limits<std::int32_t>::max();
+      st.state = afford::process_status_t::DONE;
+      st.config_digest = config_.digest;
+      st.detail = outside_ + "/" + run_;
+      st.n_channels = 0;
+      st.counts_run = run_;
+      publish(afford::channel::kStatus, afford::sealed(st));
+      return;
+    }
+    afford::run_config_t c = config_;
+    YAML::Node node = YAML::Load(c.config_yaml);
+    // From any folder, up to / and down into the folder outside.
+    std::string climb;
+    for (int i = 0; i < 24; ++i) climb += "../";
+    climb += outside_.substr(1);
+    switch (which) {
+      case 0: c.run_id = climb + "/climb-" + n; break;
+      case 1: c.run_id = outside_ + "/abs-" + n; break;  // absolute: begins with '/'
+      case 2: c.run_id = ".." ; break;
+      case 3:  // a fresh, safe run id; its checkpoint outside
+        c.run_id = "forged-" + n;
+        node["run"]["checkpoint"] = outside_ + "/forged-" + n + "/predictors.ckpt";
+        break;
+      default:  // the same, climbing from the predictors' folder
+        c.run_id = "forged-" + n;
+        node["run"]["checkpoint"] = climb + "/forged-" + n + "/predictors.ckpt";
+        break;
+    }
+    c.config_yaml = afford::emitYaml(node);
+    publish(afford::channel::kRunConfig, afford::sealed(c));
+  }
+
+  // A perfect forgery of the next message on a run channel, or a STOP, or a FAILED STATUS.
+  void sendForgery() {
+    if (run_.empty()) return;
+    const double kind = std::uniform_real_distribution<double>(0, 1)(rng_);
+    if (kind < 0.05) {
+      afford::run_control_t c;
+      c.run_id = run_;
+      c.step = 0;
+      c.command = afford::run_control_t::STOP;
+      publish(afford::channel::kRunControl, afford::sealed(c));
+      return;
+    }
+    if (kind < 0.1) {
+      afford::process_status_t st;
+      st.run_id = run_;
+      st.step = 1;
+      const char* names[] = {"environment", "eye", "predictors", "motivation", "planner"};
+      st.process = names[pick(0, 4)];
+      st.pid = pids_.count(st.process) ? pids_[st.process] : 1;
+      st.beat = std::numeric_limits<std::int64_t>::max();
+      st.state = afford::process_status_t::FAILED;
+      st.config_digest = config_.digest;
+      st.detail = "forged failure";
+      st.n_channels = 0;
+      publish(afford::channel::kStatus, afford::sealed(st));
+      return;
+    }
+    std::vector<std::string> candidates;
+    for (const auto& [ch, l] : last_) candidates.push_back(ch);
+    if (candidates.empty()) return;
+    const std::string ch = candidates[pick(0, candidates.size() - 1)];
+    Bytes b = last_[ch].bytes;
+    const std::int64_t serial = last_[ch].serial + 1, prev = last_[ch].digest;
+    const std::int64_t nudge = static_cast<std::int64_t>(pick(1, 3));
+    const bool ok = channels_[ch].edit(b, [&](void* p) {
+      using namespace afford;
+      auto next = [&](auto* m) {
+        if constexpr (wire::Bounds<std::remove_pointer_t<decltype(m)>>::kSerial) {
+          m->serial = serial;
+          m->prev_digest = prev;
+        }
+      };
+      if (ch == channel::kScene) { auto* m = static_cast<scene_t*>(p); next(m); m->step += 1; }
+      if (ch == channel::kFocus) { auto* m = static_cast<focus_t*>(p); next(m); m->step += 1; if (!m->image.empty()) m->image[0] ^= 0xFF; }
+      if (ch == channel::kPrediction) { auto* m = static_cast<prediction_t*>(p); next(m); m->step += 1; }
+      if (ch == channel::kDecision) { auto* m = static_cast<decision_t*>(p); next(m); m->step += 1; m->acted = !m->acted; }
+      if (ch == channel::kEffect) { auto* m = static_cast<effect_t*>(p); next(m); m->step += 1; }
+      if (ch == channel::kProbe) { auto* m = static_cast<object_probe_t*>(p); next(m); }
+      if (ch == channel::kAffordanceTable) { auto* m = static_cast<affordance_table_t*>(p); next(m); m->step += nudge; }
+      if (ch == channel::kResult) { auto* m = static_cast<run_result_t*>(p); next(m); m->weights_checksum = "0123456789abcdef"; m->checkpoint = outside_ + "/forged.ckpt"; }
+      if (ch == channel::kLook) { auto* m = static_cast<look_t*>(p); next(m); }
+      if (ch == channel::kForwardQuery) { auto* m = static_cast<forward_query_t*>(p); next(m); }
+      if (ch == channel::kForwardPrediction) { auto* m = static_cast<forward_prediction_t*>(p); next(m); }
+      if (ch == channel::kExtrinsicResult) { auto* m = static_cast<extrinsic_result_t*>(p); next(m); m->success = !m->success; }
+    });
+    if (!ok) return;
+    afford::sealBuffer(b.data(), b.size());
+    publish(ch, b);
+  }
+
   std::size_t sent() const { return sent_; }
   const std::map<std::string, std::size_t>& sentPerChannel() const { return per_channel_; }
 
  private:
   void onMessage(const lcm::ReceiveBuffer* rb, const std::string& ch) {
     const auto* d = static_cast<const std::uint8_t*>(rb->data);
+    std::size_t size = rb->data_size;
+    if (tagged_) {  // the real messages end with a tag this tool cannot make
+      if (size < afford::BusKey::kTagBytes) return;
+      size -= afford::BusKey::kTagBytes;
+    }
     // Only what looks real is copied (its own bad messages come back to it too).
-    if (!afford::sealIntact(d, rb->data_size)) return;
+    if (!afford::sealIntact(d, size)) return;
     auto& list = heard_[ch];
-    if (list.size() < 2000) list.emplace_back(d, d + rb->data_size);
-    else list[pick(0, list.size() - 1)] = Bytes(d, d + rb->data_size);
+    if (list.size() < 2000) list.emplace_back(d, d + size);
+    else list[pick(0, list.size() - 1)] = Bytes(d, d + size);
     std::string run;
-    if (ch == afford::channel::kFocus && afford::peekRunId(d, rb->data_size, 4096, run)) run_ = run;
+    if (ch == afford::channel::kFocus && afford::peekRunId(d, size, 4096, run)) run_ = run;
+    std::string why;
+    if (ch == afford::channel::kRunConfig) {
+      afford::run_config_t c;
+      if (afford::decodeChecked(d, size, {&g_protocol, nullptr}, c, why) && c.run_id == run_) config_ = c;
+      else if (config_.run_id.empty() && afford::decodeChecked(d, size, {&g_protocol, nullptr}, c, why)) config_ = c;
+    }
+    if (ch == afford::channel::kStatus) {
+      afford::process_status_t st;
+      if (afford::decodeChecked(d, size, {&g_protocol, nullptr}, st, why) && st.beat < (1 << 30)) pids_[st.process] = st.pid;
+    }
+    // The latest message of each run channel (its serial and digest), for `forge`.
+    afford::RunHeader h;
+    if (afford::isSerialChannel(ch) && afford::peekRunHeader(d, static_cast<std::uint32_t>(size), h) && h.run_id == run_ &&
+        (!last_.count(ch) || h.serial > last_[ch].serial)) {
+      std::int64_t digest = 0;
+      for (std::size_t i = size - 8; i < size; ++i) digest = (digest << 8) | d[i];
+      last_[ch] = {h.serial, digest, Bytes(d, d + size)};
+    }
   }
 
   // A field of a real message changed, then re-sealed.
@@ -251,7 +427,14 @@ class Hostile {
     return it->first;
   }
   void publish(const std::string& ch, const Bytes& b) {
-    lcm_.publish(ch, b.data(), static_cast<unsigned>(b.size()));
+    if (tagged_) {  // a tag of another key (or random bytes): a receiver with the bus's key drops it
+      Bytes t = forge_key_ ? forge_key_->tagged(ch, b.data(), b.size()) : b;
+      if (!forge_key_)
+        for (std::size_t i = 0; i < afford::BusKey::kTagBytes; ++i) t.push_back(static_cast<std::uint8_t>(rng_()));
+      lcm_.publish(ch, t.data(), static_cast<unsigned>(t.size()));
+    } else {
+      lcm_.publish(ch, b.data(), static_cast<unsigned>(b.size()));
+    }
     ++sent_;
     ++per_channel_[ch];
   }
@@ -267,6 +450,16 @@ class Hostile {
   std::map<std::string, Channel> channels_;
   std::map<std::string, std::vector<Bytes>> heard_;
   std::string run_;
+  std::string outside_;
+  std::shared_ptr<const afford::BusKey> forge_key_;
+  bool tagged_ = false;
+  afford::run_config_t config_;  // the run's, as heard
+  std::map<std::string, std::int32_t> pids_;
+  struct Last {
+    std::int64_t serial = -1, digest = 0;
+    Bytes bytes;
+  };
+  std::map<std::string, Last> last_;
   std::size_t sent_ = 0;
   std::map<std::string, std::size_t> per_channel_;
 };
@@ -289,15 +482,27 @@ int main(int argc, char** argv) {
   app.add_option("--kinds", kinds, "kinds of bad messages, chosen uniformly")->capture_default_str();
   std::string config_dir = afford::defaultConfigDir();
   app.add_option("--config-dir", config_dir, "folder of defaults.yaml (the protocol's limits)")->capture_default_str();
+  std::string outside, forge_key_file;
+  bool tagged = false;
+  app.add_option("--outside", outside, "paths: the folder forged names and paths point into (absolute)");
+  app.add_flag("--tagged", tagged, "the bus is keyed: take tags off what is heard, tag what is sent with another key");
+  app.add_option("--forge-key", forge_key_file, "with --tagged: tag with this key (default: random bytes)");
   CLI11_PARSE(app, argc, argv);
   g_protocol = afford::loadProtocol(config_dir);
+  if (std::find(kinds.begin(), kinds.end(), "paths") != kinds.end() && (outside.empty() || outside[0] != '/')) {
+    std::fprintf(stderr, "afford-hostile: --kinds paths needs --outside, an absolute folder\n");
+    return 2;
+  }
+  std::shared_ptr<const afford::BusKey> forge_key;
+  if (!forge_key_file.empty()) forge_key = std::make_shared<const afford::BusKey>(afford::BusKey::fromFile(forge_key_file));
   afford::installStopHandlers();
+  // Its own bus opened raw: it hears (and sends) what LCM's default bounds let through.
   lcm::LCM lcm(url);
   if (!lcm.good()) {
     std::fprintf(stderr, "afford-hostile: cannot open %s\n", url.c_str());
     return 1;
   }
-  Hostile h(lcm, seed);
+  Hostile h(lcm, seed, outside, forge_key, tagged);
   while (!h.runUnderWay() && !afford::stopRequested()) lcm.handleTimeout(50);  // a run's traffic to copy
   std::mt19937_64 pick(seed ^ 0x5eed);
   while (h.sent() < messages && !afford::stopRequested()) {

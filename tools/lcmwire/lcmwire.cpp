@@ -9,7 +9,7 @@
 // no other type's field) begins with `string run_id; int64_t step;` and ends
 // with `int64_t digest;`; a field `serial` is the third, an int64_t, and
 // `int64_t prev_digest;` follows it; a dimension names an earlier integer
-// field or is a constant.
+// field or is a constant of at most kMaxConstantDimension (also their product).
 // A host tool of the build: the standard library only.
 #include <algorithm>
 #include <cctype>
@@ -32,6 +32,10 @@ class Error : public std::runtime_error {
  public:
   using std::runtime_error::runtime_error;
 };
+
+// The largest constant array dimension (and product of a field's constant
+// dimensions): a message of more elements would exceed any bus's largest message.
+constexpr std::int64_t kMaxConstantDimension = 1 << 20;
 
 [[noreturn]] void fail(const std::string& file, int line, const std::string& what) {
   throw Error(file + ":" + std::to_string(line) + ": " + what);
@@ -276,9 +280,18 @@ class Parser {
         Dim dim;
         if (d.kind == Token::kWord && isIdentifier(d.text)) {
           dim.field = d.text;
-        } else if (d.kind == Token::kNumber && std::all_of(d.text.begin(), d.text.end(), digit) &&
-                   d.text.size() <= 9) {
+        } else if (d.kind == Token::kNumber && std::all_of(d.text.begin(), d.text.end(), digit)) {
+          // The generated scan multiplies constant dimensions: keep every product far from overflow.
+          if (d.text.size() > 7 || std::stoll(d.text) > kMaxConstantDimension)
+            fail(file_, d.line, "constant dimension " + d.text + " of field '" + f.name + "' is larger than " +
+                                    std::to_string(kMaxConstantDimension) + ", the most lcmwire accepts");
           dim.size = std::stoll(d.text);
+          std::int64_t product = dim.size;
+          for (const Dim& earlier : f.dims) product *= earlier.field.empty() ? earlier.size : 1;
+          if (product > kMaxConstantDimension)
+            fail(file_, d.line, "the constant dimensions of field '" + f.name + "' hold " + std::to_string(product) +
+                                    " elements, more than " + std::to_string(kMaxConstantDimension) +
+                                    ", the most lcmwire accepts");
         } else {
           fail(file_, d.line, "dimension " + describe(d) + " of field '" + f.name +
                                   "' must name an earlier integer field or be a constant");

@@ -192,6 +192,16 @@ struct ProtocolLimits {       // what a receiver accepts before a run's configur
   int focus_side = 0;         // side of a focus image, pixels
   int scene_side = 0;         // side of a scene, pixels
   int sub_goals = 0;          // sub-goal records of an extrinsic result
+  int run_id_bytes = 0;       // a run id (it names folders and files: afford/names.hpp)
+  int peers = 0;              // processes (name, pid) a listener keeps track of (afford status, the edge)
+  int control_messages = 0;   // distinct RUN_CONFIG and RUN_CONTROL messages the logger records in one run
+};
+// LCM's receive path (third_party/lcm), set on a process's udpm URL when it
+// opens the bus: from its config folder's defaults.yaml, not a run's.
+struct BusConfig {
+  int max_message_bytes = 0;    // a larger message is dropped by LCM (and refused by a publisher)
+  int fragment_bytes = 0;       // incomplete fragmented messages hold at most this together
+  int fragment_timeout_ms = 0;  // an incomplete fragmented message is dropped this long after its first fragment
 };
 struct ProtocolConfig {
   int heartbeat_ms = 0;       // STATUS period
@@ -206,6 +216,7 @@ struct ProtocolConfig {
   int max_deferred = 0;       // messages waiting for their turn in a process; reaching it fails the run
   int queue_capacity = 0;     // LCM's queue of each subscription, messages
   ProtocolLimits limits;
+  BusConfig bus;
 };
 
 struct RunConfig {

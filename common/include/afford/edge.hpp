@@ -3,9 +3,13 @@
 // subscriber goes through it: the processes (NodeBase), the runner, the
 // viewer, `afford status` and replay. For each datagram, in this order:
 //
+//   0. tag: on a bus with a key (afford/auth.hpp), the last 32 bytes must be
+//      the tag of the rest on this channel, else the message is dropped and
+//      counted; the tag is taken off, and the steps below see the message;
 //   1. fingerprint: the channel's type, else dropped;
-//   2. run: the run id is read (bounded) before anything is decoded; a message
-//      of no run this subscriber serves is dropped;
+//   2. run: the run id is read (bounded) before anything is decoded, and must
+//      be a safe name (afford/names.hpp); a message of no run this subscriber
+//      serves is dropped;
 //   3. bounds: every string length and array size against the bytes left and
 //      against a maximum from the configuration (afford/bounds.hpp), so LCM's
 //      decoder never sees a size it could overflow or over-allocate on;
@@ -23,9 +27,11 @@
 //      asked for, fails the run naming the channel, rather than being asked
 //      for without end).
 //
-// A bad message is dropped with one log line naming the channel and the field.
-// An exception from a handler never leaves the edge: the edge stops taking the
-// run's messages and reports the failure (the process then says FAILED).
+// A bad message is dropped with one log line naming the channel and the field,
+// and counted (drops()). An exception from a handler never leaves the edge: the
+// edge stops taking the run's messages and reports the failure (the process
+// then says FAILED). What it sends is tagged on a keyed bus, and refused (an
+// exception naming the channel) if it is larger than protocol.bus.max_message_bytes.
 // Channels in:  those subscribed; RESEND (when it answers for what it published)
 // Channels out: RESEND (asking), and what the owner publishes
 #pragma once
@@ -43,7 +49,9 @@
 #include <utility>
 #include <vector>
 
+#include "afford/auth.hpp"
 #include "afford/decode.hpp"
+#include "afford/names.hpp"
 #include "afford/config.hpp"
 #include "afford/process_status_t.hpp"
 #include "afford/resend_t.hpp"
@@ -95,6 +103,13 @@ enum class Order {
 // buffer cannot hold one of at most `max_bytes`.
 bool peekRunId(const void* data, std::size_t size, int max_bytes, std::string& out);
 
+// What an edge dropped, by kind (each also a log line).
+struct EdgeDrops {
+  std::int64_t untagged = 0;        // no valid tag on a keyed bus
+  std::int64_t refused = 0;         // every other message dropped: malformed, forged, another run's, ...
+  std::int64_t peers_forgotten = 0; // (process, pid) pairs forgotten beyond protocol.limits.peers
+};
+
 class Edge {
  public:
   // `owner`: the process (or tool) this edge belongs to, named in its requests.
@@ -102,6 +117,12 @@ class Edge {
   ~Edge();  // unsubscribes: the bus may outlive the edge (a restart in one process)
   Edge(const Edge&) = delete;
   Edge& operator=(const Edge&) = delete;
+
+  // On a keyed bus, every message sent is tagged and every message received
+  // must be (nullptr: no key). Set before the first message is handled.
+  void useKey(std::shared_ptr<const BusKey> key) { key_ = std::move(key); }
+  const std::shared_ptr<const BusKey>& key() const { return key_; }
+  const EdgeDrops& drops() const { return drops_; }
 
   // ---- the run served -----------------------------------------------------------
   // Serve `run_id` with `config` (kept by the caller, alive until leave()):
@@ -157,8 +178,7 @@ class Edge {
   // A message without a serial (RUN_CONFIG, RUN_CONTROL, STATUS): sealed and sent.
   template <class Msg>
   void send(const std::string& channel, Msg& msg) {
-    const std::vector<std::uint8_t> bytes = sealed(msg);
-    lcm_.publish(channel, bytes.data(), static_cast<unsigned>(bytes.size()));
+    transmit(channel, sealed(msg));
   }
   // Answer RESEND requests for what this edge published (processes).
   void answerResends();
@@ -200,6 +220,10 @@ class Edge {
   template <class Msg, class F>
   void receive(const std::string& channel, const lcm::ReceiveBuffer* rb, const std::shared_ptr<const F>& handler,
                Scope scope, Order order);
+  // Onto the bus: the size checked, tagged on a keyed bus.
+  void transmit(const std::string& channel, const std::vector<std::uint8_t>& bytes);
+  // Step 0: the message without its tag, or false (dropped) on a keyed bus without a valid one.
+  bool untag(const std::string& channel, const lcm::ReceiveBuffer* rb, std::size_t& size);
   bool inScope(const std::string& channel, const std::string& run_id, Scope scope);
   void drop(const std::string& channel, const std::string& why);
   // Offer an accepted serial message (or queue it behind its channel's waiting ones).
@@ -241,8 +265,10 @@ class Edge {
     std::int64_t beat = -1;
     std::uint64_t order = 0;  // when it was last updated (for evicting the oldest)
   };
-  std::map<std::string, Beat> beats_;  // process#pid -> the last STATUS taken (bounded)
+  std::map<std::string, Beat> beats_;  // process#pid -> the last STATUS taken (protocol.limits.peers)
   std::uint64_t beat_order_ = 0;
+  std::shared_ptr<const BusKey> key_;
+  EdgeDrops drops_;
 };
 
 // ---- template definitions ------------------------------------------------------------
@@ -285,7 +311,8 @@ template <class Msg, class F>
 void Edge::receive(const std::string& channel, const lcm::ReceiveBuffer* rb, const std::shared_ptr<const F>& handler,
                    Scope scope, Order order) {
   const auto* data = static_cast<const std::uint8_t*>(rb->data);
-  const std::size_t size = rb->data_size;
+  std::size_t size = rb->data_size;
+  if (!untag(channel, rb, size)) return;
   std::int64_t hash = 0;
   if (size < 8 || (__int64_t_decode_array(data, 0, 8, &hash, 1), hash != Msg::getHash()))
     return drop(channel, std::string("wrong fingerprint: not an afford.") + wire::Bounds<Msg>::kName);
@@ -293,6 +320,10 @@ void Edge::receive(const std::string& channel, const lcm::ReceiveBuffer* rb, con
   if (!peekRunId(data, size, protocol_->limits.name_bytes, run_id))
     return drop(channel, "field run_id: no string of at most " + std::to_string(protocol_->limits.name_bytes) +
                              " bytes where it begins");
+  if (!run_id.empty()) {
+    if (std::string why = runIdProblem(run_id, protocol_->limits.run_id_bytes); !why.empty())
+      return drop(channel, "field run_id '" + printable(run_id, 80) + "' " + why);
+  }
   if (!inScope(channel, run_id, scope)) return;
   auto msg = std::make_shared<Msg>();
   std::string why;
@@ -352,8 +383,8 @@ void Edge::publish(const std::string& channel, Msg& msg) {
   msg.serial = static_cast<std::int64_t>(h.messages.size());
   msg.prev_digest = h.messages.empty() ? chainSeed(history_run_, channel) : h.last_digest;
   std::vector<std::uint8_t> bytes = sealed(msg);
+  transmit(channel, bytes);
   h.last_digest = msg.digest;
-  lcm_.publish(channel, bytes.data(), static_cast<unsigned>(bytes.size()));
   h.messages.push_back(std::move(bytes));
   h.republished.emplace_back();
   last_activity_ = std::chrono::steady_clock::now();

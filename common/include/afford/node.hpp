@@ -50,6 +50,9 @@ class NodeBase {
   std::int64_t lastStep() const { return last_step_; }  // the last step handled in the run (-1: none)
   // Leave the run (used on STOP and at shutdown); subclasses flush in onStop().
   void leaveRun();
+  // A keyed bus (afford/auth.hpp): set before the first message is handled.
+  void useBusKey(std::shared_ptr<const BusKey> key) { edge_.useKey(std::move(key)); }
+  const EdgeDrops& drops() const { return edge_.drops(); }
 
  protected:
   // A channel of the run, in serial order; `handler` returns a Turn
@@ -114,8 +117,8 @@ class NodeBase {
 };
 
 // The main() of every process: flags (--lcm-url, --log-level, --config-dir,
-// plus extras), the node, the loop on handleTimeout until SIGINT/SIGTERM,
-// orderly shutdown.
+// --bus-key, plus extras), the node, the loop on handleTimeout until
+// SIGINT/SIGTERM, orderly shutdown.
 struct ProcessSpec {
   std::string name;         // "eye"
   std::string description;  // one line for --help

@@ -77,6 +77,9 @@ Command experimentCommand(CLI::App& app, const FrontDoor& door) {
   exp->add_option("--attach", o.attach,
                   "drive the runs on this LCM URL, with processes started by hand (afford-environment ..., "
                   "and afford-logger for logs): the runner starts none");
+  exp->add_option("--bus-key", o.bus_key,
+                  "key file of a keyed bus: the runner and the processes it starts tag what they send and take "
+                  "only tagged messages (default: the file $AFFORD_BUS_KEY names; none: untagged)");
   exp->add_flag("--resume", o.resume,
                 "continue the interrupted experiment of --out: the runs not finished, with its stored options");
   return {exp, [&app, exp, a, &door, tables_option, table_seed_option] {

@@ -17,6 +17,9 @@ Command replayCommand(CLI::App& app, const FrontDoor& door) {
   auto* replay = app.add_subcommand("replay", "feed a recorded run into fresh learning processes and compare");
   replay->add_option("log", a->options.log_dir, "the run's log folder (logs/<run-id>) or one .lcm file")->required();
   replay->add_option("--run", a->options.run_id, "the run to replay, in a log that holds several (default: the first)");
+  replay->add_option("--bus-key", a->options.bus_key,
+                     "the key of the bus the log was recorded on (an lcm-logger recording of a keyed bus): "
+                     "only events with its tag are replayed");
   replay->add_option("--into", a->into,
                      "processes to replay, comma-separated: predictors, motivation, planner "
                      "(default: predictors and the run's decider)");
@@ -28,6 +31,13 @@ Command replayCommand(CLI::App& app, const FrontDoor& door) {
             std::printf("run: %s (%s)\nevents: %lld%s\n", r.run_id.c_str(), r.extrinsic ? "extrinsic" : "intrinsic",
                         static_cast<long long>(r.events), r.torn_bytes ? " (then an incomplete event, skipped)" : "");
             if (!r.incomplete.empty()) std::printf("the log is incomplete: %s\n", r.incomplete.c_str());
+            if (r.malformed)
+              std::printf("skipped: %lld malformed part(s) of the log file (named with their offsets in the warnings)\n",
+                          static_cast<long long>(r.malformed));
+            if (r.refused_configs)
+              std::printf("skipped: %lld RUN_CONFIG event(s) the edge refuses\n", static_cast<long long>(r.refused_configs));
+            if (r.untagged)
+              std::printf("skipped: %lld event(s) without a valid tag of the bus key\n", static_cast<long long>(r.untagged));
             for (const auto& g : r.gaps)
               std::printf("missing from the recording: %s serial%s %lld%s\n", g.channel.c_str(),
                           g.first == g.last ? "" : "s", static_cast<long long>(g.first),

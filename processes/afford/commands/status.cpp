@@ -1,23 +1,26 @@
 // afford status: list the processes heard on a bus (pid, state, run, last step).
 #include <lcm/lcm-cpp.hpp>
 
+#include <algorithm>
 #include <chrono>
 #include <cstdio>
 #include <map>
 #include <memory>
 #include <sstream>
 
+#include "afford/bus.hpp"
 #include "afford/commands.hpp"
 #include "afford/config.hpp"
 #include "afford/edge.hpp"
 #include "afford/logging.hpp"
+#include "afford/names.hpp"
 #include "afford/process_status_t.hpp"
 
 namespace afford {
 
 Command statusCommand(CLI::App& app, const FrontDoor& door) {
   struct Args {
-    std::string url = "udpm://239.255.76.67:7667?ttl=0", wait, state;
+    std::string url = "udpm://239.255.76.67:7667?ttl=0", wait, state, bus_key;
     double seconds = 1.5;
   };
   auto a = std::make_shared<Args>();
@@ -30,15 +33,31 @@ Command statusCommand(CLI::App& app, const FrontDoor& door) {
                      "state); --seconds is then the deadline, and missing it exits 1");
   status->add_option("--state", a->state, "with --wait-for: the state to wait for")
       ->check(CLI::IsMember({"waiting", "ready", "running", "done", "failed"}));
+  status->add_option("--bus-key", a->bus_key,
+                     "key file of a keyed bus (default: the file $AFFORD_BUS_KEY names; none: untagged)");
   return {status, [a, &door] {
-            lcm::LCM bus(a->url);
-            if (!bus.good()) throw std::runtime_error("cannot open LCM at " + a->url);
-            std::map<std::string, process_status_t> heard;  // process#pid -> its last STATUS
-            Edge edge(bus, makeLogger("status", "warn"), "status", loadProtocol(door.config_dir));
+            const ProtocolConfig protocol = loadProtocol(door.config_dir);
+            const std::shared_ptr<const BusKey> key = busKeyFrom(a->bus_key);
+            const std::unique_ptr<lcm::LCM> lcm = openBus(a->url, protocol.bus);
+            lcm::LCM& bus = *lcm;
+            // process#pid -> its last STATUS, and when it was heard; at most protocol.limits.peers of them
+            // (the one heard from longest ago is forgotten: forged pids cannot grow it).
+            std::map<std::string, std::pair<process_status_t, std::uint64_t>> heard;
+            std::uint64_t order = 0;
+            std::int64_t forgotten = 0;
+            Edge edge(bus, makeLogger("status", "warn"), "status", protocol);
+            edge.useKey(key);
             edge.subscribe<process_status_t>(
                 "STATUS",
-                [&heard](const process_status_t& m) {
-                  heard[m.process + "#" + std::to_string(m.pid)] = m;
+                [&](const process_status_t& m) {
+                  const std::string id = m.process + "#" + std::to_string(m.pid);
+                  if (!heard.count(id) && heard.size() >= static_cast<std::size_t>(protocol.limits.peers)) {
+                    heard.erase(std::min_element(heard.begin(), heard.end(), [](const auto& x, const auto& y) {
+                      return x.second.second < y.second.second;
+                    }));
+                    ++forgotten;
+                  }
+                  heard[id] = {m, ++order};
                   return Turn::take();
                 },
                 Scope::Any, Order::None);
@@ -50,8 +69,10 @@ Command statusCommand(CLI::App& app, const FrontDoor& door) {
             auto allHeard = [&] {  // each awaited process's latest STATUS (any pid) says the state asked for
               for (const auto& p : awaited) {
                 bool ok = false;
-                for (const auto& [key, m] : heard)
+                for (const auto& [id, entry] : heard) {
+                  const process_status_t& m = entry.first;
                   ok = ok || (m.process == p && (a->state.empty() || a->state == states[m.state]));
+                }
                 if (!ok) return false;
               }
               return true;
@@ -59,10 +80,19 @@ Command statusCommand(CLI::App& app, const FrontDoor& door) {
             const auto until = std::chrono::steady_clock::now() + std::chrono::duration<double>(a->seconds);
             while (std::chrono::steady_clock::now() < until && !(awaited.size() && allHeard())) bus.handleTimeout(50);
             std::printf("%-12s %8s  %-8s %10s  %s\n", "process", "pid", "state", "last step", "run");
-            for (const auto& [key, m] : heard)
-              std::printf("%-12s %8d  %-8s %10lld  %s%s%s\n", m.process.c_str(), m.pid, states[m.state],
+            for (const auto& [id, entry] : heard) {
+              const process_status_t& m = entry.first;
+              // What a message says is printed as text only: no byte of it reaches the terminal as a control.
+              std::printf("%-12s %8d  %-8s %10lld  %s%s%s\n", printable(m.process, 64).c_str(), m.pid, states[m.state],
                           static_cast<long long>(m.step), m.run_id.empty() ? "-" : m.run_id.c_str(),
-                          m.detail.empty() ? "" : "  ", m.detail.c_str());
+                          m.detail.empty() ? "" : "  ", printable(m.detail, 400).c_str());
+            }
+            if (forgotten > 0)
+              std::printf("(and %lld more process ids heard, beyond protocol.limits.peers = %d: not listed)\n",
+                          static_cast<long long>(forgotten), protocol.limits.peers);
+            if (edge.drops().untagged > 0)
+              std::printf("(%lld messages without a valid tag of the bus's key dropped)\n",
+                          static_cast<long long>(edge.drops().untagged));
             if (heard.empty()) std::printf("(no process heard on %s in %.1f s)\n", a->url.c_str(), a->seconds);
             if (!awaited.empty() && !allHeard()) {
               std::fprintf(stderr, "afford status: not every one of %s was heard%s within %.1f s on %s\n",

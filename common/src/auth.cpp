@@ -1,0 +1,128 @@
+#include "afford/auth.hpp"
+
+#include <fcntl.h>
+#include <sodium.h>
+#include <sys/stat.h>
+#include <unistd.h>
+
+#include <cerrno>
+#include <cstdlib>
+#include <cstring>
+#include <fstream>
+#include <mutex>
+#include <sstream>
+#include <stdexcept>
+
+namespace afford {
+
+namespace {
+
+void initSodium() {
+  static std::once_flag once;
+  std::call_once(once, [] {
+    if (sodium_init() < 0) throw std::runtime_error("libsodium cannot be initialised");
+  });
+}
+
+int hexDigit(char c) {
+  if (c >= '0' && c <= '9') return c - '0';
+  if (c >= 'a' && c <= 'f') return c - 'a' + 10;
+  if (c >= 'A' && c <= 'F') return c - 'A' + 10;
+  return -1;
+}
+
+}  // namespace
+
+BusKey::BusKey(const std::array<std::uint8_t, kKeyBytes>& key) : key_(key) { initSodium(); }
+
+BusKey BusKey::fromFile(const std::filesystem::path& file) {
+  std::error_code ec;
+  if (!std::filesystem::is_regular_file(file, ec))
+    throw std::runtime_error("bus key " + file.string() + ": not a readable file");
+  if (std::filesystem::file_size(file, ec) > 4096)
+    throw std::runtime_error("bus key " + file.string() + ": too large to be a key file (64 hex digits)");
+  std::ifstream in(file);
+  if (!in) throw std::runtime_error("bus key " + file.string() + ": cannot be read: " + std::strerror(errno));
+  std::stringstream text;
+  text << in.rdbuf();
+  std::string digits;
+  for (char c : text.str())
+    if (c != ' ' && c != '\n' && c != '\r' && c != '\t') digits += c;
+  if (digits.size() != 2 * kKeyBytes)
+    throw std::runtime_error("bus key " + file.string() + ": expected 64 hexadecimal digits, found " +
+                             std::to_string(digits.size()) + " characters (make one with `afford bus-key FILE`)");
+  std::array<std::uint8_t, kKeyBytes> key{};
+  for (std::size_t i = 0; i < kKeyBytes; ++i) {
+    const int hi = hexDigit(digits[2 * i]), lo = hexDigit(digits[2 * i + 1]);
+    if (hi < 0 || lo < 0)
+      throw std::runtime_error("bus key " + file.string() + ": character " + std::to_string(2 * i + (hi < 0 ? 0 : 1)) +
+                               " is not a hexadecimal digit");
+    key[i] = static_cast<std::uint8_t>(hi * 16 + lo);
+  }
+  return BusKey(key);
+}
+
+void BusKey::writeNew(const std::filesystem::path& file) {
+  initSodium();
+  std::array<std::uint8_t, kKeyBytes> key{};
+  randombytes_buf(key.data(), key.size());
+  std::string text;
+  static const char* hex = "0123456789abcdef";
+  for (std::uint8_t b : key) {
+    text += hex[b >> 4];
+    text += hex[b & 15];
+  }
+  text += '\n';
+  const int fd = ::open(file.c_str(), O_WRONLY | O_CREAT | O_EXCL | O_CLOEXEC, 0600);
+  if (fd < 0) throw std::runtime_error("bus key " + file.string() + ": cannot be created: " + std::strerror(errno));
+  const bool ok = ::write(fd, text.data(), text.size()) == static_cast<ssize_t>(text.size());
+  const int err = errno;
+  ::close(fd);
+  sodium_memzero(key.data(), key.size());
+  if (!ok) throw std::runtime_error("bus key " + file.string() + ": cannot be written: " + std::strerror(err));
+}
+
+std::array<std::uint8_t, BusKey::kTagBytes> BusKey::tag(const std::string& channel, const void* data,
+                                                        std::size_t size) const {
+  std::array<std::uint8_t, kTagBytes> out{};
+  crypto_generichash_state state;
+  crypto_generichash_init(&state, key_.data(), key_.size(), out.size());
+  // The channel and its terminating zero first: a message is tagged for the channel it is sent on.
+  crypto_generichash_update(&state, reinterpret_cast<const unsigned char*>(channel.c_str()), channel.size() + 1);
+  crypto_generichash_update(&state, static_cast<const unsigned char*>(data), size);
+  crypto_generichash_final(&state, out.data(), out.size());
+  return out;
+}
+
+std::vector<std::uint8_t> BusKey::tagged(const std::string& channel, const void* data, std::size_t size) const {
+  std::vector<std::uint8_t> out(size + kTagBytes);
+  if (size > 0) std::memcpy(out.data(), data, size);
+  const auto t = tag(channel, data, size);
+  std::memcpy(out.data() + size, t.data(), t.size());
+  return out;
+}
+
+bool BusKey::verify(const std::string& channel, const void* data, std::size_t size_with_tag) const {
+  if (size_with_tag < kTagBytes) return false;
+  const std::size_t size = size_with_tag - kTagBytes;
+  const auto want = tag(channel, data, size);
+  return crypto_verify_32(want.data(), static_cast<const unsigned char*>(data) + size) == 0;
+}
+
+std::string busKeySource(const std::string& option) {
+  if (!option.empty()) return option;
+  const char* env = std::getenv(BusKey::kEnvironment);
+  return env && *env ? std::string(env) : std::string();
+}
+
+std::shared_ptr<const BusKey> busKeyFrom(const std::string& option) {
+  const std::string file = busKeySource(option);
+  if (file.empty()) return nullptr;
+  try {
+    return std::make_shared<const BusKey>(BusKey::fromFile(file));
+  } catch (const std::exception& e) {
+    throw std::runtime_error(std::string(e.what()) + (option.empty() ? " (named by $AFFORD_BUS_KEY)" : " (--bus-key)"));
+  }
+}
+
+}  // namespace afford

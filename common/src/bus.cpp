@@ -1,0 +1,46 @@
+#include "afford/bus.hpp"
+
+#include <stdexcept>
+
+namespace afford {
+
+namespace {
+bool hasOption(const std::string& query, const std::string& key) {
+  std::size_t at = 0;
+  while (at <= query.size()) {
+    const std::size_t end = std::min(query.find('&', at), query.size());
+    const std::string item = query.substr(at, end - at);
+    if (item == key || item.rfind(key + "=", 0) == 0) return true;
+    at = end + 1;
+  }
+  return false;
+}
+}  // namespace
+
+std::string busUrl(const std::string& url, const BusConfig& bus) {
+  if (url.rfind("udpm://", 0) != 0) return url;
+  const std::size_t q = url.find('?');
+  const std::string query = q == std::string::npos ? "" : url.substr(q + 1);
+  std::string out = url;
+  char sep = q == std::string::npos ? '?' : (query.empty() ? '\0' : '&');
+  auto add = [&](const std::string& key, int value) {
+    if (hasOption(query, key)) return;
+    if (sep) out += sep;
+    out += key + "=" + std::to_string(value);
+    sep = '&';
+  };
+  add("max_message_size", bus.max_message_bytes);
+  add("fragment_buffer_size", bus.fragment_bytes);
+  add("fragment_timeout_ms", bus.fragment_timeout_ms);
+  return out;
+}
+
+std::unique_ptr<lcm::LCM> openBus(const std::string& url, const BusConfig& bus) {
+  auto lcm = std::make_unique<lcm::LCM>(busUrl(url, bus));
+  if (!lcm->good())
+    throw std::runtime_error("cannot open LCM at '" + url +
+                             "' (is there a multicast route? see README: network namespace)");
+  return lcm;
+}
+
+}  // namespace afford
