@@ -32,10 +32,15 @@ std::string busUrl(const std::string& url, const BusConfig& bus) {
   add("max_message_size", bus.max_message_bytes);
   add("fragment_buffer_size", bus.fragment_bytes);
   add("fragment_timeout_ms", bus.fragment_timeout_ms);
+  add("receive_queue_size", bus.queue_bytes);
   return out;
 }
 
 std::unique_ptr<lcm::LCM> openBus(const std::string& url, const BusConfig& bus) {
+  // udpm's receive path is the one patched and bounded (third_party/lcm); memq is in-process.
+  if (url.rfind("udpm://", 0) != 0 && url.rfind("memq://", 0) != 0)
+    throw std::runtime_error("LCM URL '" + url + "': afford's processes speak over udpm:// (or memq:// in one "
+                             "process), whose receive path is bounded");
   auto lcm = std::make_unique<lcm::LCM>(busUrl(url, bus));
   if (!lcm->good())
     throw std::runtime_error("cannot open LCM at '" + url +

@@ -291,6 +291,10 @@ ProtocolConfig parseProtocol(const YAML::Node& node, const std::string& path) {
   c.bus.max_message_bytes = static_cast<int>(b.integer("max_message_bytes", 65'536, 1 << 30));
   c.bus.fragment_bytes = static_cast<int>(b.integer("fragment_bytes", 65'536, 1 << 30));
   c.bus.fragment_timeout_ms = static_cast<int>(b.integer("fragment_timeout_ms", 10, 600'000));
+  c.bus.queue_bytes = static_cast<int>(b.integer("queue_bytes", 65'536, 1 << 30));
+  if (c.bus.queue_bytes < c.bus.max_message_bytes)
+    fail(b.keyPath("queue_bytes"), "must be at least max_message_bytes (" + std::to_string(c.bus.max_message_bytes) +
+                                       "): a whole message must fit in it");
   if (c.bus.fragment_bytes < c.bus.max_message_bytes)
     fail(b.keyPath("fragment_bytes"), "must be at least max_message_bytes (" + std::to_string(c.bus.max_message_bytes) +
                                           "): one whole message is reassembled in it");

@@ -4,6 +4,7 @@
 #include <unistd.h>
 
 #include <cerrno>
+#include <algorithm>
 #include <cstring>
 #include <stdexcept>
 
@@ -71,14 +72,28 @@ bool LogReader::resync(std::int64_t from) {
   return false;
 }
 
+bool LogReader::wholeEventAt(std::int64_t at) {
+  std::uint8_t h[kHeaderBytes];
+  if (size_ - at < kHeaderBytes || std::fseek(f_, at, SEEK_SET) != 0 ||
+      std::fread(h, 1, kHeaderBytes, f_) != static_cast<std::size_t>(kHeaderBytes))
+    return false;
+  const auto channel_len = static_cast<std::int32_t>(bigEndian(h + 20, 4));
+  const auto data_len = static_cast<std::int32_t>(bigEndian(h + 24, 4));
+  return bigEndian(h, 4) == kSync && channel_len >= 1 && channel_len <= limits_.channel_bytes && data_len >= 0 &&
+         data_len <= limits_.event_bytes && at + kHeaderBytes + channel_len + data_len <= size_;
+}
+
 bool LogReader::next(LogEvent& out) {
   while (pos_ < size_) {
     const std::int64_t at = pos_;
     std::uint8_t h[kHeaderBytes];
     if (size_ - at < kHeaderBytes) {
-      // Too short for an event header: a torn event if it starts like one.
+      // Too short for an event header: a torn event if it starts like one (or like its sync word).
       std::uint8_t tail[4] = {};
-      const bool starts = size_ - at >= 4 && std::fread(tail, 1, 4, f_) == 4 && bigEndian(tail, 4) == kSync;
+      const auto n = static_cast<std::size_t>(std::min<std::int64_t>(4, size_ - at));
+      const bool read = std::fread(tail, 1, n, f_) == n;
+      const std::uint8_t sync[4] = {0xED, 0xA1, 0xDA, 0x01};
+      const bool starts = read && std::equal(tail, tail + n, sync);
       if (starts) {
         torn_bytes_ += size_ - at;
       } else {
@@ -112,20 +127,28 @@ bool LogReader::next(LogEvent& out) {
       continue;
     }
     const std::int64_t end = at + kHeaderBytes + channel_len + data_len;
-    if (end > size_) {  // cut short: the writer stopped in the middle of it, or the lengths lie
-      const bool found = resync(at + 1);
+    if (end > size_) {
+      // Cut short: the writer stopped in the middle of it (torn), unless a whole event follows it
+      // (then its lengths lie). Sync words in the torn event's own data do not count.
+      std::int64_t from = at + 1;
+      bool found = false;
+      while (!found && resync(from)) {
+        found = wholeEventAt(pos_);
+        from = pos_ + 1;
+      }
       if (!found) {
         torn_bytes_ += size_ - at;
+        pos_ = size_;
         return false;
       }
       problem(at, "the event's " + std::to_string(channel_len + data_len) + " bytes run past the end of the file");
       skipped_bytes_ += pos_ - at;
+      std::fseek(f_, pos_, SEEK_SET);
       continue;
     }
+    // The channel first: a header that is no event's costs its channel's bytes, not its data's.
     std::string channel(static_cast<std::size_t>(channel_len), '\0');
-    std::vector<std::uint8_t> data(static_cast<std::size_t>(data_len));
-    if (std::fread(channel.data(), 1, channel.size(), f_) != channel.size() ||
-        std::fread(data.data(), 1, data.size(), f_) != data.size())
+    if (std::fread(channel.data(), 1, channel.size(), f_) != channel.size())
       throw std::runtime_error("cannot read the log " + file_.string() + " at offset " + std::to_string(at));
     bool printable = true;
     for (unsigned char c : channel) printable = printable && c >= 0x20 && c < 0x7f;
@@ -135,6 +158,9 @@ bool LogReader::next(LogEvent& out) {
       skipped_bytes_ += (found ? pos_ : size_) - at;
       continue;
     }
+    std::vector<std::uint8_t> data(static_cast<std::size_t>(data_len));
+    if (std::fread(data.data(), 1, data.size(), f_) != data.size())
+      throw std::runtime_error("cannot read the log " + file_.string() + " at offset " + std::to_string(at));
     pos_ = end;
     out.channel = std::move(channel);
     out.data = std::move(data);

@@ -175,6 +175,11 @@ std::string checkRecorded(const LogEvent& e, const BoundsContext& ctx) {
 
 }  // namespace
 
+namespace {
+// More messages than any run publishes on a channel (a run of 100,000,000 steps publishes a few per step).
+constexpr std::int64_t kMostSerials = std::int64_t{1} << 40;
+}  // namespace
+
 std::vector<LogGap> recordingGaps(const std::vector<LogEvent>& events, const std::string& run_id, bool extrinsic,
                                   const BoundsContext& ctx) {
   std::map<std::string, std::set<std::int64_t>> had;
@@ -182,7 +187,9 @@ std::vector<LogGap> recordingGaps(const std::vector<LogEvent>& events, const std
   for (const LogEvent& e : events) {
     if (isSerialChannel(e.channel)) {
       RunHeader h;
-      if (peekRunHeader(e.data.data(), static_cast<std::uint32_t>(e.data.size()), h) && h.run_id == run_id)
+      // (a serial no publisher reaches is a forgery's: counting up to it would overflow)
+      if (peekRunHeader(e.data.data(), static_cast<std::uint32_t>(e.data.size()), h) && h.run_id == run_id &&
+          h.serial >= 0 && h.serial < kMostSerials)
         had[e.channel].insert(h.serial);
     } else if (e.channel == channel::kStatus) {
       process_status_t st;
@@ -190,7 +197,7 @@ std::vector<LogGap> recordingGaps(const std::vector<LogEvent>& events, const std
       if (!decodeChecked(e.data.data(), e.data.size(), ctx, st, why) || st.counts_run != run_id) continue;
       for (int i = 0; i < st.n_channels; ++i)
         if (publisherOf(st.channels[i], extrinsic) == st.process)
-          claimed[st.channels[i]] = std::max(claimed[st.channels[i]], st.counts[i]);
+          claimed[st.channels[i]] = std::max(claimed[st.channels[i]], std::min(st.counts[i], kMostSerials));
     }
   }
   std::vector<LogGap> gaps;

@@ -51,9 +51,10 @@ RecordedSoFar readRecorded(const std::string& dir, const LogLimits& limits) {
       RunHeader h;
       const auto size = static_cast<std::uint32_t>(ev.data.size());
       if (isSerialChannel(ev.channel) && peekRunHeader(ev.data.data(), size, h)) {
-        std::int64_t& next = r.next_serial[ev.channel];
-        if (h.serial >= next && h.serial < INT64_MAX && size >= 8) {
-          next = h.serial + 1;
+        // (next_serial and last_digest have an entry for a channel together, or none)
+        const auto it = r.next_serial.find(ev.channel);
+        if (h.serial >= (it == r.next_serial.end() ? 0 : it->second) && h.serial < INT64_MAX && size >= 8) {
+          r.next_serial[ev.channel] = h.serial + 1;
           r.last_digest[ev.channel] = static_cast<std::int64_t>(bigEndian(ev.data.data() + size - 8, 8));
         }
         if (ev.channel == channel::kResult || ev.channel == channel::kExtrinsicResult) r.ended = true;
@@ -83,6 +84,8 @@ RunLog::RunLog(const std::string& dir, nlohmann::json manifest) : dir_(dir), man
     std::ifstream in(old_manifest);
     const nlohmann::json old = nlohmann::json::parse(in, nullptr, false);
     if (!old.is_discarded() && old.contains("segments")) manifest_["segments"] = old["segments"];
+    if (!old.is_discarded() && old.contains("control_dropped") && old["control_dropped"].is_number_integer())
+      manifest_["control_dropped"] = old["control_dropped"];
   }
   int segment = 0;
   char name[32];

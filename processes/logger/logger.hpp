@@ -57,6 +57,10 @@ class RunLog {
   void sawProcess(const std::string& name, int pid);
   // Set a count the manifest reports (e.g. "control_dropped"); written with the next manifest.
   void count(const std::string& key, std::int64_t value) { manifest_[key] = value; }
+  // A count the manifest holds (carried from the run's earlier segments), or 0.
+  std::int64_t count(const std::string& key) const {
+    return manifest_.contains(key) && manifest_[key].is_number_integer() ? manifest_[key].get<std::int64_t>() : 0;
+  }
   // Flush and write the final manifest: complete when `incomplete` is empty,
   // else that reason and the serials still missing per channel.
   void close(const std::string& incomplete = "", const nlohmann::json& missing = nlohmann::json::object());

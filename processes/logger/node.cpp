@@ -68,6 +68,7 @@ void LoggerNode::onConfigured(const RunConfig& config) {
     log_->warn("an earlier segment of run '{}': offset {}: {}: skipped", m.run_id, p.offset, p.what);
   log_file_ = std::make_unique<RunLog>(dir, manifest);  // refuses a folder that holds a complete log
   log_file_->sawProcess(process(), static_cast<int>(getpid()));
+  control_dropped_ = log_file_->count("control_dropped");  // an earlier segment's
   for (const auto& [channel, next] : before.next_serial) edge().expectSerial(channel, next, before.last_digest.at(channel));
   for (const auto& [channel, contents] : before.untracked) {
     written_[channel] = contents;

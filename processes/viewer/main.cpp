@@ -147,7 +147,7 @@ int main(int argc, char** argv) {
     lcm.handleTimeout(20);
     if (!png_dir.empty()) {
       if (edge.run() != last_run) last_run = edge.run(), last_frame_step = -1;
-      if (viewer.step() >= 0 && (last_frame_step < 0 || viewer.step() >= last_frame_step + every)) {
+      if (viewer.step() >= 0 && (last_frame_step < 0 || viewer.step() - last_frame_step >= every)) {
         last_frame_step = viewer.step();
         char name[64];
         std::snprintf(name, sizeof name, "_%07lld.png", static_cast<long long>(viewer.step()));

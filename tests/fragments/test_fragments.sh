@@ -4,9 +4,9 @@
 # overlapping and repeated fragments, sparse claims of huge messages from 64
 # senders, oversized messages, channel names that do not end, junk, whole
 # messages of random bytes) while a run and its extrinsic tests go on, against
-# every process of the group, the viewer and an attached runner. The same
-# experiment runs first undisturbed, on a group started the same way. Every
-# process must be alive after the flood, the results must be the undisturbed
+# every process of the group, the viewer and an attached runner, all sharing
+# a key. The same experiment runs first undisturbed, on a group started the
+# same way. Every process must be alive after the flood, the results must be the undisturbed
 # ones (weights checksum included), and no process (nor the runner) may have
 # grown more than 64 MB above its undisturbed peak (VmHWM). Each process runs
 # with its address space capped (ulimit -v), so a runaway allocation fails
@@ -25,6 +25,10 @@ kinds=()
 port=7985
 url="udpm://239.255.76.67:$port?ttl=0&recv_buf_size=2097152"
 source "$root/tests/group.sh"
+# A keyed group, as scripts/procs.sh starts them: a whole message of the flood then costs each subscriber
+# a hash of its bytes before it is dropped, and waits in LCM's queue meanwhile (protocol.bus.queue_bytes).
+"$build/bin/afford" bus-key "$out/bus.key" >/dev/null
+export AFFORD_BUS_KEY=$out/bus.key  # every process, the viewer, the runner and afford status
 export GROUP_LIMIT_KB=$((3 * 1024 * 1024))  # address space of each process: far above its need, far below the machine's
 echo "flood: $datagrams datagrams, seed $seed"
 

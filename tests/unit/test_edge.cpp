@@ -10,6 +10,7 @@
 
 #include <string>
 
+#include "afford/bus.hpp"
 #include "afford/channels.hpp"
 #include "afford/edge.hpp"
 #include "afford/image.hpp"
@@ -251,6 +252,27 @@ TEST_F(EdgeOnTheBus, ForgedProcessIdsCannotGrowWhatAReceiverRemembers) {
   }
   EXPECT_EQ(heard, forged);
   EXPECT_EQ(runner.drops().peers_forgotten, forged - protocol.limits.peers);
+}
+
+TEST(Bus, AUdpmUrlGetsTheBusBoundsUnlessItSetsThemAndOtherProvidersAreRefused) {
+  const BusConfig bus = test::shippedProtocol().bus;
+  EXPECT_EQ(busUrl("udpm://239.255.76.67:7700", bus),
+            "udpm://239.255.76.67:7700?max_message_size=" + std::to_string(bus.max_message_bytes) +
+                "&fragment_buffer_size=" + std::to_string(bus.fragment_bytes) +
+                "&fragment_timeout_ms=" + std::to_string(bus.fragment_timeout_ms) +
+                "&receive_queue_size=" + std::to_string(bus.queue_bytes));
+  const std::string own = busUrl("udpm://239.255.76.67:7700?ttl=0&max_message_size=5000", bus);
+  EXPECT_NE(own.find("?ttl=0&max_message_size=5000&fragment_buffer_size="), std::string::npos) << own;
+  EXPECT_EQ(own.find("max_message_size=" + std::to_string(bus.max_message_bytes)), std::string::npos) << own;
+  EXPECT_EQ(busUrl("memq://", bus), "memq://");
+  for (const std::string url : {"mpudpm://239.255.76.67:7700", "tcpq://localhost:7700", "file:///tmp/x.lcm"}) {
+    try {
+      openBus(url, bus);
+      ADD_FAILURE() << url << " was opened";
+    } catch (const std::exception& e) {
+      EXPECT_NE(std::string(e.what()).find("udpm://"), std::string::npos) << e.what();
+    }
+  }
 }
 
 }  // namespace

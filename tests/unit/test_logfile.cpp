@@ -152,6 +152,43 @@ TEST_F(LogFileTest, AnEventCutShortAtTheEndIsTorn) {
   EXPECT_EQ(c.problem_count, 0);
 }
 
+TEST_F(LogFileTest, ATornEventWhoseDataHoldsASyncWordIsStillTorn) {
+  Bytes data = pattern(400, 14);
+  const Bytes sync = {0xED, 0xA1, 0xDA, 0x01};
+  std::copy(sync.begin(), sync.end(), data.begin() + 100);  // a sync word inside the data, with no event after it
+  Bytes b = event("OK", pattern(50, 15));
+  const Bytes last = event("CUT", data);
+  b.insert(b.end(), last.begin(), last.end() - 150);
+  writeBytes(dir_ / "torn-sync.lcm", b);
+  const LogFileContents c = readLogFile(dir_ / "torn-sync.lcm", limits_);
+  ASSERT_EQ(c.events.size(), 1u);
+  EXPECT_EQ(c.problem_count, 0) << c.problems[0].what;
+  EXPECT_EQ(c.torn_bytes, static_cast<std::int64_t>(last.size() - 150));
+  // A tail of one to three bytes of a sync word is torn too.
+  for (std::size_t n = 1; n <= 3; ++n) {
+    Bytes t = event("OK", pattern(50, 15));
+    t.insert(t.end(), sync.begin(), sync.begin() + static_cast<std::ptrdiff_t>(n));
+    writeBytes(dir_ / "torn-tail.lcm", t);
+    const LogFileContents d = readLogFile(dir_ / "torn-tail.lcm", limits_);
+    EXPECT_EQ(d.torn_bytes, static_cast<std::int64_t>(n));
+    EXPECT_EQ(d.problem_count, 0);
+  }
+}
+
+// A file of headers that are no events (a bad channel each, a data length near the cap): each is skipped
+// and named (the reader looks at the channel before it reads any data).
+TEST_F(LogFileTest, EachOfManyHeadersThatAreNoEventsIsSkippedAndNamed) {
+  Bytes b;
+  const Bytes bad = event("\x01", {}, kTrue, 1 << 20);
+  for (int i = 0; i < 2000; ++i) b.insert(b.end(), bad.begin(), bad.end());
+  b.resize(b.size() + (1 << 20), 0);
+  writeBytes(dir_ / "headers.lcm", b);
+  LogReader in(dir_ / "headers.lcm", limits_);
+  LogEvent e;
+  EXPECT_FALSE(in.next(e));
+  EXPECT_EQ(in.problemCount(), 2000);
+}
+
 TEST_F(LogFileTest, AFileThatIsNoLogHasNoEventAndOneProblem) {
   writeBytes(dir_ / "text.lcm", Bytes{'n', 'o', 't', ' ', 'a', ' ', 'l', 'o', 'g'});
   const LogFileContents c = readLogFile(dir_ / "text.lcm", limits_);

@@ -16,8 +16,8 @@
 //   channel    short messages and first fragments whose channel name runs past
 //              the datagram's end, or past LCM's 63 bytes
 //   junk       random datagrams with either magic, or none
-//   complete   whole fragmented messages of random bytes on the run's channels
-//              (they reach the edge, which refuses them)
+//   complete   whole fragmented messages of random bytes on the run's channels,
+//              up to the bus's largest (they reach the edge, which refuses them)
 //
 // Usage: afford-fragfuzz --group 239.255.76.67 --port 7667 --datagrams 100000
 //        [--seed S] [--kinds short,wrapped,...] [--senders 64] [--max-message BYTES] [--rate 20000]
@@ -249,7 +249,9 @@ class Fuzzer {
   void complete() {
     const int fd = sender();
     const std::string ch = channel();
-    const std::uint32_t size = 70000 + static_cast<std::uint32_t>(pick(60000));
+    // Up to the bus's largest message: whole ones reach the subscribers' queues (bounded by protocol.bus.queue_bytes).
+    const std::uint32_t size = pick(2) ? 70000 + static_cast<std::uint32_t>(pick(60000))
+                                       : static_cast<std::uint32_t>(pick(max_message_ - 1000)) + 1000;
     const Bytes body = random(size);
     const std::uint16_t count = static_cast<std::uint16_t>((size + ch.size() + 1 + kFragmentPayload - 1) / kFragmentPayload);
     Fragment f = first(size, count);

@@ -1,7 +1,8 @@
 // Opening the bus. A udpm URL gets the bounds of LCM's receive path from
 // protocol.bus (third_party/lcm: the largest message, the bytes and the
-// lifetime of incomplete fragmented messages) as provider options, unless the
-// URL sets them itself; other providers (memq://, file://) are opened as given.
+// lifetime of incomplete fragmented messages, the bytes of messages waiting
+// to be handled) as provider options, unless the URL sets them itself.
+// memq:// (one process) is opened as given; other providers are refused.
 #pragma once
 #include <lcm/lcm-cpp.hpp>
 
@@ -14,7 +15,8 @@ namespace afford {
 
 // `url` with protocol.bus's options added (a udpm URL), else `url`.
 std::string busUrl(const std::string& url, const BusConfig& bus);
-// The bus at busUrl(url, bus); throws std::runtime_error naming the URL if LCM cannot open it.
+// The bus at busUrl(url, bus); throws std::runtime_error naming the URL if it is neither udpm://
+// nor memq://, or if LCM cannot open it.
 std::unique_ptr<lcm::LCM> openBus(const std::string& url, const BusConfig& bus);
 
 }  // namespace afford

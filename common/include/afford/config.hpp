@@ -202,6 +202,7 @@ struct BusConfig {
   int max_message_bytes = 0;    // a larger message is dropped by LCM (and refused by a publisher)
   int fragment_bytes = 0;       // incomplete fragmented messages hold at most this together
   int fragment_timeout_ms = 0;  // an incomplete fragmented message is dropped this long after its first fragment
+  int queue_bytes = 0;          // received messages waiting to be handled hold at most this together
 };
 struct ProtocolConfig {
   int heartbeat_ms = 0;       // STATUS period

@@ -63,6 +63,8 @@ class LogReader {
   void problem(std::int64_t offset, std::string what);
   // Moves to the next sync word at or after `from`; false if there is none.
   bool resync(std::int64_t from);
+  // Does a well-formed event that ends within the file begin at `at`? (Moves the stream.)
+  bool wholeEventAt(std::int64_t at);
 
   std::filesystem::path file_;
   LogLimits limits_;
