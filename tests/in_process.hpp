@@ -11,7 +11,7 @@
 #include <string>
 #include <vector>
 
-#include "afford/channels.hpp"
+#include "afford/protocol.hpp"
 #include "afford/driver.hpp"
 #include "afford/focus_t.hpp"
 #include "afford/run_config_t.hpp"
@@ -74,10 +74,10 @@ struct InProcessRun {
       std::int64_t at;
       bool done = false;
       void on(const lcm::ReceiveBuffer* b, const std::string& ch) {
-        if (ch == channel::kStatus) return;
+        if (ch == ch::status.name) return;
         const auto* d = static_cast<const std::uint8_t*>(b->data);
         run->events.push_back({ch, std::vector<std::uint8_t>(d, d + b->data_size)});
-        if (inject && !done && ch == channel::kFocus) {
+        if (inject && !done && ch == ch::focus.name) {
           focus_t f;
           f.decode(b->data, 0, static_cast<int>(b->data_size));
           if (f.step == at) {
@@ -121,7 +121,7 @@ struct InProcessRun {
       stale.system = spec.system;
       stale.config_yaml = yaml;
       const auto bytes = sealed(stale);
-      lcm.publish(channel::kRunConfig, bytes.data(), static_cast<unsigned>(bytes.size()));
+      lcm.publish(ch::runConfig.name, bytes.data(), static_cast<unsigned>(bytes.size()));
       for (int i = 0; i < 50; ++i) pump();
     }
     outcome = driver.run(spec, pump, [] { return std::string(); });

@@ -9,7 +9,7 @@
 #include <vector>
 
 #include "afford/actions.hpp"
-#include "afford/channels.hpp"
+#include "afford/protocol.hpp"
 #include "afford/checks.hpp"
 #include "afford/image.hpp"
 #include "tests/support.hpp"
@@ -246,7 +246,7 @@ inline process_status_t sample(const process_status_t*) {
   m.config_digest = 0x0c0ffee;
   m.detail = "logs/" + kSampleRunId;
   m.counts_run = kSampleRunId;
-  m.channels = {channel::kScene, channel::kFocus, channel::kPrediction};
+  m.channels = {ch::scene.name, ch::focus.name, ch::prediction.name};
   m.counts = {12, 43, 43};
   m.n_channels = static_cast<int32_t>(m.channels.size());
   m.digest = 0x1234;
@@ -257,7 +257,7 @@ inline resend_t sample(const resend_t*) {
   resend_t m;
   m.run_id = kSampleRunId;
   m.step = 0;
-  m.channel = channel::kFocus;
+  m.channel = ch::focus.name;
   m.first = 40;
   m.last = 43;
   m.requester = "motivation";

@@ -8,7 +8,7 @@
 #include <iterator>
 
 #include "afford/actions.hpp"
-#include "afford/channels.hpp"
+#include "afford/protocol.hpp"
 
 namespace afford {
 namespace {
@@ -24,7 +24,7 @@ Max configBytes(const BoundsContext& c) { return Max(c.protocol->limits.config_b
 Max actions() { return Max(kNumActions); }
 // Training reports in one message: the update of the previous step, if any.
 Max trainedReports() { return Max(1); }
-Max channels() { return Max(static_cast<std::int64_t>(std::size(channel::kAll))); }
+Max channels() { return Max(static_cast<std::int64_t>(kChannelCount)); }
 
 // Bytes of a focus image: side x side x RGB.
 Max focusImageBytes(const BoundsContext& c) {

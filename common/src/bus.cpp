@@ -36,6 +36,15 @@ std::string busUrl(const std::string& url, const BusConfig& bus) {
   return out;
 }
 
+int pumpBus(lcm::LCM& lcm, int wait_ms, int most) {
+  int handled = 0;
+  while (handled < most && lcm.handleTimeout(0) > 0) ++handled;
+  if (handled > 0 || wait_ms <= 0 || lcm.handleTimeout(wait_ms) <= 0) return handled;
+  ++handled;
+  while (handled < most && lcm.handleTimeout(0) > 0) ++handled;
+  return handled;
+}
+
 std::unique_ptr<lcm::LCM> openBus(const std::string& url, const BusConfig& bus) {
   // udpm's receive path is the one patched and bounded (third_party/lcm); memq is in-process.
   if (url.rfind("udpm://", 0) != 0 && url.rfind("memq://", 0) != 0)

@@ -2,7 +2,7 @@
 
 #include <algorithm>
 
-#include "afford/channels.hpp"
+#include "afford/protocol.hpp"
 #include "afford/processes.hpp"
 
 namespace afford {
@@ -15,6 +15,19 @@ bool peekRunId(const void* data, std::size_t size, int max_bytes, std::string& o
   const std::uint32_t len = (std::uint32_t{p[8]} << 24) | (std::uint32_t{p[9]} << 16) | (std::uint32_t{p[10]} << 8) | p[11];
   if (len < 1 || len > static_cast<std::uint32_t>(max_bytes) + 1 || len > size - 12 || p[12 + len - 1] != 0) return false;
   out.assign(reinterpret_cast<const char*>(p + 12), len - 1);
+  return true;
+}
+
+bool peekRunHeader(const void* data, std::size_t size, RunHeader& out) {
+  if (size < 12 || !peekRunId(data, size, static_cast<int>(std::min<std::size_t>(size, INT32_MAX)), out.run_id))
+    return false;
+  const std::size_t at = 12 + out.run_id.size() + 1;  // the run id's length, its bytes and NUL
+  if (at + 16 > size) return false;
+  const auto* p = static_cast<const std::uint8_t*>(data) + at;
+  std::uint64_t step = 0, serial = 0;
+  for (int i = 0; i < 8; ++i) step = (step << 8) | p[i], serial = (serial << 8) | p[8 + i];
+  out.step = static_cast<std::int64_t>(step);
+  out.serial = static_cast<std::int64_t>(serial);
   return true;
 }
 
@@ -262,14 +275,14 @@ void Edge::askMissing() {
     m.first = r.first;
     m.last = r.last;
     m.requester = owner_;
-    send(channel::kResend, m);
+    send(ch::resend, m);
   }
 }
 
 void Edge::answerResends() {
   if (answering_) return;
   answering_ = true;
-  subscribe<resend_t>(channel::kResend, [this](const resend_t& r) {
+  subscribe(ch::resend, [this](const resend_t& r) {
     onResend(r);
     return Turn::take();
   }, Scope::Any, Order::None);

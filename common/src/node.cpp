@@ -9,7 +9,7 @@
 #include <csignal>
 
 #include "afford/bus.hpp"
-#include "afford/channels.hpp"
+#include "afford/protocol.hpp"
 #include "afford/logging.hpp"
 
 namespace afford {
@@ -20,14 +20,11 @@ using std::chrono::milliseconds;
 NodeBase::NodeBase(lcm::LCM& lcm, std::string process, std::shared_ptr<spdlog::logger> log,
                    const ProtocolConfig& protocol)
     : lcm_(lcm), log_(std::move(log)), process_(std::move(process)), edge_(lcm, log_, process_, protocol) {
-  edge_.subscribe<run_config_t>(
-      channel::kRunConfig, [this](const run_config_t& m, const Envelope& e) { return onRunConfig(m, e); }, Scope::Any,
+  edge_.subscribe(ch::runConfig, [this](const run_config_t& m, const Envelope& e) { return onRunConfig(m, e); }, Scope::Any,
       Order::None);
-  edge_.subscribe<run_control_t>(
-      channel::kRunControl, [this](const run_control_t& m, const Envelope& e) { return onRunControl(m, e); },
+  edge_.subscribe(ch::runControl, [this](const run_control_t& m, const Envelope& e) { return onRunControl(m, e); },
       Scope::Any, Order::None);
-  edge_.subscribe<process_status_t>(
-      channel::kStatus, [this](const process_status_t& m) { return onStatus(m); }, Scope::Any, Order::None);
+  edge_.subscribe(ch::status, [this](const process_status_t& m) { return onStatus(m); }, Scope::Any, Order::None);
   edge_.answerResends();
   edge_.onFailure([this](const std::string& channel, const std::string& why) { failRun(channel + ": " + why); });
 }
@@ -76,7 +73,7 @@ Turn NodeBase::onRunConfig(const run_config_t& msg, const Envelope& envelope) {
     st.config_digest = msg.digest;  // the configuration refused
     st.detail = detail_.substr(0, static_cast<std::size_t>(protocol().limits.text_bytes));
     st.n_channels = 0;  // nothing published in that run
-    edge_.send(channel::kStatus, st);
+    edge_.send(ch::status, st);
     return Turn::take();
   }
   log_->info("configured for run '{}' ({} {} seed {}, {} steps)", run_id_, msg.experiment, msg.system, msg.seed,
@@ -164,7 +161,7 @@ void NodeBase::publishStatus() {
     st.counts.push_back(n);
   }
   st.n_channels = static_cast<int32_t>(st.channels.size());
-  edge_.send(channel::kStatus, st);
+  edge_.send(ch::status, st);
   const auto now = Clock::now();
   next_beat_ = now + milliseconds(protocol().heartbeat_ms);
   announced_at_ = now;
@@ -299,11 +296,8 @@ int processMain(int argc, char** argv, const ProcessSpec& spec, const std::funct
   node->useBusKey(key);
   log->info("listening on {}{}", url, key ? " (keyed: messages without this key's tag are dropped)" : "");
   while (!stopRequested()) {
-    // Everything pending, then the node's own business: a burst is taken off
-    // LCM's queue at once (what waits there is held in memory).
-    if (lcm.handleTimeout(node->msUntilDue()) > 0)
-      for (int more = 0; more < 1000 && lcm.handleTimeout(0) > 0; ++more) {
-      }
+    // Everything pending (or what comes before the node's next business), then that business.
+    pumpBus(lcm, node->msUntilDue());
     try {
       node->tick();
     } catch (const std::exception& e) {

@@ -1,21 +1,28 @@
 #include "afford/processes.hpp"
 
-#include "afford/channels.hpp"
+#include "afford/protocol.hpp"
 
 namespace afford {
 
 const std::vector<ProcessInfo>& processRegistry() {
-  using namespace channel;
-  static const std::vector<ProcessInfo> registry = {
-      {"environment", true, true, false, {kScene, kProbe}, "the world: scene, objects, actions"},
-      {"eye", true, true, false, {kFocus, kEffect}, "attention and perception: focus, effects"},
-      {"predictors", true, true, false, {kPrediction, kAffordanceTable, kResult, kForwardPrediction},
-       "affordance and forward models"},
-      {"motivation", true, false, false, {kDecision}, "intrinsic motivations: chooses the action (intrinsic phase)"},
-      {"planner", false, true, false, {kLook, kForwardQuery, kDecision, kExtrinsicResult},
-       "attention to the goal and planning (extrinsic phase)"},
-      {"logger", true, true, true, {}, "records a run into an LCM log"},
-  };
+  static const std::vector<ProcessInfo> registry = [] {
+    std::vector<ProcessInfo> r = {
+        {"environment", true, true, false, {}, "the world: scene, objects, actions"},
+        {"eye", true, true, false, {}, "attention and perception: focus, effects"},
+        {"predictors", true, true, false, {}, "affordance and forward models"},
+        {"motivation", true, false, false, {}, "intrinsic motivations: chooses the action (intrinsic phase)"},
+        {"planner", false, true, false, {}, "attention to the goal and planning (extrinsic phase)"},
+        {"logger", true, true, true, {}, "records a run into an LCM log"},
+    };
+    // What each publishes: the run channels (afford/protocol.hpp) whose publisher it is in a phase it is in.
+    for (ProcessInfo& p : r)
+      forEachChannel([&](const ChannelInfo& c) {
+        const bool mine = (p.intrinsic && std::string(c.intrinsic_publisher) == p.name) ||
+                          (p.extrinsic && std::string(c.extrinsic_publisher) == p.name);
+        if (c.serial && mine) p.publishes.push_back(c.name);
+      });
+    return r;
+  }();
   return registry;
 }
 
@@ -27,12 +34,10 @@ std::vector<std::string> runProcesses(bool extrinsic, bool recorded) {
 }
 
 std::string publisherOf(const std::string& channel, bool extrinsic) {
-  for (const ProcessInfo& p : processRegistry()) {
-    if (!(extrinsic ? p.extrinsic : p.intrinsic)) continue;
-    for (const char* c : p.publishes)
-      if (channel == c) return p.name;
-  }
-  return "";
+  const ChannelInfo* c = channelNamed(channel);
+  if (!c || !c->serial) return "";
+  const std::string p = c->publisher(extrinsic);
+  return isProcessName(p) ? p : "";
 }
 
 bool isProcessName(const std::string& name) {
@@ -46,7 +51,7 @@ std::vector<std::string> channelsOf(const std::string& process, bool extrinsic) 
   for (const ProcessInfo& p : processRegistry())
     if (process == p.name && (extrinsic ? p.extrinsic : p.intrinsic)) {
       out.assign(p.publishes.begin(), p.publishes.end());
-      out.emplace_back(channel::kStatus);
+      out.emplace_back(ch::status.name);
     }
   return out;
 }

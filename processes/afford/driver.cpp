@@ -6,7 +6,7 @@
 #include <filesystem>
 
 #include "afford/affordance_table_t.hpp"
-#include "afford/channels.hpp"
+#include "afford/protocol.hpp"
 #include "afford/processes.hpp"
 #include "afford/extrinsic_result_t.hpp"
 #include "afford/node.hpp"
@@ -22,17 +22,14 @@ using std::chrono::milliseconds;
 RunDriver::RunDriver(lcm::LCM& lcm, std::shared_ptr<spdlog::logger> log, const ProtocolConfig& protocol)
     : lcm_(lcm), log_(std::move(log)), edge_(lcm, log_, "runner", protocol) {
   edge_.warnOtherRuns(false);  // late messages of the slot's previous run are normal
-  edge_.subscribe<process_status_t>(
-      channel::kStatus, [this](const process_status_t& m) { return onStatus(m); }, Scope::Any, Order::None);
-  edge_.subscribe<affordance_table_t>(
-      channel::kAffordanceTable,
+  edge_.subscribe(ch::status, [this](const process_status_t& m) { return onStatus(m); }, Scope::Any, Order::None);
+  edge_.subscribe(ch::affordanceTable,
       [this](const affordance_table_t& m) {
         if (outcome_) outcome_->curve.push_back({m.step, m.affordance});
         return Turn::take();
       },
       Scope::Run, Order::Serial);
-  edge_.subscribe<extrinsic_result_t>(
-      channel::kExtrinsicResult,
+  edge_.subscribe(ch::extrinsicResult,
       [this](const extrinsic_result_t& m) {
         if (!outcome_) return Turn::take();
         ExtrinsicOutcome& e = outcome_->extrinsic;
@@ -47,8 +44,7 @@ RunDriver::RunDriver(lcm::LCM& lcm, std::shared_ptr<spdlog::logger> log, const P
         return Turn::take();
       },
       Scope::Run, Order::Serial);
-  edge_.subscribe<run_result_t>(
-      channel::kResult,
+  edge_.subscribe(ch::result,
       [this](const run_result_t& m) {
         if (!outcome_) return Turn::take();
         outcome_->weights_checksum = m.weights_checksum;
@@ -87,7 +83,7 @@ void RunDriver::sendControl(const std::string& run_id, int8_t command) {
   c.run_id = run_id;
   c.step = command == run_control_t::STOP && spec_ && run_id == spec_->run_id ? spec_->steps : 0;
   c.command = command;
-  edge_.send(channel::kRunControl, c);
+  edge_.send(ch::runControl, c);
 }
 
 Turn RunDriver::onStatus(const process_status_t& m) {
@@ -134,7 +130,7 @@ void RunDriver::nudge(const std::string& process, const Seen& s) {
       return;
     case Phase::Configuring:
       if (free) {  // it has not had the configuration (lost, or it started after it went out)
-        edge_.send(channel::kRunConfig, config_msg_);
+        edge_.send(ch::runConfig, config_msg_);
         last = now;
       } else if (!s.run_id.empty() && s.run_id != run) {
         sendControl(s.run_id, run_control_t::STOP);
@@ -148,7 +144,7 @@ void RunDriver::nudge(const std::string& process, const Seen& s) {
           if (other.run_id == run) step = std::max(step, other.step);
         log_->warn("run '{}': process {} is free again (restarted?) at step {}: sending it the run's configuration",
                    run, process, step);
-        edge_.send(channel::kRunConfig, config_msg_);
+        edge_.send(ch::runConfig, config_msg_);
         sendControl(run, run_control_t::START);
         last = now;
       } else if (s.run_id == run && s.state == process_status_t::READY) {  // its START was lost
@@ -272,7 +268,7 @@ RunOutcome RunDriver::run(const RunSpec& spec, const std::function<void()>& pump
 
   // 2. Configure: START as soon as every one says READY.
   phase_ = Phase::Configuring;
-  edge_.send(channel::kRunConfig, config_msg_);
+  edge_.send(ch::runConfig, config_msg_);
   auto said = Clock::now();
   auto again = milliseconds(protocol.retry_ms);
   deadline = Clock::now() + milliseconds(protocol.ready_timeout_ms);
@@ -295,7 +291,7 @@ RunOutcome RunDriver::run(const RunSpec& spec, const std::function<void()>& pump
     if (stopRequested()) return interrupted();
     if (Clock::now() > deadline) return fail("not configured within the protocol's ready_timeout_ms: " + missing(ready));
     if (Clock::now() - said > again) {  // a datagram lost on the way there or back: say it again, backing off
-      edge_.send(channel::kRunConfig, config_msg_);
+      edge_.send(ch::runConfig, config_msg_);
       said = Clock::now();
       again = std::min(again * 2, milliseconds(protocol.heartbeat_ms));
     }

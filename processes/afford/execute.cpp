@@ -25,11 +25,7 @@ using nlohmann::json;
 namespace {
 
 // Handle what is pending (up to a batch), or wait briefly for something.
-void pumpLcm(lcm::LCM& lcm) {
-  int handled = 0;
-  while (handled < 512 && lcm.handleTimeout(0) > 0) ++handled;
-  if (handled == 0) lcm.handleTimeout(5);
-}
+void pumpLcm(lcm::LCM& lcm) { pumpBus(lcm, 5, 512); }
 
 using OnStep = std::function<void(std::int64_t)>;
 

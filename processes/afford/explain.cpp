@@ -10,7 +10,7 @@
 #include <map>
 #include <tuple>
 
-#include "afford/channels.hpp"
+#include "afford/protocol.hpp"
 #include "afford/decision_t.hpp"
 #include "afford/decode.hpp"
 #include "afford/extrinsic_result_t.hpp"
@@ -55,8 +55,10 @@ const char* metricName(PositionMetric m) { return m == PositionMetric::HalfEucli
 // message twice: one the logger asked for again and got after all), decoded
 // and checked as a receiver would; what a receiver would refuse is a warning.
 template <class Msg>
-std::map<std::int64_t, Msg> messages(const std::vector<LogEvent>& events, const char* channel, const std::string& run_id,
-                                     const BoundsContext& ctx, std::vector<std::string>& warnings) {
+std::map<std::int64_t, Msg> messages(const std::vector<LogEvent>& events, const Channel<Msg>& typed,
+                                     const std::string& run_id, const BoundsContext& ctx,
+                                     std::vector<std::string>& warnings) {
+  const char* channel = typed.name;
   std::map<std::int64_t, Msg> out;
   int refused = 0;
   std::string first_why;
@@ -127,13 +129,13 @@ Explanation explainRunEvents(const RunEvents& run, const std::string& where, std
   const BoundsContext ctx{&config.protocol, &config};
   std::vector<std::string>& warn = ex.warnings;
 
-  const auto results = messages<extrinsic_result_t>(run.events, channel::kExtrinsicResult, ex.run_id, ctx, warn);
+  const auto results = messages(run.events, ch::extrinsicResult, ex.run_id, ctx, warn);
   if (results.empty()) {
     // How far the log goes, to say where it was cut.
     std::int64_t last_step = -1;
-    for (const auto& [serial, s] : messages<scene_t>(run.events, channel::kScene, ex.run_id, ctx, warn))
+    for (const auto& [serial, s] : messages(run.events, ch::scene, ex.run_id, ctx, warn))
       last_step = std::max(last_step, s.step);
-    for (const auto& [serial, l] : messages<look_t>(run.events, channel::kLook, ex.run_id, ctx, warn))
+    for (const auto& [serial, l] : messages(run.events, ch::look, ex.run_id, ctx, warn))
       last_step = std::max(last_step, l.step);
     std::string why = where + ": the log of test '" + ex.run_id +
                       "' ends before its EXTRINSIC_RESULT, so it does not say how the test ended (a truncated log: " +
@@ -170,22 +172,22 @@ Explanation explainRunEvents(const RunEvents& run, const std::string& where, std
   ex.iterations = result.step;
 
   // Each message by the key it is answered or placed by.
-  const auto looks = messages<look_t>(run.events, channel::kLook, ex.run_id, ctx, warn);
-  const auto queries = messages<forward_query_t>(run.events, channel::kForwardQuery, ex.run_id, ctx, warn);
+  const auto looks = messages(run.events, ch::look, ex.run_id, ctx, warn);
+  const auto queries = messages(run.events, ch::forwardQuery, ex.run_id, ctx, warn);
   std::map<std::int32_t, const focus_t*> focus_by_seq;
-  const auto focuses = messages<focus_t>(run.events, channel::kFocus, ex.run_id, ctx, warn);
+  const auto focuses = messages(run.events, ch::focus, ex.run_id, ctx, warn);
   for (const auto& [serial, f] : focuses) focus_by_seq.emplace(f.seq, &f);
   std::map<std::int32_t, const forward_prediction_t*> forward_by_seq;
-  const auto forwards = messages<forward_prediction_t>(run.events, channel::kForwardPrediction, ex.run_id, ctx, warn);
+  const auto forwards = messages(run.events, ch::forwardPrediction, ex.run_id, ctx, warn);
   for (const auto& [serial, f] : forwards) forward_by_seq.emplace(f.seq, &f);
   std::map<std::int64_t, const prediction_t*> prediction_by_step;
-  const auto predictions = messages<prediction_t>(run.events, channel::kPrediction, ex.run_id, ctx, warn);
+  const auto predictions = messages(run.events, ch::prediction, ex.run_id, ctx, warn);
   for (const auto& [serial, m] : predictions) prediction_by_step.emplace(m.step, &m);
   std::map<std::int64_t, const decision_t*> decision_by_step;
-  const auto decisions = messages<decision_t>(run.events, channel::kDecision, ex.run_id, ctx, warn);
+  const auto decisions = messages(run.events, ch::decision, ex.run_id, ctx, warn);
   for (const auto& [serial, d] : decisions) decision_by_step.emplace(d.step, &d);
   std::map<std::int64_t, const scene_t*> action_scene_by_step;
-  const auto scenes = messages<scene_t>(run.events, channel::kScene, ex.run_id, ctx, warn);
+  const auto scenes = messages(run.events, ch::scene, ex.run_id, ctx, warn);
   for (const auto& [serial, s] : scenes) {
     if (s.cause == scene_t::CAUSE_START) ex.start_goal_distance = s.goal_distance;
     if (s.cause == scene_t::CAUSE_ACTION) action_scene_by_step.emplace(s.step, &s);

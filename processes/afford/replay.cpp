@@ -1,6 +1,7 @@
 #include "afford/replay.hpp"
 
 #include <algorithm>
+#include <climits>
 #include <cstdio>
 #include <filesystem>
 #include <map>
@@ -12,7 +13,8 @@
 #include <nlohmann/json.hpp>
 
 #include "afford/affordance_table_t.hpp"
-#include "afford/channels.hpp"
+#include "afford/bus.hpp"
+#include "afford/protocol.hpp"
 #include "afford/host.hpp"
 #include "afford/processes.hpp"
 #include "afford/config.hpp"
@@ -94,7 +96,7 @@ RunEvents runEventsOf(std::vector<LogEvent> events, const std::string& run_id, c
   RunEvents out;
   std::size_t begin = events.size();
   for (std::size_t i = 0; i < events.size() && begin == events.size(); ++i) {
-    if (events[i].channel != channel::kRunConfig) continue;
+    if (events[i].channel != ch::runConfig.name) continue;
     run_config_t rc;
     std::string why;
     if (!decodeChecked(events[i].data.data(), events[i].data.size(), BoundsContext{&observer, nullptr}, rc, why)) {
@@ -117,7 +119,7 @@ RunEvents runEventsOf(std::vector<LogEvent> events, const std::string& run_id, c
   for (std::size_t i = begin + 1; i < events.size(); ++i) {
     std::string id;
     if (!peekRunId(events[i].data.data(), events[i].data.size(), name_bytes, id)) continue;
-    if (id == out.config.run_id || (id.empty() && events[i].channel == channel::kStatus))
+    if (id == out.config.run_id || (id.empty() && events[i].channel == ch::status.name))
       out.events.push_back(std::move(events[i]));
   }
   return out;
@@ -141,36 +143,20 @@ struct Replayed {
     settle();
   }
   void settle() {
-    while (bus->handleTimeout(0) > 0) {
-    }
+    pumpBus(*bus, 0, INT_MAX);
     node->tick();
-    while (bus->handleTimeout(0) > 0) {
-    }
+    pumpBus(*bus, 0, INT_MAX);
   }
 };
 
 // A recorded event as its channel's type would take it (bounds, fields, digest); "" or why not.
 std::string checkRecorded(const LogEvent& e, const BoundsContext& ctx) {
   std::string why;
-  auto check = [&](auto msg) { return decodeChecked(e.data.data(), e.data.size(), ctx, msg, why) ? std::string() : why; };
-  const std::string& c = e.channel;
-  if (c == channel::kScene) return check(scene_t());
-  if (c == channel::kFocus) return check(focus_t());
-  if (c == channel::kPrediction) return check(prediction_t());
-  if (c == channel::kDecision) return check(decision_t());
-  if (c == channel::kEffect) return check(effect_t());
-  if (c == channel::kProbe) return check(object_probe_t());
-  if (c == channel::kAffordanceTable) return check(affordance_table_t());
-  if (c == channel::kResult) return check(run_result_t());
-  if (c == channel::kLook) return check(look_t());
-  if (c == channel::kForwardQuery) return check(forward_query_t());
-  if (c == channel::kForwardPrediction) return check(forward_prediction_t());
-  if (c == channel::kExtrinsicResult) return check(extrinsic_result_t());
-  if (c == channel::kRunConfig) return check(run_config_t());
-  if (c == channel::kRunControl) return check(run_control_t());
-  if (c == channel::kStatus) return check(process_status_t());
-  if (c == channel::kResend) return check(resend_t());
-  return "";  // another channel: not ours to judge
+  withChannel(e.channel, [&](const auto& c) {
+    typename std::decay_t<decltype(c)>::Message msg;
+    if (decodeChecked(e.data.data(), e.data.size(), ctx, msg, why)) why.clear();
+  });
+  return why;  // (another channel: not ours to judge)
 }
 
 }  // namespace
@@ -191,7 +177,7 @@ std::vector<LogGap> recordingGaps(const std::vector<LogEvent>& events, const std
       if (peekRunHeader(e.data.data(), static_cast<std::uint32_t>(e.data.size()), h) && h.run_id == run_id &&
           h.serial >= 0 && h.serial < kMostSerials)
         had[e.channel].insert(h.serial);
-    } else if (e.channel == channel::kStatus) {
+    } else if (e.channel == ch::status.name) {
       process_status_t st;
       std::string why;
       if (!decodeChecked(e.data.data(), e.data.size(), ctx, st, why) || st.counts_run != run_id) continue;
@@ -289,15 +275,13 @@ ReplayResult replayRun(const ReplayOptions& o, spdlog::logger& log) {
     r->tap = std::make_unique<Edge>(*r->bus, logger, "replay", config.protocol);
     r->tap->join(result.run_id, &config);
     Replayed* raw = r.get();
-    r->tap->subscribe<decision_t>(
-        channel::kDecision,
+    r->tap->subscribe(ch::decision,
         [raw](const decision_t&, const Envelope& e) {
           raw->decisions.emplace_back(e.data, e.data + e.size);
           return Turn::take();
         },
         Scope::Run, Order::None);
-    r->tap->subscribe<run_result_t>(
-        channel::kResult,
+    r->tap->subscribe(ch::result,
         [raw](const run_result_t& m) {
           raw->checksum = m.weights_checksum;
           return Turn::take();
@@ -313,12 +297,12 @@ ReplayResult replayRun(const ReplayOptions& o, spdlog::logger& log) {
       log.warn("{}: a recorded message is refused: {}", e.channel, why);
     }
     RunHeader h;
-    if ((e.channel == channel::kDecision || e.channel == channel::kResult) &&
+    if ((e.channel == ch::decision.name || e.channel == ch::result.name) &&
         peekRunHeader(e.data.data(), static_cast<std::uint32_t>(e.data.size()), h) && h.run_id == result.run_id) {
-      if (e.channel == channel::kDecision) recorded_decisions.emplace(h.serial, &e);
+      if (e.channel == ch::decision.name) recorded_decisions.emplace(h.serial, &e);
       run_result_t m;
       std::string why;
-      if (e.channel == channel::kResult && decodeChecked(e.data.data(), e.data.size(), ctx, m, why))
+      if (e.channel == ch::result.name && decodeChecked(e.data.data(), e.data.size(), ctx, m, why))
         result.recorded_checksum = m.weights_checksum;
     }
     for (auto& p : procs) p->feed(e);

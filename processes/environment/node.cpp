@@ -1,7 +1,7 @@
 #include "environment/node.hpp"
 
 #include "afford/actions.hpp"
-#include "afford/channels.hpp"
+#include "afford/protocol.hpp"
 #include "afford/object_probe_t.hpp"
 #include "afford/scene_t.hpp"
 
@@ -9,7 +9,7 @@ namespace afford {
 
 EnvironmentNode::EnvironmentNode(lcm::LCM& lcm, std::shared_ptr<spdlog::logger> log, const ProtocolConfig& protocol)
     : NodeBase(lcm, "environment", std::move(log), protocol) {
-  subscribe<decision_t>(channel::kDecision, [this](const decision_t& m) { return onDecision(m); });
+  subscribe(ch::decision, [this](const decision_t& m) { return onDecision(m); });
 }
 
 void EnvironmentNode::onConfigured(const RunConfig& config) {
@@ -34,7 +34,7 @@ void EnvironmentNode::onStart() {
   probe.images = env_->probeImages();
   probe.n_objects = static_cast<int32_t>(probe.images.size());
   probe.size = static_cast<int32_t>(probe.images.front().size());
-  publish(channel::kProbe, probe);
+  publish(ch::probe, probe);
   publishScene(0, scene_t::CAUSE_START, true, -1, -1.0, -1.0);
 }
 
@@ -55,7 +55,7 @@ void EnvironmentNode::publishScene(std::int64_t step, int8_t cause, bool scan, i
   s.encoding = scene_t::ENCODING_ZLIB_RGB8;
   s.data = encodeScene(image ? *image : env_->render());
   s.size = static_cast<int32_t>(s.data.size());
-  publish(channel::kScene, s);
+  publish(ch::scene, s);
 }
 
 Turn EnvironmentNode::onExtrinsicDecision(const decision_t& d) {

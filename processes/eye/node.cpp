@@ -1,7 +1,7 @@
 #include "eye/node.hpp"
 
 #include "afford/actions.hpp"
-#include "afford/channels.hpp"
+#include "afford/protocol.hpp"
 #include "afford/effect_t.hpp"
 #include "afford/focus_t.hpp"
 
@@ -9,9 +9,9 @@ namespace afford {
 
 EyeNode::EyeNode(lcm::LCM& lcm, std::shared_ptr<spdlog::logger> log, const ProtocolConfig& protocol, bool speculate)
     : NodeBase(lcm, "eye", std::move(log), protocol), speculate_(speculate) {
-  subscribe<scene_t>(channel::kScene, [this](const scene_t& m) { return onScene(m); });
-  subscribe<decision_t>(channel::kDecision, [this](const decision_t& m) { return onDecision(m); });
-  subscribe<look_t>(channel::kLook, [this](const look_t& m) { return onLook(m); });
+  subscribe(ch::scene, [this](const scene_t& m) { return onScene(m); });
+  subscribe(ch::decision, [this](const decision_t& m) { return onDecision(m); });
+  subscribe(ch::look, [this](const look_t& m) { return onLook(m); });
 }
 
 void EyeNode::onConfigured(const RunConfig& config) {
@@ -30,7 +30,7 @@ void EyeNode::onStop() {
 }
 
 void EyeNode::publishFocus(std::int64_t step, const Focus& f, int8_t kind, int32_t seq) {
-  publish(channel::kFocus, focusMessage(step, f, kind, seq));
+  publish(ch::focus, focusMessage(step, f, kind, seq));
 }
 
 focus_t EyeNode::focusMessage(std::int64_t step, const Focus& f, int8_t kind, int32_t seq) const {
@@ -101,7 +101,7 @@ Turn EyeNode::onLook(const look_t& l) {
         m.diff_image.push_back(std::move(d.image));
       }
       m.n_diffs = static_cast<int32_t>(m.diff_x.size());
-      publish(channel::kFocus, m);
+      publish(ch::focus, m);
       break;
     }
     case focus_t::SCENE_OBJECT:
@@ -159,7 +159,7 @@ Turn EyeNode::onScene(const scene_t& s) {
     m.size = static_cast<int32_t>(m.image.size());
     log_->debug("effect of step {}: action {} image change {:.5f} position change {:.4f} -> affordance {}", m.step,
                 m.action, m.image_change, m.position_change, m.affordance);
-    publish(channel::kEffect, m);
+    publish(ch::effect, m);
     last_effect_ = s.step - 1;
     handled(s.step - 1);
   } else {

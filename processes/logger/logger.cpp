@@ -1,6 +1,6 @@
 #include "logger/logger.hpp"
 
-#include "afford/channels.hpp"
+#include "afford/protocol.hpp"
 
 #include <cerrno>
 #include <cstdio>
@@ -21,22 +21,7 @@ std::uint64_t bigEndian(const unsigned char* p, int n) {
 }
 }  // namespace
 
-bool isSerialChannel(const std::string& channel) {
-  for (const char* c : channel::kWithSerial)
-    if (channel == c) return true;
-  return false;
-}
 
-bool peekRunHeader(const void* data, std::uint32_t size, RunHeader& out) {
-  const auto* p = static_cast<const unsigned char*>(data);
-  if (size < 12) return false;
-  const std::uint64_t len = bigEndian(p + 8, 4);  // string length, with its NUL
-  if (len < 1 || 12 + len + 16 > size) return false;
-  out.run_id.assign(reinterpret_cast<const char*>(p + 12), len - 1);
-  out.step = static_cast<std::int64_t>(bigEndian(p + 12 + len, 8));
-  out.serial = static_cast<std::int64_t>(bigEndian(p + 12 + len + 8, 8));
-  return true;
-}
 
 RecordedSoFar readRecorded(const std::string& dir, const LogLimits& limits) {
   RecordedSoFar r;
@@ -57,7 +42,7 @@ RecordedSoFar readRecorded(const std::string& dir, const LogLimits& limits) {
           r.next_serial[ev.channel] = h.serial + 1;
           r.last_digest[ev.channel] = static_cast<std::int64_t>(bigEndian(ev.data.data() + size - 8, 8));
         }
-        if (ev.channel == channel::kResult || ev.channel == channel::kExtrinsicResult) r.ended = true;
+        if (ev.channel == ch::result.name || ev.channel == ch::extrinsicResult.name) r.ended = true;
       } else {
         r.untracked[ev.channel].insert(std::string(reinterpret_cast<const char*>(ev.data.data()), ev.data.size()));
       }

@@ -15,20 +15,11 @@
 #include <string>
 #include <vector>
 
+#include "afford/edge.hpp"
 #include "afford/logfile.hpp"
 
 namespace afford {
 
-// The first fields of every run message (a type of channel::kWithSerial):
-// run_id, step, serial, read without decoding. False if the buffer is too
-// short to hold them (tests/unit/test_logger.cpp pins the layout for every
-// serial-carrying type).
-struct RunHeader {
-  std::string run_id;
-  std::int64_t step = 0, serial = 0;
-};
-bool peekRunHeader(const void* data, std::uint32_t size, RunHeader& out);
-bool isSerialChannel(const std::string& channel);
 
 // What earlier segments of a run's log hold (for a restarted logger).
 struct RecordedSoFar {

@@ -5,7 +5,7 @@
 #include <filesystem>
 
 #include "afford/affordance_table_t.hpp"
-#include "afford/channels.hpp"
+#include "afford/protocol.hpp"
 #include "afford/processes.hpp"
 #include "afford/decision_t.hpp"
 #include "afford/effect_t.hpp"
@@ -24,23 +24,17 @@ namespace afford {
 LoggerNode::LoggerNode(lcm::LCM& lcm, std::shared_ptr<spdlog::logger> log, const ProtocolConfig& protocol,
                        std::string log_root)
     : NodeBase(lcm, "logger", std::move(log), protocol), log_root_(std::move(log_root)) {
-  record<scene_t>(channel::kScene);
-  record<focus_t>(channel::kFocus);
-  record<prediction_t>(channel::kPrediction);
-  record<decision_t>(channel::kDecision);
-  record<effect_t>(channel::kEffect);
-  record<object_probe_t>(channel::kProbe);
-  record<affordance_table_t>(channel::kAffordanceTable);
-  record<run_result_t>(channel::kResult);
-  record<look_t>(channel::kLook);
-  record<forward_query_t>(channel::kForwardQuery);
-  record<forward_prediction_t>(channel::kForwardPrediction);
-  record<extrinsic_result_t>(channel::kExtrinsicResult);
+  // Every recorded run channel of the protocol (RUN_CONFIG and RUN_CONTROL come through onControl).
+  forEachChannel([this](const auto& c) {
+    using Msg = typename std::decay_t<decltype(c)>::Message;
+    if constexpr (wire::Bounds<Msg>::kSerial)
+      if (c.recorded) record(c);
+  });
 }
 
 template <class Msg>
-void LoggerNode::record(const char* channel) {
-  subscribe<Msg>(channel, [this](const Msg&, const Envelope& e) {
+void LoggerNode::record(const Channel<Msg>& channel) {
+  subscribe(channel, [this](const Msg&, const Envelope& e) {
     write(e);
     return Turn::take();
   });
@@ -108,7 +102,7 @@ void LoggerNode::onPeerStatus(const process_status_t& st) {
     log_file_->sawProcess(st.process, st.pid);
     // Its final counts matter if it publishes a channel of the run.
     bool publisher = false;
-    for (const char* ch : channel::kWithSerial)
+    for (const std::string& ch : channelNames(/*serial_only=*/true))
       publisher = publisher || publisherOf(ch, config().phase == Phase::Extrinsic) == st.process;
     if (publisher) left_.emplace(st.process, false);
   } else if (st.counts_run == runId() && left_.count(st.process)) {
@@ -124,7 +118,7 @@ void LoggerNode::write(const Envelope& e) {
     if (write_error_.empty()) write_error_ = ex.what();
     throw;  // the edge fails the run with it
   }
-  if (e.channel == channel::kResult || e.channel == channel::kExtrinsicResult) ended_ = true;
+  if (e.channel == ch::result.name || e.channel == ch::extrinsicResult.name) ended_ = true;
 }
 
 bool LoggerNode::readyToLeave() {

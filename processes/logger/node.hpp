@@ -1,7 +1,7 @@
 // Logger process node: records every channel of a run.
 // Channels in:  RUN_CONFIG and RUN_CONTROL of the run (each distinct message
 //               once, at most protocol.limits.control_messages of them; the
-//               manifest counts those dropped beyond), every run channel (channel::kWithSerial) through the
+//               manifest counts those dropped beyond), every run channel (isSerialChannel) through the
 //               edge like any receiver, STATUS (for the manifest and the
 //               publishers' message counts; not recorded: it follows the wall
 //               clock), RESEND (not recorded).
@@ -37,7 +37,7 @@ class LoggerNode : public NodeBase {
 
  private:
   template <class Msg>
-  void record(const char* channel);
+  void record(const Channel<Msg>& channel);
   bool wantsRun(const RunConfig& config) override { return config.record; }
   void onConfigured(const RunConfig& config) override;
   void onStop() override;

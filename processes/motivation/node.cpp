@@ -2,14 +2,14 @@
 
 #include <cmath>
 
-#include "afford/channels.hpp"
+#include "afford/protocol.hpp"
 #include "afford/decision_t.hpp"
 
 namespace afford {
 
 MotivationNode::MotivationNode(lcm::LCM& lcm, std::shared_ptr<spdlog::logger> log, const ProtocolConfig& protocol)
     : NodeBase(lcm, "motivation", std::move(log), protocol) {
-  subscribe<prediction_t>(channel::kPrediction, [this](const prediction_t& m) { return onPrediction(m); });
+  subscribe(ch::prediction, [this](const prediction_t& m) { return onPrediction(m); });
 }
 
 void MotivationNode::onConfigured(const RunConfig& config) {
@@ -55,7 +55,7 @@ Turn MotivationNode::onPrediction(const prediction_t& m) {
   out.motivation = d.motivation;
   out.threshold = d.threshold;
   out.revisit = d.revisit;
-  publish(channel::kDecision, out);
+  publish(ch::decision, out);
   last_ = m.step;
   handled(m.step);
   if (m.step == config().steps - 1) setState(process_status_t::DONE);

@@ -1,6 +1,6 @@
 #include "planner/node.hpp"
 
-#include "afford/channels.hpp"
+#include "afford/protocol.hpp"
 #include "afford/decision_t.hpp"
 #include "afford/extrinsic_result_t.hpp"
 #include "afford/forward_query_t.hpp"
@@ -10,10 +10,10 @@ namespace afford {
 
 PlannerNode::PlannerNode(lcm::LCM& lcm, std::shared_ptr<spdlog::logger> log, const ProtocolConfig& protocol)
     : NodeBase(lcm, "planner", std::move(log), protocol) {
-  subscribe<scene_t>(channel::kScene, [this](const scene_t& m) { return onScene(m); });
-  subscribe<focus_t>(channel::kFocus, [this](const focus_t& m) { return onFocus(m); });
-  subscribe<prediction_t>(channel::kPrediction, [this](const prediction_t& m) { return onPrediction(m); });
-  subscribe<forward_prediction_t>(channel::kForwardPrediction,
+  subscribe(ch::scene, [this](const scene_t& m) { return onScene(m); });
+  subscribe(ch::focus, [this](const focus_t& m) { return onFocus(m); });
+  subscribe(ch::prediction, [this](const prediction_t& m) { return onPrediction(m); });
+  subscribe(ch::forwardPrediction,
                                   [this](const forward_prediction_t& m) { return onForward(m); });
 }
 
@@ -71,7 +71,7 @@ void PlannerNode::look(int8_t kind, double x, double y) {
   l.scene = scene_;
   l.x = x;
   l.y = y;
-  publish(channel::kLook, l);
+  publish(ch::look, l);
 }
 
 void PlannerNode::follow(PlannerRequest r) {
@@ -106,7 +106,7 @@ void PlannerNode::follow(PlannerRequest r) {
       q.n_actions = static_cast<int32_t>(q.actions.size());
       for (int a : r.prefix) q.prefix.push_back(static_cast<int8_t>(a));
       q.n_prefix = static_cast<int8_t>(q.prefix.size());
-      return publish(channel::kForwardQuery, q);
+      return publish(ch::forwardQuery, q);
     }
     case PlannerRequest::Act: {
       decision_t d;
@@ -121,7 +121,7 @@ void PlannerNode::follow(PlannerRequest r) {
       d.revisit = false;
       d.motivation = d.threshold = 0.0;
       waiting_scene_ = true;
-      return publish(channel::kDecision, d);
+      return publish(ch::decision, d);
     }
     case PlannerRequest::IterationDone:
       return endIteration();
@@ -213,7 +213,7 @@ void PlannerNode::finish(bool success) {
   for (const SubGoalRecord& g : core_->subGoals())
     r.sub_goals.push_back({g.x, g.y, g.iterations, g.actions_checked, g.actions_taken, g.reached});
   r.n_sub_goals = static_cast<int32_t>(r.sub_goals.size());
-  publish(channel::kExtrinsicResult, r);
+  publish(ch::extrinsicResult, r);
   log_->info("test '{}' on {}: {} after {} iterations, {} actions", runId(), r.scenario,
              success ? "solved" : "not solved", r.step, r.attempts);
   setState(process_status_t::DONE);

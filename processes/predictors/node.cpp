@@ -1,7 +1,7 @@
 #include "predictors/node.hpp"
 
 #include "afford/affordance_table_t.hpp"
-#include "afford/channels.hpp"
+#include "afford/protocol.hpp"
 #include "afford/names.hpp"
 #include "afford/prediction_t.hpp"
 #include "afford/run_result_t.hpp"
@@ -13,11 +13,11 @@ PredictorsNode::PredictorsNode(lcm::LCM& lcm, std::shared_ptr<spdlog::logger> lo
     : NodeBase(lcm, "predictors", std::move(log), protocol),
       async_effects_(async_effects),
       checkpoint_root_(std::move(checkpoint_root)) {
-  subscribe<object_probe_t>(channel::kProbe, [this](const object_probe_t& m) { return onProbe(m); });
-  subscribe<focus_t>(channel::kFocus, [this](const focus_t& m) { return onFocus(m); });
-  subscribe<decision_t>(channel::kDecision, [this](const decision_t& m) { return onDecision(m); });
-  subscribe<effect_t>(channel::kEffect, [this](const effect_t& m) { return onEffect(m); });
-  subscribe<forward_query_t>(channel::kForwardQuery, [this](const forward_query_t& m) { return onForwardQuery(m); });
+  subscribe(ch::probe, [this](const object_probe_t& m) { return onProbe(m); });
+  subscribe(ch::focus, [this](const focus_t& m) { return onFocus(m); });
+  subscribe(ch::decision, [this](const decision_t& m) { return onDecision(m); });
+  subscribe(ch::effect, [this](const effect_t& m) { return onEffect(m); });
+  subscribe(ch::forwardQuery, [this](const forward_query_t& m) { return onForwardQuery(m); });
 }
 
 void PredictorsNode::checkCheckpointPath(const RunConfig& config) const {
@@ -149,7 +149,7 @@ void PredictorsNode::publishPrediction(const focus_t& m) {
   if (pending_trained_) out.trained.push_back(*pending_trained_);  // the update since the last prediction
   pending_trained_.reset();
   out.n_trained = static_cast<int8_t>(out.trained.size());
-  publish(channel::kPrediction, out);
+  publish(ch::prediction, out);
 }
 
 Turn PredictorsNode::onForwardQuery(const forward_query_t& q) {
@@ -182,7 +182,7 @@ Turn PredictorsNode::onForwardQuery(const forward_query_t& q) {
     out.input_affordance.assign(p.affordance.begin(), p.affordance.end());
   }
   out.n_input = static_cast<int8_t>(out.input_affordance.size());
-  publish(channel::kForwardPrediction, out);
+  publish(ch::forwardPrediction, out);
   handled(q.step);
   return Turn::take();
 }
@@ -276,7 +276,7 @@ void PredictorsNode::publishTable(std::int64_t step) {
   t.n_actions = kNumActions;
   for (const auto& row : core_->table(probes_)) t.affordance.emplace_back(row.begin(), row.end());
   t.n_objects = static_cast<int32_t>(t.affordance.size());
-  publish(channel::kAffordanceTable, t);
+  publish(ch::affordanceTable, t);
 }
 
 void PredictorsNode::finish() {
@@ -308,7 +308,7 @@ void PredictorsNode::finish() {
   if (pending_trained_) r.trained.push_back(*pending_trained_);
   pending_trained_.reset();
   r.n_trained = static_cast<int8_t>(r.trained.size());
-  publish(channel::kResult, r);
+  publish(ch::result, r);
   log_->info("run '{}' learned: weights checksum {}", runId(), r.weights_checksum);
   handled(config().steps);
   setState(process_status_t::DONE);

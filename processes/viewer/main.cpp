@@ -13,7 +13,7 @@
 #include <cstdio>
 #include <filesystem>
 
-#include "afford/channels.hpp"
+#include "afford/protocol.hpp"
 #include "afford/decision_t.hpp"
 #include "afford/effect_t.hpp"
 #include "afford/focus_t.hpp"
@@ -120,23 +120,17 @@ int main(int argc, char** argv) {
   Listener listener{viewer, *log, edge, {}};
   using afford::Order;
   using afford::Scope;
-  edge.subscribe<afford::run_config_t>(
-      afford::channel::kRunConfig, [&](const afford::run_config_t& m) { return listener.onConfig(m); }, Scope::Any,
+  edge.subscribe(afford::ch::runConfig, [&](const afford::run_config_t& m) { return listener.onConfig(m); }, Scope::Any,
       Order::None);
-  edge.subscribe<afford::scene_t>(
-      afford::channel::kScene, [&](const afford::scene_t& m) { return listener.onScene(m); }, Scope::RunOrAny,
+  edge.subscribe(afford::ch::scene, [&](const afford::scene_t& m) { return listener.onScene(m); }, Scope::RunOrAny,
       Order::Follow);
-  edge.subscribe<afford::focus_t>(
-      afford::channel::kFocus, [&](const afford::focus_t& m) { return listener.onFocus(m); }, Scope::RunOrAny,
+  edge.subscribe(afford::ch::focus, [&](const afford::focus_t& m) { return listener.onFocus(m); }, Scope::RunOrAny,
       Order::Follow);
-  edge.subscribe<afford::prediction_t>(
-      afford::channel::kPrediction, [&](const afford::prediction_t& m) { return listener.onPrediction(m); },
+  edge.subscribe(afford::ch::prediction, [&](const afford::prediction_t& m) { return listener.onPrediction(m); },
       Scope::RunOrAny, Order::Follow);
-  edge.subscribe<afford::decision_t>(
-      afford::channel::kDecision, [&](const afford::decision_t& m) { return listener.onDecision(m); }, Scope::RunOrAny,
+  edge.subscribe(afford::ch::decision, [&](const afford::decision_t& m) { return listener.onDecision(m); }, Scope::RunOrAny,
       Order::Follow);
-  edge.subscribe<afford::effect_t>(
-      afford::channel::kEffect, [&](const afford::effect_t& m) { return listener.onEffect(m); }, Scope::RunOrAny,
+  edge.subscribe(afford::ch::effect, [&](const afford::effect_t& m) { return listener.onEffect(m); }, Scope::RunOrAny,
       Order::Follow);
   log->info("watching {}{}", url, png_dir.empty() ? "" : ", frames to " + png_dir);
 
@@ -144,7 +138,7 @@ int main(int argc, char** argv) {
   std::string last_run;
   auto last_show = std::chrono::steady_clock::now();
   while (!afford::stopRequested()) {
-    lcm.handleTimeout(20);
+    afford::pumpBus(lcm, 20);
     if (!png_dir.empty()) {
       if (edge.run() != last_run) last_run = edge.run(), last_frame_step = -1;
       if (viewer.step() >= 0 && (last_frame_step < 0 || viewer.step() - last_frame_step >= every)) {

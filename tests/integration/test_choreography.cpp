@@ -9,7 +9,7 @@
 #include <memory>
 #include <sstream>
 
-#include "afford/channels.hpp"
+#include "afford/protocol.hpp"
 #include "afford/decision_t.hpp"
 #include "afford/driver.hpp"
 #include "afford/focus_t.hpp"
@@ -37,17 +37,17 @@ using test::baseYaml;
 TEST(Choreography, ARunHasOnePredictionAndOneDecisionPerStepInOrder) {
   InProcessRun run(baseYaml(System::IMP, 200), System::IMP, 3, 200);
   ASSERT_TRUE(run.outcome.ok) << run.outcome.error;
-  EXPECT_EQ(run.count(channel::kFocus), 200);
-  EXPECT_EQ(run.count(channel::kPrediction), 200);
-  EXPECT_EQ(run.count(channel::kDecision), 200);
-  EXPECT_GT(run.count(channel::kEffect), 0);
-  EXPECT_EQ(run.count(channel::kEffect), test::trainingReports(run.events));  // every action learned from once
-  EXPECT_EQ(run.count(channel::kResult), 1);
+  EXPECT_EQ(run.count(ch::focus.name), 200);
+  EXPECT_EQ(run.count(ch::prediction.name), 200);
+  EXPECT_EQ(run.count(ch::decision.name), 200);
+  EXPECT_GT(run.count(ch::effect.name), 0);
+  EXPECT_EQ(run.count(ch::effect.name), test::trainingReports(run.events));  // every action learned from once
+  EXPECT_EQ(run.count(ch::result.name), 1);
   ASSERT_GE(run.events.size(), 3u);
-  EXPECT_EQ(run.events[0].channel, channel::kRunConfig);
-  EXPECT_EQ(run.events[1].channel, channel::kRunControl);
-  EXPECT_EQ(run.events[2].channel, channel::kProbe);
-  EXPECT_EQ(run.events[3].channel, channel::kScene);
+  EXPECT_EQ(run.events[0].channel, ch::runConfig.name);
+  EXPECT_EQ(run.events[1].channel, ch::runControl.name);
+  EXPECT_EQ(run.events[2].channel, ch::probe.name);
+  EXPECT_EQ(run.events[3].channel, ch::scene.name);
   // Curves at steps 0, 100, 200.
   ASSERT_EQ(run.outcome.curve.size(), 3u);
   EXPECT_EQ(run.outcome.curve[1].step, 100);
@@ -104,7 +104,7 @@ TEST(Choreography, WithTheMemoryOptionsComputesWhatThePlainAlgorithmComputes) {
     EXPECT_GT(plain.replayedUpdates(), 0) << toString(s);
     int revisits = 0;
     for (const auto& e : run.events)
-      if (e.channel == channel::kDecision) {
+      if (e.channel == ch::decision.name) {
         decision_t d;
         d.decode(e.data.data(), 0, static_cast<int>(e.data.size()));
         revisits += d.revisit;
@@ -124,7 +124,7 @@ TEST(Choreography, ObservedChangeThresholdInputRuns) {
   const std::string yaml = emitYaml(effectiveConfig(std::string(AFFORD_SOURCE_DIR) + "/config", req));
   InProcessRun run(yaml, System::IMP, 3, 300);
   ASSERT_TRUE(run.outcome.ok) << run.outcome.error;
-  EXPECT_EQ(run.count(channel::kDecision), 300);
+  EXPECT_EQ(run.count(ch::decision.name), 300);
   EXPECT_EQ(run.outcome.weights_checksum, test::runIntrinsic(parseRunConfigText(yaml)).weightsChecksum());
 }
 
@@ -134,7 +134,7 @@ TEST(Choreography, LateObjectsEnterTheSceneAtTheirStep) {
   ASSERT_TRUE(run.outcome.ok) << run.outcome.error;
   int appeared = 0;
   for (const auto& e : run.events) {
-    if (e.channel != channel::kScene) continue;
+    if (e.channel != ch::scene.name) continue;
     scene_t s;
     s.decode(e.data.data(), 0, static_cast<int>(e.data.size()));
     if (s.cause == scene_t::CAUSE_OBJECTS_APPEARED) {
@@ -162,7 +162,7 @@ TEST(Choreography, LateObjectsAfterTwoPassesStartTheirStepWithTheirScene) {
   ASSERT_TRUE(probe.outcome.ok) << probe.outcome.error;
   std::map<std::int64_t, bool> acted;
   for (const auto& e : probe.events)
-    if (e.channel == channel::kDecision) {
+    if (e.channel == ch::decision.name) {
       decision_t d;
       d.decode(e.data.data(), 0, static_cast<int>(e.data.size()));
       acted[d.step] = d.acted;
@@ -179,12 +179,12 @@ TEST(Choreography, LateObjectsAfterTwoPassesStartTheirStepWithTheirScene) {
   std::int64_t scene_at = -1, focus_at = -1;  // event indices
   for (std::size_t i = 0; i < run.events.size(); ++i) {
     const auto& e = run.events[i];
-    if (e.channel == channel::kScene) {
+    if (e.channel == ch::scene.name) {
       scene_t s;
       s.decode(e.data.data(), 0, static_cast<int>(e.data.size()));
       if (s.cause == scene_t::CAUSE_OBJECTS_APPEARED) scene_at = static_cast<std::int64_t>(i);
     }
-    if (e.channel == channel::kFocus) {
+    if (e.channel == ch::focus.name) {
       focus_t f;
       f.decode(e.data.data(), 0, static_cast<int>(e.data.size()));
       if (f.step == at && focus_at < 0) focus_at = static_cast<std::int64_t>(i);
@@ -204,7 +204,7 @@ TEST(Choreography, ARejectedConfigFailsTheRunNamingTheKeyBeforeAnyProcessTakesIt
   InProcessRun run(emitYaml(root), System::IMP, 3, 50);
   EXPECT_FALSE(run.outcome.ok);
   EXPECT_NE(run.outcome.error.find("eye.focus_side"), std::string::npos) << run.outcome.error;
-  EXPECT_EQ(run.count(channel::kRunConfig), 0);
+  EXPECT_EQ(run.count(ch::runConfig.name), 0);
   EXPECT_EQ(run.log.str().find("configured for run"), std::string::npos) << run.log.str();
 }
 

@@ -9,7 +9,7 @@
 #include <limits>
 #include <nlohmann/json.hpp>
 
-#include "afford/channels.hpp"
+#include "afford/protocol.hpp"
 #include "afford/explain.hpp"
 #include "afford/extrinsic_result_t.hpp"
 #include "tests/in_process.hpp"
@@ -46,7 +46,7 @@ std::string writeLog(const std::vector<test::Event>& events, const fs::path& dir
 extrinsic_result_t resultOf(const InProcessRun& run) {
   extrinsic_result_t r;
   for (const auto& e : run.events)
-    if (e.channel == channel::kExtrinsicResult) r.decode(e.data.data(), 0, static_cast<int>(e.data.size()));
+    if (e.channel == ch::extrinsicResult.name) r.decode(e.data.data(), 0, static_cast<int>(e.data.size()));
   return r;
 }
 
@@ -196,11 +196,11 @@ TEST_F(Explain, AnUnderTrainedAgentsTimeoutsAreNamed) {
 // A log that lost a message: the rebuilt figures no longer match, and explain says so.
 TEST_F(Explain, AMissingMessageIsAWarningNotASilentDifference) {
   const Recorded t = record("whole", testYaml("scenario5", 55, {"planner.budget=4"}), 55);
-  ASSERT_GE(t.run->count(channel::kForwardPrediction), 2);  // a loss is seen by the serials after it
+  ASSERT_GE(t.run->count(ch::forwardPrediction.name), 2);  // a loss is seen by the serials after it
   std::vector<test::Event> lossy;
   bool dropped = false;
   for (const auto& ev : t.run->events) {
-    if (!dropped && ev.channel == channel::kForwardPrediction) {
+    if (!dropped && ev.channel == ch::forwardPrediction.name) {
       dropped = true;
       continue;
     }
@@ -231,7 +231,7 @@ TEST_F(Explain, BadInputIsNamedAndFails) {
   EXPECT_NE(not_extrinsic.output.find("is not an extrinsic test"), std::string::npos) << not_extrinsic.output;
 
   std::vector<test::Event> headless(t.run->events.begin() + 1, t.run->events.end());
-  ASSERT_EQ(t.run->events.front().channel, channel::kRunConfig);
+  ASSERT_EQ(t.run->events.front().channel, ch::runConfig.name);
   const auto no_config = cli(writeLog(headless, bad / "no-config"));
   EXPECT_NE(no_config.exit_code, 0);
   EXPECT_NE(no_config.output.find("no RUN_CONFIG that the edge accepts in the log"), std::string::npos) << no_config.output;
@@ -242,7 +242,7 @@ TEST_F(Explain, BadInputIsNamedAndFails) {
   EXPECT_NE(cut.exit_code, 0);
   EXPECT_NE(cut.output.find("ends before its EXTRINSIC_RESULT"), std::string::npos) << cut.output;
   std::size_t result_at = 0;
-  while (result_at < t.run->events.size() && t.run->events[result_at].channel != channel::kExtrinsicResult) ++result_at;
+  while (result_at < t.run->events.size() && t.run->events[result_at].channel != ch::extrinsicResult.name) ++result_at;
   ASSERT_LT(result_at, t.run->events.size());
   const std::string torn = writeLog(t.run->events, bad / "torn", result_at + 1);
   const auto size = fs::file_size(fs::path(torn) / "log.00.lcm");
@@ -372,7 +372,7 @@ TEST(ReplayOfAForgedRecording, SkipsWhatItCannotTakeAndReplaysTheRun) {
   std::vector<std::uint8_t> junk(300, 0x41);
   const std::int64_t hash = run_config_t::getHash();
   for (int i = 0; i < 8; ++i) junk[static_cast<std::size_t>(i)] = static_cast<std::uint8_t>(hash >> (56 - 8 * i));
-  events.push_back({channel::kRunConfig, junk});
+  events.push_back({ch::runConfig.name, junk});
   events.insert(events.end(), run.events.begin(), run.events.end());
   writeLog(events, dir);
   // A malformed event spliced in after the tenth.

@@ -21,7 +21,7 @@
 #include <string>
 #include <vector>
 
-#include "afford/channels.hpp"
+#include "afford/protocol.hpp"
 #include "afford/processes.hpp"
 #include "afford/edge.hpp"
 #include "afford/process_status_t.hpp"
@@ -89,11 +89,11 @@ struct Split {
 Split split(const Recording& rec, const std::string& process, const std::vector<std::string>& takes) {
   Split s;
   for (const Event& e : rec.events) {
-    if (e.channel == channel::kRunConfig) {
+    if (e.channel == ch::runConfig.name) {
       if (s.config.empty()) s.config = e.data;
       continue;
     }
-    if (e.channel == channel::kRunControl) {
+    if (e.channel == ch::runControl.name) {
       run_control_t c;
       c.decode(e.data.data(), 0, static_cast<int>(e.data.size()));
       if (c.command == run_control_t::START && s.start.empty()) s.start = e.data;
@@ -174,7 +174,7 @@ AloneOutcome feedAlone(const Recording& rec, const std::string& process, Feed fe
     void on(const lcm::ReceiveBuffer* b, const std::string& ch) {
       const auto* d = static_cast<const std::uint8_t*>(b->data);
       if (s->outputs.count(ch)) o->outputs[ch].emplace_back(d, d + b->data_size);
-      if (ch != channel::kResend) return;
+      if (ch != ch::resend.name) return;
       resend_t r;
       if (r.decode(b->data, 0, static_cast<int>(b->data_size)) < 0 || r.run_id != *run) return;
       auto it = s->by_serial.find(r.channel);
@@ -213,7 +213,7 @@ AloneOutcome feedAlone(const Recording& rec, const std::string& process, Feed fe
       st.config_digest = 0;
       for (const auto& [ch, n] : channels) st.channels.push_back(ch), st.counts.push_back(n);
       st.n_channels = static_cast<int32_t>(st.channels.size());
-      publish(channel::kStatus, sealed(st));
+      publish(ch::status.name, sealed(st));
     }
     ++beat;
   };
@@ -236,13 +236,13 @@ AloneOutcome feedAlone(const Recording& rec, const std::string& process, Feed fe
     return true;
   };
 
-  publish(channel::kRunConfig, s.config);
+  publish(ch::runConfig.name, s.config);
   pump();
   if (!waitFor([&] { return node->state() == process_status_t::READY; }, "take the run's configuration")) {
     o.log = log.str();
     return o;
   }
-  publish(channel::kRunControl, s.start);
+  publish(ch::runControl.name, s.start);
   pump();
   for (std::size_t i : order(s.inputs.size(), feed, seed, o.withheld)) {
     publish(s.inputs[i].channel, s.inputs[i].data);
@@ -257,7 +257,7 @@ AloneOutcome feedAlone(const Recording& rec, const std::string& process, Feed fe
       },
       "publish what it published before STOP");
   if (ran) {
-    publish(channel::kRunControl, s.stop);
+    publish(ch::runControl.name, s.stop);
     waitFor([&] { return node->runId().empty(); }, "leave the run after STOP");
   }
   node.reset();
@@ -296,8 +296,8 @@ const Recording& extrinsicRecording() {
     test::InProcessRun run(yaml, System::IMP, 11, 125);
     EXPECT_TRUE(run.outcome.ok) << run.outcome.error;
     // A test of more than one action, each with its scene and its looks.
-    EXPECT_GE(run.count(channel::kDecision), 2);
-    EXPECT_GE(run.count(channel::kLook), 3 * run.count(channel::kDecision));
+    EXPECT_GE(run.count(ch::decision.name), 2);
+    EXPECT_GE(run.count(ch::look.name), 3 * run.count(ch::decision.name));
     return Recording{run.events, true, "test-run"};
   }();
   return rec;

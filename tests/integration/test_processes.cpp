@@ -12,7 +12,7 @@
 #include <set>
 #include <thread>
 
-#include "afford/channels.hpp"
+#include "afford/protocol.hpp"
 #include "afford/tables.hpp"
 #include "tests/support.hpp"
 
@@ -68,15 +68,15 @@ TEST(Processes, RealProcessesRunTheBaseTestAndRecordIt) {
   const fs::path log_dir = run["log_dir"].get<std::string>();
   const auto events = test::readLog((log_dir / "log.00.lcm").string());
   ASSERT_FALSE(events.empty());
-  EXPECT_EQ(events.front().channel, channel::kRunConfig);
+  EXPECT_EQ(events.front().channel, ch::runConfig.name);
   std::map<std::string, int> count;
   for (const auto& e : events) ++count[e.channel];
-  EXPECT_EQ(count[channel::kPrediction], 300);
-  EXPECT_EQ(count[channel::kDecision], 300);
-  EXPECT_EQ(count[channel::kFocus], 300);
-  EXPECT_EQ(count[channel::kResult], 1);
-  EXPECT_EQ(count[channel::kStatus], 0);  // heartbeats are not recorded
-  EXPECT_EQ(count[channel::kEffect], test::trainingReports(events));
+  EXPECT_EQ(count[ch::prediction.name], 300);
+  EXPECT_EQ(count[ch::decision.name], 300);
+  EXPECT_EQ(count[ch::focus.name], 300);
+  EXPECT_EQ(count[ch::result.name], 1);
+  EXPECT_EQ(count[ch::status.name], 0);  // heartbeats are not recorded
+  EXPECT_EQ(count[ch::effect.name], test::trainingReports(events));
 
   const json m = readJson(log_dir / "manifest.json");
   EXPECT_EQ(m["seed"], 11);
@@ -168,11 +168,11 @@ TEST(Processes, RealProcessesSolveAnExtrinsicScenario) {
   const auto events = test::readLog(dir + "/logs/ex-base-IMP-s2-scenario3-e0/log.00.lcm");
   std::map<std::string, int> count;
   for (const auto& e : events) ++count[e.channel];
-  EXPECT_GT(count[channel::kLook], 0);
-  EXPECT_GT(count[channel::kForwardQuery], 0);
-  EXPECT_EQ(count[channel::kForwardQuery], count[channel::kForwardPrediction]);
-  EXPECT_EQ(count[channel::kDecision], 3);  // one action per sub-goal
-  EXPECT_EQ(count[channel::kExtrinsicResult], 1);
+  EXPECT_GT(count[ch::look.name], 0);
+  EXPECT_GT(count[ch::forwardQuery.name], 0);
+  EXPECT_EQ(count[ch::forwardQuery.name], count[ch::forwardPrediction.name]);
+  EXPECT_EQ(count[ch::decision.name], 3);  // one action per sub-goal
+  EXPECT_EQ(count[ch::extrinsicResult.name], 1);
 
   // The figures and the report from that folder.
   const auto plot = test::runCommand(test::afford("plot " + dir));
@@ -332,8 +332,8 @@ TEST(Processes, AReplayOfARecordingWithGapsNamesThemAndComparesWhatItCan) {
     lcm::LogFile out(gaps.string(), "w");
     int decision = 0, focus = 0, n = 0;
     for (const auto& e : events) {
-      if (e.channel == channel::kFocus && (focus++ >= 300 && focus <= 303)) continue;
-      if (e.channel == channel::kDecision && decision++ == 400) continue;
+      if (e.channel == ch::focus.name && (focus++ >= 300 && focus <= 303)) continue;
+      if (e.channel == ch::decision.name && decision++ == 400) continue;
       lcm::LogEvent ev;
       ev.eventnum = n++;
       ev.timestamp = 0;

@@ -11,7 +11,7 @@
 #include <string>
 
 #include "afford/bus.hpp"
-#include "afford/channels.hpp"
+#include "afford/protocol.hpp"
 #include "afford/edge.hpp"
 #include "afford/image.hpp"
 #include "afford/process_status_t.hpp"
@@ -70,8 +70,7 @@ struct Refusing : ::testing::Test {
   // The scenes of steps 0, 1 and 2 published to an eye that refuses step 1's
   // the first `refusals` times it is offered.
   void run(int refusals) {
-    eye.subscribe<scene_t>(
-        channel::kScene,
+    eye.subscribe(ch::scene,
         [this, refusals](const scene_t& s) {
           if (s.step == 1 && offered_step1++ < refusals) return Turn::refuse("step 1 is refused");
           taken.push_back(s.step);
@@ -80,7 +79,7 @@ struct Refusing : ::testing::Test {
         Scope::Run, Order::Serial);
     for (std::int64_t step : {0, 1, 2}) {
       scene_t s = sceneOf("run-1", step);
-      environment.publish(channel::kScene, s);
+      environment.publish(ch::scene, s);
     }
     pump();
   }
@@ -90,7 +89,7 @@ TEST_F(Refusing, TheSameMessageRefusedAgainFailsTheRunNamingTheChannel) {
   run(1000);
   ASSERT_TRUE(eye.failed());
   EXPECT_EQ(offered_step1, 2);  // refused, asked for, refused again: no third time
-  EXPECT_NE(failure.find(channel::kScene), std::string::npos) << failure;
+  EXPECT_NE(failure.find(ch::scene.name), std::string::npos) << failure;
   EXPECT_NE(failure.find("serial 1 was refused (step 1 is refused), asked for again, and refused again"), std::string::npos)
       << failure;
   EXPECT_EQ(taken, std::vector<std::int64_t>{0});
@@ -119,8 +118,7 @@ struct EdgeOnTheBus : ::testing::Test {
   void SetUp() override {
     sender.join("run-1", &config);
     receiver.join("run-1", &config);
-    receiver.subscribe<scene_t>(
-        channel::kScene,
+    receiver.subscribe(ch::scene,
         [this](const scene_t& m) {
           taken.push_back(m.step);
           return Turn::take();
@@ -145,7 +143,7 @@ TEST_F(EdgeOnTheBus, OnAKeyedBusOnlyMessagesWithTheKeysTagAreTaken) {
   sender.useKey(key);
   receiver.useKey(key);
   scene_t s0 = sceneOf("run-1", 0);
-  sender.send(channel::kScene, s0);  // tagged
+  sender.publish(ch::scene, s0);  // tagged
   pump();
   EXPECT_EQ(taken, std::vector<std::int64_t>{0});
 
@@ -153,14 +151,14 @@ TEST_F(EdgeOnTheBus, OnAKeyedBusOnlyMessagesWithTheKeysTagAreTaken) {
   // or tagged for another channel.
   scene_t s1 = sceneOf("run-1", 1);
   const std::vector<std::uint8_t> plain = sealed(s1);
-  raw(channel::kScene, plain);
-  raw(channel::kScene, newKey("other.key")->tagged(channel::kScene, plain.data(), plain.size()));
-  raw(channel::kScene, key->tagged(channel::kFocus, plain.data(), plain.size()));
+  raw(ch::scene.name, plain);
+  raw(ch::scene.name, newKey("other.key")->tagged(ch::scene.name, plain.data(), plain.size()));
+  raw(ch::scene.name, key->tagged(ch::focus.name, plain.data(), plain.size()));
   pump();
   EXPECT_EQ(taken, std::vector<std::int64_t>{0});
   EXPECT_EQ(receiver.drops().untagged, 3);
   EXPECT_EQ(receiver.drops().refused, 0) << "no untagged message reached the checks behind the tag";
-  raw(channel::kScene, key->tagged(channel::kScene, plain.data(), plain.size()));
+  raw(ch::scene.name, key->tagged(ch::scene.name, plain.data(), plain.size()));
   pump();
   EXPECT_EQ(taken, (std::vector<std::int64_t>{0, 1}));
 }
@@ -168,7 +166,7 @@ TEST_F(EdgeOnTheBus, OnAKeyedBusOnlyMessagesWithTheKeysTagAreTaken) {
 TEST_F(EdgeOnTheBus, ATaggedMessageIsRefusedWhereThereIsNoKey) {
   sender.useKey(newKey("bus.key"));
   scene_t s0 = sceneOf("run-1", 0);
-  sender.send(channel::kScene, s0);
+  sender.publish(ch::scene, s0);
   pump();
   EXPECT_TRUE(taken.empty());
   EXPECT_EQ(receiver.drops().refused, 1);
@@ -177,8 +175,7 @@ TEST_F(EdgeOnTheBus, ATaggedMessageIsRefusedWhereThereIsNoKey) {
 TEST_F(EdgeOnTheBus, ARunIdThatIsNoSafeNameIsDroppedBeforeDecoding) {
   Edge observer{lcm, quiet("viewer"), "viewer", protocol};
   std::vector<std::string> runs;
-  observer.subscribe<scene_t>(
-      channel::kScene,
+  observer.subscribe(ch::scene,
       [&](const scene_t& m) {
         runs.push_back(m.run_id);
         return Turn::take();
@@ -186,7 +183,7 @@ TEST_F(EdgeOnTheBus, ARunIdThatIsNoSafeNameIsDroppedBeforeDecoding) {
       Scope::Any, Order::None);
   for (const std::string id : {"../../x", "a/b", "..", ".hidden", "ok-run"}) {
     scene_t s = sceneOf(id, 0);
-    raw(channel::kScene, sealed(s));
+    raw(ch::scene.name, sealed(s));
   }
   pump();
   EXPECT_EQ(runs, std::vector<std::string>{"ok-run"});
@@ -195,20 +192,20 @@ TEST_F(EdgeOnTheBus, ARunIdThatIsNoSafeNameIsDroppedBeforeDecoding) {
 
 TEST_F(EdgeOnTheBus, AResendAskingFromTheLargestSerialIsAnsweredWithNothing) {
   scene_t s0 = sceneOf("run-1", 0);
-  sender.publish(channel::kScene, s0);
+  sender.publish(ch::scene, s0);
   sender.answerResends();
   pump();
   taken.clear();
   resend_t r;
   r.run_id = "run-1";
   r.step = 0;
-  r.channel = channel::kScene;
+  r.channel = ch::scene.name;
   r.requester = "test";
   for (const auto& [first, last] : std::vector<std::pair<std::int64_t, std::int64_t>>{
            {INT64_MAX, INT64_MAX}, {INT64_MAX - 1, INT64_MAX}, {0, INT64_MAX}}) {
     r.first = first;
     r.last = last;
-    raw(channel::kResend, sealed(r));
+    raw(ch::resend.name, sealed(r));
   }
   pump();
   EXPECT_EQ(taken, std::vector<std::int64_t>{0}) << "serial 0 once (the request from 0), nothing beyond the history";
@@ -220,7 +217,7 @@ TEST_F(EdgeOnTheBus, AMessageLargerThanTheBusTakesIsNotSent) {
   s.data.assign(20000, 7);
   s.size = static_cast<int32_t>(s.data.size());
   try {
-    sender.publish(channel::kScene, s);
+    sender.publish(ch::scene, s);
     ADD_FAILURE() << "a 20 KB message was sent on a bus of 10 KB messages";
   } catch (const std::exception& e) {
     EXPECT_NE(std::string(e.what()).find("protocol.bus.max_message_bytes"), std::string::npos) << e.what();
@@ -230,8 +227,7 @@ TEST_F(EdgeOnTheBus, AMessageLargerThanTheBusTakesIsNotSent) {
 TEST_F(EdgeOnTheBus, ForgedProcessIdsCannotGrowWhatAReceiverRemembers) {
   Edge runner{lcm, quiet("runner"), "runner", protocol};
   int heard = 0;
-  runner.subscribe<process_status_t>(
-      channel::kStatus,
+  runner.subscribe(ch::status,
       [&](const process_status_t&) {
         ++heard;
         return Turn::take();
@@ -247,7 +243,7 @@ TEST_F(EdgeOnTheBus, ForgedProcessIdsCannotGrowWhatAReceiverRemembers) {
   const int forged = protocol.limits.peers * 3;
   for (int pid = 1; pid <= forged; ++pid) {
     st.pid = pid;
-    raw(channel::kStatus, sealed(st));
+    raw(ch::status.name, sealed(st));
     pump();
   }
   EXPECT_EQ(heard, forged);

@@ -6,11 +6,13 @@
 
 #include <filesystem>
 #include <fstream>
+#include <algorithm>
+#include <iterator>
 #include <set>
 
 #include "afford/agents.hpp"
 #include "afford/plan.hpp"
-#include "afford/channels.hpp"
+#include "afford/protocol.hpp"
 #include "afford/config.hpp"
 #include "afford/host.hpp"
 #include "afford/processes.hpp"
@@ -128,24 +130,45 @@ TEST(Plan, ARunIdThatIsNoSafeNameIsRefusedBeforeAnythingRuns) {
   EXPECT_NO_THROW(planExperiment(o));
 }
 
+// docs/processes-and-channels.md shows the protocol's own table (afford processes --protocol).
+TEST(Protocol, TheDocsChannelTableIsTheProtocols) {
+  std::ifstream in(std::string(AFFORD_SOURCE_DIR) + "/docs/processes-and-channels.md");
+  const std::string docs((std::istreambuf_iterator<char>(in)), {});
+  EXPECT_NE(docs.find(protocolTable()), std::string::npos)
+      << "docs/processes-and-channels.md's channel table is not `afford processes --protocol`'s:\n" << protocolTable();
+}
+
+// Each channel's registry entry agrees with the protocol: its publisher in a phase publishes it then.
+TEST(Protocol, TheRegistryPublishesWhatTheProtocolSays) {
+  forEachChannel([](const ChannelInfo& c) {
+    for (bool extrinsic : {false, true}) {
+      const std::string p = c.publisher(extrinsic);
+      if (!c.serial || !isProcessName(p)) continue;
+      EXPECT_EQ(publisherOf(c.name, extrinsic), p) << c.name;
+      const auto mine = channelsOf(p, extrinsic);
+      EXPECT_NE(std::find(mine.begin(), mine.end(), c.name), mine.end()) << c.name << " of " << p;
+    }
+  });
+}
+
 TEST(Registry, EachRunChannelHasOnePublisherPerPhase) {
   for (bool extrinsic : {false, true}) {
     std::set<std::string> published;
     for (const std::string& p : runProcesses(extrinsic, true))
       for (const std::string& ch : channelsOf(p, extrinsic)) {
-        if (ch == channel::kStatus) continue;
+        if (ch == ch::status.name) continue;
         EXPECT_TRUE(published.insert(ch).second) << ch << " published twice";
         EXPECT_EQ(publisherOf(ch, extrinsic), p) << ch;
       }
     // Every channel with a serial is published by someone of the phase, or belongs to the other phase.
-    for (const char* ch : channel::kWithSerial)
+    for (const std::string& ch : channelNames(/*serial_only=*/true))
       if (!published.count(ch)) {
         EXPECT_EQ(publisherOf(ch, extrinsic), "") << ch;
       }
   }
-  EXPECT_EQ(publisherOf(channel::kDecision, false), "motivation");
-  EXPECT_EQ(publisherOf(channel::kDecision, true), "planner");
-  EXPECT_EQ(publisherOf(channel::kRunConfig, false), "");  // the runner's
+  EXPECT_EQ(publisherOf(ch::decision.name, false), "motivation");
+  EXPECT_EQ(publisherOf(ch::decision.name, true), "planner");
+  EXPECT_EQ(publisherOf(ch::runConfig.name, false), "");  // the runner's
 }
 
 TEST(Registry, ThePhasesTakeTheirDeciderAndTheLoggerOnlyWhenRecorded) {

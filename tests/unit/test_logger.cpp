@@ -94,7 +94,7 @@ TEST(RunHeader, IsReadFromEverySerialCarryingType) {
   std::set<std::string> seen;
   std::apply([&](auto... m) { (expectHeaderRead<decltype(m)>(seen), ...); }, wire::SerialTypes{});
   EXPECT_EQ(seen.size(), std::tuple_size_v<wire::SerialTypes>);
-  EXPECT_EQ(seen.size(), std::size(channel::kWithSerial)) << "one serial-carrying type per serial channel";
+  EXPECT_EQ(seen.size(), channelNames(/*serial_only=*/true).size()) << "one serial-carrying type per serial channel";
 }
 
 TEST(RunHeader, IsNotReadFromABufferTooShortForIt) {
@@ -108,8 +108,8 @@ TEST(RunHeader, IsNotReadFromABufferTooShortForIt) {
 }
 
 TEST(RunHeader, TheSerialChannelsAreThoseOfTheSerialTypes) {
-  for (const char* c : channel::kWithSerial) EXPECT_TRUE(isSerialChannel(c)) << c;
-  for (const char* c : {channel::kRunConfig, channel::kRunControl, channel::kStatus, channel::kResend})
+  for (const std::string& c : channelNames(/*serial_only=*/true)) EXPECT_TRUE(isSerialChannel(c)) << c;
+  for (const char* c : {ch::runConfig.name, ch::runControl.name, ch::status.name, ch::resend.name})
     EXPECT_FALSE(isSerialChannel(c)) << c;
 }
 
@@ -136,7 +136,7 @@ TEST(LoggerNode, RecordsAtMostTheControlMessagesItsLimitAllowsAndCountsTheRest) 
   rc.experiment = "base";
   rc.system = "IMP";
   rc.config_yaml = yaml;
-  runner.send(channel::kRunConfig, rc);
+  runner.send(ch::runConfig, rc);
   pump();
   ASSERT_EQ(logger.runId(), "flooded");
   const int flood = 5 * protocol.limits.control_messages;
@@ -145,17 +145,17 @@ TEST(LoggerNode, RecordsAtMostTheControlMessagesItsLimitAllowsAndCountsTheRest) 
   c.command = run_control_t::START;
   for (int i = 0; i < flood; ++i) {
     c.step = i;
-    runner.send(channel::kRunControl, c);
+    runner.send(ch::runControl, c);
     pump();
   }
   c.command = run_control_t::STOP;
   c.step = 100;
-  runner.send(channel::kRunControl, c);
+  runner.send(ch::runControl, c);
   pump();
   ASSERT_TRUE(logger.runId().empty()) << "the logger did not leave the run";
   int recorded = 0;
   for (const auto& e : test::readLog(root + "/flooded/log.00.lcm"))
-    recorded += e.channel == channel::kRunConfig || e.channel == channel::kRunControl;
+    recorded += e.channel == ch::runConfig.name || e.channel == ch::runControl.name;
   EXPECT_EQ(recorded, protocol.limits.control_messages);
   const auto m = manifestOf(fs::path(root) / "flooded");
   // Recorded: the config and control_messages - 1 STARTs; the STOP and the other STARTs counted.

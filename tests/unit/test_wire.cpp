@@ -16,7 +16,7 @@
 #include <vector>
 
 #include "afford/bounds.hpp"
-#include "afford/channels.hpp"
+#include "afford/protocol.hpp"
 #include "afford/decode.hpp"
 #include "afford/seal.hpp"
 #include "tests/samples.hpp"
@@ -290,7 +290,7 @@ TEST(Wire, AStatusWithAHugeChannelCountIsRefused) {
   std::string why;
   EXPECT_FALSE(
       wire::checkWire<process_status_t>(b.data(), b.size(), boundsFor<process_status_t>(observerContext()), why));
-  EXPECT_EQ(why, "field n_channels = 16777216 exceeds its maximum " + std::to_string(std::size(channel::kAll)));
+  EXPECT_EQ(why, "field n_channels = 16777216 exceeds its maximum " + std::to_string(kChannelCount));
 }
 
 TEST(Wire, AHugeOuterDimensionOverAnEmptyInnerOneIsRefused) {
@@ -329,8 +329,8 @@ TEST(Wire, AnArrayOfStringsNamesTheElement) {
 }
 
 TEST(Wire, TheMessageTypesAreTheChannelsTypes) {
-  EXPECT_EQ(std::tuple_size_v<wire::MessageTypes>, std::size(channel::kAll));
-  EXPECT_EQ(std::tuple_size_v<wire::SerialTypes>, std::size(channel::kWithSerial));
+  EXPECT_EQ(std::tuple_size_v<wire::MessageTypes>, kChannelCount);
+  EXPECT_EQ(std::tuple_size_v<wire::SerialTypes>, channelNames(/*serial_only=*/true).size());
   static_assert(wire::Bounds<prediction_t>::kSerial && !wire::Bounds<process_status_t>::kSerial);
   static_assert(!wire::Bounds<trained_t>::kMessage && !wire::Bounds<sub_goal_t>::kMessage);
 }

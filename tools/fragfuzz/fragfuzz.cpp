@@ -40,7 +40,7 @@
 #include <thread>
 #include <vector>
 
-#include "afford/channels.hpp"
+#include "afford/protocol.hpp"
 
 namespace {
 
@@ -108,7 +108,7 @@ class Fuzzer {
       setsockopt(fd, SOL_SOCKET, SO_SNDBUF, &sndbuf, sizeof sndbuf);
       sockets_.push_back(fd);
     }
-    for (const char* c : afford::channel::kAll) channels_.emplace_back(c);
+    channels_ = afford::channelNames();
   }
   ~Fuzzer() {
     for (int fd : sockets_) close(fd);

@@ -58,7 +58,7 @@
 #include <vector>
 
 #include "afford/auth.hpp"
-#include "afford/channels.hpp"
+#include "afford/protocol.hpp"
 #include "afford/config.hpp"
 #include "afford/node.hpp"
 #include "afford/seal.hpp"
@@ -112,22 +112,22 @@ class Hostile {
           bool tagged)
       : lcm_(lcm), rng_(seed), outside_(std::move(outside)), forge_key_(std::move(forge_key)), tagged_(tagged) {
     using namespace afford;
-    channels_[channel::kScene] = channelOf<scene_t>();
-    channels_[channel::kFocus] = channelOf<focus_t>();
-    channels_[channel::kPrediction] = channelOf<prediction_t>();
-    channels_[channel::kDecision] = channelOf<decision_t>();
-    channels_[channel::kEffect] = channelOf<effect_t>();
-    channels_[channel::kProbe] = channelOf<object_probe_t>();
-    channels_[channel::kAffordanceTable] = channelOf<affordance_table_t>();
-    channels_[channel::kResult] = channelOf<run_result_t>();
-    channels_[channel::kLook] = channelOf<look_t>();
-    channels_[channel::kForwardQuery] = channelOf<forward_query_t>();
-    channels_[channel::kForwardPrediction] = channelOf<forward_prediction_t>();
-    channels_[channel::kExtrinsicResult] = channelOf<extrinsic_result_t>();
-    channels_[channel::kStatus] = channelOf<process_status_t>();
-    channels_[channel::kResend] = channelOf<resend_t>();
-    channels_[channel::kRunConfig] = channelOf<run_config_t>();
-    channels_[channel::kRunControl] = channelOf<run_control_t>();
+    channels_[ch::scene.name] = channelOf<scene_t>();
+    channels_[ch::focus.name] = channelOf<focus_t>();
+    channels_[ch::prediction.name] = channelOf<prediction_t>();
+    channels_[ch::decision.name] = channelOf<decision_t>();
+    channels_[ch::effect.name] = channelOf<effect_t>();
+    channels_[ch::probe.name] = channelOf<object_probe_t>();
+    channels_[ch::affordanceTable.name] = channelOf<affordance_table_t>();
+    channels_[ch::result.name] = channelOf<run_result_t>();
+    channels_[ch::look.name] = channelOf<look_t>();
+    channels_[ch::forwardQuery.name] = channelOf<forward_query_t>();
+    channels_[ch::forwardPrediction.name] = channelOf<forward_prediction_t>();
+    channels_[ch::extrinsicResult.name] = channelOf<extrinsic_result_t>();
+    channels_[ch::status.name] = channelOf<process_status_t>();
+    channels_[ch::resend.name] = channelOf<resend_t>();
+    channels_[ch::runConfig.name] = channelOf<run_config_t>();
+    channels_[ch::runControl.name] = channelOf<run_control_t>();
     for (const auto& [name, c] : channels_) lcm_.subscribe(name, &Hostile::onMessage, this)->setQueueCapacity(100000);
   }
 
@@ -137,7 +137,7 @@ class Hostile {
     for (const auto& [ch, list] : heard_) n += list.size();
     return n;
   }
-  bool runUnderWay() const { return heard_.count(afford::channel::kFocus) > 0; }
+  bool runUnderWay() const { return heard_.count(afford::ch::focus.name) > 0; }
 
   void send(const char* kind) {
     std::string ch;
@@ -164,7 +164,7 @@ class Hostile {
         r.last = r.first + static_cast<std::int64_t>(coin(0.3) ? pick(0, 1'000'000'000) : pick(0, 200));
         r.requester = "hostile";
         const Bytes s = afford::sealed(r);
-        publish(afford::channel::kResend, s);
+        publish(afford::ch::resend.name, s);
       }
       return;
     } else if (k == "paths") {
@@ -175,7 +175,7 @@ class Hostile {
       c.step = static_cast<std::int64_t>(pick(0, 1'000'000'000));
       c.command = afford::run_control_t::START;
       b = afford::sealed(c);
-      ch = afford::channel::kRunControl;
+      ch = afford::ch::runControl.name;
     } else if (k == "statusflood") {
       afford::process_status_t st;
       st.run_id = "";
@@ -188,7 +188,7 @@ class Hostile {
       st.config_digest = 0;
       st.n_channels = 0;
       b = afford::sealed(st);
-      ch = afford::channel::kStatus;
+      ch = afford::ch::status.name;
     } else if (k == "forge") {
       return sendForgery();
     } else if (k == "config") {
@@ -200,9 +200,9 @@ class Hostile {
       c.system = "IMP";
       c.config_yaml = coin(0.5) ? "{{{ not: yaml" : "run: {steps: 5}";
       b = afford::sealed(c);
-      ch = afford::channel::kRunConfig;
+      ch = afford::ch::runConfig.name;
     } else {
-      if (!copy(k == "status" ? afford::channel::kStatus : realChannel(), ch, b)) return;
+      if (!copy(k == "status" ? afford::ch::status.name : realChannel(), ch, b)) return;
       Channel& c = channels_[ch];
       if (k == "truncated") {
         b.resize(pick(0, b.size() - 1));
@@ -243,7 +243,7 @@ class Hostile {
       st.detail = outside_ + "/" + run_;
       st.n_channels = 0;
       st.counts_run = run_;
-      publish(afford::channel::kStatus, afford::sealed(st));
+      publish(afford::ch::status.name, afford::sealed(st));
       return;
     }
     afford::run_config_t c = config_;
@@ -266,7 +266,7 @@ class Hostile {
         break;
     }
     c.config_yaml = afford::emitYaml(node);
-    publish(afford::channel::kRunConfig, afford::sealed(c));
+    publish(afford::ch::runConfig.name, afford::sealed(c));
   }
 
   // A perfect forgery of the next message on a run channel, or a STOP, or a FAILED STATUS.
@@ -278,7 +278,7 @@ class Hostile {
       c.run_id = run_;
       c.step = 0;
       c.command = afford::run_control_t::STOP;
-      publish(afford::channel::kRunControl, afford::sealed(c));
+      publish(afford::ch::runControl.name, afford::sealed(c));
       return;
     }
     if (kind < 0.1) {
@@ -293,7 +293,7 @@ class Hostile {
       st.config_digest = config_.digest;
       st.detail = "forged failure";
       st.n_channels = 0;
-      publish(afford::channel::kStatus, afford::sealed(st));
+      publish(afford::ch::status.name, afford::sealed(st));
       return;
     }
     std::vector<std::string> candidates;
@@ -311,18 +311,18 @@ class Hostile {
           m->prev_digest = prev;
         }
       };
-      if (ch == channel::kScene) { auto* m = static_cast<scene_t*>(p); next(m); m->step += 1; }
-      if (ch == channel::kFocus) { auto* m = static_cast<focus_t*>(p); next(m); m->step += 1; if (!m->image.empty()) m->image[0] ^= 0xFF; }
-      if (ch == channel::kPrediction) { auto* m = static_cast<prediction_t*>(p); next(m); m->step += 1; }
-      if (ch == channel::kDecision) { auto* m = static_cast<decision_t*>(p); next(m); m->step += 1; m->acted = !m->acted; }
-      if (ch == channel::kEffect) { auto* m = static_cast<effect_t*>(p); next(m); m->step += 1; }
-      if (ch == channel::kProbe) { auto* m = static_cast<object_probe_t*>(p); next(m); }
-      if (ch == channel::kAffordanceTable) { auto* m = static_cast<affordance_table_t*>(p); next(m); m->step += nudge; }
-      if (ch == channel::kResult) { auto* m = static_cast<run_result_t*>(p); next(m); m->weights_checksum = "0123456789abcdef"; m->checkpoint = outside_ + "/forged.ckpt"; }
-      if (ch == channel::kLook) { auto* m = static_cast<look_t*>(p); next(m); }
-      if (ch == channel::kForwardQuery) { auto* m = static_cast<forward_query_t*>(p); next(m); }
-      if (ch == channel::kForwardPrediction) { auto* m = static_cast<forward_prediction_t*>(p); next(m); }
-      if (ch == channel::kExtrinsicResult) { auto* m = static_cast<extrinsic_result_t*>(p); next(m); m->success = !m->success; }
+      if (ch == ch::scene.name) { auto* m = static_cast<scene_t*>(p); next(m); m->step += 1; }
+      if (ch == ch::focus.name) { auto* m = static_cast<focus_t*>(p); next(m); m->step += 1; if (!m->image.empty()) m->image[0] ^= 0xFF; }
+      if (ch == ch::prediction.name) { auto* m = static_cast<prediction_t*>(p); next(m); m->step += 1; }
+      if (ch == ch::decision.name) { auto* m = static_cast<decision_t*>(p); next(m); m->step += 1; m->acted = !m->acted; }
+      if (ch == ch::effect.name) { auto* m = static_cast<effect_t*>(p); next(m); m->step += 1; }
+      if (ch == ch::probe.name) { auto* m = static_cast<object_probe_t*>(p); next(m); }
+      if (ch == ch::affordanceTable.name) { auto* m = static_cast<affordance_table_t*>(p); next(m); m->step += nudge; }
+      if (ch == ch::result.name) { auto* m = static_cast<run_result_t*>(p); next(m); m->weights_checksum = "0123456789abcdef"; m->checkpoint = outside_ + "/forged.ckpt"; }
+      if (ch == ch::look.name) { auto* m = static_cast<look_t*>(p); next(m); }
+      if (ch == ch::forwardQuery.name) { auto* m = static_cast<forward_query_t*>(p); next(m); }
+      if (ch == ch::forwardPrediction.name) { auto* m = static_cast<forward_prediction_t*>(p); next(m); }
+      if (ch == ch::extrinsicResult.name) { auto* m = static_cast<extrinsic_result_t*>(p); next(m); m->success = !m->success; }
     });
     if (!ok) return;
     afford::sealBuffer(b.data(), b.size());
@@ -346,14 +346,14 @@ class Hostile {
     if (list.size() < 2000) list.emplace_back(d, d + size);
     else list[pick(0, list.size() - 1)] = Bytes(d, d + size);
     std::string run;
-    if (ch == afford::channel::kFocus && afford::peekRunId(d, size, 4096, run)) run_ = run;
+    if (ch == afford::ch::focus.name && afford::peekRunId(d, size, 4096, run)) run_ = run;
     std::string why;
-    if (ch == afford::channel::kRunConfig) {
+    if (ch == afford::ch::runConfig.name) {
       afford::run_config_t c;
       if (afford::decodeChecked(d, size, {&g_protocol, nullptr}, c, why) && c.run_id == run_) config_ = c;
       else if (config_.run_id.empty() && afford::decodeChecked(d, size, {&g_protocol, nullptr}, c, why)) config_ = c;
     }
-    if (ch == afford::channel::kStatus) {
+    if (ch == afford::ch::status.name) {
       afford::process_status_t st;
       if (afford::decodeChecked(d, size, {&g_protocol, nullptr}, st, why) && st.beat < (1 << 30)) pids_[st.process] = st.pid;
     }
@@ -385,19 +385,19 @@ class Hostile {
         if constexpr (wire::Bounds<std::remove_pointer_t<decltype(m)>>::kSerial)
           if (kind == "serial") m->serial = serial_pick == 1 ? m->serial + 1 : serial_pick;
       };
-      if (ch == channel::kScene) { auto* m = static_cast<scene_t*>(p); common(m); if (kind == "nan") m->goal_distance = nan; }
-      if (ch == channel::kFocus) { auto* m = static_cast<focus_t*>(p); common(m); if (kind == "nan") m->x = nan; }
-      if (ch == channel::kPrediction) { auto* m = static_cast<prediction_t*>(p); common(m); if (kind == "nan" && !m->affordance.empty()) m->affordance[pick(0, m->affordance.size() - 1)] = nan; }
-      if (ch == channel::kDecision) { auto* m = static_cast<decision_t*>(p); common(m); if (kind == "nan") m->motivation = nan; }
-      if (ch == channel::kEffect) { auto* m = static_cast<effect_t*>(p); common(m); if (kind == "nan") m->after_x = nan; }
-      if (ch == channel::kProbe) { auto* m = static_cast<object_probe_t*>(p); common(m); }
-      if (ch == channel::kAffordanceTable) { auto* m = static_cast<affordance_table_t*>(p); common(m); if (kind == "nan" && !m->affordance.empty() && !m->affordance[0].empty()) m->affordance[0][0] = nan; }
-      if (ch == channel::kResult) { auto* m = static_cast<run_result_t*>(p); common(m); }
-      if (ch == channel::kLook) { auto* m = static_cast<look_t*>(p); common(m); if (kind == "nan") m->x = nan; }
-      if (ch == channel::kForwardQuery) { auto* m = static_cast<forward_query_t*>(p); common(m); if (kind == "nan") m->x = nan; }
-      if (ch == channel::kForwardPrediction) { auto* m = static_cast<forward_prediction_t*>(p); common(m); if (kind == "nan" && !m->where_x.empty()) m->where_x[0] = nan; }
-      if (ch == channel::kExtrinsicResult) { auto* m = static_cast<extrinsic_result_t*>(p); common(m); if (kind == "nan") m->utility = nan; }
-      if (ch == channel::kStatus) {
+      if (ch == ch::scene.name) { auto* m = static_cast<scene_t*>(p); common(m); if (kind == "nan") m->goal_distance = nan; }
+      if (ch == ch::focus.name) { auto* m = static_cast<focus_t*>(p); common(m); if (kind == "nan") m->x = nan; }
+      if (ch == ch::prediction.name) { auto* m = static_cast<prediction_t*>(p); common(m); if (kind == "nan" && !m->affordance.empty()) m->affordance[pick(0, m->affordance.size() - 1)] = nan; }
+      if (ch == ch::decision.name) { auto* m = static_cast<decision_t*>(p); common(m); if (kind == "nan") m->motivation = nan; }
+      if (ch == ch::effect.name) { auto* m = static_cast<effect_t*>(p); common(m); if (kind == "nan") m->after_x = nan; }
+      if (ch == ch::probe.name) { auto* m = static_cast<object_probe_t*>(p); common(m); }
+      if (ch == ch::affordanceTable.name) { auto* m = static_cast<affordance_table_t*>(p); common(m); if (kind == "nan" && !m->affordance.empty() && !m->affordance[0].empty()) m->affordance[0][0] = nan; }
+      if (ch == ch::result.name) { auto* m = static_cast<run_result_t*>(p); common(m); }
+      if (ch == ch::look.name) { auto* m = static_cast<look_t*>(p); common(m); if (kind == "nan") m->x = nan; }
+      if (ch == ch::forwardQuery.name) { auto* m = static_cast<forward_query_t*>(p); common(m); if (kind == "nan") m->x = nan; }
+      if (ch == ch::forwardPrediction.name) { auto* m = static_cast<forward_prediction_t*>(p); common(m); if (kind == "nan" && !m->where_x.empty()) m->where_x[0] = nan; }
+      if (ch == ch::extrinsicResult.name) { auto* m = static_cast<extrinsic_result_t*>(p); common(m); if (kind == "nan") m->utility = nan; }
+      if (ch == ch::status.name) {
         auto* m = static_cast<process_status_t*>(p);
         if (coin(0.2)) m->process = "ghost" + std::to_string(pick(0, 9));
         for (auto& n : m->counts) n = coin(0.3) ? n + 1 : coin(0.5) ? n * 1000 + 7 : std::numeric_limits<std::int64_t>::max() / 2;
@@ -417,9 +417,9 @@ class Hostile {
   std::string realChannel() {
     std::vector<std::string> run_channels;
     for (const auto& [ch, list] : heard_)
-      if (ch != afford::channel::kStatus && ch != afford::channel::kResend && ch != afford::channel::kRunConfig && !list.empty())
+      if (ch != afford::ch::status.name && ch != afford::ch::resend.name && ch != afford::ch::runConfig.name && !list.empty())
         run_channels.push_back(ch);
-    return run_channels.empty() ? std::string(afford::channel::kFocus) : run_channels[pick(0, run_channels.size() - 1)];
+    return run_channels.empty() ? std::string(afford::ch::focus.name) : run_channels[pick(0, run_channels.size() - 1)];
   }
   std::string randomChannel() {
     auto it = channels_.begin();

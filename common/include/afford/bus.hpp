@@ -19,4 +19,10 @@ std::string busUrl(const std::string& url, const BusConfig& bus);
 // nor memq://, or if LCM cannot open it.
 std::unique_ptr<lcm::LCM> openBus(const std::string& url, const BusConfig& bus);
 
+// The one loop step of every listener (a process, the runner, replay, afford status, the viewer): hand
+// every message pending on the bus to its subscribers, at most `most` of them; if none was pending, wait
+// up to `wait_ms` for one and then do the same. A burst is taken off LCM's queue at once (what waits
+// there is held in memory). Returns how many were handled.
+int pumpBus(lcm::LCM& lcm, int wait_ms, int most = 1000);
+
 }  // namespace afford

@@ -53,8 +53,7 @@
 #include "afford/decode.hpp"
 #include "afford/names.hpp"
 #include "afford/config.hpp"
-#include "afford/process_status_t.hpp"
-#include "afford/resend_t.hpp"
+#include "afford/protocol.hpp"
 #include "afford/seal.hpp"
 #include "afford/serials.hpp"
 #include "afford/wire.hpp"
@@ -103,6 +102,17 @@ enum class Order {
 // buffer cannot hold one of at most `max_bytes`.
 bool peekRunId(const void* data, std::size_t size, int max_bytes, std::string& out);
 
+// The first fields of every run message (a channel with a serial): run_id,
+// step, serial, read without decoding. False if the buffer is too short to
+// hold them (tests/unit/test_logger.cpp pins the layout for every type with a
+// serial). Used where messages are counted, not taken: the logger's earlier
+// segments, replay's gaps.
+struct RunHeader {
+  std::string run_id;
+  std::int64_t step = 0, serial = 0;
+};
+bool peekRunHeader(const void* data, std::size_t size, RunHeader& out);
+
 // What an edge dropped, by kind (each also a log line).
 struct EdgeDrops {
   std::int64_t untagged = 0;        // no valid tag on a keyed bus
@@ -150,9 +160,10 @@ class Edge {
   void retry() { retryDeferred(); }
 
   // ---- receiving ----------------------------------------------------------------
-  // `handler` is called as Turn(const Msg&) or Turn(const Msg&, const Envelope&).
+  // `handler` is called as Turn(const Msg&) or Turn(const Msg&, const Envelope&), Msg being the
+  // channel's type (afford/protocol.hpp): a handler of another type does not compile.
   template <class Msg, class F>
-  void subscribe(const std::string& channel, F handler, Scope scope, Order order);
+  void subscribe(const Channel<Msg>& channel, F handler, Scope scope, Order order);
   // Take a publisher's counts (its STATUS) as claims on the channels it publishes.
   void claim(const process_status_t& status);
   // Ask for what is missing, if due (call from the loop too: retries).
@@ -174,11 +185,12 @@ class Edge {
   // A run message: the channel's next serial and the digest are set; its bytes
   // are kept in the run's history to answer RESEND.
   template <class Msg>
-  void publish(const std::string& channel, Msg& msg);
-  // A message without a serial (RUN_CONFIG, RUN_CONTROL, STATUS): sealed and sent.
+  void publish(const Channel<Msg>& channel, Msg& msg);
+  // A message without a serial (RUN_CONFIG, RUN_CONTROL, STATUS, RESEND): sealed and sent.
   template <class Msg>
-  void send(const std::string& channel, Msg& msg) {
-    transmit(channel, sealed(msg));
+  void send(const Channel<Msg>& channel, Msg& msg) {
+    static_assert(!wire::Bounds<Msg>::kSerial, "a run message is published (serial, chain, history), not sent");
+    transmit(channel.name, sealed(msg));
   }
   // Answer RESEND requests for what this edge published (processes).
   void answerResends();
@@ -284,10 +296,11 @@ Turn invokeHandler(const F& handler, const Msg& msg, const Envelope& envelope) {
 }  // namespace detail
 
 template <class Msg, class F>
-void Edge::subscribe(const std::string& channel, F handler, Scope scope, Order order) {
+void Edge::subscribe(const Channel<Msg>& typed, F handler, Scope scope, Order order) {
   static_assert(std::is_invocable_r_v<Turn, const F&, const Msg&, const Envelope&> ||
                     std::is_invocable_r_v<Turn, const F&, const Msg&>,
-                "a handler is Turn(const Msg&) or Turn(const Msg&, const Envelope&)");
+                "a handler is Turn(const Msg&) or Turn(const Msg&, const Envelope&), Msg the channel's type");
+  const std::string channel = typed.name;
   if (!wire::Bounds<Msg>::kSerial && order != Order::None)
     throw std::logic_error(channel + ": afford." + wire::Bounds<Msg>::kName + " has no serial to order by");
   auto shared = std::make_shared<const F>(std::move(handler));
@@ -378,7 +391,9 @@ void Edge::receive(const std::string& channel, const lcm::ReceiveBuffer* rb, con
 }
 
 template <class Msg>
-void Edge::publish(const std::string& channel, Msg& msg) {
+void Edge::publish(const Channel<Msg>& typed, Msg& msg) {
+  static_assert(wire::Bounds<Msg>::kSerial, "a message without a serial is sent, not published");
+  const std::string channel = typed.name;
   History& h = history_[channel];
   msg.serial = static_cast<std::int64_t>(h.messages.size());
   msg.prev_digest = h.messages.empty() ? chainSeed(history_run_, channel) : h.last_digest;

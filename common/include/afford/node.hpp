@@ -58,12 +58,12 @@ class NodeBase {
   // A channel of the run, in serial order; `handler` returns a Turn
   // (afford/edge.hpp): Take, Later (not its turn yet) or Refuse.
   template <class Msg, class F>
-  void subscribe(const std::string& channel, F handler) {
-    edge_.subscribe<Msg>(channel, std::move(handler), Scope::Run, Order::Serial);
+  void subscribe(const Channel<Msg>& channel, F handler) {
+    edge_.subscribe(channel, std::move(handler), Scope::Run, Order::Serial);
   }
   // Publish on a channel of the run (serial, digest, history for RESEND).
   template <class Msg>
-  void publish(const std::string& channel, Msg msg) {
+  void publish(const Channel<Msg>& channel, Msg msg) {
     edge_.publish(channel, msg);
   }
   void handled(int64_t step) { last_step_ = std::max(last_step_, step); }

@@ -1,7 +1,8 @@
-// The registry of the project's processes: each one's name, the phases it
-// takes part in, and the run channels it publishes. Every list of processes
-// or channels (who runs in a phase, who publishes a channel, what a replayed
-// process answers on, `afford processes` for the scripts) derives from it.
+// The registry of the project's processes: each one's name and the phases it
+// takes part in; the run channels it publishes come from the protocol
+// (afford/protocol.hpp). Every list of processes or channels (who runs in a
+// phase, who publishes a channel, what a replayed process answers on,
+// `afford processes` for the scripts) derives from the two.
 #pragma once
 #include <string>
 #include <vector>
@@ -13,7 +14,7 @@ struct ProcessInfo {
   bool intrinsic;   // takes part in the intrinsic phase
   bool extrinsic;   // ... in the extrinsic phase
   bool recorder;    // takes part only in recorded runs (the logger)
-  std::vector<const char*> publishes;  // run channels it publishes (STATUS aside: every process says it)
+  std::vector<const char*> publishes;  // run channels it publishes in its phases (STATUS aside: every process says it)
   const char* summary;
 };
 

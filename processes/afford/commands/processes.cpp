@@ -1,16 +1,18 @@
-// afford processes: the registry of processes (afford/processes.hpp), for scripts and people.
+// afford processes: the registry of processes (afford/processes.hpp) and the protocol's channels
+// (afford/protocol.hpp), for scripts and people.
 #include <cstdio>
 #include <memory>
 
 #include "afford/commands.hpp"
 #include "afford/processes.hpp"
+#include "afford/protocol.hpp"
 
 namespace afford {
 
 Command processesCommand(CLI::App& app, const FrontDoor&) {
   struct Args {
     std::string phase = "all";
-    bool recorded = true, channels = false;
+    bool recorded = true, channels = false, protocol = false;
   };
   auto a = std::make_shared<Args>();
   auto* cmd = app.add_subcommand("processes", "list the processes of a run, one per line (for scripts), or with "
@@ -20,7 +22,13 @@ Command processesCommand(CLI::App& app, const FrontDoor&) {
       ->capture_default_str();
   cmd->add_flag("!--no-logger", a->recorded, "leave the logger out (a run that is not recorded)");
   cmd->add_flag("--channels", a->channels, "each process with what it does and the channels it publishes");
+  cmd->add_flag("--protocol", a->protocol,
+                "every channel: its type, who publishes and reads it, whether it is recorded, when (markdown)");
   return {cmd, [a] {
+            if (a->protocol) {
+              std::printf("%s", protocolTable().c_str());
+              return 0;
+            }
             for (const ProcessInfo& p : processRegistry()) {
               const bool in = a->phase == "all" || (a->phase == "intrinsic" ? p.intrinsic : p.extrinsic);
               if (!in || (p.recorder && !a->recorded)) continue;

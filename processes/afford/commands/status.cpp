@@ -47,8 +47,8 @@ Command statusCommand(CLI::App& app, const FrontDoor& door) {
             std::int64_t forgotten = 0;
             Edge edge(bus, makeLogger("status", "warn"), "status", protocol);
             edge.useKey(key);
-            edge.subscribe<process_status_t>(
-                "STATUS",
+            edge.subscribe(
+                ch::status,
                 [&](const process_status_t& m) {
                   const std::string id = m.process + "#" + std::to_string(m.pid);
                   if (!heard.count(id) && heard.size() >= static_cast<std::size_t>(protocol.limits.peers)) {
@@ -78,7 +78,7 @@ Command statusCommand(CLI::App& app, const FrontDoor& door) {
               return true;
             };
             const auto until = std::chrono::steady_clock::now() + std::chrono::duration<double>(a->seconds);
-            while (std::chrono::steady_clock::now() < until && !(awaited.size() && allHeard())) bus.handleTimeout(50);
+            while (std::chrono::steady_clock::now() < until && !(awaited.size() && allHeard())) pumpBus(bus, 50);
             std::printf("%-12s %8s  %-8s %10s  %s\n", "process", "pid", "state", "last step", "run");
             for (const auto& [id, entry] : heard) {
               const process_status_t& m = entry.first;
