@@ -1,5 +1,7 @@
 #include "afford/host.hpp"
 
+#include <spdlog/sinks/null_sink.h>
+
 #include <algorithm>
 #include <stdexcept>
 
@@ -26,6 +28,19 @@ std::unique_ptr<NodeBase> makeNode(const std::string& p, lcm::LCM& lcm, std::sha
   std::string known;
   for (const ProcessInfo& info : processRegistry()) known += (known.empty() ? "" : ", ") + std::string(info.name);
   throw std::invalid_argument("unknown process \"" + p + "\" (" + known + ")");
+}
+
+std::string inputRulesTable(const std::string& config_dir) {
+  lcm::LCM bus("memq://");
+  const ProtocolConfig protocol = loadProtocol(config_dir);
+  auto quiet = std::make_shared<spdlog::logger>("rules", std::make_shared<spdlog::sinks::null_sink_mt>());
+  std::string out = "| process | takes | when |\n|---|---|---|\n";
+  for (const ProcessInfo& p : processRegistry()) {
+    const std::unique_ptr<NodeBase> node = makeNode(p.name, bus, quiet, protocol, HostOptions{true, ""});
+    for (const NodeBase::InputRule& r : node->rules())
+      out += std::string("| ") + p.name + " | `" + r.channel + "` | " + r.rule + " |\n";
+  }
+  return out;
 }
 
 InProcessHost::InProcessHost(lcm::LCM& lcm, const ProtocolConfig& protocol, LoggerFactory logger, HostOptions options)

@@ -32,6 +32,10 @@ using LoggerFactory = std::function<std::shared_ptr<spdlog::logger>(const std::s
 std::unique_ptr<NodeBase> makeNode(const std::string& process, lcm::LCM& lcm, std::shared_ptr<spdlog::logger> log,
                                    const ProtocolConfig& protocol, const HostOptions& options = {});
 
+// Every process's input rules (NodeBase::takes), as a markdown table: process,
+// channel, rule. docs/processes-and-channels.md shows it (a test compares).
+std::string inputRulesTable(const std::string& config_dir);
+
 class InProcessHost {
  public:
   InProcessHost(lcm::LCM& lcm, const ProtocolConfig& protocol, LoggerFactory logger, HostOptions options = {});

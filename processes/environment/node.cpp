@@ -9,7 +9,21 @@ namespace afford {
 
 EnvironmentNode::EnvironmentNode(lcm::LCM& lcm, std::shared_ptr<spdlog::logger> log, const ProtocolConfig& protocol)
     : NodeBase(lcm, "environment", std::move(log), protocol) {
-  subscribe(ch::decision, [this](const decision_t& m) { return onDecision(m); });
+  takes(ch::decision,
+        "intrinsic phase: the DECISION of each step, in step order: an action is executed (its SCENE, and one "
+        "more when objects appear at the next step), a pass changes nothing but the objects that appear; "
+        "extrinsic phase: each DECISION of the planner from the current iteration on, its actions executed")
+      .in(Phase::Intrinsic)
+      .inOrder([](const decision_t& d) { return d.step; }, [this] { return next_decision_; }, "the decision of step")
+      .then([this](const decision_t& d) { decide(d); })
+      .in(Phase::Extrinsic)
+      .refuse([this](const decision_t& d) {
+        return d.step < next_decision_ ? "step " + std::to_string(d.step) + " is in the past (now at " +
+                                             std::to_string(next_decision_) + ")"
+                                       : std::string();
+      })
+      .ignoreIf([](const decision_t& d) { return !d.acted; })
+      .then([this](const decision_t& d) { act(d); });
 }
 
 void EnvironmentNode::onConfigured(const RunConfig& config) {
@@ -58,29 +72,17 @@ void EnvironmentNode::publishScene(std::int64_t step, int8_t cause, bool scan, i
   publish(ch::scene, s);
 }
 
-Turn EnvironmentNode::onExtrinsicDecision(const decision_t& d) {
+void EnvironmentNode::act(const decision_t& d) {
   // The planner's steps are its iterations; it decides at most once in each.
-  if (d.step < next_decision_)
-    return Turn::refuse("step " + std::to_string(d.step) + " is in the past (now at " + std::to_string(next_decision_) +
-                        ")");
-  if (!d.acted) return Turn::take();
   std::optional<std::pair<double, double>> target;
   if (d.action == kMove) target = std::make_pair(d.target_x, d.target_y);
   const ActionOutcome out = env_->execute(d.step, d.action, d.x, d.y, target);
   next_decision_ = d.step + 1;
   handled(d.step);
   publishScene(d.step, scene_t::CAUSE_ACTION, false, d.action, out.target_x, out.target_y);
-  return Turn::take();
 }
 
-Turn EnvironmentNode::onDecision(const decision_t& d) {
-  if (state() == process_status_t::READY) return Turn::later();  // before START: its turn comes after
-  if (extrinsic()) return onExtrinsicDecision(d);
-  if (d.step < next_decision_)
-    return Turn::refuse("step " + std::to_string(d.step) + " is decided already (now at " +
-                        std::to_string(next_decision_) + ")");
-  if (d.step > next_decision_) return Turn::later();  // an earlier decision is still to come
-
+void EnvironmentNode::decide(const decision_t& d) {
   const std::int64_t next = d.step + 1;
   const bool more = next < config().steps;
   next_decision_ = next;
@@ -102,7 +104,6 @@ Turn EnvironmentNode::onDecision(const decision_t& d) {
     publishScene(next, scene_t::CAUSE_OBJECTS_APPEARED, true, -1, -1.0, -1.0);
   }  // otherwise nothing changed: no scene; the eye goes on with the one it has
   if (!more) setState(process_status_t::DONE);
-  return Turn::take();
 }
 
 }  // namespace afford

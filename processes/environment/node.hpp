@@ -20,10 +20,10 @@ class EnvironmentNode : public NodeBase {
   void onConfigured(const RunConfig& config) override;
   void onStart() override;
   void onStop() override;
-  Turn onDecision(const decision_t& msg);
+  void decide(const decision_t& d);  // intrinsic: a step's decision
+  void act(const decision_t& d);     // extrinsic: the planner's action
   void publishScene(std::int64_t step, int8_t cause, bool scan, int action, double tx, double ty,
                     const cv::Mat* image = nullptr);
-  Turn onExtrinsicDecision(const decision_t& msg);
   bool extrinsic() const { return config().phase == Phase::Extrinsic; }
 
   std::unique_ptr<Environment> env_;

@@ -9,15 +9,77 @@ namespace afford {
 
 EyeNode::EyeNode(lcm::LCM& lcm, std::shared_ptr<spdlog::logger> log, const ProtocolConfig& protocol, bool speculate)
     : NodeBase(lcm, "eye", std::move(log), protocol), speculate_(speculate) {
-  subscribe(ch::scene, [this](const scene_t& m) { return onScene(m); });
-  subscribe(ch::decision, [this](const decision_t& m) { return onDecision(m); });
-  subscribe(ch::look, [this](const look_t& m) { return onLook(m); });
+  takes(ch::scene,
+        "intrinsic phase: the SCENE of each step after the FOCUS of the step before, once: a scene an action "
+        "caused gives that action's EFFECT (once per step), a scene that says scan starts its step; extrinsic "
+        "phase: the goal scene (memorised) and each scene after it, in step order")
+      .in(Phase::Intrinsic)
+      .refuse([this](const scene_t& s) {
+        return s.step <= last_scanned_ ? "step " + std::to_string(s.step) + " is in the past (already scanned step " +
+                                             std::to_string(last_scanned_) + ")"
+                                       : std::string();
+      })
+      .refuse([this](const scene_t& s) {
+        return s.cause == scene_t::CAUSE_ACTION && s.step - 1 <= last_effect_
+                   ? "the effect of step " + std::to_string(s.step - 1) + " was seen already"
+                   : std::string();
+      })
+      .waitFor([this](const scene_t& s) { return s.step - 1 <= last_scanned_; })
+      .then([this](const scene_t& s) { see(s); })
+      .in(Phase::Extrinsic)
+      .refuse([this](const scene_t& s) {
+        return s.step < last_scene_ ? "step " + std::to_string(s.step) + " is in the past (now at " +
+                                          std::to_string(last_scene_) + ")"
+                                    : std::string();
+      })
+      .then([this](const scene_t& s) { keep(s); });
+  takes(ch::decision,
+        "intrinsic phase: each DECISION once the FOCUS of its step is out; a pass that no scene follows (no "
+        "objects appear at the next step) starts the next step")
+      .in(Phase::Intrinsic)
+      .waitFor([this](const decision_t& d) { return d.step <= last_scanned_; })
+      .then([this](const decision_t& d) {
+        if (!d.acted && !objectsAppearAt(d.step + 1) && d.step == last_scanned_) next_step_ = d.step + 1;
+      });
+  takes(ch::look,
+        "extrinsic phase: each LOOK once, in request order, answered with one FOCUS on the scene it names (the "
+        "serial of the last SCENE the planner took): a LOOK that overtakes its scene, or the goal, waits for it; "
+        "a look at the differences or at an object needs top-down attention (or, for an object, multi-step "
+        "planning)")
+      .in(Phase::Intrinsic)
+      .refuse([](const look_t&) { return "no LOOK requests in the intrinsic phase"; })
+      .in(Phase::Extrinsic)
+      .refuse([this](const look_t& l) {
+        return l.seq <= last_look_ ? "request " + std::to_string(l.seq) + " was answered already" : std::string();
+      })
+      .refuse([this](const look_t& l) {
+        return l.scene != outer_scene_ && !scenes_.count(l.scene) && l.scene < outer_scene_
+                   ? "it names scene " + std::to_string(l.scene) + ", before the one looked at (" +
+                         std::to_string(outer_scene_) + ")"
+                   : std::string();
+      })
+      .waitFor([this](const look_t& l) { return l.scene == outer_scene_ || scenes_.count(l.scene) > 0; })
+      .waitFor([this](const look_t& l) { return eye_->hasGoal() && (l.scene != outer_scene_ || eye_->hasScene()); })
+      .refuse([this](const look_t& l) {
+        return l.kind == focus_t::GOAL_DIFF && config().eye.attention != Attention::TopDown
+                   ? "a look at the differences is top-down attention, and this run has eye.attention: bottom_up"
+                   : std::string();
+      })
+      .refuse([this](const look_t& l) {
+        return l.kind == focus_t::SCENE_OBJECT && config().eye.attention != Attention::TopDown &&
+                       config().planner.max_depth < 2
+                   ? "a look at an object is top-down attention or multi-step planning, and this run has "
+                     "eye.attention: bottom_up and planner.search.max_depth: 1"
+                   : std::string();
+      })
+      .then([this](const look_t& l) { answer(l); });
 }
 
 void EyeNode::onConfigured(const RunConfig& config) {
   eye_ = std::make_unique<Eye>(config);
   last_scanned_ = last_effect_ = -1;
   guess_.reset();
+  next_step_.reset();
   last_look_ = -1;
   last_scene_ = -1;
   outer_scene_ = -1;
@@ -48,47 +110,30 @@ focus_t EyeNode::focusMessage(std::int64_t step, const Focus& f, int8_t kind, in
   return m;
 }
 
-Turn EyeNode::onExtrinsicScene(const scene_t& s) {
-  if (s.step < last_scene_)
-    return Turn::refuse("step " + std::to_string(s.step) + " is in the past (now at " + std::to_string(last_scene_) + ")");
+void EyeNode::keep(const scene_t& s) {
   cv::Mat image;
   try {
     image = decodeScene(s.data, s.width, s.height);
   } catch (const std::exception& e) {
-    return Turn::refuse(e.what());
+    throw Refusal(e.what());
   }
   last_scene_ = s.step;
   if (s.cause == scene_t::CAUSE_GOAL)
     eye_->setGoal(std::move(image));  // memorised: the inner eye's image
   else
     scenes_[s.serial] = std::move(image);  // the outer eye's, once a LOOK names it
-  return Turn::take();
 }
 
-Turn EyeNode::onLook(const look_t& l) {
-  if (config().phase != Phase::Extrinsic) return Turn::refuse("no LOOK requests in the intrinsic phase");
-  if (l.seq <= last_look_) return Turn::refuse("request " + std::to_string(l.seq) + " was answered already");
+void EyeNode::answer(const look_t& l) {
   // The scene the planner looked on when it asked (a LOOK can overtake its scene).
   if (l.scene != outer_scene_) {
     auto it = scenes_.find(l.scene);
-    if (it == scenes_.end()) {
-      if (l.scene < outer_scene_)
-        return Turn::refuse("it names scene " + std::to_string(l.scene) + ", before the one looked at (" +
-                            std::to_string(outer_scene_) + ")");
-      return Turn::later();  // that scene is still to come
-    }
     eye_->setScene(std::move(it->second));
     outer_scene_ = l.scene;
     scenes_.erase(scenes_.begin(), std::next(it));  // LOOKs come in order: no later one names these
   }
-  if (!eye_->hasScene() || !eye_->hasGoal()) return Turn::later();  // the goal and the scene come first
   // Top-down attention looks at the differences and attends objects; a
   // multi-step plan attends its object again after the plan's first action.
-  if (l.kind == focus_t::GOAL_DIFF && config().eye.attention != Attention::TopDown)
-    return Turn::refuse("a look at the differences is top-down attention, and this run has eye.attention: bottom_up");
-  if (l.kind == focus_t::SCENE_OBJECT && config().eye.attention != Attention::TopDown && config().planner.max_depth < 2)
-    return Turn::refuse("a look at an object is top-down attention or multi-step planning, and this run has "
-                        "eye.attention: bottom_up and planner.search.max_depth: 1");
   last_look_ = l.seq;
   handled(l.step);
   switch (l.kind) {
@@ -116,26 +161,15 @@ Turn EyeNode::onLook(const look_t& l) {
     default:
       publishFocus(l.step, eye_->scan(l.step), l.kind, l.seq);
   }
-  return Turn::take();
 }
 
-Turn EyeNode::onScene(const scene_t& s) {
-  if (config().phase == Phase::Extrinsic) return onExtrinsicScene(s);
-  if (s.step <= last_scanned_)
-    return Turn::refuse("step " + std::to_string(s.step) + " is in the past (already scanned step " +
-                        std::to_string(last_scanned_) + ")");
+void EyeNode::see(const scene_t& s) {
   const bool is_action = s.cause == scene_t::CAUSE_ACTION;
-  if (is_action && s.step - 1 <= last_effect_)
-    return Turn::refuse("the effect of step " + std::to_string(s.step - 1) + " was seen already");
-  // A scene for step t follows the eye's focus of step t-1 (a late message
-  // of another channel, e.g. a decision, is still to come): wait for it.
-  if (s.step - 1 > last_scanned_) return Turn::later();
-
   cv::Mat image;
   try {
     image = decodeScene(s.data, s.width, s.height);
   } catch (const std::exception& e) {
-    return Turn::refuse(e.what());
+    throw Refusal(e.what());
   }
   guess_.reset();  // the scene changes: a guess made on the old one is void
 
@@ -168,18 +202,16 @@ Turn EyeNode::onScene(const scene_t& s) {
   if (s.changes_next != objectsAppearAt(s.step + 1))
     log_->warn("SCENE of step {} says objects appear at the next step: {}, the run's world.objects: {}", s.step,
                s.changes_next, objectsAppearAt(s.step + 1));
-  if (s.scan) scanStep(s.step);
-  return Turn::take();
+  if (s.scan) next_step_ = s.step;
 }
 
-Turn EyeNode::onDecision(const decision_t& d) {
-  // Only a pass without an announced scene starts the next step here; after an
-  // action, the action's scene does. (The planner's decisions are not steps of the eye's.)
-  if (config().phase == Phase::Extrinsic) return Turn::take();
-  if (d.step > last_scanned_) return Turn::later();  // the focus of that step is still to come
-  if (d.acted || objectsAppearAt(d.step + 1) || d.step != last_scanned_) return Turn::take();
-  scanStep(d.step + 1);
-  return Turn::take();
+void EyeNode::afterInput() {
+  // The one place a step starts: a scene that says scan (the start, after an
+  // action, when objects appear) or a pass that no scene follows named it.
+  if (!next_step_) return;
+  const std::int64_t step = *next_step_;
+  next_step_.reset();
+  scanStep(step);
 }
 
 bool EyeNode::objectsAppearAt(std::int64_t step) const {

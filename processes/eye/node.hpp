@@ -1,9 +1,11 @@
 // Eye process node.
 // Channels in:  RUN_CONFIG, RUN_CONTROL, SCENE, DECISION, LOOK (extrinsic phase)
 // Channels out: EFFECT (after a scene caused by an action), FOCUS, STATUS
+// Its inputs and their rules are stated in the constructor (NodeBase::takes).
 // Intrinsic phase: a step starts with a scene (start, action, newcomers) or,
 // when the decision was to pass and no objects appear at the next step (the
-// run's world.objects say when), with that decision.
+// run's world.objects say when), with that decision; either input names the
+// step, and afterInput() starts it.
 // Extrinsic phase: the goal scene is memorised for the inner eye; each LOOK is
 // answered with one FOCUS, on the scene it names (the serial of the last SCENE
 // the planner took): a LOOK that overtakes its scene waits for it.
@@ -33,10 +35,10 @@ class EyeNode : public NodeBase {
  private:
   void onConfigured(const RunConfig& config) override;
   void onStop() override;
-  Turn onScene(const scene_t& msg);
-  Turn onDecision(const decision_t& msg);
-  Turn onLook(const look_t& msg);
-  Turn onExtrinsicScene(const scene_t& msg);
+  void see(const scene_t& s);      // intrinsic: a scene (an action's effect, a scene to scan)
+  void keep(const scene_t& s);     // extrinsic: the goal, or a scene for a LOOK to name
+  void answer(const look_t& l);    // extrinsic: a LOOK's FOCUS
+  void afterInput() override;      // starts the step named by the last input, if any
   void scanStep(std::int64_t step);
   // Late objects appear at `step`: the environment publishes a scene for it
   // whether or not the step before acted, and that scene starts the step.
@@ -53,6 +55,7 @@ class EyeNode : public NodeBase {
   std::int64_t outer_scene_ = -1;    // extrinsic: serial of the scene the outer eye holds
   std::map<std::int64_t, cv::Mat> scenes_;  // extrinsic: scenes taken, not yet named by a LOOK (by serial)
   std::optional<std::pair<std::int64_t, Focus>> guess_;  // peekScan of the next step, if computed
+  std::optional<std::int64_t> next_step_;  // a step to start now (set by an input, started by afterInput)
 };
 
 }  // namespace afford

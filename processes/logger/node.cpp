@@ -34,10 +34,8 @@ LoggerNode::LoggerNode(lcm::LCM& lcm, std::shared_ptr<spdlog::logger> log, const
 
 template <class Msg>
 void LoggerNode::record(const Channel<Msg>& channel) {
-  subscribe(channel, [this](const Msg&, const Envelope& e) {
-    write(e);
-    return Turn::take();
-  });
+  takes(channel, std::string("every ") + channel.name + " of the run, in serial order, once: written as it came")
+      .then([this](const Msg&, const Envelope& e) { write(e); });
 }
 
 void LoggerNode::onConfigured(const RunConfig& config) {

@@ -9,7 +9,27 @@ namespace afford {
 
 MotivationNode::MotivationNode(lcm::LCM& lcm, std::shared_ptr<spdlog::logger> log, const ProtocolConfig& protocol)
     : NodeBase(lcm, "motivation", std::move(log), protocol) {
-  subscribe(ch::prediction, [this](const prediction_t& m) { return onPrediction(m); });
+  takes(ch::prediction,
+        "intrinsic phase: the PREDICTION of each step, in step order, one decision each (paper Algorithm 1); "
+        "with motivation.revisit, it says what was tried on the look; with IMP's observed_change threshold, it "
+        "carries the report of the previous step's update")
+      .in(Phase::Intrinsic)
+      .withinRun([this] { return config().steps; })
+      .stepInOrder([this] { return last_ + 1; })
+      .refuse([this](const prediction_t& m) {
+        return config().motivation.revisit.enabled && m.n_tried != kNumActions
+                   ? "step " + std::to_string(m.step) +
+                         " says nothing of what was tried on the look (n_tried = 0), which motivation.revisit "
+                         "needs: do the predictors keep a memory?"
+                   : "";
+      })
+      .refuse([this](const prediction_t& m) {
+        return core_->awaitingObservation() && (m.n_trained != 1 || m.trained[0].step != m.step - 1)
+                   ? "step " + std::to_string(m.step) + " lacks the report of step " + std::to_string(m.step - 1) +
+                         "'s update"
+                   : "";
+      })
+      .then([this](const prediction_t& m) { decide(m); });
 }
 
 void MotivationNode::onConfigured(const RunConfig& config) {
@@ -19,21 +39,8 @@ void MotivationNode::onConfigured(const RunConfig& config) {
 
 void MotivationNode::onStop() { core_.reset(); }
 
-Turn MotivationNode::onPrediction(const prediction_t& m) {
-  if (config().phase == Phase::Extrinsic) return Turn::take();  // the planner decides in the extrinsic phase
-  if (m.step <= last_)
-    return Turn::refuse("step " + std::to_string(m.step) + " is in the past (decided up to " + std::to_string(last_) + ")");
-  if (m.step >= config().steps)
-    return Turn::refuse("step " + std::to_string(m.step) + " is beyond the run's last step");
-  if (m.step != last_ + 1) return Turn::later();  // an earlier prediction is still to come
-  // Every refusal comes before the core changes: a refused message is asked for again, and must find it as it was.
+void MotivationNode::decide(const prediction_t& m) {
   const bool remembered = m.n_tried == kNumActions;
-  if (config().motivation.revisit.enabled && !remembered)
-    return Turn::refuse("step " + std::to_string(m.step) + " says nothing of what was tried on the look (n_tried = 0), "
-                        "which motivation.revisit needs: do the predictors keep a memory?");
-  if (core_->awaitingObservation() && (m.n_trained != 1 || m.trained[0].step != m.step - 1))
-    return Turn::refuse("step " + std::to_string(m.step) + " lacks the report of step " + std::to_string(m.step - 1) +
-                        "'s update");
   // IMP with observed_change: the threshold takes the observed change of
   // the affordance output that the last action caused.
   if (core_->awaitingObservation())
@@ -59,7 +66,6 @@ Turn MotivationNode::onPrediction(const prediction_t& m) {
   last_ = m.step;
   handled(m.step);
   if (m.step == config().steps - 1) setState(process_status_t::DONE);
-  return Turn::take();
 }
 
 }  // namespace afford

@@ -1,8 +1,9 @@
 // Motivation process node.
 // Channels in:  RUN_CONFIG, RUN_CONTROL, PREDICTION (intrinsic phase only)
 // Channels out: DECISION, STATUS
-// Predictions are decided in step order; one that comes before its turn waits
-// at the edge (Turn::later), so the decisions are a pure function of the run.
+// Its one input, PREDICTION, is stated in the constructor (NodeBase::takes):
+// predictions are decided in step order, so the decisions are a pure function
+// of the run.
 #pragma once
 #include <memory>
 
@@ -19,7 +20,7 @@ class MotivationNode : public NodeBase {
  private:
   void onConfigured(const RunConfig& config) override;
   void onStop() override;
-  Turn onPrediction(const prediction_t& m);
+  void decide(const prediction_t& m);
 
   std::unique_ptr<Motivation> core_;
   std::int64_t last_ = -1;  // last decided step

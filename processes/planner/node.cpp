@@ -10,11 +10,83 @@ namespace afford {
 
 PlannerNode::PlannerNode(lcm::LCM& lcm, std::shared_ptr<spdlog::logger> log, const ProtocolConfig& protocol)
     : NodeBase(lcm, "planner", std::move(log), protocol) {
-  subscribe(ch::scene, [this](const scene_t& m) { return onScene(m); });
-  subscribe(ch::focus, [this](const focus_t& m) { return onFocus(m); });
-  subscribe(ch::prediction, [this](const prediction_t& m) { return onPrediction(m); });
-  subscribe(ch::forwardPrediction,
-                                  [this](const forward_prediction_t& m) { return onForward(m); });
+  // Every input: only while a test goes on (the extrinsic phase, until its result).
+  const auto idle = [this](const auto&) { return !core_ || finished_; };
+  takes(ch::scene,
+        "the SCENE that starts the test (once), then the scene of each action it decided, after the action "
+        "(the goal scene is the eye's)")
+      .ignoreIf(idle)
+      .ignoreIf([](const scene_t& s) { return s.cause != scene_t::CAUSE_START && s.cause != scene_t::CAUSE_ACTION; })
+      .refuse([this](const scene_t& s) {
+        return s.cause == scene_t::CAUSE_START && step_ >= 0 ? "the test has begun already" : "";
+      })
+      .refuse([this](const scene_t& s) {
+        return s.cause == scene_t::CAUSE_ACTION && s.step < step_
+                   ? "the scene of step " + std::to_string(s.step) + " is in the past"
+                   : std::string();
+      })
+      .waitFor([this](const scene_t& s) {
+        return s.cause != scene_t::CAUSE_ACTION || (step_ >= 0 && s.step <= step_ && waiting_scene_);
+      })
+      .then([this](const scene_t& s) { onScene(s); });
+  takes(ch::focus,
+        "the FOCUS that answers the last request (its seq), of the kind asked for: a look, the differences, or "
+        "the object of a scan or of an attention")
+      .ignoreIf(idle)
+      .waitFor([this](const focus_t& f) { return f.seq <= seq_; })
+      .refuse([this](const focus_t& f) {
+        return f.seq < seq_ ? "request " + std::to_string(f.seq) + " was answered already" : std::string();
+      })
+      .refuse([this](const focus_t& f) {
+        const bool object = f.kind == focus_t::SCENE_SCAN || f.kind == focus_t::SCENE_OBJECT;
+        const auto asked = f.kind == focus_t::SCENE_SCAN ? PlannerRequest::ScanScene : PlannerRequest::AttendObject;
+        return object && (last_.kind != asked || object_) ? "an object the planner did not ask for" : "";
+      })
+      .refuse([this](const focus_t& f) {
+        return f.kind == focus_t::GOAL_DIFF && last_.kind != PlannerRequest::LookAtDifferences
+                   ? "differences the planner did not ask for"
+                   : "";
+      })
+      .refuse([this](const focus_t& f) {
+        return (f.kind == focus_t::GOAL_SCAN && last_.kind != PlannerRequest::LookAtGoal) ||
+                       (f.kind == focus_t::SCENE_AT && last_.kind != PlannerRequest::LookAtSceneAt)
+                   ? "a look the planner did not ask for"
+                   : "";
+      })
+      .then([this](const focus_t& f) { onFocus(f); });
+  takes(ch::prediction,
+        "the PREDICTION of the object the current iteration scanned or attended, once (it may come before or "
+        "after that object's FOCUS)")
+      .ignoreIf(idle)
+      .refuse([this](const prediction_t& p) {
+        return p.step < step_ ? "step " + std::to_string(p.step) + " is in the past" : std::string();
+      })
+      .waitFor([this](const prediction_t& p) {
+        const bool asked = last_.kind == PlannerRequest::ScanScene || last_.kind == PlannerRequest::AttendObject;
+        return asked && p.step == step_ && !affordance_;
+      })
+      .then([this](const prediction_t& p) {
+        affordance_.emplace();
+        std::copy(p.affordance.begin(), p.affordance.end(), affordance_->begin());
+        tryObject();
+      });
+  takes(ch::forwardPrediction,
+        "the FORWARD_PREDICTION that answers the last request, a forward query (its seq); for an imagined "
+        "object, with that object's affordances")
+      .ignoreIf(idle)
+      .waitFor([this](const forward_prediction_t& m) {
+        return !(m.seq > seq_ || (m.seq == seq_ && last_.kind != PlannerRequest::Forward));
+      })
+      .refuse([this](const forward_prediction_t& m) {
+        return m.seq < seq_ ? "query " + std::to_string(m.seq) + " was answered already" : std::string();
+      })
+      .refuse([this](const forward_prediction_t& m) {
+        return !last_.prefix.empty() && m.n_input != kNumActions
+                   ? "query " + std::to_string(m.seq) + " asked about an imagined object, and the answer has " +
+                         std::to_string(m.n_input) + " input_affordance values, not " + std::to_string(kNumActions)
+                   : std::string();
+      })
+      .then([this](const forward_prediction_t& m) { onForward(m); });
 }
 
 void PlannerNode::onConfigured(const RunConfig& config) {
@@ -31,35 +103,20 @@ void PlannerNode::onConfigured(const RunConfig& config) {
 
 void PlannerNode::onStop() { core_.reset(); }
 
-std::optional<Turn> PlannerNode::notNow() {
-  if (!core_ || finished_) return Turn::take();
-  if (state() == process_status_t::READY) return Turn::later();  // before START: its turn comes after
-  return std::nullopt;
-}
 
-Turn PlannerNode::onScene(const scene_t& s) {
-  if (auto t = notNow()) return *t;
-  if (s.cause == scene_t::CAUSE_GOAL) return Turn::take();  // the eye memorises it
+void PlannerNode::onScene(const scene_t& s) {
   if (s.cause == scene_t::CAUSE_START) {
-    if (step_ >= 0) return Turn::refuse("the test has begun already");
     scene_ = s.serial;
     goal_distance_ = s.goal_distance;
     goal_utility_ = s.goal_utility;
     step_ = 0;  // the test begins
-    follow(core_->startIteration());
-    return Turn::take();
+    return follow(core_->startIteration());
   }
-  if (s.cause != scene_t::CAUSE_ACTION) return Turn::take();
-  if (s.step < step_) return Turn::refuse("the scene of step " + std::to_string(s.step) + " is in the past");
-  // The scene of an action not yet decided here (its turn comes after
-  // messages still late on other channels) waits.
-  if (step_ < 0 || s.step > step_ || !waiting_scene_) return Turn::later();
-  goal_distance_ = s.goal_distance;
+  goal_distance_ = s.goal_distance;  // the scene of the action decided
   goal_utility_ = s.goal_utility;
   waiting_scene_ = false;
   scene_ = s.serial;
   follow(core_->onActed());
-  return Turn::take();
 }
 
 void PlannerNode::look(int8_t kind, double x, double y) {
@@ -128,44 +185,19 @@ void PlannerNode::follow(PlannerRequest r) {
   }
 }
 
-Turn PlannerNode::onFocus(const focus_t& f) {
-  if (auto t = notNow()) return *t;
-  if (f.seq > seq_) return Turn::later();  // the answer to a request not made yet here
-  if (f.seq < seq_) return Turn::refuse("request " + std::to_string(f.seq) + " was answered already");
+void PlannerNode::onFocus(const focus_t& f) {
   handled(f.step);
   if (f.kind == focus_t::SCENE_SCAN || f.kind == focus_t::SCENE_OBJECT) {
-    const auto asked = f.kind == focus_t::SCENE_SCAN ? PlannerRequest::ScanScene : PlannerRequest::AttendObject;
-    if (last_.kind != asked || object_) return Turn::refuse("an object the planner did not ask for");
     object_ = f;
-    tryObject();
-    return Turn::take();
+    return tryObject();
   }
   if (f.kind == focus_t::GOAL_DIFF) {
-    if (last_.kind != PlannerRequest::LookAtDifferences) return Turn::refuse("differences the planner did not ask for");
     std::vector<Difference> diffs;
     for (int i = 0; i < f.n_diffs; ++i)
       diffs.push_back({f.diff_x[i], f.diff_y[i], f.diff_in[i] == focus_t::DIFF_GOAL, f.diff_image[i]});
-    follow(core_->onDifferences(diffs));
-    return Turn::take();
+    return follow(core_->onDifferences(diffs));
   }
-  if ((f.kind == focus_t::GOAL_SCAN && last_.kind != PlannerRequest::LookAtGoal) ||
-      (f.kind == focus_t::SCENE_AT && last_.kind != PlannerRequest::LookAtSceneAt))
-    return Turn::refuse("a look the planner did not ask for");
   follow(core_->onView({f.image, f.x, f.y}));
-  return Turn::take();
-}
-
-Turn PlannerNode::onPrediction(const prediction_t& p) {
-  if (auto t = notNow()) return *t;
-  // Every scene scan's prediction is taken, in order: one that comes before
-  // its scan was asked for waits.
-  if (p.step < step_) return Turn::refuse("step " + std::to_string(p.step) + " is in the past");
-  const bool objectAsked = last_.kind == PlannerRequest::ScanScene || last_.kind == PlannerRequest::AttendObject;
-  if (!objectAsked || p.step != step_ || affordance_) return Turn::later();
-  affordance_.emplace();
-  std::copy(p.affordance.begin(), p.affordance.end(), affordance_->begin());
-  tryObject();
-  return Turn::take();
 }
 
 void PlannerNode::tryObject() {
@@ -173,23 +205,16 @@ void PlannerNode::tryObject() {
   follow(core_->onObject({object_->image, object_->x, object_->y}, *affordance_));
 }
 
-Turn PlannerNode::onForward(const forward_prediction_t& m) {
-  if (auto t = notNow()) return *t;
-  if (m.seq > seq_ || (m.seq == seq_ && last_.kind != PlannerRequest::Forward)) return Turn::later();
-  if (m.seq < seq_) return Turn::refuse("query " + std::to_string(m.seq) + " was answered already");
+void PlannerNode::onForward(const forward_prediction_t& m) {
   std::vector<ForwardPrediction> preds;
   for (int i = 0; i < m.n_actions; ++i)
     preds.push_back({m.actions[i], std::vector<double>(m.what[i].begin(), m.what[i].end()), m.where_x[i], m.where_y[i]});
   std::optional<std::array<double, kNumActions>> input;
   if (!last_.prefix.empty()) {  // the query imagined its object: its affordances come with the answer
-    if (m.n_input != kNumActions)
-      return Turn::refuse("query " + std::to_string(m.seq) + " asked about an imagined object, and the answer has " +
-                          std::to_string(m.n_input) + " input_affordance values, not " + std::to_string(kNumActions));
     input.emplace();
     std::copy(m.input_affordance.begin(), m.input_affordance.end(), input->begin());
   }
   follow(core_->onForward(preds, input));
-  return Turn::take();
 }
 
 void PlannerNode::endIteration() {

@@ -29,19 +29,15 @@ class PlannerNode : public NodeBase {
  private:
   void onConfigured(const RunConfig& config) override;
   void onStop() override;
-  Turn onScene(const scene_t& m);
-  Turn onFocus(const focus_t& m);
-  Turn onPrediction(const prediction_t& m);
-  Turn onForward(const forward_prediction_t& m);
+  void onScene(const scene_t& m);       // the test's start, or an action's scene
+  void onFocus(const focus_t& m);       // the answer to a LOOK
+  void onForward(const forward_prediction_t& m);  // the answer to a FORWARD_QUERY
   // Carry out a request of the core (until it needs an answer).
   void follow(PlannerRequest r);
   void look(int8_t kind, double x = -1, double y = -1);
   void tryObject();
   void endIteration();
   void finish(bool success);
-  // A message that is not for now: the test is over or there is none (taken,
-  // nothing to do), or it has not started (later).
-  std::optional<Turn> notNow();
   bool active() const { return core_ && state() == process_status_t::RUNNING && !finished_; }
 
   std::unique_ptr<Planner> core_;

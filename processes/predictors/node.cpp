@@ -13,11 +13,75 @@ PredictorsNode::PredictorsNode(lcm::LCM& lcm, std::shared_ptr<spdlog::logger> lo
     : NodeBase(lcm, "predictors", std::move(log), protocol),
       async_effects_(async_effects),
       checkpoint_root_(std::move(checkpoint_root)) {
-  subscribe(ch::probe, [this](const object_probe_t& m) { return onProbe(m); });
-  subscribe(ch::focus, [this](const focus_t& m) { return onFocus(m); });
-  subscribe(ch::decision, [this](const decision_t& m) { return onDecision(m); });
-  subscribe(ch::effect, [this](const effect_t& m) { return onEffect(m); });
-  subscribe(ch::forwardQuery, [this](const forward_query_t& m) { return onForwardQuery(m); });
+  takes(ch::probe, "the PROBE once (each object's focus image alone: the affordance tables are computed on them)")
+      .refuse([this](const object_probe_t&) { return probes_.empty() ? "" : "the probe was received already"; })
+      .then([this](const object_probe_t& m) { probes_ = m.images; });
+  takes(ch::focus,
+        "the FOCUS of a scene scan or an attended object (not a look at the goal or at a place); intrinsic "
+        "phase: of each step in step order, once the step before is decided and, if it acted, learned from, "
+        "and the probe is in (paper Algorithm 1); extrinsic phase: each, from the current iteration on")
+      .ignoreIf([](const focus_t& m) { return m.kind != focus_t::SCENE_SCAN && m.kind != focus_t::SCENE_OBJECT; })
+      .in(Phase::Intrinsic)
+      .withinRun([this] { return config().steps; })
+      .stepInOrder([this] { return current_ + 1; })
+      .waitFor([this](const focus_t&) {
+        return !probes_.empty() && (current_ < 0 || outcome_ == Outcome::Passed || outcome_ == Outcome::Learned);
+      })
+      .then([this](const focus_t& m) { handleFocus(m); })
+      .in(Phase::Extrinsic)
+      .refuse([this](const focus_t& m) {
+        return m.step < current_ ? "step " + std::to_string(m.step) + " is in the past" : std::string();
+      })
+      .then([this](const focus_t& m) {
+        current_ = m.step;
+        handled(m.step);
+        publishPrediction(m);
+      });
+  takes(ch::decision,
+        "intrinsic phase: the DECISION of the step whose FOCUS was taken last, once: an action awaits its "
+        "EFFECT, a pass ends the step")
+      .in(Phase::Intrinsic)
+      .refuse([this](const decision_t& m) {
+        return m.step < current_ || (m.step == current_ && outcome_ != Outcome::Unknown)
+                   ? "step " + std::to_string(m.step) + " is already decided (now at " + std::to_string(current_) + ")"
+                   : std::string();
+      })
+      .waitFor([this](const decision_t& m) { return m.step == current_; })
+      .then([this](const decision_t& m) { decided(m); });
+  takes(ch::effect,
+        "intrinsic phase: the EFFECT of the step whose action was decided last, once, of that action: the "
+        "predictors learn from it (paper 2.3.3)")
+      .in(Phase::Intrinsic)
+      .refuse([this](const effect_t& m) {
+        return m.step < current_ || (m.step == current_ && outcome_ == Outcome::Learned)
+                   ? "step " + std::to_string(m.step) + " is in the past (already learned)"
+                   : std::string();
+      })
+      .refuse([this](const effect_t& m) {
+        return m.step == current_ && outcome_ == Outcome::Passed
+                   ? "no action was decided at step " + std::to_string(m.step)
+                   : std::string();
+      })
+      .waitFor([this](const effect_t& m) { return m.step == current_ && outcome_ == Outcome::AwaitingEffect; })
+      .refuse([this](const effect_t& m) {
+        return m.action != action_ ? "action " + std::to_string(m.action) + " differs from the decided action " +
+                                         std::to_string(action_)
+                                   : std::string();
+      })
+      .then([this](const effect_t& m) { learn(m); })
+      .in(Phase::Extrinsic)
+      .refuse([](const effect_t&) { return "no learning in the extrinsic phase"; });
+  takes(ch::forwardQuery,
+        "extrinsic phase: each FORWARD_QUERY once, in request order, with an agent loaded: what each action "
+        "would do to the object")
+      .in(Phase::Intrinsic)
+      .refuse([](const forward_query_t&) { return "no forward queries in the intrinsic phase"; })
+      .in(Phase::Extrinsic)
+      .refuse([this](const forward_query_t& q) {
+        return q.seq <= last_query_ ? "query " + std::to_string(q.seq) + " was answered already" : std::string();
+      })
+      .refuse([this](const forward_query_t&) { return loaded_ ? "" : "no agent is loaded"; })
+      .then([this](const forward_query_t& q) { answer(q); });
 }
 
 void PredictorsNode::checkCheckpointPath(const RunConfig& config) const {
@@ -90,36 +154,6 @@ void PredictorsNode::onStop() {
   core_.reset();
 }
 
-Turn PredictorsNode::onProbe(const object_probe_t& m) {
-  if (!probes_.empty()) return Turn::refuse("the probe was received already");
-  probes_ = m.images;
-  return Turn::take();
-}
-
-Turn PredictorsNode::onFocus(const focus_t& m) {
-  // The objects the planner attends (a scan, or top-down the object at a
-  // place) get a prediction; its looks at the goal or at a place do not.
-  if (m.kind != focus_t::SCENE_SCAN && m.kind != focus_t::SCENE_OBJECT) return Turn::take();
-  if (extrinsic()) {
-    if (m.step < current_) return Turn::refuse("step " + std::to_string(m.step) + " is in the past");
-    current_ = m.step;
-    handled(m.step);
-    publishPrediction(m);
-    return Turn::take();
-  }
-  if (m.step <= current_)
-    return Turn::refuse("step " + std::to_string(m.step) + " is in the past (now at " + std::to_string(current_) + ")");
-  if (m.step >= config().steps)
-    return Turn::refuse("step " + std::to_string(m.step) + " is beyond the run's last step");
-  // Its turn: the next step, once the current one is decided (and learned from),
-  // and the probe images are in (the affordance tables are computed on them).
-  const bool ready = m.step == current_ + 1 && !probes_.empty() &&
-                     (current_ < 0 || outcome_ == Outcome::Passed || outcome_ == Outcome::Learned);
-  if (!ready) return Turn::later();
-  handleFocus(m);
-  return Turn::take();
-}
-
 void PredictorsNode::handleFocus(const focus_t& m) {
   if (m.step % config().curve_interval == 0) publishTable(m.step);
   publishPrediction(m);
@@ -152,10 +186,7 @@ void PredictorsNode::publishPrediction(const focus_t& m) {
   publish(ch::prediction, out);
 }
 
-Turn PredictorsNode::onForwardQuery(const forward_query_t& q) {
-  if (!extrinsic()) return Turn::refuse("no forward queries in the intrinsic phase");
-  if (q.seq <= last_query_) return Turn::refuse("query " + std::to_string(q.seq) + " was answered already");
-  if (!loaded_) return Turn::refuse("no agent is loaded");  // (configured for an extrinsic run, one is)
+void PredictorsNode::answer(const forward_query_t& q) {
   last_query_ = q.seq;
   forward_prediction_t out;
   out.run_id = runId();
@@ -184,36 +215,21 @@ Turn PredictorsNode::onForwardQuery(const forward_query_t& q) {
   out.n_input = static_cast<int8_t>(out.input_affordance.size());
   publish(ch::forwardPrediction, out);
   handled(q.step);
-  return Turn::take();
 }
 
-Turn PredictorsNode::onDecision(const decision_t& m) {
-  if (extrinsic()) return Turn::take();  // the planner's actions: nothing to learn
-  if (m.step < current_ || (m.step == current_ && outcome_ != Outcome::Unknown))
-    return Turn::refuse("step " + std::to_string(m.step) + " is already decided (now at " + std::to_string(current_) + ")");
-  if (m.step != current_) return Turn::later();  // the focus of that step is still to come
+void PredictorsNode::decided(const decision_t& m) {
   if (m.acted) {
     outcome_ = Outcome::AwaitingEffect;
     action_ = m.action;
     revisits_ += m.revisit ? 1 : 0;
-    return Turn::take();
+    return;
   }
   outcome_ = Outcome::Passed;
   for (auto& u : core_->replay(m.step)) pending_effects_.push_back(std::move(u));  // a step without an action replays too
   if (m.step == config().steps - 1) finish();
-  return Turn::take();
 }
 
-Turn PredictorsNode::onEffect(const effect_t& m) {
-  if (extrinsic()) return Turn::refuse("no learning in the extrinsic phase");
-  if (m.step < current_ || (m.step == current_ && outcome_ == Outcome::Learned))
-    return Turn::refuse("step " + std::to_string(m.step) + " is in the past (already learned)");
-  if (m.step == current_ && outcome_ == Outcome::Passed)
-    return Turn::refuse("no action was decided at step " + std::to_string(m.step));
-  if (m.step != current_ || outcome_ != Outcome::AwaitingEffect) return Turn::later();  // its focus or decision is to come
-  if (m.action != action_)
-    return Turn::refuse("action " + std::to_string(m.action) + " differs from the decided action " + std::to_string(action_));
-
+void PredictorsNode::learn(const effect_t& m) {
   Experience e;
   e.action = m.action;
   e.before_image = focus_.image;
@@ -240,7 +256,6 @@ Turn PredictorsNode::onEffect(const effect_t& m) {
   outcome_ = Outcome::Learned;
   saveActionsCheckpoint();
   if (m.step == config().steps - 1) finish();
-  return Turn::take();
 }
 
 void PredictorsNode::trainPendingEffects() {

@@ -1,7 +1,7 @@
-// Predictors process node. Handles each step's inputs in the canonical order
-// PROBE, then FOCUS(t) -> DECISION(t) -> [EFFECT(t)] -> FOCUS(t+1); one that comes before
-// its turn waits at the edge (Turn::later), so its state is a pure function
-// of the run's messages.
+// Predictors process node. Takes each step's inputs in the canonical order
+// PROBE, then FOCUS(t) -> DECISION(t) -> [EFFECT(t)] -> FOCUS(t+1), by the
+// input rules stated in its constructor (NodeBase::takes), so its state is a
+// pure function of the run's messages.
 // Channels in:  RUN_CONFIG, RUN_CONTROL, PROBE, FOCUS, DECISION, EFFECT,
 //               FORWARD_QUERY (extrinsic phase)
 // Channels out: AFFORDANCE_TABLE (every run.curve_interval steps and at the end),
@@ -47,11 +47,9 @@ class PredictorsNode : public NodeBase {
 
   void onConfigured(const RunConfig& config) override;
   void onStop() override;
-  Turn onProbe(const object_probe_t& m);
-  Turn onFocus(const focus_t& m);
-  Turn onDecision(const decision_t& m);
-  Turn onEffect(const effect_t& m);
-  Turn onForwardQuery(const forward_query_t& m);
+  void decided(const decision_t& m);         // intrinsic: the decision of the current step
+  void learn(const effect_t& m);             // intrinsic: its effect, learned from
+  void answer(const forward_query_t& q);     // extrinsic: what actions would do
   void publishPrediction(const focus_t& m);
   bool extrinsic() const { return config().phase == Phase::Extrinsic; }
   void handleFocus(const focus_t& m);

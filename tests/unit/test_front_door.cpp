@@ -138,6 +138,15 @@ TEST(Protocol, TheDocsChannelTableIsTheProtocols) {
       << "docs/processes-and-channels.md's channel table is not `afford processes --protocol`'s:\n" << protocolTable();
 }
 
+// docs/processes-and-channels.md shows every process's input rules (afford processes --rules).
+TEST(Protocol, TheDocsRulesTableIsTheProcesses) {
+  std::ifstream in(std::string(AFFORD_SOURCE_DIR) + "/docs/processes-and-channels.md");
+  const std::string docs((std::istreambuf_iterator<char>(in)), {});
+  const std::string rules = inputRulesTable(kConfigDir);
+  EXPECT_NE(docs.find(rules), std::string::npos)
+      << "docs/processes-and-channels.md's rules table is not `afford processes --rules`'s:\n" << rules;
+}
+
 // Each channel's registry entry agrees with the protocol: its publisher in a phase publishes it then.
 TEST(Protocol, TheRegistryPublishesWhatTheProtocolSays) {
   forEachChannel([](const ChannelInfo& c) {

@@ -18,6 +18,7 @@
 #include <chrono>
 #include <functional>
 #include <memory>
+#include <stdexcept>
 #include <string>
 #include <vector>
 
@@ -28,6 +29,125 @@
 #include "afford/run_control_t.hpp"
 
 namespace afford {
+
+// A message that a handler finds impossible only by working on it (a scene
+// that does not decode): thrown before the handler changes anything, it is
+// refused as a rule's refusal is.
+struct Refusal : std::runtime_error {
+  using std::runtime_error::runtime_error;
+};
+
+// What a node takes from one channel, and when: its input rule. A node states
+// each of its inputs once, in words (`rule`, what `afford processes --rules`
+// prints) and as clauses, which NodeBase tries in order on every message of
+// the channel (and again whenever another message is taken):
+//   ignoreIf(test)  the message is taken and nothing is done with it;
+//   refuse(why)     it cannot be the channel's next message: refused with the
+//                   reason (the edge expects that serial again);
+//   waitFor(ready)  it is not its turn: kept until it is (Turn::later);
+// and when every clause passes, the handler (`then`) gets it. Clauses and
+// handler may hold for one phase only (`in(phase)`); in a phase with none, the
+// channel's messages are taken and ignored. Handlers hold no ordering code.
+template <class Msg>
+class Input {
+ public:
+  using Test = std::function<bool(const Msg&)>;
+  using Why = std::function<std::string(const Msg&)>;
+  using Handler = std::function<void(const Msg&, const Envelope&)>;
+
+  explicit Input(std::string rule) : rule_(std::move(rule)) {}
+  // What follows applies in this phase only (until the next in()).
+  Input& in(Phase phase) {
+    phase_ = static_cast<int>(phase);
+    for (int p : phases()) sections_[p].defined = true;
+    return *this;
+  }
+  Input& ignoreIf(Test test) { return add({Clause::Ignore, std::move(test), {}}); }
+  Input& refuse(Why why) { return add({Clause::Refuse, {}, std::move(why)}); }
+  Input& waitFor(Test ready) { return add({Clause::Wait, std::move(ready), {}}); }
+  // Keys in order, from next(): a smaller one is refused ("<what> k is in the past (the next is n)"),
+  // a larger one waits.
+  Input& inOrder(std::function<std::int64_t(const Msg&)> key, std::function<std::int64_t()> next, std::string what) {
+    refuse([key, next, what](const Msg& m) {
+      const std::int64_t k = key(m), n = next();
+      return k < n ? what + " " + std::to_string(k) + " is in the past (the next is " + std::to_string(n) + ")"
+                   : std::string();
+    });
+    return waitFor([key, next](const Msg& m) { return key(m) == next(); });
+  }
+  // Steps in order, from next().
+  Input& stepInOrder(std::function<std::int64_t()> next) {
+    return inOrder([](const Msg& m) { return m.step; }, std::move(next), "step");
+  }
+  // A step of the run: below `steps()`.
+  Input& withinRun(std::function<std::int64_t()> steps) {
+    return refuse([steps](const Msg& m) {
+      return m.step >= steps() ? "step " + std::to_string(m.step) + " is beyond the run's last step" : std::string();
+    });
+  }
+  Input& then(std::function<void(const Msg&)> handler) {
+    return then(Handler([h = std::move(handler)](const Msg& m, const Envelope&) { h(m); }));
+  }
+  Input& then(Handler handler) {
+    for (int p : phases()) {
+      sections_[p].handler = handler;
+      sections_[p].defined = true;
+    }
+    return *this;
+  }
+  const std::string& rule() const { return rule_; }
+
+  // The message's turn, by the clauses of the run's phase; on Take, it has been handled.
+  Turn offer(const Msg& m, const Envelope& e, Phase phase) const {
+    const Section& s = sections_[static_cast<int>(phase)];
+    if (!s.defined) return Turn::take();  // not an input in this phase
+    for (const Clause& c : s.clauses) {
+      switch (c.kind) {
+        case Clause::Ignore:
+          if (c.test(m)) return Turn::take();
+          break;
+        case Clause::Refuse:
+          if (std::string why = c.why(m); !why.empty()) return Turn::refuse(std::move(why));
+          break;
+        case Clause::Wait:
+          if (!c.test(m)) return Turn::later();
+          break;
+      }
+    }
+    if (s.handler) {
+      try {
+        s.handler(m, e);
+      } catch (const Refusal& r) {
+        return Turn::refuse(r.what());
+      }
+    }
+    return Turn::take();
+  }
+
+ private:
+  struct Clause {
+    enum Kind { Ignore, Refuse, Wait } kind;
+    Test test;
+    Why why;
+  };
+  struct Section {
+    std::vector<Clause> clauses;
+    Handler handler;
+    bool defined = false;
+  };
+  std::vector<int> phases() const { return phase_ < 0 ? std::vector<int>{0, 1} : std::vector<int>{phase_}; }
+  Input& add(Clause c) {
+    for (int p : phases()) {
+      sections_[p].clauses.push_back(c);
+      sections_[p].defined = true;
+    }
+    return *this;
+  }
+
+  std::string rule_;
+  Section sections_[2];  // by Phase
+  int phase_ = -1;       // the phase of what is being added (-1: both)
+};
 
 class NodeBase {
  public:
@@ -50,17 +170,37 @@ class NodeBase {
   std::int64_t lastStep() const { return last_step_; }  // the last step handled in the run (-1: none)
   // Leave the run (used on STOP and at shutdown); subclasses flush in onStop().
   void leaveRun();
+  // Each input's channel and rule, in the order the node states them.
+  struct InputRule {
+    std::string channel, rule;
+  };
+  const std::vector<InputRule>& rules() const { return rules_; }
   // A keyed bus (afford/auth.hpp): set before the first message is handled.
   void useBusKey(std::shared_ptr<const BusKey> key) { edge_.useKey(std::move(key)); }
   const EdgeDrops& drops() const { return edge_.drops(); }
 
  protected:
-  // A channel of the run, in serial order; `handler` returns a Turn
-  // (afford/edge.hpp): Take, Later (not its turn yet) or Refuse.
-  template <class Msg, class F>
-  void subscribe(const Channel<Msg>& channel, F handler) {
-    edge_.subscribe(channel, std::move(handler), Scope::Run, Order::Serial);
+  // An input of the node (see Input): a channel of the run, taken in serial
+  // order, by the rule stated here in words and built on the returned Input.
+  // Nothing is taken before START; after each message taken, afterInput().
+  template <class Msg>
+  Input<Msg>& takes(const Channel<Msg>& channel, std::string rule) {
+    auto input = std::make_shared<Input<Msg>>(std::move(rule));
+    rules_.push_back({channel.name, input->rule()});
+    edge_.subscribe(
+        channel,
+        [this, input](const Msg& m, const Envelope& e) {
+          if (state_ == process_status_t::READY) return Turn::later();  // its turn comes after START
+          const Turn t = input->offer(m, e, config_.phase);
+          if (t.kind() == Turn::Kind::Take) afterInput();
+          return t;
+        },
+        Scope::Run, Order::Serial);
+    return *input;
   }
+  // Called after every message an input took: where what follows from the
+  // node's inputs together happens (the eye starts a step there).
+  virtual void afterInput() {}
   // Publish on a channel of the run (serial, digest, history for RESEND).
   template <class Msg>
   void publish(const Channel<Msg>& channel, Msg msg) {
@@ -114,6 +254,7 @@ class NodeBase {
   Clock::duration announce_wait_{};
   bool stop_pending_ = false;
   Clock::time_point stop_deadline_{};
+  std::vector<InputRule> rules_;
 };
 
 // The main() of every process: flags (--lcm-url, --log-level, --config-dir,

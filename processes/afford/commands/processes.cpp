@@ -4,15 +4,16 @@
 #include <memory>
 
 #include "afford/commands.hpp"
+#include "afford/host.hpp"
 #include "afford/processes.hpp"
 #include "afford/protocol.hpp"
 
 namespace afford {
 
-Command processesCommand(CLI::App& app, const FrontDoor&) {
+Command processesCommand(CLI::App& app, const FrontDoor& door) {
   struct Args {
     std::string phase = "all";
-    bool recorded = true, channels = false, protocol = false;
+    bool recorded = true, channels = false, protocol = false, rules = false;
   };
   auto a = std::make_shared<Args>();
   auto* cmd = app.add_subcommand("processes", "list the processes of a run, one per line (for scripts), or with "
@@ -24,9 +25,14 @@ Command processesCommand(CLI::App& app, const FrontDoor&) {
   cmd->add_flag("--channels", a->channels, "each process with what it does and the channels it publishes");
   cmd->add_flag("--protocol", a->protocol,
                 "every channel: its type, who publishes and reads it, whether it is recorded, when (markdown)");
-  return {cmd, [a] {
+  cmd->add_flag("--rules", a->rules, "each process's inputs: what it takes from each channel, and when (markdown)");
+  return {cmd, [a, &door] {
             if (a->protocol) {
               std::printf("%s", protocolTable().c_str());
+              return 0;
+            }
+            if (a->rules) {
+              std::printf("%s", inputRulesTable(door.config_dir).c_str());
               return 0;
             }
             for (const ProcessInfo& p : processRegistry()) {
