@@ -1,8 +1,13 @@
 #!/usr/bin/env bash
 # Start, stop, restart and watch the processes of a run by hand.
 #
-#   scripts/procs.sh start   RUN [PROCESS...]   start processes (default: all six) on RUN's bus
-#   scripts/procs.sh stop    RUN [PROCESS...]   SIGINT, then SIGKILL after $AFFORD_GRACE s (default 5)
+#   scripts/procs.sh start   RUN [--process NAME='CMD ARGS']... [PROCESS...]
+#                                               start processes (default: all six) on RUN's bus; with
+#                                               --process, CMD runs in place of afford-NAME, its standard
+#                                               arguments (--lcm-url URL ...) appended, in this start and
+#                                               every later one (--process NAME= goes back to the shipped one)
+#   scripts/procs.sh stop    RUN [PROCESS...]   SIGINT, then SIGTERM after $AFFORD_GRACE s (default 5), then
+#                                               SIGKILL
 #   scripts/procs.sh restart RUN PROCESS...     stop, then start again with the same command
 #   scripts/procs.sh kill    RUN PROCESS...     kill -9 (to try a live restart)
 #   scripts/procs.sh status  RUN [OPTIONS]      pid and liveness, then each process's state,
@@ -13,8 +18,9 @@
 #
 # PROCESS: environment eye predictors motivation planner logger.
 # Each process's output goes to logs/RUN/<process>.log (appended), its pid to
-# logs/RUN/<process>.pid, its command line to logs/RUN/<process>.cmd; the bus
-# to logs/RUN/lcm-url. The bus is $AFFORD_URL (default below) at `start`.
+# logs/RUN/<process>.pid, its command line to logs/RUN/<process>.cmd (and a
+# --process command to logs/RUN/<process>.process); the bus to
+# logs/RUN/lcm-url. The bus is $AFFORD_URL (default below) at `start`.
 #
 # The group's bus is keyed (docs/security.md): `start` makes logs/RUN/bus.key
 # (a new random key) if there is none, and every process, `status`, `run` and
@@ -34,7 +40,7 @@ netns=${AFFORD_NETNS:-afford}
 grace=${AFFORD_GRACE:-5}
 mapfile -t all < <("$bin/afford" processes)  # the registry of processes
 
-usage() { sed -n '2,28p' "$0" | sed 's/^# \{0,1\}//'; exit 2; }
+usage() { sed -n '2,34p' "$0" | sed 's/^# \{0,1\}//'; exit 2; }
 die() { echo "procs.sh: $*" >&2; exit 1; }
 [[ $# -ge 2 ]] || usage
 cmd=$1 run=$2
@@ -62,12 +68,17 @@ check_process() {
   die "unknown process '$1' (one of: ${all[*]})"
 }
 url() { [[ -f $dir/lcm-url ]] || die "no group '$run' (scripts/procs.sh start $run first)"; cat "$dir/lcm-url"; }
-# running PID PROCESS: PID is afford-PROCESS and not a zombie (a killed process nobody has reaped yet). The
-# name matters: pids are reused (pid_max can be 32768), and a busy machine may give a dead process's pid to
-# another one within seconds.
+# stat PID: the fields of /proc/PID/stat after the command's name (which may hold spaces): state first,
+# then the 20th, the start time since boot.
+stat_of() { local s; s=$(cat "/proc/$1/stat" 2>/dev/null) || return 1; echo "${s##*) }"; }
+# running PID PROCESS: PID is the process started as PROCESS (its start time is the one recorded then) and
+# not a zombie (a killed process nobody has reaped yet). The start time matters: pids are reused (pid_max can
+# be 32768), and a busy machine may give a dead process's pid to another one within seconds. (Not its name:
+# a --process command may be any program.)
 running() {
-  [[ -r /proc/$1/stat ]] && [[ $(awk '{print $3}' "/proc/$1/stat" 2>/dev/null) != Z ]] &&
-    [[ $(tr '\0' '\n' <"/proc/$1/cmdline" 2>/dev/null | head -n 1) == */afford-$2 ]]
+  local f
+  f=($(stat_of "$1")) || return 1
+  [[ ${f[0]} != Z && ${f[19]} == "$(cat "$dir/$2.started" 2>/dev/null)" ]]
 }
 alive() { [[ -f $dir/$1.pid ]] && running "$(cat "$dir/$1.pid")" "$1"; }
 
@@ -76,6 +87,8 @@ start_one() {
   check_process "$p"
   alive "$p" && { echo "$p is running already (pid $(cat "$dir/$p.pid"))"; return 0; }
   local line=("$bin/afford-$p" --lcm-url "$u")
+  # A swapped process: the shell runs the command with the standard arguments as "$@", and becomes it (exec).
+  [[ -s $dir/$p.process ]] && line=(/bin/sh -c "exec $(cat "$dir/$p.process") \"\$@\"" "afford-$p" --lcm-url "$u")
   [[ -n ${AFFORD_BUS_KEY:-} ]] && line+=(--bus-key "$AFFORD_BUS_KEY")
   [[ $p == logger ]] && line+=(--log-dir "$logs")
   [[ $p == predictors ]] && line+=(--checkpoint-dir "$logs")
@@ -88,10 +101,10 @@ start_one() {
   else
     ip netns exec "$netns" "${line[@]}" >>"$dir/$p.log" 2>&1 </dev/null &
   fi
-  local pid=$!
+  local pid=$! f
+  # The pid and its start time (`running`): the same through every exec from here to the process itself.
+  f=($(stat_of "$pid")) && echo "${f[19]}" >"$dir/$p.started"
   echo "$pid" >"$dir/$p.pid"
-  # Until the child has exec'd afford-$p (`running` knows it by name), it is not yet the process.
-  for _ in $(seq 250); do running "$pid" "$p" || [[ ! -e /proc/$pid ]] && break; sleep 0.02; done
   echo "$p started (pid $pid, output in $dir/$p.log)"
 }
 
@@ -103,6 +116,10 @@ stop_one() {
   pid=$(cat "$dir/$p.pid")
   kill -INT "$pid"
   for _ in $(seq $((grace * 10))); do running "$pid" "$p" || break; sleep 0.1; done
+  if running "$pid" "$p"; then  # (a program started in the background may ignore SIGINT: SIGTERM then)
+    kill -TERM "$pid"
+    for _ in $(seq 20); do running "$pid" "$p" || break; sleep 0.1; done
+  fi
   if running "$pid" "$p"; then
     kill -KILL "$pid"
     echo "$p (pid $pid) did not stop within ${grace} s: killed"
@@ -121,7 +138,25 @@ case $cmd in
       export AFFORD_BUS_KEY=$key
     fi
     u=$(url)
-    procs=("$@")
+    procs=()
+    while [[ $# -gt 0 ]]; do
+      case $1 in
+        --process | --process=*)
+          if [[ $1 == --process ]]; then
+            [[ $# -ge 2 ]] || die "--process needs NAME='CMD ARGS'"
+            swap=$2
+            shift
+          else
+            swap=${1#--process=}
+          fi
+          [[ $swap == *=* ]] || die "--process '$swap': give NAME='CMD ARGS'"
+          check_process "${swap%%=*}"
+          printf '%s\n' "${swap#*=}" | sed '/^[[:space:]]*$/d' >"$dir/${swap%%=*}.process"
+          ;;
+        *) procs+=("$1") ;;
+      esac
+      shift
+    done
     [[ ${#procs[@]} -gt 0 ]] || procs=("${all[@]}")
     for p in "${procs[@]}"; do start_one "$p" "$u"; done
     if [[ $netns == none ]]; then echo "bus: $u"; else echo "bus: $u (network namespace '$netns')"; fi
@@ -159,6 +194,7 @@ case $cmd in
       [[ -f $dir/$p.pid ]] || continue
       if alive "$p"; then a=yes; else a=no; fi
       printf '%-12s %8s  %s\n' "$p" "$(cat "$dir/$p.pid")" "$a"
+      [[ -s $dir/$p.process ]] && printf '%-12s %8s  runs: %s\n' "" "" "$(cat "$dir/$p.process")"
     done
     echo
     in_ns "$bin/afford" status --lcm-url "$u" "$@"  # e.g. --wait-for eye --state running

@@ -49,7 +49,8 @@ start_xvfb() {
 # the paths decide (wall times, speeds, memory, log sizes and folders, run
 # ids, versions): two experiments with the same results print the same.
 summary_results() {
-  awk '/"peak_rss_kb": \{\}/ {next} /"peak_rss_kb": \{/ {skip=1; next} skip && /\}/ {skip=0; next} !skip' "$1/summary.json" |
+  # (how the runs were hosted: the processes' peak memory, the commands swapped in with --process)
+  awk '/"(peak_rss_kb|processes)": \{\}/ {next} /"(peak_rss_kb|processes)": \{/ {skip=1; next} skip && /\}/ {skip=0; next} !skip' "$1/summary.json" |
     grep -v -E '"(wall_seconds|run_seconds|steps_per_second|log_bytes|log_bytes_per_step|log_dir|checkpoint|transport|network|afford_version|run_id)"'
 }
 

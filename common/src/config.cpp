@@ -411,6 +411,14 @@ RunConfig parseRunConfig(const YAML::Node& root) {
   }
   {
     Reader m = r.map("motivation");
+    c.motivation.kind = m.text("kind");
+    for (char ch : c.motivation.kind)
+      if (!((ch >= 'a' && ch <= 'z') || (ch >= '0' && ch <= '9') || ch == '_' || ch == '-') || c.motivation.kind.size() > 64)
+        fail(m.keyPath("kind"), "'" + c.motivation.kind + "' is not a name (lower-case letters, digits, '_', '-')");
+    if (c.motivation.kind.empty()) fail(m.keyPath("kind"), "is empty");
+    Reader nov = m.map("novelty");
+    c.motivation.novelty_threshold = nov.number("threshold", 0.0, 1.0);
+    nov.finish();
     c.motivation.fixed_threshold = m.number("fixed_threshold", 0.0, 1.0);
     c.motivation.leak = m.number("leak", 0.0, 1.0);
     c.motivation.initial_threshold = m.number("initial_threshold", 0.0, 1.0);
@@ -423,6 +431,8 @@ RunConfig parseRunConfig(const YAML::Node& root) {
     c.motivation.revisit.after_steps = rv.integer("after_steps", 0, 100'000'000);
     c.motivation.revisit.order =
         rv.choice<RevisitOrder>("order", {{"actions", RevisitOrder::Actions}, {"random", RevisitOrder::Random}});
+    if (c.motivation.revisit.enabled && c.motivation.kind != "paper")  // revisits are the paper motivation's
+      fail(rv.keyPath("enabled"), "true needs motivation.kind paper (it is '" + c.motivation.kind + "')");
     rv.finish();
     m.finish();
   }

@@ -107,14 +107,15 @@ RunOutcome runOverUdpm(const PlannedRun& run, const ExperimentOptions& o, const 
     slot.group = std::make_unique<ProcessGroup>(bin, runProcesses(run.spec.extrinsic, /*recorded=*/false), slot.url,
                                                 out, common,
                                                 std::map<std::string, std::vector<std::string>>{
-                                                    {"predictors", {"--checkpoint-dir", o.log_root}}});
+                                                    {"predictors", {"--checkpoint-dir", o.log_root}}},
+                                                o.processes);
   }
   // The logger serves the slot's runs one after another; those not to be kept
   // say so in their configuration (run.record), and it stays free during them.
   if (run.keep_log && !attached && (!slot.logger || !slot.logger->health().empty()))
     slot.logger = std::make_unique<ProcessGroup>(
         bin, std::vector<std::string>{"logger"}, slot.url, out, common,
-        std::map<std::string, std::vector<std::string>>{{"logger", {"--log-dir", o.log_root}}});
+        std::map<std::string, std::vector<std::string>>{{"logger", {"--log-dir", o.log_root}}}, o.processes);
   lcm::LCM& lcm = *slot.lcm;
   RunDriver& driver = *slot.driver;
   driver.onStep(on_step);

@@ -23,6 +23,8 @@
 #include "afford/store.hpp"
 #include "afford/summary.hpp"
 #include "afford/sweep.hpp"
+#include "afford/processes.hpp"
+#include "motivation/component.hpp"
 
 namespace afford {
 namespace fs = std::filesystem;
@@ -288,7 +290,46 @@ json sweepSummary(const std::vector<Part>& parts, std::vector<json>& summaries, 
           {"conditions", by_name}};
 }
 
+// --process: only where the runner starts real processes. And the motivation that each run's motivation.kind
+// names must be one this runner hosts or starts (not checked where someone else's process decides).
+void checkProcesses(const ExperimentOptions& o, const std::vector<PlannedRun>& runs) {
+  if (!o.processes.empty() && !o.attach.empty())
+    throw ConfigError("--process with --attach: the runner starts no process on a bus it attaches to; start "
+                      "your own by hand (scripts/procs.sh start RUN --process NAME='CMD')");
+  if (!o.processes.empty() && o.transport != "udpm")
+    throw ConfigError("--process starts a command in place of a shipped process, which needs real processes "
+                      "(--transport udpm, not " + o.transport + "); in one process, a config key chooses the "
+                      "component (motivation.kind)");
+  if (!o.attach.empty() || o.processes.count("motivation")) return;
+  std::set<std::string> seen;
+  for (const PlannedRun& run : runs)
+    if (seen.insert(run.spec.config_yaml).second) {
+      try {
+        makeMotivation(parseRunConfigText(run.spec.config_yaml));
+      } catch (const ConfigError& e) {
+        throw ConfigError("run " + run.spec.run_id + ": " + e.what());
+      }
+    }
+}
+
 }  // namespace
+
+std::map<std::string, std::string> parseProcessSwaps(const std::vector<std::string>& given, const std::string& option) {
+  std::string known;
+  for (const ProcessInfo& p : processRegistry()) known += (known.empty() ? "" : ", ") + std::string(p.name);
+  std::map<std::string, std::string> out;
+  for (const std::string& g : given) {
+    const auto eq = g.find('=');
+    const std::string name = g.substr(0, eq);
+    if (eq == std::string::npos || !isProcessName(name))
+      throw ConfigError(option + " '" + g + "': give NAME='CMD ARGS', NAME one of " + known);
+    const auto first = g.find_first_not_of(" \t", eq + 1);
+    if (first == std::string::npos) throw ConfigError(option + " " + name + "=: the command is empty");
+    if (!out.emplace(name, g.substr(first)).second)
+      throw ConfigError(option + " " + name + " is given twice");
+  }
+  return out;
+}
 
 int runExperiment(const ExperimentOptions& request, spdlog::logger& log) {
   const auto began = std::chrono::steady_clock::now();  // reported only, never decides anything
@@ -326,6 +367,7 @@ int runExperiment(const ExperimentOptions& request, spdlog::logger& log) {
     refuseChangedPlan(request, optionsFromJson(state.at("options")), plan);
     refuseOtherPlan(state.at("runs"), fingerprint(runs), "intrinsic runs");
   }
+  if (!merging) checkProcesses(o, runs);
   std::vector<char> elsewhere;  // --shard: the runs other shards run
   if (o.shard_count)
     for (std::size_t i = 0; i < runs.size(); ++i)
@@ -385,6 +427,12 @@ int runExperiment(const ExperimentOptions& request, spdlog::logger& log) {
     moveUnfinishedAside(runs, intrinsic, o, state, log);
   }
   const AgentStore agents((fs::path(o.log_root) / "agents").string());
+  // The store knows the shipped processes' code (its key), not what a swapped command runs.
+  if (o.reuse_agents && !o.processes.empty()) {
+    o.reuse_agents = false;
+    log.info("--process: the agents of this experiment are neither taken from nor kept in {}/agents",
+             o.log_root);
+  }
   if (o.reuse_agents && !merging) takeStoredAgents(runs, plan.design.after_actions, intrinsic, agents, o, log);
   executeRuns(runs, intrinsic, o, plan.protocol, bin, log);
   if (o.reuse_agents && !merging) storeAgents(runs, intrinsic, agents, log);

@@ -9,6 +9,7 @@
 #include <spdlog/spdlog.h>
 
 #include <cstdint>
+#include <map>
 #include <optional>
 #include <set>
 #include <string>
@@ -47,6 +48,9 @@ struct ExperimentOptions {
   std::optional<int> tables;               // random tables: how many (default: the experiment file's tables.count)
   std::optional<std::int64_t> table_seed;  // ... and the series they are drawn from (default: its tables.seed)
   std::string attach;                      // run on this bus with processes started by hand (no group, one job)
+  // --process NAME=CMD: the runner starts CMD (a shell command, the standard arguments appended) in place of
+  // the shipped afford-NAME (udpm only)
+  std::map<std::string, std::string> processes;
   std::string bus_key;                     // key file of a keyed bus (afford/auth.hpp; "": $AFFORD_BUS_KEY, or none)
   int shard_index = 0, shard_count = 0;    // --shard i/n: run intrinsic run k (and its tests) iff k mod n == i
   std::vector<std::string> merged_from;    // afford merge: the shards' folders (nothing is run)
@@ -56,6 +60,10 @@ struct ExperimentOptions {
                                            // resume, plan options must match the stored ones, run options override
   std::string program = "afford";          // how the command was called (in the resume command it prints)
 };
+
+// --process NAME=CMD options (`option` names them in errors): NAME a process of the registry, CMD not empty,
+// each NAME once.
+std::map<std::string, std::string> parseProcessSwaps(const std::vector<std::string>& given, const std::string& option);
 
 // Returns the process exit code (0 when every run succeeded).
 int runExperiment(const ExperimentOptions& options, spdlog::logger& log);

@@ -25,18 +25,27 @@ std::string executableDir() {
 
 ProcessGroup::ProcessGroup(const std::string& bin_dir, const std::vector<std::string>& names, const std::string& lcm_url,
                            const std::string& output_dir, const std::vector<std::string>& common_args,
-                           const std::map<std::string, std::vector<std::string>>& own_args) {
+                           const std::map<std::string, std::vector<std::string>>& own_args,
+                           const std::map<std::string, std::string>& commands) {
   std::filesystem::create_directories(output_dir);
   for (const auto& name : names) {
     Child c;
     c.name = name;
     c.output = (std::filesystem::path(output_dir) / (name + ".log")).string();
+    if (const auto it = commands.find(name); it != commands.end()) c.command = it->second;
     const std::string exe = (std::filesystem::path(bin_dir) / ("afford-" + name)).string();
-    if (access(exe.c_str(), X_OK) != 0) {
+    const auto command = commands.find(name);
+    if (command == commands.end() && access(exe.c_str(), X_OK) != 0) {
       stop(0);
       throw std::runtime_error("process executable " + exe + " is missing (build it: cmake --build build)");
     }
-    std::vector<std::string> args{exe, "--lcm-url", lcm_url};
+    // A swapped process: the shell runs the command with the standard arguments as "$@" (its $0 names the
+    // process it stands for, in the shell's own errors).
+    std::vector<std::string> args = command == commands.end()
+                                        ? std::vector<std::string>{exe}
+                                        : std::vector<std::string>{"/bin/sh", "-c", "exec " + command->second + " \"$@\"",
+                                                                   "afford-" + name};
+    args.insert(args.end(), {"--lcm-url", lcm_url});
     args.insert(args.end(), common_args.begin(), common_args.end());
     if (const auto it = own_args.find(name); it != own_args.end()) args.insert(args.end(), it->second.begin(), it->second.end());
     const pid_t parent = getpid();
@@ -82,6 +91,13 @@ ProcessGroup::ProcessGroup(const std::string& bin_dir, const std::vector<std::st
 
 ProcessGroup::~ProcessGroup() { stop(); }
 
+namespace {
+// The child's whole process group (it leads one): a swapped command may have started processes of its own.
+void signalChild(pid_t pid, int sig) {
+  if (kill(-pid, sig) != 0) kill(pid, sig);
+}
+}  // namespace
+
 long peakRssKb(pid_t pid) {
   std::ifstream in("/proc/" + std::to_string(pid) + "/status");
   for (std::string line; std::getline(in, line);)
@@ -107,7 +123,8 @@ std::string ProcessGroup::health() {
                         : WIFSIGNALED(status) ? "was killed by signal " + std::to_string(WTERMSIG(status)) + " (SIG" +
                                                     sigabbrev_np(WTERMSIG(status)) + ")"
                                               : "ended";
-      return "process '" + c.name + "' (pid " + std::to_string(c.pid) + ") " + how + "; its output: " + c.output;
+      return "process '" + c.name + "' (pid " + std::to_string(c.pid) + (c.command.empty() ? "" : ", command '" + c.command + "'") +
+             ") " + how + "; its output: " + c.output;
     }
   }
   for (const auto& c : children_)
@@ -117,7 +134,7 @@ std::string ProcessGroup::health() {
 
 void ProcessGroup::stop(int grace_ms) {
   for (auto& c : children_)
-    if (!c.exited) kill(c.pid, SIGTERM);
+    if (!c.exited) signalChild(c.pid, SIGTERM);
   const auto deadline = std::chrono::steady_clock::now() + std::chrono::milliseconds(grace_ms);
   for (auto& c : children_) {
     while (!c.exited) {
@@ -129,7 +146,7 @@ void ProcessGroup::stop(int grace_ms) {
         break;
       }
       if (std::chrono::steady_clock::now() >= deadline) {
-        kill(c.pid, SIGKILL);
+        signalChild(c.pid, SIGKILL);
         waitpid(c.pid, &status, 0);
         c.exited = true;
         c.status = status;

@@ -21,16 +21,20 @@ struct Child {
   std::string name;   // "eye"
   pid_t pid = -1;
   std::string output; // file with its stdout and stderr
+  std::string command; // the command it runs in place of afford-<name> ("" for the shipped one)
   bool exited = false;
   int status = 0;
 };
 
 class ProcessGroup {
  public:
-  // Starts build/bin/afford-<name> --lcm-url URL [common_args...] [args[name]...] for each name.
+  // Starts build/bin/afford-<name> --lcm-url URL [common_args...] [args[name]...] for each name; a name
+  // that `commands` gives a shell command starts that instead, with the same arguments appended
+  // (/bin/sh -c 'exec CMD "$@"', so the child is the command itself).
   ProcessGroup(const std::string& bin_dir, const std::vector<std::string>& names, const std::string& lcm_url,
                const std::string& output_dir, const std::vector<std::string>& common_args = {},
-               const std::map<std::string, std::vector<std::string>>& args = {});
+               const std::map<std::string, std::vector<std::string>>& args = {},
+               const std::map<std::string, std::string>& commands = {});
   ~ProcessGroup();
   ProcessGroup(const ProcessGroup&) = delete;
   ProcessGroup& operator=(const ProcessGroup&) = delete;

@@ -220,6 +220,12 @@ void refuseChangedPlan(const ExperimentOptions& given, const ExperimentOptions& 
   check("--log-root", path(given.log_root), path(stored.log_root));
   check("--run-prefix", given.run_prefix, stored.run_prefix);
   check("--set", joined(given.settings), joined(stored.settings));
+  const auto swapped = [](const ExperimentOptions& x) {
+    std::vector<std::string> v;
+    for (const auto& [name, command] : x.processes) v.push_back(name + "=" + command);
+    return joined(v);
+  };
+  check("--process", swapped(given), swapped(stored));
   check("--sweep", given.sweep_file.empty() ? "" : path(given.sweep_file), stored.sweep_file.empty() ? "" : path(stored.sweep_file));
   const auto shard = [](const ExperimentOptions& x) {
     return x.shard_count ? std::to_string(x.shard_index) + "/" + std::to_string(x.shard_count) : std::string("none");

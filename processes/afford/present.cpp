@@ -31,7 +31,9 @@ void printTables(const json& summary, const Plan& plan, const ExperimentOptions&
       << " run(s) per table, system and condition.\nMean absolute error of each run's learned table against its own table";
     if (rt.contains("floors"))
       t << "; " << rt["floors"]["source"].get<std::string>();
-    t << "\n\n  condition    system   mean     median   worst (table)\n";
+    std::size_t cw = 13;  // the column of conditions: 13, or the longest name and a space
+    for (const auto& cj : rt["condition_order"]) cw = std::max(cw, cj.get<std::string>().size() + 1);
+    t << "\n\n  " << std::left << std::setw(static_cast<int>(cw)) << "condition" << "system   mean     median   worst (table)\n";
     std::vector<std::pair<std::string, std::string>> columns;
     for (const auto& cj : rt["condition_order"])
       for (const auto& sj : rt["system_order"]) {
@@ -39,7 +41,7 @@ void printTables(const json& summary, const Plan& plan, const ExperimentOptions&
         const json& m = rt["mae"][c][sys];
         columns.emplace_back(c, sys);
         const auto num = [](const json& v) { return v.is_null() ? std::string("-") : fixed(v.get<double>(), 3); };
-        t << "  " << std::left << std::setw(13) << c << std::setw(9) << sys << std::setw(9) << num(m["mean"])
+        t << "  " << std::left << std::setw(static_cast<int>(cw)) << c << std::setw(9) << sys << std::setw(9) << num(m["mean"])
           << std::setw(9) << num(m["median"]) << num(m["worst"])
           << (m["worst_table"].get<int>() >= 0 ? " (t" + std::to_string(m["worst_table"].get<int>()) + ")" : "") << "\n";
       }

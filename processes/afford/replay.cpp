@@ -23,6 +23,7 @@
 #include "afford/logging.hpp"
 #include "afford/run_config_t.hpp"
 #include "afford/run_result_t.hpp"
+#include "motivation/component.hpp"
 #include "logger/logger.hpp"
 
 namespace afford {
@@ -34,7 +35,8 @@ bool ReplayResult::consistent() const {
 }
 
 bool ReplayResult::ok() const {
-  return consistent() && gaps.empty() && incomplete.empty() && decisions == decisions_recorded &&
+  return consistent() && gaps.empty() && incomplete.empty() &&
+         (!decider_skipped.empty() || decisions == decisions_recorded) &&
          (recorded_checksum.empty() || !weights_checksum.empty());
 }
 
@@ -126,28 +128,37 @@ RunEvents runEventsOf(std::vector<LogEvent> events, const std::string& run_id, c
 }
 
 namespace {
+void keepPublished(const lcm::ReceiveBuffer* rbuf, const std::string& channel, std::vector<LogEvent>* out) {
+  LogEvent e;
+  e.channel = channel;
+  const auto* bytes = static_cast<const std::uint8_t*>(rbuf->data);
+  e.data.assign(bytes, bytes + rbuf->data_size);
+  e.utime = rbuf->recv_utime;
+  out->push_back(std::move(e));
+}
+}  // namespace
 
-// One fresh process on its own bus, fed the recorded events it does not publish itself.
-struct Replayed {
-  std::string name;
-  std::unique_ptr<lcm::LCM> bus;
-  std::unique_ptr<NodeBase> node;
-  std::unique_ptr<Edge> tap;      // what it publishes, through the edge like any subscriber
-  std::set<std::string> outputs;  // channels it publishes: the record's copies are not fed back
-  std::vector<std::vector<std::uint8_t>> decisions;  // what it published on DECISION
-  std::string checksum;           // what it published on RESULT
+ReplayedProcess::ReplayedProcess(const std::string& process, const ProtocolConfig& protocol, bool extrinsic,
+                                 const HostOptions& options)
+    : name_(process), bus_(std::make_unique<lcm::LCM>("memq://")) {
+  node_ = makeNode(process, *bus_, makeLogger("replay-" + process, "warn"), protocol, options);
+  for (const auto& ch : channelsOf(process, extrinsic)) {
+    outputs_.insert(ch);
+    bus_->subscribeFunction(ch, &keepPublished, &published_);
+  }
+}
 
-  void feed(const LogEvent& e) {
-    if (outputs.count(e.channel)) return;
-    bus->publish(e.channel, e.data.data(), static_cast<unsigned>(e.data.size()));
-    settle();
-  }
-  void settle() {
-    pumpBus(*bus, 0, INT_MAX);
-    node->tick();
-    pumpBus(*bus, 0, INT_MAX);
-  }
-};
+ReplayedProcess::~ReplayedProcess() = default;
+
+void ReplayedProcess::feed(const LogEvent& e) {
+  if (outputs_.count(e.channel)) return;  // the record's copies of its own messages: it makes them
+  bus_->publish(e.channel, e.data.data(), static_cast<unsigned>(e.data.size()));
+  pumpBus(*bus_, 0, INT_MAX);
+  node_->tick();
+  pumpBus(*bus_, 0, INT_MAX);
+}
+
+namespace {
 
 // A recorded event as its channel's type would take it (bounds, fields, digest); "" or why not.
 std::string checkRecorded(const LogEvent& e, const BoundsContext& ctx) {
@@ -259,35 +270,34 @@ ReplayResult replayRun(const ReplayOptions& o, spdlog::logger& log) {
   if (!run_folder.has_filename()) run_folder = run_folder.parent_path();  // a trailing '/'
   const std::string log_root = run_folder.parent_path().string();
   std::vector<std::string> into = o.into;
-  if (into.empty()) into = {"predictors", result.extrinsic ? "planner" : "motivation"};
-  std::vector<std::unique_ptr<Replayed>> procs;
+  const auto kinds = motivationKinds();
+  const bool own_motivation =
+      std::find(kinds.begin(), kinds.end(), config.motivation.kind) == kinds.end();
+  if (into.empty()) {
+    into = {"predictors"};
+    if (result.extrinsic)
+      into.push_back("planner");
+    else if (own_motivation)
+      result.decider_skipped = "motivation.kind '" + config.motivation.kind +
+                               "' is not built in (it ran as a process of its own): its recorded decisions "
+                               "are fed to the predictors";
+    else
+      into.push_back("motivation");
+  } else if (own_motivation && !result.extrinsic &&
+             std::find(into.begin(), into.end(), "motivation") != into.end()) {
+    throw std::runtime_error("--into motivation: the run's motivation.kind '" + config.motivation.kind +
+                             "' is not built in (it ran as a process of its own), so it cannot be replayed here; "
+                             "replay --into predictors");
+  }
+  std::vector<std::unique_ptr<ReplayedProcess>> procs;
   for (const auto& name : into) {
-    auto r = std::make_unique<Replayed>();
-    r->name = name;
-    r->bus = std::make_unique<lcm::LCM>("memq://");
-    auto logger = makeLogger("replay-" + name, "warn");
     if (name != "predictors" && name != "motivation" && name != "planner")
       throw std::runtime_error("--into: unknown process \"" + name + "\" (predictors, motivation or planner)");
     // The predictors load an extrinsic run's agent only from the log root the log is in.
-    r->node = makeNode(name, *r->bus, logger, config.protocol, HostOptions{/*single_thread=*/true, log_root});
-    for (const auto& ch : channelsOf(name, result.extrinsic)) r->outputs.insert(ch);
-    // What the replayed process publishes, taken through the edge like any subscriber.
-    r->tap = std::make_unique<Edge>(*r->bus, logger, "replay", config.protocol);
-    r->tap->join(result.run_id, &config);
-    Replayed* raw = r.get();
-    r->tap->subscribe(ch::decision,
-        [raw](const decision_t&, const Envelope& e) {
-          raw->decisions.emplace_back(e.data, e.data + e.size);
-          return Turn::take();
-        },
-        Scope::Run, Order::None);
-    r->tap->subscribe(ch::result,
-        [raw](const run_result_t& m) {
-          raw->checksum = m.weights_checksum;
-          return Turn::take();
-        },
-        Scope::Run, Order::None);
-    procs.push_back(std::move(r));
+    HostOptions host;
+    host.single_thread = true;
+    host.log_root = log_root;
+    procs.push_back(std::make_unique<ReplayedProcess>(name, config.protocol, result.extrinsic, host));
   }
 
   std::map<std::int64_t, const LogEvent*> recorded_decisions;  // by serial: a recording may hold repeats
@@ -309,19 +319,29 @@ ReplayResult replayRun(const ReplayOptions& o, spdlog::logger& log) {
   }
 
   for (auto& p : procs) {
-    if (p->name == "predictors") result.weights_checksum = p->checksum;
-    if (p->name == "motivation" || p->name == "planner") {
+    if (p->name() == "predictors")
+      for (const LogEvent& e : p->published()) {
+        run_result_t m;
+        std::string why;
+        if (e.channel == ch::result.name && decodeChecked(e.data.data(), e.data.size(), ctx, m, why))
+          result.weights_checksum = m.weights_checksum;
+      }
+    if (p->name() == "motivation" || p->name() == "planner") {
       // Only the process that decided in this phase is compared.
-      const bool decided_here = (p->name == "planner") == result.extrinsic;
+      const bool decided_here = (p->name() == "planner") == result.extrinsic;
       if (!decided_here) continue;
-      result.decisions = static_cast<std::int64_t>(p->decisions.size());
       result.decisions_recorded = static_cast<std::int64_t>(recorded_decisions.size());
-      // Compared serial by serial: a recording may lack some (its gaps).
-      for (const auto& d : p->decisions) {
+      // Compared serial by serial: a recording may lack some (its gaps). Each
+      // serial once: a process publishes one again when a peer asks for it.
+      std::set<std::int64_t> seen;
+      for (const LogEvent& d : p->published()) {
         RunHeader h;
-        if (!peekRunHeader(d.data(), static_cast<std::uint32_t>(d.size()), h)) continue;
+        if (d.channel != ch::decision.name ||
+            !peekRunHeader(d.data.data(), static_cast<std::uint32_t>(d.data.size()), h) || !seen.insert(h.serial).second)
+          continue;
+        ++result.decisions;
         auto it = recorded_decisions.find(h.serial);
-        if (it != recorded_decisions.end()) result.decisions_differing += d != it->second->data;
+        if (it != recorded_decisions.end()) result.decisions_differing += d.data != it->second->data;
       }
     }
   }

@@ -11,11 +11,14 @@
 
 #include <cstdint>
 #include <filesystem>
+#include <memory>
+#include <set>
 #include <string>
 #include <vector>
 
 #include "afford/auth.hpp"
 #include "afford/bounds.hpp"
+#include "afford/host.hpp"
 #include "afford/logfile.hpp"
 #include "afford/run_config_t.hpp"
 
@@ -72,6 +75,31 @@ struct RunEvents {
 RunEvents runEventsOf(std::vector<LogEvent> events, const std::string& run_id, const std::string& where,
                       spdlog::logger& log);
 
+// One fresh process of a run, on an in-process bus of its own, fed a
+// recording's events one at a time, each handled before the next (those on
+// channels it publishes itself are not fed: it makes its own). What it
+// publishes on the run's channels is kept, in order. Used by replay and
+// explain; `options` says where its files are (HostOptions::log_root) and who
+// observes the planner.
+class ReplayedProcess {
+ public:
+  ReplayedProcess(const std::string& process, const ProtocolConfig& protocol, bool extrinsic,
+                  const HostOptions& options);
+  ~ReplayedProcess();
+  ReplayedProcess(const ReplayedProcess&) = delete;
+  ReplayedProcess& operator=(const ReplayedProcess&) = delete;
+  void feed(const LogEvent& e);
+  const std::string& name() const { return name_; }
+  const std::vector<LogEvent>& published() const { return published_; }
+
+ private:
+  std::string name_;
+  std::unique_ptr<lcm::LCM> bus_;
+  std::unique_ptr<NodeBase> node_;
+  std::set<std::string> outputs_;
+  std::vector<LogEvent> published_;
+};
+
 struct ReplayOptions {
   std::string log_dir;                    // a run's folder: log.NN.lcm segments (or one .lcm file)
   // predictors, motivation, planner; empty: the predictors and the run's decider
@@ -93,6 +121,10 @@ struct ReplayResult {
   std::string recorded_checksum;      // the live run's RESULT ("" if the log has none)
   // Per replayed decider (motivation or planner): its decisions against the recorded ones.
   std::int64_t decisions = 0, decisions_recorded = 0, decisions_differing = 0;
+  // Why the run's decider was not replayed ("" when it was): a motivation of
+  // one's own (motivation.kind not built in) ran as its own process, which
+  // replay cannot start; its decisions are taken from the record.
+  std::string decider_skipped;
   using Gap = LogGap;
   std::vector<Gap> gaps;              // serials a channel's publisher published that the recording lacks
   std::string incomplete;             // the manifest's reason, when it says the log is incomplete

@@ -53,6 +53,7 @@ json optionsToJson(const ExperimentOptions& o) {
           {"extrinsic_reps", o.extrinsic_reps},
           {"scenarios", o.scenarios},
           {"tables", o.tables ? json(*o.tables) : json(nullptr)},
+          {"processes", o.processes},
           {"table_seed", o.table_seed ? json(*o.table_seed) : json(nullptr)},
           // run options: --resume uses them unless given again
           {"jobs", o.jobs},
@@ -91,6 +92,7 @@ ExperimentOptions optionsFromJson(const json& j) {
   o.extrinsic_reps = j.at("extrinsic_reps").get<int>();
   o.scenarios = j.at("scenarios").get<std::vector<std::string>>();
   if (j.contains("tables") && !j["tables"].is_null()) o.tables = j["tables"].get<int>();
+  o.processes = j.value("processes", std::map<std::string, std::string>());  // stored before issue 24: none
   if (j.contains("table_seed") && !j["table_seed"].is_null()) o.table_seed = j["table_seed"].get<std::int64_t>();
   o.jobs = j.at("jobs").get<int>();
   o.transport = j.at("transport").get<std::string>();

@@ -198,6 +198,7 @@ json summarise(const Plan& plan, const ExperimentOptions& o, const PhaseRuns& ph
   // The paper's numbers belong to the shipped experiments: one from a file elsewhere has none beside it.
   const bool shipped = exp.file.empty();
   if (!shipped) summary["experiment_file"] = exp.file;
+  if (!o.processes.empty()) summary["processes"] = o.processes;  // --process: the commands run in place of ours
   const YAML::Node reference = shipped ? ref.entry(exp.name) : YAML::Node();
   const std::string key = exp.name + ".";
   for (const auto& sys : plan.systems) {

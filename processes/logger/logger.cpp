@@ -49,7 +49,7 @@ RecordedSoFar readRecorded(const std::string& dir, const LogLimits& limits) {
     }
     for (const LogProblem& p : in.problems()) r.problems.push_back({p.offset, path.string() + ": " + p.what});
     if (in.tornBytes() > 0)
-      r.problems.push_back({fs::file_size(path) - in.tornBytes(),
+      r.problems.push_back({static_cast<std::int64_t>(fs::file_size(path) - in.tornBytes()),
                             path.string() + ": an incomplete last event of " + std::to_string(in.tornBytes()) + " bytes"});
   }
   return r;

@@ -9,7 +9,7 @@
 
 #include "afford/node.hpp"
 #include "afford/prediction_t.hpp"
-#include "motivation/motivation.hpp"
+#include "motivation/component.hpp"
 
 namespace afford {
 
@@ -22,7 +22,7 @@ class MotivationNode : public NodeBase {
   void onStop() override;
   void decide(const prediction_t& m);
 
-  std::unique_ptr<Motivation> core_;
+  std::unique_ptr<MotivationComponent> core_;
   std::int64_t last_ = -1;  // last decided step
 };
 

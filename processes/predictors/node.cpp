@@ -124,7 +124,7 @@ void PredictorsNode::onConfigured(const RunConfig& config) {
     } else {
       core_ = std::make_shared<Predictors>(config);
       core_->load(path);  // throws: the config is refused, naming the file
-      loaded_ = Loaded{path, size, mtime, core_};
+      loaded_ = Loaded{path, size, mtime, core_, {}};
     }
   } else {
     loaded_.reset();

@@ -8,9 +8,11 @@
 #include <fstream>
 #include <algorithm>
 #include <iterator>
+#include <map>
 #include <set>
 
 #include "afford/agents.hpp"
+#include "afford/experiment.hpp"
 #include "afford/plan.hpp"
 #include "afford/protocol.hpp"
 #include "afford/config.hpp"
@@ -128,6 +130,22 @@ TEST(Plan, ARunIdThatIsNoSafeNameIsRefusedBeforeAnythingRuns) {
   o.extrinsic_reps = 1;
   o.scenarios = {"scenario1"};
   EXPECT_NO_THROW(planExperiment(o));
+}
+
+// afford experiment --process NAME='CMD ARGS': each name once, a process of the registry, a command.
+TEST(Plan, ProcessSwapsAreCheckedNamingTheOption) {
+  EXPECT_EQ(parseProcessSwaps({"motivation=  ./mine --x 1"}, "--process"),
+            (std::map<std::string, std::string>{{"motivation", "./mine --x 1"}}));
+  for (const std::string& bad : std::vector<std::string>{"motivation", "brain=./x", "=./x", "motivation=  ",
+                                                         "../x=./y"}) {
+    try {
+      parseProcessSwaps({bad}, "--process");
+      ADD_FAILURE() << "'" << bad << "' was taken";
+    } catch (const ConfigError& e) {
+      EXPECT_NE(std::string(e.what()).find("--process"), std::string::npos) << e.what();
+    }
+  }
+  EXPECT_THROW(parseProcessSwaps({"eye=./a", "eye=./b"}, "--process"), ConfigError);
 }
 
 // docs/processes-and-channels.md shows the protocol's own table (afford processes --protocol).

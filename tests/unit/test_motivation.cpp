@@ -1,7 +1,9 @@
 #include <gtest/gtest.h>
 
+#include <cmath>
 #include <map>
 
+#include "motivation/component.hpp"
 #include "motivation/motivation.hpp"
 #include "tests/support.hpp"
 
@@ -143,6 +145,88 @@ TEST(Revisit, ARevisitActsWhateverTheThresholdAndLeavesItAsItIs) {
 TEST(Revisit, IsRefusedWithoutWhatWasTriedOnTheLook) {
   Motivation m(test::shippedConfig("base", System::IGN, 1, test::kMemoryOptions));
   EXPECT_THROW(m.decide(A{0.5, 0.5, 0.5, 0.5}, A{}), std::invalid_argument);
+}
+
+// motivation.kind=novelty: on each look, the action chosen least often there
+// (ties to the first), with the signal 1/sqrt(1+n); passes once even the least
+// chosen one has been tried so often that the signal is below the threshold.
+TEST(Novelty, CountsByLookAndPassesBelowItsThreshold) {
+  RunConfig c = test::shippedConfig("base", System::IMP);
+  c.motivation.kind = "novelty";
+  c.motivation.novelty_threshold = 0.5;  // acts while n <= 3
+  auto m = makeMotivation(c);
+  EXPECT_TRUE(m->needsMemory());
+  Percept p;
+  p.look = 7;
+  std::array<int, kNumActions> chosen{};
+  for (int i = 0; i < 4 * kNumActions; ++i) {
+    p.step = i;
+    const Decision d = m->decide(p);
+    ASSERT_TRUE(d.act) << "step " << i;
+    EXPECT_EQ(d.action, i % kNumActions);  // least chosen, ties to the first: round robin
+    EXPECT_DOUBLE_EQ(d.motivation, 1.0 / std::sqrt(1.0 + i / kNumActions));
+    EXPECT_DOUBLE_EQ(d.threshold, 0.5);
+    ++chosen[d.action];
+  }
+  p.step = 4 * kNumActions;
+  Decision d = m->decide(p);  // n = 4 everywhere: 1/sqrt(5) < 0.5
+  EXPECT_FALSE(d.act);
+  EXPECT_DOUBLE_EQ(d.motivation, 1.0 / std::sqrt(5.0));
+  EXPECT_FALSE(m->decide(p).act);  // a pass counts nothing
+  p.look = 8;  // another look has its own counts
+  d = m->decide(p);
+  EXPECT_TRUE(d.act);
+  EXPECT_EQ(d.action, 0);
+  EXPECT_DOUBLE_EQ(d.motivation, 1.0);
+}
+
+// The same percepts in order give the same decisions: what replay and live restart rely on.
+TEST(Novelty, IsAPureFunctionOfThePerceptsInOrder) {
+  RunConfig c = test::shippedConfig("base", System::IMP);
+  c.motivation.kind = "novelty";
+  auto a = makeMotivation(c), b = makeMotivation(c);
+  for (int i = 0; i < 200; ++i) {
+    Percept p;
+    p.step = i;
+    p.look = (i * 7919) % 5;
+    const Decision x = a->decide(p), y = b->decide(p);
+    ASSERT_EQ(x.act, y.act);
+    ASSERT_EQ(x.action, y.action);
+    ASSERT_EQ(x.motivation, y.motivation);
+  }
+}
+
+TEST(MotivationKind, ThePaperKindIsTheSystemsMotivation) {
+  const RunConfig c = test::shippedConfig("base", System::IMP);
+  ASSERT_EQ(c.motivation.kind, "paper");
+  auto m = makeMotivation(c);
+  Motivation core(c);
+  Percept p;
+  p.affordance = A{0.5, 0.5, 0.5, 0.5};
+  p.learning_progress = A{0.01, -0.03, 0.03, 0.02};
+  const Decision d = m->decide(p), e = core.decide(p.affordance, p.learning_progress);
+  EXPECT_EQ(d.act, e.act);
+  EXPECT_EQ(d.action, e.action);
+  EXPECT_DOUBLE_EQ(d.motivation, e.motivation);
+}
+
+TEST(MotivationKind, AKindNotBuiltInIsRefusedNamingTheKeyAndTheWayToRunOnesOwn) {
+  RunConfig c = test::shippedConfig("base", System::IMP);
+  c.motivation.kind = "mine";
+  try {
+    makeMotivation(c);
+    ADD_FAILURE() << "kind 'mine' was taken";
+  } catch (const ConfigError& e) {
+    const std::string what = e.what();
+    EXPECT_NE(what.find("motivation.kind"), std::string::npos) << what;
+    EXPECT_NE(what.find("paper, novelty"), std::string::npos) << what;
+    EXPECT_NE(what.find("--process motivation="), std::string::npos) << what;
+  }
+  registerMotivation("mine", makeNoveltyMotivation);  // what a process of one's own does first
+  EXPECT_NO_THROW(makeMotivation(c));
+  const auto kinds = motivationKinds();
+  EXPECT_EQ(kinds.front(), "paper");
+  EXPECT_EQ(kinds.back(), "mine");
 }
 
 }  // namespace

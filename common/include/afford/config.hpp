@@ -124,6 +124,8 @@ struct RevisitConfig {
 };
 
 struct MotivationConfig {
+  std::string kind = "paper";            // the motivation component (motivation/component.hpp): paper, novelty, ...
+  double novelty_threshold = 0;          // novelty: act while 1 / sqrt(1 + n) is at least this
   double fixed_threshold = 0;            // FIX
   double leak = 0;                       // nu of equation 2 (IGN, IMP)
   double initial_threshold = 0;          // th_0 (IGN, IMP)
@@ -242,8 +244,11 @@ struct RunConfig {
   PlannerConfig planner;
   ProtocolConfig protocol;
 
-  // The predictors keep a memory of experiences: replay or revisits use it.
-  bool keepsMemory() const { return predictors.replay.enabled || motivation.revisit.enabled; }
+  // The predictors keep a memory of experiences: replay, revisits and every
+  // motivation but the paper's use it (its looks, what was tried on them).
+  bool keepsMemory() const {
+    return predictors.replay.enabled || motivation.revisit.enabled || motivation.kind != "paper";
+  }
 };
 
 // Parse a scenario (types, names, ranges); `path` prefixes the keys in errors.

@@ -22,6 +22,7 @@ enum class Purpose : std::uint64_t {
   Replay = 9,             // predictors: which remembered experiences are replayed at a step
   Revisit = 10,           // motivation: the order of never-tried colour changes (revisit.order: random)
   ScenarioGeneration = 11,  // experiments: a generated scenario (step = its index, sub-key = the attempt)
+  Component = 12,         // a component of one's own (docs/writing-a-component.md): sub-key = its own constant
 };
 
 constexpr std::uint64_t splitmix64(std::uint64_t x) {

@@ -13,6 +13,7 @@ Command experimentCommand(CLI::App& app, const FrontDoor& door) {
   struct Args {
     ExperimentOptions o;
     std::string system, netns = "auto", file, shard;
+    std::vector<std::string> processes;
     int reps = 0, tables = 0;
     std::int64_t steps = 0, table_seed = 0;
   };
@@ -80,6 +81,10 @@ Command experimentCommand(CLI::App& app, const FrontDoor& door) {
   exp->add_option("--bus-key", o.bus_key,
                   "key file of a keyed bus: the runner and the processes it starts tag what they send and take "
                   "only tagged messages (default: the file $AFFORD_BUS_KEY names; none: untagged)");
+  exp->add_option("--process", a->processes,
+                  "NAME='CMD ARGS': start CMD in place of the shipped process NAME (repeatable; real processes "
+                  "only). CMD gets the arguments the shipped one would (--lcm-url URL ...) appended; see "
+                  "docs/writing-a-component.md");
   exp->add_flag("--resume", o.resume,
                 "continue the interrupted experiment of --out: the runs not finished, with its stored options");
   return {exp, [&app, exp, a, &door, tables_option, table_seed_option] {
@@ -114,6 +119,7 @@ Command experimentCommand(CLI::App& app, const FrontDoor& door) {
               if (o.shard_count < 1 || o.shard_index < 0 || o.shard_index >= o.shard_count)
                 throw ConfigError("--shard must be i/n with 0 <= i < n, not \"" + a->shard + "\"");
             }
+            o.processes = parseProcessSwaps(a->processes, "--process");
             if (a->reps) o.reps = a->reps;
             if (a->steps) o.steps = a->steps;
             if (tables_option->count()) o.tables = a->tables;

@@ -50,7 +50,10 @@ Command replayCommand(CLI::App& app, const FrontDoor& door) {
                           r.weights_checksum.empty() ? "(not reached: the replay stopped before the end)"
                                                      : r.weights_checksum.c_str(),
                           r.recorded_checksum.empty() ? "(none in the log)" : r.recorded_checksum.c_str());
-            std::printf("decisions: %lld replayed, %lld recorded, %lld differing\n", static_cast<long long>(r.decisions),
+            if (!r.decider_skipped.empty())
+              std::printf("decider not replayed: %s\n", r.decider_skipped.c_str());
+            else
+              std::printf("decisions: %lld replayed, %lld recorded, %lld differing\n", static_cast<long long>(r.decisions),
                         static_cast<long long>(r.decisions_recorded), static_cast<long long>(r.decisions_differing));
             if (r.ok())
               std::printf("replay equals the record\n");

@@ -22,6 +22,7 @@ Command statusCommand(CLI::App& app, const FrontDoor& door) {
   struct Args {
     std::string url = "udpm://239.255.76.67:7667?ttl=0", wait, state, bus_key;
     double seconds = 1.5;
+    std::int64_t step = -1;
   };
   auto a = std::make_shared<Args>();
   auto* status = app.add_subcommand("status", "list the processes heard on a bus: pid, state, run, last step");
@@ -33,6 +34,7 @@ Command statusCommand(CLI::App& app, const FrontDoor& door) {
                      "state); --seconds is then the deadline, and missing it exits 1");
   status->add_option("--state", a->state, "with --wait-for: the state to wait for")
       ->check(CLI::IsMember({"waiting", "ready", "running", "done", "failed"}));
+  status->add_option("--step", a->step, "with --wait-for: until each has handled this step (or a later one)");
   status->add_option("--bus-key", a->bus_key,
                      "key file of a keyed bus (default: the file $AFFORD_BUS_KEY names; none: untagged)");
   return {status, [a, &door] {
@@ -71,7 +73,7 @@ Command statusCommand(CLI::App& app, const FrontDoor& door) {
                 bool ok = false;
                 for (const auto& [id, entry] : heard) {
                   const process_status_t& m = entry.first;
-                  ok = ok || (m.process == p && (a->state.empty() || a->state == states[m.state]));
+                  ok = ok || (m.process == p && (a->state.empty() || a->state == states[m.state]) && m.step >= a->step);
                 }
                 if (!ok) return false;
               }
@@ -95,8 +97,9 @@ Command statusCommand(CLI::App& app, const FrontDoor& door) {
                           static_cast<long long>(edge.drops().untagged));
             if (heard.empty()) std::printf("(no process heard on %s in %.1f s)\n", a->url.c_str(), a->seconds);
             if (!awaited.empty() && !allHeard()) {
-              std::fprintf(stderr, "afford status: not every one of %s was heard%s within %.1f s on %s\n",
-                           a->wait.c_str(), a->state.empty() ? "" : (" " + a->state).c_str(), a->seconds,
+              std::fprintf(stderr, "afford status: not every one of %s was heard%s%s within %.1f s on %s\n",
+                           a->wait.c_str(), a->state.empty() ? "" : (" " + a->state).c_str(),
+                           a->step < 0 ? "" : (" at step " + std::to_string(a->step)).c_str(), a->seconds,
                            a->url.c_str());
               return 1;
             }

@@ -1,0 +1,68 @@
+// What a motivation is, for someone who writes one (docs/writing-a-component.md):
+// the motivation process's node takes each step's PREDICTION by its input rule
+// (in step order, once) and gives the component what the predictors say of the
+// focused object; the component says whether to act, and with which action;
+// the node publishes the DECISION. A component holds no protocol code.
+//
+// For exact replay and live restart, a component's state must be a pure
+// function of the percepts it was given, in order, and of the run's
+// configuration; randomness comes from KeyedRng(config.seed, step, purpose)
+// (afford/rng.hpp), never from a clock or a global generator.
+//
+// The motivation.kind config key picks the component: `paper` (FIX, IGN and
+// IMP, the system of the run: paper 2.4.1) and `novelty` ship; a process of
+// one's own registers more (registerMotivation) before it starts.
+#pragma once
+#include <array>
+#include <cstdint>
+#include <functional>
+#include <memory>
+#include <optional>
+#include <string>
+#include <vector>
+
+#include "afford/actions.hpp"
+#include "afford/config.hpp"
+#include "motivation/motivation.hpp"
+
+namespace afford {
+
+// What the predictors say of the object in focus at `step` (one PREDICTION).
+struct Percept {
+  std::int64_t step = 0;
+  std::array<double, kNumActions> affordance{};          // predicted success of each action
+  std::array<double, kNumActions> learning_progress{};   // predicted change of each affordance output
+  // With the predictors' memory (RunConfig::keepsMemory): which look the focus
+  // is (the same object seen again), and the steps since each action was last
+  // tried on it (-1: never).
+  int look = -1;
+  std::optional<std::array<std::int64_t, kNumActions>> tried_ago;
+  // |change| of the affordance output that the previous step's action caused
+  // (its update report), when there is one.
+  std::optional<double> last_change;
+};
+
+class MotivationComponent {
+ public:
+  virtual ~MotivationComponent() = default;
+  // Act (and with which action) or pass, for this step's percept.
+  virtual Decision decide(const Percept& p) = 0;
+  // Must this step's percept carry the previous step's update report? (The
+  // node then waits for, or refuses, a PREDICTION without it.)
+  virtual bool needsLastChange() const { return false; }
+  // Must the percepts say which look the focus is and what was tried on it
+  // (the predictors' memory, which they keep for every kind but paper)?
+  virtual bool needsMemory() const { return false; }
+};
+
+using MotivationFactory = std::function<std::unique_ptr<MotivationComponent>(const RunConfig&)>;
+// Make `kind` available to motivation.kind (a process of one's own does this before processMain).
+void registerMotivation(const std::string& kind, MotivationFactory factory);
+// The kinds registered, the shipped ones first.
+std::vector<std::string> motivationKinds();
+// The component motivation.kind names; throws ConfigError naming the key and the kinds known.
+std::unique_ptr<MotivationComponent> makeMotivation(const RunConfig& config);
+// The shipped novelty motivation (motivation/novelty.cpp).
+std::unique_ptr<MotivationComponent> makeNoveltyMotivation(const RunConfig& config);
+
+}  // namespace afford

@@ -1,0 +1,46 @@
+// A motivation the paper does not have: count-based novelty, a standard
+// baseline of the curiosity literature. On the focused look, the action this
+// motivation chose least often there; its signal is 1 / sqrt(1 + n), n that
+// count; it acts while the signal is at least motivation.novelty.threshold.
+// Its state, the counts, is a pure function of the percepts in order, so
+// replay and live restart reproduce it. (docs/writing-a-component.md)
+#include <cmath>
+#include <map>
+
+#include "motivation/component.hpp"
+
+namespace afford {
+
+namespace {
+
+class Novelty : public MotivationComponent {
+ public:
+  explicit Novelty(const RunConfig& config) : threshold_(config.motivation.novelty_threshold) {}
+
+  Decision decide(const Percept& p) override {
+    std::array<std::int64_t, kNumActions>& n = counts_[p.look];  // by look: the predictors' memory
+    int least = 0;
+    for (int a = 1; a < kNumActions; ++a)
+      if (n[a] < n[least]) least = a;  // ties: the first in the action order
+    Decision d;
+    d.action = least;
+    d.motivation = 1.0 / std::sqrt(1.0 + static_cast<double>(n[least]));
+    d.threshold = threshold_;
+    d.act = d.motivation >= threshold_;
+    if (d.act) ++n[least];
+    return d;
+  }
+  bool needsMemory() const override { return true; }
+
+ private:
+  double threshold_;
+  std::map<int, std::array<std::int64_t, kNumActions>> counts_;  // look -> times each action was chosen on it
+};
+
+}  // namespace
+
+std::unique_ptr<MotivationComponent> makeNoveltyMotivation(const RunConfig& config) {
+  return std::make_unique<Novelty>(config);
+}
+
+}  // namespace afford
