@@ -10,6 +10,7 @@
 #include <map>
 #include <tuple>
 
+#include "afford/processes.hpp"
 #include "afford/protocol.hpp"
 #include "afford/decision_t.hpp"
 #include "afford/decode.hpp"
@@ -79,14 +80,6 @@ std::map<std::int64_t, Msg> messages(const std::vector<LogEvent>& events, const 
   return out;
 }
 
-// A request of the planner in the order it made them: LOOK and FORWARD_QUERY
-// draw their seq from one counter.
-struct Request {
-  const look_t* look = nullptr;
-  const forward_query_t* query = nullptr;
-  std::int64_t step() const { return look ? look->step : query->step; }
-};
-
 // The better of two checks against a sub-goal: one that passed both tests;
 // else one whose predicted place matched (the right object and action, only
 // the image off); else the smaller what-distance.
@@ -96,10 +89,120 @@ bool closerCheck(const ExplainedCheck& a, const ExplainedCheck& b) {
   return a.what_distance < b.what_distance;
 }
 
-struct SubGoalImage {
-  std::vector<std::uint8_t> image;
-  double x = 0, y = 0;
+// What the planner core tells as it replays the test (PlannerObserver): the
+// iterations, the sub-goals with their images, and the core's own figures.
+struct Recorder : PlannerObserver {
+  std::map<std::int64_t, ExplainedIteration> steps;
+  std::vector<ExplainedSubGoal> sub_goals;
+  std::vector<std::vector<std::uint8_t>> images;  // of sub_goals
+  std::vector<SubGoalRecord> records;             // as of the last iteration ended
+  std::map<std::size_t, SubGoalExit> exits;       // of the sub-goals left unreached
+  int current = -1;
+
+  ExplainedIteration& at(int iteration) {
+    auto [it, fresh] = steps.try_emplace(iteration);
+    if (fresh) {
+      it->second.step = iteration;
+      it->second.sub_goal = current;
+    }
+    return it->second;
+  }
+  void requested(int iteration, const PlannerRequest& r) override {
+    ExplainedIteration& it = at(iteration);
+    if (r.kind == PlannerRequest::Forward && r.prefix.empty()) it.candidates = r.actions;
+    if (r.kind == PlannerRequest::Act) {
+      it.executed = r.action;
+      it.target_x = r.x;
+      it.target_y = r.y;
+    }
+  }
+  void subGoalPicked(int iteration, const View& g) override {
+    ExplainedSubGoal s;
+    s.x = g.x;
+    s.y = g.y;
+    s.first_step = s.last_step = iteration;
+    sub_goals.push_back(s);
+    images.push_back(g.image);
+    current = static_cast<int>(sub_goals.size()) - 1;
+    ExplainedIteration& it = at(iteration);
+    it.sub_goal = current;
+    it.picked = true;
+  }
+  void reachChecked(int iteration, bool after_action, double distance, bool reached) override {
+    at(iteration).reach_checks.push_back({after_action, distance, reached});
+  }
+  void objectTaken(int iteration, const View& object, const std::array<double, kNumActions>& affordance) override {
+    ExplainedIteration& it = at(iteration);
+    it.scanned = true;
+    it.object_x = object.x;
+    it.object_y = object.y;
+    it.affordance = affordance;
+  }
+  void predictionsChecked(int iteration, const std::vector<int>& prefix,
+                          const std::vector<PlannerCheck>& checks) override {
+    // The checks of the multi-step search's imagined objects lead to the first action's: those are explained.
+    if (prefix.empty()) at(iteration).checks = checks;
+  }
+  void subGoalLeft(int /*iteration*/, std::size_t sub_goal, SubGoalExit why) override { exits[sub_goal] = why; }
+  void iterationEnded(int iteration, const std::vector<SubGoalRecord>& sub_goal_records) override {
+    at(iteration);
+    records = sub_goal_records;
+  }
 };
+
+// What the replayed planner published against the recording, channel by
+// channel and serial by serial; why it stopped if it did not finish.
+void compareWithRecord(const ReplayedProcess& planner, const std::vector<LogEvent>& recorded, const std::string& run_id,
+                       const BoundsContext& ctx, std::vector<std::string>& warn) {
+  std::map<std::string, std::map<std::int64_t, const LogEvent*>> mine, theirs;
+  for (const LogEvent& e : planner.published()) {
+    RunHeader h;
+    if (peekRunHeader(e.data.data(), static_cast<std::uint32_t>(e.data.size()), h)) mine[e.channel].emplace(h.serial, &e);
+  }
+  for (const LogEvent& e : recorded) {
+    if (!isSerialChannel(e.channel) || publisherOf(e.channel, true) != std::string("planner")) continue;
+    RunHeader h;
+    if (peekRunHeader(e.data.data(), static_cast<std::uint32_t>(e.data.size()), h) && h.run_id == run_id)
+      theirs[e.channel].emplace(h.serial, &e);
+  }
+  for (const auto& [channel, recorded_ones] : theirs) {
+    const auto& replayed = mine[channel];
+    for (const auto& [serial, e] : recorded_ones) {
+      auto it = replayed.find(serial);
+      if (it != replayed.end() && it->second->data != e->data) {
+        warn.push_back(format("%s serial %lld of the replayed planner differs from the recorded one: the log is not "
+                              "this planner's (another version?); what follows is the replayed planner's account",
+                              channel.c_str(), static_cast<long long>(serial)));
+        break;
+      }
+    }
+  }
+  if (!mine[ch::extrinsicResult.name].empty()) return;
+  // It did not finish: say what it waits for that the log lacks.
+  std::int32_t last_seq = -1;
+  std::int64_t last_step = -1;
+  bool query = false;
+  for (const char* c : {ch::look.name, ch::forwardQuery.name})
+    for (const auto& [serial, e] : mine[c]) {
+      std::string why;
+      if (c == std::string(ch::look.name)) {
+        look_t l;
+        if (decodeChecked(e->data.data(), e->data.size(), ctx, l, why) && l.seq > last_seq)
+          std::tie(last_seq, last_step, query) = std::make_tuple(l.seq, l.step, false);
+      } else {
+        forward_query_t q;
+        if (decodeChecked(e->data.data(), e->data.size(), ctx, q, why) && q.seq > last_seq)
+          std::tie(last_seq, last_step, query) = std::make_tuple(q.seq, q.step, true);
+      }
+    }
+  warn.push_back(last_seq < 0 ? std::string("the replayed planner made no request: the log does not start the test")
+                 : query ? format("iteration %lld: FORWARD_QUERY seq %d has no FORWARD_PREDICTION in the log: the "
+                                  "replayed planner stops there",
+                                  static_cast<long long>(last_step), last_seq)
+                         : format("iteration %lld: LOOK seq %d has no FOCUS answering it in the log (or the "
+                                  "PREDICTION of its object is missing): the replayed planner stops there",
+                                  static_cast<long long>(last_step), last_seq));
+}
 
 }  // namespace
 
@@ -171,21 +274,17 @@ Explanation explainRunEvents(const RunEvents& run, const std::string& where, std
   ex.utility = result.utility;
   ex.iterations = result.step;
 
-  // Each message by the key it is answered or placed by.
-  const auto looks = messages(run.events, ch::look, ex.run_id, ctx, warn);
-  const auto queries = messages(run.events, ch::forwardQuery, ex.run_id, ctx, warn);
-  std::map<std::int32_t, const focus_t*> focus_by_seq;
-  const auto focuses = messages(run.events, ch::focus, ex.run_id, ctx, warn);
-  for (const auto& [serial, f] : focuses) focus_by_seq.emplace(f.seq, &f);
-  std::map<std::int32_t, const forward_prediction_t*> forward_by_seq;
-  const auto forwards = messages(run.events, ch::forwardPrediction, ex.run_id, ctx, warn);
-  for (const auto& [serial, f] : forwards) forward_by_seq.emplace(f.seq, &f);
-  std::map<std::int64_t, const prediction_t*> prediction_by_step;
-  const auto predictions = messages(run.events, ch::prediction, ex.run_id, ctx, warn);
-  for (const auto& [serial, m] : predictions) prediction_by_step.emplace(m.step, &m);
-  std::map<std::int64_t, const decision_t*> decision_by_step;
-  const auto decisions = messages(run.events, ch::decision, ex.run_id, ctx, warn);
-  for (const auto& [serial, d] : decisions) decision_by_step.emplace(d.step, &d);
+  // The test replayed into a fresh planner, whose core tells what it checks and decides.
+  Recorder rec;
+  HostOptions host;
+  host.single_thread = true;
+  host.log_root = "";  // the planner reads no file
+  host.planner_observer = &rec;
+  ReplayedProcess planner("planner", config.protocol, /*extrinsic=*/true, host);
+  for (const LogEvent& e : run.events) planner.feed(e);
+  compareWithRecord(planner, run.events, ex.run_id, ctx, warn);
+
+  // What the environment says of the scenes: the goal distance at the start and after each action.
   std::map<std::int64_t, const scene_t*> action_scene_by_step;
   const auto scenes = messages(run.events, ch::scene, ex.run_id, ctx, warn);
   for (const auto& [serial, s] : scenes) {
@@ -193,160 +292,35 @@ Explanation explainRunEvents(const RunEvents& run, const std::string& where, std
     if (s.cause == scene_t::CAUSE_ACTION) action_scene_by_step.emplace(s.step, &s);
     if (s.cause == scene_t::CAUSE_START || s.cause == scene_t::CAUSE_ACTION) ex.final_goal_distance = s.goal_distance;
   }
-
-  std::map<std::int32_t, Request> requests;
-  for (const auto& [serial, l] : looks) requests[l.seq].look = &l;
-  for (const auto& [serial, q] : queries) {
-    Request& r = requests[q.seq];
-    if (r.look) warn.push_back(format("LOOK and FORWARD_QUERY both have seq %d", q.seq));
-    r.query = &q;
+  for (auto& [step, it] : rec.steps) {
+    if (it.executed < 0) continue;
+    auto s = action_scene_by_step.find(step);
+    if (s != action_scene_by_step.end())
+      it.goal_distance_after = s->second->goal_distance;
+    else
+      warn.push_back(format("iteration %lld: no SCENE after the action in the log", static_cast<long long>(step)));
   }
 
-  // The planner's iterations, request by request.
-  std::map<std::int64_t, ExplainedIteration> steps;
-  std::vector<SubGoalImage> images;  // of ex.sub_goals
-  std::vector<SubGoalImage> differences;  // top-down: the sub-goals of the last look at the differences
-  int current = -1;
-  auto iteration = [&](std::int64_t step) -> ExplainedIteration& {
-    auto [it, fresh] = steps.try_emplace(step);
-    if (fresh) {
-      it->second.step = step;
-      it->second.sub_goal = current;
-    }
-    return it->second;
-  };
-  for (const auto& [seq, r] : requests) {
-    ExplainedIteration& it = iteration(r.step());
-    if (r.query) {
-      const forward_query_t& q = *r.query;
-      // Multi-step search: the queries about imagined objects (a prefix of
-      // actions) lead to the first one's action; its checks are the ones explained.
-      if (q.n_prefix > 0) continue;
-      it.candidates.assign(q.actions.begin(), q.actions.end());
-      auto f = forward_by_seq.find(seq);
-      if (f == forward_by_seq.end()) {
-        warn.push_back(format("iteration %lld: FORWARD_QUERY seq %d has no FORWARD_PREDICTION in the log",
-                              static_cast<long long>(it.step), seq));
-        continue;
-      }
-      if (it.sub_goal < 0) {
-        warn.push_back(format("iteration %lld: forward predictions without a sub-goal in the log",
-                              static_cast<long long>(it.step)));
-        continue;
-      }
-      const SubGoalImage& goal = images[static_cast<std::size_t>(it.sub_goal)];
-      if (q.target_x != goal.x || q.target_y != goal.y)
-        warn.push_back(format("iteration %lld: FORWARD_QUERY seq %d names the target (%.4f, %.4f), the sub-goal is at (%.4f, %.4f)",
-                              static_cast<long long>(it.step), seq, q.target_x, q.target_y, goal.x, goal.y));
-      const forward_prediction_t& fp = *f->second;
-      bool passed = false;  // ActionPlanning stops at the first action that passes
-      for (int i = 0; i < fp.n_actions; ++i) {
-        ExplainedCheck c;
-        c.action = fp.actions[i];
-        c.what_distance = imageDistance(std::vector<double>(fp.what[i].begin(), fp.what[i].end()), goal.image);
-        c.what_ok = c.what_distance < p.image_match;
-        c.where_distance = positionDistance(fp.where_x[i], fp.where_y[i], goal.x, goal.y, p.position_metric);
-        c.where_ok = c.where_distance <= p.position_match;
-        c.checked = !passed;
-        passed = passed || c.passes();
-        it.checks.push_back(c);
-      }
-      continue;
-    }
-    const look_t& l = *r.look;
-    auto fi = focus_by_seq.find(seq);
-    if (fi == focus_by_seq.end()) {
-      warn.push_back(format("iteration %lld: LOOK seq %d has no FOCUS answering it in the log",
-                            static_cast<long long>(it.step), seq));
-      continue;
-    }
-    const focus_t& f = *fi->second;
-    if (f.kind != l.kind)
-      warn.push_back(format("iteration %lld: LOOK seq %d of kind %d is answered by a FOCUS of kind %d",
-                            static_cast<long long>(it.step), seq, l.kind, f.kind));
-    // Top-down attention: a look at the scene at a place of the differences,
-    // before any object in the iteration, picks that sub-goal (its image: the goal's there).
-    const SubGoalImage* top_down_pick = nullptr;
-    if (l.kind == focus_t::SCENE_AT && !it.scanned && !it.picked)
-      for (const SubGoalImage& d : differences)
-        if (d.x == l.x && d.y == l.y) top_down_pick = &d;
-    if (l.kind == focus_t::GOAL_DIFF) {
-      differences.clear();
-      for (int i = 0; i < f.n_diffs; ++i)
-        if (f.diff_in[i] == focus_t::DIFF_GOAL) differences.push_back({f.diff_image[i], f.diff_x[i], f.diff_y[i]});
-      continue;
-    }
-    if (l.kind == focus_t::GOAL_SCAN || top_down_pick) {
-      const SubGoalImage picked = top_down_pick ? *top_down_pick : SubGoalImage{f.image, f.x, f.y};
-      ExplainedSubGoal g;
-      g.x = picked.x;
-      g.y = picked.y;
-      g.first_step = g.last_step = it.step;
-      ex.sub_goals.push_back(g);
-      images.push_back(picked);
-      current = static_cast<int>(ex.sub_goals.size()) - 1;
-      it.sub_goal = current;
-      it.picked = true;
-      if (l.kind == focus_t::GOAL_SCAN) continue;
-    }
-    if (l.kind == focus_t::SCENE_AT) {
-      if (it.sub_goal < 0) {
-        warn.push_back(format("iteration %lld: a look at the scene before any sub-goal", static_cast<long long>(it.step)));
-        continue;
-      }
-      const SubGoalImage& goal = images[static_cast<std::size_t>(it.sub_goal)];
-      ExplainedReachCheck c;
-      c.after_action = it.scanned;  // the look after the scan is the one after the action
-      c.distance = imageDistance(goal.image, f.image);
-      c.reached = c.distance < p.subgoal_match;
-      it.reach_checks.push_back(c);
-    } else {  // SCENE_SCAN or SCENE_OBJECT: the object, and its affordances from the PREDICTION of the step
-      it.scanned = true;
-      it.object_x = f.x;
-      it.object_y = f.y;
-      auto pr = prediction_by_step.find(it.step);
-      if (pr != prediction_by_step.end() && pr->second->n_actions == kNumActions) {
-        std::array<double, kNumActions> a{};
-        std::copy(pr->second->affordance.begin(), pr->second->affordance.end(), a.begin());
-        it.affordance = a;
-      } else {
-        warn.push_back(format("iteration %lld: no PREDICTION answers the scan in the log", static_cast<long long>(it.step)));
-      }
-    }
+  // The sub-goals: the core's own figures, and what the iterations show of each.
+  ex.sub_goals = rec.sub_goals;
+  for (std::size_t i = 0; i < ex.sub_goals.size() && i < rec.records.size(); ++i) {
+    const SubGoalRecord& r = rec.records[i];
+    ExplainedSubGoal& g = ex.sub_goals[i];
+    g.iterations = r.iterations;
+    g.actions_checked = r.actions_checked;
+    g.actions_taken = r.actions_taken;
+    g.reached = r.reached;
   }
-  for (auto& [step, it] : steps) {
-    auto d = decision_by_step.find(step);
-    if (d != decision_by_step.end() && d->second->acted) {
-      it.executed = d->second->action;
-      it.target_x = d->second->target_x;
-      it.target_y = d->second->target_y;
-      auto s = action_scene_by_step.find(step);
-      if (s != action_scene_by_step.end())
-        it.goal_distance_after = s->second->goal_distance;
-      else
-        warn.push_back(format("iteration %lld: no SCENE after the action in the log", static_cast<long long>(step)));
-    }
-  }
-  for (const auto& [step, d] : decision_by_step)
-    if (!steps.count(step))
-      warn.push_back(format("a DECISION at iteration %lld, where the log has no request of the planner",
-                            static_cast<long long>(step)));
-
-  // The sub-goals' figures, counted as the planner counts them.
   int executed = 0;
-  for (auto& [step, it] : steps) {
+  for (auto& [step, it] : rec.steps) {
     ex.steps.push_back(it);
     executed += it.executed >= 0;
     if (it.sub_goal < 0) continue;
     ExplainedSubGoal& g = ex.sub_goals[static_cast<std::size_t>(it.sub_goal)];
     g.last_step = step;
-    if (!it.reached()) ++g.iterations;  // the iteration it is found reached in is not spent on it
-    g.reached = g.reached || it.reached();
     g.reached_when_picked = g.reached_when_picked || (it.picked && !it.reach_checks.empty() && it.reach_checks.front().reached);
-    g.actions_taken += it.executed >= 0;
     for (const ExplainedCheck& c : it.checks) {
       if (!c.checked) continue;
-      ++g.actions_checked;
       if (!g.closest || closerCheck(c, *g.closest)) {
         g.closest = c;
         g.closest_step = step;
@@ -362,7 +336,7 @@ Explanation explainRunEvents(const RunEvents& run, const std::string& where, std
         g.place_affordance = it.affordance;
     if (!g.place_affordance) continue;
     std::array<double, 3> channel{};
-    const std::vector<std::uint8_t>& image = images[i].image;
+    const std::vector<std::uint8_t>& image = rec.images[i];
     for (std::size_t b = 0; b < image.size(); ++b) channel[b % 3] += image[b];
     const int dominant = static_cast<int>(std::max_element(channel.begin(), channel.end()) - channel.begin());
     for (int a = 0; a < kNumActions; ++a)
@@ -374,14 +348,12 @@ Explanation explainRunEvents(const RunEvents& run, const std::string& where, std
       g.ended = "reached";
     } else if (i + 1 == ex.sub_goals.size()) {
       g.ended = "open";
-    } else {
-      // The utility planner moves on once it has weighed an action that
-      // passed; otherwise a sub-goal is given up only when it timed out.
-      const ExplainedIteration& last = *std::find_if(ex.steps.rbegin(), ex.steps.rend(), [&](const ExplainedIteration& it) {
-        return it.sub_goal == static_cast<int>(i);
-      });
-      const bool weighed = std::any_of(last.checks.begin(), last.checks.end(), [](const ExplainedCheck& c) { return c.passes(); });
-      g.ended = p.kind == PlannerKind::Utility && weighed ? "left" : "timeout";
+    } else {  // why the core left it
+      const auto exit = rec.exits.find(i);
+      g.ended = exit == rec.exits.end()                       ? "open"
+                : exit->second == SubGoalExit::Weighed        ? "left"
+                : exit->second == SubGoalExit::NotActionable  ? "not_actionable"
+                                                              : "timeout";
       if (g.ended == "timeout" && g.iterations < p.subgoal_timeout)
         warn.push_back(format("sub-goal %zu was given up after %d iterations, before planner.subgoal_timeout (%d)", i,
                               g.iterations, p.subgoal_timeout));
@@ -411,22 +383,24 @@ Explanation explainRunEvents(const RunEvents& run, const std::string& where, std
 
   // The rebuilt figures against what the planner reported.
   if (static_cast<std::int64_t>(ex.steps.size()) != result.step)
-    warn.push_back(format("the log shows %zu iterations, the EXTRINSIC_RESULT %lld", ex.steps.size(),
+    warn.push_back(format("the replayed planner ran %zu iterations, the EXTRINSIC_RESULT says %lld", ex.steps.size(),
                           static_cast<long long>(result.step)));
   if (executed != result.attempts)
-    warn.push_back(format("the log shows %d executed actions, the EXTRINSIC_RESULT %d", executed, result.attempts));
+    warn.push_back(format("the replayed planner executed %d actions, the EXTRINSIC_RESULT says %d", executed,
+                          result.attempts));
   if (ex.sub_goals.size() != result.sub_goals.size())
-    warn.push_back(format("the log shows %zu sub-goals, the EXTRINSIC_RESULT %zu", ex.sub_goals.size(),
+    warn.push_back(format("the replayed planner picked %zu sub-goals, the EXTRINSIC_RESULT says %zu", ex.sub_goals.size(),
                           result.sub_goals.size()));
   for (std::size_t i = 0; i < std::min(ex.sub_goals.size(), result.sub_goals.size()); ++i) {
     const ExplainedSubGoal& g = ex.sub_goals[i];
     const sub_goal_t& r = result.sub_goals[i];
     auto differ = [&](const char* what, long long log, long long reported) {
       if (log != reported)
-        warn.push_back(format("sub-goal %zu: the log shows %s %lld, the EXTRINSIC_RESULT %lld", i, what, log, reported));
+        warn.push_back(format("sub-goal %zu: the replayed planner counts %s %lld, the EXTRINSIC_RESULT %lld", i, what,
+                              log, reported));
     };
     if (g.x != r.x || g.y != r.y)
-      warn.push_back(format("sub-goal %zu: the log places it at (%.4f, %.4f), the EXTRINSIC_RESULT at (%.4f, %.4f)", i, g.x,
+      warn.push_back(format("sub-goal %zu: the replayed planner places it at (%.4f, %.4f), the EXTRINSIC_RESULT at (%.4f, %.4f)", i, g.x,
                             g.y, r.x, r.y));
     differ("iterations", g.iterations, r.iterations);
     differ("actions checked", g.actions_checked, r.actions_checked);
@@ -486,6 +460,9 @@ std::string subGoalText(const Explanation& e, std::size_t i) {
                  e.planner.subgoal_timeout);
   else if (g.ended == "left")
     how = "not reached: left after weighing an action (Algorithm 3)";
+  else if (g.ended == "not_actionable")
+    how = format("not reached: no remembered object was left to try for it, after %d iterations (top-down attention)",
+                 g.iterations);
   else
     how = "not reached: the test ended with it";
   return format("  #%zu at (%.4f, %.4f), iterations %lld..%lld: %d spent, %d actions checked, %d taken; %s", i, g.x, g.y,

@@ -1,11 +1,14 @@
 // `afford explain LOG`: why an extrinsic test ended as it did, read from its
-// log. The planner's iterations are rebuilt from the recorded messages (LOOK
-// and FOCUS by seq, FORWARD_QUERY and FORWARD_PREDICTION by seq, PREDICTION,
-// DECISION and SCENE by step), and every comparison the planner made is made
-// again with the planner's own distance functions and the run's thresholds.
-// The rebuilt per-sub-goal figures are checked against the test's
-// EXTRINSIC_RESULT; any difference is a warning. Given a folder of run logs
-// (an experiment's --log-root), it summarises every extrinsic test in it.
+// log. The test's messages are replayed into a fresh planner (as `afford
+// replay --into planner` does), whose core tells an observer
+// (PlannerObserver) every sub-goal it picks, every comparison it makes with
+// the run's thresholds and every action it decides: the explanation is the
+// planner's own account, not a second derivation of it. What the replayed
+// planner publishes is compared with the recorded messages, and its
+// per-sub-goal figures with the test's EXTRINSIC_RESULT; any difference, and
+// a message the replay waits for that the log lacks, is a warning. Given a
+// folder of run logs (an experiment's --log-root), it summarises every
+// extrinsic test in it.
 #pragma once
 #include <spdlog/spdlog.h>
 
@@ -20,6 +23,7 @@
 #include "afford/actions.hpp"
 #include "afford/config.hpp"
 #include "afford/replay.hpp"
+#include "planner/planner.hpp"
 
 namespace afford {
 
@@ -28,18 +32,8 @@ struct NotAnExtrinsicTest : std::runtime_error {
   using std::runtime_error::runtime_error;
 };
 
-// One candidate action's predicted effect compared with the sub-goal.
-struct ExplainedCheck {
-  int action = 0;
-  double what_distance = 0;   // imageDistance(predicted focus image, sub-goal image)
-  bool what_ok = false;       // < planner.image_match
-  double where_distance = 0;  // positionDistance(predicted place, sub-goal place, planner.position_metric)
-  bool where_ok = false;      // <= planner.position_match
-  // The planner compared it: it stops at the first action that passes both,
-  // so the candidates after that one were predicted but not compared.
-  bool checked = false;
-  bool passes() const { return what_ok && where_ok; }
-};
+// One candidate action's predicted effect compared with the sub-goal, as the planner core compared it.
+using ExplainedCheck = PlannerCheck;
 
 // A look at the scene at the sub-goal's place: is the sub-goal reached?
 struct ExplainedReachCheck {
@@ -73,10 +67,11 @@ struct ExplainedSubGoal {
   int actions_taken = 0;
   bool reached = false;
   bool reached_when_picked = false;  // the scene showed it already: no iteration spent on it
-  // How the planner left it: "reached"; "timeout" (not reached in
-  // planner.subgoal_timeout iterations: another was picked); "left" (the
-  // utility planner moves on after each weighed action, Algorithm 3);
-  // "open" (the test ended while it was the sub-goal).
+  // How the planner left it, as its core told: "reached"; "timeout" (not
+  // reached in planner.subgoal_timeout iterations: another was picked);
+  // "left" (the utility planner moves on after each weighed action,
+  // Algorithm 3); "not_actionable" (top-down attention: no remembered object
+  // left to try for it); "open" (the test ended while it was the sub-goal).
   std::string ended;
   // The checked action that passed both tests; else, of those whose
   // predicted place matched, the one with the smallest what-distance; else

@@ -23,7 +23,7 @@ std::unique_ptr<NodeBase> makeNode(const std::string& p, lcm::LCM& lcm, std::sha
     return std::make_unique<PredictorsNode>(lcm, std::move(log), protocol, /*async_effects=*/!options.single_thread,
                                             options.log_root);
   if (p == "motivation") return std::make_unique<MotivationNode>(lcm, std::move(log), protocol);
-  if (p == "planner") return std::make_unique<PlannerNode>(lcm, std::move(log), protocol);
+  if (p == "planner") return std::make_unique<PlannerNode>(lcm, std::move(log), protocol, options.planner_observer);
   if (p == "logger") return std::make_unique<LoggerNode>(lcm, std::move(log), protocol, options.log_root);
   std::string known;
   for (const ProcessInfo& info : processRegistry()) known += (known.empty() ? "" : ", ") + std::string(info.name);

@@ -19,11 +19,15 @@
 
 namespace afford {
 
+class PlannerObserver;  // planner/planner.hpp
+
 struct HostOptions {
   // One thread runs every node: the eye does not speculate and the
   // predictors learn from effects in line (no idle time to fill).
   bool single_thread = true;
   std::string log_root = "logs";  // the logger's folder of run logs, and the predictors' of checkpoints
+  // The planner core tells it what it checks and decides (afford explain); not owned.
+  PlannerObserver* planner_observer = nullptr;
 };
 
 using LoggerFactory = std::function<std::shared_ptr<spdlog::logger>(const std::string& process)>;

@@ -8,8 +8,9 @@
 
 namespace afford {
 
-PlannerNode::PlannerNode(lcm::LCM& lcm, std::shared_ptr<spdlog::logger> log, const ProtocolConfig& protocol)
-    : NodeBase(lcm, "planner", std::move(log), protocol) {
+PlannerNode::PlannerNode(lcm::LCM& lcm, std::shared_ptr<spdlog::logger> log, const ProtocolConfig& protocol,
+                         PlannerObserver* observer)
+    : NodeBase(lcm, "planner", std::move(log), protocol), observer_(observer) {
   // Every input: only while a test goes on (the extrinsic phase, until its result).
   const auto idle = [this](const auto&) { return !core_ || finished_; };
   takes(ch::scene,
@@ -91,7 +92,10 @@ PlannerNode::PlannerNode(lcm::LCM& lcm, std::shared_ptr<spdlog::logger> log, con
 
 void PlannerNode::onConfigured(const RunConfig& config) {
   core_.reset();
-  if (config.phase == Phase::Extrinsic) core_ = std::make_unique<Planner>(config.planner, goalValues(*config.scenario));
+  if (config.phase == Phase::Extrinsic) {
+    core_ = std::make_unique<Planner>(config.planner, goalValues(*config.scenario));
+    core_->observe(observer_);
+  }
   step_ = -1;
   seq_ = 0;
   goal_distance_ = goal_utility_ = -1;

@@ -24,7 +24,9 @@ namespace afford {
 
 class PlannerNode : public NodeBase {
  public:
-  PlannerNode(lcm::LCM& lcm, std::shared_ptr<spdlog::logger> log, const ProtocolConfig& protocol);
+  // `observer` (not owned; nullptr: none) is told what the core checks and decides in each test.
+  PlannerNode(lcm::LCM& lcm, std::shared_ptr<spdlog::logger> log, const ProtocolConfig& protocol,
+              PlannerObserver* observer = nullptr);
 
  private:
   void onConfigured(const RunConfig& config) override;
@@ -41,6 +43,7 @@ class PlannerNode : public NodeBase {
   bool active() const { return core_ && state() == process_status_t::RUNNING && !finished_; }
 
   std::unique_ptr<Planner> core_;
+  PlannerObserver* observer_;
   std::int64_t step_ = -1;          // the current iteration
   std::int32_t seq_ = 0;            // last request sent
   double goal_distance_ = -1;       // the environment's last word on it

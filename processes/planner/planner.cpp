@@ -62,16 +62,50 @@ PlannerRequest Planner::request(PlannerRequest::Kind kind, double x, double y) c
   return r;
 }
 
+PlannerRequest Planner::told(PlannerRequest r) const {
+  if (observer_) observer_->requested(iteration(), r);
+  return r;
+}
+
+PlannerCheck Planner::check(const ForwardPrediction& p) const {
+  PlannerCheck c;
+  c.action = p.action;
+  c.what_distance = imageDistance(p.what, sub_goal_.image);
+  c.what_ok = c.what_distance < config_.image_match;
+  c.where_distance = positionDistance(p.where_x, p.where_y, sub_goal_.x, sub_goal_.y, config_.position_metric);
+  c.where_ok = c.where_distance <= config_.position_match;
+  return c;
+}
+
+void Planner::left(SubGoalExit why) const {
+  if (observer_ && !records_.empty()) observer_->subGoalLeft(iteration(), records_.size() - 1, why);
+}
+
 PlannerRequest Planner::done() {
   wait_ = Wait::Nothing;
   if (active_ && !records_.empty()) {
     ++records_.back().iterations;
     ++iterations_on_sub_goal_;
   }
+  if (observer_) observer_->iterationEnded(iteration(), records_);
   return request(PlannerRequest::IterationDone);
 }
 
-PlannerRequest Planner::startIteration() {
+PlannerRequest Planner::startIteration() { return told(begin()); }
+PlannerRequest Planner::onDifferences(const std::vector<Difference>& differences) {
+  return told(differencesSeen(differences));
+}
+PlannerRequest Planner::onView(const View& v) { return told(viewed(v)); }
+PlannerRequest Planner::onObject(const View& object, const std::array<double, kNumActions>& affordance) {
+  return told(objectSeen(object, affordance));
+}
+PlannerRequest Planner::onForward(const std::vector<ForwardPrediction>& predictions,
+                                  const std::optional<std::array<double, kNumActions>>& input_affordance) {
+  return told(predicted(predictions, input_affordance));
+}
+PlannerRequest Planner::onActed() { return told(acted()); }
+
+PlannerRequest Planner::begin() {
   if (wait_ != Wait::Nothing) throw std::logic_error("Planner: an iteration is already under way");
   ++iterations_;
   queries_ = 0;
@@ -91,10 +125,12 @@ PlannerRequest Planner::startIteration() {
     if (active_ && timed_out) {  // too long on this one: not actionable until the differences are looked at again
       targets_[static_cast<std::size_t>(target_)].status = Status::NotActionable;
       active_ = false;
+      left(SubGoalExit::Timeout);
     }
     return active_ ? attendCandidate() : nextTarget();
   }
   if (!active_ || timed_out) {  // Algorithm 2: select a non-achieved sub-goal
+    if (active_) left(SubGoalExit::Timeout);
     wait_ = Wait::SubGoal;
     return request(PlannerRequest::LookAtGoal);
   }
@@ -102,7 +138,7 @@ PlannerRequest Planner::startIteration() {
   return request(PlannerRequest::ScanScene);
 }
 
-PlannerRequest Planner::onDifferences(const std::vector<Difference>& differences) {
+PlannerRequest Planner::differencesSeen(const std::vector<Difference>& differences) {
   if (wait_ != Wait::Differences) throw std::logic_error("Planner: differences it did not ask for");
   targets_.clear();
   objects_.clear();
@@ -124,6 +160,7 @@ PlannerRequest Planner::nextTarget() {
     sub_goal_ = {targets_[i].image, targets_[i].x, targets_[i].y};
     iterations_on_sub_goal_ = 0;
     records_.push_back({sub_goal_.x, sub_goal_.y, 0, 0, 0, false});
+    if (observer_) observer_->subGoalPicked(iteration(), sub_goal_);
     wait_ = Wait::SceneAtSubGoal;
     return request(PlannerRequest::LookAtSceneAt, sub_goal_.x, sub_goal_.y);
   }
@@ -160,7 +197,7 @@ PlannerRequest Planner::attendCandidate() {
   }
   if (best < 0) {  // no object left to try: not actionable
     t.status = Status::NotActionable;
-    return leaveSubGoal();
+    return leaveSubGoal(SubGoalExit::NotActionable);
   }
   candidate_ = best;
   t.tried.push_back(best);
@@ -169,17 +206,23 @@ PlannerRequest Planner::attendCandidate() {
                  objects_[static_cast<std::size_t>(best)].y);
 }
 
-PlannerRequest Planner::onView(const View& v) {
+PlannerRequest Planner::viewed(const View& v) {
+  // GoalNotAchievedCheck: the scene at the sub-goal's place against the sub-goal.
+  const auto reach = [&](bool after_action) {
+    const double distance = imageDistance(sub_goal_.image, v.image);
+    active_ = distance >= config_.subgoal_match;
+    if (observer_) observer_->reachChecked(iteration(), after_action, distance, !active_);
+  };
   switch (wait_) {
     case Wait::SubGoal:
       sub_goal_ = v;
       iterations_on_sub_goal_ = 0;
       records_.push_back({v.x, v.y, 0, 0, 0, false});
+      if (observer_) observer_->subGoalPicked(iteration(), sub_goal_);
       wait_ = Wait::SceneAtSubGoal;
       return request(PlannerRequest::LookAtSceneAt, v.x, v.y);
     case Wait::SceneAtSubGoal:
-      // GoalNotAchievedCheck
-      active_ = imageDistance(sub_goal_.image, v.image) >= config_.subgoal_match;
+      reach(false);
       if (!active_) {
         records_.back().reached = true;
         if (target_ >= 0) targets_[static_cast<std::size_t>(target_)].status = Status::Done;
@@ -189,7 +232,7 @@ PlannerRequest Planner::onView(const View& v) {
       wait_ = Wait::Object;
       return request(PlannerRequest::ScanScene);
     case Wait::SceneAfterAction:
-      active_ = imageDistance(sub_goal_.image, v.image) >= config_.subgoal_match;
+      reach(true);
       if (!active_) {
         records_.back().reached = true;
         continue_at_.reset();
@@ -221,10 +264,11 @@ PlannerRequest Planner::forward(const std::vector<std::uint8_t>& image, double x
   return r;
 }
 
-PlannerRequest Planner::onObject(const View& object, const std::array<double, kNumActions>& affordance) {
+PlannerRequest Planner::objectSeen(const View& object, const std::array<double, kNumActions>& affordance) {
   if (wait_ != Wait::Object) throw std::logic_error("Planner: an object it did not ask for");
   object_ = object;
   affordance_ = affordance;
+  if (observer_) observer_->objectTaken(iteration(), object, affordance);
   std::vector<int> actions;
   for (int a = 0; a < kNumActions; ++a)
     if (!config_.restrict_by_affordance || affordance[a] > config_.affordance_threshold) actions.push_back(a);
@@ -235,7 +279,7 @@ PlannerRequest Planner::onObject(const View& object, const std::array<double, kN
   return forward(object.image, object.x, object.y, std::move(actions), {});
 }
 
-PlannerRequest Planner::onForward(const std::vector<ForwardPrediction>& predictions,
+PlannerRequest Planner::predicted(const std::vector<ForwardPrediction>& predictions,
                                   const std::optional<std::array<double, kNumActions>>& input_affordance) {
   if (wait_ != Wait::Forward) throw std::logic_error("Planner: predictions it did not ask for");
   const SearchNode node = querying_;
@@ -243,15 +287,24 @@ PlannerRequest Planner::onForward(const std::vector<ForwardPrediction>& predicti
   if (imagined && !input_affordance) throw std::logic_error("Planner: predictions for an imagined object without its affordances");
   // ActionPlanning: the first candidate whose predicted effect is the sub-goal;
   // breadth first, so the first plan found is a shortest one.
+  const ForwardPrediction* plan = nullptr;
+  std::vector<PlannerCheck> checks;  // for the observer: the ones after the plan too, not compared
   for (const ForwardPrediction& p : predictions) {
     // An imagined object is restricted by what it would afford (the first step by the PREDICTION).
     if (imagined && config_.restrict_by_affordance && (*input_affordance)[p.action] <= config_.affordance_threshold)
       continue;
+    if (plan) {
+      if (observer_) checks.push_back(check(p));
+      continue;
+    }
     ++records_.back().actions_checked;
-    const bool image_ok = imageDistance(p.what, sub_goal_.image) < config_.image_match;
-    const bool place_ok = positionDistance(p.where_x, p.where_y, sub_goal_.x, sub_goal_.y, config_.position_metric) <=
-                          config_.position_match;
-    if (image_ok && place_ok) return actOnPlan(imagined ? node.first : p, node.actions.size() + 1);
+    PlannerCheck c = check(p);
+    c.checked = true;
+    if (observer_) checks.push_back(c);
+    if (c.passes()) {
+      plan = &p;
+      continue;
+    }
     if (static_cast<int>(node.actions.size()) + 1 < config_.max_depth) {
       SearchNode child{node.actions, quantiseImage(p.what), std::clamp(p.where_x, 0.0, 1.0),
                        std::clamp(p.where_y, 0.0, 1.0), imagined ? node.first : p};
@@ -259,6 +312,8 @@ PlannerRequest Planner::onForward(const std::vector<ForwardPrediction>& predicti
       frontier_.push_back(std::move(child));
     }
   }
+  if (observer_) observer_->predictionsChecked(iteration(), node.actions, checks);
+  if (plan) return actOnPlan(imagined ? node.first : *plan, node.actions.size() + 1);
   if (frontier_next_ < frontier_.size() && queries_ < config_.max_queries) {
     querying_ = frontier_[frontier_next_++];
     std::vector<int> all(kNumActions);
@@ -292,24 +347,25 @@ PlannerRequest Planner::weighUtility(const ForwardPrediction& p) {
   const double potential = potential_utility_;
   if (evaluating()) {  // raise the estimate of the attainable utility
     if (utility >= potential) potential_utility_ += config_.raise_leak * (utility - potential);
-    return leaveSubGoal();
+    return leaveSubGoal(SubGoalExit::Weighed);
   }
   // Acting: lower the estimate for each chosen action, whether or not its
   // utility reaches the estimate (docs/model.md says why), and act if it does.
   potential_utility_ += config_.lower_leak * (0.0 - potential);
   if (utility >= potential) return act(p);
-  return leaveSubGoal();
+  return leaveSubGoal(SubGoalExit::Weighed);
 }
 
-PlannerRequest Planner::leaveSubGoal() {
+PlannerRequest Planner::leaveSubGoal(SubGoalExit why) {
+  left(why);
   active_ = false;  // Algorithm 3: another sub-goal next iteration
   ++records_.back().iterations;
   return done();
 }
 
-PlannerRequest Planner::onActed() {
+PlannerRequest Planner::acted() {
   if (wait_ != Wait::Acted) throw std::logic_error("Planner: an action it did not ask for");
-  if (config_.kind == PlannerKind::Utility) return leaveSubGoal();  // Algorithm 3: no check of the sub-goal
+  if (config_.kind == PlannerKind::Utility) return leaveSubGoal(SubGoalExit::Weighed);  // Algorithm 3: no check of the sub-goal
   wait_ = Wait::SceneAfterAction;
   return request(PlannerRequest::LookAtSceneAt, sub_goal_.x, sub_goal_.y);
 }

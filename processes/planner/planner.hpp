@@ -77,6 +77,49 @@ struct GoalValue {
 };
 std::vector<GoalValue> goalValues(const Scenario& s);
 
+// What the core checked and decided, as it does it: `afford explain` replays
+// a test's log into the planner node and records these, so an explanation is
+// the planner's own account, never a second derivation of it. Every call
+// names the iteration (0-based: the `step` of the test's messages). The
+// default does nothing; an observer must not throw.
+struct PlannerCheck {
+  int action = 0;
+  double what_distance = 0;   // imageDistance(predicted focus image, sub-goal image)
+  bool what_ok = false;       // < planner.image_match
+  double where_distance = 0;  // positionDistance(predicted place, sub-goal place, planner.position_metric)
+  bool where_ok = false;      // <= planner.position_match
+  // Compared: the search stops at the first prediction that passes both, so
+  // those after it were predicted but not compared (and not counted).
+  bool checked = false;
+  bool passes() const { return what_ok && where_ok; }
+};
+// Why the planner left a sub-goal it had not reached.
+enum class SubGoalExit {
+  Timeout,        // planner.subgoal_timeout iterations spent on it
+  NotActionable,  // top-down attention: no remembered object left to try for it
+  Weighed,        // the utility planner weighed an action for it, and acted or not (Algorithm 3)
+};
+class PlannerObserver {
+ public:
+  virtual ~PlannerObserver() = default;
+  // Every request the core makes, as it makes it (Act: the action decided).
+  virtual void requested(int /*iteration*/, const PlannerRequest& /*r*/) {}
+  // A sub-goal picked: from the goal image's scan, or a remembered difference (top-down).
+  virtual void subGoalPicked(int /*iteration*/, const View& /*sub_goal*/) {}
+  // The scene at the sub-goal's place against it: right after the pick, or after an action.
+  virtual void reachChecked(int /*iteration*/, bool /*after_action*/, double /*distance*/, bool /*reached*/) {}
+  // The object to act on, and what it affords.
+  virtual void objectTaken(int /*iteration*/, const View& /*object*/, const std::array<double, kNumActions>& /*affordance*/) {}
+  // The forward predictions of one query against the sub-goal, in the answer's
+  // order; `prefix`: the actions imagined before (multi-step search), empty for the object itself.
+  virtual void predictionsChecked(int /*iteration*/, const std::vector<int>& /*prefix*/,
+                                  const std::vector<PlannerCheck>& /*checks*/) {}
+  // The sub-goal (its index among those picked) is left unreached.
+  virtual void subGoalLeft(int /*iteration*/, std::size_t /*sub_goal*/, SubGoalExit /*why*/) {}
+  // An iteration is over; the sub-goals' figures as they stand (what EXTRINSIC_RESULT reports).
+  virtual void iterationEnded(int /*iteration*/, const std::vector<SubGoalRecord>& /*sub_goals*/) {}
+};
+
 class Planner {
  public:
   // `values`: the sub-goal values of the scenario (used by the utility planner);
@@ -100,9 +143,19 @@ class Planner {
   double subGoalValue(double x, double y) const;
   bool subGoalActive() const { return active_; }
   const std::vector<SubGoalRecord>& subGoals() const { return records_; }
+  // Tell `observer` (not owned; nullptr: none) what the core checks and decides from here on.
+  void observe(PlannerObserver* observer) { observer_ = observer; }
 
  private:
   enum class Wait { Nothing, SubGoal, SceneAtSubGoal, Object, Forward, Acted, SceneAfterAction, Differences };
+  // The public on...() and startIteration(), before the observer is told the request.
+  PlannerRequest begin();
+  PlannerRequest viewed(const View& v);
+  PlannerRequest objectSeen(const View& object, const std::array<double, kNumActions>& affordance);
+  PlannerRequest predicted(const std::vector<ForwardPrediction>& predictions,
+                           const std::optional<std::array<double, kNumActions>>& input_affordance);
+  PlannerRequest differencesSeen(const std::vector<Difference>& differences);
+  PlannerRequest acted();
   PlannerRequest request(PlannerRequest::Kind kind, double x = -1, double y = -1) const;
   PlannerRequest done();
   PlannerRequest forward(const std::vector<std::uint8_t>& image, double x, double y, std::vector<int> actions,
@@ -118,10 +171,17 @@ class Planner {
   // Algorithm 3 once ActionPlanning found `p` for the sub-goal and object.
   PlannerRequest weighUtility(const ForwardPrediction& p);
   // End the iteration on this sub-goal, counted, and pick another next time.
-  PlannerRequest leaveSubGoal();
+  PlannerRequest leaveSubGoal(SubGoalExit why);
+  void left(SubGoalExit why) const;
+
+  // Every request leaves through here, told to the observer.
+  PlannerRequest told(PlannerRequest r) const;
+  int iteration() const { return iterations_ - 1; }
+  PlannerCheck check(const ForwardPrediction& p) const;
 
   PlannerConfig config_;
   std::vector<GoalValue> values_;
+  PlannerObserver* observer_ = nullptr;
   Wait wait_ = Wait::Nothing;
   int iterations_ = 0;  // started so far
   double potential_utility_ = 0;
