@@ -208,6 +208,7 @@ void onSignal(int) { g_stop = 1; }
 }  // namespace
 
 bool stopRequested() { return g_stop != 0; }
+void clearStopRequest() { g_stop = 0; }
 void installStopHandlers() {
   struct sigaction sa {};
   sa.sa_handler = onSignal;

@@ -30,7 +30,7 @@ const std::string& codeFingerprint() {
   static const std::string fingerprint = [] {
     Fnv1a h;
     const fs::path bin = executableDir();
-    std::vector<fs::path> files{fs::read_symlink("/proc/self/exe")};
+    std::vector<fs::path> files{bin / "afford"};  // the runner (the one running, unless another host set the folder)
     for (const ProcessInfo& p : processRegistry()) files.push_back(bin / ("afford-" + std::string(p.name)));
     std::vector<char> buf(1 << 20);
     for (const auto& f : files) {

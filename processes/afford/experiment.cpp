@@ -67,6 +67,24 @@ void installInterruptHandlers(const std::string& resume) {
   sigaction(SIGTERM, &sa, nullptr);
 }
 
+}  // namespace
+
+InterruptScope::InterruptScope() {
+  sigaction(SIGINT, nullptr, &int_);
+  sigaction(SIGTERM, nullptr, &term_);
+}
+
+InterruptScope::~InterruptScope() {
+  sigaction(SIGINT, &int_, nullptr);
+  sigaction(SIGTERM, &term_, nullptr);
+  g_signal = 0;
+  clearStopRequest();
+}
+
+int InterruptScope::signal() const { return g_signal; }
+
+namespace {
+
 std::string signalName(int sig) { return sig == SIGINT ? "SIGINT" : sig == SIGTERM ? "SIGTERM" : std::to_string(sig); }
 
 // Intrinsic runs not finished (nor run by another shard) whose agent is

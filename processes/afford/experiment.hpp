@@ -6,6 +6,7 @@
 // way, writes the summary of those that finished and exits 128 + the signal;
 // `--resume` runs the rest (docs/experiments.md).
 #pragma once
+#include <csignal>
 #include <spdlog/spdlog.h>
 
 #include <cstdint>
@@ -67,5 +68,22 @@ std::map<std::string, std::string> parseProcessSwaps(const std::vector<std::stri
 
 // Returns the process exit code (0 when every run succeeded).
 int runExperiment(const ExperimentOptions& options, spdlog::logger& log);
+
+// For a host that goes on after an experiment (the Python package): the
+// SIGINT and SIGTERM handlers in place at its construction are put back at its
+// destruction, and the signal runExperiment received is forgotten, so that the
+// next experiment starts afresh.
+class InterruptScope {
+ public:
+  InterruptScope();
+  ~InterruptScope();
+  InterruptScope(const InterruptScope&) = delete;
+  InterruptScope& operator=(const InterruptScope&) = delete;
+  // SIGINT or SIGTERM if one stopped the experiment; 0 if none did.
+  int signal() const;
+
+ private:
+  struct sigaction int_{}, term_{};
+};
 
 }  // namespace afford

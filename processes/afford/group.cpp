@@ -16,7 +16,17 @@
 
 namespace afford {
 
+namespace {
+std::string& givenExecutableDir() {
+  static std::string dir;
+  return dir;
+}
+}  // namespace
+
+void setExecutableDir(const std::string& dir) { givenExecutableDir() = dir; }
+
 std::string executableDir() {
+  if (!givenExecutableDir().empty()) return givenExecutableDir();
   std::error_code ec;
   const auto exe = std::filesystem::read_symlink("/proc/self/exe", ec);
   if (ec) throw std::runtime_error("cannot locate the afford executable: " + ec.message());

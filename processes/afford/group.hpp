@@ -54,7 +54,10 @@ class ProcessGroup {
 // Peak resident memory (VmHWM, kB) of a process, or -1.
 long peakRssKb(pid_t pid);
 
-// Directory of the running executable (where the process executables live).
+// Where the process executables (afford-<name>) and the runner (afford) live:
+// the running executable's folder, or the one a host that is not the afford
+// executable (the Python package) set.
 std::string executableDir();
+void setExecutableDir(const std::string& dir);
 
 }  // namespace afford

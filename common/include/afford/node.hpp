@@ -289,5 +289,7 @@ void boundHeapGrowth();
 // Set by SIGINT/SIGTERM.
 bool stopRequested();
 void installStopHandlers();
+// Forget a stop request (a host that goes on after an interrupted run: the Python package).
+void clearStopRequest();
 
 }  // namespace afford

@@ -1,0 +1,75 @@
+"""Experiments from Python: afford.run(experiment, ...) runs `afford experiment` in this process."""
+from __future__ import annotations
+
+import tempfile
+from pathlib import Path
+from typing import Any, Iterable
+
+from . import _afford
+from .components import register_motivation
+from .results import Experiment, load
+
+
+def _setting(key: str, value: Any) -> str:
+    if isinstance(value, bool):
+        value = "true" if value else "false"
+    elif isinstance(value, (list, tuple)):
+        value = "[" + ",".join(str(v) for v in value) + "]"
+    return f"{key}={value}"
+
+
+def run(experiment: str, system: str | Iterable[str] | None = None, reps: int | None = None,
+        steps: int | None = None, set: dict[str, Any] | None = None, transport: str = "memq",
+        out: str | Path | None = None, log_root: str | Path | None = None, seed: int = 1, jobs: int = 1,
+        extrinsic_reps: int = 0, scenarios: Iterable[str] = (), keep_logs: str = "all",
+        run_prefix: str = "", reuse_agents: bool = True, progress: str = "none",
+        log_level: str = "warn", motivation: Any = None, processes: dict[str, str] | None = None,
+        tables: int | None = None, table_seed: int | None = None) -> Experiment:
+    """Run an experiment as `afford experiment` does and return what afford.load returns.
+
+    `experiment`: a name of config/experiments/ (base, late1, ...) or an
+    experiment file (a path ending in .yaml, as --config takes); `system`:
+    FIX, IGN, IMP, a list of them or "all"; `set`: config keys and values
+    (`{"motivation.leak": 0.3}`; a list value is a YAML list, not a sweep).
+    `out` defaults to a new temporary folder, `log_root` to `out`/logs.
+    Over memq (the default) everything runs in this process; udpm starts the
+    processes. Ctrl-C (a notebook's interrupt) stops it as it stops the
+    command: the runs under way stop, what finished is written, and
+    KeyboardInterrupt is raised naming the folder (`afford experiment
+    --resume --out OUT` completes it). A bad option or config key raises
+    afford.ConfigError (a ValueError) naming it.
+
+    `motivation`: a class written in Python (afford.Motivation) in the place
+    of the shipped motivation, in this process (memq): it is registered under
+    its kind and motivation.kind is set to it. `processes`: commands in the
+    place of shipped processes, as `afford experiment --process NAME=CMD`
+    (udpm), e.g. {"motivation": "python3 -m afford.process motivation mine.py:Mine"}.
+    `tables`, `table_seed`: random tables (--tables, --table-seed).
+    """
+    if experiment.endswith((".yaml", ".yml")) or "/" in experiment:
+        experiment = str(Path(experiment).resolve())
+    settings = dict(set or {})
+    if motivation is not None:
+        if transport != "memq":
+            raise ValueError("afford.run(motivation=...) runs the class in this process: transport='memq'; over "
+                             "udpm, give processes={'motivation': 'python3 -m afford.process motivation "
+                             "MODULE:CLASS'} and set={'motivation.kind': KIND}")
+        settings.setdefault("motivation.kind", register_motivation(motivation))
+    out = Path(out) if out else Path(tempfile.mkdtemp(prefix=f"afford-{experiment}-"))
+    systems = [system] if isinstance(system, str) else list(system or [])
+    request = {
+        "experiment": experiment, "systems": systems, "reps": reps, "steps": steps, "seed": seed, "jobs": jobs,
+        "out": str(out), "log_root": str(log_root or out / "logs"), "transport": transport,
+        "keep_logs": keep_logs, "settings": [_setting(k, v) for k, v in settings.items()],
+        "processes": dict(processes or {}),
+        "extrinsic_reps": extrinsic_reps, "scenarios": list(scenarios), "run_prefix": run_prefix,
+        "progress": progress, "reuse_agents": reuse_agents, "log_level": log_level,
+        "tables": tables, "table_seed": table_seed,
+    }
+    code, signal = _afford.run_experiment(request)
+    if signal:
+        raise KeyboardInterrupt(f"afford.run({experiment!r}) was interrupted: what finished is in {out}; "
+                                f"`afford experiment --resume --out {out}` completes it")
+    if code != 0:
+        raise RuntimeError(f"afford.run({experiment!r}) failed (exit {code}); see the messages above and {out}")
+    return load(out)

@@ -1,0 +1,93 @@
+"""A run's log as Python data: afford.read_log(run_folder).
+
+The log is read by the project's own log reader and each message is decoded
+and checked as the processes' edge checks it (the C++ module _afford): no
+file format or message layout is written again in Python. Scenes come as
+height x width x 3 arrays of bytes; focus images (and the other images of
+side x side RGB pixels) as side x side x 3 arrays.
+"""
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass
+from pathlib import Path
+from typing import Any, Iterator
+
+import numpy as np
+import pandas as pd
+
+from . import _afford
+
+# Fields holding focus images, row-major RGB, flat in the message.
+_IMAGE_FIELDS = ("image", "images", "diff_image", "what")
+
+
+def _shaped(fields: dict[str, Any]) -> dict[str, Any]:
+    for name in _IMAGE_FIELDS:
+        a = fields.get(name)
+        if not isinstance(a, np.ndarray) or a.ndim == 3 or a.size == 0:
+            continue
+        per_image = a.shape[-1]
+        side = math.isqrt(per_image // 3)
+        if side * side * 3 == per_image:
+            fields[name] = a.reshape(a.shape[:-1] + (side, side, 3))
+    return fields
+
+
+@dataclass(frozen=True)
+class Message:
+    channel: str
+    utime: int                 # when the logger recorded it, microseconds
+    fields: dict[str, Any]     # the message's fields by name (docs/processes-and-channels.md)
+
+    def __getitem__(self, name: str) -> Any:
+        return self.fields[name]
+
+
+@dataclass
+class RunLog:
+    run_id: str
+    config_yaml: str           # the run's configuration, as its RUN_CONFIG carried it
+    messages: list[Message]
+    refused: int               # events their channel's type refuses (corrupted), skipped
+    first_refusal: str         # ... and why the first one was refused
+    unknown_channels: int      # events of channels the protocol does not have, skipped
+    malformed: int             # malformed parts of the files, skipped
+    torn_bytes: int            # an incomplete last event (a writer cut mid-write)
+
+    def __iter__(self) -> Iterator[Message]:
+        return iter(self.messages)
+
+    def __len__(self) -> int:
+        return len(self.messages)
+
+    def channel(self, name: str) -> list[Message]:
+        """The messages of one channel, in log order."""
+        return [m for m in self.messages if m.channel == name]
+
+    def frame(self, name: str) -> pd.DataFrame:
+        """The scalar fields of one channel's messages, one row each (arrays left out)."""
+        rows = [{"utime": m.utime, **{k: v for k, v in m.fields.items()
+                                      if not isinstance(v, (np.ndarray, list, dict))}} for m in self.channel(name)]
+        return pd.DataFrame(rows)
+
+    def __repr__(self) -> str:
+        counts: dict[str, int] = {}
+        for m in self.messages:
+            counts[m.channel] = counts.get(m.channel, 0) + 1
+        return f"RunLog({self.run_id!r}: {len(self.messages)} messages, {counts})"
+
+
+def read_log(log: str | Path, run: str | None = None, bus_key: str | Path | None = None,
+             channels: list[str] | None = None) -> RunLog:
+    """The messages of one run: `log` a run's log folder (logs/<run-id>) or one .lcm file.
+
+    `run` picks a run in a log of several (default: the first); `bus_key`, the
+    key file of a keyed bus an lcm-logger recording was made on; `channels`
+    keeps only those channels (faster: the others are not decoded). Raises
+    RuntimeError naming the file when there is no log or no run in it.
+    """
+    raw = _afford.read_log(str(log), run or "", str(bus_key) if bus_key else "", list(channels or []))
+    messages = [Message(channel, utime, _shaped(fields)) for channel, utime, fields in raw["messages"]]
+    return RunLog(raw["run_id"], raw["config_yaml"], messages, raw["refused"], raw["first_refusal"],
+                  raw["unknown_channels"], raw["malformed"], raw["torn_bytes"])

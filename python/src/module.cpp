@@ -1,0 +1,258 @@
+// afford._afford: the project's C++ behind the Python package (python/afford).
+// No protocol or file format is written again in Python: a log is read by the
+// project's log reader and each message decoded and checked by the edge's
+// decodeChecked, then converted by the conversions afford-lcmwire generates
+// from the .lcm files (afford/to_python.hpp).
+#include <pybind11/numpy.h>
+#include <pybind11/pybind11.h>
+#include <pybind11/stl.h>
+#include <spdlog/sinks/null_sink.h>
+
+#include <cstring>
+#include <memory>
+#include <string>
+
+#include "afford/config.hpp"
+#include "afford/experiment.hpp"
+#include "afford/group.hpp"
+#include "afford/logging.hpp"
+#include "afford/decode.hpp"
+#include "afford/image.hpp"
+#include "afford/protocol.hpp"
+#include "afford/replay.hpp"
+#include "afford/rng.hpp"
+#include "motivation/component.hpp"
+#include "motivation/node.hpp"
+#include "afford/to_python.hpp"
+
+namespace py = pybind11;
+
+namespace afford {
+namespace {
+
+// A scene's pixels: height x width x 3 bytes, RGB.
+py::array_t<std::uint8_t> sceneImage(const scene_t& m) {
+  const cv::Mat rgb = decodeScene(m.data, m.width, m.height);
+  py::array_t<std::uint8_t> out({static_cast<py::ssize_t>(m.height), static_cast<py::ssize_t>(m.width),
+                                 static_cast<py::ssize_t>(3)});
+  std::memcpy(out.mutable_data(), rgb.data, static_cast<std::size_t>(m.height) * m.width * 3);
+  return out;
+}
+
+// The messages of one run of a log: its RUN_CONFIG and every later event of
+// its run id, each as (channel, utime, fields). An event its channel's type
+// refuses is skipped and counted (`refused`); one of a channel the protocol
+// does not have is skipped and counted (`unknown`).
+py::dict readLog(const std::string& path, const std::string& run_id, const std::string& bus_key,
+                 const std::vector<std::string>& channels) {
+  auto log = std::make_shared<spdlog::logger>("read_log", std::make_shared<spdlog::sinks::null_sink_mt>());
+  std::shared_ptr<const BusKey> key = bus_key.empty() ? nullptr : busKeyFrom(bus_key);
+  RecordedLog recorded = readRecordedLog(path, *log, key.get());
+  const RunEvents run = runEventsOf(std::move(recorded.events), run_id, path, *log);
+  const RunConfig config = parseRunConfigText(run.config.config_yaml);
+  const BoundsContext ctx{&config.protocol, &config};
+  py::list messages;
+  std::int64_t refused = 0, unknown = 0;
+  std::string first_refusal;
+  for (const LogEvent& e : run.events) {
+    if (!channels.empty() && std::find(channels.begin(), channels.end(), e.channel) == channels.end()) continue;
+    const bool known = withChannel(e.channel, [&](const auto& c) {
+      typename std::decay_t<decltype(c)>::Message m;
+      std::string why;
+      if (!decodeChecked(e.data.data(), e.data.size(), ctx, m, why)) {
+        if (refused++ == 0) first_refusal = e.channel + ": " + why;
+        return;
+      }
+      py::dict fields = python::toPython(m);
+      if constexpr (std::is_same_v<std::decay_t<decltype(m)>, scene_t>) fields["image"] = sceneImage(m);
+      messages.append(py::make_tuple(e.channel, e.utime, fields));
+    });
+    unknown += !known;
+  }
+  py::dict out;
+  out["run_id"] = run.config.run_id;
+  out["config_yaml"] = run.config.config_yaml;
+  out["messages"] = messages;
+  out["refused"] = refused;
+  out["first_refusal"] = first_refusal;
+  out["unknown_channels"] = unknown;
+  out["malformed"] = recorded.malformed;
+  out["torn_bytes"] = recorded.torn_bytes;
+  return out;
+}
+
+// `afford experiment` in this process: (exit code, the signal that stopped it or 0).
+// The GIL is released while it runs; SIGINT (a notebook's interrupt) stops
+// it as it stops the command, and Python's own handlers are put back after.
+py::tuple runExperimentFrom(const py::dict& request) {
+  ExperimentOptions o;
+  o.experiment = request["experiment"].cast<std::string>();
+  o.systems = request["systems"].cast<std::vector<std::string>>();
+  if (!request["reps"].is_none()) o.reps = request["reps"].cast<int>();
+  if (!request["steps"].is_none()) o.steps = request["steps"].cast<std::int64_t>();
+  o.seed = request["seed"].cast<std::int64_t>();
+  if (!request["tables"].is_none()) o.tables = request["tables"].cast<int>();
+  if (!request["table_seed"].is_none()) o.table_seed = request["table_seed"].cast<std::int64_t>();
+  o.jobs = request["jobs"].cast<int>();
+  o.out_dir = request["out"].cast<std::string>();
+  o.log_root = request["log_root"].cast<std::string>();
+  o.transport = request["transport"].cast<std::string>();
+  o.keep_logs = request["keep_logs"].cast<std::string>();
+  o.settings = request["settings"].cast<std::vector<std::string>>();
+  o.extrinsic_reps = request["extrinsic_reps"].cast<int>();
+  o.scenarios = request["scenarios"].cast<std::vector<std::string>>();
+  o.run_prefix = request["run_prefix"].cast<std::string>();
+  o.progress = request["progress"].cast<std::string>();
+  o.reuse_agents = request["reuse_agents"].cast<bool>();
+  o.processes = parseProcessSwaps(
+      [&] {
+        std::vector<std::string> swaps;
+        for (const auto& [name, command] : request["processes"].cast<std::map<std::string, std::string>>())
+          swaps.push_back(name + "=" + command);
+        return swaps;
+      }(),
+      "processes");
+  o.quiet = true;
+  o.program = "python3 -c 'import afford; afford.run(...)'; or: build/bin/afford";
+  auto log = makeLogger("afford", request["log_level"].cast<std::string>());
+  int code = 0, signal = 0;
+  {
+    py::gil_scoped_release free;
+    InterruptScope scope;
+    code = runExperiment(o, *log);
+    signal = scope.signal();
+  }
+  return py::make_tuple(code, signal);
+}
+
+
+
+// ---- a motivation written in Python (docs/python.md#components-in-python) ----------------
+
+// The run's configuration as the component's constructor gets it.
+py::dict configDict(const RunConfig& c) {
+  py::dict d;
+  d["experiment"] = c.experiment;
+  d["system"] = toString(c.system);
+  d["seed"] = c.seed;
+  d["steps"] = c.steps;
+  d["motivation_kind"] = c.motivation.kind;
+  return d;
+}
+
+// A Python object with decide(percept) in the place of a MotivationComponent.
+// Every call into Python holds the GIL; a Python exception becomes the run's
+// failure, naming the kind and the Python error.
+class PythonMotivation : public MotivationComponent {
+ public:
+  PythonMotivation(std::string kind, py::object cls, const RunConfig& config) : kind_(std::move(kind)) {
+    py::gil_scoped_acquire gil;
+    try {
+      obj_ = cls(configDict(config));
+      needs_memory_ = py::bool_(py::getattr(obj_, "needs_memory", py::bool_(false)));
+      needs_last_change_ = py::bool_(py::getattr(obj_, "needs_last_change", py::bool_(false)));
+    } catch (py::error_already_set& e) {
+      throw ConfigError("motivation '" + kind_ + "' (Python): its constructor failed: " + e.what());
+    }
+  }
+  ~PythonMotivation() override {
+    py::gil_scoped_acquire gil;
+    obj_ = py::object();
+  }
+  Decision decide(const Percept& p) override {
+    py::gil_scoped_acquire gil;
+    try {
+      py::dict percept;
+      percept["step"] = p.step;
+      percept["affordance"] = py::array_t<double>(kNumActions, p.affordance.data());
+      percept["learning_progress"] = py::array_t<double>(kNumActions, p.learning_progress.data());
+      percept["look"] = p.look;
+      percept["tried_ago"] = p.tried_ago ? py::object(py::array_t<std::int64_t>(kNumActions, p.tried_ago->data()))
+                                         : py::object(py::none());
+      percept["last_change"] = p.last_change ? py::object(py::float_(*p.last_change)) : py::object(py::none());
+      const py::object r = obj_.attr("decide")(percept);
+      Decision d;
+      const auto field = [&](const char* name) {
+        if (py::isinstance<py::dict>(r)) return py::object(r.cast<py::dict>()[name]);
+        return py::getattr(r, name);
+      };
+      d.act = field("act").cast<bool>();
+      d.action = d.act ? field("action").cast<int>() : -1;
+      if (d.act && (d.action < 0 || d.action >= kNumActions))
+        throw std::runtime_error("motivation '" + kind_ + "' (Python): decide() at step " + std::to_string(p.step) +
+                                 " returned action " + std::to_string(d.action) + ", not one of 0.." +
+                                 std::to_string(kNumActions - 1));
+      d.motivation = field("motivation").cast<double>();
+      d.threshold = field("threshold").cast<double>();
+      return d;
+    } catch (py::error_already_set& e) {
+      throw std::runtime_error("motivation '" + kind_ + "' (Python): decide() at step " + std::to_string(p.step) +
+                               " raised " + e.what());
+    } catch (py::cast_error& e) {
+      throw std::runtime_error("motivation '" + kind_ + "' (Python): decide() at step " + std::to_string(p.step) +
+                               " returned no act, action, motivation and threshold (" + e.what() + ")");
+    }
+  }
+  bool needsMemory() const override { return needs_memory_; }
+  bool needsLastChange() const override { return needs_last_change_; }
+
+ private:
+  std::string kind_;
+  py::object obj_;
+  bool needs_memory_ = false, needs_last_change_ = false;
+};
+
+// Make `cls` the motivation of motivation.kind `kind` in this process.
+void registerPythonMotivation(const std::string& kind, py::object cls) {
+  auto shared = std::make_shared<py::object>(std::move(cls));
+  registerMotivation(kind, [kind, shared](const RunConfig& c) {
+    return std::make_unique<PythonMotivation>(kind, *shared, c);
+  });
+}
+
+// The motivation process, its component the Python class of `kind` (registered first): what
+// `python3 -m afford.process motivation MODULE:CLASS ARGS` runs. ARGS: a process's standard ones.
+int serveMotivation(const std::vector<std::string>& args) {
+  std::vector<std::string> owned = args;
+  std::vector<char*> argv;
+  for (std::string& a : owned) argv.push_back(a.data());
+  argv.push_back(nullptr);
+  py::gil_scoped_release free;
+  return processMain(static_cast<int>(owned.size()), argv.data(),
+                     {"motivation", "a motivation written in Python (afford.process)"}, [](CLIHook&) {},
+                     [](lcm::LCM& lcm, std::shared_ptr<spdlog::logger> log, const ProtocolConfig& protocol) {
+                       return std::make_unique<MotivationNode>(lcm, std::move(log), protocol);
+                     });
+}
+
+}  // namespace
+}  // namespace afford
+
+PYBIND11_MODULE(_afford, m) {
+  // The executables this module was built with (afford-<name> for udpm runs): $AFFORD_BIN, or the build's.
+  const char* bin = std::getenv("AFFORD_BIN");
+  afford::setExecutableDir(bin && *bin ? bin : AFFORD_BIN_DIR);
+  m.doc() = "afford's C++ core for the Python package: the log reader, the message types";
+  py::register_exception<afford::ConfigError>(m, "ConfigError", PyExc_ValueError);
+  m.def("read_log", &afford::readLog, py::arg("path"), py::arg("run_id") = "", py::arg("bus_key") = "",
+        py::arg("channels") = std::vector<std::string>{},
+        "The messages of one run of a log folder (or .lcm file), read and checked by the project's reader.");
+  m.def("run_experiment", &afford::runExperimentFrom, py::arg("request"),
+        "Run an experiment in this process (afford experiment); returns (exit code, signal or 0).");
+  m.def("channels", [] { return afford::channelNames(); }, "Every channel of the protocol, in the protocol's order.");
+  m.def("register_motivation", &afford::registerPythonMotivation, py::arg("kind"), py::arg("cls"),
+        "Make cls (constructed with the run's configuration, with decide(percept)) the motivation of that kind.");
+  m.def("motivation_kinds", &afford::motivationKinds, "The motivation kinds of this process.");
+  m.def("serve_motivation", &afford::serveMotivation, py::arg("argv"),
+        "Run the motivation process (its standard arguments in argv, argv[0] its name).");
+  py::class_<afford::KeyedRng>(m, "KeyedRng",
+                                "The run's keyed generator for a component: (seed, step, Purpose::Component, sub).")
+      .def(py::init([](std::int64_t seed, std::int64_t step, std::uint64_t sub) {
+             return afford::KeyedRng(seed, step, afford::Purpose::Component, sub);
+           }),
+           py::arg("seed"), py::arg("step"), py::arg("sub"))
+      .def("bits", &afford::KeyedRng::bits, py::arg("i") = 0, "The i-th 64-bit draw.")
+      .def("uniform", py::overload_cast<std::uint64_t>(&afford::KeyedRng::uniform, py::const_), py::arg("i") = 0,
+           "The i-th draw, uniform in [0, 1).");
+  m.attr("version") = AFFORD_VERSION;
+}

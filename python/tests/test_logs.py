@@ -1,0 +1,60 @@
+"""afford.read_log: a run's messages through the project's log reader and the edge's checks."""
+import json
+
+import numpy as np
+import pytest
+
+import afford
+
+
+def run_of(made):
+    s = json.loads((made / "base" / "summary.json").read_text())
+    return s["systems"]["IMP"]["runs"][0]
+
+
+def test_a_runs_messages_come_by_channel_with_images_as_arrays(made):
+    run = run_of(made)
+    log = afford.read_log(made / "logs" / run["run_id"])
+    assert log.run_id == run["run_id"]
+    assert log.refused == log.unknown_channels == log.malformed == log.torn_bytes == 0
+    assert "steps: 400" in log.config_yaml
+    decisions = log.channel("DECISION")
+    assert [d["step"] for d in decisions] == list(range(400))
+    acted = [d for d in decisions if d["acted"]]
+    assert len(acted) == sum(run["actions_executed"])
+    scene = log.channel("SCENE")[0]
+    assert scene["image"].shape == (scene["height"], scene["width"], 3)
+    assert scene["image"].dtype == np.uint8
+    focus = log.channel("FOCUS")[0]
+    assert focus["image"].shape == (focus["side"], focus["side"], 3)
+    # the final table of the run's last AFFORDANCE_TABLE is the summary's
+    table = log.channel("AFFORDANCE_TABLE")[-1]
+    assert np.allclose(table["affordance"], np.array(run["affordance"]))
+    assert log.channel("RESULT")[0]["weights_checksum"] == run["weights_checksum"]
+    frame = log.frame("DECISION")
+    assert len(frame) == 400 and {"step", "acted", "action", "motivation"} <= set(frame.columns)
+
+
+def test_channels_keeps_only_those(made):
+    log = afford.read_log(made / "logs" / run_of(made)["run_id"], channels=["DECISION"])
+    assert {m.channel for m in log} == {"DECISION"}
+    assert set(afford.channels()) >= {"SCENE", "FOCUS", "DECISION", "PREDICTION", "RUN_CONFIG"}
+
+
+def test_a_damaged_log_is_read_as_far_as_it_goes(made, tmp_path):
+    src = made / "logs" / run_of(made)["run_id"] / "log.00.lcm"
+    data = bytearray(src.read_bytes())
+    (tmp_path / "cut").mkdir()
+    (tmp_path / "cut" / "log.00.lcm").write_bytes(bytes(data[: len(data) // 2]))
+    log = afford.read_log(tmp_path / "cut")
+    assert log.torn_bytes > 0
+    assert 0 < len(log) < len(afford.read_log(src))
+
+
+def test_bad_logs_are_named(tmp_path):
+    with pytest.raises(RuntimeError, match="no run log at"):
+        afford.read_log(tmp_path / "nowhere")
+    (tmp_path / "junk").mkdir()
+    (tmp_path / "junk" / "log.00.lcm").write_bytes(b"not an LCM log")
+    with pytest.raises(RuntimeError, match="no RUN_CONFIG"):
+        afford.read_log(tmp_path / "junk")

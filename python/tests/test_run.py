@@ -1,0 +1,62 @@
+"""afford.run: an experiment in this process, as `afford experiment` runs it."""
+import json
+import os
+import signal
+import subprocess
+import sys
+import textwrap
+from pathlib import Path
+
+import pytest
+
+import afford
+
+
+def test_a_run_returns_its_experiment_and_is_the_commands(made, tmp_path):
+    e = afford.run("base", system="IMP", reps=1, steps=400, out=tmp_path / "run", run_prefix="py")
+    assert len(e.runs) == 1 and e.summary["steps"] == 400
+    # the command's run of the same seed and steps (made by conftest: --system all --reps 2 --steps 400)
+    base = afford.load(made / "base")
+    same = base.runs[(base.runs.system == "IMP") & (base.runs.seed == 1)]
+    assert e.runs["weights_checksum"].iloc[0] == same["weights_checksum"].iloc[0]
+
+
+def test_settings_are_config_keys(tmp_path):
+    a = afford.run("base", system="IMP", reps=1, steps=300, out=tmp_path / "a", set={"motivation.leak": 0.3})
+    b = afford.run("base", system="IMP", reps=1, steps=300, out=tmp_path / "b")
+    assert a.runs["weights_checksum"].iloc[0] != b.runs["weights_checksum"].iloc[0]
+    with pytest.raises(afford.ConfigError, match="motivation.leek"):
+        afford.run("base", system="IMP", reps=1, steps=300, out=tmp_path / "c", set={"motivation.leek": 0.3})
+    with pytest.raises(ValueError):  # a ConfigError is one
+        afford.run("no-such-experiment", out=tmp_path / "d")
+
+
+SCRIPT = textwrap.dedent("""
+    import os, signal, sys, threading, time
+    from pathlib import Path
+    import afford
+    out = Path(sys.argv[1])
+    def interrupt():  # as soon as the first run has logged its configuration
+        while not list((out / "logs").glob("*/log.00.lcm")):
+            time.sleep(0.01)
+        os.kill(os.getpid(), signal.SIGINT)
+    threading.Thread(target=interrupt, daemon=True).start()
+    try:
+        afford.run("base", system="IMP", reps=2, steps=200000, out=out, run_prefix="ctrlc")
+        print("not interrupted")
+    except KeyboardInterrupt as e:
+        print("KeyboardInterrupt:", e)
+    assert signal.getsignal(signal.SIGINT) is signal.default_int_handler, signal.getsignal(signal.SIGINT)
+    e = afford.run("base", system="IMP", reps=1, steps=200, out=out.parent / "after", run_prefix="after")
+    print("after:", len(e.runs))
+""")
+
+
+def test_ctrl_c_stops_it_as_it_stops_the_command_and_python_goes_on(tmp_path):
+    r = subprocess.run([sys.executable, "-c", SCRIPT, str(tmp_path / "cut")], capture_output=True, text=True,
+                       timeout=240, env=os.environ)
+    assert r.returncode == 0, r.stdout + r.stderr
+    assert "KeyboardInterrupt: afford.run('base') was interrupted" in r.stdout, r.stdout + r.stderr
+    assert "after: 1" in r.stdout
+    summary = json.loads((tmp_path / "cut" / "summary.json").read_text())
+    assert summary["interrupted"]["signal"] == "SIGINT"
