@@ -41,7 +41,9 @@ double tagMicros(const BusKey& key, std::size_t size) {
     sink ^= key.tag("SCENE", m.data(), m.size())[0];
   }
   const double us = std::chrono::duration<double, std::micro>(std::chrono::steady_clock::now() - t0).count() / n;
-  return sink == 0xFFFF ? 0 : us;  // (sink keeps the loop)
+  volatile std::uint8_t keep = sink;  // the loop's result is used: the compiler keeps the loop
+  (void)keep;
+  return us;
 }
 
 }  // namespace

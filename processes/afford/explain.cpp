@@ -12,14 +12,10 @@
 
 #include "afford/processes.hpp"
 #include "afford/protocol.hpp"
-#include "afford/decision_t.hpp"
 #include "afford/decode.hpp"
 #include "afford/extrinsic_result_t.hpp"
-#include "afford/focus_t.hpp"
-#include "afford/forward_prediction_t.hpp"
 #include "afford/forward_query_t.hpp"
 #include "afford/look_t.hpp"
-#include "afford/prediction_t.hpp"
 #include "afford/scene_t.hpp"
 #include "planner/planner.hpp"
 

@@ -1,4 +1,4 @@
-// Keeping multicast on this machine (ARCHITECTURE.md, "LCM facts"): the
+// Keeping multicast on this machine (docs/operating.md): the
 // runner moves itself, before it starts any thread or process, into a private
 // network namespace whose only interface is loopback with a route for
 // 224.0.0.0/4. Every process it starts inherits it, so no packet can leave.

@@ -342,7 +342,9 @@ TEST_F(LcmPatches, AMessageThatCannotBeAllocatedIsDropped) {
     s.sendShort("SYNC", {0, 0, 0, 1});
     std::this_thread::sleep_for(std::chrono::milliseconds(100));
   }
-  if (waitpid(child, &status, WNOHANG) == 0) ASSERT_EQ(waitpid(child, &status, 0), child);
+  if (waitpid(child, &status, WNOHANG) == 0) {
+    ASSERT_EQ(waitpid(child, &status, 0), child);
+  }
   ASSERT_TRUE(WIFEXITED(status)) << "the receiver died of signal " << (WIFSIGNALED(status) ? WTERMSIG(status) : 0);
   EXPECT_EQ(WEXITSTATUS(status), 0) << "3: could not cap its memory; 4: no SYNC, or the message was passed on";
 }

@@ -8,7 +8,7 @@
 // dict (pybind11), for the Python package.
 //
 // It fails with "file:line: what" on anything it does not understand and on
-// the project's message rules (STYLE.md habit 1): a message type (one that is
+// the project's message rules: a message type (one that is
 // no other type's field) begins with `string run_id; int64_t step;` and ends
 // with `int64_t digest;`; a field `serial` is the third, an int64_t, and
 // `int64_t prev_digest;` follows it; a dimension names an earlier integer

@@ -1,6 +1,6 @@
 // Field checks of every message type, shared by all subscribers so that each
-// process rejects the same malformed messages (ARCHITECTURE.md: "validate
-// every field (sizes, ranges, NaN)"). Each returns "" or the reason, naming
+// process rejects the same malformed messages: every field is validated
+// (sizes, ranges, NaN; docs/processes-and-channels.md#the-message-edge). Each returns "" or the reason, naming
 // the field. The edge (afford/edge.hpp) calls the one of each type it
 // decodes: a type without one does not compile. With the run's configuration
 // in the context, sizes and steps are checked against it; without one (an

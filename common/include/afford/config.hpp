@@ -1,4 +1,4 @@
-// Typed run configuration (STYLE.md habit 5): loaded once from YAML, validated
+// Typed run configuration (docs/configuration.md): loaded once from YAML, validated
 // strictly. Every error names the offending key, e.g.
 //   config key 'predictors.affordance.learning_rate': expected a number, got "fast"
 // The effective configuration of a run travels as YAML text in run_config_t,

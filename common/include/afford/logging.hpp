@@ -1,4 +1,4 @@
-// One spdlog logger per process (STYLE.md habit 13), not registered globally so
+// One spdlog logger per process, not registered globally so
 // that several runs can host the same cores in one process (memq).
 #pragma once
 #include <spdlog/spdlog.h>

@@ -1,4 +1,4 @@
-// What every process shares (ARCHITECTURE.md "How a process is built"): the
+// What every process shares (docs/processes-and-channels.md): the
 // message edge (afford/edge.hpp) and the run lifecycle
 //   WAITING --RUN_CONFIG--> READY --START--> RUNNING [--> DONE] --STOP--> WAITING
 // with FAILED when a handler throws, a bound is reached, or the run's

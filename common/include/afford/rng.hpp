@@ -1,4 +1,4 @@
-// Keyed random numbers (ARCHITECTURE.md, Determinism): every draw is a pure
+// Keyed random numbers (docs/processes-and-channels.md#determinism): every draw is a pure
 // function of (run seed, step, purpose, index), so the same draw is made by
 // whoever makes it and however often it is remade, and no generator state has
 // to survive a restart. Counter-based: index i of a key is mix(key, i).
