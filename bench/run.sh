@@ -17,8 +17,13 @@
 #   bench/run.sh loss [--reps R] [--seed S] [--rates "0.01 0.05 0.20"] [--out DIR]
 #     packet loss: how much longer a run takes when datagrams are dropped at random (floor: 5% loss at
 #     most 3 times as long, median over seeds; exit 1 above it). Root; a private network namespace.
+#   bench/run.sh python [--steps N] [--reps R] [--floor F] [--transports memq,udpm] [--out DIR]
+#     components written in Python (ports of the paper's motivation and affordance predictor) against the
+#     all-C++ run: steps per second and their ratio (floor 0.5 for the motivation; exit 1 below it), checksums.
 set -euo pipefail
 cd "$(dirname "$0")/.."
 [[ ${1:-} == loss ]] && { shift; exec bench/loss.sh "$@"; }
+[[ ${1:-} == python ]] && { shift; [[ -x build/bin/afford ]] || scripts/setup.sh;
+  PYTHONPATH=build/python exec /usr/bin/python3 bench/python_bench.py "$@"; }
 [[ -x build/bin/afford-bench ]] || scripts/setup.sh
 exec build/bin/afford-bench "$@"

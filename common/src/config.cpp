@@ -106,6 +106,16 @@ class Reader {
   std::set<std::string> used_;
 };
 
+// A component's kind (motivation.kind, predictors.affordance.kind): a name a process's registry knows.
+std::string componentKind(Reader& r) {
+  const std::string kind = r.text("kind");
+  if (kind.empty()) fail(r.keyPath("kind"), "is empty");
+  for (char ch : kind)
+    if (!((ch >= 'a' && ch <= 'z') || (ch >= '0' && ch <= '9') || ch == '_' || ch == '-') || kind.size() > 64)
+      fail(r.keyPath("kind"), "'" + kind + "' is not a name (lower-case letters, digits, '_', '-')");
+  return kind;
+}
+
 std::vector<double> numberList(Reader& r, const std::string& key, std::size_t n, double lo, double hi) {
   YAML::Node v = r.raw(key);
   const std::string k = r.keyPath(key);
@@ -326,6 +336,7 @@ ProtocolConfig loadProtocol(const std::string& config_dir) {
 RunConfig parseRunConfig(const YAML::Node& root) {
   Reader r(root, "");
   RunConfig c;
+  std::string memory_keep_path;
   c.experiment = r.text("experiment");
   c.system = r.choice<System>("system", {{"FIX", System::FIX}, {"IGN", System::IGN}, {"IMP", System::IMP}});
   c.seed = r.integer("seed", 0, INT64_MAX);
@@ -382,6 +393,7 @@ RunConfig parseRunConfig(const YAML::Node& root) {
   {
     Reader p = r.map("predictors");
     Reader a = p.map("affordance");
+    if (a.has("kind")) c.predictors.affordance_kind = componentKind(a);  // logs recorded before it have none: paper
     c.predictors.affordance_learning_rate = a.number("learning_rate", 0.0, 10.0);
     a.finish();
     Reader lp = p.map("learning_progress");
@@ -399,6 +411,10 @@ RunConfig parseRunConfig(const YAML::Node& root) {
     c.predictors.memory.look_shift_px = static_cast<int>(mem.integer("look_shift_px", 0, 10));
     c.predictors.memory.max_looks = static_cast<int>(mem.integer("max_looks", 1, 100'000));
     c.predictors.memory.per_look_action = static_cast<int>(mem.integer("per_look_action", 1, 100'000));
+    if (mem.has("keep"))  // logs recorded before it have none: auto
+      c.predictors.memory.keep = mem.choice<MemoryKeep>(
+          "keep", {{"auto", MemoryKeep::Auto}, {"always", MemoryKeep::Always}, {"never", MemoryKeep::Never}});
+    memory_keep_path = mem.keyPath("keep");
     mem.finish();
     Reader rep = p.map("replay");
     c.predictors.replay.enabled = rep.choice<bool>("enabled", {{"true", true}, {"false", false}});
@@ -411,11 +427,7 @@ RunConfig parseRunConfig(const YAML::Node& root) {
   }
   {
     Reader m = r.map("motivation");
-    c.motivation.kind = m.text("kind");
-    for (char ch : c.motivation.kind)
-      if (!((ch >= 'a' && ch <= 'z') || (ch >= '0' && ch <= '9') || ch == '_' || ch == '-') || c.motivation.kind.size() > 64)
-        fail(m.keyPath("kind"), "'" + c.motivation.kind + "' is not a name (lower-case letters, digits, '_', '-')");
-    if (c.motivation.kind.empty()) fail(m.keyPath("kind"), "is empty");
+    c.motivation.kind = componentKind(m);
     Reader nov = m.map("novelty");
     c.motivation.novelty_threshold = nov.number("threshold", 0.0, 1.0);
     nov.finish();
@@ -436,6 +448,10 @@ RunConfig parseRunConfig(const YAML::Node& root) {
     rv.finish();
     m.finish();
   }
+  if (c.predictors.memory.keep == MemoryKeep::Never && (c.predictors.replay.enabled || c.motivation.revisit.enabled))
+    fail(memory_keep_path, "never, but " +
+                               std::string(c.predictors.replay.enabled ? "predictors.replay.enabled" : "motivation.revisit.enabled") +
+                               " is true, which needs the memory");
   if (r.has("extrinsic")) {
     Reader e = r.map("extrinsic");
     c.extrinsic_checkpoint = e.text("checkpoint");
@@ -501,6 +517,7 @@ RunConfig parseRunConfigText(const std::string& yaml_text) {
     throw ConfigError(std::string("config is not valid YAML: ") + e.what());
   }
   RunConfig config = parseRunConfig(root);
+  config.text = yaml_text;
   const std::lock_guard<std::mutex> lock(mutex);
   recent.emplace_front(yaml_text, config);
   if (recent.size() > kKept) recent.pop_back();

@@ -25,6 +25,7 @@
 #include "afford/sweep.hpp"
 #include "afford/processes.hpp"
 #include "motivation/component.hpp"
+#include "predictors/affordance.hpp"
 
 namespace afford {
 namespace fs = std::filesystem;
@@ -318,12 +319,17 @@ void checkProcesses(const ExperimentOptions& o, const std::vector<PlannedRun>& r
     throw ConfigError("--process starts a command in place of a shipped process, which needs real processes "
                       "(--transport udpm, not " + o.transport + "); in one process, a config key chooses the "
                       "component (motivation.kind)");
-  if (!o.attach.empty() || o.processes.count("motivation")) return;
+  if (!o.attach.empty()) return;
+  const auto affordance_kinds = affordanceKinds();
   std::set<std::string> seen;
   for (const PlannedRun& run : runs)
     if (seen.insert(run.spec.config_yaml).second) {
       try {
-        makeMotivation(parseRunConfigText(run.spec.config_yaml));
+        const RunConfig config = parseRunConfigText(run.spec.config_yaml);
+        if (!o.processes.count("motivation")) makeMotivation(config);
+        if (!o.processes.count("predictors") && std::find(affordance_kinds.begin(), affordance_kinds.end(),
+                                                          config.predictors.affordance_kind) == affordance_kinds.end())
+          makeAffordance(config);  // throws, naming the key and the kinds known
       } catch (const ConfigError& e) {
         throw ConfigError("run " + run.spec.run_id + ": " + e.what());
       }

@@ -24,6 +24,7 @@
 #include "afford/run_config_t.hpp"
 #include "afford/run_result_t.hpp"
 #include "motivation/component.hpp"
+#include "predictors/affordance.hpp"
 #include "logger/logger.hpp"
 
 namespace afford {
@@ -289,6 +290,13 @@ ReplayResult replayRun(const ReplayOptions& o, spdlog::logger& log) {
                              "' is not built in (it ran as a process of its own), so it cannot be replayed here; "
                              "replay --into predictors");
   }
+  const auto affordance_kinds = affordanceKinds();
+  if (std::find(into.begin(), into.end(), "predictors") != into.end() &&
+      std::find(affordance_kinds.begin(), affordance_kinds.end(), config.predictors.affordance_kind) ==
+          affordance_kinds.end())
+    throw std::runtime_error("the run's predictors.affordance.kind '" + config.predictors.affordance_kind +
+                             "' is not one of afford's own (a program of one's own, or Python, registered it), so "
+                             "its predictors cannot be replayed here" + (result.extrinsic || own_motivation ? std::string() : "; replay --into motivation"));
   std::vector<std::unique_ptr<ReplayedProcess>> procs;
   for (const auto& name : into) {
     if (name != "predictors" && name != "motivation" && name != "planner")

@@ -14,24 +14,18 @@
 #include <sstream>
 
 #include "afford/checksum.hpp"
+#include "afford/names.hpp"
 #include "afford/rng.hpp"
 
 namespace afford {
 
 Predictors::Predictors(const RunConfig& config)
     : config_(config), input_size_(config.eye.focus_side * config.eye.focus_side * 3) {
+  affordance_ = makeAffordance(config);
   const int dim = input_size_ + 1;
   for (int a = 0; a < kNumActions; ++a) {
-    affordance_.emplace_back(dim, true);  // zero weights: output 0.5, ignorance 1 (paper 2.4.1)
-    learning_progress_.emplace_back(dim, false);
     what_.emplace_back(input_size_, dim, true);
     where_.emplace_back(2, a == kMove ? 5 : 3, false);
-    // Learning-progress weights: random sign, fixed magnitude (docs/parameters.md).
-    const KeyedRng rng(config.seed, 0, Purpose::LearningProgressInit, static_cast<std::uint64_t>(a));
-    Eigen::VectorXd& w = learning_progress_.back().weights();
-    for (int i = 0; i < dim; ++i)
-      w[i] = (rng.bits(static_cast<std::uint64_t>(i)) & 1u) ? config.predictors.learning_progress_init
-                                                            : -config.predictors.learning_progress_init;
   }
   if (config.keepsMemory()) memory_ = std::make_unique<Memory>(config.predictors.memory, config.eye.focus_side);
 }
@@ -49,10 +43,7 @@ Prediction Predictors::see(const std::vector<std::uint8_t>& focus_image, std::in
 Prediction Predictors::predict(const std::vector<std::uint8_t>& focus_image) const {
   const SparseInput x = focusInput(focus_image);
   Prediction p;
-  for (int a = 0; a < kNumActions; ++a) {
-    p.affordance[a] = affordance_[a].output(x);
-    p.learning_progress[a] = learning_progress_[a].output(x);
-  }
+  affordance_->predict(FocusView{focus_image, x}, p.affordance, p.learning_progress);
   return p;
 }
 
@@ -72,12 +63,10 @@ TrainingReport Predictors::trainAffordance(const Experience& e, std::int64_t ste
   TrainingReport r;
   r.action = a;
   r.affordance = e.affordance;
-  r.affordance_before = affordance_[a].train(x, e.affordance ? 1.0 : 0.0, config_.predictors.affordance_learning_rate);
-  r.affordance_after = affordance_[a].output(x);
-  r.learning_progress = learning_progress_[a].output(x);
-  if (config_.system == System::IMP)  // Algorithm 1 line 9: only IMP
-    learning_progress_[a].train(x, r.affordance_after - r.affordance_before,
-                                config_.predictors.learning_progress_learning_rate);
+  const Learned learned = affordance_->learn(FocusView{e.before_image, x}, a, e.affordance);
+  r.affordance_before = learned.before;
+  r.affordance_after = learned.after;
+  r.learning_progress = learned.learning_progress;
   ++executed_[a];
   if (e.affordance) ++successes_[a];
   r.effect_trained = e.affordance;
@@ -105,7 +94,7 @@ std::vector<Memory::Ref> Predictors::replay(std::int64_t step, bool own_effect) 
   const ReplayConfig& replay = config_.predictors.replay;
   if (!memory_ || !replay.enabled) return {};
   for (const Memory::Ref& m : memory_->sample(replay.sampling, config_.seed, step, 0, static_cast<std::size_t>(replay.ratio), false)) {
-    affordance_[m->action].train(m->before_input, m->affordance ? 1.0 : 0.0, config_.predictors.affordance_learning_rate);
+    affordance_->relearn(FocusView{m->before_image, m->before_input}, m->action, m->affordance);
     ++replayed_;
   }
   // Step t's share of effects_ratio: floor((t + 1) r) - floor(t r), which adds up to r per step.
@@ -153,18 +142,17 @@ constexpr char kMagic[8] = {'A', 'F', 'F', 'O', 'R', 'D', 'C', 'K'};
 // A checkpoint as written since issue 13: this magic, the size of the plain
 // checkpoint (uint64), then the plain checkpoint (kMagic ...) deflated by zlib.
 constexpr char kPackedMagic[8] = {'A', 'F', 'F', 'O', 'R', 'D', 'C', 'Z'};
-// 1: weights and counters; 2: then a byte saying whether a memory follows, and the memory.
-constexpr std::uint32_t kVersion = 2;
+// 1: weights and counters; 2: then a byte saying whether a memory follows, and the memory;
+// 3: as 2, with the affordance component's kind (a length, then the name) after the header.
+constexpr std::uint32_t kVersion = 3;
 }  // namespace
 
 template <class F>
-static void forEachWeightArray(F&& f, std::vector<Unit>& aff, std::vector<Unit>& lp, std::vector<Layer>& what,
-                               std::vector<Layer>& where) {
+void Predictors::forEachWeightArray(F&& f) const {
   for (int a = 0; a < kNumActions; ++a) {
-    f(aff[a].weights().data(), aff[a].weights().size());
-    f(lp[a].weights().data(), lp[a].weights().size());
-    f(what[a].weights().data(), what[a].weights().size());
-    f(where[a].weights().data(), where[a].weights().size());
+    for (const StateArray& s : affordance_->state(a)) f(s.data, s.size);
+    f(const_cast<double*>(what_[a].weights().data()), static_cast<std::size_t>(what_[a].weights().size()));
+    f(const_cast<double*>(where_[a].weights().data()), static_cast<std::size_t>(where_[a].weights().size()));
   }
 }
 
@@ -173,11 +161,19 @@ void Predictors::save(const std::string& path, const std::string& checksum) cons
   // stay at their start, and a checkpoint shrinks about twentyfold, losslessly.
   std::ostringstream raw(std::ios::binary);
   raw.write(kMagic, sizeof kMagic);
-  const std::uint32_t header[2] = {kVersion, static_cast<std::uint32_t>(input_size_)};
+  // The paper's component: format 2, as ever; another: format 3, which names it.
+  const bool paper = config_.predictors.affordance_kind == "paper";
+  const std::uint32_t header[2] = {paper ? 2u : kVersion, static_cast<std::uint32_t>(input_size_)};
   raw.write(reinterpret_cast<const char*>(header), sizeof header);
-  auto self = const_cast<Predictors*>(this);
-  forEachWeightArray([&](double* d, Eigen::Index n) { raw.write(reinterpret_cast<const char*>(d), n * sizeof(double)); },
-                     self->affordance_, self->learning_progress_, self->what_, self->where_);
+  if (!paper) {
+    const auto& kind = config_.predictors.affordance_kind;
+    const auto size = static_cast<std::uint32_t>(kind.size());
+    raw.write(reinterpret_cast<const char*>(&size), sizeof size);
+    raw.write(kind.data(), static_cast<std::streamsize>(kind.size()));
+  }
+  forEachWeightArray([&](const double* d, std::size_t n) {
+    raw.write(reinterpret_cast<const char*>(d), static_cast<std::streamsize>(n * sizeof(double)));
+  });
   raw.write(reinterpret_cast<const char*>(executed_.data()), sizeof executed_);
   raw.write(reinterpret_cast<const char*>(successes_.data()), sizeof successes_);
   const char has_memory = memory_ ? 1 : 0;
@@ -246,14 +242,26 @@ void Predictors::loadFrom(std::istream& in, const std::string& path) {
   in.read(reinterpret_cast<char*>(header), sizeof header);
   if (!in || std::memcmp(magic, kMagic, sizeof magic) != 0)
     throw std::runtime_error("checkpoint " + path + ": not an afford predictors checkpoint");
-  if (header[0] != 1 && header[0] != kVersion)
+  if (header[0] < 1 || header[0] > kVersion)
     throw std::runtime_error("checkpoint " + path + ": format version " + std::to_string(header[0]) + ", expected 1 to " +
                              std::to_string(kVersion));
   if (header[1] != static_cast<std::uint32_t>(input_size_))
     throw std::runtime_error("checkpoint " + path + ": focus images of " + std::to_string(header[1]) +
                              " values, this run uses " + std::to_string(input_size_));
-  forEachWeightArray([&](double* d, Eigen::Index n) { in.read(reinterpret_cast<char*>(d), n * sizeof(double)); },
-                     affordance_, learning_progress_, what_, where_);
+  std::string kind = "paper";
+  if (header[0] >= 3) {
+    std::uint32_t size = 0;
+    in.read(reinterpret_cast<char*>(&size), sizeof size);
+    if (!in || size > 64) throw std::runtime_error("checkpoint " + path + ": truncated, or not a component's name");
+    kind.assign(size, '\0');
+    in.read(kind.data(), size);
+  }
+  if (kind != config_.predictors.affordance_kind)
+    throw std::runtime_error("checkpoint " + path + ": its affordance predictor is '" + printable(kind) +
+                             "', this run's predictors.affordance.kind is '" + config_.predictors.affordance_kind + "'");
+  forEachWeightArray([&](double* d, std::size_t n) {
+    in.read(reinterpret_cast<char*>(d), static_cast<std::streamsize>(n * sizeof(double)));
+  });
   in.read(reinterpret_cast<char*>(executed_.data()), sizeof executed_);
   in.read(reinterpret_cast<char*>(successes_.data()), sizeof successes_);
   char has_memory = 0;
@@ -278,12 +286,7 @@ void Predictors::loadFrom(std::istream& in, const std::string& path) {
 
 std::string Predictors::weightsChecksum() const {
   Fnv1a h;
-  for (int a = 0; a < kNumActions; ++a) {
-    h.add(affordance_[a].weights().data(), sizeof(double) * affordance_[a].weights().size());
-    h.add(learning_progress_[a].weights().data(), sizeof(double) * learning_progress_[a].weights().size());
-    h.add(what_[a].weights().data(), sizeof(double) * what_[a].weights().size());
-    h.add(where_[a].weights().data(), sizeof(double) * where_[a].weights().size());
-  }
+  forEachWeightArray([&](const double* d, std::size_t n) { h.add(d, sizeof(double) * n); });
   if (memory_) {
     h.add(&replayed_, sizeof replayed_);
     h.add(&replayed_effects_, sizeof replayed_effects_);

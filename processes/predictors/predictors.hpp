@@ -1,5 +1,6 @@
-// Predictors core (paper 2.3.3): for each of the 4 actions, an affordance
-// perceptron (sigmoid), a learning-progress perceptron (linear), a what-effect
+// Predictors core (paper 2.3.3): the affordance component (affordance.hpp: by
+// default, for each of the 4 actions an affordance perceptron, sigmoid, and a
+// learning-progress perceptron, linear), and for each action a what-effect
 // perceptron (1323 sigmoid outputs) and a where-effect perceptron (2 linear
 // outputs), trained as Algorithm 1 lines 7-12 say. No LCM here.
 #pragma once
@@ -13,12 +14,11 @@
 #include "afford/actions.hpp"
 #include "afford/config.hpp"
 #include "afford/perceptron.hpp"
+#include "predictors/affordance.hpp"
 #include "predictors/experience.hpp"
 #include "predictors/memory.hpp"
 
 namespace afford {
-
-using PerAction = std::array<double, kNumActions>;
 
 struct Prediction {
   PerAction affordance{};
@@ -79,7 +79,8 @@ class Predictors {
   std::vector<double> whatEffect(int action, const std::vector<std::uint8_t>& focus_image) const;
   std::array<double, 2> whereEffect(int action, double x, double y, double target_x, double target_y) const;
 
-  // FNV-1a 64 of every weight, in a fixed order, then of the memory if there
+  // FNV-1a 64 of every weight, in a fixed order (per action: the affordance
+  // component's state, then the forward models), then of the memory if there
   // is one (hex): the predictors' whole state. Without a memory, the weights'
   // checksum of the paper's agent.
   std::string weightsChecksum() const;
@@ -88,7 +89,8 @@ class Predictors {
   // checksum, deflated by zlib (lossless: the same weights come back, and the
   // same decisions; checkpoints written plain before still load). save() writes atomically (temp + rename);
   // load() throws std::runtime_error naming the file and the problem (missing,
-  // wrong format, other dimensions, checksum mismatch).
+  // wrong format, other dimensions, another affordance component, checksum
+  // mismatch). A component other than the paper's is named in the file.
   // `checksum`: weightsChecksum() if the caller has it already (it takes a
   // pass over every weight), "" to compute it.
   void save(const std::string& path, const std::string& checksum = "") const;
@@ -103,10 +105,13 @@ class Predictors {
  private:
   SparseInput whereInput(int action, double x, double y, double tx, double ty) const;
   void loadFrom(std::istream& in, const std::string& path);  // the plain format, from its magic on
+  // f(data, size) for every array of the state, in the checksum's order.
+  template <class F>
+  void forEachWeightArray(F&& f) const;
 
   RunConfig config_;
   int input_size_;
-  std::vector<Unit> affordance_, learning_progress_;
+  std::unique_ptr<AffordanceComponent> affordance_;
   std::vector<Layer> what_, where_;
   std::array<std::int64_t, kNumActions> executed_{}, successes_{};
   std::unique_ptr<Memory> memory_;

@@ -6,7 +6,8 @@
     e = afford.run("base", system="IMP", reps=2, set={"motivation.leak": 0.3})  # in this process
 """
 from . import _afford
-from .components import ACTIONS, Decision, KeyedRng, Motivation, register_motivation
+from .components import (ACTIONS, AffordancePredictor, Decision, KeyedRng, Motivation, register_affordance,
+                         register_motivation)
 from .experiments import run
 from .logs import Message, RunLog, read_log
 from .results import Experiment, load
@@ -15,4 +16,5 @@ __version__ = _afford.version
 ConfigError = _afford.ConfigError
 channels = _afford.channels
 
-__all__ = ["Motivation", "Decision", "KeyedRng", "ACTIONS", "register_motivation", "run", "load", "Experiment", "read_log", "RunLog", "Message", "ConfigError", "channels"]
+__all__ = ["Motivation", "Decision", "KeyedRng", "ACTIONS", "register_motivation", "AffordancePredictor",
+           "register_affordance", "run", "load", "Experiment", "read_log", "RunLog", "Message", "ConfigError", "channels"]

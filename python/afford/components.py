@@ -1,14 +1,22 @@
 """Components written in Python (docs/python.md#components-in-python).
 
-A motivation is a class constructed with the run's configuration (a dict:
-experiment, system, seed, steps, motivation_kind) whose decide(percept)
-says, each step, whether to act and with which action. It stands in for
-the shipped motivation in this process (afford.run(..., motivation=Cls)) or
-as a process on the bus (python3 -m afford.process motivation MODULE:CLASS).
-For exact replay and live restart, its state must be a pure function of the
-percepts it was given, in order, and of the configuration; its randomness
-comes from KeyedRng(config["seed"], step, sub), never from a clock or a
-global generator.
+A component is a class constructed with the run's configuration (a dict of
+the run's whole configuration, config["motivation"]["leak"], with
+experiment, system, seed, steps and motivation_kind at the top).
+
+- A motivation's decide(percept) says, each step, whether to act and with
+  which action.
+- An affordance predictor's predict(image) says what each action affords the
+  focused object and how fast that is changing (the learning progress), and
+  learn(image, action, succeeded) learns from an executed action.
+
+Either stands in for the shipped one in this process (afford.run(...,
+motivation=Cls, affordance=Cls)) or as a process on the bus (python3 -m
+afford.process motivation|predictors MODULE:CLASS). For exact replay and live
+restart, its state must be a pure function of the calls it was given, in
+order, and of the configuration; its randomness comes from
+KeyedRng(config["seed"], step, sub), never from a clock or a global
+generator.
 """
 from __future__ import annotations
 
@@ -51,15 +59,56 @@ class Motivation:
         raise NotImplementedError
 
 
+class AffordancePredictor:
+    """A base for an affordance predictor in Python (duck typing works as well).
+
+    The predictors process keeps the forward models, the memory and replay;
+    this part predicts and learns the affordances (and the learning
+    progress, IMP's signal). Images are focus images, side x side x 3 uint8
+    (config["eye"]["focus_side"]); actions are 0..3 (ACTIONS).
+
+    predict(image) -> (affordance, learning_progress), 4 numbers each: the
+    predicted success of each action, and its learning progress.
+    learn(image, action, succeeded) -> (before, after, learning_progress): the
+    action's affordance output before and after this update, and its
+    learning-progress output before its own update.
+    relearn(image, action, succeeded): replay (predictors.replay) learns the
+    affordance again from a remembered experience.
+    state(action) -> a list of float64 numpy arrays (contiguous, writeable):
+    together over the actions, the whole state. The weights checksum hashes
+    them, a checkpoint saves them, and loading one writes into them in place.
+    """
+
+    kind: str = ""                # predictors.affordance.kind naming it (default: the class name in lower case)
+
+    def __init__(self, config: dict[str, Any]):
+        self.config = config
+
+    def predict(self, image):
+        raise NotImplementedError
+
+    def learn(self, image, action: int, succeeded: bool):
+        raise NotImplementedError
+
+    def relearn(self, image, action: int, succeeded: bool) -> None:
+        raise NotImplementedError(f"{type(self).__name__} does not replay (predictors.replay.enabled)")
+
+    def state(self, action: int) -> list:
+        raise NotImplementedError
+
+
 class KeyedRng:
     """The run's keyed generator for a component: the draws of (seed, step, sub), whenever made.
 
     The C++ generator itself (KeyedRng(seed, step, Purpose::Component, sub)), so
-    a component draws the same in Python as in C++.
+    a component draws the same in Python as in C++. `purpose` other than
+    "component" gives the draws of a shipped component, to port it exactly:
+    "learning_progress_init" (sub: the action; the i-th draw's lowest bit is
+    the sign of weight i), "replay", "revisit".
     """
 
-    def __init__(self, seed: int, step: int, sub: int):
-        self._rng = _afford.KeyedRng(seed, step, sub)
+    def __init__(self, seed: int, step: int, sub: int, purpose: str = "component"):
+        self._rng = _afford.KeyedRng(seed, step, sub, purpose)
 
     def bits(self, i: int = 0) -> int:
         return self._rng.bits(i)
@@ -78,7 +127,7 @@ _NAME = re.compile(r"^[a-z0-9_-]{1,64}$")
 def kind_of(cls: Any) -> str:
     kind = getattr(cls, "kind", "") or cls.__name__.lower()
     if not _NAME.match(kind):
-        raise ValueError(f"motivation kind {kind!r} of {cls!r}: use lower-case letters, digits, '_' or '-' "
+        raise ValueError(f"component kind {kind!r} of {cls!r}: use lower-case letters, digits, '_' or '-' "
                          "(set the class attribute `kind`)")
     return kind
 
@@ -92,3 +141,22 @@ def register_motivation(cls: Any, kind: str | None = None) -> str:
         raise TypeError(f"{cls!r} has no decide(percept)")
     _afford.register_motivation(kind, cls)
     return kind
+
+
+def register_affordance(cls: Any, kind: str | None = None) -> str:
+    """Make `cls` the affordance predictor of predictors.affordance.kind `kind` (default: kind_of(cls)) here."""
+    kind = kind or kind_of(cls)
+    if not _NAME.match(kind):
+        raise ValueError(f"affordance predictor kind {kind!r}: use lower-case letters, digits, '_' or '-'")
+    for method in ("predict", "learn", "state"):
+        if not callable(getattr(cls, method, None)):
+            raise TypeError(f"{cls!r} has no {method}() (an affordance predictor has predict, learn, relearn, state)")
+    _afford.register_affordance(kind, cls)
+    return kind
+
+
+# What a process written in Python can stand in for, with the config key of its kind and how to register it.
+ROLES = {
+    "motivation": ("motivation.kind", register_motivation),
+    "predictors": ("predictors.affordance.kind", register_affordance),
+}

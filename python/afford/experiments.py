@@ -6,7 +6,7 @@ from pathlib import Path
 from typing import Any, Iterable
 
 from . import _afford
-from .components import register_motivation
+from .components import ROLES
 from .results import Experiment, load
 
 
@@ -23,7 +23,8 @@ def run(experiment: str, system: str | Iterable[str] | None = None, reps: int | 
         out: str | Path | None = None, log_root: str | Path | None = None, seed: int = 1, jobs: int = 1,
         extrinsic_reps: int = 0, scenarios: Iterable[str] = (), keep_logs: str = "all",
         run_prefix: str = "", reuse_agents: bool = True, progress: str = "none",
-        log_level: str = "warn", motivation: Any = None, processes: dict[str, str] | None = None,
+        log_level: str = "warn", motivation: Any = None, affordance: Any = None,
+        processes: dict[str, str] | None = None,
         tables: int | None = None, table_seed: int | None = None) -> Experiment:
     """Run an experiment as `afford experiment` does and return what afford.load returns.
 
@@ -44,17 +45,23 @@ def run(experiment: str, system: str | Iterable[str] | None = None, reps: int | 
     its kind and motivation.kind is set to it. `processes`: commands in the
     place of shipped processes, as `afford experiment --process NAME=CMD`
     (udpm), e.g. {"motivation": "python3 -m afford.process motivation mine.py:Mine"}.
+    `affordance`: a class written in Python (afford.AffordancePredictor) in
+    the place of the paper's affordance and learning-progress predictors, in
+    this process (memq); predictors.affordance.kind is set to its kind.
     `tables`, `table_seed`: random tables (--tables, --table-seed).
     """
     if experiment.endswith((".yaml", ".yml")) or "/" in experiment:
         experiment = str(Path(experiment).resolve())
     settings = dict(set or {})
-    if motivation is not None:
+    for argument, cls, role in (("motivation", motivation, "motivation"), ("affordance", affordance, "predictors")):
+        if cls is None:
+            continue
+        key, register = ROLES[role]
         if transport != "memq":
-            raise ValueError("afford.run(motivation=...) runs the class in this process: transport='memq'; over "
-                             "udpm, give processes={'motivation': 'python3 -m afford.process motivation "
-                             "MODULE:CLASS'} and set={'motivation.kind': KIND}")
-        settings.setdefault("motivation.kind", register_motivation(motivation))
+            raise ValueError(f"afford.run({argument}=...) runs the class in this process: transport='memq'; over "
+                             f"udpm, give processes={{'{role}': 'python3 -m afford.process {role} MODULE:CLASS'}} "
+                             f"and set={{'{key}': KIND}}")
+        settings.setdefault(key, register(cls))
     out = Path(out) if out else Path(tempfile.mkdtemp(prefix=f"afford-{experiment}-"))
     systems = [system] if isinstance(system, str) else list(system or [])
     request = {

@@ -1,13 +1,15 @@
 """A component written in Python as a process on the bus.
 
     python3 -m afford.process motivation MODULE:CLASS [--lcm-url URL] [--bus-key FILE] [--log-level L]
+    python3 -m afford.process predictors MODULE:CLASS [... --checkpoint-dir DIR]
 
 MODULE is an importable module (the current folder is on the path) or a
 file (path/to/mine.py). The class is registered under its kind
-(afford.components.kind_of) and the shipped motivation node runs it: the
-edge, the input rules, STATUS, live restart and Ctrl-C are the C++ ones, so
-no protocol code is written in Python. A run uses it when its
-motivation.kind is that kind, e.g.
+(afford.components.kind_of) and the shipped node runs it (a motivation, or
+the predictors with the class as their affordance predictor): the edge, the
+input rules, STATUS, live restart and Ctrl-C are the C++ ones, so no
+protocol code is written in Python. A run uses it when its motivation.kind
+(predictors.affordance.kind) is that kind, e.g.
 
     afford experiment base --set motivation.kind=mine \\
         --process motivation='/usr/bin/python3 -m afford.process motivation mine.py:Mine'
@@ -20,9 +22,9 @@ import sys
 from pathlib import Path
 
 from . import _afford
-from .components import register_motivation
+from .components import ROLES
 
-USAGE = "usage: python3 -m afford.process motivation MODULE:CLASS [--lcm-url URL] [--bus-key FILE] [...]"
+USAGE = "usage: python3 -m afford.process motivation|predictors MODULE:CLASS [--lcm-url URL] [--bus-key FILE] [...]"
 
 
 def load_class(target: str):
@@ -52,12 +54,12 @@ def main(argv: list[str] | None = None) -> int:
     if len(argv) < 2 or argv[0] in ("-h", "--help"):
         print(USAGE, file=sys.stderr)
         return 2
-    if argv[0] != "motivation":
-        print(f"afford.process: '{argv[0]}': only the motivation can be written in Python so far\n{USAGE}",
-              file=sys.stderr)
+    if argv[0] not in ROLES:
+        print(f"afford.process: '{argv[0]}': a component in Python stands in for the motivation or the "
+              f"predictors\n{USAGE}", file=sys.stderr)
         return 2
-    register_motivation(load_class(argv[1]))
-    return _afford.serve_motivation([f"afford-motivation ({argv[1]})", *argv[2:]])
+    ROLES[argv[0]][1](load_class(argv[1]))
+    return _afford.serve(argv[0], [f"afford-{argv[0]} ({argv[1]})", *argv[2:]])
 
 
 if __name__ == "__main__":

@@ -23,8 +23,7 @@
 #include "afford/rng.hpp"
 #include "environment/environment.hpp"
 #include "eye/eye.hpp"
-#include "motivation/component.hpp"
-#include "motivation/node.hpp"
+#include "components.hpp"
 #include "afford/to_python.hpp"
 
 namespace py = pybind11;
@@ -127,105 +126,6 @@ py::tuple runExperimentFrom(const py::dict& request) {
   return py::make_tuple(code, signal);
 }
 
-
-
-// ---- a motivation written in Python (docs/python.md#components-in-python) ----------------
-
-// The run's configuration as the component's constructor gets it.
-py::dict configDict(const RunConfig& c) {
-  py::dict d;
-  d["experiment"] = c.experiment;
-  d["system"] = toString(c.system);
-  d["seed"] = c.seed;
-  d["steps"] = c.steps;
-  d["motivation_kind"] = c.motivation.kind;
-  return d;
-}
-
-// A Python object with decide(percept) in the place of a MotivationComponent.
-// Every call into Python holds the GIL; a Python exception becomes the run's
-// failure, naming the kind and the Python error.
-class PythonMotivation : public MotivationComponent {
- public:
-  PythonMotivation(std::string kind, py::object cls, const RunConfig& config) : kind_(std::move(kind)) {
-    py::gil_scoped_acquire gil;
-    try {
-      obj_ = cls(configDict(config));
-      needs_memory_ = py::bool_(py::getattr(obj_, "needs_memory", py::bool_(false)));
-      needs_last_change_ = py::bool_(py::getattr(obj_, "needs_last_change", py::bool_(false)));
-    } catch (py::error_already_set& e) {
-      throw ConfigError("motivation '" + kind_ + "' (Python): its constructor failed: " + e.what());
-    }
-  }
-  ~PythonMotivation() override {
-    py::gil_scoped_acquire gil;
-    obj_ = py::object();
-  }
-  Decision decide(const Percept& p) override {
-    py::gil_scoped_acquire gil;
-    try {
-      py::dict percept;
-      percept["step"] = p.step;
-      percept["affordance"] = py::array_t<double>(kNumActions, p.affordance.data());
-      percept["learning_progress"] = py::array_t<double>(kNumActions, p.learning_progress.data());
-      percept["look"] = p.look;
-      percept["tried_ago"] = p.tried_ago ? py::object(py::array_t<std::int64_t>(kNumActions, p.tried_ago->data()))
-                                         : py::object(py::none());
-      percept["last_change"] = p.last_change ? py::object(py::float_(*p.last_change)) : py::object(py::none());
-      const py::object r = obj_.attr("decide")(percept);
-      Decision d;
-      const auto field = [&](const char* name) {
-        if (py::isinstance<py::dict>(r)) return py::object(r.cast<py::dict>()[name]);
-        return py::getattr(r, name);
-      };
-      d.act = field("act").cast<bool>();
-      d.action = d.act ? field("action").cast<int>() : -1;
-      if (d.act && (d.action < 0 || d.action >= kNumActions))
-        throw std::runtime_error("motivation '" + kind_ + "' (Python): decide() at step " + std::to_string(p.step) +
-                                 " returned action " + std::to_string(d.action) + ", not one of 0.." +
-                                 std::to_string(kNumActions - 1));
-      d.motivation = field("motivation").cast<double>();
-      d.threshold = field("threshold").cast<double>();
-      return d;
-    } catch (py::error_already_set& e) {
-      throw std::runtime_error("motivation '" + kind_ + "' (Python): decide() at step " + std::to_string(p.step) +
-                               " raised " + e.what());
-    } catch (py::cast_error& e) {
-      throw std::runtime_error("motivation '" + kind_ + "' (Python): decide() at step " + std::to_string(p.step) +
-                               " returned no act, action, motivation and threshold (" + e.what() + ")");
-    }
-  }
-  bool needsMemory() const override { return needs_memory_; }
-  bool needsLastChange() const override { return needs_last_change_; }
-
- private:
-  std::string kind_;
-  py::object obj_;
-  bool needs_memory_ = false, needs_last_change_ = false;
-};
-
-// Make `cls` the motivation of motivation.kind `kind` in this process.
-void registerPythonMotivation(const std::string& kind, py::object cls) {
-  auto shared = std::make_shared<py::object>(std::move(cls));
-  registerMotivation(kind, [kind, shared](const RunConfig& c) {
-    return std::make_unique<PythonMotivation>(kind, *shared, c);
-  });
-}
-
-// The motivation process, its component the Python class of `kind` (registered first): what
-// `python3 -m afford.process motivation MODULE:CLASS ARGS` runs. ARGS: a process's standard ones.
-int serveMotivation(const std::vector<std::string>& args) {
-  std::vector<std::string> owned = args;
-  std::vector<char*> argv;
-  for (std::string& a : owned) argv.push_back(a.data());
-  argv.push_back(nullptr);
-  py::gil_scoped_release free;
-  return processMain(static_cast<int>(owned.size()), argv.data(),
-                     {"motivation", "a motivation written in Python (afford.process)"}, [](CLIHook&) {},
-                     [](lcm::LCM& lcm, std::shared_ptr<spdlog::logger> log, const ProtocolConfig& protocol) {
-                       return std::make_unique<MotivationNode>(lcm, std::move(log), protocol);
-                     });
-}
 
 
 // ---- the environment and the eye in process, step by step (afford.env) ------------------
@@ -341,20 +241,7 @@ PYBIND11_MODULE(_afford, m) {
   m.def("run_experiment", &afford::runExperimentFrom, py::arg("request"),
         "Run an experiment in this process (afford experiment); returns (exit code, signal or 0).");
   m.def("channels", [] { return afford::channelNames(); }, "Every channel of the protocol, in the protocol's order.");
-  m.def("register_motivation", &afford::registerPythonMotivation, py::arg("kind"), py::arg("cls"),
-        "Make cls (constructed with the run's configuration, with decide(percept)) the motivation of that kind.");
-  m.def("motivation_kinds", &afford::motivationKinds, "The motivation kinds of this process.");
-  m.def("serve_motivation", &afford::serveMotivation, py::arg("argv"),
-        "Run the motivation process (its standard arguments in argv, argv[0] its name).");
-  py::class_<afford::KeyedRng>(m, "KeyedRng",
-                                "The run's keyed generator for a component: (seed, step, Purpose::Component, sub).")
-      .def(py::init([](std::int64_t seed, std::int64_t step, std::uint64_t sub) {
-             return afford::KeyedRng(seed, step, afford::Purpose::Component, sub);
-           }),
-           py::arg("seed"), py::arg("step"), py::arg("sub"))
-      .def("bits", &afford::KeyedRng::bits, py::arg("i") = 0, "The i-th 64-bit draw.")
-      .def("uniform", py::overload_cast<std::uint64_t>(&afford::KeyedRng::uniform, py::const_), py::arg("i") = 0,
-           "The i-th draw, uniform in [0, 1).");
+  afford::defineComponents(m);
   py::class_<afford::World>(m, "World", "The environment and the eye of one run, a step at a time (afford.env).")
       .def(py::init<const std::string&, const std::string&, std::int64_t, const std::vector<std::string>&,
                     const std::string&>(),

@@ -1,11 +1,14 @@
-"""A motivation written in Python, in process and as a process on the bus, against the C++ ones."""
+"""Components written in Python (a motivation, an affordance predictor), in process and as processes on the
+bus, against the C++ ones."""
+import subprocess
 import sys
 from pathlib import Path
 
 import pytest
 
 import afford
-from motivations import Broken, PyNovelty, PyRandom
+from motivations import Broken, PyNovelty, PyPaper, PyRandom
+from predictors import Frozen, PyPerceptrons
 
 HERE = Path(__file__).resolve().parent
 BIN = Path(__file__).resolve().parents[2] / "build" / "bin"
@@ -61,3 +64,99 @@ def test_bad_classes_are_named():
         afford.register_motivation(type("nodecide", (), {}))
     with pytest.raises(ValueError, match="transport='memq'"):
         afford.run("base", motivation=PyNovelty, transport="udpm")
+
+
+def test_python_ports_of_the_paper_give_the_cpp_weights_in_process(tmp_path):
+    # Without a memory (which the paper's agent does not keep), a run with a port is comparable checksum for checksum.
+    never = {"predictors.memory.keep": "never"}
+    paper = {}
+    for system in ("IGN", "IMP"):
+        paper[system] = afford.run("base", system=system, reps=1, steps=1500, out=tmp_path / f"paper-{system}")
+        motivation = afford.run("base", system=system, reps=1, steps=1500, out=tmp_path / f"m-{system}",
+                                motivation=PyPaper, set=never)
+        log = afford.read_log(motivation.runs["log_dir"].iloc[0], channels=["DECISION"])
+        assert "kind: py-paper" in log.config_yaml and len(log) == 1500
+        assert checksum(motivation) == checksum(paper[system]), system
+    both = afford.run("base", system="IMP", reps=1, steps=1500, out=tmp_path / "both", motivation=PyPaper,
+                      affordance=PyPerceptrons, set=never)
+    assert checksum(both) == checksum(paper["IMP"])
+    # with the memory it keeps for a motivation of one's own, the same decisions, another checksum
+    kept = afford.run("base", system="IMP", reps=1, steps=1500, out=tmp_path / "kept", motivation=PyPaper)
+    assert checksum(kept) != checksum(paper["IMP"])
+    assert kept.runs["looks"].iloc[0] > 0
+
+
+def test_a_python_affordance_predictor_replays_saves_and_plans_as_the_paper_one(tmp_path):
+    # replay (predictors.replay) relearns remembered experiences through the component
+    replay = {"predictors.replay.enabled": True}
+    cpp = afford.run("base", system="IMP", reps=1, steps=400, out=tmp_path / "cpp-replay", set=replay)
+    py = afford.run("base", system="IMP", reps=1, steps=400, out=tmp_path / "py-replay", set=replay,
+                    affordance=PyPerceptrons)
+    assert checksum(py) == checksum(cpp) and py.runs["replayed"].iloc[0] > 0
+    # afford replay cannot rebuild a component it does not have, and says so
+    said = subprocess.run([BIN / "afford", "replay", py.runs["log_dir"].iloc[0]], capture_output=True, text=True)
+    assert said.returncode != 0 and "predictors.affordance.kind 'py-perceptrons' is not one of afford's own" in said.stderr
+    # the checkpoint holds the component's arrays; the extrinsic tests load them into a new one and plan alike
+    kw = dict(system="IMP", reps=1, steps=2500, extrinsic_reps=1, scenarios=["scenario2"], set={"planner.budget": 40})
+    cpp = afford.run("base", out=tmp_path / "cpp", **kw)
+    py = afford.run("base", out=tmp_path / "py", affordance=PyPerceptrons, **kw)
+    assert checksum(py) == checksum(cpp)
+    columns = ["scenario", "success", "completion", "attempts", "actions_checked"]
+    assert py.extrinsic[columns].equals(cpp.extrinsic[columns])
+    assert cpp.extrinsic["actions_checked"].iloc[0] > 0
+    # a component of another kind learns otherwise, and its own checkpoint serves its tests
+    frozen = afford.run("base", out=tmp_path / "frozen", affordance=Frozen, **kw)
+    assert checksum(frozen) != checksum(cpp)
+    assert set(frozen.affordances["value"]) == {0.5}
+    assert len(frozen.extrinsic) == 1
+
+
+def test_a_python_affordance_predictor_as_a_process_on_the_bus(tmp_path, monkeypatch):
+    monkeypatch.setenv("PYTHONPATH", f"{HERE}:{Path(afford.__file__).parent.parent}")
+    command = f"{sys.executable} -m afford.process predictors {HERE / 'predictors.py'}:PyPerceptrons"
+    py = afford.run("base", system="IMP", reps=1, steps=1000, out=tmp_path / "py", transport="udpm",
+                    set={"predictors.affordance.kind": "py-perceptrons"}, processes={"predictors": command})
+    paper = afford.run("base", system="IMP", reps=1, steps=1000, out=tmp_path / "paper")
+    assert checksum(py) == checksum(paper)
+    assert py.summary["processes"] == {"predictors": command}
+
+
+class RaisingLearner(PyPerceptrons):
+    kind = "raising"
+
+    def learn(self, image, action, succeeded):
+        raise ArithmeticError("cannot learn this")
+
+
+class SinglePrecision(PyPerceptrons):
+    kind = "single"
+
+    def state(self, action):
+        return [w.astype("float32") for w in super().state(action)]
+
+
+class ThreeActions(PyPerceptrons):
+    kind = "three"
+
+    def predict(self, image):
+        affordance, lp = super().predict(image)
+        return affordance[:3], lp
+
+
+@pytest.mark.parametrize("cls, message", [
+    (RaisingLearner, "affordance predictor 'raising' (Python): learn() raised ArithmeticError: cannot learn this"),
+    (SinglePrecision, "affordance predictor 'single' (Python): state(0)[0] is an array of float32, not float64"),
+    (ThreeActions, "affordance predictor 'three' (Python): predict()'s affordance has 3 numbers, not one per action"),
+])
+def test_a_python_affordance_predictor_that_misbehaves_fails_its_run_naming_what(tmp_path, cls, message):
+    with pytest.raises(RuntimeError, match="failed"):
+        afford.run("base", system="IMP", reps=1, steps=60, out=tmp_path / "b", affordance=cls)
+    error = afford.load(tmp_path / "b").summary["systems"]["IMP"]["failed_runs"][0]["error"]
+    assert message in error
+
+
+def test_a_class_that_is_not_an_affordance_predictor_is_named():
+    with pytest.raises(TypeError, match="no learn"):
+        afford.register_affordance(type("predictonly", (), {"predict": lambda self, image: None}))
+    with pytest.raises(ValueError, match="transport='memq'"):
+        afford.run("base", affordance=PyPerceptrons, transport="udpm")

@@ -10,11 +10,32 @@
 
 #include "afford/actions.hpp"
 #include "environment/environment.hpp"
+#include "predictors/affordance.hpp"
 #include "predictors/predictors.hpp"
 #include "tests/support.hpp"
 
 namespace afford {
 namespace {
+
+// A checkpoint file's bytes, and its plain format (inflated; empty if it is not a packed checkpoint).
+struct CheckpointBytes {
+  std::string file, plain;
+};
+CheckpointBytes readCheckpoint(const std::string& path) {
+  CheckpointBytes c;
+  std::ifstream in(path, std::ios::binary);
+  c.file.assign(std::istreambuf_iterator<char>(in), std::istreambuf_iterator<char>());
+  if (c.file.size() < 16 || c.file.substr(0, 8) != "AFFORDCZ") return c;
+  std::uint64_t size = 0;
+  std::memcpy(&size, c.file.data() + 8, sizeof size);
+  std::string plain(size, '\0');
+  uLongf plain_size = static_cast<uLongf>(size);
+  if (uncompress(reinterpret_cast<Bytef*>(plain.data()), &plain_size, reinterpret_cast<const Bytef*>(c.file.data() + 16),
+                 static_cast<uLong>(c.file.size() - 16)) == Z_OK &&
+      plain_size == size)
+    c.plain = std::move(plain);
+  return c;
+}
 
 struct Fixture : ::testing::Test {
   RunConfig imp = test::shippedConfig("base", System::IMP);
@@ -131,18 +152,9 @@ TEST_F(Fixture, CheckpointsAreCompressedLosslesslyAndPlainOnesStillLoad) {
   for (int k = 0; k < 200; ++k) trained.train(experience(k % 4, k % 3 != 0, k % 9));
   const std::string dir = test::tempDir("ckpt-packed");
   trained.save(dir + "/p.ckpt");
-  std::ifstream in(dir + "/p.ckpt", std::ios::binary);
-  const std::string file((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());
-  ASSERT_GT(file.size(), 16u);
+  const auto [file, plain] = readCheckpoint(dir + "/p.ckpt");
   ASSERT_EQ(file.substr(0, 8), "AFFORDCZ");
-  std::uint64_t size = 0;
-  std::memcpy(&size, file.data() + 8, sizeof size);
-  std::string plain(size, '\0');
-  uLongf plain_size = static_cast<uLongf>(size);
-  ASSERT_EQ(uncompress(reinterpret_cast<Bytef*>(plain.data()), &plain_size,
-                       reinterpret_cast<const Bytef*>(file.data() + 16), static_cast<uLong>(file.size() - 16)),
-            Z_OK);
-  ASSERT_EQ(plain_size, size);
+  ASSERT_FALSE(plain.empty()) << "the checkpoint does not inflate";
   EXPECT_EQ(plain.substr(0, 8), "AFFORDCK");
   EXPECT_EQ(plain.substr(plain.size() - 16), trained.weightsChecksum());  // the plain format ends with the checksum
   EXPECT_LT(file.size() * 5, plain.size()) << "compressed " << file.size() << " of " << plain.size() << " bytes";
@@ -290,6 +302,116 @@ TEST_F(Fixture, TheCheckpointHoldsTheMemoryAndTheChecksumCoversIt) {
   Predictors into_paper(imp);
   into_paper.load(dir + "/p.ckpt");
   EXPECT_EQ(into_paper.weightsChecksum(), saved);
+}
+
+// ---- the affordance component (predictors/affordance.hpp, docs/writing-a-component.md) ----
+
+// A component of another kind: a constant affordance per action, nudged by each outcome; its state one array.
+class Tally : public AffordanceComponent {
+ public:
+  void predict(const FocusView&, PerAction& affordance, PerAction& learning_progress) const override {
+    for (int a = 0; a < kNumActions; ++a) affordance[a] = counts_[a] / (1.0 + counts_[a]), learning_progress[a] = 0;
+  }
+  Learned learn(const FocusView& f, int a, bool succeeded) override {
+    Learned l;
+    PerAction before{}, lp{};
+    predict(f, before, lp);
+    relearn(f, a, succeeded);
+    PerAction after{};
+    predict(f, after, lp);
+    l.before = before[a];
+    l.after = after[a];
+    return l;
+  }
+  void relearn(const FocusView&, int a, bool succeeded) override { counts_[a] += succeeded ? 1 : 0; }
+  std::vector<StateArray> state(int a) override {
+    if (a == 0) return {{counts_.data(), counts_.size()}};
+    return {};
+  }
+
+ private:
+  std::array<double, kNumActions> counts_{};
+};
+
+TEST_F(Fixture, TheAffordanceKindPicksTheComponentAndItsStateIsTheChecksumsAndTheCheckpoints) {
+  registerAffordance("tally", [](const RunConfig&) { return std::make_unique<Tally>(); });
+  RunConfig tally = imp;
+  tally.predictors.affordance_kind = "tally";
+  Predictors p(tally), paper(imp);
+  for (int k = 0; k < 12; ++k) p.train(experience(k % 4, k % 3 != 0, k % 9)), paper.train(experience(k % 4, k % 3 != 0, k % 9));
+  p.train(experience(kTurnBlue, true)), paper.train(experience(kTurnBlue, true));
+  // each action succeeded twice in its three tries (k % 3 != 0), blue once more
+  EXPECT_DOUBLE_EQ(p.predict(probes[0]).affordance[kTurnGreen], 2.0 / 3.0);
+  EXPECT_DOUBLE_EQ(p.predict(probes[0]).affordance[kTurnBlue], 3.0 / 4.0);
+  // The component's state is what the checksum takes: the forward models alike, the affordances not.
+  EXPECT_NE(p.weightsChecksum(), paper.weightsChecksum());
+  EXPECT_EQ(p.whatEffect(kTurnRed, probes[4]), paper.whatEffect(kTurnRed, probes[4]));
+  const std::string dir = test::tempDir("ckpt-kind");
+  p.save(dir + "/tally.ckpt");
+  paper.save(dir + "/paper.ckpt");
+  Predictors back(tally);
+  back.load(dir + "/tally.ckpt");
+  EXPECT_EQ(back.weightsChecksum(), p.weightsChecksum());
+  EXPECT_DOUBLE_EQ(back.predict(probes[0]).affordance[kTurnGreen], 2.0 / 3.0);
+  // A checkpoint names its component: another kind does not load it.
+  auto refusal = [](Predictors& into, const std::string& path) {
+    try {
+      into.load(path);
+    } catch (const std::runtime_error& e) {
+      return std::string(e.what());
+    }
+    return std::string();
+  };
+  Predictors wrong_paper(imp), wrong_tally(tally);
+  EXPECT_NE(refusal(wrong_paper, dir + "/tally.ckpt")
+                .find("its affordance predictor is 'tally', this run's predictors.affordance.kind is 'paper'"),
+            std::string::npos);
+  EXPECT_NE(refusal(wrong_tally, dir + "/paper.ckpt")
+                .find("its affordance predictor is 'paper', this run's predictors.affordance.kind is 'tally'"),
+            std::string::npos);
+}
+
+TEST_F(Fixture, ThePapersCheckpointsKeepTheirFormat) {
+  // Format 2, as before components: checkpoints of the paper's agent are written as they were.
+  Predictors p(imp);
+  const std::string dir = test::tempDir("ckpt-format");
+  p.save(dir + "/p.ckpt");
+  const std::string plain = readCheckpoint(dir + "/p.ckpt").plain;
+  ASSERT_FALSE(plain.empty()) << "the checkpoint does not inflate";
+  std::uint32_t version = 0;
+  std::memcpy(&version, plain.data() + 8, sizeof version);
+  EXPECT_EQ(version, 2u);
+  EXPECT_EQ(plain.size(), 8 + 8 + 4 * (2 * 1324 + 1323 * 1324) * 8 + (5 + 3 + 3 + 3) * 2 * 8 + 2 * 4 * 8 + 1 + 16);
+}
+
+TEST_F(Fixture, AnAffordanceKindNotBuiltInIsRefusedNamingTheKey) {
+  RunConfig c = imp;
+  c.predictors.affordance_kind = "nowhere";
+  try {
+    Predictors p(c);
+    ADD_FAILURE() << "kind 'nowhere' was taken";
+  } catch (const ConfigError& e) {
+    const std::string what = e.what();
+    EXPECT_NE(what.find("predictors.affordance.kind"), std::string::npos) << what;
+    EXPECT_NE(what.find("'nowhere'"), std::string::npos) << what;
+    EXPECT_NE(what.find("--process predictors="), std::string::npos) << what;
+  }
+}
+
+TEST_F(Fixture, MemoryKeepOverridesWhatTheOtherKeysWouldKeep) {
+  RunConfig always = imp;
+  always.predictors.memory.keep = MemoryKeep::Always;
+  EXPECT_NE(Predictors(always).memory(), nullptr);
+  RunConfig never = test::shippedConfig("base", System::IMP, 1, {"motivation.kind=novelty", "predictors.memory.keep=never"});
+  EXPECT_EQ(Predictors(never).memory(), nullptr);
+  EXPECT_NE(Predictors(test::shippedConfig("base", System::IMP, 1, {"motivation.kind=novelty"})).memory(), nullptr);
+  try {
+    test::shippedConfig("base", System::IMP, 1, {"predictors.replay.enabled=true", "predictors.memory.keep=never"});
+    ADD_FAILURE() << "replay without a memory was taken";
+  } catch (const ConfigError& e) {
+    EXPECT_NE(std::string(e.what()).find("predictors.memory.keep"), std::string::npos) << e.what();
+    EXPECT_NE(std::string(e.what()).find("predictors.replay.enabled"), std::string::npos) << e.what();
+  }
 }
 
 }  // namespace

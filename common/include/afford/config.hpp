@@ -83,11 +83,15 @@ struct EyeConfig {
 
 // The agent's memory of past experiences (issue 11, docs/model.md#memory):
 // kept when replay or revisits need it; the paper's agent has none.
+// Do the predictors keep a memory (docs/model.md#memory)? auto: when replay,
+// revisits or a motivation other than the paper's may use it.
+enum class MemoryKeep { Auto, Always, Never };
 struct MemoryConfig {
   double look_threshold = 0;    // two focus images show one look below this distance (L1 per value, 0..1)
   int look_shift_px = 0;        // ... allowing the images to be shifted by up to this many pixels
   int max_looks = 0;            // looks remembered; a new one replaces the one seen least recently
   int per_look_action = 0;      // experiences kept per look and action (the newest)
+  MemoryKeep keep = MemoryKeep::Auto;
 };
 enum class ReplaySampling {
   Balanced,  // a remembered (look, action) uniformly, then one of its experiences
@@ -101,6 +105,9 @@ struct ReplayConfig {
 };
 
 struct PredictorsConfig {
+  // The affordance component (predictors/affordance.hpp): the affordance and
+  // learning-progress predictors; paper, or one a process registers.
+  std::string affordance_kind = "paper";
   double affordance_learning_rate = 0;
   double learning_progress_learning_rate = 0;
   double learning_progress_init = 0;  // magnitude of the random-sign initial weights
@@ -246,9 +253,15 @@ struct RunConfig {
 
   // The predictors keep a memory of experiences: replay, revisits and every
   // motivation but the paper's use it (its looks, what was tried on them).
+  // predictors.memory.keep decides; auto keeps it for any of those.
   bool keepsMemory() const {
+    if (predictors.memory.keep != MemoryKeep::Auto) return predictors.memory.keep == MemoryKeep::Always;
     return predictors.replay.enabled || motivation.revisit.enabled || motivation.kind != "paper";
   }
+  // The YAML text this configuration was parsed from (parseRunConfigText; the
+  // run's RUN_CONFIG), for a component that reads it whole (afford's Python
+  // components get it as a dict).
+  std::string text;
 };
 
 // Parse a scenario (types, names, ranges); `path` prefixes the keys in errors.
