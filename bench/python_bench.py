@@ -10,13 +10,15 @@ and with the Python port of the paper's affordance predictor
 udpm (python3 -m afford.process). Each is a port, so every run must give the
 C++ run's weights checksum; the median steps per second of R runs each,
 and its ratio to the C++ run's. Exit 1 if the motivation's ratio is below
---floor (0.5) on a transport, or a checksum differs.
+--floor (0.5) on a transport, or a checksum differs. First, the time
+afford.load takes to read every folder of docs/results (floor 2 s in all).
 """
 import argparse
 import os
 import statistics
 import sys
 import tempfile
+import time
 from pathlib import Path
 
 ROOT = Path(__file__).resolve().parents[1]
@@ -54,6 +56,13 @@ def main():
     out = Path(a.out or tempfile.mkdtemp(prefix="afford-bench-python-"))
     os.environ["PYTHONPATH"] = f"{TESTS}:{Path(afford.__file__).parent.parent}"
     failed = False
+    start = time.perf_counter()
+    folders = sorted(d for d in (ROOT / "docs" / "results").iterdir() if d.is_dir())
+    rows = sum(len(f) for d in folders for f in afford.load(d).figures.values())
+    took = time.perf_counter() - start
+    failed |= took > 2.0
+    print(f"afford.load of the {len(folders)} folders of docs/results ({rows} rows): {took:.2f} s (floor 2 s: "
+          f"{'FAIL' if took > 2.0 else 'PASS'})")
     print(f"base IMP, {a.steps} steps, median of {a.reps} runs each; logs off; {out}")
     print(f"{'transport':9}  {'component':28}  {'steps/s':>8}  {'of C++':>6}  checksum")
     for transport in a.transports.split(","):
@@ -72,8 +81,8 @@ def main():
             failed |= not same or (name == "Python motivation" and ratio < a.floor)
             print(f"{transport:9}  {name:28}  {rate:8.0f}  {ratio:6.2f}  {','.join(sorted(sums))}"
                   f"{'' if same else '  DIFFERS from the C++ run'}")
-    print(f"floor: the Python motivation at least {a.floor} of the C++ run's steps per second: "
-          f"{'FAIL' if failed else 'PASS'}")
+    print(f"floors (docs/results loaded within 2 s; the Python motivation at least {a.floor} of the C++ run's "
+          f"steps per second; the C++ checksums): {'FAIL' if failed else 'PASS'}")
     return 1 if failed else 0
 
 

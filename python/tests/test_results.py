@@ -1,5 +1,6 @@
 """afford.load: every kind of experiment folder as data frames, checked against summary.json and the CSV files."""
 import json
+from pathlib import Path
 
 import numpy as np
 import pandas as pd
@@ -78,3 +79,16 @@ def test_bad_folders_are_named(tmp_path):
     (tmp_path / "summary.json").write_text("{not json")
     with pytest.raises(ValueError, match="summary.json: not JSON"):
         afford.load(tmp_path)
+
+
+def test_every_folder_of_the_documented_results_loads_whole():
+    docs = Path(__file__).resolve().parents[2] / "docs" / "results"
+    folders = sorted(d for d in docs.iterdir() if d.is_dir())
+    assert folders
+    for d in folders:
+        e = afford.load(d)
+        csvs = sorted(d.glob("fig_*.csv"))
+        assert sorted(e.figures) == [f.stem[len("fig_"):] for f in csvs], d
+        for f in csvs:
+            lines = [line for line in f.read_text().splitlines() if line.strip()]
+            assert len(e.figures[f.stem[len("fig_"):]]) == len(lines) - 1, f  # every row, under its header
