@@ -262,6 +262,31 @@ System parseSystem(const std::string& s) {
   if (s == "IMP") return System::IMP;
   throw ConfigError("unknown system \"" + s + "\" (expected FIX, IGN or IMP)");
 }
+std::vector<std::string> parseSystems(const std::vector<std::string>& given, const std::string& option) {
+  std::vector<std::string> out;
+  const auto add = [&](const std::string& name) {
+    if (std::find(out.begin(), out.end(), name) == out.end()) out.push_back(name);
+  };
+  for (const std::string& g : given) {
+    std::stringstream items(g);
+    std::string item;
+    bool any = false;
+    while (std::getline(items, item, ',')) {
+      any = true;
+      if (item == "all") {
+        for (const char* s : {"FIX", "IGN", "IMP"}) add(s);
+        continue;
+      }
+      try {
+        add(toString(parseSystem(item)));
+      } catch (const ConfigError&) {
+        throw ConfigError(option + ": unknown system \"" + item + "\" in \"" + g + "\" (FIX, IGN, IMP, all, or a list: FIX,IMP)");
+      }
+    }
+    if (!any) throw ConfigError(option + ": empty (FIX, IGN, IMP, all, or a list: FIX,IMP)");
+  }
+  return out;
+}
 int colourChannel(Colour c) { return c == Colour::Red ? 0 : c == Colour::Green ? 1 : 2; }
 
 ProtocolConfig parseProtocol(const YAML::Node& node, const std::string& path) {
@@ -669,6 +694,9 @@ ExtrinsicDesign parseDesign(const YAML::Node& node, const std::string& file) {
   return d;
 }
 
+// `key: none` (or an empty value) in an experiment file: drop what the extended experiment had.
+bool isNone(const YAML::Node& n) { return n.IsNull() || (n.IsScalar() && n.Scalar() == "none"); }
+
 ExperimentFile loadExperimentChain(const std::string& config_dir, const std::string& name, int depth,
                                    const std::filesystem::path& from = {}) {
   const bool path = isExperimentPath(name);
@@ -684,13 +712,13 @@ ExperimentFile loadExperimentChain(const std::string& config_dir, const std::str
   YAML::Node root = loadFile(file);
   if (!root.IsMap()) throw ConfigError("config file " + file.string() + ": expected a map");
   ExperimentFile e;
-  if (root["extends"].IsDefined()) {  // start from another experiment's world, runs and systems
+  if (root["extends"].IsDefined()) {  // start from the whole of another experiment; this file changes what it states
     if (depth > 8) throw ConfigError("config file " + file.string() + ": 'extends' chain too long (a cycle?)");
     e = loadExperimentChain(config_dir, root["extends"].Scalar(), depth + 1, file);
     e.overlay = YAML::Clone(e.overlay);
     e.systems = YAML::Clone(e.systems);
-    e.extrinsic.reset();
-    e.default_systems.clear();
+    e.extrinsic_node = YAML::Clone(e.extrinsic_node);
+    e.tables_node = YAML::Clone(e.tables_node);
   } else {
     e.overlay = YAML::Node(YAML::NodeType::Map);
   }
@@ -708,9 +736,30 @@ ExperimentFile loadExperimentChain(const std::string& config_dir, const std::str
       if (!kv.second.IsSequence()) fail("default_systems", "expected a list of systems (FIX, IGN, IMP)");
       for (const auto& s : kv.second) e.default_systems.push_back(toString(parseSystem(s.Scalar())));
     } else if (key == "extrinsic") {
-      e.extrinsic = parseDesign(kv.second, file.string());
+      if (isNone(kv.second)) {  // `extrinsic: none`: no design, whatever the extended experiment had
+        e.extrinsic.reset();
+        e.extrinsic_node = YAML::Node();
+        continue;
+      }
+      if (!kv.second.IsMap()) fail("extrinsic", "expected a map (or none), got " + describe(kv.second) + " (" + file.string() + ")");
+      YAML::Node merged = e.extrinsic_node.IsMap() ? e.extrinsic_node : YAML::Node(YAML::NodeType::Map);
+      // The tests' source: a file stating one (scenarios, or generate) does not keep the extended design's other.
+      if (kv.second["scenarios"] && !kv.second["generate"]) merged.remove("generate");
+      if (kv.second["generate"] && !kv.second["scenarios"]) merged.remove("scenarios");
+      mergeInto(merged, kv.second);
+      e.extrinsic_node = merged;
+      e.extrinsic = parseDesign(merged, file.string());
     } else if (key == "tables") {
-      Reader t(kv.second, "tables");
+      if (isNone(kv.second)) {
+        e.tables.reset();
+        e.tables_node = YAML::Node();
+        continue;
+      }
+      if (!kv.second.IsMap()) fail("tables", "expected a map (or none), got " + describe(kv.second) + " (" + file.string() + ")");
+      YAML::Node merged = e.tables_node.IsMap() ? e.tables_node : YAML::Node(YAML::NodeType::Map);
+      mergeInto(merged, kv.second);
+      e.tables_node = merged;
+      Reader t(merged, "tables");
       e.tables = TablesDesign{static_cast<int>(t.integer("count", 1, 100'000)), t.integer("seed", 0, INT64_MAX)};
       t.finish();
     } else if (key == "conditions") {

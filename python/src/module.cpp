@@ -88,7 +88,7 @@ py::dict readLog(const std::string& path, const std::string& run_id, const std::
 py::tuple runExperimentFrom(const py::dict& request) {
   ExperimentOptions o;
   o.experiment = request["experiment"].cast<std::string>();
-  o.systems = request["systems"].cast<std::vector<std::string>>();
+  o.systems = parseSystems(request["systems"].cast<std::vector<std::string>>(), "system");
   if (!request["reps"].is_none()) o.reps = request["reps"].cast<int>();
   if (!request["steps"].is_none()) o.steps = request["steps"].cast<std::int64_t>();
   o.seed = request["seed"].cast<std::int64_t>();

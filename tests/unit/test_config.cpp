@@ -1,7 +1,13 @@
 #include <gtest/gtest.h>
 
 #include <filesystem>
+#include <cstdlib>
+#include <functional>
+#include <regex>
+#include <set>
 #include <fstream>
+#include <iterator>
+#include <sstream>
 
 #include "afford/config.hpp"
 #include "tests/support.hpp"
@@ -221,7 +227,8 @@ TEST(Config, GeneratedDesignsNameTheirPointsAndTheirErrors) {
             std::string::npos);
   EXPECT_NE(errorOfFile("extends: base\nextrinsic: {generate: {sub_goals: 2, typo: 1}}\n").find("extrinsic.generate.typo"),
             std::string::npos);
-  EXPECT_NE(errorOfFile("extends: base\nextrinsic: {tests: 1}\n").find("extrinsic.scenarios"), std::string::npos);
+  EXPECT_EQ(errorOfFile("extends: base\nextrinsic: {tests: 1}\n"), "");  // base's five scenarios, once each
+  EXPECT_NE(errorOfFile("extrinsic: {tests: 1}\n").find("extrinsic.scenarios"), std::string::npos);
 }
 
 // A scenario written out by scenarioNode reads back as it was.
@@ -236,6 +243,139 @@ TEST(Config, AScenarioNodeReadsBackEqual) {
   EXPECT_EQ(back.objects[0].initial.x, 0.31234567890123);
   EXPECT_EQ(back.objects[0].goal.colour, Colour::Green);
   EXPECT_EQ(back.objects[0].actions, 2);
+}
+
+TEST(Systems, ListsAndAllAreTakenInOrderOnceAndAnUnknownOneIsNamed) {
+  EXPECT_EQ(parseSystems({"FIX,IMP"}, "--system"), (std::vector<std::string>{"FIX", "IMP"}));
+  EXPECT_EQ(parseSystems({"IMP", "all"}, "--system"), (std::vector<std::string>{"IMP", "FIX", "IGN"}));
+  EXPECT_EQ(parseSystems({"IGN,IGN"}, "--system"), (std::vector<std::string>{"IGN"}));
+  try {
+    parseSystems({"FIX,IMPP"}, "--system");
+    ADD_FAILURE() << "IMPP was taken";
+  } catch (const ConfigError& e) {
+    EXPECT_NE(std::string(e.what()).find("--system: unknown system \"IMPP\" in \"FIX,IMPP\""), std::string::npos) << e.what();
+  }
+  EXPECT_THROW(parseSystems({""}, "--system"), ConfigError);
+}
+
+// Every shipped experiment as loaded (extends resolved): its design, written out. The record
+// (tests/data/experiments.txt) is what the reproduction runs; a change to it must be meant.
+// AFFORD_UPDATE_RECORD=1 writes it anew.
+std::string describeExperiment(const ExperimentFile& e) {
+  std::ostringstream o;
+  const auto list = [](const std::vector<std::string>& xs) {
+    std::string s;
+    for (const auto& x : xs) s += (s.empty() ? "" : ", ") + x;
+    return "[" + s + "]";
+  };
+  o << "== " << e.name << "\ndescription: " << e.description << "\nrepetitions: " << e.repetitions
+    << "\ndefault_systems: " << list(e.default_systems) << "\noverlay:\n" << emitYaml(e.overlay)
+    << "\nsystems:\n" << (e.systems.IsDefined() && !e.systems.IsNull() ? emitYaml(e.systems) : "~") << "\n";
+  if (e.extrinsic) {
+    const ExtrinsicDesign& d = *e.extrinsic;
+    o << "extrinsic: scenarios " << list(d.scenarios) << ", tests " << d.tests << ", after_actions " << d.after_actions
+      << ", analysis '" << d.analysis << "'\n";
+    if (d.generate) {
+      std::vector<std::string> k, n;
+      for (int x : d.generate->sub_goals) k.push_back(std::to_string(x));
+      for (int x : d.generate->objects) n.push_back(std::to_string(x));
+      o << "  generate: sub_goals " << list(k) << ", objects " << list(n) << ", multi_step " << d.generate->multi_step
+        << (d.generate->all_multi_step ? " (all)" : "") << ", per_point " << d.generate->per_point << ", seed "
+        << d.generate->seed << "\n";
+    }
+    for (const auto& [key, values] : d.vary) o << "  vary " << key << ": " << list(values) << "\n";
+  } else {
+    o << "extrinsic: none\n";
+  }
+  if (e.tables) o << "tables: " << e.tables->count << " from seed " << e.tables->seed << "\n";
+  for (const auto& [name, settings] : e.conditions) o << "condition " << name << ": " << list(settings) << "\n";
+  return o.str();
+}
+
+TEST(Experiments, EveryShippedExperimentLoadsAsRecorded) {
+  const std::string dir = std::string(AFFORD_SOURCE_DIR) + "/config";
+  std::string all;
+  for (const std::string& name : listExperiments(dir)) all += describeExperiment(loadExperiment(dir, name));
+  const std::string record = std::string(AFFORD_SOURCE_DIR) + "/tests/data/experiments.txt";
+  if (const char* update = std::getenv("AFFORD_UPDATE_RECORD"); update && std::string(update) == "1") {
+    std::ofstream(record) << all;
+    GTEST_SKIP() << "wrote " << record;
+  }
+  std::ifstream in(record);
+  const std::string recorded((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());
+  EXPECT_EQ(all, recorded) << "an experiment loads otherwise than " << record
+                           << " records (AFFORD_UPDATE_RECORD=1 writes it anew, if that is meant)";
+}
+
+TEST(Experiments, ExtendsTakesTheWholeExperimentAndAFileChangesOnlyWhatItStates) {
+  const std::string config = std::string(AFFORD_SOURCE_DIR) + "/config";
+  const std::string dir = test::tempDir("extends");
+  const auto load = [&](const std::string& name, const std::string& text) {
+    std::ofstream(dir + "/" + name + ".yaml") << text;
+    return loadExperiment(config, dir + "/" + name + ".yaml");
+  };
+  const ExperimentFile attention = loadExperiment(config, "attention");
+  // A new seed for the generated scenarios: the rest of attention's design and its systems stay.
+  const ExperimentFile seeded = load("seeded", "extends: attention\nextrinsic: {generate: {seed: 7}}\n");
+  ASSERT_TRUE(seeded.extrinsic && seeded.extrinsic->generate);
+  EXPECT_EQ(seeded.extrinsic->generate->seed, 7);
+  EXPECT_EQ(seeded.extrinsic->generate->sub_goals, attention.extrinsic->generate->sub_goals);
+  EXPECT_EQ(seeded.extrinsic->generate->per_point, attention.extrinsic->generate->per_point);
+  EXPECT_EQ(seeded.extrinsic->tests, attention.extrinsic->tests);
+  EXPECT_EQ(seeded.extrinsic->vary, attention.extrinsic->vary);
+  EXPECT_EQ(seeded.default_systems, attention.default_systems);
+  EXPECT_EQ(emitYaml(seeded.overlay), emitYaml(attention.overlay));
+  // ... to any depth: a file extending that file, changing a world key, keeps the seed.
+  const ExperimentFile deeper = load("deeper", "extends: seeded.yaml\nplanner: {budget: 99}\n");
+  EXPECT_EQ(deeper.extrinsic->generate->seed, 7);
+  EXPECT_EQ(deeper.overlay["planner"]["budget"].as<int>(), 99);
+  EXPECT_EQ(deeper.overlay["planner"]["max_attempts"].as<std::string>(),
+            attention.overlay["planner"]["max_attempts"].as<std::string>());
+  // Stating the tests' source replaces the extended one; `none` drops the design.
+  const ExperimentFile listed = load("listed", "extends: attention\nextrinsic: {scenarios: [scenario2]}\n");
+  EXPECT_FALSE(listed.extrinsic->generate);
+  EXPECT_EQ(listed.extrinsic->scenarios, std::vector<std::string>{"scenario2"});
+  EXPECT_EQ(listed.extrinsic->vary, attention.extrinsic->vary);
+  EXPECT_FALSE(load("none", "extends: attention\nextrinsic: none\n").extrinsic);
+  // Random tables: another series, the same count and conditions.
+  const ExperimentFile tables = load("tables", "extends: random-tables\ntables: {seed: 9}\n");
+  ASSERT_TRUE(tables.tables);
+  EXPECT_EQ(tables.tables->seed, 9);
+  EXPECT_EQ(tables.tables->count, loadExperiment(config, "random-tables").tables->count);
+  EXPECT_EQ(tables.conditions, loadExperiment(config, "random-tables").conditions);
+  try {
+    load("bad", "extends: attention\nextrinsic: [scenario1]\n");
+    ADD_FAILURE() << "a list for extrinsic was taken";
+  } catch (const ConfigError& e) {
+    EXPECT_NE(std::string(e.what()).find("extrinsic"), std::string::npos) << e.what();
+  }
+}
+
+// Every key of config/defaults.yaml has its row in docs/configuration.md, and every row names a key of
+// the defaults or one an experiment gives (its default column says "per experiment").
+TEST(Configuration, EveryKeyIsDocumentedAndEveryDocumentedKeyExists) {
+  std::set<std::string> keys;
+  std::function<void(const YAML::Node&, const std::string&)> leaves = [&](const YAML::Node& n, const std::string& path) {
+    if (!n.IsMap()) {
+      keys.insert(path);
+      return;
+    }
+    for (const auto& kv : n) leaves(kv.second, path.empty() ? kv.first.Scalar() : path + "." + kv.first.Scalar());
+  };
+  leaves(YAML::LoadFile(std::string(AFFORD_SOURCE_DIR) + "/config/defaults.yaml"), "");
+  std::ifstream doc(std::string(AFFORD_SOURCE_DIR) + "/docs/configuration.md");
+  std::set<std::string> documented;
+  const std::regex row(R"(^\| `([a-z0-9_.]+)` \| ([^|]*)\|)");
+  for (std::string line; std::getline(doc, line);) {
+    std::smatch m;
+    if (!std::regex_search(line, m, row)) continue;
+    documented.insert(m[1]);
+    EXPECT_TRUE(keys.count(m[1]) || m[2].str().find("per experiment") != std::string::npos)
+        << "docs/configuration.md documents '" << m[1] << "', which config/defaults.yaml does not have";
+  }
+  for (const std::string& k : keys)
+    EXPECT_TRUE(documented.count(k)) << "config key '" << k << "' has no row in docs/configuration.md";
+  EXPECT_GT(keys.size(), 80u);
 }
 
 }  // namespace

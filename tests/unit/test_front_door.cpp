@@ -9,6 +9,7 @@
 #include <algorithm>
 #include <iterator>
 #include <map>
+#include <regex>
 #include <set>
 
 #include "afford/agents.hpp"
@@ -263,6 +264,25 @@ TEST(Reference, ABrokenFileIsAnErrorNamingItAndTheKey) {
   } catch (const ConfigError& e) {
     EXPECT_NE(std::string(e.what()).find(missing + "/reference.yaml"), std::string::npos) << e.what();
   }
+}
+
+// The map of files in docs/processes-and-channels.md names every file of the front door.
+TEST(Docs, TheMapOfFilesNamesEveryFileOfTheFrontDoor) {
+  const std::filesystem::path root = AFFORD_SOURCE_DIR;
+  std::ifstream doc(root / "docs" / "processes-and-channels.md");
+  const std::string text((std::istreambuf_iterator<char>(doc)), std::istreambuf_iterator<char>());
+  const auto from = text.find("processes/afford/ ");
+  ASSERT_NE(from, std::string::npos) << "no map of processes/afford/ in docs/processes-and-channels.md";
+  const std::string map = text.substr(from, text.find("```", from) - from);
+  int files = 0;
+  for (const auto& e : std::filesystem::directory_iterator(root / "processes" / "afford")) {
+    if (!e.is_regular_file()) continue;
+    ++files;
+    const std::string stem = e.path().stem().string();
+    const bool named = std::regex_search(map, std::regex("(^|[^a-z_])" + stem + "\\."));
+    EXPECT_TRUE(named) << "processes/afford/" << e.path().filename().string() << " is not in the map of files";
+  }
+  EXPECT_GT(files, 20);
 }
 
 }  // namespace

@@ -37,6 +37,9 @@ const char* toString(Shape);
 const char* toString(Colour);
 const char* toString(System);
 System parseSystem(const std::string&);  // throws ConfigError
+// The systems `given` names, each a system, `all`, or a comma-separated list of them (FIX,IMP), in the
+// order given, each once; throws ConfigError naming `option` and the unknown name.
+std::vector<std::string> parseSystems(const std::vector<std::string>& given, const std::string& option);
 int colourChannel(Colour);                // R=0, G=1, B=2
 
 struct ObjectSpec {
@@ -332,13 +335,21 @@ struct ExperimentFile {
   std::optional<TablesDesign> tables;
   // Intrinsic conditions compared (`conditions:`, with `tables:`): name -> settings ("key.path=value"), in file order.
   std::vector<std::pair<std::string, std::vector<std::string>>> conditions;
+  // The `extrinsic:` and `tables:` sections as written, merged along `extends` (the designs are parsed from them).
+  YAML::Node extrinsic_node, tables_node;
 };
 
 std::vector<std::string> listExperiments(const std::string& config_dir);
 // `name`: an experiment of <config_dir>/experiments, or the path of an
 // experiment file anywhere (it has a '/' or ends in .yaml; its name is the
 // file's stem). `extends:` names an experiment of the config folder, or a
-// path relative to the extending file's folder.
+// path relative to the extending file's folder; the file then starts from
+// the whole of that experiment and changes what it states: maps (the config
+// keys, `systems`, `extrinsic`, `tables`) are merged to any depth, lists
+// replaced; `extrinsic` stating one source of tests (`scenarios` or
+// `generate`) drops the extended design's other; `conditions` are replaced
+// as a whole;
+// `extrinsic: none` and `tables: none` drop the extended experiment's.
 ExperimentFile loadExperiment(const std::string& config_dir, const std::string& name);
 bool isExperimentPath(const std::string& name);
 

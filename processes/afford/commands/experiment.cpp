@@ -21,7 +21,7 @@ Command experimentCommand(CLI::App& app, const FrontDoor& door) {
   ExperimentOptions& o = a->o;
   auto* exp = app.add_subcommand("experiment", "run an experiment's repetitions and summarise them");
   exp->add_option("name", o.experiment, "experiment (see `afford experiments`); optional with --resume");
-  exp->add_option("--system", a->system, "FIX, IGN, IMP or all (default: the experiment's systems, else all)");
+  exp->add_option("--system", a->system, "FIX, IGN, IMP, all, or a list (FIX,IMP) (default: the experiment's systems, else all)");
   exp->add_option("--reps", a->reps, "repetitions per system (default: the experiment's)");
   exp->add_option("--steps", a->steps, "intrinsic steps per run (default: the experiment's)");
   exp->add_option("--jobs,-j", o.jobs, "runs at a time")->capture_default_str();
@@ -124,10 +124,7 @@ Command experimentCommand(CLI::App& app, const FrontDoor& door) {
             if (a->steps) o.steps = a->steps;
             if (tables_option->count()) o.tables = a->tables;
             if (table_seed_option->count()) o.table_seed = a->table_seed;
-            if (a->system == "all")
-              o.systems = {"FIX", "IGN", "IMP"};
-            else if (!a->system.empty())
-              o.systems = {toString(parseSystem(a->system))};
+            if (!a->system.empty()) o.systems = parseSystems({a->system}, "--system");
             if (a->netns == "auto")
               o.netns = NetnsMode::Auto;
             else if (a->netns == "on")
