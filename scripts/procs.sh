@@ -34,8 +34,14 @@
 # route 224.0.0.0/4, e.g. inside `unshare --net`).
 set -euo pipefail
 root=$(cd "$(dirname "$0")/.." && pwd)
-bin=${AFFORD_BIN:-$root/build/bin}
-logs=${AFFORD_LOGS:-$root/logs}
+if [[ -f $root/config/defaults.yaml && -x $root/../../bin/afford && ! -d $root/build ]]; then
+  # an installed copy (cmake --install): <prefix>/share/afford/scripts; the binaries in <prefix>/bin, logs here
+  bin=${AFFORD_BIN:-$(cd "$root/../../bin" && pwd)}
+  logs=${AFFORD_LOGS:-$PWD/logs}
+else
+  bin=${AFFORD_BIN:-$root/build/bin}
+  logs=${AFFORD_LOGS:-$root/logs}
+fi
 netns=${AFFORD_NETNS:-afford}
 grace=${AFFORD_GRACE:-5}
 mapfile -t all < <("$bin/afford" processes)  # the registry of processes

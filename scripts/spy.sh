@@ -12,6 +12,7 @@ root=$(cd "$(dirname "$0")/.." && pwd)
 url=${1:-${LCM_DEFAULT_URL:-udpm://239.255.76.67:7667?ttl=0}}
 [[ $# -gt 0 ]] && shift
 jar=$root/build/share/afford-lcmtypes.jar
+[[ -f $jar || ! -f $root/java/afford-lcmtypes.jar ]] || jar=$root/java/afford-lcmtypes.jar  # an installed copy
 for f in "$jar" /usr/share/java/lcm.jar /usr/share/java/jchart2d.jar; do
   [[ -f $f ]] || { echo "spy.sh: $f is missing (run scripts/setup.sh)" >&2; exit 2; }
 done

@@ -1,5 +1,7 @@
 #include "afford/node.hpp"
 
+#include <filesystem>
+
 #include <CLI/CLI.hpp>
 #include <opencv2/core.hpp>
 #include <malloc.h>
@@ -227,7 +229,18 @@ void boundHeapGrowth() {
   mallopt(M_TRIM_THRESHOLD, 256 * 1024);
 }
 
-std::string defaultConfigDir() { return std::string(AFFORD_SOURCE_DIR) + "/config"; }
+std::string installedShareDir() {
+  std::error_code ec;
+  const std::filesystem::path exe = std::filesystem::read_symlink("/proc/self/exe", ec);
+  if (ec) return "";
+  const std::filesystem::path share = exe.parent_path().parent_path() / "share" / "afford";
+  return std::filesystem::is_regular_file(share / "config" / "defaults.yaml", ec) ? share.string() : "";
+}
+
+std::string defaultConfigDir() {
+  const std::string share = installedShareDir();
+  return share.empty() ? std::string(AFFORD_SOURCE_DIR) + "/config" : share + "/config";
+}
 
 void CLIHook::option(const std::string& name, std::string& target, const std::string& help) {
   static_cast<CLI::App*>(app_)->add_option(name, target, help)->capture_default_str();

@@ -6,6 +6,7 @@
 
 #include <vector>
 
+#include "afford/node.hpp"
 #include "afford/commands.hpp"
 #include "afford/config.hpp"
 #include "afford/logging.hpp"
@@ -14,7 +15,7 @@ int main(int argc, char** argv) {
   CLI::App app{"afford: an embodied agent learning affordances (intrinsic phase) and solving extrinsic tasks", "afford"};
   app.require_subcommand(1);
   auto log = afford::makeLogger("afford");
-  afford::FrontDoor door{std::string(AFFORD_SOURCE_DIR) + "/config", argv[0], log.get()};
+  afford::FrontDoor door{afford::defaultConfigDir(), argv[0], log.get()};
   app.add_option("--config-dir", door.config_dir, "folder with defaults.yaml and experiments/")->capture_default_str();
   const std::vector<afford::Command> commands = {
       afford::experimentCommand(app, door), afford::experimentsCommand(app, door), afford::configCommand(app, door),

@@ -1,6 +1,7 @@
 #include "afford/plan.hpp"
 
 #include "afford/names.hpp"
+#include "afford/node.hpp"
 
 #include <algorithm>
 #include <ctime>
@@ -35,7 +36,7 @@ void checkRunId(const std::string& id, const Plan& plan) {
 
 Plan planExperiment(const ExperimentOptions& o) {
   Plan plan;
-  plan.config_dir = o.config_dir.empty() ? std::string(AFFORD_SOURCE_DIR) + "/config" : o.config_dir;
+  plan.config_dir = o.config_dir.empty() ? defaultConfigDir() : o.config_dir;
   plan.exp = loadExperiment(plan.config_dir, o.experiment);
   plan.protocol = loadProtocol(plan.config_dir);
   plan.reference.emplace(plan.config_dir);

@@ -279,7 +279,13 @@ class CLIHook {
   void* app_;
 };
 
-// The folder of defaults.yaml (--config-dir's default): the source tree's config/.
+// The folder of afford's shared files beside the running executable, as
+// `cmake --install` lays them out (<prefix>/bin/afford, <prefix>/share/afford:
+// config/, docs/, java/, scripts/), or "" when the executable runs from a
+// build tree.
+std::string installedShareDir();
+// The folder of defaults.yaml (--config-dir's default): an installed copy's
+// share/afford/config, else the source tree's config/.
 std::string defaultConfigDir();
 
 // Large transient buffers (LCM's reassembly of fragmented messages) go back to

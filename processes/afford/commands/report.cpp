@@ -2,6 +2,7 @@
 #include <cstdio>
 #include <memory>
 
+#include "afford/node.hpp"
 #include "afford/commands.hpp"
 #include "afford/report.hpp"
 
@@ -20,7 +21,7 @@ Command reportCommand(CLI::App& app, const FrontDoor& door) {
   report->add_option("--note", r->note, "a paragraph on how the runs were made, put under the table of what ran");
   return {report, [r, &door] {
             r->config_dir = door.config_dir;
-            r->docs_dir = std::string(AFFORD_SOURCE_DIR) + "/docs";
+            r->docs_dir = installedShareDir().empty() ? std::string(AFFORD_SOURCE_DIR) + "/docs" : installedShareDir() + "/docs";
             const ReportWritten w = writeReport(*r);
             std::printf("%s\n", w.out.c_str());
             return 0;
