@@ -12,11 +12,11 @@
 #include <vector>
 
 #include "afford/protocol.hpp"
-#include "afford/driver.hpp"
+#include "experiment/run/driver.hpp"
 #include "afford/focus_t.hpp"
 #include "afford/run_config_t.hpp"
 #include "afford/seal.hpp"
-#include "afford/host.hpp"
+#include "experiment/run/host.hpp"
 #include "afford/processes.hpp"
 #include "tests/support.hpp"
 

@@ -13,13 +13,13 @@
 #include <string>
 
 #include "afford/config.hpp"
-#include "afford/experiment.hpp"
-#include "afford/group.hpp"
+#include "experiment/experiment.hpp"
+#include "experiment/run/group.hpp"
 #include "afford/logging.hpp"
 #include "afford/decode.hpp"
 #include "afford/image.hpp"
 #include "afford/protocol.hpp"
-#include "afford/replay.hpp"
+#include "experiment/replay/replay.hpp"
 #include "afford/rng.hpp"
 #include "environment/environment.hpp"
 #include "eye/eye.hpp"
@@ -86,26 +86,26 @@ py::dict readLog(const std::string& path, const std::string& run_id, const std::
 // The GIL is released while it runs; SIGINT (a notebook's interrupt) stops
 // it as it stops the command, and Python's own handlers are put back after.
 py::tuple runExperimentFrom(const py::dict& request) {
-  ExperimentOptions o;
-  o.experiment = request["experiment"].cast<std::string>();
-  o.systems = parseSystems(request["systems"].cast<std::vector<std::string>>(), "system");
-  if (!request["reps"].is_none()) o.reps = request["reps"].cast<int>();
-  if (!request["steps"].is_none()) o.steps = request["steps"].cast<std::int64_t>();
-  o.seed = request["seed"].cast<std::int64_t>();
-  if (!request["tables"].is_none()) o.tables = request["tables"].cast<int>();
-  if (!request["table_seed"].is_none()) o.table_seed = request["table_seed"].cast<std::int64_t>();
-  o.jobs = request["jobs"].cast<int>();
-  o.out_dir = request["out"].cast<std::string>();
-  o.log_root = request["log_root"].cast<std::string>();
-  o.transport = request["transport"].cast<std::string>();
-  o.keep_logs = request["keep_logs"].cast<std::string>();
-  o.settings = request["settings"].cast<std::vector<std::string>>();
-  o.extrinsic_reps = request["extrinsic_reps"].cast<int>();
-  o.scenarios = request["scenarios"].cast<std::vector<std::string>>();
-  o.run_prefix = request["run_prefix"].cast<std::string>();
-  o.progress = request["progress"].cast<std::string>();
-  o.reuse_agents = request["reuse_agents"].cast<bool>();
-  o.processes = parseProcessSwaps(
+  ExperimentRequest o;
+  o.plan.experiment = request["experiment"].cast<std::string>();
+  o.plan.systems = parseSystems(request["systems"].cast<std::vector<std::string>>(), "system");
+  if (!request["reps"].is_none()) o.plan.reps = request["reps"].cast<int>();
+  if (!request["steps"].is_none()) o.plan.steps = request["steps"].cast<std::int64_t>();
+  o.plan.seed = request["seed"].cast<std::int64_t>();
+  if (!request["tables"].is_none()) o.plan.tables = request["tables"].cast<int>();
+  if (!request["table_seed"].is_none()) o.plan.table_seed = request["table_seed"].cast<std::int64_t>();
+  o.host.jobs = request["jobs"].cast<int>();
+  o.write.out_dir = request["out"].cast<std::string>();
+  o.plan.log_root = request["log_root"].cast<std::string>();
+  o.host.transport = request["transport"].cast<std::string>();
+  o.plan.keep_logs = request["keep_logs"].cast<std::string>();
+  o.plan.settings = request["settings"].cast<std::vector<std::string>>();
+  o.plan.extrinsic_reps = request["extrinsic_reps"].cast<int>();
+  o.plan.scenarios = request["scenarios"].cast<std::vector<std::string>>();
+  o.plan.run_prefix = request["run_prefix"].cast<std::string>();
+  o.host.progress = request["progress"].cast<std::string>();
+  o.host.reuse_agents = request["reuse_agents"].cast<bool>();
+  o.host.processes = parseProcessSwaps(
       [&] {
         std::vector<std::string> swaps;
         for (const auto& [name, command] : request["processes"].cast<std::map<std::string, std::string>>())
@@ -113,8 +113,8 @@ py::tuple runExperimentFrom(const py::dict& request) {
         return swaps;
       }(),
       "processes");
-  o.quiet = true;
-  o.program = "python3 -c 'import afford; afford.run(...)'; or: build/bin/afford";
+  o.write.quiet = true;
+  o.write.program = "python3 -c 'import afford; afford.run(...)'; or: build/bin/afford";
   auto log = makeLogger("afford", request["log_level"].cast<std::string>());
   int code = 0, signal = 0;
   {

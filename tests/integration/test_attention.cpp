@@ -7,7 +7,7 @@
 #include <string>
 #include <vector>
 
-#include "afford/generate.hpp"
+#include "experiment/design/generate.hpp"
 #include "tests/in_process.hpp"
 #include "tests/reference_loops.hpp"
 #include "tests/support.hpp"

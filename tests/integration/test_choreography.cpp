@@ -11,7 +11,7 @@
 
 #include "afford/protocol.hpp"
 #include "afford/decision_t.hpp"
-#include "afford/driver.hpp"
+#include "experiment/run/driver.hpp"
 #include "afford/focus_t.hpp"
 #include "afford/run_config_t.hpp"
 #include "afford/scene_t.hpp"

@@ -10,7 +10,7 @@
 #include <nlohmann/json.hpp>
 
 #include "afford/protocol.hpp"
-#include "afford/explain.hpp"
+#include "experiment/replay/explain.hpp"
 #include "afford/extrinsic_result_t.hpp"
 #include "tests/in_process.hpp"
 #include "tests/reference_loops.hpp"

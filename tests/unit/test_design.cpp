@@ -1,6 +1,6 @@
 #include <gtest/gtest.h>
 
-#include "afford/design.hpp"
+#include "experiment/design/design.hpp"
 
 namespace afford {
 namespace {

@@ -6,21 +6,22 @@
 
 #include <filesystem>
 #include <fstream>
+#include <functional>
 #include <algorithm>
 #include <iterator>
 #include <map>
 #include <regex>
 #include <set>
 
-#include "afford/agents.hpp"
-#include "afford/experiment.hpp"
-#include "afford/plan.hpp"
+#include "experiment/execute/agents.hpp"
+#include "experiment/experiment.hpp"
+#include "experiment/plan/plan.hpp"
 #include "afford/protocol.hpp"
 #include "afford/config.hpp"
-#include "afford/host.hpp"
+#include "experiment/run/host.hpp"
 #include "afford/processes.hpp"
-#include "afford/reference.hpp"
-#include "afford/sweep.hpp"
+#include "experiment/design/reference.hpp"
+#include "experiment/plan/sweep.hpp"
 #include "tests/support.hpp"
 
 namespace afford {
@@ -111,26 +112,26 @@ TEST(Sweep, ASweepFileKeyThatIsNoNameIsRefusedNamingTheFile) {
 
 // Every process drops messages of a run id that is not a safe name: the runner refuses one before anything runs.
 TEST(Plan, ARunIdThatIsNoSafeNameIsRefusedBeforeAnythingRuns) {
-  ExperimentOptions o;
-  o.experiment = "base";
-  o.systems = {"IMP"};
-  o.reps = 1;
-  o.steps = 10;
+  ExperimentRequest o;
+  o.plan.experiment = "base";
+  o.plan.systems = {"IMP"};
+  o.plan.reps = 1;
+  o.plan.steps = 10;
   for (const std::string& prefix : std::vector<std::string>{"a b", "../x", ".hidden", std::string(200, 'p')}) {
-    o.run_prefix = prefix;
+    o.plan.run_prefix = prefix;
     try {
-      planExperiment(o);
+      planExperiment(o.plan);
       ADD_FAILURE() << "run prefix '" << prefix << "' was taken";
     } catch (const ConfigError& e) {
       EXPECT_NE(std::string(e.what()).find("--run-prefix"), std::string::npos) << e.what();
     }
   }
-  o.run_prefix = "fine-1.0_x";
-  EXPECT_NO_THROW(planExperiment(o));
-  o.run_prefix = "fine";
-  o.extrinsic_reps = 1;
-  o.scenarios = {"scenario1"};
-  EXPECT_NO_THROW(planExperiment(o));
+  o.plan.run_prefix = "fine-1.0_x";
+  EXPECT_NO_THROW(planExperiment(o.plan));
+  o.plan.run_prefix = "fine";
+  o.plan.extrinsic_reps = 1;
+  o.plan.scenarios = {"scenario1"};
+  EXPECT_NO_THROW(planExperiment(o.plan));
 }
 
 // afford experiment --process NAME='CMD ARGS': each name once, a process of the registry, a command.
@@ -266,8 +267,9 @@ TEST(Reference, ABrokenFileIsAnErrorNamingItAndTheKey) {
   }
 }
 
-// The map of files in docs/processes-and-channels.md names every file of the front door.
-TEST(Docs, TheMapOfFilesNamesEveryFileOfTheFrontDoor) {
+// The map of files in docs/processes-and-channels.md names every file of the
+// front door (processes/afford) and of the experiment engine (experiment/).
+TEST(Docs, TheMapOfFilesNamesEveryFileOfTheFrontDoorAndTheEngine) {
   const std::filesystem::path root = AFFORD_SOURCE_DIR;
   std::ifstream doc(root / "docs" / "processes-and-channels.md");
   const std::string text((std::istreambuf_iterator<char>(doc)), std::istreambuf_iterator<char>());
@@ -275,14 +277,90 @@ TEST(Docs, TheMapOfFilesNamesEveryFileOfTheFrontDoor) {
   ASSERT_NE(from, std::string::npos) << "no map of processes/afford/ in docs/processes-and-channels.md";
   const std::string map = text.substr(from, text.find("```", from) - from);
   int files = 0;
-  for (const auto& e : std::filesystem::directory_iterator(root / "processes" / "afford")) {
-    if (!e.is_regular_file()) continue;
-    ++files;
-    const std::string stem = e.path().stem().string();
-    const bool named = std::regex_search(map, std::regex("(^|[^a-z_])" + stem + "\\."));
-    EXPECT_TRUE(named) << "processes/afford/" << e.path().filename().string() << " is not in the map of files";
-  }
-  EXPECT_GT(files, 20);
+  for (const char* folder : {"processes/afford", "experiment"})
+    for (const auto& e : std::filesystem::recursive_directory_iterator(root / folder)) {
+      if (!e.is_regular_file()) continue;
+      ++files;
+      const std::string stem = e.path().stem().string();
+      const bool named = std::regex_search(map, std::regex("(^|[^a-z_])" + stem + "\\."));
+      EXPECT_TRUE(named) << std::filesystem::relative(e.path(), root).string() << " is not in the map of files";
+    }
+  EXPECT_GT(files, 40);
+}
+
+// The layers of the engine, lowest first: a file includes headers of its own
+// folder or of a lower layer, never of a higher one or of a sibling; and no
+// include cycle. (The processes and common/ are below them all.)
+TEST(Layers, NoFileIncludesAHeaderOfAHigherLayerAndThereIsNoCycle) {
+  namespace fs = std::filesystem;
+  const fs::path root = AFFORD_SOURCE_DIR;
+  const auto folderOf = [&](const fs::path& file) {  // "experiment/plan", "processes/afford", "common", ...
+    const fs::path rel = fs::relative(file, root);
+    auto it = rel.begin();
+    const std::string top = (it++)->string();
+    if (top == "common" || top == "third_party") return top;
+    const std::string second = (it != rel.end() && std::next(it) != rel.end()) ? it->string() : std::string();
+    return second.empty() ? top : top + "/" + second;
+  };
+  const std::map<std::string, int> rank = {
+      {"experiment/design", 1}, {"experiment/run", 1},      {"experiment/plan", 2},    {"experiment/execute", 3},
+      {"experiment/replay", 3}, {"experiment/results", 4},  {"experiment/present", 5}, {"experiment", 6},
+      {"processes/afford", 7}};
+  const auto rankOf = [&](const std::string& folder) {
+    const auto r = rank.find(folder);
+    return r == rank.end() ? 0 : r->second;  // common/ and the processes' own folders
+  };
+  // Where an include resolves: common's afford/x.hpp, a process's <name>/x.hpp, or experiment/...
+  const auto resolve = [&](const std::string& inc) -> fs::path {
+    for (const fs::path& base : {root / "common" / "include", root / "processes", root})
+      if (fs::exists(base / inc)) return fs::weakly_canonical(base / inc);
+    return {};
+  };
+  std::map<fs::path, std::vector<fs::path>> graph;
+  const std::regex include_re("#include \"([^\"]+)\"");
+  int checked = 0;
+  for (const char* top : {"common", "processes", "experiment"})
+    for (const auto& e : fs::recursive_directory_iterator(root / top)) {
+      const std::string ext = e.path().extension().string();
+      if (!e.is_regular_file() || (ext != ".hpp" && ext != ".cpp")) continue;
+      const fs::path file = fs::weakly_canonical(e.path());
+      std::ifstream in(file);
+      const std::string text((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());
+      for (std::sregex_iterator m(text.begin(), text.end(), include_re), end; m != end; ++m) {
+        const fs::path target = resolve((*m)[1]);
+        if (target.empty()) continue;  // generated (lcmtypes) or system
+        ++checked;
+        graph[file].push_back(target);
+        const std::string from = folderOf(file), to = folderOf(target);
+        if (from == to) continue;
+        EXPECT_LT(rankOf(to), rankOf(from) + (rankOf(from) == 0 ? 1 : 0))
+            << fs::relative(file, root).string() << " (layer " << from << ") includes " << (*m)[1]
+            << " (layer " << to << ")";
+        if (rankOf(from) == 0) EXPECT_EQ(rankOf(to), 0) << fs::relative(file, root).string() << " includes " << (*m)[1];
+      }
+    }
+  EXPECT_GT(checked, 300);
+  // Cycles: a depth-first walk over the headers.
+  std::map<fs::path, int> mark;  // 1: on the path, 2: done
+  std::vector<fs::path> path;
+  std::function<void(const fs::path&)> visit = [&](const fs::path& f) {
+    mark[f] = 1;
+    path.push_back(f);
+    for (const fs::path& g : graph[f]) {
+      if (mark[g] == 1) {
+        std::string cycle;
+        for (auto it = std::find(path.begin(), path.end(), g); it != path.end(); ++it)
+          cycle += fs::relative(*it, root).string() + " -> ";
+        ADD_FAILURE() << "include cycle: " << cycle << fs::relative(g, root).string();
+      } else if (mark[g] == 0) {
+        visit(g);
+      }
+    }
+    path.pop_back();
+    mark[f] = 2;
+  };
+  for (const auto& [f, _] : graph)
+    if (mark[f] == 0) visit(f);
 }
 
 }  // namespace

@@ -1,4 +1,4 @@
-// afford report (processes/afford/report.cpp): a report of any set of
+// afford report (experiment/present/report.cpp): a report of any set of
 // experiment folders, here two folders of the base test written by hand
 // (summary.json and experiment.json as docs/results-schema.md describes them,
 // a figure and its CSV each), reported into a nested folder.
@@ -10,7 +10,7 @@
 #include <regex>
 #include <sstream>
 
-#include "afford/report.hpp"
+#include "experiment/present/report.hpp"
 #include "tests/support.hpp"
 
 namespace afford {

@@ -6,7 +6,7 @@
 
 #include "afford/actions.hpp"
 #include "afford/config.hpp"
-#include "afford/generate.hpp"
+#include "experiment/design/generate.hpp"
 #include "environment/environment.hpp"
 #include "tests/support.hpp"
 

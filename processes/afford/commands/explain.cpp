@@ -4,7 +4,7 @@
 
 #include "afford/commands.hpp"
 #include "afford/config.hpp"
-#include "afford/explain.hpp"
+#include "experiment/replay/explain.hpp"
 
 namespace afford {
 

@@ -12,8 +12,8 @@
 
 #include "afford/commands.hpp"
 #include "afford/config.hpp"
-#include "afford/experiment.hpp"
-#include "afford/store.hpp"
+#include "experiment/experiment.hpp"
+#include "experiment/state.hpp"
 
 namespace afford {
 namespace fs = std::filesystem;
@@ -29,11 +29,11 @@ json planOptions(json options) {
   return options;
 }
 
-ExperimentOptions mergeOptions(const std::vector<std::string>& dirs, const std::string& out) {
+ExperimentRequest mergeOptions(const std::vector<std::string>& dirs, const std::string& out) {
   if (dirs.empty()) throw ConfigError("afford merge: give the shards' folders");
   std::map<int, std::string> seen;  // shard index -> folder
   json first_plan;
-  ExperimentOptions o;
+  ExperimentRequest o;
   int count = 0;
   for (const auto& dir : dirs) {
     if (fs::exists(out) && fs::exists(dir) && fs::equivalent(dir, out))
@@ -52,7 +52,7 @@ ExperimentOptions mergeOptions(const std::vector<std::string>& dirs, const std::
     if (seen.empty()) {
       count = n;
       first_plan = planOptions(options);
-      o = optionsFromJson(options);
+      o = requestFromJson(options);
       std::ifstream in(fs::path(dir) / "summary.json");
       if (in) o.merged_network = json::parse(in, nullptr, false).value("network", std::string());
     } else {
@@ -75,10 +75,10 @@ ExperimentOptions mergeOptions(const std::vector<std::string>& dirs, const std::
   for (int i = 0; i < count; ++i)
     if (!seen.count(i)) missing += (missing.empty() ? "" : ", ") + std::to_string(i) + "/" + std::to_string(count);
   if (!missing.empty()) throw ConfigError("afford merge: shard(s) " + missing + " missing: give every shard's folder");
-  o.shard_index = o.shard_count = 0;
-  o.out_dir = out;
+  o.host.shard_index = o.host.shard_count = 0;
+  o.write.out_dir = out;
   o.resume = false;
-  o.reuse_agents = false;  // the shards stored their agents
+  o.host.reuse_agents = false;  // the shards stored their agents
   for (const auto& [i, dir] : seen) o.merged_from.push_back(fs::absolute(dir).lexically_normal().string());
   return o;
 }
@@ -99,9 +99,9 @@ Command mergeCommand(CLI::App& app, const FrontDoor& door) {
   merge->add_option("--out", a->out, "folder for the merged summary.json and CSV files")->capture_default_str();
   merge->add_flag("--quiet", a->quiet, "do not print the table at the end");
   return {merge, [a, &door] {
-            ExperimentOptions o = mergeOptions(a->dirs, a->out);
-            o.quiet = a->quiet;
-            o.program = door.program;
+            ExperimentRequest o = mergeOptions(a->dirs, a->out);
+            o.write.quiet = a->quiet;
+            o.write.program = door.program;
             return runExperiment(o, *door.log);
           }};
 }

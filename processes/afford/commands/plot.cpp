@@ -3,7 +3,7 @@
 #include <memory>
 
 #include "afford/commands.hpp"
-#include "afford/plots.hpp"
+#include "experiment/present/plots.hpp"
 
 namespace afford {
 

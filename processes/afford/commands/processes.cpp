@@ -4,7 +4,7 @@
 #include <memory>
 
 #include "afford/commands.hpp"
-#include "afford/host.hpp"
+#include "experiment/run/host.hpp"
 #include "afford/processes.hpp"
 #include "afford/protocol.hpp"
 

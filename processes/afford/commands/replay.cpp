@@ -4,7 +4,7 @@
 #include <sstream>
 
 #include "afford/commands.hpp"
-#include "afford/replay.hpp"
+#include "experiment/replay/replay.hpp"
 
 namespace afford {
 

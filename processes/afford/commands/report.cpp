@@ -4,7 +4,7 @@
 
 #include "afford/node.hpp"
 #include "afford/commands.hpp"
-#include "afford/report.hpp"
+#include "experiment/present/report.hpp"
 
 namespace afford {
 

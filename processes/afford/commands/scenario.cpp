@@ -6,7 +6,7 @@
 
 #include "afford/commands.hpp"
 #include "afford/config.hpp"
-#include "afford/generate.hpp"
+#include "experiment/design/generate.hpp"
 #include "afford/image.hpp"
 
 namespace afford {

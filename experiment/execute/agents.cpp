@@ -1,0 +1,153 @@
+#include "experiment/execute/agents.hpp"
+
+#include <unistd.h>
+#include <yaml-cpp/yaml.h>
+
+#include <filesystem>
+#include <fstream>
+
+#include "afford/checksum.hpp"
+#include "afford/config.hpp"
+#include "experiment/run/group.hpp"
+#include "afford/processes.hpp"
+#include "experiment/run/outcome.hpp"
+
+namespace afford {
+namespace fs = std::filesystem;
+using nlohmann::json;
+
+std::vector<fs::path> checkpointFiles(const std::string& checkpoint) {
+  std::vector<fs::path> out;
+  const fs::path dir = fs::path(checkpoint).parent_path();
+  const std::string stem = fs::path(checkpoint).stem().string();
+  std::error_code ec;
+  for (const auto& f : fs::directory_iterator(dir, ec))
+    if (f.path().extension() == ".ckpt" && f.path().filename().string().rfind(stem, 0) == 0) out.push_back(f.path());
+  return out;
+}
+
+const std::string& codeFingerprint() {
+  static const std::string fingerprint = [] {
+    Fnv1a h;
+    const fs::path bin = executableDir();
+    std::vector<fs::path> files{bin / "afford"};  // the runner (the one running, unless another host set the folder)
+    for (const ProcessInfo& p : processRegistry()) files.push_back(bin / ("afford-" + std::string(p.name)));
+    std::vector<char> buf(1 << 20);
+    for (const auto& f : files) {
+      std::ifstream in(f, std::ios::binary);
+      while (in.read(buf.data(), static_cast<std::streamsize>(buf.size())) || in.gcount() > 0)
+        h.add(buf.data(), static_cast<std::size_t>(in.gcount()));
+    }
+    return h.hex();
+  }();
+  return fingerprint;
+}
+
+std::string agentKey(const std::string& config_yaml) {
+  YAML::Node node = YAML::Load(config_yaml);
+  node.remove("experiment");
+  node.remove("planner");
+  if (node["run"]) {
+    node["run"].remove("checkpoint");
+    node["run"].remove("record");
+    node["run"].remove("checkpoint_after_actions");
+  }
+  const std::string text = std::string(AFFORD_VERSION) + "\n" + codeFingerprint() + "\n" + emitYaml(node);
+  Fnv1a h;
+  h.add(text.data(), text.size());
+  return h.hex();
+}
+
+AgentStore::AgentStore(std::string root) : root_(std::move(root)) {}
+
+std::optional<RunOutcome> AgentStore::find(const std::string& key, std::int64_t after_actions) const {
+  const fs::path dir = fs::path(root_) / key;
+  const fs::path file = dir / "outcome.json";
+  if (!fs::exists(file)) return std::nullopt;
+  json j;
+  try {
+    std::ifstream in(file);
+    j = json::parse(in);
+  } catch (const std::exception& e) {
+    throw ConfigError("the stored agent " + file.string() + " cannot be read (" + e.what() +
+                      "): remove its folder (afford clean) or run with --no-reuse-agents");
+  }
+  RunOutcome r = outcomeFromJson(j.at("outcome"));
+  r.reused_from = j.at("run_id").get<std::string>();
+  r.checkpoint = (dir / "predictors.ckpt").string();
+  if (!fs::exists(r.checkpoint)) return std::nullopt;
+  if (after_actions > 0 && !fs::exists(actionsCheckpoint(r.checkpoint, after_actions))) return std::nullopt;
+  return r;
+}
+
+void AgentStore::keep(const std::string& key, const std::string& run_id, const std::string& experiment,
+                      const RunOutcome& r) const {
+  if (!r.ok || r.checkpoint.empty() || !fs::exists(r.checkpoint)) return;
+  const fs::path dir = fs::path(root_) / key;
+  // Unique among runners sharing the log root, on this host or another.
+  char host[256] = {};
+  gethostname(host, sizeof host - 1);
+  const std::string mine = std::string(".part.") + host + "." + std::to_string(getpid());
+  // Each checkpoint file of the run, as predictors<suffix> in `folder` (a hard link where it can).
+  const std::size_t stem = fs::path(r.checkpoint).stem().string().size();
+  auto link = [&](const fs::path& folder, bool only_missing) {
+    for (const fs::path& f : checkpointFiles(r.checkpoint)) {
+      const fs::path to = folder / ("predictors" + f.filename().string().substr(stem));
+      if (only_missing && fs::exists(to)) continue;
+      const fs::path tmp = only_missing ? fs::path(to.string() + mine) : to;  // renamed into place: never half a file
+      std::error_code ec;
+      fs::create_hard_link(f, tmp, ec);
+      if (ec) fs::copy_file(f, tmp, fs::copy_options::overwrite_existing);
+      if (only_missing) fs::rename(tmp, to);
+    }
+  };
+  if (fs::exists(dir)) {  // kept already (the same agent): add what it lacks, e.g. an after-N-actions checkpoint
+    link(dir, true);
+    return;
+  }
+  const fs::path part = fs::path(root_) / (key + mine);
+  fs::remove_all(part);
+  fs::create_directories(part);
+  link(part, false);
+  RunOutcome kept = r;
+  kept.reused_from.clear();
+  writeWhole(part / "outcome.json", json{{"run_id", run_id}, {"experiment", experiment}, {"key", key}, {"outcome", outcomeToJson(kept)}}.dump() + "\n");
+  std::error_code ec;
+  fs::rename(part, dir, ec);
+  if (ec) fs::remove_all(part);  // another runner kept the same agent first
+}
+
+// Intrinsic runs not finished (nor run by another shard) whose agent is
+// stored (the same content key) are not run: they take the stored outcome and
+// checkpoints, kept as finished.
+void takeStoredAgents(const std::vector<PlannedRun>& runs, int after_actions, PhaseRuns& phase,
+                      const AgentStore& agents, const std::string& out_dir, spdlog::logger& log) {
+  std::size_t taken = 0;
+  for (const auto& p : runs) {
+    if (phase.finished[p.index] || (!phase.elsewhere.empty() && phase.elsewhere[p.index])) continue;
+    auto r = agents.find(agentKey(p.spec.config_yaml), after_actions);
+    if (!r) continue;
+    keepOutcome(out_dir, p.spec.run_id, *r);
+    phase.outcomes[p.index] = std::move(*r);
+    phase.finished[p.index] = 1;
+    ++taken;
+  }
+  if (taken)
+    log.info("{} of {} intrinsic run(s) reuse a stored agent of the same configuration and seed ({}; "
+             "--no-reuse-agents runs them again)", taken, runs.size(), agents.root());
+}
+
+void storeAgents(const std::vector<PlannedRun>& runs, const PhaseRuns& phase, const AgentStore& agents,
+                 spdlog::logger& log) {
+  for (const auto& p : runs) {
+    const RunOutcome& r = phase.outcomes[p.index];
+    if (!phase.finished[p.index] || !r.ok || !r.reused_from.empty()) continue;
+    try {
+      agents.keep(agentKey(p.spec.config_yaml), p.spec.run_id, p.spec.experiment, r);
+    } catch (const std::exception& e) {  // the experiment's own results stand; only the reuse is lost
+      log.warn("run '{}': its agent could not be stored for reuse ({})", p.spec.run_id, e.what());
+    }
+  }
+}
+
+}  // namespace afford

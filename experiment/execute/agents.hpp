@@ -1,0 +1,65 @@
+// Trained agents found by content (issue 13). An intrinsic run is decided by
+// its effective configuration (seed included) and the code: the same ones
+// give the same weights. A finished run's outcome and checkpoints are kept
+// under <log-root>/agents/<key>/; a later intrinsic run with the same key,
+// in this experiment or another, takes them instead of running again (its
+// summary entry says which run it reuses). Experiments that share their
+// intrinsic runs (stochastic, utility, forward-models, search-reduction; base,
+// attention, multi-step) train each agent once.
+#pragma once
+#include <cstdint>
+#include <filesystem>
+#include <optional>
+#include <string>
+#include <vector>
+
+#include <spdlog/spdlog.h>
+
+#include "experiment/execute/execute.hpp"
+#include "experiment/plan/plan.hpp"
+#include "experiment/run/driver.hpp"
+
+namespace afford {
+
+// A run's checkpoint files: `checkpoint` (predictors.ckpt) and those written
+// after an action count beside it (predictors.after-N-actions.ckpt), as they exist.
+std::vector<std::filesystem::path> checkpointFiles(const std::string& checkpoint);
+
+// FNV-1a of the executables (afford and every afford-<process>): another build is other code.
+const std::string& codeFingerprint();
+
+// FNV-1a (hex) of the afford version, the code's fingerprint and the run's configuration without what
+// does not change its intrinsic phase: the experiment's name, the planner's
+// section (only the extrinsic phase reads it), where the checkpoint goes,
+// whether the run is recorded, and after how many actions an extra checkpoint
+// is written (a stored agent that lacks one is not taken).
+std::string agentKey(const std::string& config_yaml);
+
+class AgentStore {
+ public:
+  explicit AgentStore(std::string root);  // <log-root>/agents
+  // The stored run of `key`, its checkpoint paths pointing into the store;
+  // nullopt if there is none, or it lacks the checkpoint after `after_actions` (> 0).
+  std::optional<RunOutcome> find(const std::string& key, std::int64_t after_actions) const;
+  // Keeps a finished intrinsic run (ok, with its checkpoint): the outcome, and
+  // the checkpoint files hard-linked (copied where a link cannot be made).
+  // `run_id` is named by the runs that reuse it. Written aside, then renamed:
+  // an entry is whole or absent.
+  void keep(const std::string& key, const std::string& run_id, const std::string& experiment, const RunOutcome& r) const;
+  const std::string& root() const { return root_; }
+
+ private:
+  std::string root_;
+};
+
+// Intrinsic runs not finished (nor run by another shard) whose agent is
+// stored take the stored outcome and checkpoints (kept in out_dir/runs/ as
+// finished) instead of running.
+void takeStoredAgents(const std::vector<PlannedRun>& runs, int after_actions, PhaseRuns& phase,
+                      const AgentStore& agents, const std::string& out_dir, spdlog::logger& log);
+
+// Every intrinsic run that finished here (not one taken from the store) is stored for reuse.
+void storeAgents(const std::vector<PlannedRun>& runs, const PhaseRuns& phase, const AgentStore& agents,
+                 spdlog::logger& log);
+
+}  // namespace afford

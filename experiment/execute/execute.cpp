@@ -1,0 +1,299 @@
+#include "experiment/execute/execute.hpp"
+
+#include "afford/bus.hpp"
+
+#include <sys/resource.h>
+#include <sys/syscall.h>
+#include <unistd.h>
+
+#include <atomic>
+#include <functional>
+#include <mutex>
+#include <thread>
+
+#include "experiment/run/group.hpp"
+#include "experiment/run/host.hpp"
+#include "afford/logging.hpp"
+#include "afford/processes.hpp"
+#include "experiment/execute/progress.hpp"
+#include "experiment/run/outcome.hpp"
+#include "afford/config.hpp"
+
+namespace afford {
+namespace fs = std::filesystem;
+using nlohmann::json;
+
+namespace {
+
+// Handle what is pending (up to a batch), or wait briefly for something.
+void pumpLcm(lcm::LCM& lcm) { pumpBus(lcm, 5, 512); }
+
+using OnStep = std::function<void(std::int64_t)>;
+
+struct Slot {
+  int index = 0;
+  std::string url;
+  std::unique_ptr<ProcessGroup> group;   // environment, eye, predictors, and motivation or planner
+  bool extrinsic = false;                // which of the two the group (or the host) has
+  std::unique_ptr<ProcessGroup> logger;  // started with the slot's first recorded run, kept for the others
+  // One bus connection and driver for all the slot's runs: the driver keeps
+  // what each process last said, so a run starts as soon as they are free.
+  std::unique_ptr<lcm::LCM> lcm;
+  std::unique_ptr<RunDriver> driver;
+  // Over memq, the slot's nodes in this process, kept between its runs as a
+  // udpm slot keeps its processes (declared after the bus they are on).
+  std::unique_ptr<InProcessHost> host;
+};
+
+RunOutcome runInProcess(const PlannedRun& run, const HostRequest& o, const std::string& log_root,
+                        const ProtocolConfig& protocol, Slot& slot, const OnStep& on_step) {
+  const std::string tag = o.jobs > 1 ? "#" + std::to_string(slot.index) : "";
+  const std::string level = o.process_log_level == "info" ? "warn" : o.process_log_level;
+  if (!slot.lcm) {
+    slot.lcm = std::make_unique<lcm::LCM>("memq://");
+    slot.driver = std::make_unique<RunDriver>(*slot.lcm, makeLogger("runner" + tag, level), protocol);
+  }
+  // The motivation decides in the intrinsic phase, the planner in the extrinsic one: the other phase, a new host.
+  if (!slot.host || slot.extrinsic != run.spec.extrinsic) {
+    slot.host.reset();
+    slot.extrinsic = run.spec.extrinsic;
+    slot.host = std::make_unique<InProcessHost>(
+        *slot.lcm, protocol, [tag, level](const std::string& p) { return makeLogger(p + tag, level); },
+        HostOptions{/*single_thread=*/true, log_root});
+  }
+  // The logger, once started with a recorded run, stays free during the runs not recorded (run.record).
+  for (const std::string& p : run.spec.processes)
+    if (!slot.host->hosts(p)) slot.host->start(p);
+  InProcessHost& host = *slot.host;
+  lcm::LCM& lcm = *slot.lcm;
+  slot.driver->onStep(on_step);
+  RunOutcome r = slot.driver->run(
+      run.spec,
+      [&] {
+        pumpLcm(lcm);
+        host.tick();
+      },
+      [] { return std::string(); });
+  r.peak_rss_kb["all (one process)"] = peakRssKb(getpid());
+  if (!r.ok) slot.host.reset();  // a host whose run failed is not reused
+  return r;
+}
+
+RunOutcome runOverUdpm(const PlannedRun& run, const HostRequest& o, const std::string& log_root,
+                       const std::string& out_dir, const ProtocolConfig& protocol, Slot& slot, const std::string& bin,
+                       const OnStep& on_step) {
+  const std::string out = (fs::path(out_dir) / "processes" / ("slot" + std::to_string(slot.index))).string();
+  const bool attached = !o.attach.empty();  // the user started the processes; none are ours to start
+  // The runner listens before it starts any process: it hears each one's first STATUS.
+  if (!slot.lcm) {
+    // This thread only watches the runs (see kWatcherNice); LCM's receive
+    // thread, created on the first handle(), inherits the priority.
+    setpriority(PRIO_PROCESS, static_cast<id_t>(syscall(SYS_gettid)), kWatcherNice);
+    try {
+      slot.lcm = openBus(slot.url, protocol.bus);
+    } catch (const std::exception& e) {
+      RunOutcome r;
+      r.error = e.what();
+      return r;
+    }
+    slot.driver = std::make_unique<RunDriver>(*slot.lcm, makeLogger("runner", "warn"), protocol);
+    slot.driver->useBusKey(busKeyFrom(o.bus_key));
+  }
+  // The processes' own arguments: the bus's key (if given here; they read $AFFORD_BUS_KEY themselves), and
+  // the folder each writes in.
+  std::vector<std::string> common;
+  if (!o.bus_key.empty()) common = {"--bus-key", fs::absolute(o.bus_key).string()};
+  if (!attached && (!slot.group || !slot.group->health().empty() || slot.extrinsic != run.spec.extrinsic)) {
+    slot.group.reset();
+    slot.extrinsic = run.spec.extrinsic;
+    slot.group = std::make_unique<ProcessGroup>(bin, runProcesses(run.spec.extrinsic, /*recorded=*/false), slot.url,
+                                                out, common,
+                                                std::map<std::string, std::vector<std::string>>{
+                                                    {"predictors", {"--checkpoint-dir", log_root}}},
+                                                o.processes);
+  }
+  // The logger serves the slot's runs one after another; those not to be kept
+  // say so in their configuration (run.record), and it stays free during them.
+  if (run.keep_log && !attached && (!slot.logger || !slot.logger->health().empty()))
+    slot.logger = std::make_unique<ProcessGroup>(
+        bin, std::vector<std::string>{"logger"}, slot.url, out, common,
+        std::map<std::string, std::vector<std::string>>{{"logger", {"--log-dir", log_root}}}, o.processes);
+  lcm::LCM& lcm = *slot.lcm;
+  RunDriver& driver = *slot.driver;
+  driver.onStep(on_step);
+  auto health = [&]() {
+    std::string h = slot.group ? slot.group->health() : std::string();
+    if (h.empty() && slot.logger && run.keep_log) h = slot.logger->health();
+    return h;
+  };
+  RunOutcome r = driver.run(run.spec, [&] { pumpLcm(lcm); }, health);
+  if (slot.group) r.peak_rss_kb = slot.group->peakRssKb();
+  if (slot.logger && run.keep_log)
+    for (const auto& [name, kb] : slot.logger->peakRssKb()) r.peak_rss_kb[name] = kb;
+  if (!r.ok) {  // a broken group is not reused
+    slot.group.reset();
+    slot.logger.reset();
+  }
+  return r;
+}
+
+}  // namespace
+
+void checkHostRequest(const HostRequest& o) {
+  if (o.jobs < 1) throw ConfigError("--jobs must be at least 1");
+  if (!o.attach.empty() && (o.jobs != 1 || o.transport != "udpm"))
+    throw ConfigError("--attach runs one run at a time over the given bus: it needs --jobs 1 and --transport udpm");
+  if (o.transport != "udpm" && o.transport != "memq")
+    throw ConfigError("--transport must be udpm or memq, not \"" + o.transport + "\"");
+  if (o.shard_count && (o.shard_count < 1 || o.shard_index < 0 || o.shard_index >= o.shard_count))
+    throw ConfigError("--shard must be i/n with 0 <= i < n, not " + std::to_string(o.shard_index) + "/" +
+                      std::to_string(o.shard_count));
+}
+
+std::vector<char> shardMask(const HostRequest& o, std::size_t n) {
+  std::vector<char> mask;
+  if (o.shard_count > 0)
+    for (std::size_t k = 0; k < n; ++k)
+      mask.push_back(static_cast<int>(k % static_cast<std::size_t>(o.shard_count)) != o.shard_index);
+  return mask;
+}
+
+PhaseRuns slicePhase(const PhaseRuns& all, std::size_t offset, std::size_t n) {
+  PhaseRuns p;
+  p.outcomes.assign(all.outcomes.begin() + offset, all.outcomes.begin() + offset + n);
+  p.finished.assign(all.finished.begin() + offset, all.finished.begin() + offset + n);
+  if (!all.elsewhere.empty()) p.elsewhere.assign(all.elsewhere.begin() + offset, all.elsewhere.begin() + offset + n);
+  for (const auto& [i, where] : all.cut)
+    if (i >= offset && i < offset + n) p.cut[i - offset] = where;
+  return p;
+}
+
+// The outcomes kept by an earlier invocation (--resume); none on a fresh start.
+PhaseRuns keptRuns(const std::vector<PlannedRun>& runs, const fs::path& out) {
+  PhaseRuns phase;
+  phase.outcomes.resize(runs.size());
+  phase.finished.assign(runs.size(), 0);
+  for (std::size_t i = 0; i < runs.size(); ++i)
+    if (auto r = keptOutcome(out, runs[i].spec.run_id)) {
+      phase.outcomes[i] = std::move(*r);
+      phase.finished[i] = 1;
+    }
+  return phase;
+}
+
+// A run that did not finish may have left its folder (an incomplete log): it
+// is never reused nor deleted, but moved aside as <run-id>.cut-<k>, and the
+// run starts afresh.
+json moveUnfinishedAside(const std::vector<PlannedRun>& runs, const PhaseRuns& phase, const std::string& log_root,
+                         spdlog::logger& log) {
+  json moved = json::array();
+  for (std::size_t i = 0; i < runs.size(); ++i) {
+    const fs::path dir = fs::path(log_root) / runs[i].spec.run_id;
+    if (phase.finished[i] || !fs::exists(dir)) continue;
+    fs::path aside;
+    for (int k = 1; fs::exists(aside = dir.string() + ".cut-" + std::to_string(k)); ++k) {
+    }
+    fs::rename(dir, aside);
+    moved.push_back({{"run_id", runs[i].spec.run_id}, {"to", aside.string()}});
+    log.info("run '{}' did not finish: its folder is now {}; the run starts again", runs[i].spec.run_id, aside.string());
+  }
+  return moved;
+}
+
+// Run every planned run not finished yet (nor run elsewhere), J at a time, and keep each outcome
+// in DIR/runs/ as it comes. After a SIGINT or SIGTERM no run starts; a run it
+// stopped is cut, not finished.
+void executeRuns(const std::vector<PlannedRun>& runs, PhaseRuns& phase, const HostRequest& o,
+                 const std::string& log_root, const std::string& out_dir, const ProtocolConfig& protocol,
+                 const std::string& bin, spdlog::logger& log) {
+  std::vector<std::size_t> todo;
+  for (std::size_t i = 0; i < runs.size(); ++i)
+    if (!phase.finished[i] && (phase.elsewhere.empty() || !phase.elsewhere[i])) todo.push_back(i);
+  std::atomic<std::size_t> next{0};
+  std::size_t done = phase.finishedCount();
+  std::mutex mutex;
+  const int slots = std::min<int>(o.jobs, static_cast<int>(todo.size()));
+  std::vector<std::int64_t> steps;
+  for (std::size_t i : todo) steps.push_back(runs[i].spec.steps);
+  std::size_t planned = runs.size();
+  for (std::size_t i = 0; i < runs.size(); ++i) planned -= !phase.elsewhere.empty() && phase.elsewhere[i];
+  Progress progress(ProgressOptions{o.progress, o.progress_every},
+                    !runs.empty() && runs.front().spec.extrinsic ? "extrinsic tests" : "intrinsic runs", slots,
+                    std::move(steps), done, planned);
+  auto worker = [&](int slot_index) {
+    Slot slot;
+    slot.index = slot_index;
+    // A 2 MB receive buffer per socket (the kernel's default is 208 KB): every process hears every
+    // datagram of its slot, and one descheduled for a while must not lose any (the kernel caps the
+    // request at net.core.rmem_max).
+    slot.url = "udpm://239.255.76.67:" + std::to_string(o.base_port + slot_index) + "?ttl=0&recv_buf_size=2097152";
+    if (!o.attach.empty()) slot.url = o.attach;
+    for (std::size_t k; !stopRequested() && (k = next.fetch_add(1)) < todo.size();) {
+      const std::size_t i = todo[k];
+      const std::string& id = runs[i].spec.run_id;
+      RunOutcome r;
+      progress.started(slot_index, id, runs[i].spec.steps);
+      const OnStep on_step = [&progress, slot_index](std::int64_t step) { progress.step(slot_index, step); };
+      PlannedRun run = runs[i];
+      run.spec.stall_seconds = o.stall_seconds;
+      try {
+        r = o.transport == "memq" ? runInProcess(run, o, log_root, protocol, slot, on_step)
+                                  : runOverUdpm(run, o, log_root, out_dir, protocol, slot, bin, on_step);
+      } catch (const std::exception& e) {
+        slot.host.reset();  // (memq) nodes left mid-run are not reused
+        r.ok = false;
+        r.error = "run '" + id + "': " + e.what();
+      }
+      // A run that fails while the processes are being stopped failed because of it: cut too.
+      const bool cut = r.interrupted || (!r.ok && stopRequested());
+      if (r.ok && !r.log_dir.empty()) {
+        std::error_code ec;
+        for (const auto& f : fs::directory_iterator(r.log_dir, ec))
+          if (f.path().extension() == ".lcm") r.log_bytes += fs::file_size(f.path(), ec);
+      }
+      if (!cut) try {
+          keepOutcome(out_dir, id, r);
+          // What `afford clean` reads to tell the experiment of a run's folder (a folder without a log has no manifest).
+          if (const fs::path dir = fs::path(log_root) / id; fs::is_directory(dir))
+            writeWhole(dir / "run.json", json{{"run_id", id},
+                                              {"experiment", runs[i].spec.experiment},
+                                              {"out_dir", fs::absolute(out_dir).string()}}
+                                             .dump() + "\n");
+        } catch (const std::exception& e) {
+          log.error("cannot keep the outcome of run '{}' ({}): --resume would run it again", id, e.what());
+        }
+      progress.ended(slot_index, !cut);
+      std::lock_guard<std::mutex> lock(mutex);
+      if (cut) {
+        const std::string prefix = "run '" + id + "': ";
+        std::string where = r.error.rfind(prefix, 0) == 0 ? r.error.substr(prefix.size()) : r.error;
+        // (The step is the last one the processes reported, in their heartbeats.)
+        if (const std::string none = "at step -1"; where.size() > none.size() && where.substr(where.size() - none.size()) == none)
+          where = where.substr(0, where.size() - none.size()) + "before any step was reported";
+        phase.cut[i] = where;
+        progress.say([&] { log.warn("{}: {}", id, phase.cut[i]); });
+        continue;
+      }
+      phase.outcomes[i] = std::move(r);
+      phase.finished[i] = 1;
+      const RunOutcome& out = phase.outcomes[i];
+      ++done;
+      progress.say([&] {
+      if (out.ok && runs[i].spec.extrinsic)
+        log.info("[{}/{}] {}: {}, {} action(s), utility {}", done, runs.size(), id,
+                 out.extrinsic.success ? "solved in " + std::to_string(out.extrinsic.completion) + " steps" : "not solved",
+                 out.extrinsic.attempts, out.extrinsic.utility);
+      else if (out.ok)
+        log.info("[{}/{}] {} done in {:.1f} s, weights {}", done, runs.size(), id, out.wall_seconds,
+                 out.weights_checksum);
+      else
+        log.error("[{}/{}] {}", done, runs.size(), out.error);
+      });
+    }
+  };
+  std::vector<std::thread> threads;
+  for (int j = 0; j < slots; ++j) threads.emplace_back(worker, j);
+  for (auto& t : threads) t.join();
+}
+
+}  // namespace afford

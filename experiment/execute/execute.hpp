@@ -1,0 +1,51 @@
+// Hosting an experiment's runs: J at a time, each job slot on its own LCM URL
+// with its own group of processes (udpm), or every process in this one
+// (memq, afford/host.hpp). Each finished run's outcome is kept as it comes.
+#pragma once
+#include <spdlog/spdlog.h>
+
+#include <cstddef>
+#include <filesystem>
+#include <map>
+#include <string>
+#include <vector>
+
+#include <nlohmann/json.hpp>
+
+#include "experiment/execute/request.hpp"
+#include "experiment/plan/plan.hpp"
+#include "experiment/run/driver.hpp"
+
+namespace afford {
+
+// The runs of one phase (intrinsic runs, or extrinsic tests), in plan order.
+struct PhaseRuns {
+  std::vector<RunOutcome> outcomes;
+  std::vector<char> finished;              // its outcome is final (it succeeded or failed) and kept in DIR/runs/
+  std::map<std::size_t, std::string> cut;  // run index -> where a signal stopped it
+  std::vector<char> elsewhere;             // --shard: runs another shard runs (empty: none)
+  std::size_t finishedCount() const { return static_cast<std::size_t>(std::count(finished.begin(), finished.end(), 1)); }
+};
+
+
+// The outcomes kept by an earlier invocation (--resume); none on a fresh start.
+PhaseRuns keptRuns(const std::vector<PlannedRun>& runs, const std::filesystem::path& out);
+
+// The `n` runs of `all` from `offset` on, as a phase of their own.
+PhaseRuns slicePhase(const PhaseRuns& all, std::size_t offset, std::size_t n);
+
+// A run that did not finish may have left its folder (an incomplete log): it
+// is never reused nor deleted, but moved aside as <run-id>.cut-<k>, and the
+// run starts afresh. Returns what was moved where ([{run_id, to}]).
+nlohmann::json moveUnfinishedAside(const std::vector<PlannedRun>& runs, const PhaseRuns& phase,
+                                   const std::string& log_root, spdlog::logger& log);
+
+// Run every planned run not finished yet (nor run elsewhere), J at a time, and keep each outcome
+// in DIR/runs/ as it comes. After a SIGINT or SIGTERM no run starts; a run it
+// stopped is cut, not finished.
+// Each run's folder is log_root/<run-id>; the outcomes go to out_dir/runs/.
+void executeRuns(const std::vector<PlannedRun>& runs, PhaseRuns& phase, const HostRequest& o,
+                 const std::string& log_root, const std::string& out_dir, const ProtocolConfig& protocol,
+                 const std::string& bin, spdlog::logger& log);
+
+}  // namespace afford

@@ -1,0 +1,38 @@
+// What hosts an experiment's runs: how many at a time, over which transport,
+// with which processes, and which of the runs (a shard). Nothing here changes
+// what a run computes: the same plan hosted two ways gives the same results.
+#pragma once
+#include <map>
+#include <cstddef>
+#include <string>
+#include <vector>
+
+#include "experiment/run/netns.hpp"
+
+namespace afford {
+
+struct HostRequest {
+  int jobs = 1;
+  std::string transport = "udpm";          // udpm | memq
+  bool reuse_agents = true;                // take stored agents of the same content key (execute/agents.hpp)
+  NetnsMode netns = NetnsMode::Auto;
+  int base_port = 7700;
+  std::string process_log_level = "info";  // for the processes (udpm) / in-process nodes (memq: warn)
+  double stall_seconds = 30;               // a run whose processes say nothing this long failed
+  std::string progress = "auto";           // auto | terminal | lines | none (execute/progress.hpp)
+  double progress_every = -1;              // seconds between progress draws (< 0: by mode)
+  std::string attach;                      // run on this bus with processes started by hand (no group, one job)
+  // --process NAME=CMD: the runner starts CMD (a shell command, the standard arguments appended) in place of
+  // the shipped afford-NAME (udpm only)
+  std::map<std::string, std::string> processes;
+  std::string bus_key;                     // key file of a keyed bus (afford/auth.hpp; "": $AFFORD_BUS_KEY, or none)
+  int shard_index = 0, shard_count = 0;    // --shard i/n: run intrinsic run k (and its tests) iff k mod n == i
+};
+
+// The checks of a request that need no file: each names its option.
+void checkHostRequest(const HostRequest& r);
+
+// Which of n intrinsic runs another shard runs (run k iff k mod count != index); empty without shards.
+std::vector<char> shardMask(const HostRequest& r, std::size_t n);
+
+}  // namespace afford

@@ -1,0 +1,62 @@
+// `afford experiment NAME ...`: runs repetitions of an experiment's intrinsic
+// phase for one or more systems, J runs at a time, each on its own LCM URL,
+// and writes DIR/summary.json plus CSV files (schema: docs/results-schema.md).
+// It keeps its options (DIR/experiment.json) and each finished run's outcome
+// (DIR/runs/<run-id>.json) as it goes: SIGINT or SIGTERM stops the runs under
+// way, writes the summary of those that finished and exits 128 + the signal;
+// `--resume` runs the rest (docs/experiments.md).
+#pragma once
+#include <csignal>
+#include <spdlog/spdlog.h>
+
+#include <cstdint>
+#include <map>
+#include <optional>
+#include <set>
+#include <string>
+#include <vector>
+
+#include "experiment/execute/request.hpp"
+#include "experiment/plan/request.hpp"
+#include "experiment/results/request.hpp"
+
+namespace afford {
+
+// An experiment request: what plans, what hosts and what writes, and how it
+// is executed (afresh, resumed, or merged from shards' folders).
+struct ExperimentRequest {
+  PlanRequest plan;
+  HostRequest host;
+  WriteRequest write;
+  bool resume = false;                     // continue the unfinished experiment stored in write.out_dir
+  std::vector<std::string> merged_from;    // afford merge: the shards' folders (nothing is run)
+  std::string merged_network;              // ... and the network they ran over
+  std::set<std::string> given;             // options given on the command line ("--reps", "name", ...): with
+                                           // resume, plan options must match the stored ones, run options override
+};
+
+// --process NAME=CMD options (`option` names them in errors): NAME a process of the registry, CMD not empty,
+// each NAME once.
+std::map<std::string, std::string> parseProcessSwaps(const std::vector<std::string>& given, const std::string& option);
+
+// Returns the process exit code (0 when every run succeeded).
+int runExperiment(const ExperimentRequest& request, spdlog::logger& log);
+
+// For a host that goes on after an experiment (the Python package): the
+// SIGINT and SIGTERM handlers in place at its construction are put back at its
+// destruction, and the signal runExperiment received is forgotten, so that the
+// next experiment starts afresh.
+class InterruptScope {
+ public:
+  InterruptScope();
+  ~InterruptScope();
+  InterruptScope(const InterruptScope&) = delete;
+  InterruptScope& operator=(const InterruptScope&) = delete;
+  // SIGINT or SIGTERM if one stopped the experiment; 0 if none did.
+  int signal() const;
+
+ private:
+  struct sigaction int_{}, term_{};
+};
+
+}  // namespace afford

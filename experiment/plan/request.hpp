@@ -1,0 +1,35 @@
+// What plans an experiment: the experiment, its systems, seeds and settings,
+// and what each run keeps. Two requests that agree here plan the very same
+// runs (their ids and configurations), whoever hosts them and wherever the
+// results are written.
+#pragma once
+#include <cstdint>
+#include <optional>
+#include <string>
+#include <vector>
+
+namespace afford {
+
+struct PlanRequest {
+  std::string experiment;
+  std::vector<std::string> systems;        // FIX, IGN, IMP (default: the experiment file's)
+  std::optional<int> reps;                 // default: the experiment file's repetitions
+  std::optional<std::int64_t> steps;       // default: the experiment file's run.steps
+  std::int64_t seed = 1;
+  std::string config_dir;                  // default: the installed or source config/
+  std::vector<std::string> settings;       // key.path=value overrides; key.path=v1,v2,... sweeps (plan/sweep.hpp)
+  std::string sweep_file;                  // a YAML map of config keys to lists of values, swept too
+  int extrinsic_reps = 0;                  // tests per scenario from each intrinsic run (0: the design's)
+  std::vector<std::string> scenarios;      // default: the design's, or every config/scenarios/*.yaml
+  std::optional<int> tables;               // random tables: how many (default: the experiment file's tables.count)
+  std::optional<std::int64_t> table_seed;  // ... and the series they are drawn from (default: its tables.seed)
+  std::string run_prefix;                  // the run ids' first part (default: a wall-clock stamp, names only)
+  std::string keep_logs = "all";           // all | first | none: which runs are recorded
+  std::string keep_checkpoints = "all";    // all | first | none: the intrinsic runs' checkpoints kept at the end
+  std::string log_root = "logs";           // each run's folder (its log and checkpoints) is log_root/<run-id>
+};
+
+// The checks of a request that need no file: each names its option.
+void checkPlanRequest(const PlanRequest& r);
+
+}  // namespace afford

@@ -1,0 +1,526 @@
+#include "experiment/present/plots.hpp"
+
+#include "experiment/design/design.hpp"
+
+#include <nlohmann/json.hpp>
+
+#include <algorithm>
+#include <cstdlib>
+#include <filesystem>
+#include <fstream>
+#include <map>
+#include <sstream>
+#include <stdexcept>
+
+namespace afford {
+namespace fs = std::filesystem;
+using nlohmann::json;
+
+namespace {
+
+struct Box {
+  double min = 0, q1 = 0, median = 0, q3 = 0, max = 0;
+};
+
+Box box(std::vector<double> v) {
+  std::sort(v.begin(), v.end());
+  return {v.front(), quantile(v, 0.25), quantile(v, 0.5), quantile(v, 0.75), v.back()};
+}
+
+const char* kSystemColour(const std::string& s) {
+  return s == "FIX" ? "#e69f00" : s == "IGN" ? "#56b4e9" : "#009e73";
+}
+
+// gnuplot colour and point type for an object name like "green circle".
+std::string objectStyle(const std::string& name) {
+  const std::string colour = name.find("red") != std::string::npos     ? "#d62728"
+                             : name.find("green") != std::string::npos ? "#2ca02c"
+                                                                       : "#1f77b4";
+  const int pt = name.find("square") != std::string::npos ? 5 : name.find("circle") != std::string::npos ? 7 : 3;
+  const std::string dash = name.find("green") != std::string::npos ? "2" : name.find("blue") != std::string::npos ? "3" : "1";
+  return "lc rgb '" + colour + "' pt " + std::to_string(pt) + " dt " + dash;
+}
+
+void runGnuplot(const fs::path& script) {
+  const std::string cmd = "gnuplot " + script.string() + " 2>&1";
+  if (std::system(cmd.c_str()) != 0) throw std::runtime_error("gnuplot failed on " + script.string());
+}
+
+std::string quoted(const std::string& s) { return "'" + s + "'"; }
+
+std::string pText(const json& p) {
+  if (p.is_null()) return "p: -";
+  char buf[32];
+  std::snprintf(buf, sizeof buf, "p=%.2g", p.get<double>());
+  return buf;
+}
+
+// One box of a box plot: its x, series (colour and legend) and values.
+struct BoxItem {
+  double x = 0;
+  std::string series;
+  std::vector<double> values;
+};
+
+// Box plots (quartiles, min-max bars, median line, mean as a cross) of groups
+// at labelled x positions, with optional labels (p values) above the groups.
+std::string boxPlot(const fs::path& dir, const std::string& name, const std::string& title, const std::string& xlabel,
+                    const std::string& ylabel, const std::vector<BoxItem>& items,
+                    const std::vector<std::pair<double, std::string>>& xtics,
+                    const std::vector<std::pair<double, std::string>>& labels,
+                    const std::map<std::string, std::string>& colours) {
+  const fs::path csv = dir / (name + ".csv"), gp = dir / (name + ".gp"), png = dir / (name + ".png");
+  std::ofstream out(csv);
+  out << "series,x,n,min,q1,median,q3,max,mean\n";
+  double top = 0, lo = 0, left = 1e9, right = -1e9;
+  for (const auto& it : items) {
+    if (it.values.empty()) continue;
+    const Box b = box(it.values);
+    double mean = 0;
+    for (double v : it.values) mean += v / it.values.size();
+    out << it.series << "," << it.x << "," << it.values.size() << "," << b.min << "," << b.q1 << "," << b.median << ","
+        << b.q3 << "," << b.max << "," << mean << "\n";
+    top = std::max(top, b.max);
+    lo = std::min(lo, b.min);
+    left = std::min(left, it.x);
+    right = std::max(right, it.x);
+  }
+  out.close();
+  std::ofstream g(gp);
+  g << "set terminal pngcairo size 1000,650 font 'DejaVu Sans,11'\nset output " << quoted(png.string()) << "\n"
+    << "set datafile separator ','\nset title " << quoted(title) << "\nset xlabel " << quoted(xlabel)
+    << "\nset ylabel " << quoted(ylabel) << "\nset grid ytics\nset boxwidth 0.25\nset key outside right top vertical\n"
+    << "set xrange [" << left - 0.7 << ":" << right + 0.7 << "]\nset yrange [" << lo << ":" << (top > 0 ? top * 1.2 : 1) << "]\n";
+  g << "set xtics (";
+  for (std::size_t i = 0; i < xtics.size(); ++i) g << (i ? ", " : "") << quoted(xtics[i].second) << " " << xtics[i].first;
+  g << ")\n";
+  for (const auto& [x, text] : labels)
+    g << "set label \"" << text << "\" at " << x << "," << (top > 0 ? top * 1.1 : 0.9) << " center\n";
+  g << "plot ";
+  bool first = true;
+  for (const auto& [series, colour] : colours) {
+    g << (first ? "" : ", ") << quoted(csv.string()) << " using (strcol(1) eq " << quoted(series)
+      << " ? $2 : NaN):5:4:8:7 with candlesticks whiskerbars lc rgb '" << colour << "' fs solid 0.4 title "
+      << quoted(series) << ", '' using (strcol(1) eq " << quoted(series)
+      << " ? $2 : NaN):6:6:6:6 with candlesticks lc rgb 'black' notitle, '' using (strcol(1) eq " << quoted(series)
+      << " ? $2 : NaN):9 with points pt 2 ps 1.3 lc rgb 'black' notitle";
+    first = false;
+  }
+  g << "\n";
+  g.close();
+  runGnuplot(gp);
+  return png.string();
+}
+
+// The per-agent means of a condition's statistic, from summary.json.
+std::vector<double> agentMeans(const json& system, int condition, const std::string& scenario, const char* key) {
+  return system["extrinsic"]["conditions"][condition]["scenarios"][scenario][key].get<std::vector<double>>();
+}
+
+int conditionWith(const json& system, const std::string& key, const std::string& value, const std::string& key2 = "",
+                  const std::string& value2 = "") {
+  const json& cs = system["extrinsic"]["conditions"];
+  for (std::size_t i = 0; i < cs.size(); ++i) {
+    const json& st = cs[i]["settings"];
+    if (st.value(key, std::string()) == value && (key2.empty() || st.value(key2, std::string()) == value2))
+      return static_cast<int>(i);
+  }
+  throw std::runtime_error("summary.json has no condition with " + key + "=" + value);
+}
+
+// A sweep (issue 13): each condition's own figures in its folder, and
+// figures comparing the conditions: the runs' final errors, and the tests'
+// success rates over the scenarios, per condition and system.
+std::vector<std::string> plotSweep(const fs::path& dir, const json& s) {
+  std::vector<std::string> written;
+  const json& conditions = s["sweep"]["conditions"];
+  std::string keys;
+  for (auto& [k, _] : s["sweep"]["keys"].items()) keys += (keys.empty() ? "" : ", ") + k;
+  for (std::size_t at = 0; (at = keys.find('_', at)) != std::string::npos; at += 2) keys.insert(at, "\\");  // not a subscript
+  std::vector<std::string> systems;
+  for (const auto& c : conditions)
+    for (auto& [sys, _] : s["conditions"][c["name"].get<std::string>()]["systems"].items())
+      if (std::find(systems.begin(), systems.end(), sys) == systems.end()) systems.push_back(sys);
+  std::vector<std::pair<double, std::string>> xtics;
+  std::map<std::string, std::string> colours;
+  for (const auto& sys : systems) colours[sys] = kSystemColour(sys);
+  std::vector<BoxItem> mae, success;
+  for (std::size_t k = 0; k < conditions.size(); ++k) {
+    const std::string name = conditions[k]["name"];
+    for (const auto& f : plotExperiment((dir / conditions[k]["folder"].get<std::string>()).string())) written.push_back(f);
+    std::string tic;  // the values only: the keys are in the axis label
+    for (const auto& kv : conditions[k]["settings"]) {
+      const std::string setting = kv;
+      tic += (tic.empty() ? "" : ", ") + setting.substr(setting.find('=') + 1);
+    }
+    xtics.emplace_back(k + 1.0, tic);
+    const json& cs = s["conditions"][name];
+    for (std::size_t j = 0; j < systems.size(); ++j) {
+      if (!cs["systems"].contains(systems[j])) continue;
+      const json& js = cs["systems"][systems[j]];
+      const double x = k + 1 + (static_cast<double>(j) - (systems.size() - 1) / 2.0) * 0.28;
+      BoxItem e{x, systems[j], {}}, t{x, systems[j], {}};
+      for (const auto& r : js["runs"]) e.values.push_back(r["affordance_mae"].get<double>());
+      if (js.contains("extrinsic"))
+        for (const auto& c : js["extrinsic"]["conditions"])
+          for (auto& [scn, sc] : c["scenarios"].items()) t.values.push_back(sc["success_rate"].get<double>());
+      mae.push_back(e);
+      if (!t.values.empty()) success.push_back(t);
+    }
+  }
+  const std::string title = s.value("experiment", std::string("experiment")) + ", " +
+                            std::to_string(s.value("steps", 0)) + " steps, swept over " + keys;
+  written.push_back(boxPlot(dir, "fig_sweep_mae", "Final mean absolute error per run (" + title + ")", keys,
+                            "mean absolute error of the learned table", mae, xtics, {}, colours));
+  if (!success.empty())
+    written.push_back(boxPlot(dir, "fig_sweep_success",
+                              "Extrinsic success rate per scenario (" + title + ")", keys, "success rate", success,
+                              xtics, {}, colours));
+  return written;
+}
+
+}  // namespace
+
+std::vector<std::string> plotExperiment(const std::string& dir_name) {
+  const fs::path dir(dir_name);
+  std::ifstream in(dir / "summary.json");
+  if (!in) throw std::runtime_error("no summary.json in " + dir.string());
+  const json s = json::parse(in);
+  if (s.contains("sweep")) return plotSweep(dir, s);
+  const auto objects = s.at("objects").get<std::vector<std::string>>();
+  const auto actions = s.at("actions").get<std::vector<std::string>>();
+  std::vector<std::string> systems;
+  for (auto& [name, _] : s.at("systems").items()) systems.push_back(name);
+  std::vector<std::string> written;
+  const std::string title_base = s.value("experiment", std::string("experiment")) + ", " +
+                                 std::to_string(s.value("steps", 0)) + " steps";
+
+  // ---- random tables (issue 11): one box per system and condition, of the tables' errors (as Figure 5's boxes)
+  if (s.contains("random_tables")) {
+    const json& rt = s["random_tables"];
+    const auto conditions = rt.at("condition_order").get<std::vector<std::string>>();
+    const auto order = rt.at("system_order").get<std::vector<std::string>>();
+    static const char* kConditionColour[] = {"#999999", "#009e73", "#e69f00", "#56b4e9", "#cc79a7", "#0072b2"};
+    std::vector<BoxItem> items;
+    std::vector<std::pair<double, std::string>> xtics;
+    std::map<std::string, std::string> colours;
+    for (std::size_t k = 0; k < order.size(); ++k) {
+      xtics.emplace_back(k + 1.0, order[k]);
+      for (std::size_t c = 0; c < conditions.size(); ++c) {
+        BoxItem it;
+        it.x = k + 1 + (static_cast<double>(c) - (conditions.size() - 1) / 2.0) * 0.3;
+        it.series = conditions[c];
+        for (const auto& v : rt["mae"][conditions[c]][order[k]]["per_table"])
+          if (!v.is_null()) it.values.push_back(v.get<double>());
+        items.push_back(it);
+        colours[conditions[c]] = kConditionColour[c % 6];
+      }
+    }
+    written.push_back(boxPlot(dir, "fig_random_tables",
+                              "Mean absolute error on " + std::to_string(rt["count"].get<int>()) +
+                                  " random affordance tables (" + title_base + "); box: quartiles, bars: min-max, x: mean",
+                              "system", "mean absolute error of the learned table", items, xtics, {}, colours));
+    return written;
+  }
+
+  // ---- final affordances: box plots (Figures 5, 10)
+  {
+    const fs::path csv = dir / "fig_affordances.csv", gp = dir / "fig_affordances.gp", png = dir / "fig_affordances.png";
+    std::ofstream out(csv);
+    out << "action,object,system,x,min,q1,median,q3,max,target\n";
+    for (std::size_t a = 0; a < actions.size(); ++a)
+      for (std::size_t i = 0; i < objects.size(); ++i)
+        for (std::size_t k = 0; k < systems.size(); ++k) {
+          const json& js = s["systems"][systems[k]];
+          std::vector<double> v;
+          for (const auto& r : js["runs"]) v.push_back(r["affordance"][i][a].get<double>());
+          if (v.empty()) continue;
+          const Box b = box(v);
+          const double x = i + 1 + (static_cast<double>(k) - (systems.size() - 1) / 2.0) * 0.25;
+          out << a << ",\"" << objects[i] << "\"," << systems[k] << "," << x << "," << b.min << "," << b.q1 << ","
+              << b.median << "," << b.q3 << "," << b.max << "," << js["target"][i][a].get<double>() << "\n";
+        }
+    out.close();
+    std::ofstream g(gp);
+    g << "set terminal pngcairo size 1400,1000 font 'DejaVu Sans,10'\nset output " << quoted(png.string()) << "\n"
+      << "set datafile separator ','\nset multiplot layout 2,2 title " << quoted("Final affordance predictions (" + title_base + "), box: quartiles, bars: min-max") << "\n"
+      << "set yrange [-0.05:1.05]\nset xrange [0.4:" << objects.size() + 0.6 << "]\nset boxwidth 0.2\nset grid ytics\n"
+      << "set key outside bottom center horizontal\n";
+    g << "set xtics (";
+    for (std::size_t i = 0; i < objects.size(); ++i) g << (i ? ", " : "") << quoted(objects[i]) << " " << i + 1;
+    g << ") rotate by 30 right\n";
+    for (std::size_t a = 0; a < actions.size(); ++a) {
+      g << "set title " << quoted(actions[a]) << "\nplot ";
+      for (std::size_t k = 0; k < systems.size(); ++k)
+        g << (k ? ", " : "") << quoted(csv.string()) << " using ($1==" << a << " && strcol(3) eq " << quoted(systems[k])
+          << " ? $4 : NaN):6:5:9:8 with candlesticks whiskerbars lc rgb '" << kSystemColour(systems[k])
+          << "' fs solid 0.4 title " << quoted(systems[k]) << ", '' using ($1==" << a << " && strcol(3) eq "
+          << quoted(systems[k]) << " ? $4 : NaN):7:7:7:7 with candlesticks lc rgb 'black' notitle";
+      g << ", " << quoted(csv.string()) << " using ($1==" << a
+        << " ? $4 : NaN):10 with points pt 1 ps 1.2 lc rgb 'black' title 'table'\n";
+    }
+    g << "unset multiplot\n";
+    g.close();
+    runGnuplot(gp);
+    written.push_back(png.string());
+  }
+
+  // ---- learning curves (Figures 7-9)
+  for (const auto& sys : systems) {
+    const json& js = s["systems"][sys];
+    if (!js.contains("curves")) continue;
+    const fs::path csv = dir / ("fig_curves_" + sys + ".csv"), gp = dir / ("fig_curves_" + sys + ".gp"),
+                   png = dir / ("fig_curves_" + sys + ".png");
+    std::ofstream out(csv);
+    out << "step";
+    for (std::size_t a = 0; a < actions.size(); ++a)
+      for (const auto& o : objects) out << ",\"" << actions[a] << ": " << o << "\"";
+    out << "\n";
+    const auto& steps = js["curves"]["steps"];
+    for (std::size_t t = 0; t < steps.size(); ++t) {
+      out << steps[t].get<long>();
+      for (std::size_t a = 0; a < actions.size(); ++a)
+        for (std::size_t i = 0; i < objects.size(); ++i) out << "," << js["curves"]["mean"][t][i][a].get<double>();
+      out << "\n";
+    }
+    out.close();
+    std::ofstream g(gp);
+    g << "set terminal pngcairo size 1400,1000 font 'DejaVu Sans,10'\nset output " << quoted(png.string()) << "\n"
+      << "set datafile separator ','\nset multiplot layout 2,2 title "
+      << quoted(sys + ": mean affordance predictions over " + std::to_string(js["runs"].size()) + " run(s), " + title_base) << "\n"
+      << "set yrange [-0.05:1.05]\nset grid\nset xlabel 'step'\nset key outside right\n";
+    for (std::size_t a = 0; a < actions.size(); ++a) {
+      g << "set title " << quoted(actions[a]) << "\nplot ";
+      for (std::size_t i = 0; i < objects.size(); ++i)
+        g << (i ? ", " : "") << quoted(csv.string()) << " using 1:" << 2 + a * objects.size() + i
+          << " with linespoints pi 10 " << objectStyle(objects[i]) << " title " << quoted(objects[i]);
+      g << "\n";
+    }
+    g << "unset multiplot\n";
+    g.close();
+    runGnuplot(gp);
+    written.push_back(png.string());
+  }
+
+  // ---- completion steps (Figure 6)
+  bool any_extrinsic = false;
+  for (const auto& sys : systems)
+    any_extrinsic |= s["systems"][sys].contains("extrinsic") && s["systems"][sys]["extrinsic"].contains("completion_steps");
+  if (any_extrinsic) {
+    const fs::path csv = dir / "fig_completion.csv", gp = dir / "fig_completion.gp", png = dir / "fig_completion.png";
+    std::ofstream out(csv);
+    out << "system,sub_goals,x,n,min,q1,median,q3,max,fit_a,fit_b\n";
+    double top = 1;
+    for (std::size_t k = 0; k < systems.size(); ++k) {
+      const json& js = s["systems"][systems[k]];
+      if (!js.contains("extrinsic") || !js["extrinsic"].contains("completion_steps")) continue;
+      const json& cs = js["extrinsic"]["completion_steps"];
+      const double a = cs.contains("fit") ? cs["fit"]["a"].get<double>() : 0, b = cs.contains("fit") ? cs["fit"]["b"].get<double>() : 0;
+      for (const auto& sc : js["extrinsic"]["scenarios"]) {
+        const json& c = cs[sc.get<std::string>()];
+        const int x = c["sub_goals"].get<int>();
+        top = std::max(top, c["max"].get<double>());
+        out << systems[k] << "," << x << "," << x + (static_cast<double>(k) - (systems.size() - 1) / 2.0) * 0.2 << ","
+            << c["n"] << "," << c["min"] << "," << c["q1"] << "," << c["median"] << "," << c["q3"] << "," << c["max"]
+            << "," << a << "," << b << "\n";
+      }
+    }
+    out.close();
+    std::ofstream g(gp);
+    g << "set terminal pngcairo size 900,650 font 'DejaVu Sans,11'\nset output " << quoted(png.string()) << "\n"
+      << "set datafile separator ','\nset title " << quoted("Completion steps of solved tests (" + title_base + ")") << "\n"
+      << "set xlabel 'sub-goals (scenario)'\nset ylabel 'steps'\nset grid\nset boxwidth 0.15\nset key left top\n"
+      << "set xrange [0.4:5.6]\nset yrange [0:" << top * 1.08 << "]\nplot ";
+    bool first = true;
+    for (std::size_t k = 0; k < systems.size(); ++k) {
+      const json& js = s["systems"][systems[k]];
+      if (!js.contains("extrinsic") || !js["extrinsic"].contains("completion_steps")) continue;
+      const json& cs = js["extrinsic"]["completion_steps"];
+      g << (first ? "" : ", ") << quoted(csv.string()) << " using (strcol(1) eq " << quoted(systems[k])
+        << " ? $3 : NaN):6:5:9:8 with candlesticks whiskerbars lc rgb '" << kSystemColour(systems[k])
+        << "' fs solid 0.4 title " << quoted(systems[k]) << ", '' using (strcol(1) eq " << quoted(systems[k])
+        << " ? $3 : NaN):7:7:7:7 with candlesticks lc rgb 'black' notitle";
+      if (cs.contains("fit")) {
+        std::ostringstream f;
+        f << cs["fit"]["a"].get<double>() << "*x**2 + (" << cs["fit"]["b"].get<double>() << ")*x";
+        g << ", " << f.str() << " lc rgb '" << kSystemColour(systems[k]) << "' dt 2 title "
+          << quoted(systems[k] + " fit");
+      }
+      first = false;
+    }
+    if (s.contains("reference_completion_fit"))
+      g << ", " << s["reference_completion_fit"]["a"].get<double>() << "*x**2 + ("
+        << s["reference_completion_fit"]["b"].get<double>() << ")*x lc rgb 'black' dt 3 title 'paper, IMP'";
+    g << "\n";
+    g.close();
+    runGnuplot(gp);
+    written.push_back(png.string());
+  }
+
+  // ---- stochastic affordances: final predictions against the probabilities (Figure 11)
+  bool stochastic = false;
+  for (const auto& sys : systems)
+    for (const auto& row : s["systems"][sys]["target"])
+      for (const auto& v : row) stochastic |= v.get<double>() > 0 && v.get<double>() < 1;
+  if (stochastic) {
+    const fs::path csv = dir / "fig_stochastic.csv", gp = dir / "fig_stochastic.gp", png = dir / "fig_stochastic.png";
+    std::ofstream out(csv);
+    out << "system,action,object,x,target,mean,min,max\n";
+    for (std::size_t k = 0; k < systems.size(); ++k) {
+      const json& js = s["systems"][systems[k]];
+      if (!js.contains("affordance")) continue;
+      for (std::size_t a = 0; a < actions.size(); ++a)
+        for (std::size_t i = 0; i < objects.size(); ++i)
+          out << systems[k] << "," << a << ",\"" << objects[i] << "\","
+              << i + 1 + (static_cast<double>(k) - (systems.size() - 1) / 2.0) * 0.22 << ","
+              << js["target"][i][a].get<double>() << "," << js["affordance"][i][a].get<double>() << ","
+              << js["affordance_min"][i][a].get<double>() << "," << js["affordance_max"][i][a].get<double>() << "\n";
+    }
+    out.close();
+    std::ofstream g(gp);
+    g << "set terminal pngcairo size 1400,1000 font 'DejaVu Sans,10'\nset output " << quoted(png.string()) << "\n"
+      << "set datafile separator ','\nset multiplot layout 2,2 title "
+      << quoted("Stochastic affordances: mean final prediction (bars: min-max over runs) and the true probability (" + title_base + ")")
+      << "\nset yrange [-0.05:1.05]\nset xrange [0.4:" << objects.size() + 0.6 << "]\nset grid ytics\n"
+      << "set key outside bottom center horizontal\nset xtics (";
+    for (std::size_t i = 0; i < objects.size(); ++i) g << (i ? ", " : "") << quoted(objects[i]) << " " << i + 1;
+    g << ") rotate by 30 right\n";
+    for (std::size_t a = 0; a < actions.size(); ++a) {
+      g << "set title " << quoted(actions[a]) << "\nplot ";
+      for (std::size_t k = 0; k < systems.size(); ++k)
+        g << (k ? ", " : "") << quoted(csv.string()) << " using ($2==" << a << " && strcol(1) eq " << quoted(systems[k])
+          << " ? $4 : NaN):6:7:8 with yerrorbars pt 7 ps 1.1 lc rgb '" << kSystemColour(systems[k]) << "' title "
+          << quoted(systems[k]);
+      g << ", " << quoted(csv.string()) << " using ($2==" << a << " && strcol(1) eq " << quoted(systems.front())
+        << " ? $4 : NaN):5 with points pt 6 ps 2 lc rgb 'black' title 'true probability (Table 7)'\n";
+    }
+    g << "unset multiplot\n";
+    g.close();
+    runGnuplot(gp);
+    written.push_back(png.string());
+  }
+
+  // ---- goal-based vs utility-based planner (Figure 12)
+  if (s.contains("utility")) {
+    const json& u = s["utility"];
+    const std::string sys = u["system"], sc = u["scenario"];
+    const json& js = s["systems"][sys];
+    std::vector<BoxItem> items;
+    std::vector<std::pair<double, std::string>> xtics, labels;
+    for (std::size_t k = 0; k < u["budgets"].size(); ++k) {
+      const std::string b = std::to_string(u["budgets"][k].get<int>());
+      const double x = static_cast<double>(k + 1);
+      items.push_back({x - 0.15, "goal-based", agentMeans(js, conditionWith(js, "planner.kind", "goal", "planner.max_attempts", b), sc, "utility_agent_means")});
+      items.push_back({x + 0.15, "utility-based", agentMeans(js, conditionWith(js, "planner.kind", "utility", "planner.max_attempts", b), sc, "utility_agent_means")});
+      xtics.emplace_back(x, b);
+      labels.emplace_back(x, pText(u["p_values"][k]));
+    }
+    written.push_back(boxPlot(dir, "fig_utility", "Utility gained per test (" + sys + "; boxes over agents, x: mean)",
+                              "action budget", "utility", items, xtics, labels,
+                              {{"goal-based", "#999999"}, {"utility-based", "#009e73"}}));
+  }
+
+  // ---- forward models after a number of actions (Figure 13)
+  if (s.contains("forward_models")) {
+    const json& f = s["forward_models"];
+    const std::string sc = f["scenario"];
+    std::vector<BoxItem> items;
+    std::vector<std::pair<double, std::string>> xtics, labels;
+    std::map<std::string, std::string> colours;
+    for (std::size_t k = 0; k < f["budgets"].size(); ++k) {
+      const std::string b = std::to_string(f["budgets"][k].get<int>());
+      const double x = static_cast<double>(k + 1);
+      for (std::size_t j = 0; j < systems.size(); ++j) {
+        const json& js = s["systems"][systems[j]];
+        items.push_back({x + (static_cast<double>(j) - (systems.size() - 1) / 2.0) * 0.28, systems[j],
+                         agentMeans(js, conditionWith(js, "planner.max_attempts", b), sc, "utility_agent_means")});
+        colours[systems[j]] = kSystemColour(systems[j]);
+      }
+      xtics.emplace_back(x, b);
+      std::string text;
+      for (const auto& [pair, ps] : f["p_values"].items()) text += (text.empty() ? "" : "\\n") + pair + " " + pText(ps[k]);
+      labels.emplace_back(x, text);
+    }
+    written.push_back(boxPlot(dir, "fig_forward_models", "Utility planner with the weights after " +
+                                  std::to_string(s.value("after_actions", 0)) + " actions (boxes over agents, x: mean)",
+                              "action budget", "utility", items, xtics, labels, colours));
+  }
+
+  // ---- affordance-restricted search (Figure 14)
+  if (s.contains("search")) {
+    const json& r = s["search"];
+    const std::string sys = r["system"], sc = r["scenario"];
+    const json& js = s["systems"][sys];
+    std::vector<BoxItem> items{
+        {1, "restricted", agentMeans(js, conditionWith(js, "planner.restrict_by_affordance", "true"), sc, "actions_checked_agent_means")},
+        {2, "not restricted", agentMeans(js, conditionWith(js, "planner.restrict_by_affordance", "false"), sc, "actions_checked_agent_means")}};
+    written.push_back(boxPlot(dir, "fig_search", "Actions checked per sub-goal (" + sys + "; boxes over agents, x: mean)",
+                              "", "actions checked per sub-goal", items,
+                              {{1, "affordance > 0.5 only"}, {2, "all actions"}}, {{1.5, pText(r["p_value"])}},
+                              {{"restricted", "#009e73"}, {"not restricted", "#999999"}}));
+  }
+
+  // ---- generated scenarios (issue 12): completion steps and success per point, one line per condition
+  if (s.contains("extrinsic_design") && s["extrinsic_design"].contains("generate")) {
+    const json& gen = s["extrinsic_design"]["generate"];
+    const bool by_objects = gen["objects"].size() > 1;  // else by sub-goals
+    const std::string xname = by_objects ? "objects" : "sub_goals";
+    static const char* kColour[] = {"#0072b2", "#d55e00", "#009e73", "#cc79a7", "#e69f00", "#56b4e9"};
+    for (const auto& sys : systems) {
+      const json& js = s["systems"][sys];
+      if (!js.contains("extrinsic") || !js["extrinsic"].contains("conditions")) continue;
+      const json& conds = js["extrinsic"]["conditions"];
+      const std::string stem = "fig_generated" + (systems.size() > 1 ? "_" + sys : std::string());
+      const fs::path csv = dir / (stem + ".csv"), gp = dir / (stem + ".gp"), png = dir / (stem + ".png");
+      std::ofstream out(csv);
+      out << "condition,label,sub_goals,objects,multi_step,x,tests,success_rate,completion_n,q1,median,q3,"
+             "steps_per_sub_goal_median,fit_a,fit_b\n";
+      double top = 1, xmin = 1e9, xmax = 0;
+      for (std::size_t c = 0; c < conds.size(); ++c) {
+        const json& cd = conds[c];
+        const double a = cd.contains("completion_fit") ? cd["completion_fit"]["a"].get<double>() : 0;
+        const double b = cd.contains("completion_fit") ? cd["completion_fit"]["b"].get<double>() : 0;
+        for (const auto& p : cd["points"]) {
+          const double x = p[xname].get<double>() + (static_cast<double>(c) - (conds.size() - 1) / 2.0) * 0.12;
+          const json& cs = p["completion_steps"];
+          top = std::max(top, cs["q3"].get<double>());
+          xmin = std::min(xmin, p[xname].get<double>());
+          xmax = std::max(xmax, p[xname].get<double>());
+          out << c << ",\"" << cd["label"].get<std::string>() << "\"," << p["sub_goals"] << "," << p["objects"] << ","
+              << p["multi_step"] << "," << x << "," << p["tests_completed"] << "," << p["success_rate"] << ","
+              << cs["n"] << "," << cs["q1"] << "," << cs["median"] << "," << cs["q3"] << ","
+              << p["steps_per_sub_goal"]["median"] << "," << a << "," << b << "\n";
+        }
+      }
+      out.close();
+      std::ofstream g(gp);
+      g << "set terminal pngcairo size 1200,520 font 'DejaVu Sans,11' noenhanced\nset output " << quoted(png.string())
+        << "\nset datafile separator ','\nset multiplot layout 1,2 title "
+        << quoted(s.value("experiment", std::string("")) + ", " + sys + ": generated scenarios, " +
+                  std::to_string(gen["per_point"].get<int>()) + " per point, seed " + std::to_string(gen["seed"].get<std::int64_t>()))
+        << "\nset grid\nset key left top\nset xrange [" << xmin - 0.6 << ":" << xmax + 0.6 << "]\n"
+        << "set xlabel " << quoted(by_objects ? "objects in the scene" : "sub-goals") << "\n"
+        << "set title 'completion steps of solved tests (median, quartiles)'\nset ylabel 'steps'\nset yrange [0:"
+        << top * 1.1 << "]\nplot ";
+      for (std::size_t c = 0; c < conds.size(); ++c) {
+        const std::string colour = kColour[c % 6];
+        g << (c ? ", " : "") << quoted(csv.string()) << " using ($1 == " << c << " ? $6 : NaN):11:10:12 with yerrorlines lc rgb '"
+          << colour << "' pt 7 title " << quoted(conds[c]["label"].get<std::string>());
+        if (!by_objects && conds[c].contains("completion_fit"))
+          g << ", " << conds[c]["completion_fit"]["a"].get<double>() << "*x**2 + (" << conds[c]["completion_fit"]["b"].get<double>()
+            << ")*x lc rgb '" << colour << "' dt 2 notitle";
+      }
+      g << "\nset key right bottom\nset title 'tests solved'\nset ylabel 'share solved'\nset yrange [0:1.05]\nplot ";
+      for (std::size_t c = 0; c < conds.size(); ++c)
+        g << (c ? ", " : "") << quoted(csv.string()) << " using ($1 == " << c << " ? $6 : NaN):8 with linespoints lc rgb '"
+          << kColour[c % 6] << "' pt 7 title " << quoted(conds[c]["label"].get<std::string>());
+      g << "\nunset multiplot\n";
+      g.close();
+      runGnuplot(gp);
+      written.push_back(png.string());
+    }
+  }
+  return written;
+}
+
+}  // namespace afford

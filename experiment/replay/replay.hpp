@@ -1,0 +1,143 @@
+// `afford replay LOGDIR`: feed a recorded run's messages into fresh instances
+// of the learning processes, in log order and without a network (each on its
+// own in-process memq bus, one event at a time, handled before the next), and
+// compare what they compute with what the live run recorded. Replay writes
+// nothing: the replayed predictors save no checkpoint, so the recorded run's
+// folder is never touched. A recording with gaps (an lcm-logger capture that
+// lost datagrams) is replayed as far as it goes, and the gaps are named; a
+// log whose manifest says it is incomplete (a cut run) is said to be.
+#pragma once
+#include <spdlog/spdlog.h>
+
+#include <cstdint>
+#include <filesystem>
+#include <memory>
+#include <set>
+#include <string>
+#include <vector>
+
+#include "afford/auth.hpp"
+#include "afford/bounds.hpp"
+#include "experiment/run/host.hpp"
+#include "afford/logfile.hpp"
+#include "afford/run_config_t.hpp"
+
+namespace afford {
+
+// ---- reading a run's log (also used by `afford explain`) ------------------------
+
+// A run log's segments in order (log.00.lcm, log.01.lcm, ...), or the one file
+// given; throws naming the path when there is no log there.
+std::vector<std::filesystem::path> logSegments(const std::filesystem::path& log);
+
+// Every well-formed event of a log's segments, in order, read by the project's
+// log reader (afford/logfile.hpp) with the caps of the config folder's
+// protocol: a malformed event is skipped and warned of with its file and
+// offset; a segment whose last event is incomplete is warned of and read up
+// to the one before.
+struct RecordedLog {
+  std::vector<LogEvent> events;
+  std::int64_t torn_bytes = 0;      // of incomplete last events
+  std::int64_t malformed = 0;       // malformed parts skipped
+  std::int64_t skipped_bytes = 0;   // ... and their bytes
+  std::int64_t untagged = 0;        // events without a valid tag of the key given, skipped
+};
+// With a bus key (an lcm-logger recording of a keyed bus), every event must end
+// with its tag, which is taken off; one without a valid tag is skipped and counted.
+RecordedLog readRecordedLog(const std::filesystem::path& log_path, spdlog::logger& log,
+                            const BusKey* key = nullptr);
+
+struct LogGap {
+  std::string channel;
+  std::int64_t first = 0, last = 0;  // serials missing from the recording, inclusive
+};
+// The serials each channel's publisher published in run `run_id` that `events`
+// lack: holes below the highest recorded serial, and beyond it up to the
+// publisher's own count (STATUS, in lcm-logger recordings).
+std::vector<LogGap> recordingGaps(const std::vector<LogEvent>& events, const std::string& run_id, bool extrinsic,
+                                  const BoundsContext& ctx);
+// The manifest beside a log folder's segments: its reason if it says the log
+// is incomplete ("" if it does not, or there is none), and into `missing` the
+// serials it says the logger never got.
+std::string manifestIncomplete(const std::filesystem::path& log, std::vector<LogGap>& missing);
+
+// The events of one run in a log: its RUN_CONFIG (the first one the edge
+// accepts, or the first of `run_id`), then every later event of that run id
+// (other runs' events, and events without a run id, are left out: a recording
+// of a bus may interleave runs, or hold a forged datagram).
+struct RunEvents {
+  run_config_t config;
+  std::vector<LogEvent> events;      // events.front() is the RUN_CONFIG
+  std::int64_t refused_configs = 0;  // RUN_CONFIG events the edge refuses, skipped (warned of)
+};
+// Throws std::runtime_error naming `where` only when the run cannot be
+// rebuilt: the log holds no (such) RUN_CONFIG that the edge accepts.
+RunEvents runEventsOf(std::vector<LogEvent> events, const std::string& run_id, const std::string& where,
+                      spdlog::logger& log);
+
+// One fresh process of a run, on an in-process bus of its own, fed a
+// recording's events one at a time, each handled before the next (those on
+// channels it publishes itself are not fed: it makes its own). What it
+// publishes on the run's channels is kept, in order. Used by replay and
+// explain; `options` says where its files are (HostOptions::log_root) and who
+// observes the planner.
+class ReplayedProcess {
+ public:
+  ReplayedProcess(const std::string& process, const ProtocolConfig& protocol, bool extrinsic,
+                  const HostOptions& options);
+  ~ReplayedProcess();
+  ReplayedProcess(const ReplayedProcess&) = delete;
+  ReplayedProcess& operator=(const ReplayedProcess&) = delete;
+  void feed(const LogEvent& e);
+  const std::string& name() const { return name_; }
+  const std::vector<LogEvent>& published() const { return published_; }
+
+ private:
+  std::string name_;
+  std::unique_ptr<lcm::LCM> bus_;
+  std::unique_ptr<NodeBase> node_;
+  std::set<std::string> outputs_;
+  std::vector<LogEvent> published_;
+};
+
+struct ReplayOptions {
+  std::string log_dir;                    // a run's folder: log.NN.lcm segments (or one .lcm file)
+  // predictors, motivation, planner; empty: the predictors and the run's decider
+  // (the motivation in the intrinsic phase, the planner in the extrinsic one)
+  std::vector<std::string> into;
+  std::string run_id;                     // the run to replay in a log of several (default: the first)
+  std::string bus_key;                    // key file: the recording is of a keyed bus (tags checked and taken off)
+};
+
+struct ReplayResult {
+  std::int64_t events = 0;            // of the replayed run in the log
+  std::int64_t torn_bytes = 0;        // an incomplete last event (a writer killed mid-write)
+  std::int64_t malformed = 0;         // malformed parts of the log file skipped (named with their offsets)
+  std::int64_t refused_configs = 0;   // RUN_CONFIG events refused and skipped
+  std::int64_t untagged = 0;          // with --bus-key: events without a valid tag, skipped
+  std::string run_id;
+  bool extrinsic = false;
+  std::string weights_checksum;       // the replayed predictors' final weights ("" without them)
+  std::string recorded_checksum;      // the live run's RESULT ("" if the log has none)
+  // Per replayed decider (motivation or planner): its decisions against the recorded ones.
+  std::int64_t decisions = 0, decisions_recorded = 0, decisions_differing = 0;
+  // Why the run's decider was not replayed ("" when it was): a motivation of
+  // one's own (motivation.kind not built in) ran as its own process, which
+  // replay cannot start; its decisions are taken from the record.
+  std::string decider_skipped;
+  using Gap = LogGap;
+  std::vector<Gap> gaps;              // serials a channel's publisher published that the recording lacks
+  std::string incomplete;             // the manifest's reason, when it says the log is incomplete
+  std::int64_t dropped = 0;           // recorded messages the edge refused (a corrupted recording)
+  // Everything the record holds was replayed and equals it (a record with gaps
+  // cannot be replayed whole, so it is never ok).
+  bool ok() const;
+  // What was replayed equals the record as far as it goes.
+  bool consistent() const;
+};
+
+// Reads `options.log_dir`; throws std::runtime_error naming the file on a
+// log it cannot read.
+ReplayResult replayRun(const ReplayOptions& options, spdlog::logger& log);
+
+}  // namespace afford

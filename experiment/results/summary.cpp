@@ -1,0 +1,368 @@
+#include "experiment/results/summary.hpp"
+
+#include <yaml-cpp/yaml.h>
+
+#include <algorithm>
+#include <cmath>
+#include <filesystem>
+#include <sstream>
+
+#include "afford/actions.hpp"
+#include "experiment/design/reference.hpp"
+#include "experiment/run/outcome.hpp"
+#include "afford/tables.hpp"
+
+namespace afford {
+namespace fs = std::filesystem;
+using nlohmann::json;
+
+namespace {
+
+using Table = std::vector<std::vector<double>>;
+
+double meanAbsError(const Table& a, const Table& b) {
+  double sum = 0;
+  int n = 0;
+  for (std::size_t i = 0; i < a.size(); ++i)
+    for (std::size_t j = 0; j < a[i].size(); ++j, ++n) sum += std::abs(a[i][j] - b[i][j]);
+  return n ? sum / n : 0.0;
+}
+
+// Random tables (issue 11): per condition and system, each table's mean
+// absolute error (mean over its runs), their mean, quartiles and the worst
+// table; and random_tables.csv, random_tables_entries.csv.
+json summariseTables(const Plan& plan, const PhaseRuns& phase, const std::string& out_dir) {
+  const auto label = [](const std::string& c) { return c.empty() ? std::string("default") : c; };
+  std::vector<std::string> names;
+  for (const auto& ob : plan.configs.begin()->second.world.objects) names.push_back(ob.name);
+  const auto names_of = [&](std::size_t i) { return names[i]; };
+  json rt = {{"seed", plan.tables->seed}, {"count", plan.tables->count}, {"tables", plan.table_list},
+             {"conditions", json::object()}, {"mae", json::object()}};
+  rt["one_way_looks"] = json::array();  // per table: the objects whose look cannot come back once left
+  for (const auto& table : plan.table_list) {
+    json names = json::array();
+    for (std::size_t i : oneWayLooks(table, plan.configs.begin()->second.world.objects)) names.push_back(names_of(i));
+    rt["one_way_looks"].push_back(names);
+  }
+  rt["condition_order"] = json::array();
+  rt["system_order"] = plan.systems;
+  for (const auto& [c, settings] : plan.conditions_run) {
+    rt["conditions"][label(c)] = settings;
+    rt["condition_order"].push_back(label(c));
+  }
+  std::ostringstream csv, entries;
+  csv << "table,condition,system,seed,run_id,mae\n";
+  entries << "table,object,action,afforded\n";
+  for (std::size_t k = 0; k < plan.table_list.size(); ++k)
+    for (std::size_t i = 0; i < plan.table_list[k].size(); ++i)
+      for (int a = 0; a < kNumActions; ++a)
+        entries << k << ",\"" << names[i] << "\"," << kActionNames[a] << "," << plan.table_list[k][i][a] << "\n";
+  for (const auto& [c, settings] : plan.conditions_run)
+    for (const auto& sys : plan.systems) {
+      std::vector<double> sum(plan.table_list.size(), 0.0);
+      std::vector<int> n(plan.table_list.size(), 0);
+      for (const auto& p : plan.runs) {
+        if (p.intrinsic_condition != c || p.system != sys || !phase.finished[p.index]) continue;
+        const RunOutcome& r = phase.outcomes[p.index];
+        if (!r.ok || r.curve.empty()) continue;
+        const double mae = meanAbsError(r.curve.back().affordance, p.target);
+        sum[static_cast<std::size_t>(p.table)] += mae;
+        ++n[static_cast<std::size_t>(p.table)];
+        csv << p.table << "," << label(c) << "," << sys << "," << p.spec.seed << "," << p.spec.run_id << "," << mae << "\n";
+      }
+      json per_table = json::array();
+      std::vector<double> values;
+      int worst = -1;
+      for (std::size_t k = 0; k < sum.size(); ++k) {
+        if (!n[k]) {
+          per_table.push_back(nullptr);
+          continue;
+        }
+        per_table.push_back(sum[k] / n[k]);
+        values.push_back(sum[k] / n[k]);
+        if (worst < 0 || sum[k] / n[k] > per_table[static_cast<std::size_t>(worst)].get<double>()) worst = static_cast<int>(k);
+      }
+      std::vector<double> sorted = values;
+      std::sort(sorted.begin(), sorted.end());
+      double mean = 0;
+      for (double v : values) mean += v / values.size();
+      rt["mae"][label(c)][sys] = {{"per_table", per_table},
+                                  {"tables", values.size()},
+                                  {"mean", values.empty() ? json(nullptr) : json(mean)},
+                                  {"median", quantile(sorted, 0.5)},
+                                  {"q1", quantile(sorted, 0.25)},
+                                  {"q3", quantile(sorted, 0.75)},
+                                  {"min", sorted.empty() ? json(nullptr) : json(sorted.front())},
+                                  {"worst", sorted.empty() ? json(nullptr) : json(sorted.back())},
+                                  {"worst_table", worst}};
+    }
+  writeWhole(fs::path(out_dir) / "random_tables.csv", csv.str());
+  writeWhole(fs::path(out_dir) / "random_tables_entries.csv", entries.str());
+  return rt;
+}
+
+}  // namespace
+
+void summariseExtrinsic(json& summary, const Plan& plan, const std::vector<PlannedRun>& tests, const PhaseRuns& phase,
+                        const std::string& out_dir) {
+  const double solved_share = plan.reference->required("thresholds.table_metric.solved_share");
+  const auto& outcomes = phase.outcomes;
+  for (const auto& sys : plan.systems) {
+    std::ostringstream csv;
+    csv << "system,intrinsic_run_id,seed,scenario,condition,rep,success,completion,attempts,utility,sub_goals,"
+           "active_sub_goals,actions_checked,wall_seconds\n";
+    for (const auto& t : tests) {
+      if (t.system != sys || !phase.finished[t.index]) continue;
+      const RunOutcome& r = outcomes[t.index];
+      int checks = 0, active = 0;
+      for (const auto& g : r.extrinsic.sub_goals) checks += g.actions_checked, active += g.iterations > 0;
+      csv << sys << "," << plan.runs[t.intrinsic].spec.run_id << "," << t.spec.seed << "," << t.scenario << ",\""
+          << plan.conditions[t.condition].label << "\"," << t.rep << "," << (r.ok && r.extrinsic.success) << ","
+          << r.extrinsic.completion << "," << r.extrinsic.attempts << "," << r.extrinsic.utility << ","
+          << r.extrinsic.sub_goals.size() << "," << active << "," << checks << "," << r.wall_seconds << "\n";
+    }
+    writeWhole(fs::path(out_dir) / ("extrinsic_" + sys + ".csv"), csv.str());
+    json ex = {{"scenarios", plan.scenarios}, {"tests_per_scenario", plan.tests}, {"table_metric_solved_share", solved_share}};
+    if (plan.conditions.size() > 1) {  // the design's summary compares the conditions
+      summary["systems"][sys]["extrinsic"] = ex;
+      continue;
+    }
+    std::vector<std::pair<double, double>> solved;  // (sub-goals, completion) of every solved test
+    for (const auto& scenario : plan.scenarios) {
+      std::map<std::size_t, std::pair<int, int>> per_run;  // intrinsic run -> (successes, tests)
+      std::vector<double> steps;
+      double checked = 0;
+      int sub_goal_count = 0, successes = 0, total = 0;
+      for (const auto& t : tests) {
+        if (t.system != sys || t.scenario != scenario || !phase.finished[t.index]) continue;
+        const RunOutcome& r = outcomes[t.index];
+        const bool ok = r.ok && r.extrinsic.success;
+        auto& [s, n] = per_run[t.intrinsic];
+        s += ok;
+        ++n;
+        successes += ok;
+        ++total;
+        int checks = 0;
+        for (const auto& g : r.extrinsic.sub_goals) checks += g.actions_checked;
+        checked += checks;
+        sub_goal_count += static_cast<int>(r.extrinsic.sub_goals.size());
+        if (ok) {
+          steps.push_back(r.extrinsic.completion);
+          solved.emplace_back(plan.sub_goals.at(scenario), r.extrinsic.completion);
+        }
+      }
+      int good_runs = 0;
+      for (const auto& [run, sn] : per_run) good_runs += sn.first > solved_share * sn.second;
+      std::sort(steps.begin(), steps.end());
+      double mean = 0;
+      for (double v : steps) mean += v / steps.size();
+      ex["table_metric"][scenario] = per_run.empty() ? 0.0 : static_cast<double>(good_runs) / per_run.size();
+      ex["success_rate"][scenario] = total ? static_cast<double>(successes) / total : 0.0;
+      ex["completion_steps"][scenario] = {{"n", steps.size()},
+                                          {"sub_goals", plan.sub_goals.at(scenario)},
+                                          {"median", quantile(steps, 0.5)},
+                                          {"q1", quantile(steps, 0.25)},
+                                          {"q3", quantile(steps, 0.75)},
+                                          {"min", steps.empty() ? 0.0 : steps.front()},
+                                          {"max", steps.empty() ? 0.0 : steps.back()},
+                                          {"mean", mean}};
+      ex["actions_checked_per_sub_goal"][scenario] = sub_goal_count ? checked / sub_goal_count : 0.0;
+    }
+    if (const auto fit = fitCompletion(solved)) ex["completion_steps"]["fit"] = {{"a", fit->a}, {"b", fit->b}};
+    summary["systems"][sys]["extrinsic"] = ex;
+  }
+}
+
+// summary.json content (docs/results-schema.md) of the finished runs; also writes the CSV files.
+json summarise(const Plan& plan, const Hosting& hosting, const PhaseRuns& phase, const std::string& out_dir) {
+  const auto& outcomes = phase.outcomes;
+  const auto& runs = plan.runs;
+  const auto& configs = plan.configs;
+  const int reps = plan.reps;
+  const auto& exp = plan.exp;
+  const auto& any_cfg = configs.begin()->second;
+  std::vector<std::string> object_names;
+  for (const auto& ob : any_cfg.world.objects) object_names.push_back(ob.name);
+  json summary = {{"experiment", exp.name},
+                  {"description", exp.description},
+                  {"steps", runs.front().spec.steps},
+                  {"repetitions", reps},
+                  {"seed", plan.seed},
+                  {"transport", hosting.transport},
+                  {"network", hosting.network},
+                  {"afford_version", AFFORD_VERSION},
+                  {"objects", object_names},
+                  {"actions", {"move", "turn green", "turn red", "turn blue"}},
+                  {"systems", json::object()}};
+  const Reference& ref = *plan.reference;
+  // The paper's numbers belong to the shipped experiments: one from a file elsewhere has none beside it.
+  const bool shipped = exp.file.empty();
+  if (!shipped) summary["experiment_file"] = exp.file;
+  if (!hosting.processes.empty()) summary["processes"] = hosting.processes;  // --process: the commands run in place of ours
+  const YAML::Node reference = shipped ? ref.entry(exp.name) : YAML::Node();
+  const std::string key = exp.name + ".";
+  for (const auto& sys : plan.systems) {
+    const RunConfig& cfg = configs.at(sys);
+    Table target;
+    for (const auto& ob : cfg.world.objects) target.emplace_back(ob.affordance.begin(), ob.affordance.end());
+    json js = {{"target", target}, {"runs", json::array()}};
+    std::vector<Table> finals;
+    std::vector<double> maes;
+    std::ostringstream curves_csv;
+    curves_csv << "system,run_id,seed,step,object,action,prediction\n";
+    std::map<std::int64_t, std::pair<Table, int>> curve_sum;
+    for (const auto& p : runs) {
+      if (p.system != sys || !phase.finished[p.index]) continue;
+      const RunOutcome& r = outcomes[p.index];
+      if (!r.ok || r.curve.empty()) {
+        js["failed_runs"].push_back({{"run_id", p.spec.run_id}, {"seed", p.spec.seed}, {"error", r.error}});
+        continue;
+      }
+      // Every run reports its table at the same steps (run.curve_interval): a snapshot lost on the
+      // way would bias the mean curve at that step, so say so.
+      if (r.curve.size() != static_cast<std::size_t>(cfg.steps / cfg.curve_interval + 1) + (cfg.steps % cfg.curve_interval != 0))
+        js["curve_gaps"].push_back({{"run_id", p.spec.run_id}, {"snapshots", r.curve.size()}});
+      const Table& fin = r.curve.back().affordance;
+      finals.push_back(fin);
+      maes.push_back(meanAbsError(fin, p.target));
+      json entry = {{"run_id", p.spec.run_id},
+                    {"seed", p.spec.seed},
+                    {"affordance", fin},
+                    {"affordance_mae", maes.back()},
+                    {"weights_checksum", r.weights_checksum},
+                    {"actions_executed", r.executed},
+                    {"successes", r.successes},
+                    {"looks", r.looks},
+                    {"replayed", r.replayed},
+                    {"replayed_effects", r.replayed_effects},
+                    {"revisits", r.revisits},
+                    {"reused_from", r.reused_from.empty() ? json(nullptr) : json(r.reused_from)},
+                    {"wall_seconds", r.wall_seconds},
+                    {"steps_per_second", r.run_seconds > 0 ? p.spec.steps / r.run_seconds : 0.0}};
+      if (plan.tables) {  // random tables: each run against its own table; no mean table or curve across them
+        entry["table"] = p.table;
+        entry["condition"] = p.intrinsic_condition.empty() ? std::string("default") : p.intrinsic_condition;
+        entry["target"] = p.target;
+        js["runs"].push_back(entry);
+        continue;
+      }
+      entry["log_dir"] = r.log_dir.empty() ? json(nullptr) : json(r.log_dir);
+      entry["checkpoint"] = r.checkpoint;
+      entry["peak_rss_kb"] = r.peak_rss_kb;
+      entry["log_bytes"] = r.log_bytes;
+      entry["log_bytes_per_step"] = static_cast<double>(r.log_bytes) / p.spec.steps;
+      js["runs"].push_back(entry);
+      for (const auto& snap : r.curve) {
+        auto& [sum, n] = curve_sum[snap.step];
+        if (sum.empty()) sum = Table(snap.affordance.size(), std::vector<double>(kNumActions, 0.0));
+        for (std::size_t i = 0; i < snap.affordance.size(); ++i)
+          for (int a = 0; a < kNumActions; ++a) {
+            sum[i][a] += snap.affordance[i][a];
+            curves_csv << sys << "," << p.spec.run_id << "," << p.spec.seed << "," << snap.step << ",\""
+                       << object_names[i] << "\"," << kActionNames[a] << "," << snap.affordance[i][a] << "\n";
+          }
+        ++n;
+      }
+    }
+    if (!finals.empty() && !plan.tables) {
+      Table mean = target, mn = target, mx = target;
+      for (std::size_t i = 0; i < target.size(); ++i)
+        for (int a = 0; a < kNumActions; ++a) {
+          double s = 0, lo = 1e9, hi = -1e9;
+          for (const auto& f : finals) {
+            s += f[i][a];
+            lo = std::min(lo, f[i][a]);
+            hi = std::max(hi, f[i][a]);
+          }
+          mean[i][a] = s / finals.size();
+          mn[i][a] = lo;
+          mx[i][a] = hi;
+        }
+      double mae_sum = 0;
+      for (double m : maes) mae_sum += m;
+      js["affordance"] = mean;
+      js["affordance_min"] = mn;
+      js["affordance_max"] = mx;
+      js["affordance_mae"] = mae_sum / maes.size();
+      js["affordance_mae_of_mean"] = meanAbsError(mean, target);
+      json steps = json::array(), means = json::array();
+      for (auto& [step, sn] : curve_sum) {
+        auto& [sum, n] = sn;
+        for (auto& row : sum)
+          for (auto& v : row) v /= n;
+        steps.push_back(step);
+        means.push_back(sum);
+      }
+      js["curves"] = {{"steps", steps}, {"mean", means}};
+      std::ostringstream csv;
+      csv << "system,object,action,target,mean,min,max\n";
+      for (std::size_t i = 0; i < target.size(); ++i)
+        for (int a = 0; a < kNumActions; ++a)
+          csv << sys << ",\"" << object_names[i] << "\"," << kActionNames[a] << "," << target[i][a] << ","
+              << mean[i][a] << "," << mn[i][a] << "," << mx[i][a] << "\n";
+      writeWhole(fs::path(out_dir) / ("affordance_" + sys + ".csv"), csv.str());
+    }
+    if (!plan.tables) writeWhole(fs::path(out_dir) / ("curves_" + sys + ".csv"), curves_csv.str());
+    if (plan.tables) js.erase("target");
+    if (reference && reference["affordance_mae"] && reference["affordance_mae"][sys])
+      js["reference_affordance_mae"] = ref.number(reference["affordance_mae"][sys], key + "affordance_mae." + sys);
+    summary["systems"][sys] = js;
+  }
+  if (reference && reference["source"]) summary["reference_source"] = ref.text(reference["source"], key + "source");
+  if (plan.tables) {
+    summary["random_tables"] = summariseTables(plan, phase, out_dir);
+    if (reference && reference["floors"])  // what issue 11 asks of the memory options, shown beside
+      summary["random_tables"]["floors"] = {{"mean", ref.number(reference["floors"]["mean"], key + "floors.mean")},
+                                            {"worst", ref.number(reference["floors"]["worst"], key + "floors.worst")},
+                                            {"source", ref.text(reference["floors"]["source"], key + "floors.source")}};
+  }
+  {  // the paper's extrinsic tables, for the same experiment
+    const std::string ekey = exp.name + "_extrinsic";
+    const YAML::Node ext = shipped ? ref.entry(ekey) : YAML::Node();
+    if (ext && ext["table_metric"])
+      for (const auto& sys : plan.systems)
+        if (ext["table_metric"][sys]) {  // the paper's scenarios 1-5
+          const auto row = ref.numbers(ext["table_metric"][sys], ekey + ".table_metric." + sys);
+          for (std::size_t k = 0; k < row.size(); ++k)
+            summary["systems"][sys]["reference_table_metric"]["scenario" + std::to_string(k + 1)] = row[k];
+        }
+    if (ext && ext["completion_fit"])
+      summary["reference_completion_fit"] = {{"a", ref.number(ext["completion_fit"]["a"], ekey + ".completion_fit.a")},
+                                             {"b", ref.number(ext["completion_fit"]["b"], ekey + ".completion_fit.b")}};
+    if (ext && ext["source"]) summary["reference_extrinsic_source"] = ref.text(ext["source"], ekey + ".source");
+  }
+  return summary;
+}
+
+std::vector<TestRecord> testRecords(const Plan& plan, const std::vector<PlannedRun>& tests, const PhaseRuns& phase) {
+  std::vector<TestRecord> records;
+  for (const auto& t : tests) {
+    if (!phase.finished[t.index]) continue;
+    const RunOutcome& r = phase.outcomes[t.index];
+    TestRecord rec;
+    rec.system = t.system;
+    rec.agent = t.intrinsic;
+    rec.scenario = t.scenario;
+    rec.condition = t.condition;
+    rec.ok = r.ok;
+    rec.success = r.ok && r.extrinsic.success;
+    rec.utility = r.extrinsic.utility;
+    rec.attempts = r.extrinsic.attempts;
+    rec.completion = r.extrinsic.completion;
+    rec.sub_goals = plan.sub_goals.at(t.scenario);
+    if (const auto spec = plan.specs.find(t.scenario); spec != plan.specs.end()) {
+      rec.objects = spec->second.objects;
+      rec.multi_step = spec->second.multi_step;
+    } else {
+      rec.objects = rec.sub_goals;
+    }
+    for (const auto& g : r.extrinsic.sub_goals) {
+      rec.actions_checked += g.actions_checked;
+      rec.active_sub_goals += g.iterations > 0;
+    }
+    records.push_back(rec);
+  }
+  return records;
+}
+
+}  // namespace afford

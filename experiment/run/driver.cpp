@@ -1,0 +1,363 @@
+#include "experiment/run/driver.hpp"
+
+#include "afford/names.hpp"
+
+#include <algorithm>
+#include <filesystem>
+
+#include "afford/affordance_table_t.hpp"
+#include "afford/protocol.hpp"
+#include "afford/processes.hpp"
+#include "afford/extrinsic_result_t.hpp"
+#include "afford/node.hpp"
+#include "afford/process_status_t.hpp"
+#include "afford/run_config_t.hpp"
+#include "afford/run_control_t.hpp"
+#include "afford/run_result_t.hpp"
+
+namespace afford {
+
+using std::chrono::milliseconds;
+
+RunDriver::RunDriver(lcm::LCM& lcm, std::shared_ptr<spdlog::logger> log, const ProtocolConfig& protocol)
+    : lcm_(lcm), log_(std::move(log)), edge_(lcm, log_, "runner", protocol) {
+  edge_.warnOtherRuns(false);  // late messages of the slot's previous run are normal
+  edge_.subscribe(ch::status, [this](const process_status_t& m) { return onStatus(m); }, Scope::Any, Order::None);
+  edge_.subscribe(ch::affordanceTable,
+      [this](const affordance_table_t& m) {
+        if (outcome_) outcome_->curve.push_back({m.step, m.affordance});
+        return Turn::take();
+      },
+      Scope::Run, Order::Serial);
+  edge_.subscribe(ch::extrinsicResult,
+      [this](const extrinsic_result_t& m) {
+        if (!outcome_) return Turn::take();
+        ExtrinsicOutcome& e = outcome_->extrinsic;
+        e.scenario = m.scenario;
+        e.success = m.success;
+        e.completion = m.completion;
+        e.attempts = m.attempts;
+        e.utility = m.utility;
+        for (const auto& g : m.sub_goals)
+          e.sub_goals.push_back({g.x, g.y, g.iterations, g.actions_checked, g.actions_taken, g.reached != 0});
+        have_result_ = true;
+        return Turn::take();
+      },
+      Scope::Run, Order::Serial);
+  edge_.subscribe(ch::result,
+      [this](const run_result_t& m) {
+        if (!outcome_) return Turn::take();
+        outcome_->weights_checksum = m.weights_checksum;
+        // Only the checkpoint the run was configured with (the predictors report it, or "" if they could not write it).
+        if (m.checkpoint.empty() || m.checkpoint == config_.checkpoint)
+          outcome_->checkpoint = m.checkpoint;
+        else
+          log_->warn("RESULT of run '{}' names the checkpoint '{}', not the run's: not taken", m.run_id,
+                     printable(m.checkpoint));
+        outcome_->executed = m.actions_executed;
+        outcome_->successes = m.successes;
+        outcome_->looks = m.looks;
+        outcome_->replayed = m.replayed;
+        outcome_->replayed_effects = m.replayed_effects;
+        outcome_->revisits = m.revisits;
+        have_result_ = true;
+        return Turn::take();
+      },
+      Scope::Run, Order::Serial);
+}
+
+bool RunDriver::isRunFolder(const std::string& folder) const {
+  namespace fs = std::filesystem;
+  std::error_code ec;
+  return spec_ && !folder.empty() &&
+         fs::weakly_canonical(fs::absolute(folder, ec), ec) ==
+             fs::weakly_canonical(fs::absolute(fs::path(spec_->log_root) / spec_->run_id, ec), ec);
+}
+
+bool RunDriver::ours(const std::string& process) const {
+  return spec_ && std::find(spec_->processes.begin(), spec_->processes.end(), process) != spec_->processes.end();
+}
+
+void RunDriver::sendControl(const std::string& run_id, int8_t command) {
+  run_control_t c;
+  c.run_id = run_id;
+  c.step = command == run_control_t::STOP && spec_ && run_id == spec_->run_id ? spec_->steps : 0;
+  c.command = command;
+  edge_.send(ch::runControl, c);
+}
+
+Turn RunDriver::onStatus(const process_status_t& m) {
+  if (!isProcessName(m.process)) return Turn::take();  // not one of ours (a tool, or a forgery)
+  Seen& s = seen_[m.process];
+  s = {m.run_id, m.step, m.state, m.pid, m.config_digest, m.detail, Clock::now()};
+  edge_.claim(m);
+  if (phase_ == Phase::Idle || !spec_) return Turn::take();
+  if (on_step_ && phase_ == Phase::Running && m.run_id == spec_->run_id && m.step >= 0 && ours(m.process))
+    on_step_(m.step);
+  // The logger closed the log: it says DONE with the log's folder, then, free
+  // again, the run it left (its DONE may have been lost on the way).
+  const bool closed = m.state == process_status_t::DONE && m.run_id == spec_->run_id;
+  const bool left = phase_ == Phase::Stopping && m.state == process_status_t::WAITING && m.run_id.empty() &&
+                    m.counts_run == spec_->run_id && std::filesystem::is_directory(m.detail);
+  if (m.process == "logger" && (closed || left) && outcome_) {
+    // The run's log folder is the one under the runner's --log-root, whatever a message names.
+    if (isRunFolder(m.detail))
+      outcome_->log_dir = m.detail;
+    else if (!logger_done_)
+      log_->info("the logger closed the log of run '{}' in '{}', not in {}/: not kept as the run's log folder",
+                 spec_->run_id, printable(m.detail), spec_->log_root);
+    logger_done_ = true;
+  }
+  if (ours(m.process)) nudge(m.process, s);
+  return Turn::take();
+}
+
+void RunDriver::nudge(const std::string& process, const Seen& s) {
+  const std::string& run = spec_->run_id;
+  const bool free = s.run_id.empty() && s.state == process_status_t::WAITING;
+  const auto now = Clock::now();
+  auto& last = nudged_[process];
+  if (now - last < milliseconds(config_.protocol.retry_ms)) return;  // told a moment ago: the answer is on its way
+  switch (phase_) {
+    case Phase::Freeing:
+      // Still in another run a while after this one began (its WAITING is not simply on its way):
+      // its STOP was lost, or it serves a run nobody runs.
+      if (!s.run_id.empty() && s.run_id != run && now - phase_at_ >= milliseconds(config_.protocol.retry_ms)) {
+        log_->warn("process '{}' is still in run '{}': told to stop again", process, s.run_id);
+        sendControl(s.run_id, run_control_t::STOP);
+        last = now;
+      }
+      return;
+    case Phase::Configuring:
+      if (free) {  // it has not had the configuration (lost, or it started after it went out)
+        edge_.send(ch::runConfig, config_msg_);
+        last = now;
+      } else if (!s.run_id.empty() && s.run_id != run) {
+        sendControl(s.run_id, run_control_t::STOP);
+        last = now;
+      }
+      return;
+    case Phase::Running:
+      if (free) {  // restarted: give it the run again; it catches up
+        std::int64_t step = -1;
+        for (const auto& [p, other] : seen_)
+          if (other.run_id == run) step = std::max(step, other.step);
+        log_->warn("run '{}': process {} is free again (restarted?) at step {}: sending it the run's configuration",
+                   run, process, step);
+        edge_.send(ch::runConfig, config_msg_);
+        sendControl(run, run_control_t::START);
+        last = now;
+      } else if (s.run_id == run && s.state == process_status_t::READY) {  // its START was lost
+        sendControl(run, run_control_t::START);
+        last = now;
+      }
+      return;
+    case Phase::Stopping:
+      if (s.run_id == run && s.state != process_status_t::FAILED) {  // its STOP was lost
+        sendControl(run, run_control_t::STOP);
+        last = now;
+      }
+      return;
+    case Phase::Idle:
+      return;
+  }
+}
+
+RunOutcome RunDriver::run(const RunSpec& spec, const std::function<void()>& pump,
+                          const std::function<std::string()>& health) {
+  RunOutcome out;
+  const auto t0 = Clock::now();
+  try {
+    config_ = parseRunConfigText(spec.config_yaml);
+  } catch (const std::exception& e) {
+    out.error = "run '" + spec.run_id + "': " + e.what();
+    return out;
+  }
+  spec_ = &spec;
+  outcome_ = &out;
+  have_result_ = false;
+  logger_done_ = false;
+  nudged_.clear();
+  edge_.join(spec.run_id, &config_);
+  const ProtocolConfig& protocol = config_.protocol;
+  config_msg_ = run_config_t();
+  config_msg_.run_id = spec.run_id;
+  config_msg_.step = 0;
+  config_msg_.seed = spec.seed;
+  config_msg_.experiment = spec.experiment;
+  config_msg_.system = spec.system;
+  config_msg_.config_yaml = spec.config_yaml;
+  sealed(config_msg_);  // its digest: what the processes' STATUS name
+  struct Reset {
+    RunDriver* d;
+    ~Reset() {
+      d->phase_ = Phase::Idle;
+      d->outcome_ = nullptr;
+      d->spec_ = nullptr;
+      d->edge_.leave();
+    }
+  } reset{this};
+
+  const bool logged = std::find(spec.processes.begin(), spec.processes.end(), "logger") != spec.processes.end();
+  // The logger took the run (a log to close), as far as its STATUS says.
+  auto loggerJoined = [&] { return seen_.count("logger") && seen_["logger"].run_id == spec.run_id; };
+  auto stopAndWait = [&] {  // the processes leave the run; the logger closes the log, if it opened one
+    const bool opened = phase_ == Phase::Running || loggerJoined();
+    phase_ = Phase::Stopping;
+    sendControl(spec.run_id, run_control_t::STOP);
+    const auto until = Clock::now() + milliseconds(protocol.close_timeout_ms);
+    while (logged && opened && !logger_done_ && Clock::now() < until && health().empty()) pump();
+  };
+  auto fail = [&](const std::string& why) {
+    out.ok = false;
+    out.error = "run '" + spec.run_id + "': " + why;
+    if (phase_ != Phase::Freeing) {
+      phase_ = Phase::Stopping;
+      sendControl(spec.run_id, run_control_t::STOP);  // no process stays in a failed run
+    }
+    out.wall_seconds = std::chrono::duration<double>(Clock::now() - t0).count();
+    return out;
+  };
+  auto interrupted = [&] {
+    std::int64_t step = -1;
+    for (const auto& [p, s] : seen_)
+      if (s.run_id == spec.run_id) step = std::max(step, s.step);
+    stopAndWait();
+    out.ok = false;
+    out.interrupted = true;
+    out.error = "run '" + spec.run_id + "': interrupted at step " + std::to_string(step);
+    out.wall_seconds = std::chrono::duration<double>(Clock::now() - t0).count();
+    return out;
+  };
+  auto missing = [&](auto pred) {
+    std::string names;
+    for (const auto& p : spec.processes)
+      if (!seen_.count(p) || !pred(seen_.at(p))) names += (names.empty() ? "" : ", ") + p;
+    return names;
+  };
+  auto failedProcess = [&]() -> std::string {
+    for (const auto& p : spec.processes) {
+      auto it = seen_.find(p);
+      if (it == seen_.end() || it->second.run_id != spec.run_id || it->second.state != process_status_t::FAILED) continue;
+      if (it->second.config_digest != config_msg_.digest) continue;  // about a configuration that is not ours
+      // Once the result is in, a process that fails afterwards (restarted after its
+      // last step, it refuses to save its weights again) changes nothing; the logger does.
+      if (have_result_ && p != "logger") continue;
+      return "process '" + p + "' failed: " + it->second.detail;
+    }
+    return "";
+  };
+  // Heard within three heartbeats: alive (a stale entry is a process gone).
+  const auto fresh = milliseconds(3 * protocol.heartbeat_ms);
+  auto free = [&](const Seen& s) {
+    return s.state == process_status_t::WAITING && s.run_id.empty() && Clock::now() - s.at < fresh;
+  };
+
+  // 1. Every process present and free (one still in another run is told to stop on its next STATUS).
+  phase_ = Phase::Freeing;
+  phase_at_ = Clock::now();
+  auto deadline = Clock::now() + milliseconds(protocol.ready_timeout_ms);
+  while (!missing(free).empty()) {
+    if (auto h = health(); !h.empty()) return fail(h);
+    if (stopRequested()) return interrupted();
+    if (Clock::now() > deadline)
+      return fail("no process of this name reported free for a run within " +
+                  std::to_string(protocol.ready_timeout_ms / 1000.0).substr(0, 4) + " s: " + missing(free));
+    pump();
+  }
+
+  // 2. Configure: START as soon as every one says READY.
+  phase_ = Phase::Configuring;
+  edge_.send(ch::runConfig, config_msg_);
+  auto said = Clock::now();
+  auto again = milliseconds(protocol.retry_ms);
+  deadline = Clock::now() + milliseconds(protocol.ready_timeout_ms);
+  auto ready = [&](const Seen& s) { return s.run_id == spec.run_id && s.state == process_status_t::READY; };
+  // A process that took a configuration of this run other than ours: another publisher on the bus.
+  auto impostor = [&]() -> std::string {
+    for (const auto& p : spec.processes) {
+      auto it = seen_.find(p);
+      if (it != seen_.end() && it->second.run_id == spec.run_id && it->second.state != process_status_t::FAILED &&
+          it->second.config_digest != config_msg_.digest)
+        return "process '" + p + "' took a configuration of this run that is not the runner's: another publisher "
+               "on the bus sends RUN_CONFIG with this run id";
+    }
+    return "";
+  };
+  while (!missing(ready).empty()) {
+    if (auto h = health(); !h.empty()) return fail(h);
+    if (auto f = failedProcess(); !f.empty()) return fail(f);
+    if (auto f = impostor(); !f.empty()) return fail(f);
+    if (stopRequested()) return interrupted();
+    if (Clock::now() > deadline) return fail("not configured within the protocol's ready_timeout_ms: " + missing(ready));
+    if (Clock::now() - said > again) {  // a datagram lost on the way there or back: say it again, backing off
+      edge_.send(ch::runConfig, config_msg_);
+      said = Clock::now();
+      again = std::min(again * 2, milliseconds(protocol.heartbeat_ms));
+    }
+    pump();
+  }
+
+  // 3. Run.
+  phase_ = Phase::Running;
+  sendControl(spec.run_id, run_control_t::START);
+  const auto started = Clock::now();
+  std::int64_t progress = -1;
+  auto progress_at = Clock::now();
+  const auto silence = std::chrono::duration<double>(spec.stall_seconds);
+  // An intrinsic run reports its affordance table every curve_interval steps and at the end.
+  const std::size_t tables = spec.extrinsic ? 0
+                                            : static_cast<std::size_t>(config_.steps / config_.curve_interval + 1 +
+                                                                       (config_.steps % config_.curve_interval != 0));
+  // The logger must be in the run to close its log: one restarted after the
+  // last step still catches up first.
+  auto loggerIn = [&] { return !logged || loggerJoined(); };
+  while (!have_result_ || out.curve.size() < tables || !loggerIn()) {
+    if (auto h = health(); !h.empty()) return fail(h);
+    if (auto f = failedProcess(); !f.empty()) return fail(f);
+    if (stopRequested()) return interrupted();
+    pump();
+    edge_.askMissing();
+    const auto now = Clock::now();
+    std::int64_t handled = 0;  // the steps of all, in the run
+    for (const auto& p : spec.processes) {
+      auto it = seen_.find(p);
+      if (it == seen_.end()) continue;
+      if (now - it->second.at > silence)
+        return fail("process '" + p + "' stopped reporting (last heard " +
+                    std::to_string(std::chrono::duration<double>(now - it->second.at).count()) + " s ago)");
+      if (it->second.run_id == spec.run_id) handled += it->second.step + 1;
+    }
+    // Progress is any process moving on (a restarted one catching up included), or a table coming in.
+    if (const auto p = handled + static_cast<std::int64_t>(out.curve.size()); p != progress) {
+      progress = p;
+      progress_at = now;
+    }
+    if (now - progress_at > std::chrono::duration<double>(spec.stall_seconds)) {
+      std::string where;
+      for (const auto& p : spec.processes)
+        if (seen_.count(p)) where += " " + p + "@" + std::to_string(seen_[p].step);
+      std::string lacking;
+      for (const auto& [channel, range] : edge_.missingRanges())
+        lacking += " " + channel + " " + std::to_string(range.first) + ".." + std::to_string(range.second - 1);
+      return fail("stalled: no progress for " + std::to_string(static_cast<int>(spec.stall_seconds)) +
+                  " s (last step handled per process:" + where + ")" +
+                  (lacking.empty() ? "" : "; the runner still misses" + lacking));
+    }
+  }
+  out.run_seconds = std::chrono::duration<double>(Clock::now() - started).count();
+
+  // 4. Stop, and let the logger close the log.
+  stopAndWait();
+  if (logged && !logger_done_) {
+    if (auto h = health(); !h.empty()) return fail(h);
+    if (auto f = failedProcess(); !f.empty()) return fail(f);
+    return fail("the logger did not close the log within the protocol's close_timeout_ms");
+  }
+  if (auto f = failedProcess(); !f.empty()) return fail(f);
+  out.ok = true;
+  out.wall_seconds = std::chrono::duration<double>(Clock::now() - t0).count();
+  return out;
+}
+
+}  // namespace afford

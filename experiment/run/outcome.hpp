@@ -1,0 +1,26 @@
+// A run's outcome as the experiment keeps it: DIR/runs/<run-id>.json, written
+// as the run finishes, so that an interrupted experiment does not run it
+// again. Files are written whole or not at all.
+#pragma once
+#include <nlohmann/json.hpp>
+
+#include <filesystem>
+#include <optional>
+#include <string>
+
+#include "experiment/run/driver.hpp"
+
+namespace afford {
+
+// `text` into `path`, whole or not at all: written beside it, then renamed
+// over it (an interruption leaves the previous version or the new one).
+void writeWhole(const std::filesystem::path& path, const std::string& text);
+
+nlohmann::json outcomeToJson(const RunOutcome& r);
+RunOutcome outcomeFromJson(const nlohmann::json& j);
+
+// A finished run's outcome, kept as it finishes: --resume does not run it again.
+void keepOutcome(const std::filesystem::path& out, const std::string& run_id, const RunOutcome& r);
+std::optional<RunOutcome> keptOutcome(const std::filesystem::path& out, const std::string& run_id);
+
+}  // namespace afford
