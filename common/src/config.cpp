@@ -4,12 +4,14 @@
 #include <cmath>
 #include <deque>
 #include <filesystem>
+#include <fstream>
 #include <map>
 #include <mutex>
 #include <set>
 #include <sstream>
 
 #include "afford/image.hpp"
+#include "config_keys.hpp"
 
 namespace afford {
 namespace {
@@ -74,6 +76,16 @@ class Reader {
     }
     fail(join(path_, key), "unknown value \"" + s + "\" (expected one of: " + names + ")");
   }
+  template <typename E, std::size_t N>
+  E choice(const std::string& key, const std::array<Named<E>, N>& names) {
+    const std::string s = text(key);
+    std::string known;
+    for (const auto& n : names) {
+      if (s == n.name) return n.value;
+      known += known.empty() ? n.name : std::string(", ") + n.name;
+    }
+    fail(join(path_, key), "unknown value \"" + s + "\" (expected one of: " + known + ")");
+  }
   Reader map(const std::string& key) { return Reader(raw(key), join(path_, key)); }
   std::string keyPath(const std::string& key) const { return join(path_, key); }
 
@@ -107,12 +119,12 @@ class Reader {
 };
 
 // A component's kind (motivation.kind, predictors.affordance.kind): a name a process's registry knows.
-std::string componentKind(Reader& r) {
-  const std::string kind = r.text("kind");
-  if (kind.empty()) fail(r.keyPath("kind"), "is empty");
+std::string componentKind(Reader& r, const std::string& key) {
+  const std::string kind = r.text(key);
+  if (kind.empty()) fail(r.keyPath(key), "is empty");
   for (char ch : kind)
     if (!((ch >= 'a' && ch <= 'z') || (ch >= '0' && ch <= '9') || ch == '_' || ch == '-') || kind.size() > 64)
-      fail(r.keyPath("kind"), "'" + kind + "' is not a name (lower-case letters, digits, '_', '-')");
+      fail(r.keyPath(key), "'" + kind + "' is not a name (lower-case letters, digits, '_', '-')");
   return kind;
 }
 
@@ -134,10 +146,8 @@ ObjectSpec parseObject(const YAML::Node& node, const std::string& path, const Wo
   Reader r(node, path);
   ObjectSpec o;
   o.name = r.text("name");
-  o.shape = r.choice<Shape>("shape", {{"square", Shape::Square}, {"circle", Shape::Circle},
-                                       {"rectangle", Shape::Rectangle}});
-  o.colour = r.choice<Colour>("colour", {{"red", Colour::Red}, {"green", Colour::Green},
-                                          {"blue", Colour::Blue}});
+  o.shape = r.choice("shape", kShapeNames);
+  o.colour = r.choice("colour", kColourNames);
   const auto pos = numberList(r, "position", 2, w.table_min, w.table_max);
   o.x = pos[0];
   o.y = pos[1];
@@ -196,13 +206,167 @@ std::vector<std::string> yamlNames(const std::string& config_dir, const char* su
 ObjectState parseState(Reader& parent, const std::string& key, const WorldConfig& w) {
   Reader r = parent.map(key);
   ObjectState s;
-  s.colour = r.choice<Colour>("colour", {{"red", Colour::Red}, {"green", Colour::Green}, {"blue", Colour::Blue}});
+  s.colour = r.choice("colour", kColourNames);
   const auto pos = numberList(r, "position", 2, w.table_min, w.table_max);
   s.x = pos[0];
   s.y = pos[1];
   r.finish();
   return s;
 }
+
+// What one key's range cannot say: how protocol keys bound each other.
+void checkProtocol(const ProtocolConfig& c, const std::string& path) {
+  const auto key = [&](const std::string& k) { return join(path, k); };
+  if (c.max_deferred < c.resend_batch)
+    fail(key("max_deferred"), "must be at least resend_batch (" + std::to_string(c.resend_batch) +
+                                  "): a channel catching up defers up to a batch");
+  if (c.close_timeout_ms <= c.stop_grace_ms)
+    fail(key("close_timeout_ms"), "must be longer than stop_grace_ms (the logger waits that long first)");
+  if (c.limits.run_id_bytes > c.limits.name_bytes)
+    fail(key("limits.run_id_bytes"), "must be at most name_bytes (" + std::to_string(c.limits.name_bytes) + ")");
+  const BusConfig& b = c.bus;
+  if (b.queue_bytes < b.max_message_bytes)
+    fail(key("bus.queue_bytes"), "must be at least max_message_bytes (" + std::to_string(b.max_message_bytes) +
+                                     "): a whole message must fit in it");
+  if (b.fragment_bytes < b.max_message_bytes)
+    fail(key("bus.fragment_bytes"), "must be at least max_message_bytes (" + std::to_string(b.max_message_bytes) +
+                                        "): one whole message is reassembled in it");
+  // The largest message a limit allows must fit on the bus (its other fields take a few KB at most).
+  const long largest_text = std::max<long>(c.limits.config_bytes, c.limits.text_bytes);
+  if (largest_text + 64 * 1024 > b.max_message_bytes)
+    fail(key("bus.max_message_bytes"), "must exceed limits.config_bytes and limits.text_bytes by 64 KiB (" +
+                                           std::to_string(largest_text + 64 * 1024) +
+                                           "): a RUN_CONFIG or STATUS at its limit must fit on the bus");
+}
+
+// What one key's range cannot say: how a run's keys bound each other.
+void checkRunConfig(const RunConfig& c) {
+  if (c.eye.focus_side % 2 == 0) fail("eye.focus_side", "must be odd (the gaze is the centre pixel)");
+  if (c.motivation.revisit.enabled && c.motivation.kind != "paper")  // revisits are the paper motivation's
+    fail("motivation.revisit.enabled", "true needs motivation.kind paper (it is '" + c.motivation.kind + "')");
+  if (c.predictors.memory.keep == MemoryKeep::Never && (c.predictors.replay.enabled || c.motivation.revisit.enabled))
+    fail("predictors.memory.keep",
+         "never, but " +
+             std::string(c.predictors.replay.enabled ? "predictors.replay.enabled" : "motivation.revisit.enabled") +
+             " is true, which needs the memory");
+  if (c.phase == Phase::Extrinsic && !c.scenario)
+    fail("extrinsic", "missing (an extrinsic run needs a checkpoint and a scenario)");
+  checkProtocol(c.protocol, "protocol");
+}
+
+// The world's objects (world.objects): a list of maps the declaration cannot spell key by key.
+void readObjects(Reader& w, WorldConfig& world) {
+  YAML::Node objs = w.raw("objects");
+  if (!objs.IsSequence() || objs.size() == 0)
+    fail(w.keyPath("objects"), "expected a non-empty list of objects, got " + describe(objs));
+  for (std::size_t i = 0; i < objs.size(); ++i)
+    world.objects.push_back(parseObject(objs[i], w.keyPath("objects") + "[" + std::to_string(i) + "]", world));
+  checkWorldLayout(world);
+}
+
+// An extrinsic test's scenario (extrinsic.scenario), of the run's world.
+void readScenario(Reader& e, RunConfig& c) {
+  c.scenario = parseScenario(e.raw("scenario"), e.keyPath("scenario"), c.world);
+  validateScenario(*c.scenario, c.world);
+}
+
+// Reads a YAML tree through the declaration (config_keys.hpp): each key's
+// type and range checked, unknown keys refused, each error naming its key.
+class Parser {
+ public:
+  explicit Parser(Reader& root) : stack_{&root} {}
+  template <class F>
+  void section(const char* key, F&& body) {
+    Reader r = top().map(key);
+    stack_.push_back(&r);
+    body();
+    stack_.pop_back();
+    r.finish();
+  }
+  template <class F>
+  void given(const char* key, F&& body) {
+    if (top().has(key)) body();
+  }
+  template <class T>
+  void integer(const char* key, T& field, std::int64_t lo, std::int64_t hi, const char*) {
+    field = static_cast<T>(top().integer(key, lo, hi));
+  }
+  void number(const char* key, double& field, double lo, double hi, const char*) { field = top().number(key, lo, hi); }
+  void text(const char* key, std::string& field, const char*) { field = top().text(key); }
+  void kind(const char* key, std::string& field, const char*) { field = componentKind(top(), key); }
+  template <class E, std::size_t N>
+  void choice(const char* key, E& field, const std::array<Named<E>, N>& names, const char*) {
+    field = top().choice(key, names);
+  }
+  void pair(const char* key, double& a, double& b, double lo, double hi, const char*) {
+    const auto v = numberList(top(), key, 2, lo, hi);
+    a = v[0];
+    b = v[1];
+  }
+  template <class F>
+  void custom(const char*, const char*, F&& read, const char*) {
+    read(top());
+  }
+  void from(KeyInfo::Origin) {}
+
+ private:
+  Reader& top() { return *stack_.back(); }
+  std::vector<Reader*> stack_;
+};
+
+std::string rangeText(double lo, double hi) {
+  std::ostringstream s;
+  s << "[" << lo << ", " << hi << "]";
+  return s.str();
+}
+
+// Lists the keys of the declaration: path, type and range, origin, meaning.
+class Describer {
+ public:
+  std::vector<KeyInfo> keys;
+  template <class F>
+  void section(const char* key, F&& body) {
+    path_.push_back(key);
+    body();
+    path_.pop_back();
+  }
+  template <class F>
+  void given(const char*, F&& body) {
+    body();
+  }
+  template <class T>
+  void integer(const char* key, T&, std::int64_t lo, std::int64_t hi, const char* meaning) {
+    add(key, "integer in [" + std::to_string(lo) + ", " + std::to_string(hi) + "]", meaning);
+  }
+  void number(const char* key, double&, double lo, double hi, const char* meaning) {
+    add(key, "number in " + rangeText(lo, hi), meaning);
+  }
+  void text(const char* key, std::string&, const char* meaning) { add(key, "text", meaning); }
+  void kind(const char* key, std::string&, const char* meaning) { add(key, "a component's kind (a name)", meaning); }
+  template <class E, std::size_t N>
+  void choice(const char* key, E&, const std::array<Named<E>, N>& names, const char* meaning) {
+    std::string t;
+    for (const auto& n : names) t += (t.empty() ? "one of " : ", ") + std::string(n.name);
+    add(key, t, meaning);
+  }
+  void pair(const char* key, double&, double&, double lo, double hi, const char* meaning) {
+    add(key, "two numbers in " + rangeText(lo, hi), meaning);
+  }
+  template <class F>
+  void custom(const char* key, const char* type, F&&, const char* meaning) {
+    add(key, type, meaning);
+  }
+  void from(KeyInfo::Origin origin) { origin_ = origin; }
+
+ private:
+  void add(const char* key, std::string type, const char* meaning) {
+    std::string path;
+    for (const auto& p : path_) path += p + ".";
+    keys.push_back({path + key, std::move(type), meaning, origin_});
+  }
+  std::vector<std::string> path_;
+  KeyInfo::Origin origin_ = KeyInfo::Origin::Defaults;
+};
 
 }  // namespace
 
@@ -217,8 +381,7 @@ Scenario parseScenario(const YAML::Node& node, const std::string& path, const Wo
   for (std::size_t i = 0; i < objs.size(); ++i) {
     Reader o(objs[i], key + "[" + std::to_string(i) + "]");
     ScenarioObject so;
-    so.shape = o.choice<Shape>("shape", {{"square", Shape::Square}, {"circle", Shape::Circle},
-                                          {"rectangle", Shape::Rectangle}});
+    so.shape = o.choice("shape", kShapeNames);
     so.initial = parseState(o, "initial", world);
     so.goal = parseState(o, "goal", world);
     so.value = o.has("value") ? o.number("value", 0.0, 1e6) : 1.0;
@@ -232,34 +395,12 @@ Scenario parseScenario(const YAML::Node& node, const std::string& path, const Wo
 
 std::vector<std::string> listScenarios(const std::string& config_dir) { return yamlNames(config_dir, "scenarios"); }
 
-const char* toString(Shape s) {
-  switch (s) {
-    case Shape::Square: return "square";
-    case Shape::Circle: return "circle";
-    case Shape::Rectangle: return "rectangle";
-  }
-  return "?";
-}
-const char* toString(Colour c) {
-  switch (c) {
-    case Colour::Red: return "red";
-    case Colour::Green: return "green";
-    case Colour::Blue: return "blue";
-  }
-  return "?";
-}
-const char* toString(System s) {
-  switch (s) {
-    case System::FIX: return "FIX";
-    case System::IGN: return "IGN";
-    case System::IMP: return "IMP";
-  }
-  return "?";
-}
+const char* toString(Shape s) { return nameOf(kShapeNames, s); }
+const char* toString(Colour c) { return nameOf(kColourNames, c); }
+const char* toString(System s) { return nameOf(kSystemNames, s); }
 System parseSystem(const std::string& s) {
-  if (s == "FIX") return System::FIX;
-  if (s == "IGN") return System::IGN;
-  if (s == "IMP") return System::IMP;
+  for (const auto& n : kSystemNames)
+    if (s == n.name) return n.value;
   throw ConfigError("unknown system \"" + s + "\" (expected FIX, IGN or IMP)");
 }
 std::vector<std::string> parseSystems(const std::vector<std::string>& given, const std::string& option) {
@@ -292,55 +433,10 @@ int colourChannel(Colour c) { return c == Colour::Red ? 0 : c == Colour::Green ?
 ProtocolConfig parseProtocol(const YAML::Node& node, const std::string& path) {
   Reader p(node, path);
   ProtocolConfig c;
-  c.heartbeat_ms = static_cast<int>(p.integer("heartbeat_ms", 10, 60'000));
-  c.idle_announce_ms = static_cast<int>(p.integer("idle_announce_ms", 1, 60'000));
-  c.retry_ms = static_cast<int>(p.integer("retry_ms", 1, 60'000));
-  c.resend_batch = static_cast<int>(p.integer("resend_batch", 1, 100'000));
-  c.resend_cap = static_cast<int>(p.integer("resend_cap", 1, 100'000));
-  c.resend_budget = static_cast<int>(p.integer("resend_budget", 1, 1'000'000));
-  c.stop_grace_ms = static_cast<int>(p.integer("stop_grace_ms", 0, 600'000));
-  c.ready_timeout_ms = static_cast<int>(p.integer("ready_timeout_ms", 100, 600'000));
-  c.close_timeout_ms = static_cast<int>(p.integer("close_timeout_ms", 100, 600'000));
-  c.max_deferred = static_cast<int>(p.integer("max_deferred", 1, 1'000'000));
-  c.queue_capacity = static_cast<int>(p.integer("queue_capacity", 30, 1'000'000));
-  if (c.max_deferred < c.resend_batch)
-    fail(p.keyPath("max_deferred"), "must be at least resend_batch (" + std::to_string(c.resend_batch) +
-                                        "): a channel catching up defers up to a batch");
-  if (c.close_timeout_ms <= c.stop_grace_ms)
-    fail(p.keyPath("close_timeout_ms"), "must be longer than stop_grace_ms (the logger waits that long first)");
-  Reader l = p.map("limits");
-  c.limits.name_bytes = static_cast<int>(l.integer("name_bytes", 16, 65'536));
-  c.limits.text_bytes = static_cast<int>(l.integer("text_bytes", 16, 1'048'576));
-  c.limits.config_bytes = static_cast<int>(l.integer("config_bytes", 1024, 64 * 1'048'576));
-  c.limits.objects = static_cast<int>(l.integer("objects", 1, 100'000));
-  c.limits.focus_side = static_cast<int>(l.integer("focus_side", 3, 4096));
-  c.limits.scene_side = static_cast<int>(l.integer("scene_side", 32, 8192));
-  c.limits.sub_goals = static_cast<int>(l.integer("sub_goals", 1, 1'000'000));
-  c.limits.run_id_bytes = static_cast<int>(l.integer("run_id_bytes", 16, 240));
-  c.limits.peers = static_cast<int>(l.integer("peers", 8, 100'000));
-  c.limits.control_messages = static_cast<int>(l.integer("control_messages", 4, 100'000));
-  if (c.limits.run_id_bytes > c.limits.name_bytes)
-    fail(l.keyPath("run_id_bytes"), "must be at most name_bytes (" + std::to_string(c.limits.name_bytes) + ")");
-  l.finish();
-  Reader b = p.map("bus");
-  c.bus.max_message_bytes = static_cast<int>(b.integer("max_message_bytes", 65'536, 1 << 30));
-  c.bus.fragment_bytes = static_cast<int>(b.integer("fragment_bytes", 65'536, 1 << 30));
-  c.bus.fragment_timeout_ms = static_cast<int>(b.integer("fragment_timeout_ms", 10, 600'000));
-  c.bus.queue_bytes = static_cast<int>(b.integer("queue_bytes", 65'536, 1 << 30));
-  if (c.bus.queue_bytes < c.bus.max_message_bytes)
-    fail(b.keyPath("queue_bytes"), "must be at least max_message_bytes (" + std::to_string(c.bus.max_message_bytes) +
-                                       "): a whole message must fit in it");
-  if (c.bus.fragment_bytes < c.bus.max_message_bytes)
-    fail(b.keyPath("fragment_bytes"), "must be at least max_message_bytes (" + std::to_string(c.bus.max_message_bytes) +
-                                          "): one whole message is reassembled in it");
-  // The largest message a limit allows must fit on the bus (its other fields take a few KB at most).
-  const long largest_text = std::max<long>(c.limits.config_bytes, c.limits.text_bytes);
-  if (largest_text + 64 * 1024 > c.bus.max_message_bytes)
-    fail(b.keyPath("max_message_bytes"), "must exceed limits.config_bytes and limits.text_bytes by 64 KiB (" +
-                                             std::to_string(largest_text + 64 * 1024) +
-                                             "): a RUN_CONFIG or STATUS at its limit must fit on the bus");
-  b.finish();
+  Parser v(p);
+  declareProtocol(v, c);
   p.finish();
+  checkProtocol(c, path);
   return c;
 }
 
@@ -361,160 +457,93 @@ ProtocolConfig loadProtocol(const std::string& config_dir) {
 RunConfig parseRunConfig(const YAML::Node& root) {
   Reader r(root, "");
   RunConfig c;
-  std::string memory_keep_path;
-  c.experiment = r.text("experiment");
-  c.system = r.choice<System>("system", {{"FIX", System::FIX}, {"IGN", System::IGN}, {"IMP", System::IMP}});
-  c.seed = r.integer("seed", 0, INT64_MAX);
-  c.phase = r.choice<Phase>("phase", {{"intrinsic", Phase::Intrinsic}, {"extrinsic", Phase::Extrinsic}});
-  {
-    Reader run = r.map("run");
-    c.steps = run.integer("steps", 1, 100'000'000);
-    c.curve_interval = run.integer("curve_interval", 1, 100'000'000);
-    c.checkpoint = run.has("checkpoint") ? run.text("checkpoint") : "";
-    c.checkpoint_after_actions = run.integer("checkpoint_after_actions", 0, 100'000'000);
-    c.record = run.choice<bool>("record", {{"true", true}, {"false", false}});
-    run.finish();
-  }
-  {
-    Reader w = r.map("world");
-    c.world.size_px = static_cast<int>(w.integer("size_px", 32, 2048));
-    c.world.object_size = w.number("object_size", 0.01, 0.3);
-    const auto table = numberList(w, "table", 2, 0.0, 1.0);
-    if (!(table[0] < table[1])) fail("world.table", "expected [min, max] with min < max");
-    c.world.table_min = table[0];
-    c.world.table_max = table[1];
-    c.world.max_target_draws = static_cast<int>(w.integer("max_target_draws", 1, 1'000'000));
-    c.world.positions =
-        w.choice<Positions>("positions", {{"continuous", Positions::Continuous}, {"pixel", Positions::Pixel}});
-    c.world.late_overlap = w.choice<bool>("late_overlap", {{"true", true}, {"false", false}});
-    YAML::Node objs = w.raw("objects");
-    if (!objs.IsSequence() || objs.size() == 0)
-      fail("world.objects", "expected a non-empty list of objects, got " + describe(objs));
-    for (std::size_t i = 0; i < objs.size(); ++i)
-      c.world.objects.push_back(parseObject(objs[i], "world.objects[" + std::to_string(i) + "]", c.world));
-    w.finish();
-    checkWorldLayout(c.world);
-  }
-  {
-    Reader e = r.map("eye");
-    c.eye.focus_side = static_cast<int>(e.integer("focus_side", 3, 101));
-    if (c.eye.focus_side % 2 == 0) fail("eye.focus_side", "must be odd (the gaze is the centre pixel)");
-    c.eye.saliency_noise = e.number("saliency_noise", 0.0, 1.0);
-    c.eye.saliency_sigma_px = e.number("saliency_sigma_px", 0.0, 20.0);
-    c.eye.saliency_order = e.choice<SaliencyOrder>(
-        "saliency_order",
-        {{"smooth_then_noise", SaliencyOrder::SmoothThenNoise}, {"noise_then_smooth", SaliencyOrder::NoiseThenSmooth}});
-    c.eye.change_sigma_px = e.number("change_sigma_px", 0.0, 20.0);
-    const auto gaze = numberList(e, "initial_gaze", 2, 0.0, 1.0);
-    c.eye.initial_gaze_x = gaze[0];
-    c.eye.initial_gaze_y = gaze[1];
-    c.eye.image_change_threshold = e.number("image_change_threshold", 0.0, 1.0);
-    c.eye.position_change_threshold = e.number("position_change_threshold", 0.0, 1.0);
-    c.eye.max_scan_draws = static_cast<int>(e.integer("max_scan_draws", 1, 100000));
-    c.eye.attention =
-        e.choice<Attention>("attention", {{"bottom_up", Attention::BottomUp}, {"top_down", Attention::TopDown}});
-    e.finish();
-  }
-  {
-    Reader p = r.map("predictors");
-    Reader a = p.map("affordance");
-    if (a.has("kind")) c.predictors.affordance_kind = componentKind(a);  // logs recorded before it have none: paper
-    c.predictors.affordance_learning_rate = a.number("learning_rate", 0.0, 10.0);
-    a.finish();
-    Reader lp = p.map("learning_progress");
-    c.predictors.learning_progress_learning_rate = lp.number("learning_rate", 0.0, 10.0);
-    c.predictors.learning_progress_init = lp.number("init_magnitude", 0.0, 1.0);
-    lp.finish();
-    Reader what = p.map("what_effect");
-    c.predictors.what_effect_learning_rate = what.number("learning_rate", 0.0, 10.0);
-    what.finish();
-    Reader where = p.map("where_effect");
-    c.predictors.where_effect_learning_rate = where.number("learning_rate", 0.0, 10.0);
-    where.finish();
-    Reader mem = p.map("memory");
-    c.predictors.memory.look_threshold = mem.number("look_threshold", 0.0, 1.0);
-    c.predictors.memory.look_shift_px = static_cast<int>(mem.integer("look_shift_px", 0, 10));
-    c.predictors.memory.max_looks = static_cast<int>(mem.integer("max_looks", 1, 100'000));
-    c.predictors.memory.per_look_action = static_cast<int>(mem.integer("per_look_action", 1, 100'000));
-    if (mem.has("keep"))  // logs recorded before it have none: auto
-      c.predictors.memory.keep = mem.choice<MemoryKeep>(
-          "keep", {{"auto", MemoryKeep::Auto}, {"always", MemoryKeep::Always}, {"never", MemoryKeep::Never}});
-    memory_keep_path = mem.keyPath("keep");
-    mem.finish();
-    Reader rep = p.map("replay");
-    c.predictors.replay.enabled = rep.choice<bool>("enabled", {{"true", true}, {"false", false}});
-    c.predictors.replay.ratio = static_cast<int>(rep.integer("ratio", 0, 10'000));
-    c.predictors.replay.effects_ratio = rep.number("effects_ratio", 0.0, 10'000.0);
-    c.predictors.replay.sampling = rep.choice<ReplaySampling>(
-        "sampling", {{"balanced", ReplaySampling::Balanced}, {"uniform", ReplaySampling::Uniform}});
-    rep.finish();
-    p.finish();
-  }
-  {
-    Reader m = r.map("motivation");
-    c.motivation.kind = componentKind(m);
-    Reader nov = m.map("novelty");
-    c.motivation.novelty_threshold = nov.number("threshold", 0.0, 1.0);
-    nov.finish();
-    c.motivation.fixed_threshold = m.number("fixed_threshold", 0.0, 1.0);
-    c.motivation.leak = m.number("leak", 0.0, 1.0);
-    c.motivation.initial_threshold = m.number("initial_threshold", 0.0, 1.0);
-    c.motivation.act_margin = m.number("act_margin", 0.0, 1.0);
-    c.motivation.imp_threshold_input = m.choice<ImpThresholdInput>(
-        "imp_threshold_input",
-        {{"signal", ImpThresholdInput::Signal}, {"observed_change", ImpThresholdInput::ObservedChange}});
-    Reader rv = m.map("revisit");
-    c.motivation.revisit.enabled = rv.choice<bool>("enabled", {{"true", true}, {"false", false}});
-    c.motivation.revisit.after_steps = rv.integer("after_steps", 0, 100'000'000);
-    c.motivation.revisit.order =
-        rv.choice<RevisitOrder>("order", {{"actions", RevisitOrder::Actions}, {"random", RevisitOrder::Random}});
-    if (c.motivation.revisit.enabled && c.motivation.kind != "paper")  // revisits are the paper motivation's
-      fail(rv.keyPath("enabled"), "true needs motivation.kind paper (it is '" + c.motivation.kind + "')");
-    rv.finish();
-    m.finish();
-  }
-  if (c.predictors.memory.keep == MemoryKeep::Never && (c.predictors.replay.enabled || c.motivation.revisit.enabled))
-    fail(memory_keep_path, "never, but " +
-                               std::string(c.predictors.replay.enabled ? "predictors.replay.enabled" : "motivation.revisit.enabled") +
-                               " is true, which needs the memory");
-  if (r.has("extrinsic")) {
-    Reader e = r.map("extrinsic");
-    c.extrinsic_checkpoint = e.text("checkpoint");
-    c.scenario = parseScenario(e.raw("scenario"), "extrinsic.scenario", c.world);
-    validateScenario(*c.scenario, c.world);
-    e.finish();
-  }
-  if (c.phase == Phase::Extrinsic && !c.scenario)
-    fail("extrinsic", "missing (an extrinsic run needs a checkpoint and a scenario)");
-  {
-    Reader p = r.map("planner");
-    c.planner.subgoal_match = p.number("subgoal_match", 0.0, 1.0);
-    c.planner.image_match = p.number("image_match", 0.0, 1.0);
-    c.planner.position_match = p.number("position_match", 0.0, 1.0);
-    c.planner.position_metric = p.choice<PositionMetric>(
-        "position_metric", {{"euclidean", PositionMetric::Euclidean}, {"half_euclidean", PositionMetric::HalfEuclidean}});
-    c.planner.subgoal_timeout = static_cast<int>(p.integer("subgoal_timeout", 1, 1000));
-    c.planner.budget = static_cast<int>(p.integer("budget", 1, 1'000'000));
-    c.planner.max_attempts = static_cast<int>(p.integer("max_attempts", 1, 1'000'000));
-    c.planner.restrict_by_affordance = p.choice<bool>("restrict_by_affordance", {{"true", true}, {"false", false}});
-    c.planner.affordance_threshold = p.number("affordance_threshold", 0.0, 1.0);
-    c.planner.success_distance = p.number("success_distance", 0.0, 1.0);
-    c.planner.kind = p.choice<PlannerKind>("kind", {{"goal", PlannerKind::Goal}, {"utility", PlannerKind::Utility}});
-    c.planner.attention = c.eye.attention;
-    Reader search = p.map("search");
-    c.planner.max_depth = static_cast<int>(search.integer("max_depth", 1, 4));
-    c.planner.max_queries = static_cast<int>(search.integer("max_queries", 1, 10000));
-    search.finish();
-    Reader u = p.map("utility");
-    c.planner.evaluation_iterations = static_cast<int>(u.integer("evaluation_iterations", 0, 1'000'000));
-    c.planner.raise_leak = u.number("raise_leak", 0.0, 1.0);
-    c.planner.lower_leak = u.number("lower_leak", 0.0, 1.0);
-    u.finish();
-    p.finish();
-  }
-  c.protocol = parseProtocol(r.raw("protocol"));
+  Parser v(r);
+  declareRunConfig(v, c);
   r.finish();
+  c.planner.attention = c.eye.attention;  // the eye and the planner read one key
+  checkRunConfig(c);
   return c;
+}
+
+std::vector<KeyInfo> configKeys() {
+  Describer d;
+  RunConfig c;
+  declareRunConfig(d, c);
+  return d.keys;
+}
+
+namespace {
+
+// Each key's value and comment as config/defaults.yaml spells them (its
+// first line): "steps: 6000  # paper 3.1.1 ..." gives run.steps -> {6000, paper 3.1.1 ...}.
+struct DefaultLine {
+  std::string value, comment;
+};
+std::map<std::string, DefaultLine> defaultLines(const std::filesystem::path& file) {
+  std::ifstream in(file);
+  if (!in) throw ConfigError("cannot read config file " + file.string());
+  std::map<std::string, DefaultLine> out;
+  std::vector<std::pair<std::size_t, std::string>> open;  // the sections the line is in: indentation, key
+  const auto trim = [](std::string t) {
+    t.erase(0, t.find_first_not_of(" \t"));
+    t.erase(t.find_last_not_of(" \t") + 1);
+    return t;
+  };
+  for (std::string line; std::getline(in, line);) {
+    const std::size_t indent = line.find_first_not_of(' ');
+    if (indent == std::string::npos || line[indent] == '#') continue;
+    const std::size_t colon = line.find(':', indent);
+    if (colon == std::string::npos) continue;
+    while (!open.empty() && open.back().first >= indent) open.pop_back();
+    std::string path;
+    for (const auto& [i, k] : open) path += k + ".";
+    path += line.substr(indent, colon - indent);
+    // The comment begins at the first '#' outside quotes.
+    std::size_t hash = std::string::npos;
+    bool quoted = false;
+    for (std::size_t i = colon + 1; i < line.size() && hash == std::string::npos; ++i) {
+      if (line[i] == '"') quoted = !quoted;
+      if (line[i] == '#' && !quoted) hash = i;
+    }
+    const std::string value = trim(line.substr(colon + 1, hash == std::string::npos ? std::string::npos : hash - colon - 1));
+    const std::string comment = hash == std::string::npos ? "" : trim(line.substr(hash + 1));
+    if (value.empty())
+      open.emplace_back(indent, line.substr(indent, colon - indent));
+    else
+      out[path] = {value, comment};
+  }
+  return out;
+}
+
+std::string cell(const std::string& text) {
+  std::string out;
+  for (char ch : text) out += ch == '|' ? std::string("\\|") : std::string(1, ch);
+  return out;
+}
+
+}  // namespace
+
+std::string keysMarkdown(const std::string& config_dir) {
+  const auto lines = defaultLines(std::filesystem::path(config_dir) / "defaults.yaml");
+  std::ostringstream run, protocol;
+  run << "| key | type | default | source | meaning |\n|---|---|---|---|---|\n";
+  protocol << "| key | type | default | meaning |\n|---|---|---|---|\n";
+  for (const KeyInfo& k : configKeys()) {
+    std::string value = k.origin == KeyInfo::Origin::Runner ? "set by the runner" : "per experiment";
+    std::string source;
+    if (k.origin == KeyInfo::Origin::Defaults) {
+      const auto line = lines.find(k.key);
+      if (line == lines.end()) throw ConfigError("config key '" + k.key + "': missing in " + config_dir + "/defaults.yaml");
+      value = line->second.value;
+      source = line->second.comment.substr(0, line->second.comment.find(':'));
+    }
+    if (k.key.rfind("protocol.", 0) == 0)
+      protocol << "| `" << k.key << "` | " << cell(k.type) << " | " << cell(value) << " | " << cell(k.meaning) << " |\n";
+    else
+      run << "| `" << k.key << "` | " << cell(k.type) << " | " << cell(value) << " | " << cell(source) << " | "
+          << cell(k.meaning) << " |\n";
+  }
+  return run.str() + "\n" + protocol.str();
 }
 
 std::string actionsCheckpoint(const std::string& checkpoint, std::int64_t actions) {

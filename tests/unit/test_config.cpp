@@ -351,9 +351,9 @@ TEST(Experiments, ExtendsTakesTheWholeExperimentAndAFileChangesOnlyWhatItStates)
   }
 }
 
-// Every key of config/defaults.yaml has its row in docs/configuration.md, and every row names a key of
-// the defaults or one an experiment gives (its default column says "per experiment").
-TEST(Configuration, EveryKeyIsDocumentedAndEveryDocumentedKeyExists) {
+// Each key is declared once (common/src/config_keys.hpp): config/defaults.yaml
+// gives exactly the keys declared to come from it, and no key is declared twice.
+TEST(Configuration, DefaultsYamlGivesExactlyTheKeysDeclaredToComeFromIt) {
   std::set<std::string> keys;
   std::function<void(const YAML::Node&, const std::string&)> leaves = [&](const YAML::Node& n, const std::string& path) {
     if (!n.IsMap()) {
@@ -363,19 +363,55 @@ TEST(Configuration, EveryKeyIsDocumentedAndEveryDocumentedKeyExists) {
     for (const auto& kv : n) leaves(kv.second, path.empty() ? kv.first.Scalar() : path + "." + kv.first.Scalar());
   };
   leaves(YAML::LoadFile(std::string(AFFORD_SOURCE_DIR) + "/config/defaults.yaml"), "");
-  std::ifstream doc(std::string(AFFORD_SOURCE_DIR) + "/docs/configuration.md");
-  std::set<std::string> documented;
-  const std::regex row(R"(^\| `([a-z0-9_.]+)` \| ([^|]*)\|)");
-  for (std::string line; std::getline(doc, line);) {
-    std::smatch m;
-    if (!std::regex_search(line, m, row)) continue;
-    documented.insert(m[1]);
-    EXPECT_TRUE(keys.count(m[1]) || m[2].str().find("per experiment") != std::string::npos)
-        << "docs/configuration.md documents '" << m[1] << "', which config/defaults.yaml does not have";
+  std::set<std::string> declared, from_defaults;
+  for (const KeyInfo& k : configKeys()) {
+    EXPECT_TRUE(declared.insert(k.key).second) << "config key '" << k.key << "' is declared twice";
+    EXPECT_FALSE(k.meaning.empty()) << "config key '" << k.key << "' has no meaning";
+    EXPECT_FALSE(k.type.empty()) << "config key '" << k.key << "' has no type";
+    if (k.origin == KeyInfo::Origin::Defaults) from_defaults.insert(k.key);
   }
   for (const std::string& k : keys)
-    EXPECT_TRUE(documented.count(k)) << "config key '" << k << "' has no row in docs/configuration.md";
+    EXPECT_TRUE(from_defaults.count(k)) << "config/defaults.yaml has '" << k << "', which is not declared as a default";
+  for (const std::string& k : from_defaults)
+    EXPECT_TRUE(keys.count(k)) << "config key '" << k << "' is declared as a default but config/defaults.yaml lacks it";
   EXPECT_GT(keys.size(), 80u);
+  EXPECT_GT(declared.size(), keys.size());  // and the runner's and the experiments' keys
+}
+
+// The tables of keys in docs/configuration.md are what the declaration and
+// defaults.yaml give (`afford config --keys`): every key, its type and range,
+// its default and source, its meaning.
+TEST(Configuration, TheTablesOfKeysInTheDocsAreThoseTheDeclarationGives) {
+  std::ifstream doc(std::string(AFFORD_SOURCE_DIR) + "/docs/configuration.md");
+  const std::string text((std::istreambuf_iterator<char>(doc)), std::istreambuf_iterator<char>());
+  const std::string begin = "<!-- the keys: `afford config --keys` -->\n", end = "<!-- end of the keys -->";
+  const auto from = text.find(begin), to = text.find(end);
+  ASSERT_NE(from, std::string::npos) << "docs/configuration.md has no " << begin;
+  ASSERT_NE(to, std::string::npos) << "docs/configuration.md has no " << end;
+  const std::string documented = text.substr(from + begin.size(), to - from - begin.size());
+  const std::string expected = keysMarkdown(std::string(AFFORD_SOURCE_DIR) + "/config") + "\n";
+  EXPECT_EQ(documented, expected) << "regenerate the tables with scripts/docs-keys.sh";
+}
+
+// Every default value has its source: the comment beside it in defaults.yaml begins with it.
+TEST(Configuration, EveryDefaultNamesItsSource) {
+  const std::string md = keysMarkdown(std::string(AFFORD_SOURCE_DIR) + "/config");
+  std::istringstream rows(md.substr(0, md.find("\n\n")));
+  int checked = 0;
+  for (std::string line; std::getline(rows, line);) {
+    if (line.rfind("| `", 0) != 0) continue;
+    std::vector<std::string> cells;  // key, type, default, source, meaning
+    for (std::size_t at = 2, bar; (bar = line.find(" | ", at)) != std::string::npos; at = bar + 3)
+      cells.push_back(line.substr(at, bar - at));
+    ASSERT_GE(cells.size(), 4u) << line;
+    if (cells[2] == "set by the runner" || cells[2] == "per experiment") continue;
+    ++checked;
+    const std::string& s = cells[3];
+    EXPECT_TRUE(s.rfind("paper", 0) == 0 || s.rfind("authors' code", 0) == 0 || s.rfind("ours", 0) == 0)
+        << cells[0] << ": its source in defaults.yaml is '" << s
+        << "' (begin its comment with paper ..., authors' code or ours)";
+  }
+  EXPECT_GT(checked, 50);
 }
 
 }  // namespace

@@ -191,6 +191,48 @@ struct PlannerConfig {
 
 enum class Phase { Intrinsic, Extrinsic };
 
+// The names of an enum's values as the configuration spells them, declared
+// once: the parser reads them, nameOf (and toString) print them.
+template <class E>
+struct Named {
+  const char* name;
+  E value;
+};
+inline constexpr std::array<Named<Shape>, 3> kShapeNames{
+    {{"square", Shape::Square}, {"circle", Shape::Circle}, {"rectangle", Shape::Rectangle}}};
+inline constexpr std::array<Named<Colour>, 3> kColourNames{
+    {{"red", Colour::Red}, {"green", Colour::Green}, {"blue", Colour::Blue}}};
+inline constexpr std::array<Named<System>, 3> kSystemNames{
+    {{"FIX", System::FIX}, {"IGN", System::IGN}, {"IMP", System::IMP}}};
+inline constexpr std::array<Named<Phase>, 2> kPhaseNames{
+    {{"intrinsic", Phase::Intrinsic}, {"extrinsic", Phase::Extrinsic}}};
+inline constexpr std::array<Named<Positions>, 2> kPositionsNames{
+    {{"continuous", Positions::Continuous}, {"pixel", Positions::Pixel}}};
+inline constexpr std::array<Named<SaliencyOrder>, 2> kSaliencyOrderNames{
+    {{"smooth_then_noise", SaliencyOrder::SmoothThenNoise}, {"noise_then_smooth", SaliencyOrder::NoiseThenSmooth}}};
+inline constexpr std::array<Named<Attention>, 2> kAttentionNames{
+    {{"bottom_up", Attention::BottomUp}, {"top_down", Attention::TopDown}}};
+inline constexpr std::array<Named<MemoryKeep>, 3> kMemoryKeepNames{
+    {{"auto", MemoryKeep::Auto}, {"always", MemoryKeep::Always}, {"never", MemoryKeep::Never}}};
+inline constexpr std::array<Named<ReplaySampling>, 2> kReplaySamplingNames{
+    {{"balanced", ReplaySampling::Balanced}, {"uniform", ReplaySampling::Uniform}}};
+inline constexpr std::array<Named<ImpThresholdInput>, 2> kImpThresholdInputNames{
+    {{"signal", ImpThresholdInput::Signal}, {"observed_change", ImpThresholdInput::ObservedChange}}};
+inline constexpr std::array<Named<RevisitOrder>, 2> kRevisitOrderNames{
+    {{"actions", RevisitOrder::Actions}, {"random", RevisitOrder::Random}}};
+inline constexpr std::array<Named<PlannerKind>, 2> kPlannerKindNames{
+    {{"goal", PlannerKind::Goal}, {"utility", PlannerKind::Utility}}};
+inline constexpr std::array<Named<PositionMetric>, 2> kPositionMetricNames{
+    {{"euclidean", PositionMetric::Euclidean}, {"half_euclidean", PositionMetric::HalfEuclidean}}};
+inline constexpr std::array<Named<bool>, 2> kBoolNames{{{"true", true}, {"false", false}}};
+
+template <class E, std::size_t N>
+const char* nameOf(const std::array<Named<E>, N>& names, E value) {
+  for (const auto& n : names)
+    if (n.value == value) return n.name;
+  return "?";
+}
+
 // The message edge (config key `protocol`, docs/processes-and-channels.md):
 // how fast a lost datagram is found and asked for again, how long the runner
 // and the logger wait for the others, and what a receiver accepts. None of it
@@ -282,6 +324,25 @@ void validateScenario(const Scenario& s, const WorldConfig& world);
 std::string actionsCheckpoint(const std::string& checkpoint, std::int64_t actions);
 
 // Parse and validate an effective configuration. Unknown keys are errors too.
+// Every key of a run's configuration, as declared once (common/src/config_keys.hpp).
+struct KeyInfo {
+  enum class Origin {
+    Defaults,    // config/defaults.yaml gives it (with its source), experiment files and --set change it
+    Runner,      // the runner sets it for each run (the experiment, system, seed; an extrinsic test's checkpoint)
+    Experiment,  // each experiment file gives it (world.objects)
+  };
+  std::string key;      // "motivation.leak"
+  std::string type;     // "number in [0, 1]", "goal | utility", ...
+  std::string meaning;  // one line
+  Origin origin = Origin::Defaults;
+};
+std::vector<KeyInfo> configKeys();
+
+// The tables of keys of docs/configuration.md: every key with its value and
+// source in config_dir's defaults.yaml (the comment beside it, up to its first
+// colon) and its meaning; the protocol's keys in a table of their own.
+std::string keysMarkdown(const std::string& config_dir);
+
 RunConfig parseRunConfig(const YAML::Node& root);
 RunConfig parseRunConfigText(const std::string& yaml_text);
 // The `protocol` section alone (keys named from `path`).
