@@ -152,9 +152,11 @@ WelchResult welchTest(const std::vector<double>& a, const std::vector<double>& b
   return r;
 }
 
-void summariseDesign(json& summary, const std::vector<TestRecord>& tests, const std::vector<Condition>& conditions,
-                     const ExtrinsicDesign& design, const std::vector<std::string>& systems,
-                     const std::vector<std::string>& scenarios) {
+namespace {
+
+// Per system, the conditions' statistics: per scenario and per design point.
+void summariseConditions(json& summary, const std::vector<TestRecord>& tests, const std::vector<Condition>& conditions,
+                         const std::vector<std::string>& systems, const std::vector<std::string>& scenarios) {
   for (const auto& sys : systems) {
     json list = json::array();
     for (std::size_t c = 0; c < conditions.size(); ++c) {
@@ -206,84 +208,112 @@ void summariseDesign(json& summary, const std::vector<TestRecord>& tests, const 
     }
     summary["systems"][sys]["extrinsic"]["conditions"] = list;
   }
+}
+
+bool has(const std::vector<std::string>& systems, const std::string& s) {
+  return std::find(systems.begin(), systems.end(), s) != systems.end();
+}
+
+// Figure 12: goal vs utility planner per action budget.
+json analyseUtility(const std::vector<TestRecord>& tests, const std::vector<Condition>& conditions,
+                    const ExtrinsicDesign& design, const std::vector<std::string>& systems, const std::string& sc) {
+  const std::string sys = has(systems, "IMP") ? "IMP" : systems.front();
+  json u = {{"system", sys}, {"scenario", sc}, {"budgets", json::array()}, {"goal_mean", json::array()},
+            {"utility_mean", json::array()}, {"goal_sd", json::array()}, {"utility_sd", json::array()},
+            {"p_values", json::array()}, {"t", json::array()}, {"n", json::array()}};
+  for (const auto& b : valuesOf(design, "planner.max_attempts")) {
+    const int cg = findCondition(conditions, "planner.kind", "goal", "planner.max_attempts", b);
+    const int cu = findCondition(conditions, "planner.kind", "utility", "planner.max_attempts", b);
+    if (cg < 0 || cu < 0) throw std::runtime_error("extrinsic.analysis utility needs planner.kind goal and utility");
+    const Samples g = collect(tests, sys, sc, cg), ut = collect(tests, sys, sc, cu);
+    u["budgets"].push_back(std::stoi(b));
+    u["goal_mean"].push_back(mean(g.utility));
+    u["utility_mean"].push_back(mean(ut.utility));
+    u["goal_sd"].push_back(std::sqrt(variance(g.utility)));
+    u["utility_sd"].push_back(std::sqrt(variance(ut.utility)));
+    const bool testable = g.utility.size() >= 2 && ut.utility.size() >= 2;
+    const WelchResult w = testable ? welchTest(ut.utility, g.utility) : WelchResult{};
+    u["p_values"].push_back(testable ? json(w.p) : json(nullptr));
+    u["t"].push_back(testable ? json(w.t) : json(nullptr));
+    u["n"].push_back({g.utility.size(), ut.utility.size()});
+  }
+  return u;
+}
+
+// Figure 13: systems per action budget (their means and deviations go into each system's summary).
+json analyseForwardModels(json& summary, const std::vector<TestRecord>& tests, const std::vector<Condition>& conditions,
+                          const ExtrinsicDesign& design, const std::vector<std::string>& systems, const std::string& sc) {
+  const auto budgets = valuesOf(design, "planner.max_attempts");
+  json fm = {{"scenario", sc}, {"budgets", json::array()}, {"p_values", json::object()}, {"t", json::object()}};
+  for (const auto& b : budgets) fm["budgets"].push_back(std::stoi(b));
+  std::map<std::string, std::vector<std::vector<double>>> samples;  // system -> per budget
+  for (const auto& sys : systems) {
+    json means = json::array(), sds = json::array();
+    for (const auto& b : budgets) {
+      const int c = findCondition(conditions, "planner.max_attempts", b);
+      const Samples s = collect(tests, sys, sc, c);
+      samples[sys].push_back(s.utility);
+      means.push_back(mean(s.utility));
+      sds.push_back(std::sqrt(variance(s.utility)));
+    }
+    summary["systems"][sys]["utility_mean"] = means;
+    summary["systems"][sys]["utility_sd"] = sds;
+  }
+  if (has(systems, "IMP"))
+    for (const auto& other : systems) {
+      if (other == "IMP") continue;
+      const std::string pair = "IMP-" + other;
+      fm["p_values"][pair] = json::array();
+      fm["t"][pair] = json::array();
+      for (std::size_t k = 0; k < budgets.size(); ++k) {
+        const auto &a = samples["IMP"][k], &bb = samples[other][k];
+        const bool testable = a.size() >= 2 && bb.size() >= 2;
+        const WelchResult w = testable ? welchTest(a, bb) : WelchResult{};
+        fm["p_values"][pair].push_back(testable ? json(w.p) : json(nullptr));
+        fm["t"][pair].push_back(testable ? json(w.t) : json(nullptr));
+      }
+    }
+  return fm;
+}
+
+// Figure 14: actions checked per sub-goal, with and without the affordance restriction.
+json analyseSearch(const std::vector<TestRecord>& tests, const std::vector<Condition>& conditions,
+                   const std::vector<std::string>& systems, const std::string& sc) {
+  const std::string sys = has(systems, "IMP") ? "IMP" : systems.front();
+  const int cr = findCondition(conditions, "planner.restrict_by_affordance", "true");
+  const int cu = findCondition(conditions, "planner.restrict_by_affordance", "false");
+  if (cr < 0 || cu < 0)
+    throw std::runtime_error("extrinsic.analysis search-reduction needs planner.restrict_by_affordance true and false");
+  const Samples r = collect(tests, sys, sc, cr), u = collect(tests, sys, sc, cu);
+  json s = {{"system", sys},
+            {"scenario", sc},
+            {"restricted_mean", mean(r.checked_per_sub_goal)},
+            {"unrestricted_mean", mean(u.checked_per_sub_goal)},
+            {"restricted_sd", std::sqrt(variance(r.checked_per_sub_goal))},
+            {"unrestricted_sd", std::sqrt(variance(u.checked_per_sub_goal))},
+            {"n", {r.checked_per_sub_goal.size(), u.checked_per_sub_goal.size()}}};
+  const bool testable = r.checked_per_sub_goal.size() >= 2 && u.checked_per_sub_goal.size() >= 2;
+  const WelchResult w = testable ? welchTest(r.checked_per_sub_goal, u.checked_per_sub_goal) : WelchResult{};
+  s["p_value"] = testable ? json(w.p) : json(nullptr);
+  s["t"] = testable ? json(w.t) : json(nullptr);
+  s["df"] = testable ? json(w.df) : json(nullptr);
+  return s;
+}
+
+}  // namespace
+
+void summariseDesign(json& summary, const std::vector<TestRecord>& tests, const std::vector<Condition>& conditions,
+                     const ExtrinsicDesign& design, const std::vector<std::string>& systems,
+                     const std::vector<std::string>& scenarios) {
+  summariseConditions(summary, tests, conditions, systems, scenarios);
   if (design.analysis.empty()) return;
   const std::string& sc = scenarios.front();
-  const auto has = [&](const std::string& s) { return std::find(systems.begin(), systems.end(), s) != systems.end(); };
-  if (design.analysis == "utility") {  // Figure 12: goal vs utility planner per action budget
-    const std::string sys = has("IMP") ? "IMP" : systems.front();
-    json u = {{"system", sys}, {"scenario", sc}, {"budgets", json::array()}, {"goal_mean", json::array()},
-              {"utility_mean", json::array()}, {"goal_sd", json::array()}, {"utility_sd", json::array()},
-              {"p_values", json::array()}, {"t", json::array()}, {"n", json::array()}};
-    for (const auto& b : valuesOf(design, "planner.max_attempts")) {
-      const int cg = findCondition(conditions, "planner.kind", "goal", "planner.max_attempts", b);
-      const int cu = findCondition(conditions, "planner.kind", "utility", "planner.max_attempts", b);
-      if (cg < 0 || cu < 0) throw std::runtime_error("extrinsic.analysis utility needs planner.kind goal and utility");
-      const Samples g = collect(tests, sys, sc, cg), ut = collect(tests, sys, sc, cu);
-      u["budgets"].push_back(std::stoi(b));
-      u["goal_mean"].push_back(mean(g.utility));
-      u["utility_mean"].push_back(mean(ut.utility));
-      u["goal_sd"].push_back(std::sqrt(variance(g.utility)));
-      u["utility_sd"].push_back(std::sqrt(variance(ut.utility)));
-      const bool testable = g.utility.size() >= 2 && ut.utility.size() >= 2;
-      const WelchResult w = testable ? welchTest(ut.utility, g.utility) : WelchResult{};
-      u["p_values"].push_back(testable ? json(w.p) : json(nullptr));
-      u["t"].push_back(testable ? json(w.t) : json(nullptr));
-      u["n"].push_back({g.utility.size(), ut.utility.size()});
-    }
-    summary["utility"] = u;
-  } else if (design.analysis == "forward-models") {  // Figure 13: systems per action budget
-    const auto budgets = valuesOf(design, "planner.max_attempts");
-    json fm = {{"scenario", sc}, {"budgets", json::array()}, {"p_values", json::object()}, {"t", json::object()}};
-    for (const auto& b : budgets) fm["budgets"].push_back(std::stoi(b));
-    std::map<std::string, std::vector<std::vector<double>>> samples;  // system -> per budget
-    for (const auto& sys : systems) {
-      json means = json::array(), sds = json::array();
-      for (const auto& b : budgets) {
-        const int c = findCondition(conditions, "planner.max_attempts", b);
-        const Samples s = collect(tests, sys, sc, c);
-        samples[sys].push_back(s.utility);
-        means.push_back(mean(s.utility));
-        sds.push_back(std::sqrt(variance(s.utility)));
-      }
-      summary["systems"][sys]["utility_mean"] = means;
-      summary["systems"][sys]["utility_sd"] = sds;
-    }
-    if (has("IMP"))
-      for (const auto& other : systems) {
-        if (other == "IMP") continue;
-        const std::string pair = "IMP-" + other;
-        fm["p_values"][pair] = json::array();
-        fm["t"][pair] = json::array();
-        for (std::size_t k = 0; k < budgets.size(); ++k) {
-          const auto &a = samples["IMP"][k], &bb = samples[other][k];
-          const bool testable = a.size() >= 2 && bb.size() >= 2;
-          const WelchResult w = testable ? welchTest(a, bb) : WelchResult{};
-          fm["p_values"][pair].push_back(testable ? json(w.p) : json(nullptr));
-          fm["t"][pair].push_back(testable ? json(w.t) : json(nullptr));
-        }
-      }
-    summary["forward_models"] = fm;
-  } else if (design.analysis == "search-reduction") {  // Figure 14: actions checked per sub-goal
-    const std::string sys = has("IMP") ? "IMP" : systems.front();
-    const int cr = findCondition(conditions, "planner.restrict_by_affordance", "true");
-    const int cu = findCondition(conditions, "planner.restrict_by_affordance", "false");
-    if (cr < 0 || cu < 0)
-      throw std::runtime_error("extrinsic.analysis search-reduction needs planner.restrict_by_affordance true and false");
-    const Samples r = collect(tests, sys, sc, cr), u = collect(tests, sys, sc, cu);
-    json s = {{"system", sys},
-              {"scenario", sc},
-              {"restricted_mean", mean(r.checked_per_sub_goal)},
-              {"unrestricted_mean", mean(u.checked_per_sub_goal)},
-              {"restricted_sd", std::sqrt(variance(r.checked_per_sub_goal))},
-              {"unrestricted_sd", std::sqrt(variance(u.checked_per_sub_goal))},
-              {"n", {r.checked_per_sub_goal.size(), u.checked_per_sub_goal.size()}}};
-    const bool testable = r.checked_per_sub_goal.size() >= 2 && u.checked_per_sub_goal.size() >= 2;
-    const WelchResult w = testable ? welchTest(r.checked_per_sub_goal, u.checked_per_sub_goal) : WelchResult{};
-    s["p_value"] = testable ? json(w.p) : json(nullptr);
-    s["t"] = testable ? json(w.t) : json(nullptr);
-    s["df"] = testable ? json(w.df) : json(nullptr);
-    summary["search"] = s;
-  }
+  if (design.analysis == "utility")
+    summary["utility"] = analyseUtility(tests, conditions, design, systems, sc);
+  else if (design.analysis == "forward-models")
+    summary["forward_models"] = analyseForwardModels(summary, tests, conditions, design, systems, sc);
+  else if (design.analysis == "search-reduction")
+    summary["search"] = analyseSearch(tests, conditions, systems, sc);
 }
 
 }  // namespace afford

@@ -181,49 +181,57 @@ std::vector<std::string> plotSweep(const fs::path& dir, const json& s) {
 
 }  // namespace
 
-std::vector<std::string> plotExperiment(const std::string& dir_name) {
-  const fs::path dir(dir_name);
-  std::ifstream in(dir / "summary.json");
-  if (!in) throw std::runtime_error("no summary.json in " + dir.string());
-  const json s = json::parse(in);
-  if (s.contains("sweep")) return plotSweep(dir, s);
-  const auto objects = s.at("objects").get<std::vector<std::string>>();
-  const auto actions = s.at("actions").get<std::vector<std::string>>();
-  std::vector<std::string> systems;
-  for (auto& [name, _] : s.at("systems").items()) systems.push_back(name);
-  std::vector<std::string> written;
-  const std::string title_base = s.value("experiment", std::string("experiment")) + ", " +
-                                 std::to_string(s.value("steps", 0)) + " steps";
+namespace {
 
-  // ---- random tables (issue 11): one box per system and condition, of the tables' errors (as Figure 5's boxes)
-  if (s.contains("random_tables")) {
-    const json& rt = s["random_tables"];
-    const auto conditions = rt.at("condition_order").get<std::vector<std::string>>();
-    const auto order = rt.at("system_order").get<std::vector<std::string>>();
-    static const char* kConditionColour[] = {"#999999", "#009e73", "#e69f00", "#56b4e9", "#cc79a7", "#0072b2"};
-    std::vector<BoxItem> items;
-    std::vector<std::pair<double, std::string>> xtics;
-    std::map<std::string, std::string> colours;
-    for (std::size_t k = 0; k < order.size(); ++k) {
-      xtics.emplace_back(k + 1.0, order[k]);
-      for (std::size_t c = 0; c < conditions.size(); ++c) {
-        BoxItem it;
-        it.x = k + 1 + (static_cast<double>(c) - (conditions.size() - 1) / 2.0) * 0.3;
-        it.series = conditions[c];
-        for (const auto& v : rt["mae"][conditions[c]][order[k]]["per_table"])
-          if (!v.is_null()) it.values.push_back(v.get<double>());
-        items.push_back(it);
-        colours[conditions[c]] = kConditionColour[c % 6];
-      }
+// What every figure of an experiment folder is drawn from.
+struct Figures {
+  fs::path dir;
+  json s;  // its summary.json
+  std::vector<std::string> objects, actions, systems;
+  std::string title;                 // "<experiment>, <steps> steps"
+  std::vector<std::string> written;  // the figures drawn so far
+};
+
+// Random tables (issue 11): one box per system and condition, of the tables' errors (as Figure 5's boxes)
+void plotRandomTables(Figures& f) {
+  const fs::path& dir = f.dir;
+  const json& s = f.s;
+  const std::string& title_base = f.title;
+  std::vector<std::string>& written = f.written;
+  const json& rt = s["random_tables"];
+  const auto conditions = rt.at("condition_order").get<std::vector<std::string>>();
+  const auto order = rt.at("system_order").get<std::vector<std::string>>();
+  static const char* kConditionColour[] = {"#999999", "#009e73", "#e69f00", "#56b4e9", "#cc79a7", "#0072b2"};
+  std::vector<BoxItem> items;
+  std::vector<std::pair<double, std::string>> xtics;
+  std::map<std::string, std::string> colours;
+  for (std::size_t k = 0; k < order.size(); ++k) {
+    xtics.emplace_back(k + 1.0, order[k]);
+    for (std::size_t c = 0; c < conditions.size(); ++c) {
+      BoxItem it;
+      it.x = k + 1 + (static_cast<double>(c) - (conditions.size() - 1) / 2.0) * 0.3;
+      it.series = conditions[c];
+      for (const auto& v : rt["mae"][conditions[c]][order[k]]["per_table"])
+        if (!v.is_null()) it.values.push_back(v.get<double>());
+      items.push_back(it);
+      colours[conditions[c]] = kConditionColour[c % 6];
     }
-    written.push_back(boxPlot(dir, "fig_random_tables",
-                              "Mean absolute error on " + std::to_string(rt["count"].get<int>()) +
-                                  " random affordance tables (" + title_base + "); box: quartiles, bars: min-max, x: mean",
-                              "system", "mean absolute error of the learned table", items, xtics, {}, colours));
-    return written;
   }
+  written.push_back(boxPlot(dir, "fig_random_tables",
+                            "Mean absolute error on " + std::to_string(rt["count"].get<int>()) +
+                                " random affordance tables (" + title_base + "); box: quartiles, bars: min-max, x: mean",
+                            "system", "mean absolute error of the learned table", items, xtics, {}, colours));
+}
 
-  // ---- final affordances: box plots (Figures 5, 10)
+// Final affordances: box plots (Figures 5, 10)
+void plotAffordances(Figures& f) {
+  const fs::path& dir = f.dir;
+  const json& s = f.s;
+  const std::vector<std::string>& objects = f.objects;
+  const std::vector<std::string>& actions = f.actions;
+  const std::vector<std::string>& systems = f.systems;
+  const std::string& title_base = f.title;
+  std::vector<std::string>& written = f.written;
   {
     const fs::path csv = dir / "fig_affordances.csv", gp = dir / "fig_affordances.gp", png = dir / "fig_affordances.png";
     std::ofstream out(csv);
@@ -264,8 +272,17 @@ std::vector<std::string> plotExperiment(const std::string& dir_name) {
     runGnuplot(gp);
     written.push_back(png.string());
   }
+}
 
-  // ---- learning curves (Figures 7-9)
+// Learning curves (Figures 7-9)
+void plotCurves(Figures& f) {
+  const fs::path& dir = f.dir;
+  const json& s = f.s;
+  const std::vector<std::string>& objects = f.objects;
+  const std::vector<std::string>& actions = f.actions;
+  const std::vector<std::string>& systems = f.systems;
+  const std::string& title_base = f.title;
+  std::vector<std::string>& written = f.written;
   for (const auto& sys : systems) {
     const json& js = s["systems"][sys];
     if (!js.contains("curves")) continue;
@@ -301,8 +318,15 @@ std::vector<std::string> plotExperiment(const std::string& dir_name) {
     runGnuplot(gp);
     written.push_back(png.string());
   }
+}
 
-  // ---- completion steps (Figure 6)
+// Completion steps (Figure 6)
+void plotCompletion(Figures& f) {
+  const fs::path& dir = f.dir;
+  const json& s = f.s;
+  const std::vector<std::string>& systems = f.systems;
+  const std::string& title_base = f.title;
+  std::vector<std::string>& written = f.written;
   bool any_extrinsic = false;
   for (const auto& sys : systems)
     any_extrinsic |= s["systems"][sys].contains("extrinsic") && s["systems"][sys]["extrinsic"].contains("completion_steps");
@@ -356,8 +380,17 @@ std::vector<std::string> plotExperiment(const std::string& dir_name) {
     runGnuplot(gp);
     written.push_back(png.string());
   }
+}
 
-  // ---- stochastic affordances: final predictions against the probabilities (Figure 11)
+// Stochastic affordances: final predictions against the probabilities (Figure 11)
+void plotStochastic(Figures& f) {
+  const fs::path& dir = f.dir;
+  const json& s = f.s;
+  const std::vector<std::string>& objects = f.objects;
+  const std::vector<std::string>& actions = f.actions;
+  const std::vector<std::string>& systems = f.systems;
+  const std::string& title_base = f.title;
+  std::vector<std::string>& written = f.written;
   bool stochastic = false;
   for (const auto& sys : systems)
     for (const auto& row : s["systems"][sys]["target"])
@@ -399,8 +432,13 @@ std::vector<std::string> plotExperiment(const std::string& dir_name) {
     runGnuplot(gp);
     written.push_back(png.string());
   }
+}
 
-  // ---- goal-based vs utility-based planner (Figure 12)
+// Goal-based vs utility-based planner (Figure 12)
+void plotUtility(Figures& f) {
+  const fs::path& dir = f.dir;
+  const json& s = f.s;
+  std::vector<std::string>& written = f.written;
   if (s.contains("utility")) {
     const json& u = s["utility"];
     const std::string sys = u["system"], sc = u["scenario"];
@@ -419,8 +457,14 @@ std::vector<std::string> plotExperiment(const std::string& dir_name) {
                               "action budget", "utility", items, xtics, labels,
                               {{"goal-based", "#999999"}, {"utility-based", "#009e73"}}));
   }
+}
 
-  // ---- forward models after a number of actions (Figure 13)
+// Forward models after a number of actions (Figure 13)
+void plotForwardModels(Figures& f) {
+  const fs::path& dir = f.dir;
+  const json& s = f.s;
+  const std::vector<std::string>& systems = f.systems;
+  std::vector<std::string>& written = f.written;
   if (s.contains("forward_models")) {
     const json& f = s["forward_models"];
     const std::string sc = f["scenario"];
@@ -445,8 +489,13 @@ std::vector<std::string> plotExperiment(const std::string& dir_name) {
                                   std::to_string(s.value("after_actions", 0)) + " actions (boxes over agents, x: mean)",
                               "action budget", "utility", items, xtics, labels, colours));
   }
+}
 
-  // ---- affordance-restricted search (Figure 14)
+// Affordance-restricted search (Figure 14)
+void plotSearch(Figures& f) {
+  const fs::path& dir = f.dir;
+  const json& s = f.s;
+  std::vector<std::string>& written = f.written;
   if (s.contains("search")) {
     const json& r = s["search"];
     const std::string sys = r["system"], sc = r["scenario"];
@@ -459,8 +508,14 @@ std::vector<std::string> plotExperiment(const std::string& dir_name) {
                               {{1, "affordance > 0.5 only"}, {2, "all actions"}}, {{1.5, pText(r["p_value"])}},
                               {{"restricted", "#009e73"}, {"not restricted", "#999999"}}));
   }
+}
 
-  // ---- generated scenarios (issue 12): completion steps and success per point, one line per condition
+// Generated scenarios (issue 12): completion steps and success per point, one line per condition
+void plotGenerated(Figures& f) {
+  const fs::path& dir = f.dir;
+  const json& s = f.s;
+  const std::vector<std::string>& systems = f.systems;
+  std::vector<std::string>& written = f.written;
   if (s.contains("extrinsic_design") && s["extrinsic_design"].contains("generate")) {
     const json& gen = s["extrinsic_design"]["generate"];
     const bool by_objects = gen["objects"].size() > 1;  // else by sub-goals
@@ -520,7 +575,29 @@ std::vector<std::string> plotExperiment(const std::string& dir_name) {
       written.push_back(png.string());
     }
   }
-  return written;
+}
+
+}  // namespace
+
+std::vector<std::string> plotExperiment(const std::string& dir_name) {
+  Figures f;
+  f.dir = dir_name;
+  std::ifstream in(f.dir / "summary.json");
+  if (!in) throw std::runtime_error("no summary.json in " + f.dir.string());
+  f.s = json::parse(in);
+  if (f.s.contains("sweep")) return plotSweep(f.dir, f.s);
+  f.objects = f.s.at("objects").get<std::vector<std::string>>();
+  f.actions = f.s.at("actions").get<std::vector<std::string>>();
+  for (auto& [name, _] : f.s.at("systems").items()) f.systems.push_back(name);
+  f.title = f.s.value("experiment", std::string("experiment")) + ", " + std::to_string(f.s.value("steps", 0)) + " steps";
+  if (f.s.contains("random_tables")) {  // its own figure only
+    plotRandomTables(f);
+    return f.written;
+  }
+  for (auto plot : {plotAffordances, plotCurves, plotCompletion, plotStochastic, plotUtility, plotForwardModels,
+                    plotSearch, plotGenerated})
+    plot(f);
+  return f.written;
 }
 
 }  // namespace afford

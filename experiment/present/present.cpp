@@ -19,50 +19,56 @@ std::string fixed(double v, int digits) {
   return s.str();
 }
 
-void printTables(const json& summary, const Plan& plan, const std::string& out_dir) {
+namespace {
+
+// Random tables: no one table to show, but the error of each run's learned table against its own.
+void randomTablesText(std::ostringstream& t, const json& summary) {
+  const auto& runs_steps = summary["steps"];
+  const int reps = summary["repetitions"].get<int>();
+  const json& rt = summary["random_tables"];
+  t << "\nRandom affordance tables: " << rt["count"].get<int>() << " tables drawn from seed " << rt["seed"].get<std::int64_t>()
+    << ", " << runs_steps.get<std::int64_t>() << " steps, " << reps
+    << " run(s) per table, system and condition.\nMean absolute error of each run's learned table against its own table";
+  if (rt.contains("floors"))
+    t << "; " << rt["floors"]["source"].get<std::string>();
+  std::size_t cw = 13;  // the column of conditions: 13, or the longest name and a space
+  for (const auto& cj : rt["condition_order"]) cw = std::max(cw, cj.get<std::string>().size() + 1);
+  t << "\n\n  " << std::left << std::setw(static_cast<int>(cw)) << "condition" << "system   mean     median   worst (table)\n";
+  std::vector<std::pair<std::string, std::string>> columns;
+  for (const auto& cj : rt["condition_order"])
+    for (const auto& sj : rt["system_order"]) {
+      const std::string c = cj.get<std::string>(), sys = sj.get<std::string>();
+      const json& m = rt["mae"][c][sys];
+      columns.emplace_back(c, sys);
+      const auto num = [](const json& v) { return v.is_null() ? std::string("-") : fixed(v.get<double>(), 3); };
+      t << "  " << std::left << std::setw(static_cast<int>(cw)) << c << std::setw(9) << sys << std::setw(9) << num(m["mean"])
+        << std::setw(9) << num(m["median"]) << num(m["worst"])
+        << (m["worst_table"].get<int>() >= 0 ? " (t" + std::to_string(m["worst_table"].get<int>()) + ")" : "") << "\n";
+    }
+  const auto width = [](const std::string& c, const std::string& sys) {
+    return std::max<int>(9, static_cast<int>(c.size() + sys.size()) + 3);
+  };
+  t << "\n  table ";
+  for (const auto& [c, sys] : columns) t << std::right << std::setw(width(c, sys)) << (sys + " " + c);
+  t << "   one-way looks (docs/model.md#revisit)\n";
+  for (int k = 0; k < rt["count"].get<int>(); ++k) {
+    t << "  t" << std::left << std::setw(5) << k << std::right;
+    for (const auto& [c, sys] : columns) {
+      const json& v = rt["mae"][c][sys]["per_table"][static_cast<std::size_t>(k)];
+      t << std::setw(width(c, sys)) << (v.is_null() ? std::string("-") : fixed(v.get<double>(), 3));
+    }
+    std::string one_way;
+    for (const auto& n : rt["one_way_looks"][static_cast<std::size_t>(k)]) one_way += (one_way.empty() ? "" : ", ") + n.get<std::string>();
+    t << "   " << (one_way.empty() ? "-" : one_way);
+    t << "\n";
+  }
+}
+
+// The mean learned table of each system beside the experiment's table.
+void learnedTablesText(std::ostringstream& t, const json& summary, const Plan& plan) {
   const auto& runs_steps = summary["steps"];
   const auto object_names = summary["objects"].get<std::vector<std::string>>();
   const int reps = summary["repetitions"].get<int>();
-  std::ostringstream t;
-  if (summary.contains("random_tables")) {  // no one table to show: the error on each run's own
-    const json& rt = summary["random_tables"];
-    t << "\nRandom affordance tables: " << rt["count"].get<int>() << " tables drawn from seed " << rt["seed"].get<std::int64_t>()
-      << ", " << runs_steps.get<std::int64_t>() << " steps, " << reps
-      << " run(s) per table, system and condition.\nMean absolute error of each run's learned table against its own table";
-    if (rt.contains("floors"))
-      t << "; " << rt["floors"]["source"].get<std::string>();
-    std::size_t cw = 13;  // the column of conditions: 13, or the longest name and a space
-    for (const auto& cj : rt["condition_order"]) cw = std::max(cw, cj.get<std::string>().size() + 1);
-    t << "\n\n  " << std::left << std::setw(static_cast<int>(cw)) << "condition" << "system   mean     median   worst (table)\n";
-    std::vector<std::pair<std::string, std::string>> columns;
-    for (const auto& cj : rt["condition_order"])
-      for (const auto& sj : rt["system_order"]) {
-        const std::string c = cj.get<std::string>(), sys = sj.get<std::string>();
-        const json& m = rt["mae"][c][sys];
-        columns.emplace_back(c, sys);
-        const auto num = [](const json& v) { return v.is_null() ? std::string("-") : fixed(v.get<double>(), 3); };
-        t << "  " << std::left << std::setw(static_cast<int>(cw)) << c << std::setw(9) << sys << std::setw(9) << num(m["mean"])
-          << std::setw(9) << num(m["median"]) << num(m["worst"])
-          << (m["worst_table"].get<int>() >= 0 ? " (t" + std::to_string(m["worst_table"].get<int>()) + ")" : "") << "\n";
-      }
-    const auto width = [](const std::string& c, const std::string& sys) {
-      return std::max<int>(9, static_cast<int>(c.size() + sys.size()) + 3);
-    };
-    t << "\n  table ";
-    for (const auto& [c, sys] : columns) t << std::right << std::setw(width(c, sys)) << (sys + " " + c);
-    t << "   one-way looks (docs/model.md#revisit)\n";
-    for (int k = 0; k < rt["count"].get<int>(); ++k) {
-      t << "  t" << std::left << std::setw(5) << k << std::right;
-      for (const auto& [c, sys] : columns) {
-        const json& v = rt["mae"][c][sys]["per_table"][static_cast<std::size_t>(k)];
-        t << std::setw(width(c, sys)) << (v.is_null() ? std::string("-") : fixed(v.get<double>(), 3));
-      }
-      std::string one_way;
-      for (const auto& n : rt["one_way_looks"][static_cast<std::size_t>(k)]) one_way += (one_way.empty() ? "" : ", ") + n.get<std::string>();
-      t << "   " << (one_way.empty() ? "-" : one_way);
-      t << "\n";
-    }
-  } else {
   t << "\nLearned affordances after " << runs_steps.get<std::int64_t>() << " steps (mean of " << reps
     << " run(s)); in brackets the paper's table\n";
   for (const auto& sys : plan.systems) {
@@ -84,7 +90,10 @@ void printTables(const json& summary, const Plan& plan, const std::string& out_d
       t << " (authors' code: " << fixed(js["reference_affordance_mae"].get<double>(), 3) << ")";
     t << "\n";
   }
-  }
+}
+
+// The extrinsic tests: the table metric and share solved per scenario, the completion steps and their fit.
+void extrinsicText(std::ostringstream& t, const json& summary, const Plan& plan) {
   bool header = false;
   for (const auto& sys : plan.systems) {
     const json& js = summary["systems"][sys];
@@ -131,6 +140,10 @@ void printTables(const json& summary, const Plan& plan, const std::string& out_d
       t << "\n";
     }
   }
+}
+
+// The design's analysis: Figures 12, 13 and 14.
+void analysisText(std::ostringstream& t, const json& summary, const Plan& plan) {
   const auto p = [](const json& v) { return v.is_null() ? std::string("-") : fixed(v.get<double>(), 4); };
   if (summary.contains("utility")) {  // Figure 12
     const json& u = summary["utility"];
@@ -164,6 +177,18 @@ void printTables(const json& summary, const Plan& plan, const std::string& out_d
       << "; Welch's t-test p = " << (s["p_value"].is_null() ? std::string("-") : fmt::format("{:.3g}", s["p_value"].get<double>()))
       << "\n";
   }
+}
+
+}  // namespace
+
+void printTables(const json& summary, const Plan& plan, const std::string& out_dir) {
+  std::ostringstream t;
+  if (summary.contains("random_tables"))
+    randomTablesText(t, summary);
+  else
+    learnedTablesText(t, summary, plan);
+  extrinsicText(t, summary, plan);
+  analysisText(t, summary, plan);
   t << "\nsummary: " << (fs::path(out_dir) / "summary.json").string() << "\n";
   std::printf("%s", t.str().c_str());
   std::fflush(stdout);

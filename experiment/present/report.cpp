@@ -518,15 +518,13 @@ struct Where {
   std::string note;
 };
 
-// The whole report of `folders`; reads the folders, writes nothing.
-Rendered render(const std::vector<Folder>& folders, const Reference& reference, const Where& where) {
-  Rendered out;
-  std::ostringstream md;
+const std::vector<std::string> kSystems{"FIX", "IGN", "IMP"};
+
+// What was run, read from the folders: a row per folder, and what was set.
+void whatWasRun(std::ostringstream& md, const std::vector<Folder>& folders, const Where& where) {
   const std::time_t now = std::time(nullptr);
   char date[32];
   std::strftime(date, sizeof date, "%Y-%m-%d", std::gmtime(&now));
-
-  // ---- what was run, read from the folders
   std::set<std::string> networks;
   bool paper = false;
   for (const auto& f : folders) {
@@ -562,12 +560,14 @@ Rendered render(const std::vector<Folder>& folders, const Reference& reference, 
          << where.docs.link("results-discussion.md") << ".\n";
     md << "\nNumbers in brackets are the paper's (or, where marked, the authors' code's).\n";
   }
+}
 
-  // ---- intrinsic phase
+// The intrinsic phase: the mean absolute errors (paper Table 1), and base's mean table (Figure 5).
+void intrinsicSection(std::ostringstream& md, const std::vector<Folder>& folders) {
+  const std::vector<std::string>& systems = kSystems;
   md << "\n## Intrinsic phase: learned affordances (paper Table 1, Figure 5)\n\n"
      << "Mean absolute error of the final affordance predictions against the experiment's table, mean over runs:\n\n"
      << "| experiment | steps |";
-  const std::vector<std::string> systems{"FIX", "IGN", "IMP"};
   for (const auto& s : systems) md << " " << s << " |";
   md << "\n|---|---|---|---|---|\n";
   for (const auto& f : folders) {
@@ -606,8 +606,11 @@ Rendered render(const std::vector<Folder>& folders, const Reference& reference, 
       md << "\n";
     }
   }
+}
 
-  // ---- extrinsic phase
+// The extrinsic phase: the table metric and the share of tests solved (paper Tables 2, 4, 5, 6).
+void extrinsicSection(std::ostringstream& md, const std::vector<Folder>& folders) {
+  const std::vector<std::string>& systems = kSystems;
   md << "\n## Extrinsic phase: goal-based planner (paper Tables 2, 4, 5, 6)\n\n"
      << "Table metric: the share of trained agents that solved more than 90% of their tests of the scenario. "
         "Below it, the share of all tests solved.\n";
@@ -648,8 +651,11 @@ Rendered render(const std::vector<Folder>& folders, const Reference& reference, 
       md << "\n";
     }
   }
+}
 
-  // ---- completion steps
+// Completion steps by number of sub-goals and their fit (paper Figure 6).
+void completionSection(std::ostringstream& md, const std::vector<Folder>& folders) {
+  const std::vector<std::string>& systems = kSystems;
   md << "\n## Completion steps (paper Figure 6)\n\nMedian iterations of the solved tests, by number of sub-goals, "
         "and the least-squares fit of a x^2 + b x";
   for (const auto& f : folders)
@@ -675,12 +681,10 @@ Rendered render(const std::vector<Folder>& folders, const Reference& reference, 
       md << " " << (cs.contains("fit") ? num(cs["fit"]["a"].get<double>(), 3) + " x^2 " + num(cs["fit"]["b"].get<double>(), 3) + " x" : "-")
          << " |\n";
     }
+}
 
-  md << stochasticSections(folders, reference);
-  md << memorySections(folders, where.docs);
-  md << generatedSections(folders, reference, where.docs);
-
-  // ---- figures, each folder's into its own <figures>/<label>/
+// The figures, each folder's into its own <figures>/<label>/ (and a sweep's comparisons, once).
+void figuresSection(std::ostringstream& md, const std::vector<Folder>& folders, const Where& where, Rendered& out) {
   md << "\n## Figures\n";
   std::set<std::string> sweeps_shown;
   for (const auto& f : folders) {
@@ -714,6 +718,20 @@ Rendered render(const std::vector<Folder>& folders, const Reference& reference, 
       md << "![" << f.label << " " << p << "](" << linkPath(relativeTo(target / p, where.out_dir)) << ")\n";
     }
   }
+}
+
+// The whole report of `folders`; reads the folders, writes nothing.
+Rendered render(const std::vector<Folder>& folders, const Reference& reference, const Where& where) {
+  Rendered out;
+  std::ostringstream md;
+  whatWasRun(md, folders, where);
+  intrinsicSection(md, folders);
+  extrinsicSection(md, folders);
+  completionSection(md, folders);
+  md << stochasticSections(folders, reference);
+  md << memorySections(folders, where.docs);
+  md << generatedSections(folders, reference, where.docs);
+  figuresSection(md, folders, where, out);
   out.markdown = md.str();
   return out;
 }

@@ -46,7 +46,7 @@ std::string format(const char* fmt, ...) {
 std::string actionName(int a) { return validAction(a) ? std::string(kActionNames[a]) : "action " + std::to_string(a); }
 
 const char* kindName(PlannerKind k) { return k == PlannerKind::Utility ? "utility" : "goal"; }
-const char* metricName(PositionMetric m) { return m == PositionMetric::HalfEuclidean ? "half_euclidean" : "euclidean"; }
+const char* metricName(PositionMetric m) { return nameOf(kPositionMetricNames, m); }
 
 // The run's messages of one type, each serial once (a recording may hold a
 // message twice: one the logger asked for again and got after all), decoded
@@ -202,56 +202,35 @@ void compareWithRecord(const ReplayedProcess& planner, const std::vector<LogEven
 
 }  // namespace
 
-Explanation explainRunEvents(const RunEvents& run, const std::string& where, std::int64_t torn_bytes,
-                             const std::string& incomplete, const std::vector<LogGap>& manifest_missing) {
-  Explanation ex;
-  ex.log = where;
-  ex.run_id = run.config.run_id;
-  ex.experiment = run.config.experiment;
-  ex.system = run.config.system;
-  ex.seed = run.config.seed;
-  RunConfig config;
-  try {
-    config = parseRunConfigText(run.config.config_yaml);
-  } catch (const std::exception& e) {
-    throw std::runtime_error(where + ": the configuration in the RUN_CONFIG of run '" + ex.run_id +
-                             "' is refused: " + e.what());
-  }
-  ex.agent = fs::path(config.extrinsic_checkpoint).parent_path().filename().string();
-  if (config.phase != Phase::Extrinsic || !config.scenario)
-    throw NotAnExtrinsicTest(where + ": run '" + ex.run_id +
-                             "' is not an extrinsic test (its RUN_CONFIG says phase: intrinsic); "
-                             "explain reads the log of one extrinsic test");
-  ex.scenario = config.scenario->name;
-  ex.planner = config.planner;
-  const PlannerConfig& p = config.planner;
-  const BoundsContext ctx{&config.protocol, &config};
-  std::vector<std::string>& warn = ex.warnings;
+namespace {
 
-  const auto results = messages(run.events, ch::extrinsicResult, ex.run_id, ctx, warn);
-  if (results.empty()) {
-    // How far the log goes, to say where it was cut.
-    std::int64_t last_step = -1;
-    for (const auto& [serial, s] : messages(run.events, ch::scene, ex.run_id, ctx, warn))
-      last_step = std::max(last_step, s.step);
-    for (const auto& [serial, l] : messages(run.events, ch::look, ex.run_id, ctx, warn))
-      last_step = std::max(last_step, l.step);
-    std::string why = where + ": the log of test '" + ex.run_id +
-                      "' ends before its EXTRINSIC_RESULT, so it does not say how the test ended (a truncated log: " +
-                      std::to_string(run.events.size()) + " events, " +
-                      (last_step < 0 ? std::string("the test had not begun")
-                                     : "the last at planner iteration " + std::to_string(last_step));
-    if (torn_bytes > 0) why += ", then an incomplete event of " + std::to_string(torn_bytes) + " bytes";
-    if (!incomplete.empty()) why += "; its manifest: " + incomplete;
-    throw std::runtime_error(why + ")");
-  }
-  const extrinsic_result_t& result = results.begin()->second;
-  if (results.size() > 1) warn.push_back(format("%zu EXTRINSIC_RESULT messages: the first is explained", results.size()));
+// Why a test's log without its EXTRINSIC_RESULT cannot be explained: how far it goes.
+[[noreturn]] void endsBeforeTheResult(const RunEvents& run, const std::string& where, const std::string& run_id,
+                                      std::int64_t torn_bytes, const std::string& incomplete, const BoundsContext& ctx,
+                                      std::vector<std::string>& warn) {
+  std::int64_t last_step = -1;
+  for (const auto& [serial, s] : messages(run.events, ch::scene, run_id, ctx, warn)) last_step = std::max(last_step, s.step);
+  for (const auto& [serial, l] : messages(run.events, ch::look, run_id, ctx, warn)) last_step = std::max(last_step, l.step);
+  std::string why = where + ": the log of test '" + run_id +
+                    "' ends before its EXTRINSIC_RESULT, so it does not say how the test ended (a truncated log: " +
+                    std::to_string(run.events.size()) + " events, " +
+                    (last_step < 0 ? std::string("the test had not begun")
+                                   : "the last at planner iteration " + std::to_string(last_step));
+  if (torn_bytes > 0) why += ", then an incomplete event of " + std::to_string(torn_bytes) + " bytes";
+  if (!incomplete.empty()) why += "; its manifest: " + incomplete;
+  throw std::runtime_error(why + ")");
+}
+
+// What is wrong with the log itself: repeated results, a torn end, an incomplete manifest, gaps.
+void warnOfTheLog(const RunEvents& run, std::size_t results, std::int64_t torn_bytes, const std::string& incomplete,
+                  const std::vector<LogGap>& manifest_missing, const std::string& run_id, const BoundsContext& ctx,
+                  std::vector<std::string>& warn) {
+  if (results > 1) warn.push_back(format("%zu EXTRINSIC_RESULT messages: the first is explained", results));
   if (torn_bytes > 0)
     warn.push_back(format("the log ends with an incomplete event (%lld bytes), after the EXTRINSIC_RESULT",
                           static_cast<long long>(torn_bytes)));
   if (!incomplete.empty()) warn.push_back("the log's manifest says it is incomplete: " + incomplete);
-  std::vector<LogGap> gaps = recordingGaps(run.events, ex.run_id, true, ctx);
+  std::vector<LogGap> gaps = recordingGaps(run.events, run_id, true, ctx);
   for (const LogGap& g : manifest_missing) {  // what the logger knew it never got, beyond the last recorded
     const bool known = std::any_of(gaps.begin(), gaps.end(), [&](const LogGap& h) {
       return h.channel == g.channel && h.first <= g.first && h.last >= g.last;
@@ -264,23 +243,11 @@ Explanation explainRunEvents(const RunEvents& run, const std::string& where, std
                        : format("%s serials %lld..%lld are missing from the log", g.channel.c_str(),
                                 static_cast<long long>(g.first), static_cast<long long>(g.last)));
 
-  ex.success = result.success;
-  ex.completion = result.completion;
-  ex.attempts = result.attempts;
-  ex.utility = result.utility;
-  ex.iterations = result.step;
+}
 
-  // The test replayed into a fresh planner, whose core tells what it checks and decides.
-  Recorder rec;
-  HostOptions host;
-  host.single_thread = true;
-  host.log_root = "";  // the planner reads no file
-  host.planner_observer = &rec;
-  ReplayedProcess planner("planner", config.protocol, /*extrinsic=*/true, host);
-  for (const LogEvent& e : run.events) planner.feed(e);
-  compareWithRecord(planner, run.events, ex.run_id, ctx, warn);
-
-  // What the environment says of the scenes: the goal distance at the start and after each action.
+// What the environment says of the scenes: the goal distance at the start and after each action.
+void goalDistances(Explanation& ex, Recorder& rec, const RunEvents& run, const BoundsContext& ctx) {
+  std::vector<std::string>& warn = ex.warnings;
   std::map<std::int64_t, const scene_t*> action_scene_by_step;
   const auto scenes = messages(run.events, ch::scene, ex.run_id, ctx, warn);
   for (const auto& [serial, s] : scenes) {
@@ -296,8 +263,12 @@ Explanation explainRunEvents(const RunEvents& run, const std::string& where, std
     else
       warn.push_back(format("iteration %lld: no SCENE after the action in the log", static_cast<long long>(step)));
   }
+}
 
-  // The sub-goals: the core's own figures, and what the iterations show of each.
+// The sub-goals: the core's own figures, what the iterations show of each, and how each ended.
+// Returns the actions executed.
+int explainSubGoals(Explanation& ex, const Recorder& rec, const PlannerConfig& p) {
+  std::vector<std::string>& warn = ex.warnings;
   ex.sub_goals = rec.sub_goals;
   for (std::size_t i = 0; i < ex.sub_goals.size() && i < rec.records.size(); ++i) {
     const SubGoalRecord& r = rec.records[i];
@@ -355,8 +326,12 @@ Explanation explainRunEvents(const RunEvents& run, const std::string& where, std
                               g.iterations, p.subgoal_timeout));
     }
   }
+  return executed;
+}
 
-  // How it ended, in the order the planner asks at the end of an iteration.
+// How it ended, in the order the planner asks at the end of an iteration.
+void howItEnded(Explanation& ex, const extrinsic_result_t& result, const PlannerConfig& p) {
+  std::vector<std::string>& warn = ex.warnings;
   const bool out_of_budget = result.step >= p.budget;
   const bool out_of_attempts = result.attempts >= p.max_attempts;
   if (result.success) {
@@ -376,8 +351,11 @@ Explanation explainRunEvents(const RunEvents& run, const std::string& where, std
                           "neither limit was reached",
                           static_cast<long long>(result.step), p.budget, result.attempts, p.max_attempts));
   }
+}
 
-  // The rebuilt figures against what the planner reported.
+// The rebuilt figures against what the planner reported.
+void compareWithResult(Explanation& ex, const extrinsic_result_t& result, int executed) {
+  std::vector<std::string>& warn = ex.warnings;
   if (static_cast<std::int64_t>(ex.steps.size()) != result.step)
     warn.push_back(format("the replayed planner ran %zu iterations, the EXTRINSIC_RESULT says %lld", ex.steps.size(),
                           static_cast<long long>(result.step)));
@@ -403,6 +381,59 @@ Explanation explainRunEvents(const RunEvents& run, const std::string& where, std
     differ("actions taken", g.actions_taken, r.actions_taken);
     differ("reached", g.reached, r.reached);
   }
+}
+
+}  // namespace
+
+Explanation explainRunEvents(const RunEvents& run, const std::string& where, std::int64_t torn_bytes,
+                             const std::string& incomplete, const std::vector<LogGap>& manifest_missing) {
+  Explanation ex;
+  ex.log = where;
+  ex.run_id = run.config.run_id;
+  ex.experiment = run.config.experiment;
+  ex.system = run.config.system;
+  ex.seed = run.config.seed;
+  RunConfig config;
+  try {
+    config = parseRunConfigText(run.config.config_yaml);
+  } catch (const std::exception& e) {
+    throw std::runtime_error(where + ": the configuration in the RUN_CONFIG of run '" + ex.run_id +
+                             "' is refused: " + e.what());
+  }
+  ex.agent = fs::path(config.extrinsic_checkpoint).parent_path().filename().string();
+  if (config.phase != Phase::Extrinsic || !config.scenario)
+    throw NotAnExtrinsicTest(where + ": run '" + ex.run_id +
+                             "' is not an extrinsic test (its RUN_CONFIG says phase: intrinsic); "
+                             "explain reads the log of one extrinsic test");
+  ex.scenario = config.scenario->name;
+  ex.planner = config.planner;
+  const PlannerConfig& p = config.planner;
+  const BoundsContext ctx{&config.protocol, &config};
+  std::vector<std::string>& warn = ex.warnings;
+
+  const auto results = messages(run.events, ch::extrinsicResult, ex.run_id, ctx, warn);
+  if (results.empty()) endsBeforeTheResult(run, where, ex.run_id, torn_bytes, incomplete, ctx, warn);
+  const extrinsic_result_t& result = results.begin()->second;
+  warnOfTheLog(run, results.size(), torn_bytes, incomplete, manifest_missing, ex.run_id, ctx, warn);
+  ex.success = result.success;
+  ex.completion = result.completion;
+  ex.attempts = result.attempts;
+  ex.utility = result.utility;
+  ex.iterations = result.step;
+
+  // The test replayed into a fresh planner, whose core tells what it checks and decides.
+  Recorder rec;
+  HostOptions host;
+  host.single_thread = true;
+  host.log_root = "";  // the planner reads no file
+  host.planner_observer = &rec;
+  ReplayedProcess planner("planner", config.protocol, /*extrinsic=*/true, host);
+  for (const LogEvent& e : run.events) planner.feed(e);
+  compareWithRecord(planner, run.events, ex.run_id, ctx, warn);
+  goalDistances(ex, rec, run, ctx);
+  const int executed = explainSubGoals(ex, rec, p);
+  howItEnded(ex, result, p);
+  compareWithResult(ex, result, executed);
   return ex;
 }
 

@@ -229,6 +229,80 @@ std::string manifestIncomplete(const fs::path& log, std::vector<LogGap>& missing
   return m.value("incomplete", std::string("its manifest says it is not complete"));
 }
 
+namespace {
+
+// The processes a run is replayed into: --into, else the predictors and the
+// process that decided in its phase (a motivation not built in cannot be).
+std::vector<std::string> processesToReplay(const ReplayOptions& o, const RunConfig& config, ReplayResult& result) {
+  std::vector<std::string> into = o.into;
+  const auto kinds = motivationKinds();
+  const bool own_motivation = std::find(kinds.begin(), kinds.end(), config.motivation.kind) == kinds.end();
+  if (into.empty()) {
+    into = {"predictors"};
+    if (result.extrinsic)
+      into.push_back("planner");
+    else if (own_motivation)
+      result.decider_skipped = "motivation.kind '" + config.motivation.kind +
+                               "' is not built in (it ran as a process of its own): its recorded decisions "
+                               "are fed to the predictors";
+    else
+      into.push_back("motivation");
+  } else if (own_motivation && !result.extrinsic && std::find(into.begin(), into.end(), "motivation") != into.end()) {
+    throw std::runtime_error("--into motivation: the run's motivation.kind '" + config.motivation.kind +
+                             "' is not built in (it ran as a process of its own), so it cannot be replayed here; "
+                             "replay --into predictors");
+  }
+  const auto affordance_kinds = affordanceKinds();
+  if (std::find(into.begin(), into.end(), "predictors") != into.end() &&
+      std::find(affordance_kinds.begin(), affordance_kinds.end(), config.predictors.affordance_kind) ==
+          affordance_kinds.end())
+    throw std::runtime_error("the run's predictors.affordance.kind '" + config.predictors.affordance_kind +
+                             "' is not one of afford's own (a program of one's own, or Python, registered it), so "
+                             "its predictors cannot be replayed here" +
+                             (result.extrinsic || own_motivation ? std::string() : "; replay --into motivation"));
+  for (const auto& name : into)
+    if (name != "predictors" && name != "motivation" && name != "planner")
+      throw std::runtime_error("--into: unknown process \"" + name + "\" (predictors, motivation or planner)");
+  return into;
+}
+
+// What the replayed processes published, against the recording: the
+// predictors' checksum, and the decisions of the process that decided in
+// this phase, serial by serial.
+void compareWithRecording(const std::vector<std::unique_ptr<ReplayedProcess>>& procs,
+                          const std::map<std::int64_t, const LogEvent*>& recorded_decisions, const BoundsContext& ctx,
+                          ReplayResult& result) {
+  for (auto& p : procs) {
+    if (p->name() == "predictors")
+      for (const LogEvent& e : p->published()) {
+        run_result_t m;
+        std::string why;
+        if (e.channel == ch::result.name && decodeChecked(e.data.data(), e.data.size(), ctx, m, why))
+          result.weights_checksum = m.weights_checksum;
+      }
+    if (p->name() == "motivation" || p->name() == "planner") {
+      // Only the process that decided in this phase is compared.
+      const bool decided_here = (p->name() == "planner") == result.extrinsic;
+      if (!decided_here) continue;
+      result.decisions_recorded = static_cast<std::int64_t>(recorded_decisions.size());
+      // Compared serial by serial: a recording may lack some (its gaps). Each
+      // serial once: a process publishes one again when a peer asks for it.
+      std::set<std::int64_t> seen;
+      for (const LogEvent& d : p->published()) {
+        RunHeader h;
+        if (d.channel != ch::decision.name ||
+            !peekRunHeader(d.data.data(), static_cast<std::uint32_t>(d.data.size()), h) || !seen.insert(h.serial).second)
+          continue;
+        ++result.decisions;
+        auto it = recorded_decisions.find(h.serial);
+        if (it != recorded_decisions.end()) result.decisions_differing += d.data != it->second->data;
+      }
+    }
+  }
+}
+
+}  // namespace
+
 ReplayResult replayRun(const ReplayOptions& o, spdlog::logger& log) {
   ReplayResult result;
   const std::shared_ptr<const BusKey> key = o.bus_key.empty() ? nullptr : busKeyFrom(o.bus_key);
@@ -270,37 +344,8 @@ ReplayResult replayRun(const ReplayOptions& o, spdlog::logger& log) {
   fs::path run_folder = fs::absolute(log_folder).lexically_normal();
   if (!run_folder.has_filename()) run_folder = run_folder.parent_path();  // a trailing '/'
   const std::string log_root = run_folder.parent_path().string();
-  std::vector<std::string> into = o.into;
-  const auto kinds = motivationKinds();
-  const bool own_motivation =
-      std::find(kinds.begin(), kinds.end(), config.motivation.kind) == kinds.end();
-  if (into.empty()) {
-    into = {"predictors"};
-    if (result.extrinsic)
-      into.push_back("planner");
-    else if (own_motivation)
-      result.decider_skipped = "motivation.kind '" + config.motivation.kind +
-                               "' is not built in (it ran as a process of its own): its recorded decisions "
-                               "are fed to the predictors";
-    else
-      into.push_back("motivation");
-  } else if (own_motivation && !result.extrinsic &&
-             std::find(into.begin(), into.end(), "motivation") != into.end()) {
-    throw std::runtime_error("--into motivation: the run's motivation.kind '" + config.motivation.kind +
-                             "' is not built in (it ran as a process of its own), so it cannot be replayed here; "
-                             "replay --into predictors");
-  }
-  const auto affordance_kinds = affordanceKinds();
-  if (std::find(into.begin(), into.end(), "predictors") != into.end() &&
-      std::find(affordance_kinds.begin(), affordance_kinds.end(), config.predictors.affordance_kind) ==
-          affordance_kinds.end())
-    throw std::runtime_error("the run's predictors.affordance.kind '" + config.predictors.affordance_kind +
-                             "' is not one of afford's own (a program of one's own, or Python, registered it), so "
-                             "its predictors cannot be replayed here" + (result.extrinsic || own_motivation ? std::string() : "; replay --into motivation"));
   std::vector<std::unique_ptr<ReplayedProcess>> procs;
-  for (const auto& name : into) {
-    if (name != "predictors" && name != "motivation" && name != "planner")
-      throw std::runtime_error("--into: unknown process \"" + name + "\" (predictors, motivation or planner)");
+  for (const auto& name : processesToReplay(o, config, result)) {
     // The predictors load an extrinsic run's agent only from the log root the log is in.
     HostOptions host;
     host.single_thread = true;
@@ -326,33 +371,7 @@ ReplayResult replayRun(const ReplayOptions& o, spdlog::logger& log) {
     for (auto& p : procs) p->feed(e);
   }
 
-  for (auto& p : procs) {
-    if (p->name() == "predictors")
-      for (const LogEvent& e : p->published()) {
-        run_result_t m;
-        std::string why;
-        if (e.channel == ch::result.name && decodeChecked(e.data.data(), e.data.size(), ctx, m, why))
-          result.weights_checksum = m.weights_checksum;
-      }
-    if (p->name() == "motivation" || p->name() == "planner") {
-      // Only the process that decided in this phase is compared.
-      const bool decided_here = (p->name() == "planner") == result.extrinsic;
-      if (!decided_here) continue;
-      result.decisions_recorded = static_cast<std::int64_t>(recorded_decisions.size());
-      // Compared serial by serial: a recording may lack some (its gaps). Each
-      // serial once: a process publishes one again when a peer asks for it.
-      std::set<std::int64_t> seen;
-      for (const LogEvent& d : p->published()) {
-        RunHeader h;
-        if (d.channel != ch::decision.name ||
-            !peekRunHeader(d.data.data(), static_cast<std::uint32_t>(d.data.size()), h) || !seen.insert(h.serial).second)
-          continue;
-        ++result.decisions;
-        auto it = recorded_decisions.find(h.serial);
-        if (it != recorded_decisions.end()) result.decisions_differing += d.data != it->second->data;
-      }
-    }
-  }
+  compareWithRecording(procs, recorded_decisions, ctx, result);
   return result;
 }
 

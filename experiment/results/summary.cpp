@@ -173,164 +173,182 @@ void summariseExtrinsic(json& summary, const Plan& plan, const std::vector<Plann
   }
 }
 
+namespace {
+
+// A finished intrinsic run's entry in its system's "runs".
+json runEntry(const Plan& plan, const PlannedRun& p, const RunOutcome& r, double mae) {
+  json entry = {{"run_id", p.spec.run_id},
+                {"seed", p.spec.seed},
+                {"affordance", r.curve.back().affordance},
+                {"affordance_mae", mae},
+                {"weights_checksum", r.weights_checksum},
+                {"actions_executed", r.executed},
+                {"successes", r.successes},
+                {"looks", r.looks},
+                {"replayed", r.replayed},
+                {"replayed_effects", r.replayed_effects},
+                {"revisits", r.revisits},
+                {"reused_from", r.reused_from.empty() ? json(nullptr) : json(r.reused_from)},
+                {"wall_seconds", r.wall_seconds},
+                {"steps_per_second", r.run_seconds > 0 ? p.spec.steps / r.run_seconds : 0.0}};
+  if (plan.tables) {  // random tables: each run against its own table; no mean table or curve across them
+    entry["table"] = p.table;
+    entry["condition"] = p.intrinsic_condition.empty() ? std::string("default") : p.intrinsic_condition;
+    entry["target"] = p.target;
+    return entry;
+  }
+  entry["log_dir"] = r.log_dir.empty() ? json(nullptr) : json(r.log_dir);
+  entry["checkpoint"] = r.checkpoint;
+  entry["peak_rss_kb"] = r.peak_rss_kb;
+  entry["log_bytes"] = r.log_bytes;
+  entry["log_bytes_per_step"] = static_cast<double>(r.log_bytes) / p.spec.steps;
+  return entry;
+}
+
+// A system's final tables: their mean, least and greatest entries, and how far each is from the target;
+// and affordance_<system>.csv.
+void summariseFinals(json& js, const std::string& sys, const Table& target, const std::vector<Table>& finals,
+                     const std::vector<double>& maes, const std::vector<std::string>& object_names,
+                     const std::string& out_dir) {
+  Table mean = target, mn = target, mx = target;
+  for (std::size_t i = 0; i < target.size(); ++i)
+    for (int a = 0; a < kNumActions; ++a) {
+      double s = 0, lo = 1e9, hi = -1e9;
+      for (const auto& f : finals) {
+        s += f[i][a];
+        lo = std::min(lo, f[i][a]);
+        hi = std::max(hi, f[i][a]);
+      }
+      mean[i][a] = s / finals.size();
+      mn[i][a] = lo;
+      mx[i][a] = hi;
+    }
+  double mae_sum = 0;
+  for (double m : maes) mae_sum += m;
+  js["affordance"] = mean;
+  js["affordance_min"] = mn;
+  js["affordance_max"] = mx;
+  js["affordance_mae"] = mae_sum / maes.size();
+  js["affordance_mae_of_mean"] = meanAbsError(mean, target);
+  std::ostringstream csv;
+  csv << "system,object,action,target,mean,min,max\n";
+  for (std::size_t i = 0; i < target.size(); ++i)
+    for (int a = 0; a < kNumActions; ++a)
+      csv << sys << ",\"" << object_names[i] << "\"," << kActionNames[a] << "," << target[i][a] << "," << mean[i][a]
+          << "," << mn[i][a] << "," << mx[i][a] << "\n";
+  writeWhole(fs::path(out_dir) / ("affordance_" + sys + ".csv"), csv.str());
+}
+
+// One system's summary of its finished intrinsic runs; and curves_<system>.csv.
+json summariseSystem(const Plan& plan, const std::string& sys, const PhaseRuns& phase,
+                     const std::vector<std::string>& object_names, const std::string& out_dir) {
+  const RunConfig& cfg = plan.configs.at(sys);
+  Table target;
+  for (const auto& ob : cfg.world.objects) target.emplace_back(ob.affordance.begin(), ob.affordance.end());
+  json js = {{"target", target}, {"runs", json::array()}};
+  std::vector<Table> finals;
+  std::vector<double> maes;
+  std::ostringstream curves_csv;
+  curves_csv << "system,run_id,seed,step,object,action,prediction\n";
+  std::map<std::int64_t, std::pair<Table, int>> curve_sum;
+  for (const auto& p : plan.runs) {
+    if (p.system != sys || !phase.finished[p.index]) continue;
+    const RunOutcome& r = phase.outcomes[p.index];
+    if (!r.ok || r.curve.empty()) {
+      js["failed_runs"].push_back({{"run_id", p.spec.run_id}, {"seed", p.spec.seed}, {"error", r.error}});
+      continue;
+    }
+    // Every run reports its table at the same steps (run.curve_interval): a snapshot lost on the
+    // way would bias the mean curve at that step, so say so.
+    if (r.curve.size() != static_cast<std::size_t>(cfg.steps / cfg.curve_interval + 1) + (cfg.steps % cfg.curve_interval != 0))
+      js["curve_gaps"].push_back({{"run_id", p.spec.run_id}, {"snapshots", r.curve.size()}});
+    finals.push_back(r.curve.back().affordance);
+    maes.push_back(meanAbsError(finals.back(), p.target));
+    js["runs"].push_back(runEntry(plan, p, r, maes.back()));
+    if (plan.tables) continue;
+    for (const auto& snap : r.curve) {
+      auto& [sum, n] = curve_sum[snap.step];
+      if (sum.empty()) sum = Table(snap.affordance.size(), std::vector<double>(kNumActions, 0.0));
+      for (std::size_t i = 0; i < snap.affordance.size(); ++i)
+        for (int a = 0; a < kNumActions; ++a) {
+          sum[i][a] += snap.affordance[i][a];
+          curves_csv << sys << "," << p.spec.run_id << "," << p.spec.seed << "," << snap.step << ",\""
+                     << object_names[i] << "\"," << kActionNames[a] << "," << snap.affordance[i][a] << "\n";
+        }
+      ++n;
+    }
+  }
+  if (!finals.empty() && !plan.tables) {
+    summariseFinals(js, sys, target, finals, maes, object_names, out_dir);
+    json steps = json::array(), means = json::array();
+    for (auto& [step, sn] : curve_sum) {
+      auto& [sum, n] = sn;
+      for (auto& row : sum)
+        for (auto& v : row) v /= n;
+      steps.push_back(step);
+      means.push_back(sum);
+    }
+    js["curves"] = {{"steps", steps}, {"mean", means}};
+  }
+  if (!plan.tables) writeWhole(fs::path(out_dir) / ("curves_" + sys + ".csv"), curves_csv.str());
+  if (plan.tables) js.erase("target");
+  return js;
+}
+
+// The paper's numbers for the same experiment (config/reference.yaml), beside ours: its mean absolute
+// errors, the floors of random tables, its extrinsic tables and completion fit.
+void addReference(json& summary, const Plan& plan) {
+  const auto& exp = plan.exp;
+  if (!exp.file.empty()) return;  // an experiment from a file elsewhere has none beside it
+  const Reference& ref = *plan.reference;
+  const YAML::Node reference = ref.entry(exp.name);
+  const std::string key = exp.name + ".";
+  for (const auto& sys : plan.systems)
+    if (reference && reference["affordance_mae"] && reference["affordance_mae"][sys])
+      summary["systems"][sys]["reference_affordance_mae"] =
+          ref.number(reference["affordance_mae"][sys], key + "affordance_mae." + sys);
+  if (reference && reference["source"]) summary["reference_source"] = ref.text(reference["source"], key + "source");
+  if (plan.tables && reference && reference["floors"])  // what issue 11 asks of the memory options, shown beside
+    summary["random_tables"]["floors"] = {{"mean", ref.number(reference["floors"]["mean"], key + "floors.mean")},
+                                          {"worst", ref.number(reference["floors"]["worst"], key + "floors.worst")},
+                                          {"source", ref.text(reference["floors"]["source"], key + "floors.source")}};
+  const std::string ekey = exp.name + "_extrinsic";
+  const YAML::Node ext = ref.entry(ekey);
+  if (ext && ext["table_metric"])
+    for (const auto& sys : plan.systems)
+      if (ext["table_metric"][sys]) {  // the paper's scenarios 1-5
+        const auto row = ref.numbers(ext["table_metric"][sys], ekey + ".table_metric." + sys);
+        for (std::size_t k = 0; k < row.size(); ++k)
+          summary["systems"][sys]["reference_table_metric"]["scenario" + std::to_string(k + 1)] = row[k];
+      }
+  if (ext && ext["completion_fit"])
+    summary["reference_completion_fit"] = {{"a", ref.number(ext["completion_fit"]["a"], ekey + ".completion_fit.a")},
+                                           {"b", ref.number(ext["completion_fit"]["b"], ekey + ".completion_fit.b")}};
+  if (ext && ext["source"]) summary["reference_extrinsic_source"] = ref.text(ext["source"], ekey + ".source");
+}
+
+}  // namespace
+
 // summary.json content (docs/results-schema.md) of the finished runs; also writes the CSV files.
 json summarise(const Plan& plan, const Hosting& hosting, const PhaseRuns& phase, const std::string& out_dir) {
-  const auto& outcomes = phase.outcomes;
-  const auto& runs = plan.runs;
-  const auto& configs = plan.configs;
-  const int reps = plan.reps;
-  const auto& exp = plan.exp;
-  const auto& any_cfg = configs.begin()->second;
   std::vector<std::string> object_names;
-  for (const auto& ob : any_cfg.world.objects) object_names.push_back(ob.name);
-  json summary = {{"experiment", exp.name},
-                  {"description", exp.description},
-                  {"steps", runs.front().spec.steps},
-                  {"repetitions", reps},
+  for (const auto& ob : plan.configs.begin()->second.world.objects) object_names.push_back(ob.name);
+  json summary = {{"experiment", plan.exp.name},
+                  {"description", plan.exp.description},
+                  {"steps", plan.runs.front().spec.steps},
+                  {"repetitions", plan.reps},
                   {"seed", plan.seed},
                   {"transport", hosting.transport},
                   {"network", hosting.network},
                   {"afford_version", AFFORD_VERSION},
                   {"objects", object_names},
-                  {"actions", {"move", "turn green", "turn red", "turn blue"}},
+                  {"actions", std::vector<std::string>(kActionNames.begin(), kActionNames.end())},
                   {"systems", json::object()}};
-  const Reference& ref = *plan.reference;
-  // The paper's numbers belong to the shipped experiments: one from a file elsewhere has none beside it.
-  const bool shipped = exp.file.empty();
-  if (!shipped) summary["experiment_file"] = exp.file;
+  if (!plan.exp.file.empty()) summary["experiment_file"] = plan.exp.file;
   if (!hosting.processes.empty()) summary["processes"] = hosting.processes;  // --process: the commands run in place of ours
-  const YAML::Node reference = shipped ? ref.entry(exp.name) : YAML::Node();
-  const std::string key = exp.name + ".";
-  for (const auto& sys : plan.systems) {
-    const RunConfig& cfg = configs.at(sys);
-    Table target;
-    for (const auto& ob : cfg.world.objects) target.emplace_back(ob.affordance.begin(), ob.affordance.end());
-    json js = {{"target", target}, {"runs", json::array()}};
-    std::vector<Table> finals;
-    std::vector<double> maes;
-    std::ostringstream curves_csv;
-    curves_csv << "system,run_id,seed,step,object,action,prediction\n";
-    std::map<std::int64_t, std::pair<Table, int>> curve_sum;
-    for (const auto& p : runs) {
-      if (p.system != sys || !phase.finished[p.index]) continue;
-      const RunOutcome& r = outcomes[p.index];
-      if (!r.ok || r.curve.empty()) {
-        js["failed_runs"].push_back({{"run_id", p.spec.run_id}, {"seed", p.spec.seed}, {"error", r.error}});
-        continue;
-      }
-      // Every run reports its table at the same steps (run.curve_interval): a snapshot lost on the
-      // way would bias the mean curve at that step, so say so.
-      if (r.curve.size() != static_cast<std::size_t>(cfg.steps / cfg.curve_interval + 1) + (cfg.steps % cfg.curve_interval != 0))
-        js["curve_gaps"].push_back({{"run_id", p.spec.run_id}, {"snapshots", r.curve.size()}});
-      const Table& fin = r.curve.back().affordance;
-      finals.push_back(fin);
-      maes.push_back(meanAbsError(fin, p.target));
-      json entry = {{"run_id", p.spec.run_id},
-                    {"seed", p.spec.seed},
-                    {"affordance", fin},
-                    {"affordance_mae", maes.back()},
-                    {"weights_checksum", r.weights_checksum},
-                    {"actions_executed", r.executed},
-                    {"successes", r.successes},
-                    {"looks", r.looks},
-                    {"replayed", r.replayed},
-                    {"replayed_effects", r.replayed_effects},
-                    {"revisits", r.revisits},
-                    {"reused_from", r.reused_from.empty() ? json(nullptr) : json(r.reused_from)},
-                    {"wall_seconds", r.wall_seconds},
-                    {"steps_per_second", r.run_seconds > 0 ? p.spec.steps / r.run_seconds : 0.0}};
-      if (plan.tables) {  // random tables: each run against its own table; no mean table or curve across them
-        entry["table"] = p.table;
-        entry["condition"] = p.intrinsic_condition.empty() ? std::string("default") : p.intrinsic_condition;
-        entry["target"] = p.target;
-        js["runs"].push_back(entry);
-        continue;
-      }
-      entry["log_dir"] = r.log_dir.empty() ? json(nullptr) : json(r.log_dir);
-      entry["checkpoint"] = r.checkpoint;
-      entry["peak_rss_kb"] = r.peak_rss_kb;
-      entry["log_bytes"] = r.log_bytes;
-      entry["log_bytes_per_step"] = static_cast<double>(r.log_bytes) / p.spec.steps;
-      js["runs"].push_back(entry);
-      for (const auto& snap : r.curve) {
-        auto& [sum, n] = curve_sum[snap.step];
-        if (sum.empty()) sum = Table(snap.affordance.size(), std::vector<double>(kNumActions, 0.0));
-        for (std::size_t i = 0; i < snap.affordance.size(); ++i)
-          for (int a = 0; a < kNumActions; ++a) {
-            sum[i][a] += snap.affordance[i][a];
-            curves_csv << sys << "," << p.spec.run_id << "," << p.spec.seed << "," << snap.step << ",\""
-                       << object_names[i] << "\"," << kActionNames[a] << "," << snap.affordance[i][a] << "\n";
-          }
-        ++n;
-      }
-    }
-    if (!finals.empty() && !plan.tables) {
-      Table mean = target, mn = target, mx = target;
-      for (std::size_t i = 0; i < target.size(); ++i)
-        for (int a = 0; a < kNumActions; ++a) {
-          double s = 0, lo = 1e9, hi = -1e9;
-          for (const auto& f : finals) {
-            s += f[i][a];
-            lo = std::min(lo, f[i][a]);
-            hi = std::max(hi, f[i][a]);
-          }
-          mean[i][a] = s / finals.size();
-          mn[i][a] = lo;
-          mx[i][a] = hi;
-        }
-      double mae_sum = 0;
-      for (double m : maes) mae_sum += m;
-      js["affordance"] = mean;
-      js["affordance_min"] = mn;
-      js["affordance_max"] = mx;
-      js["affordance_mae"] = mae_sum / maes.size();
-      js["affordance_mae_of_mean"] = meanAbsError(mean, target);
-      json steps = json::array(), means = json::array();
-      for (auto& [step, sn] : curve_sum) {
-        auto& [sum, n] = sn;
-        for (auto& row : sum)
-          for (auto& v : row) v /= n;
-        steps.push_back(step);
-        means.push_back(sum);
-      }
-      js["curves"] = {{"steps", steps}, {"mean", means}};
-      std::ostringstream csv;
-      csv << "system,object,action,target,mean,min,max\n";
-      for (std::size_t i = 0; i < target.size(); ++i)
-        for (int a = 0; a < kNumActions; ++a)
-          csv << sys << ",\"" << object_names[i] << "\"," << kActionNames[a] << "," << target[i][a] << ","
-              << mean[i][a] << "," << mn[i][a] << "," << mx[i][a] << "\n";
-      writeWhole(fs::path(out_dir) / ("affordance_" + sys + ".csv"), csv.str());
-    }
-    if (!plan.tables) writeWhole(fs::path(out_dir) / ("curves_" + sys + ".csv"), curves_csv.str());
-    if (plan.tables) js.erase("target");
-    if (reference && reference["affordance_mae"] && reference["affordance_mae"][sys])
-      js["reference_affordance_mae"] = ref.number(reference["affordance_mae"][sys], key + "affordance_mae." + sys);
-    summary["systems"][sys] = js;
-  }
-  if (reference && reference["source"]) summary["reference_source"] = ref.text(reference["source"], key + "source");
-  if (plan.tables) {
-    summary["random_tables"] = summariseTables(plan, phase, out_dir);
-    if (reference && reference["floors"])  // what issue 11 asks of the memory options, shown beside
-      summary["random_tables"]["floors"] = {{"mean", ref.number(reference["floors"]["mean"], key + "floors.mean")},
-                                            {"worst", ref.number(reference["floors"]["worst"], key + "floors.worst")},
-                                            {"source", ref.text(reference["floors"]["source"], key + "floors.source")}};
-  }
-  {  // the paper's extrinsic tables, for the same experiment
-    const std::string ekey = exp.name + "_extrinsic";
-    const YAML::Node ext = shipped ? ref.entry(ekey) : YAML::Node();
-    if (ext && ext["table_metric"])
-      for (const auto& sys : plan.systems)
-        if (ext["table_metric"][sys]) {  // the paper's scenarios 1-5
-          const auto row = ref.numbers(ext["table_metric"][sys], ekey + ".table_metric." + sys);
-          for (std::size_t k = 0; k < row.size(); ++k)
-            summary["systems"][sys]["reference_table_metric"]["scenario" + std::to_string(k + 1)] = row[k];
-        }
-    if (ext && ext["completion_fit"])
-      summary["reference_completion_fit"] = {{"a", ref.number(ext["completion_fit"]["a"], ekey + ".completion_fit.a")},
-                                             {"b", ref.number(ext["completion_fit"]["b"], ekey + ".completion_fit.b")}};
-    if (ext && ext["source"]) summary["reference_extrinsic_source"] = ref.text(ext["source"], ekey + ".source");
-  }
+  for (const auto& sys : plan.systems) summary["systems"][sys] = summariseSystem(plan, sys, phase, object_names, out_dir);
+  if (plan.tables) summary["random_tables"] = summariseTables(plan, phase, out_dir);
+  addReference(summary, plan);
   return summary;
 }
 

@@ -163,10 +163,183 @@ void RunDriver::nudge(const std::string& process, const Seen& s) {
   }
 }
 
+bool RunDriver::logged() const {
+  return std::find(spec_->processes.begin(), spec_->processes.end(), "logger") != spec_->processes.end();
+}
+
+bool RunDriver::loggerJoined() const {
+  const auto it = seen_.find("logger");
+  return it != seen_.end() && it->second.run_id == spec_->run_id;
+}
+
+std::string RunDriver::missing(const std::function<bool(const Seen&)>& pred) const {
+  std::string names;
+  for (const auto& p : spec_->processes)
+    if (!seen_.count(p) || !pred(seen_.at(p))) names += (names.empty() ? "" : ", ") + p;
+  return names;
+}
+
+std::string RunDriver::failedProcess() const {
+  for (const auto& p : spec_->processes) {
+    auto it = seen_.find(p);
+    if (it == seen_.end() || it->second.run_id != spec_->run_id || it->second.state != process_status_t::FAILED) continue;
+    if (it->second.config_digest != config_msg_.digest) continue;  // about a configuration that is not ours
+    // Once the result is in, a process that fails afterwards (restarted after its
+    // last step, it refuses to save its weights again) changes nothing; the logger does.
+    if (have_result_ && p != "logger") continue;
+    return "process '" + p + "' failed: " + it->second.detail;
+  }
+  return "";
+}
+
+// A process that took a configuration of this run other than ours: another publisher on the bus.
+std::string RunDriver::impostor() const {
+  for (const auto& p : spec_->processes) {
+    auto it = seen_.find(p);
+    if (it != seen_.end() && it->second.run_id == spec_->run_id && it->second.state != process_status_t::FAILED &&
+        it->second.config_digest != config_msg_.digest)
+      return "process '" + p + "' took a configuration of this run that is not the runner's: another publisher "
+             "on the bus sends RUN_CONFIG with this run id";
+  }
+  return "";
+}
+
+void RunDriver::stopAndWait(const Waiting& w) {
+  const bool opened = phase_ == Phase::Running || loggerJoined();
+  phase_ = Phase::Stopping;
+  sendControl(spec_->run_id, run_control_t::STOP);
+  const auto until = Clock::now() + milliseconds(config_.protocol.close_timeout_ms);
+  while (logged() && opened && !logger_done_ && Clock::now() < until && w.health().empty()) w.pump();
+}
+
+RunOutcome& RunDriver::failed(const std::string& why) {
+  RunOutcome& out = *outcome_;
+  out.ok = false;
+  out.error = "run '" + spec_->run_id + "': " + why;
+  if (phase_ != Phase::Freeing) {
+    phase_ = Phase::Stopping;
+    sendControl(spec_->run_id, run_control_t::STOP);  // no process stays in a failed run
+  }
+  out.wall_seconds = std::chrono::duration<double>(Clock::now() - started_at_).count();
+  return out;
+}
+
+RunOutcome& RunDriver::interrupted(const Waiting& w) {
+  std::int64_t step = -1;
+  for (const auto& [p, s] : seen_)
+    if (s.run_id == spec_->run_id) step = std::max(step, s.step);
+  stopAndWait(w);
+  RunOutcome& out = *outcome_;
+  out.ok = false;
+  out.interrupted = true;
+  out.error = "run '" + spec_->run_id + "': interrupted at step " + std::to_string(step);
+  out.wall_seconds = std::chrono::duration<double>(Clock::now() - started_at_).count();
+  return out;
+}
+
+// 1. Every process present and free (one still in another run is told to stop on its next STATUS).
+RunDriver::Ending RunDriver::waitFree(const Waiting& w) {
+  const ProtocolConfig& protocol = config_.protocol;
+  const auto fresh = milliseconds(3 * protocol.heartbeat_ms);  // heard within three heartbeats: alive
+  const auto free = [&](const Seen& s) {
+    return s.state == process_status_t::WAITING && s.run_id.empty() && Clock::now() - s.at < fresh;
+  };
+  phase_ = Phase::Freeing;
+  phase_at_ = Clock::now();
+  const auto deadline = Clock::now() + milliseconds(protocol.ready_timeout_ms);
+  while (!missing(free).empty()) {
+    if (auto h = w.health(); !h.empty()) return {false, h};
+    if (stopRequested()) return {true, ""};
+    if (Clock::now() > deadline)
+      return {false, "no process of this name reported free for a run within " +
+                         std::to_string(protocol.ready_timeout_ms / 1000.0).substr(0, 4) + " s: " + missing(free)};
+    w.pump();
+  }
+  return {};
+}
+
+// 2. Configure: START as soon as every one says READY.
+RunDriver::Ending RunDriver::configure(const Waiting& w) {
+  const ProtocolConfig& protocol = config_.protocol;
+  phase_ = Phase::Configuring;
+  edge_.send(ch::runConfig, config_msg_);
+  auto said = Clock::now();
+  auto again = milliseconds(protocol.retry_ms);
+  const auto deadline = Clock::now() + milliseconds(protocol.ready_timeout_ms);
+  const auto ready = [&](const Seen& s) { return s.run_id == spec_->run_id && s.state == process_status_t::READY; };
+  while (!missing(ready).empty()) {
+    if (auto h = w.health(); !h.empty()) return {false, h};
+    if (auto f = failedProcess(); !f.empty()) return {false, f};
+    if (auto f = impostor(); !f.empty()) return {false, f};
+    if (stopRequested()) return {true, ""};
+    if (Clock::now() > deadline) return {false, "not configured within the protocol's ready_timeout_ms: " + missing(ready)};
+    if (Clock::now() - said > again) {  // a datagram lost on the way there or back: say it again, backing off
+      edge_.send(ch::runConfig, config_msg_);
+      said = Clock::now();
+      again = std::min(again * 2, milliseconds(protocol.heartbeat_ms));
+    }
+    w.pump();
+  }
+  return {};
+}
+
+// 3. Run: until the result, every affordance table and the logger are in.
+RunDriver::Ending RunDriver::runSteps(const Waiting& w) {
+  const RunSpec& spec = *spec_;
+  RunOutcome& out = *outcome_;
+  phase_ = Phase::Running;
+  sendControl(spec.run_id, run_control_t::START);
+  const auto started = Clock::now();
+  std::int64_t progress = -1;
+  auto progress_at = Clock::now();
+  const auto silence = std::chrono::duration<double>(spec.stall_seconds);
+  // An intrinsic run reports its affordance table every curve_interval steps and at the end.
+  const std::size_t tables = spec.extrinsic ? 0
+                                            : static_cast<std::size_t>(config_.steps / config_.curve_interval + 1 +
+                                                                       (config_.steps % config_.curve_interval != 0));
+  // The logger must be in the run to close its log: one restarted after the
+  // last step still catches up first.
+  while (!have_result_ || out.curve.size() < tables || (logged() && !loggerJoined())) {
+    if (auto h = w.health(); !h.empty()) return {false, h};
+    if (auto f = failedProcess(); !f.empty()) return {false, f};
+    if (stopRequested()) return {true, ""};
+    w.pump();
+    edge_.askMissing();
+    const auto now = Clock::now();
+    std::int64_t handled = 0;  // the steps of all, in the run
+    for (const auto& p : spec.processes) {
+      auto it = seen_.find(p);
+      if (it == seen_.end()) continue;
+      if (now - it->second.at > silence)
+        return {false, "process '" + p + "' stopped reporting (last heard " +
+                           std::to_string(std::chrono::duration<double>(now - it->second.at).count()) + " s ago)"};
+      if (it->second.run_id == spec.run_id) handled += it->second.step + 1;
+    }
+    // Progress is any process moving on (a restarted one catching up included), or a table coming in.
+    if (const auto p = handled + static_cast<std::int64_t>(out.curve.size()); p != progress) {
+      progress = p;
+      progress_at = now;
+    }
+    if (now - progress_at > silence) {
+      std::string where;
+      for (const auto& p : spec.processes)
+        if (seen_.count(p)) where += " " + p + "@" + std::to_string(seen_[p].step);
+      std::string lacking;
+      for (const auto& [channel, range] : edge_.missingRanges())
+        lacking += " " + channel + " " + std::to_string(range.first) + ".." + std::to_string(range.second - 1);
+      return {false, "stalled: no progress for " + std::to_string(static_cast<int>(spec.stall_seconds)) +
+                         " s (last step handled per process:" + where + ")" +
+                         (lacking.empty() ? "" : "; the runner still misses" + lacking)};
+    }
+  }
+  out.run_seconds = std::chrono::duration<double>(Clock::now() - started).count();
+  return {};
+}
+
 RunOutcome RunDriver::run(const RunSpec& spec, const std::function<void()>& pump,
                           const std::function<std::string()>& health) {
   RunOutcome out;
-  const auto t0 = Clock::now();
+  started_at_ = Clock::now();
   try {
     config_ = parseRunConfigText(spec.config_yaml);
   } catch (const std::exception& e) {
@@ -179,7 +352,6 @@ RunOutcome RunDriver::run(const RunSpec& spec, const std::function<void()>& pump
   logger_done_ = false;
   nudged_.clear();
   edge_.join(spec.run_id, &config_);
-  const ProtocolConfig& protocol = config_.protocol;
   config_msg_ = run_config_t();
   config_msg_.run_id = spec.run_id;
   config_msg_.step = 0;
@@ -197,166 +369,22 @@ RunOutcome RunDriver::run(const RunSpec& spec, const std::function<void()>& pump
       d->edge_.leave();
     }
   } reset{this};
-
-  const bool logged = std::find(spec.processes.begin(), spec.processes.end(), "logger") != spec.processes.end();
-  // The logger took the run (a log to close), as far as its STATUS says.
-  auto loggerJoined = [&] { return seen_.count("logger") && seen_["logger"].run_id == spec.run_id; };
-  auto stopAndWait = [&] {  // the processes leave the run; the logger closes the log, if it opened one
-    const bool opened = phase_ == Phase::Running || loggerJoined();
-    phase_ = Phase::Stopping;
-    sendControl(spec.run_id, run_control_t::STOP);
-    const auto until = Clock::now() + milliseconds(protocol.close_timeout_ms);
-    while (logged && opened && !logger_done_ && Clock::now() < until && health().empty()) pump();
-  };
-  auto fail = [&](const std::string& why) {
-    out.ok = false;
-    out.error = "run '" + spec.run_id + "': " + why;
-    if (phase_ != Phase::Freeing) {
-      phase_ = Phase::Stopping;
-      sendControl(spec.run_id, run_control_t::STOP);  // no process stays in a failed run
-    }
-    out.wall_seconds = std::chrono::duration<double>(Clock::now() - t0).count();
-    return out;
-  };
-  auto interrupted = [&] {
-    std::int64_t step = -1;
-    for (const auto& [p, s] : seen_)
-      if (s.run_id == spec.run_id) step = std::max(step, s.step);
-    stopAndWait();
-    out.ok = false;
-    out.interrupted = true;
-    out.error = "run '" + spec.run_id + "': interrupted at step " + std::to_string(step);
-    out.wall_seconds = std::chrono::duration<double>(Clock::now() - t0).count();
-    return out;
-  };
-  auto missing = [&](auto pred) {
-    std::string names;
-    for (const auto& p : spec.processes)
-      if (!seen_.count(p) || !pred(seen_.at(p))) names += (names.empty() ? "" : ", ") + p;
-    return names;
-  };
-  auto failedProcess = [&]() -> std::string {
-    for (const auto& p : spec.processes) {
-      auto it = seen_.find(p);
-      if (it == seen_.end() || it->second.run_id != spec.run_id || it->second.state != process_status_t::FAILED) continue;
-      if (it->second.config_digest != config_msg_.digest) continue;  // about a configuration that is not ours
-      // Once the result is in, a process that fails afterwards (restarted after its
-      // last step, it refuses to save its weights again) changes nothing; the logger does.
-      if (have_result_ && p != "logger") continue;
-      return "process '" + p + "' failed: " + it->second.detail;
-    }
-    return "";
-  };
-  // Heard within three heartbeats: alive (a stale entry is a process gone).
-  const auto fresh = milliseconds(3 * protocol.heartbeat_ms);
-  auto free = [&](const Seen& s) {
-    return s.state == process_status_t::WAITING && s.run_id.empty() && Clock::now() - s.at < fresh;
-  };
-
-  // 1. Every process present and free (one still in another run is told to stop on its next STATUS).
-  phase_ = Phase::Freeing;
-  phase_at_ = Clock::now();
-  auto deadline = Clock::now() + milliseconds(protocol.ready_timeout_ms);
-  while (!missing(free).empty()) {
-    if (auto h = health(); !h.empty()) return fail(h);
-    if (stopRequested()) return interrupted();
-    if (Clock::now() > deadline)
-      return fail("no process of this name reported free for a run within " +
-                  std::to_string(protocol.ready_timeout_ms / 1000.0).substr(0, 4) + " s: " + missing(free));
-    pump();
+  const Waiting w{pump, health};
+  for (auto stage : {&RunDriver::waitFree, &RunDriver::configure, &RunDriver::runSteps}) {
+    const Ending e = (this->*stage)(w);
+    if (e.interrupted) return interrupted(w);
+    if (!e.why.empty()) return failed(e.why);
   }
-
-  // 2. Configure: START as soon as every one says READY.
-  phase_ = Phase::Configuring;
-  edge_.send(ch::runConfig, config_msg_);
-  auto said = Clock::now();
-  auto again = milliseconds(protocol.retry_ms);
-  deadline = Clock::now() + milliseconds(protocol.ready_timeout_ms);
-  auto ready = [&](const Seen& s) { return s.run_id == spec.run_id && s.state == process_status_t::READY; };
-  // A process that took a configuration of this run other than ours: another publisher on the bus.
-  auto impostor = [&]() -> std::string {
-    for (const auto& p : spec.processes) {
-      auto it = seen_.find(p);
-      if (it != seen_.end() && it->second.run_id == spec.run_id && it->second.state != process_status_t::FAILED &&
-          it->second.config_digest != config_msg_.digest)
-        return "process '" + p + "' took a configuration of this run that is not the runner's: another publisher "
-               "on the bus sends RUN_CONFIG with this run id";
-    }
-    return "";
-  };
-  while (!missing(ready).empty()) {
-    if (auto h = health(); !h.empty()) return fail(h);
-    if (auto f = failedProcess(); !f.empty()) return fail(f);
-    if (auto f = impostor(); !f.empty()) return fail(f);
-    if (stopRequested()) return interrupted();
-    if (Clock::now() > deadline) return fail("not configured within the protocol's ready_timeout_ms: " + missing(ready));
-    if (Clock::now() - said > again) {  // a datagram lost on the way there or back: say it again, backing off
-      edge_.send(ch::runConfig, config_msg_);
-      said = Clock::now();
-      again = std::min(again * 2, milliseconds(protocol.heartbeat_ms));
-    }
-    pump();
-  }
-
-  // 3. Run.
-  phase_ = Phase::Running;
-  sendControl(spec.run_id, run_control_t::START);
-  const auto started = Clock::now();
-  std::int64_t progress = -1;
-  auto progress_at = Clock::now();
-  const auto silence = std::chrono::duration<double>(spec.stall_seconds);
-  // An intrinsic run reports its affordance table every curve_interval steps and at the end.
-  const std::size_t tables = spec.extrinsic ? 0
-                                            : static_cast<std::size_t>(config_.steps / config_.curve_interval + 1 +
-                                                                       (config_.steps % config_.curve_interval != 0));
-  // The logger must be in the run to close its log: one restarted after the
-  // last step still catches up first.
-  auto loggerIn = [&] { return !logged || loggerJoined(); };
-  while (!have_result_ || out.curve.size() < tables || !loggerIn()) {
-    if (auto h = health(); !h.empty()) return fail(h);
-    if (auto f = failedProcess(); !f.empty()) return fail(f);
-    if (stopRequested()) return interrupted();
-    pump();
-    edge_.askMissing();
-    const auto now = Clock::now();
-    std::int64_t handled = 0;  // the steps of all, in the run
-    for (const auto& p : spec.processes) {
-      auto it = seen_.find(p);
-      if (it == seen_.end()) continue;
-      if (now - it->second.at > silence)
-        return fail("process '" + p + "' stopped reporting (last heard " +
-                    std::to_string(std::chrono::duration<double>(now - it->second.at).count()) + " s ago)");
-      if (it->second.run_id == spec.run_id) handled += it->second.step + 1;
-    }
-    // Progress is any process moving on (a restarted one catching up included), or a table coming in.
-    if (const auto p = handled + static_cast<std::int64_t>(out.curve.size()); p != progress) {
-      progress = p;
-      progress_at = now;
-    }
-    if (now - progress_at > std::chrono::duration<double>(spec.stall_seconds)) {
-      std::string where;
-      for (const auto& p : spec.processes)
-        if (seen_.count(p)) where += " " + p + "@" + std::to_string(seen_[p].step);
-      std::string lacking;
-      for (const auto& [channel, range] : edge_.missingRanges())
-        lacking += " " + channel + " " + std::to_string(range.first) + ".." + std::to_string(range.second - 1);
-      return fail("stalled: no progress for " + std::to_string(static_cast<int>(spec.stall_seconds)) +
-                  " s (last step handled per process:" + where + ")" +
-                  (lacking.empty() ? "" : "; the runner still misses" + lacking));
-    }
-  }
-  out.run_seconds = std::chrono::duration<double>(Clock::now() - started).count();
-
   // 4. Stop, and let the logger close the log.
-  stopAndWait();
-  if (logged && !logger_done_) {
-    if (auto h = health(); !h.empty()) return fail(h);
-    if (auto f = failedProcess(); !f.empty()) return fail(f);
-    return fail("the logger did not close the log within the protocol's close_timeout_ms");
+  stopAndWait(w);
+  if (logged() && !logger_done_) {
+    if (auto h = health(); !h.empty()) return failed(h);
+    if (auto f = failedProcess(); !f.empty()) return failed(f);
+    return failed("the logger did not close the log within the protocol's close_timeout_ms");
   }
-  if (auto f = failedProcess(); !f.empty()) return fail(f);
+  if (auto f = failedProcess(); !f.empty()) return failed(f);
   out.ok = true;
-  out.wall_seconds = std::chrono::duration<double>(Clock::now() - t0).count();
+  out.wall_seconds = std::chrono::duration<double>(Clock::now() - started_at_).count();
   return out;
 }
 

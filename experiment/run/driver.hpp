@@ -107,6 +107,29 @@ class RunDriver {
     std::string detail;
     Clock::time_point at;
   };
+  // What one run() waits with: the caller's pump and health.
+  struct Waiting {
+    const std::function<void()>& pump;
+    const std::function<std::string()>& health;
+  };
+  // How a stage of run() ended: done, failed (why), or cut by a signal.
+  struct Ending {
+    bool interrupted = false;
+    std::string why;  // "" and not interrupted: done
+  };
+  // The stages of run(), in order.
+  Ending waitFree(const Waiting& w);   // every process present and free
+  Ending configure(const Waiting& w);  // RUN_CONFIG until every one is READY
+  Ending runSteps(const Waiting& w);   // START, then until the result, every table and the logger are in
+  void stopAndWait(const Waiting& w);  // STOP; the logger closes the log, if it opened one
+  RunOutcome& failed(const std::string& why);
+  RunOutcome& interrupted(const Waiting& w);
+  // The run's processes for which `pred` does not hold, by name.
+  std::string missing(const std::function<bool(const Seen&)>& pred) const;
+  std::string failedProcess() const;  // a process of the run that failed with our configuration, and why
+  std::string impostor() const;       // one that took another configuration of this run
+  bool logged() const;                // the run is recorded: the logger is one of its processes
+  bool loggerJoined() const;          // the logger took the run, as far as its STATUS says
   Turn onStatus(const process_status_t& m);
   // Tell a process of the run what it missed (a lost datagram, or a restart).
   void nudge(const std::string& process, const Seen& s);
@@ -126,6 +149,7 @@ class RunDriver {
   Phase phase_ = Phase::Idle;
   Clock::time_point phase_at_{};  // when the current phase began
   RunOutcome* outcome_ = nullptr;
+  Clock::time_point started_at_{};  // when run() was called
   bool have_result_ = false;
   bool logger_done_ = false;
   std::function<void(std::int64_t)> on_step_;
