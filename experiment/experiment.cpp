@@ -355,25 +355,22 @@ class Executor {
   // Before the phase's kept outcomes are read: a merge keeps the shards' outcomes as its own.
   virtual void gather(const std::vector<PlannedRun>& runs, bool extrinsic) = 0;
   // The runs not finished yet: run them (or, for a merge, nothing is left).
-  virtual void execute(const std::vector<PlannedRun>& runs, PhaseRuns& phase) = 0;
+  virtual void execute(const std::vector<PlannedRun>& runs, bool extrinsic, PhaseRuns& phase) = 0;
 };
 
 // Runs them here, J at a time: a fresh experiment, a resumed one, a shard.
 class Hosted : public Executor {
  public:
   Hosted(Experiment& x, spdlog::logger& log)
-      : x_(x), log_(log), agents_((fs::path(x.o.plan.log_root) / "agents").string()) {
-    // The store knows the shipped processes' code (its key), not what a swapped command runs.
-    if (x_.o.host.reuse_agents && !x_.o.host.processes.empty()) {
-      x_.o.host.reuse_agents = false;
+      : x_(x), log_(log), agents_((fs::path(x.o.plan.log_root) / "agents").string()),
+        // The store knows the shipped processes' code (its key), not what a swapped command runs.
+        reuse_(x.o.host.reuse_agents && x.o.host.processes.empty()) {}
+  void gather(const std::vector<PlannedRun>&, bool) override {}
+  void execute(const std::vector<PlannedRun>& runs, bool extrinsic, PhaseRuns& phase) override {
+    if (!extrinsic && x_.o.host.reuse_agents && !reuse_)
       log_.info("--process: the agents of this experiment are neither taken from nor kept in {}/agents",
                 x_.o.plan.log_root);
-    }
-  }
-  void gather(const std::vector<PlannedRun>&, bool) override {}
-  void execute(const std::vector<PlannedRun>& runs, PhaseRuns& phase) override {
-    const bool intrinsic = !runs.empty() && !runs.front().spec.extrinsic;
-    const bool reuse = intrinsic && x_.o.host.reuse_agents;
+    const bool reuse = !extrinsic && reuse_;
     if (reuse) takeStoredAgents(runs, x_.plan().design.after_actions, phase, agents_, x_.o.write.out_dir, log_);
     executeRuns(runs, phase, x_.o.host, x_.o.plan.log_root, x_.o.write.out_dir, x_.plan().protocol, x_.bin, log_);
     if (reuse) storeAgents(runs, phase, agents_, log_);
@@ -383,6 +380,7 @@ class Hosted : public Executor {
   Experiment& x_;
   spdlog::logger& log_;
   const AgentStore agents_;
+  const bool reuse_;  // agents taken from and kept in the store
 };
 
 // afford merge: every outcome from the shard that ran it (all gathered, and
@@ -398,7 +396,7 @@ class Merged : public Executor {
     const PhaseRuns& from = extrinsic ? tests_ : intrinsic_;
     for (std::size_t i = 0; i < runs.size(); ++i) keepOutcome(x_.out(), runs[i].spec.run_id, from.outcomes[i]);
   }
-  void execute(const std::vector<PlannedRun>&, PhaseRuns&) override {}
+  void execute(const std::vector<PlannedRun>&, bool, PhaseRuns&) override {}
 
  private:
   const Experiment& x_;
@@ -486,8 +484,8 @@ void sayWhatRuns(const Experiment& x, spdlog::logger& log) {
 }
 
 // One phase: the outcomes kept already (resume; a merge's gathered ones), and the others executed.
-PhaseRuns runPhase(Experiment& x, Executor& exec, const std::vector<PlannedRun>& runs, spdlog::logger& log) {
-  const bool extrinsic = !runs.empty() && runs.front().spec.extrinsic;
+PhaseRuns runPhase(Experiment& x, Executor& exec, const std::vector<PlannedRun>& runs, bool extrinsic,
+                   spdlog::logger& log) {
   exec.gather(runs, extrinsic);
   PhaseRuns phase = keptRuns(runs, x.out());
   if (!extrinsic) phase.elsewhere = shardMask(x.o.host, runs.size());  // a shard's tests are those of its own agents
@@ -500,7 +498,7 @@ PhaseRuns runPhase(Experiment& x, Executor& exec, const std::vector<PlannedRun>&
     for (const auto& m : moved) x.state["moved_aside"].push_back(m);
     if (!moved.empty()) x.saveState();
   }
-  exec.execute(runs, phase);
+  exec.execute(runs, extrinsic, phase);
   return phase;
 }
 
@@ -537,12 +535,16 @@ Summaries summariseIntrinsic(const Experiment& x, const PhaseRuns& intrinsic, sp
     if (x.o.host.shard_count) s.parts.back()["shard"] = {{"index", x.o.host.shard_index}, {"count", x.o.host.shard_count}};
     if (x.merging()) s.parts.back()["merged_from"] = x.o.merged_from;
   }
+  return s;
+}
+
+// Runs whose curve misses snapshots, said once the intrinsic phase is whole.
+void warnCurveGaps(const Summaries& s, spdlog::logger& log) {
   for (const json& summary : s.parts)
     for (const auto& [sys, js] : summary["systems"].items())
       for (const auto& g : js.value("curve_gaps", json::array()))
         log.warn("run '{}' reported {} affordance tables, not one per run.curve_interval: its curve has gaps",
                  g["run_id"].get<std::string>(), g["snapshots"].get<std::size_t>());
-  return s;
 }
 
 // The extrinsic phase: every part's tests planned from its trained agents, run, and summarised.
@@ -574,7 +576,7 @@ Tests runTests(Experiment& x, Executor& exec, Summaries& s, spdlog::logger& log)
   for (const auto& e : t.untested) log.error("{}", e);
   log.info("extrinsic phase: {} test(s): {} condition(s) x {} scenario(s) x {} from each trained agent", t.runs.size(),
            x.plan().conditions.size(), x.plan().scenarios.size(), x.plan().tests);
-  t.phase = runPhase(x, exec, t.runs, log);
+  t.phase = runPhase(x, exec, t.runs, true, log);
   for (std::size_t k = 0; k < x.parts.size(); ++k) {
     const PhaseRuns mine = slicePhase(t.phase, offsets[k], part_tests[k].size());
     summariseTests(s.parts[k], x.parts[k], part_tests[k], mine, part_untested[k]);
@@ -626,7 +628,7 @@ int runExperiment(const ExperimentRequest& request, spdlog::logger& log) {
   installInterruptHandlers(resumeCommand(x.o));  // from here a signal stops the experiment in order
   openFolder(x);
   sayWhatRuns(x, log);
-  const PhaseRuns intrinsic = runPhase(x, *exec, x.runs, log);
+  const PhaseRuns intrinsic = runPhase(x, *exec, x.runs, false, log);
   Summaries s = summariseIntrinsic(x, intrinsic, log);
   s.began = began;
   if (g_signal) {
@@ -634,6 +636,7 @@ int runExperiment(const ExperimentRequest& request, spdlog::logger& log) {
     json whole = s.whole(x);
     return stopHere(whole, "intrinsic", x.runs, intrinsic, x.plan().tests > 0, x.o, x.state, log);
   }
+  warnCurveGaps(s, log);
   const Tests tests = runTests(x, *exec, s, log);
   if (g_signal) {
     s.stamp(tests.phase.finishedCount());

@@ -66,16 +66,6 @@ class Reader {
     if (!v.IsScalar()) fail(join(path_, key), "expected a string, got " + describe(v));
     return v.Scalar();
   }
-  template <typename E>
-  E choice(const std::string& key, std::initializer_list<std::pair<const char*, E>> options) {
-    const std::string s = text(key);
-    std::string names;
-    for (const auto& [name, value] : options) {
-      if (s == name) return value;
-      names += names.empty() ? name : std::string(", ") + name;
-    }
-    fail(join(path_, key), "unknown value \"" + s + "\" (expected one of: " + names + ")");
-  }
   template <typename E, std::size_t N>
   E choice(const std::string& key, const std::array<Named<E>, N>& names) {
     const std::string s = text(key);
@@ -303,6 +293,10 @@ class Parser {
     a = v[0];
     b = v[1];
   }
+  void interval(const char* key, double& a, double& b, double lo, double hi, const char* meaning) {
+    pair(key, a, b, lo, hi, meaning);
+    if (!(a < b)) fail(top().keyPath(key), "expected [min, max] with min < max");
+  }
   template <class F>
   void custom(const char*, const char*, F&& read, const char*) {
     read(top());
@@ -351,6 +345,9 @@ class Describer {
   }
   void pair(const char* key, double&, double&, double lo, double hi, const char* meaning) {
     add(key, "two numbers in " + rangeText(lo, hi), meaning);
+  }
+  void interval(const char* key, double&, double&, double lo, double hi, const char* meaning) {
+    add(key, "[min, max] in " + rangeText(lo, hi) + ", min < max", meaning);
   }
   template <class F>
   void custom(const char* key, const char* type, F&&, const char* meaning) {
@@ -521,6 +518,53 @@ std::string cell(const std::string& text) {
   return out;
 }
 
+// Every scalar of a tree, by its dotted key ("motivation.leak" -> "0.3");
+// lists and the keys in `skip` (and below them) are left out.
+void flatten(const YAML::Node& node, const std::string& path, const std::set<std::string>& skip,
+             std::map<std::string, std::string>& out) {
+  if (skip.count(path)) return;
+  if (node.IsScalar()) out[path] = node.Scalar();
+  if (!node.IsMap()) return;
+  for (const auto& kv : node) flatten(kv.second, join(path, kv.first.Scalar()), skip, out);
+}
+
+// The values the experiment files (and their systems' blocks) give in place
+// of defaults.yaml's, as a table: key, default, and each other value with
+// where it is set ("base: IGN" for one system; an experiment alone for all).
+std::string overridesMarkdown(const std::string& config_dir, const std::map<std::string, DefaultLine>& lines) {
+  // The runner's keys and the world's objects differ by their nature.
+  const std::set<std::string> skip{"experiment", "system", "seed", "run", "world.objects"};
+  std::map<std::string, std::map<std::string, std::map<std::string, std::vector<std::string>>>> by_key;  // key, value, experiment, systems
+  for (const std::string& name : listExperiments(config_dir))
+    for (const auto& sys : kSystemNames) {
+      std::map<std::string, std::string> flat;
+      flatten(effectiveConfig(config_dir, RunRequest{name, sys.value, 1, std::nullopt, {}}), "", skip, flat);
+      for (const auto& [key, value] : flat) {
+        const auto d = lines.find(key);
+        if (d != lines.end() && YAML::Load(d->second.value).Scalar() != value) by_key[key][value][name].push_back(sys.name);
+      }
+    }
+  std::ostringstream out;
+  out << "| key | default | elsewhere |\n|---|---|---|\n";
+  for (const auto& [key, values] : by_key) {
+    std::string elsewhere;
+    for (const auto& [value, experiments] : values) {
+      std::string where;
+      for (const auto& [name, systems] : experiments) {
+        std::string who = name;
+        if (systems.size() < kSystemNames.size()) {
+          who += ":";
+          for (const auto& s : systems) who += " " + s;
+        }
+        where += (where.empty() ? "" : ", ") + who;
+      }
+      elsewhere += (elsewhere.empty() ? "" : "; ") + value + " (" + where + ")";
+    }
+    out << "| `" << key << "` | " << cell(lines.at(key).value) << " | " << cell(elsewhere) << " |\n";
+  }
+  return out.str();
+}
+
 }  // namespace
 
 std::string keysMarkdown(const std::string& config_dir) {
@@ -543,7 +587,11 @@ std::string keysMarkdown(const std::string& config_dir) {
       run << "| `" << k.key << "` | " << cell(k.type) << " | " << cell(value) << " | " << cell(source) << " | "
           << cell(k.meaning) << " |\n";
   }
-  return run.str() + "\n" + protocol.str();
+  return run.str() + "\n" + protocol.str() +
+         "\nThe values the experiment files give in place of the defaults (each "
+         "experiment's file names their sources); `name: FIX` is one system's block, "
+         "a name alone holds for every system:\n\n" +
+         overridesMarkdown(config_dir, lines);
 }
 
 std::string actionsCheckpoint(const std::string& checkpoint, std::int64_t actions) {

@@ -11,6 +11,7 @@
 //   given(key, body)                    body's keys are read only if `key` is in the YAML (older logs lack it)
 //   number(key, field, lo, hi, meaning) integer(...) text(key, field, meaning) kind(key, field, meaning)
 //   choice(key, field, names, meaning)  pair(key, a, b, lo, hi, meaning)  (a list of two numbers)
+//   interval(key, lo_field, hi_field, lo, hi, meaning)  (a pair [min, max] with min < max)
 //   custom(key, type, read, meaning)    read(Reader&) parses what the declaration cannot say (lists of maps)
 //   from(origin)                        where the keys declared next get their value (KeyInfo::Origin)
 #pragma once
@@ -87,13 +88,14 @@ void declareWorld(V& v, RunConfig& c) {
     WorldConfig& w = c.world;
     v.integer("size_px", w.size_px, 32, 2048, "scene side in pixels (side = 1 unit)");
     v.number("object_size", w.object_size, 0.01, 0.3, "square side; circle and rectangle have the same area");
-    v.pair("table", w.table_min, w.table_max, 0.0, 1.0, "range of object centres [min, max]");
+    v.interval("table", w.table_min, w.table_max, 0.0, 1.0, "range of object centres");
     v.integer("max_target_draws", w.max_target_draws, 1, 1'000'000,
               "redraws of a random move target before the move does nothing");
     v.choice("positions", w.positions, kPositionsNames,
              "`continuous`: real centres and move targets, each shape drawn from its centre, late objects at "
              "random free places (the authors' code); `pixel`: centres snapped to a pixel, one footprint per "
-             "shape, late objects at their configured places");
+             "shape, late objects at their configured places ([model](model.md#positions): how each draws, and "
+             "when a place is free)");
     v.choice("late_overlap", w.late_overlap, kBoolNames,
              "continuous positions: a late object's place need only be free of the objects present before its "
              "step, so late objects of one step may overlap");

@@ -1,6 +1,6 @@
 // Hosting an experiment's runs: J at a time, each job slot on its own LCM URL
 // with its own group of processes (udpm), or every process in this one
-// (memq, afford/host.hpp). Each finished run's outcome is kept as it comes.
+// (memq, experiment/run/host.hpp). Each finished run's outcome is kept as it comes.
 #pragma once
 #include <spdlog/spdlog.h>
 

@@ -466,13 +466,13 @@ void plotForwardModels(Figures& f) {
   const std::vector<std::string>& systems = f.systems;
   std::vector<std::string>& written = f.written;
   if (s.contains("forward_models")) {
-    const json& f = s["forward_models"];
-    const std::string sc = f["scenario"];
+    const json& fm = s["forward_models"];
+    const std::string sc = fm["scenario"];
     std::vector<BoxItem> items;
     std::vector<std::pair<double, std::string>> xtics, labels;
     std::map<std::string, std::string> colours;
-    for (std::size_t k = 0; k < f["budgets"].size(); ++k) {
-      const std::string b = std::to_string(f["budgets"][k].get<int>());
+    for (std::size_t k = 0; k < fm["budgets"].size(); ++k) {
+      const std::string b = std::to_string(fm["budgets"][k].get<int>());
       const double x = static_cast<double>(k + 1);
       for (std::size_t j = 0; j < systems.size(); ++j) {
         const json& js = s["systems"][systems[j]];
@@ -482,7 +482,7 @@ void plotForwardModels(Figures& f) {
       }
       xtics.emplace_back(x, b);
       std::string text;
-      for (const auto& [pair, ps] : f["p_values"].items()) text += (text.empty() ? "" : "\\n") + pair + " " + pText(ps[k]);
+      for (const auto& [pair, ps] : fm["p_values"].items()) text += (text.empty() ? "" : "\\n") + pair + " " + pText(ps[k]);
       labels.emplace_back(x, text);
     }
     written.push_back(boxPlot(dir, "fig_forward_models", "Utility planner with the weights after " +

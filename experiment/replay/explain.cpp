@@ -45,7 +45,7 @@ std::string format(const char* fmt, ...) {
 
 std::string actionName(int a) { return validAction(a) ? std::string(kActionNames[a]) : "action " + std::to_string(a); }
 
-const char* kindName(PlannerKind k) { return k == PlannerKind::Utility ? "utility" : "goal"; }
+const char* kindName(PlannerKind k) { return nameOf(kPlannerKindNames, k); }
 const char* metricName(PositionMetric m) { return nameOf(kPositionMetricNames, m); }
 
 // The run's messages of one type, each serial once (a recording may hold a

@@ -69,7 +69,7 @@ struct RunOutcome {
   std::string error;
   std::string weights_checksum;
   std::string checkpoint;                     // the predictors' saved weights, if any
-  std::string reused_from;                    // a stored agent's run (afford/agents.hpp), not run again
+  std::string reused_from;                    // a stored agent's run (experiment/execute/agents.hpp), not run again
   std::vector<TableSnapshot> curve;           // every curve_interval steps, and the end
   std::vector<std::int64_t> executed, successes;
   int looks = 0;                              // the predictors' memory at the end (issue 11), 0 without one

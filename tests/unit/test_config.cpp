@@ -89,6 +89,18 @@ TEST(Config, OutOfRangeValueIsNamed) {
   EXPECT_NE(e.find("out of range"), std::string::npos) << e;
 }
 
+// The table's range is [min, max]: a reversed or empty one is named, before any object is checked against it.
+TEST(Config, AReversedTableRangeIsNamed) {
+  for (const auto& [lo, hi] : {std::pair{0.9, 0.1}, std::pair{0.5, 0.5}}) {
+    YAML::Node root = baseTree();
+    root["world"]["table"][0] = lo;
+    root["world"]["table"][1] = hi;
+    const std::string e = errorOf(root);
+    EXPECT_NE(e.find("'world.table'"), std::string::npos) << e;
+    EXPECT_NE(e.find("min < max"), std::string::npos) << e;
+  }
+}
+
 TEST(Config, ObjectOutsideTheTableIsNamedWithItsIndex) {
   YAML::Node root = baseTree();
   root["world"]["objects"][3]["position"][0] = 0.95;

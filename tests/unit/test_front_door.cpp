@@ -336,7 +336,9 @@ TEST(Layers, NoFileIncludesAHeaderOfAHigherLayerAndThereIsNoCycle) {
         EXPECT_LT(rankOf(to), rankOf(from) + (rankOf(from) == 0 ? 1 : 0))
             << fs::relative(file, root).string() << " (layer " << from << ") includes " << (*m)[1]
             << " (layer " << to << ")";
-        if (rankOf(from) == 0) EXPECT_EQ(rankOf(to), 0) << fs::relative(file, root).string() << " includes " << (*m)[1];
+        if (rankOf(from) == 0) {
+          EXPECT_EQ(rankOf(to), 0) << fs::relative(file, root).string() << " includes " << (*m)[1];
+        }
       }
     }
   EXPECT_GT(checked, 300);

@@ -323,7 +323,6 @@ void validateScenario(const Scenario& s, const WorldConfig& world);
 // The file of a checkpoint taken after `actions` executed actions, beside `checkpoint`.
 std::string actionsCheckpoint(const std::string& checkpoint, std::int64_t actions);
 
-// Parse and validate an effective configuration. Unknown keys are errors too.
 // Every key of a run's configuration, as declared once (common/src/config_keys.hpp).
 struct KeyInfo {
   enum class Origin {
@@ -332,7 +331,7 @@ struct KeyInfo {
     Experiment,  // each experiment file gives it (world.objects)
   };
   std::string key;      // "motivation.leak"
-  std::string type;     // "number in [0, 1]", "goal | utility", ...
+  std::string type;     // "number in [0, 1]", "one of goal, utility", ...
   std::string meaning;  // one line
   Origin origin = Origin::Defaults;
 };
@@ -343,6 +342,7 @@ std::vector<KeyInfo> configKeys();
 // colon) and its meaning; the protocol's keys in a table of their own.
 std::string keysMarkdown(const std::string& config_dir);
 
+// Parse and validate an effective configuration. Unknown keys are errors too.
 RunConfig parseRunConfig(const YAML::Node& root);
 RunConfig parseRunConfigText(const std::string& yaml_text);
 // The `protocol` section alone (keys named from `path`).
