@@ -92,7 +92,7 @@ std::string signalName(int sig) { return sig == SIGINT ? "SIGINT" : sig == SIGTE
 // --keep-checkpoints first|none: once every test is done, the checkpoints of
 // the intrinsic runs not kept go (a stored agent keeps its own link), and the
 // summary says so; a run folder left with nothing else goes too.
-void removeCheckpoints(const Plan& plan, const PhaseRuns& phase, json& summary, spdlog::logger& log) {
+void removeCheckpoints(const Plan& plan, const PhaseRuns& phase, Summary& summary, spdlog::logger& log) {
   std::uintmax_t freed = 0;
   std::set<std::string> removed;
   for (const auto& p : plan.runs) {
@@ -109,79 +109,84 @@ void removeCheckpoints(const Plan& plan, const PhaseRuns& phase, json& summary, 
       fs::remove_all(dir, ec);  // nothing left but the note of whose it was
     removed.insert(p.spec.run_id);
   }
-  for (auto& [sys, js] : summary["systems"].items())
-    for (auto& entry : js["runs"])
-      if (removed.count(entry["run_id"].get<std::string>())) entry["checkpoint"] = nullptr;
+  for (auto& [sys, js] : summary.systems)
+    for (RunEntry& entry : js.runs)
+      if (removed.count(entry.run_id)) entry.checkpoint = Nullable<std::string>();
   if (!removed.empty())
     log.info("--keep-checkpoints: removed the checkpoints of {} run(s), {:.1f} MB", removed.size(), freed / 1e6);
 }
 
 // After a SIGINT or SIGTERM, once the runs under way have stopped: the summary
 // of what finished, where the others stopped, and the command that goes on.
-// `summary` holds what finished; `phase` is "intrinsic" or "extrinsic".
-int stopHere(json& summary, const std::string& phase_name, const std::vector<PlannedRun>& runs, const PhaseRuns& phase,
-             bool extrinsic_to_come, const ExperimentRequest& o, json& state, spdlog::logger& log) {
-  const std::string signal = signalName(g_signal);
-  json cut = json::array(), not_started = json::array();
+// `phase` is "intrinsic" or "extrinsic".
+Interruption interruption(const std::string& phase_name, const std::vector<PlannedRun>& runs, const PhaseRuns& phase,
+                          bool extrinsic_to_come, const ExperimentRequest& o) {
+  Interruption in;
+  in.signal = signalName(g_signal);
+  in.phase = phase_name;
+  in.finished = static_cast<std::int64_t>(phase.finishedCount());
+  in.planned = static_cast<std::int64_t>(runs.size());
   for (std::size_t i = 0; i < runs.size(); ++i) {
     if (phase.finished[i]) continue;
     const std::string& id = runs[i].spec.run_id;
     const fs::path dir = fs::path(o.plan.log_root) / id;
     if (auto c = phase.cut.find(i); c != phase.cut.end())
-      cut.push_back({{"run_id", id}, {"where", c->second}, {"log_dir", fs::exists(dir) ? json(dir.string()) : json(nullptr)}});
+      in.cut.push_back({id, c->second, fs::exists(dir) ? Nullable<std::string>(dir.string()) : Nullable<std::string>()});
     else
-      not_started.push_back(id);
+      in.not_started.push_back(id);
   }
-  const std::string command = resumeCommand(o);
-  const std::string cwd = fs::current_path().string();
-  summary["interrupted"] = {{"signal", signal},
-                            {"phase", phase_name},
-                            {"finished", phase.finishedCount()},
-                            {"planned", runs.size()},
-                            {"cut", cut},
-                            {"not_started", not_started},
-                            {"extrinsic_tests_to_come", extrinsic_to_come},
-                            {"resume", command},
-                            {"resume_in", cwd}};
-  writeWhole(fs::path(o.write.out_dir) / "summary.json", summary.dump(2) + "\n");
+  in.extrinsic_tests_to_come = extrinsic_to_come;
+  in.resume = resumeCommand(o);
+  in.resume_in = fs::current_path().string();
+  return in;
+}
+
+// Once `in` is in summary.json: the experiment's state says so, and the log what is kept and what comes.
+int stopHere(const Interruption& in, const ExperimentRequest& o, json& state, spdlog::logger& log) {
+  const std::string &signal = in.signal, &phase_name = in.phase, &cwd = in.resume_in, &command = in.resume;
   state["state"] = "interrupted";
+  json cut = json::array();
+  for (const CutRun& c : in.cut)
+    cut.push_back({{"run_id", c.run_id}, {"where", c.where}, {"log_dir", c.log_dir ? json(*c.log_dir) : json(nullptr)}});
   state["interruptions"].push_back({{"signal", signal}, {"phase", phase_name}, {"cut", cut}});
   writeWhole(statePath(o.write.out_dir), state.dump(2) + "\n");
 
   const std::string what = phase_name == "intrinsic" ? "intrinsic run(s)" : "extrinsic test(s)";
   log.warn("interrupted by {} during the {} phase", signal, phase_name);
-  log.info("kept: {} of {} {} finished{}, in {} and the CSV files beside it", phase.finishedCount(), runs.size(), what,
+  log.info("kept: {} of {} {} finished{}, in {} and the CSV files beside it", in.finished, in.planned, what,
            phase_name == "extrinsic" ? " (and every intrinsic run)" : "",
            (fs::path(o.write.out_dir) / "summary.json").string());
-  for (const auto& c : cut)
-    log.info("cut: {} ({}){}", c["run_id"].get<std::string>(), c["where"].get<std::string>(),
-             c["log_dir"].is_null() ? std::string()
-                                    : "; its log, incomplete, stays in " + c["log_dir"].get<std::string>());
-  if (!not_started.empty()) log.info("not started: {} {}", not_started.size(), what);
-  if (extrinsic_to_come) log.info("not started: the extrinsic tests");
+  for (const CutRun& c : in.cut)
+    log.info("cut: {} ({}){}", c.run_id, c.where, c.log_dir ? "; its log, incomplete, stays in " + *c.log_dir : "");
+  if (!in.not_started.empty()) log.info("not started: {} {}", in.not_started.size(), what);
+  if (in.extrinsic_tests_to_come) log.info("not started: the extrinsic tests");
   log.warn("to resume (in {}): {}", cwd, command);
   return 128 + g_signal;
 }
 
 
 // The design's summary of a part's tests (after summariseExtrinsic).
-void summariseTests(json& summary, const Part& part, const std::vector<PlannedRun>& tests, const PhaseRuns& phase,
+void summariseTests(Summary& summary, const Part& part, const std::vector<PlannedRun>& tests, const PhaseRuns& phase,
                     const std::vector<std::string>& untested) {
   const Plan& plan = part.plan;
   summariseExtrinsic(summary, plan, tests, phase, part.out_dir);
   summariseDesign(summary, testRecords(plan, tests, phase), plan.conditions, plan.design, plan.systems, plan.scenarios);
-  json vary = json::object();
-  for (const auto& [k, v] : plan.design.vary) vary[k] = v;
-  summary["extrinsic_design"] = {{"scenarios", plan.scenarios}, {"tests", plan.tests}, {"vary", vary},
-                                 {"analysis", plan.design.analysis}, {"after_actions", plan.design.after_actions}};
+  DesignSummary& d = summary.extrinsic_design.emplace();
+  d.scenarios = plan.scenarios;
+  d.tests = plan.tests;
+  for (const auto& [k, v] : plan.design.vary) d.vary[k] = v;
+  d.analysis = plan.design.analysis;
+  d.after_actions = plan.design.after_actions;
   if (plan.design.generate) {
     const GenerateDesign& g = *plan.design.generate;
-    summary["extrinsic_design"]["generate"] = {
-        {"sub_goals", g.sub_goals}, {"objects", g.objects}, {"per_point", g.per_point}, {"seed", g.seed},
-        {"multi_step", g.all_multi_step ? json("all") : json(g.multi_step)}};
+    d.generate = GenerateSummary{{g.sub_goals.begin(), g.sub_goals.end()},
+                                 {g.objects.begin(), g.objects.end()},
+                                 g.per_point,
+                                 g.seed,
+                                 {g.all_multi_step, g.multi_step}};
   }
-  if (plan.design.after_actions > 0) summary["after_actions"] = plan.design.after_actions;
-  if (!untested.empty()) summary["untested_agents"] = untested;
+  if (plan.design.after_actions > 0) summary.after_actions = plan.design.after_actions;
+  if (!untested.empty()) summary.untested_agents = untested;
 }
 
 // afford merge: the outcome of every run, and then of every test, from the
@@ -232,22 +237,21 @@ PhaseRuns gatherShards(const std::vector<Part>& parts, const std::vector<Planned
 // own: DIR/conditions/<folder>/summary.json) under "conditions", every run
 // entry naming its condition; and each CSV of the conditions in one, with a
 // sweep_condition column first.
-json sweepSummary(const std::vector<Part>& parts, std::vector<json>& summaries, const Sweep& sweep,
-                  const std::string& out_dir) {
-  json keys = json::object(), conditions = json::array(), by_name = json::object();
-  for (const auto& [k, v] : sweep.keys) keys[k] = v;
+SweepSummary sweepSummary(const std::vector<Part>& parts, std::vector<Summary>& summaries, const Sweep& sweep,
+                          const std::string& out_dir) {
+  SweepSummary whole;
+  for (const auto& [k, v] : sweep.keys) whole.sweep.keys[k] = v;
   std::map<std::string, std::pair<std::string, std::string>> csvs;  // file -> header, rows
   for (std::size_t k = 0; k < parts.size(); ++k) {
     const Part& part = parts[k];
-    json& s = summaries[k];
-    s["sweep_condition"] = part.condition;
-    s["sweep_settings"] = part.condition_settings;
-    for (auto& [sys, js] : s["systems"].items())
-      for (auto& entry : js["runs"]) entry["sweep_condition"] = part.condition;
-    conditions.push_back({{"name", part.condition},
-                          {"settings", part.condition_settings},
-                          {"folder", (fs::path("conditions") / fs::path(part.out_dir).filename()).string()}});
-    by_name[part.condition] = s;
+    Summary& s = summaries[k];
+    s.sweep_condition = part.condition;
+    s.sweep_settings = part.condition_settings;
+    for (auto& [sys, js] : s.systems)
+      for (RunEntry& entry : js.runs) entry.sweep_condition = part.condition;
+    whole.sweep.conditions.push_back(
+        {part.condition, part.condition_settings, (fs::path("conditions") / fs::path(part.out_dir).filename()).string()});
+    whole.conditions[part.condition] = s;
     std::error_code ec;
     std::vector<fs::path> files;
     for (const auto& f : fs::directory_iterator(part.out_dir, ec))
@@ -263,18 +267,17 @@ json sweepSummary(const std::vector<Part>& parts, std::vector<json>& summaries, 
     }
   }
   for (const auto& [file, hr] : csvs) writeWhole(fs::path(out_dir) / file, hr.first + "\n" + hr.second);
-  const json& first = summaries.front();
-  return {{"experiment", first["experiment"]},
-          {"description", first["description"]},
-          {"steps", first["steps"]},
-          {"repetitions", first["repetitions"]},
-          {"seed", first["seed"]},
-          {"transport", first["transport"]},
-          {"network", first["network"]},
-          {"afford_version", first["afford_version"]},
-          {"settings", sweep.fixed},
-          {"sweep", {{"keys", keys}, {"conditions", conditions}}},
-          {"conditions", by_name}};
+  const Summary& first = summaries.front();
+  whole.experiment = first.experiment;
+  whole.description = first.description;
+  whole.steps = first.steps;
+  whole.repetitions = first.repetitions;
+  whole.seed = first.seed;
+  whole.transport = first.transport;
+  whole.network = first.network;
+  whole.afford_version = first.afford_version;
+  whole.settings = sweep.fixed;
+  return whole;
 }
 
 // --process: only where the runner starts real processes. And the motivation that each run's motivation.kind
@@ -506,23 +509,24 @@ PhaseRuns runPhase(Experiment& x, Executor& exec, const std::vector<PlannedRun>&
 // experiment of its own), and the whole (a sweep's own).
 struct Summaries {
   std::chrono::steady_clock::time_point began;  // reported only, never decides anything
-  std::vector<json> parts;
+  std::vector<Summary> parts;         // extrinsic_tests: each part's, once its tests are summarised
   std::vector<PhaseRuns> part_phase;  // each part's intrinsic runs
 
-  void stamp(std::size_t tests) {
-    for (json& s : parts) {
-      s["wall_seconds"] = seconds();
-      if (!s.contains("extrinsic_tests")) s["extrinsic_tests"] = tests;
-    }
-  }
   double seconds() const { return std::chrono::duration<double>(std::chrono::steady_clock::now() - began).count(); }
-  json whole(const Experiment& x) {
-    if (x.parts.size() == 1) return parts.front();
-    json s = sweepSummary(x.parts, parts, x.sweep, x.o.write.out_dir);  // names each condition in its summary too
+  // summary.json (a sweep's: each condition's too), with the interruption that stopped it, if one did.
+  void write(const Experiment& x, const std::optional<Interruption>& stopped) {
+    for (Summary& s : parts) s.wall_seconds = seconds();
+    if (x.parts.size() == 1) {
+      parts.front().interrupted = stopped;
+      writeWhole(x.out() / "summary.json", toJson(parts.front()).dump(2) + "\n");
+      return;
+    }
+    SweepSummary whole = sweepSummary(x.parts, parts, x.sweep, x.o.write.out_dir);  // names each condition in its summary too
     for (std::size_t k = 0; k < x.parts.size(); ++k)
-      writeWhole(fs::path(x.parts[k].out_dir) / "summary.json", parts[k].dump(2) + "\n");
-    s["wall_seconds"] = seconds();
-    return s;
+      writeWhole(fs::path(x.parts[k].out_dir) / "summary.json", toJson(parts[k]).dump(2) + "\n");
+    whole.interrupted = stopped;
+    whole.wall_seconds = seconds();
+    writeWhole(x.out() / "summary.json", toJson(whole).dump(2) + "\n");
   }
 };
 
@@ -532,19 +536,19 @@ Summaries summariseIntrinsic(const Experiment& x, const PhaseRuns& intrinsic, sp
     s.part_phase.push_back(slicePhase(intrinsic, part.offset, part.plan.runs.size()));
     if (x.parts.size() > 1) fs::create_directories(part.out_dir);
     s.parts.push_back(summarise(part.plan, x.hosting, s.part_phase.back(), part.out_dir));
-    if (x.o.host.shard_count) s.parts.back()["shard"] = {{"index", x.o.host.shard_index}, {"count", x.o.host.shard_count}};
-    if (x.merging()) s.parts.back()["merged_from"] = x.o.merged_from;
+    if (x.o.host.shard_count) s.parts.back().shard = ShardSummary{x.o.host.shard_index, x.o.host.shard_count};
+    if (x.merging()) s.parts.back().merged_from = x.o.merged_from;
   }
   return s;
 }
 
 // Runs whose curve misses snapshots, said once the intrinsic phase is whole.
 void warnCurveGaps(const Summaries& s, spdlog::logger& log) {
-  for (const json& summary : s.parts)
-    for (const auto& [sys, js] : summary["systems"].items())
-      for (const auto& g : js.value("curve_gaps", json::array()))
+  for (const Summary& summary : s.parts)
+    for (const auto& [sys, js] : summary.systems)
+      for (const CurveGap& g : js.curve_gaps.value_or(std::vector<CurveGap>{}))
         log.warn("run '{}' reported {} affordance tables, not one per run.curve_interval: its curve has gaps",
-                 g["run_id"].get<std::string>(), g["snapshots"].get<std::size_t>());
+                 g.run_id, g.snapshots);
 }
 
 // The extrinsic phase: every part's tests planned from its trained agents, run, and summarised.
@@ -580,7 +584,7 @@ Tests runTests(Experiment& x, Executor& exec, Summaries& s, spdlog::logger& log)
   for (std::size_t k = 0; k < x.parts.size(); ++k) {
     const PhaseRuns mine = slicePhase(t.phase, offsets[k], part_tests[k].size());
     summariseTests(s.parts[k], x.parts[k], part_tests[k], mine, part_untested[k]);
-    s.parts[k]["extrinsic_tests"] = mine.finishedCount();
+    s.parts[k].extrinsic_tests = static_cast<std::int64_t>(mine.finishedCount());
   }
   return t;
 }
@@ -588,13 +592,11 @@ Tests runTests(Experiment& x, Executor& exec, Summaries& s, spdlog::logger& log)
 // The end of a finished experiment: checkpoints not kept removed, the summary
 // written, the tables presented. Returns the exit code.
 int finish(Experiment& x, Summaries& s, const PhaseRuns& intrinsic, const Tests& tests, spdlog::logger& log) {
-  s.stamp(tests.phase.finishedCount());
   // A shard keeps every checkpoint: the merge plans the tests again from the
   // checkpoint files (an after-N-actions one included), then removes them.
   if (!x.o.host.shard_count)
     for (std::size_t k = 0; k < x.parts.size(); ++k) removeCheckpoints(x.parts[k].plan, s.part_phase[k], s.parts[k], log);
-  const json summary = s.whole(x);
-  writeWhole(x.out() / "summary.json", summary.dump(2) + "\n");
+  s.write(x, std::nullopt);
   x.state["state"] = "finished";
   x.saveState();
   if (!x.o.write.quiet)
@@ -632,16 +634,16 @@ int runExperiment(const ExperimentRequest& request, spdlog::logger& log) {
   Summaries s = summariseIntrinsic(x, intrinsic, log);
   s.began = began;
   if (g_signal) {
-    s.stamp(0);
-    json whole = s.whole(x);
-    return stopHere(whole, "intrinsic", x.runs, intrinsic, x.plan().tests > 0, x.o, x.state, log);
+    const Interruption in = interruption("intrinsic", x.runs, intrinsic, x.plan().tests > 0, x.o);
+    s.write(x, in);
+    return stopHere(in, x.o, x.state, log);
   }
   warnCurveGaps(s, log);
   const Tests tests = runTests(x, *exec, s, log);
   if (g_signal) {
-    s.stamp(tests.phase.finishedCount());
-    json whole = s.whole(x);
-    return stopHere(whole, "extrinsic", tests.runs, tests.phase, false, x.o, x.state, log);
+    const Interruption in = interruption("extrinsic", tests.runs, tests.phase, false, x.o);
+    s.write(x, in);
+    return stopHere(in, x.o, x.state, log);
   }
   return finish(x, s, intrinsic, tests, log);
 }

@@ -9,7 +9,6 @@
 #include <stdexcept>
 
 namespace afford {
-using nlohmann::json;
 
 std::string Condition::value(const std::string& key) const {
   for (const auto& [k, v] : settings)
@@ -49,17 +48,17 @@ double variance(const std::vector<double>& v) {  // sample variance
   return s / (v.size() - 1);
 }
 
-json describe(const std::vector<double>& v) {
+Stats describe(const std::vector<double>& v) {
   std::vector<double> sorted = v;
   std::sort(sorted.begin(), sorted.end());
-  return {{"n", v.size()},
-          {"mean", mean(v)},
-          {"sd", std::sqrt(variance(v))},
-          {"median", quantile(sorted, 0.5)},
-          {"q1", quantile(sorted, 0.25)},
-          {"q3", quantile(sorted, 0.75)},
-          {"min", sorted.empty() ? 0.0 : sorted.front()},
-          {"max", sorted.empty() ? 0.0 : sorted.back()}};
+  return {static_cast<std::int64_t>(v.size()),
+          mean(v),
+          std::sqrt(variance(v)),
+          quantile(sorted, 0.5),
+          quantile(sorted, 0.25),
+          quantile(sorted, 0.75),
+          sorted.empty() ? 0.0 : sorted.front(),
+          sorted.empty() ? 0.0 : sorted.back()};
 }
 
 // Samples of one system, scenario and condition: per test, and per agent (means).
@@ -155,12 +154,14 @@ WelchResult welchTest(const std::vector<double>& a, const std::vector<double>& b
 namespace {
 
 // Per system, the conditions' statistics: per scenario and per design point.
-void summariseConditions(json& summary, const std::vector<TestRecord>& tests, const std::vector<Condition>& conditions,
+void summariseConditions(Summary& summary, const std::vector<TestRecord>& tests, const std::vector<Condition>& conditions,
                          const std::vector<std::string>& systems, const std::vector<std::string>& scenarios) {
   for (const auto& sys : systems) {
-    json list = json::array();
+    std::vector<PlannerCondition> list;
     for (std::size_t c = 0; c < conditions.size(); ++c) {
-      json per = json::object();
+      PlannerCondition entry;
+      entry.label = conditions[c].label;
+      for (const auto& [k, v] : conditions[c].settings) entry.settings[k] = v;
       std::vector<std::pair<double, double>> solved;  // (sub-goals, completion) of every solved test
       struct Point {
         int tests = 0, ok = 0, successes = 0;
@@ -175,38 +176,30 @@ void summariseConditions(json& summary, const std::vector<TestRecord>& tests, co
         p.ok += s.ok;
         p.successes += s.successes;
         p.completion.insert(p.completion.end(), s.completion.begin(), s.completion.end());
-        per[sc] = {{"tests", s.tests},
-                   {"tests_completed", s.ok},
-                   {"success_rate", s.ok ? static_cast<double>(s.successes) / s.ok : 0.0},
-                   {"utility", describe(s.utility)},
-                   {"utility_agent_means", agentMeans(s.agent_utility)},
-                   {"actions_checked_per_sub_goal", describe(s.checked_per_sub_goal)},
-                   {"actions_checked_agent_means", agentMeans(s.agent_checked)},
-                   {"sub_goals", s.sub_goals},
-                   {"objects", s.objects},
-                   {"multi_step", s.multi_step},
-                   {"completion_steps", describe(s.completion)}};
+        entry.scenarios[sc] = {s.tests,
+                               s.ok,
+                               s.ok ? static_cast<double>(s.successes) / s.ok : 0.0,
+                               describe(s.utility),
+                               agentMeans(s.agent_utility),
+                               describe(s.checked_per_sub_goal),
+                               agentMeans(s.agent_checked),
+                               s.sub_goals,
+                               s.objects,
+                               s.multi_step,
+                               describe(s.completion)};
       }
-      json point_list = json::array();
       for (const auto& [key, p] : points) {
         std::vector<double> per_sub_goal;
         for (double y : p.completion) per_sub_goal.push_back(y / key[0]);
-        point_list.push_back({{"sub_goals", key[0]},
-                              {"objects", key[1]},
-                              {"multi_step", key[2]},
-                              {"tests", p.tests},
-                              {"tests_completed", p.ok},
-                              {"success_rate", p.ok ? static_cast<double>(p.successes) / p.ok : 0.0},
-                              {"completion_steps", describe(p.completion)},
-                              {"steps_per_sub_goal", describe(per_sub_goal)}});
+        entry.points.push_back({key[0], key[1], key[2], p.tests, p.ok,
+                                p.ok ? static_cast<double>(p.successes) / p.ok : 0.0, describe(p.completion),
+                                describe(per_sub_goal)});
       }
-      json settings = json::object();
-      for (const auto& [k, v] : conditions[c].settings) settings[k] = v;
-      json entry = {{"label", conditions[c].label}, {"settings", settings}, {"scenarios", per}, {"points", point_list}};
-      if (const auto fit = fitCompletion(solved)) entry["completion_fit"] = {{"a", fit->a}, {"b", fit->b}};
+      if (const auto fit = fitCompletion(solved)) entry.completion_fit = Fit{fit->a, fit->b};
       list.push_back(entry);
     }
-    summary["systems"][sys]["extrinsic"]["conditions"] = list;
+    auto& ex = summary.systems[sys].extrinsic;
+    (ex ? *ex : ex.emplace()).conditions = list;
   }
 }
 
@@ -215,40 +208,41 @@ bool has(const std::vector<std::string>& systems, const std::string& s) {
 }
 
 // Figure 12: goal vs utility planner per action budget.
-json analyseUtility(const std::vector<TestRecord>& tests, const std::vector<Condition>& conditions,
+UtilityAnalysis analyseUtility(const std::vector<TestRecord>& tests, const std::vector<Condition>& conditions,
                     const ExtrinsicDesign& design, const std::vector<std::string>& systems, const std::string& sc) {
   const std::string sys = has(systems, "IMP") ? "IMP" : systems.front();
-  json u = {{"system", sys}, {"scenario", sc}, {"budgets", json::array()}, {"goal_mean", json::array()},
-            {"utility_mean", json::array()}, {"goal_sd", json::array()}, {"utility_sd", json::array()},
-            {"p_values", json::array()}, {"t", json::array()}, {"n", json::array()}};
+  UtilityAnalysis u;
+  u.system = sys;
+  u.scenario = sc;
   for (const auto& b : valuesOf(design, "planner.max_attempts")) {
     const int cg = findCondition(conditions, "planner.kind", "goal", "planner.max_attempts", b);
     const int cu = findCondition(conditions, "planner.kind", "utility", "planner.max_attempts", b);
     if (cg < 0 || cu < 0) throw std::runtime_error("extrinsic.analysis utility needs planner.kind goal and utility");
     const Samples g = collect(tests, sys, sc, cg), ut = collect(tests, sys, sc, cu);
-    u["budgets"].push_back(std::stoi(b));
-    u["goal_mean"].push_back(mean(g.utility));
-    u["utility_mean"].push_back(mean(ut.utility));
-    u["goal_sd"].push_back(std::sqrt(variance(g.utility)));
-    u["utility_sd"].push_back(std::sqrt(variance(ut.utility)));
+    u.budgets.push_back(std::stoi(b));
+    u.goal_mean.push_back(mean(g.utility));
+    u.utility_mean.push_back(mean(ut.utility));
+    u.goal_sd.push_back(std::sqrt(variance(g.utility)));
+    u.utility_sd.push_back(std::sqrt(variance(ut.utility)));
     const bool testable = g.utility.size() >= 2 && ut.utility.size() >= 2;
     const WelchResult w = testable ? welchTest(ut.utility, g.utility) : WelchResult{};
-    u["p_values"].push_back(testable ? json(w.p) : json(nullptr));
-    u["t"].push_back(testable ? json(w.t) : json(nullptr));
-    u["n"].push_back({g.utility.size(), ut.utility.size()});
+    u.p_values.push_back(testable ? Nullable<double>(w.p) : Nullable<double>());
+    u.t.push_back(testable ? Nullable<double>(w.t) : Nullable<double>());
+    u.n.push_back({static_cast<std::int64_t>(g.utility.size()), static_cast<std::int64_t>(ut.utility.size())});
   }
   return u;
 }
 
 // Figure 13: systems per action budget (their means and deviations go into each system's summary).
-json analyseForwardModels(json& summary, const std::vector<TestRecord>& tests, const std::vector<Condition>& conditions,
+ForwardModelsAnalysis analyseForwardModels(Summary& summary, const std::vector<TestRecord>& tests, const std::vector<Condition>& conditions,
                           const ExtrinsicDesign& design, const std::vector<std::string>& systems, const std::string& sc) {
   const auto budgets = valuesOf(design, "planner.max_attempts");
-  json fm = {{"scenario", sc}, {"budgets", json::array()}, {"p_values", json::object()}, {"t", json::object()}};
-  for (const auto& b : budgets) fm["budgets"].push_back(std::stoi(b));
+  ForwardModelsAnalysis fm;
+  fm.scenario = sc;
+  for (const auto& b : budgets) fm.budgets.push_back(std::stoi(b));
   std::map<std::string, std::vector<std::vector<double>>> samples;  // system -> per budget
   for (const auto& sys : systems) {
-    json means = json::array(), sds = json::array();
+    std::vector<double> means, sds;
     for (const auto& b : budgets) {
       const int c = findCondition(conditions, "planner.max_attempts", b);
       const Samples s = collect(tests, sys, sc, c);
@@ -256,28 +250,28 @@ json analyseForwardModels(json& summary, const std::vector<TestRecord>& tests, c
       means.push_back(mean(s.utility));
       sds.push_back(std::sqrt(variance(s.utility)));
     }
-    summary["systems"][sys]["utility_mean"] = means;
-    summary["systems"][sys]["utility_sd"] = sds;
+    summary.systems[sys].utility_mean = means;
+    summary.systems[sys].utility_sd = sds;
   }
   if (has(systems, "IMP"))
     for (const auto& other : systems) {
       if (other == "IMP") continue;
       const std::string pair = "IMP-" + other;
-      fm["p_values"][pair] = json::array();
-      fm["t"][pair] = json::array();
+      PValues& p_values = fm.p_values[pair];
+      PValues& t = fm.t[pair];
       for (std::size_t k = 0; k < budgets.size(); ++k) {
         const auto &a = samples["IMP"][k], &bb = samples[other][k];
         const bool testable = a.size() >= 2 && bb.size() >= 2;
         const WelchResult w = testable ? welchTest(a, bb) : WelchResult{};
-        fm["p_values"][pair].push_back(testable ? json(w.p) : json(nullptr));
-        fm["t"][pair].push_back(testable ? json(w.t) : json(nullptr));
+        p_values.push_back(testable ? Nullable<double>(w.p) : Nullable<double>());
+        t.push_back(testable ? Nullable<double>(w.t) : Nullable<double>());
       }
     }
   return fm;
 }
 
 // Figure 14: actions checked per sub-goal, with and without the affordance restriction.
-json analyseSearch(const std::vector<TestRecord>& tests, const std::vector<Condition>& conditions,
+SearchAnalysis analyseSearch(const std::vector<TestRecord>& tests, const std::vector<Condition>& conditions,
                    const std::vector<std::string>& systems, const std::string& sc) {
   const std::string sys = has(systems, "IMP") ? "IMP" : systems.front();
   const int cr = findCondition(conditions, "planner.restrict_by_affordance", "true");
@@ -285,35 +279,38 @@ json analyseSearch(const std::vector<TestRecord>& tests, const std::vector<Condi
   if (cr < 0 || cu < 0)
     throw std::runtime_error("extrinsic.analysis search-reduction needs planner.restrict_by_affordance true and false");
   const Samples r = collect(tests, sys, sc, cr), u = collect(tests, sys, sc, cu);
-  json s = {{"system", sys},
-            {"scenario", sc},
-            {"restricted_mean", mean(r.checked_per_sub_goal)},
-            {"unrestricted_mean", mean(u.checked_per_sub_goal)},
-            {"restricted_sd", std::sqrt(variance(r.checked_per_sub_goal))},
-            {"unrestricted_sd", std::sqrt(variance(u.checked_per_sub_goal))},
-            {"n", {r.checked_per_sub_goal.size(), u.checked_per_sub_goal.size()}}};
+  SearchAnalysis s;
+  s.system = sys;
+  s.scenario = sc;
+  s.restricted_mean = mean(r.checked_per_sub_goal);
+  s.unrestricted_mean = mean(u.checked_per_sub_goal);
+  s.restricted_sd = std::sqrt(variance(r.checked_per_sub_goal));
+  s.unrestricted_sd = std::sqrt(variance(u.checked_per_sub_goal));
+  s.n = {static_cast<std::int64_t>(r.checked_per_sub_goal.size()), static_cast<std::int64_t>(u.checked_per_sub_goal.size())};
   const bool testable = r.checked_per_sub_goal.size() >= 2 && u.checked_per_sub_goal.size() >= 2;
   const WelchResult w = testable ? welchTest(r.checked_per_sub_goal, u.checked_per_sub_goal) : WelchResult{};
-  s["p_value"] = testable ? json(w.p) : json(nullptr);
-  s["t"] = testable ? json(w.t) : json(nullptr);
-  s["df"] = testable ? json(w.df) : json(nullptr);
+  if (testable) {
+    s.p_value = w.p;
+    s.t = w.t;
+    s.df = w.df;
+  }
   return s;
 }
 
 }  // namespace
 
-void summariseDesign(json& summary, const std::vector<TestRecord>& tests, const std::vector<Condition>& conditions,
+void summariseDesign(Summary& summary, const std::vector<TestRecord>& tests, const std::vector<Condition>& conditions,
                      const ExtrinsicDesign& design, const std::vector<std::string>& systems,
                      const std::vector<std::string>& scenarios) {
   summariseConditions(summary, tests, conditions, systems, scenarios);
   if (design.analysis.empty()) return;
   const std::string& sc = scenarios.front();
   if (design.analysis == "utility")
-    summary["utility"] = analyseUtility(tests, conditions, design, systems, sc);
+    summary.utility = analyseUtility(tests, conditions, design, systems, sc);
   else if (design.analysis == "forward-models")
-    summary["forward_models"] = analyseForwardModels(summary, tests, conditions, design, systems, sc);
+    summary.forward_models = analyseForwardModels(summary, tests, conditions, design, systems, sc);
   else if (design.analysis == "search-reduction")
-    summary["search"] = analyseSearch(tests, conditions, systems, sc);
+    summary.search = analyseSearch(tests, conditions, systems, sc);
 }
 
 }  // namespace afford

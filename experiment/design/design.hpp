@@ -3,7 +3,6 @@
 // the paper's comparisons: utility vs goal planner (Figure 12), forward models
 // at 4000 actions (Figure 13), affordance-restricted search (Figure 14).
 #pragma once
-#include <nlohmann/json.hpp>
 
 #include <cstddef>
 #include <optional>
@@ -12,6 +11,7 @@
 #include <vector>
 
 #include "afford/config.hpp"
+#include "experiment/schema/summary.hpp"
 
 namespace afford {
 
@@ -65,12 +65,12 @@ struct TestRecord {
   int multi_step = 0;        // its sub-goals that need two actions
 };
 
-// summary["systems"][S]["extrinsic"]["conditions"]: per condition and
+// summary.systems[S].extrinsic->conditions: per condition and
 // scenario, success, utility and actions checked per sub-goal (over tests and
 // over agents' means); per condition and point (sub-goals, objects, two-action
 // sub-goals), success and completion steps over the point's scenarios; then the design's analysis at the top level
 // (docs/results-schema.md).
-void summariseDesign(nlohmann::json& summary, const std::vector<TestRecord>& tests,
+void summariseDesign(Summary& summary, const std::vector<TestRecord>& tests,
                      const std::vector<Condition>& conditions, const ExtrinsicDesign& design,
                      const std::vector<std::string>& systems, const std::vector<std::string>& scenarios);
 

@@ -11,7 +11,6 @@
 
 namespace afford {
 namespace fs = std::filesystem;
-using nlohmann::json;
 
 std::string fixed(double v, int digits) {
   std::ostringstream s;
@@ -21,29 +20,26 @@ std::string fixed(double v, int digits) {
 
 namespace {
 
+std::string number(const Nullable<double>& v, int digits) { return v ? fixed(*v, digits) : std::string("-"); }
+
 // Random tables: no one table to show, but the error of each run's learned table against its own.
-void randomTablesText(std::ostringstream& t, const json& summary) {
-  const auto& runs_steps = summary["steps"];
-  const int reps = summary["repetitions"].get<int>();
-  const json& rt = summary["random_tables"];
-  t << "\nRandom affordance tables: " << rt["count"].get<int>() << " tables drawn from seed " << rt["seed"].get<std::int64_t>()
-    << ", " << runs_steps.get<std::int64_t>() << " steps, " << reps
+void randomTablesText(std::ostringstream& t, const Summary& summary) {
+  const RandomTables& rt = *summary.random_tables;
+  t << "\nRandom affordance tables: " << rt.count << " tables drawn from seed " << rt.seed << ", " << summary.steps
+    << " steps, " << summary.repetitions
     << " run(s) per table, system and condition.\nMean absolute error of each run's learned table against its own table";
-  if (rt.contains("floors"))
-    t << "; " << rt["floors"]["source"].get<std::string>();
+  if (rt.floors) t << "; " << rt.floors->source;
   std::size_t cw = 13;  // the column of conditions: 13, or the longest name and a space
-  for (const auto& cj : rt["condition_order"]) cw = std::max(cw, cj.get<std::string>().size() + 1);
+  for (const auto& c : rt.condition_order) cw = std::max(cw, c.size() + 1);
   t << "\n\n  " << std::left << std::setw(static_cast<int>(cw)) << "condition" << "system   mean     median   worst (table)\n";
   std::vector<std::pair<std::string, std::string>> columns;
-  for (const auto& cj : rt["condition_order"])
-    for (const auto& sj : rt["system_order"]) {
-      const std::string c = cj.get<std::string>(), sys = sj.get<std::string>();
-      const json& m = rt["mae"][c][sys];
+  for (const auto& c : rt.condition_order)
+    for (const auto& sys : rt.system_order) {
+      const TableErrors& m = rt.mae.at(c).at(sys);
       columns.emplace_back(c, sys);
-      const auto num = [](const json& v) { return v.is_null() ? std::string("-") : fixed(v.get<double>(), 3); };
-      t << "  " << std::left << std::setw(static_cast<int>(cw)) << c << std::setw(9) << sys << std::setw(9) << num(m["mean"])
-        << std::setw(9) << num(m["median"]) << num(m["worst"])
-        << (m["worst_table"].get<int>() >= 0 ? " (t" + std::to_string(m["worst_table"].get<int>()) + ")" : "") << "\n";
+      t << "  " << std::left << std::setw(static_cast<int>(cw)) << c << std::setw(9) << sys << std::setw(9)
+        << number(m.mean, 3) << std::setw(9) << fixed(m.median, 3) << number(m.worst, 3)
+        << (m.worst_table >= 0 ? " (t" + std::to_string(m.worst_table) + ")" : "") << "\n";
     }
   const auto width = [](const std::string& c, const std::string& sys) {
     return std::max<int>(9, static_cast<int>(c.size() + sys.size()) + 3);
@@ -51,139 +47,144 @@ void randomTablesText(std::ostringstream& t, const json& summary) {
   t << "\n  table ";
   for (const auto& [c, sys] : columns) t << std::right << std::setw(width(c, sys)) << (sys + " " + c);
   t << "   one-way looks (docs/model.md#revisit)\n";
-  for (int k = 0; k < rt["count"].get<int>(); ++k) {
+  for (std::size_t k = 0; k < static_cast<std::size_t>(rt.count); ++k) {
     t << "  t" << std::left << std::setw(5) << k << std::right;
     for (const auto& [c, sys] : columns) {
-      const json& v = rt["mae"][c][sys]["per_table"][static_cast<std::size_t>(k)];
-      t << std::setw(width(c, sys)) << (v.is_null() ? std::string("-") : fixed(v.get<double>(), 3));
+      const auto& per_table = rt.mae.at(c).at(sys).per_table;
+      t << std::setw(width(c, sys)) << (k < per_table.size() ? number(per_table[k], 3) : std::string("-"));
     }
     std::string one_way;
-    for (const auto& n : rt["one_way_looks"][static_cast<std::size_t>(k)]) one_way += (one_way.empty() ? "" : ", ") + n.get<std::string>();
+    if (k < rt.one_way_looks.size())
+      for (const auto& n : rt.one_way_looks[k]) one_way += (one_way.empty() ? "" : ", ") + n;
     t << "   " << (one_way.empty() ? "-" : one_way);
     t << "\n";
   }
 }
 
 // The mean learned table of each system beside the experiment's table.
-void learnedTablesText(std::ostringstream& t, const json& summary, const Plan& plan) {
-  const auto& runs_steps = summary["steps"];
-  const auto object_names = summary["objects"].get<std::vector<std::string>>();
-  const int reps = summary["repetitions"].get<int>();
-  t << "\nLearned affordances after " << runs_steps.get<std::int64_t>() << " steps (mean of " << reps
+void learnedTablesText(std::ostringstream& t, const Summary& summary, const Plan& plan) {
+  const auto& object_names = summary.objects;
+  t << "\nLearned affordances after " << summary.steps << " steps (mean of " << summary.repetitions
     << " run(s)); in brackets the paper's table\n";
   for (const auto& sys : plan.systems) {
-    const json& js = summary["systems"][sys];
-    if (!js.contains("affordance")) continue;
+    const auto it = summary.systems.find(sys);
+    if (it == summary.systems.end() || !it->second.affordance || !it->second.target) continue;
+    const SystemSummary& js = it->second;
     std::size_t name_width = 17;
     for (const auto& n : object_names) name_width = std::max(name_width, n.size() + 1);
     t << "\n" << std::left << std::setw(static_cast<int>(name_width) + 2) << sys
       << "move        turn green  turn red    turn blue\n";
-    for (std::size_t i = 0; i < object_names.size(); ++i) {
+    for (std::size_t i = 0; i < object_names.size() && i < js.affordance->size(); ++i) {
       t << "  " << std::left << std::setw(static_cast<int>(name_width)) << object_names[i];
-      for (int a = 0; a < kNumActions; ++a)
-        t << std::setw(12)
-          << (fixed(js["affordance"][i][a].get<double>(), 2) + " (" + fixed(js["target"][i][a].get<double>(), 1) + ")");
+      for (std::size_t a = 0; a < (*js.affordance)[i].size(); ++a)
+        t << std::setw(12) << (fixed((*js.affordance)[i][a], 2) + " (" + fixed(js.target->at(i).at(a), 1) + ")");
       t << "\n";
     }
-    t << "  mean absolute error " << fixed(js["affordance_mae"].get<double>(), 3);
-    if (js.contains("reference_affordance_mae"))
-      t << " (authors' code: " << fixed(js["reference_affordance_mae"].get<double>(), 3) << ")";
+    t << "  mean absolute error " << fixed(js.affordance_mae.value_or(0.0), 3);
+    if (js.reference_affordance_mae) t << " (authors' code: " << fixed(*js.reference_affordance_mae, 3) << ")";
     t << "\n";
   }
 }
 
+const SystemExtrinsic* extrinsicOf(const Summary& summary, const std::string& sys) {
+  const auto it = summary.systems.find(sys);
+  return it == summary.systems.end() || !it->second.extrinsic ? nullptr : &*it->second.extrinsic;
+}
+
 // The extrinsic tests: the table metric and share solved per scenario, the completion steps and their fit.
-void extrinsicText(std::ostringstream& t, const json& summary, const Plan& plan) {
+void extrinsicText(std::ostringstream& t, const Summary& summary, const Plan& plan) {
   bool header = false;
   for (const auto& sys : plan.systems) {
-    const json& js = summary["systems"][sys];
-    if (!js.contains("extrinsic") || !js["extrinsic"].contains("table_metric")) continue;
-    const json& ex = js["extrinsic"];
+    const SystemExtrinsic* ex = extrinsicOf(summary, sys);
+    if (!ex || !ex->table_metric || !ex->success_rate) continue;
+    const SystemSummary& js = summary.systems.at(sys);
     if (!header) {
-      t << "\nExtrinsic tests (" << ex["tests_per_scenario"].get<int>()
+      t << "\nExtrinsic tests (" << ex->tests_per_scenario
         << " per scenario and trained agent): table metric = share of agents with > 90% of their tests\n"
            "solved; in brackets the paper's; then the raw share of tests solved\n\n"
         << "       ";
-      for (const auto& s : ex["scenarios"]) t << std::setw(14) << s.get<std::string>();
+      for (const auto& s : ex->scenarios) t << std::setw(14) << s;
       t << "\n";
       header = true;
     }
+    const auto at = [](const std::map<std::string, double>& m, const std::string& k) {
+      const auto it = m.find(k);
+      return it == m.end() ? std::string("-") : fixed(it->second, 2);
+    };
     t << "  " << std::left << std::setw(5) << sys << std::right;
-    for (const auto& s : ex["scenarios"]) {
-      const std::string name = s.get<std::string>();
-      std::string cell = fixed(ex["table_metric"][name].get<double>(), 2);
-      if (js.contains("reference_table_metric") && js["reference_table_metric"].contains(name))
-        cell += " (" + fixed(js["reference_table_metric"][name].get<double>(), 1) + ")";
+    for (const auto& name : ex->scenarios) {
+      std::string cell = at(*ex->table_metric, name);
+      if (js.reference_table_metric && js.reference_table_metric->count(name))
+        cell += " (" + fixed(js.reference_table_metric->at(name), 1) + ")";
       t << std::setw(14) << cell;
     }
     t << "\n  " << std::setw(5) << "" << std::right;
-    for (const auto& s : ex["scenarios"]) t << std::setw(14) << fixed(ex["success_rate"][s.get<std::string>()].get<double>(), 2);
+    for (const auto& name : ex->scenarios) t << std::setw(14) << at(*ex->success_rate, name);
     t << "\n";
   }
-  if (header) {
-    t << "\nCompletion steps (median over solved tests) by number of sub-goals; fit a x^2 + b x";
-    if (summary.contains("reference_completion_fit"))
-      t << " (paper, IMP: " << fixed(summary["reference_completion_fit"]["a"].get<double>(), 3) << " x^2 "
-        << fixed(summary["reference_completion_fit"]["b"].get<double>(), 3) << " x)";
-    t << "\n";
-    for (const auto& sys : plan.systems) {
-      const json& js = summary["systems"][sys];
-      if (!js.contains("extrinsic") || !js["extrinsic"].contains("completion_steps")) continue;
-      const json& cs = js["extrinsic"]["completion_steps"];
-      t << "  " << std::left << std::setw(5) << sys << std::right;
-      for (const auto& s : js["extrinsic"]["scenarios"]) {
-        const json& c = cs[s.get<std::string>()];  // none solved: no median to show
-        t << std::setw(14) << (c["n"].get<int>() ? fixed(c["median"].get<double>(), 1) : std::string("-"));
-      }
-      if (cs.contains("fit"))
-        t << "   fit " << fixed(cs["fit"]["a"].get<double>(), 3) << " x^2 " << fixed(cs["fit"]["b"].get<double>(), 3) << " x";
-      t << "\n";
+  if (!header) return;
+  t << "\nCompletion steps (median over solved tests) by number of sub-goals; fit a x^2 + b x";
+  if (summary.reference_completion_fit)
+    t << " (paper, IMP: " << fixed(summary.reference_completion_fit->a, 3) << " x^2 "
+      << fixed(summary.reference_completion_fit->b, 3) << " x)";
+  t << "\n";
+  for (const auto& sys : plan.systems) {
+    const SystemExtrinsic* ex = extrinsicOf(summary, sys);
+    if (!ex || !ex->completion_steps) continue;
+    const CompletionSteps& cs = *ex->completion_steps;
+    t << "  " << std::left << std::setw(5) << sys << std::right;
+    for (const auto& s : ex->scenarios) {
+      const auto c = cs.scenarios.find(s);  // none solved: no median to show
+      t << std::setw(14) << (c != cs.scenarios.end() && c->second.n ? fixed(c->second.median, 1) : std::string("-"));
     }
+    if (cs.fit) t << "   fit " << fixed(cs.fit->a, 3) << " x^2 " << fixed(cs.fit->b, 3) << " x";
+    t << "\n";
   }
 }
 
 // The design's analysis: Figures 12, 13 and 14.
-void analysisText(std::ostringstream& t, const json& summary, const Plan& plan) {
-  const auto p = [](const json& v) { return v.is_null() ? std::string("-") : fixed(v.get<double>(), 4); };
-  if (summary.contains("utility")) {  // Figure 12
-    const json& u = summary["utility"];
-    t << "\nUtility gained per test (" << u["system"].get<std::string>() << ", " << u["scenario"].get<std::string>()
+void analysisText(std::ostringstream& t, const Summary& summary, const Plan& plan) {
+  if (summary.utility) {  // Figure 12
+    const UtilityAnalysis& u = *summary.utility;
+    t << "\nUtility gained per test (" << u.system << ", " << u.scenario
       << "): goal-based vs utility-based planner, Welch's t-test\n  budget   goal     utility  p\n" << std::left;
-    for (std::size_t k = 0; k < u["budgets"].size(); ++k)
-      t << "  " << std::setw(6) << u["budgets"][k].get<int>() << "   " << fixed(u["goal_mean"][k].get<double>(), 3)
-        << "    " << fixed(u["utility_mean"][k].get<double>(), 3) << "    " << p(u["p_values"][k]) << "\n";
+    for (std::size_t k = 0; k < u.budgets.size() && k < u.goal_mean.size() && k < u.utility_mean.size() &&
+                            k < u.p_values.size();
+         ++k)
+      t << "  " << std::setw(6) << u.budgets[k] << "   " << fixed(u.goal_mean[k], 3) << "    "
+        << fixed(u.utility_mean[k], 3) << "    " << number(u.p_values[k], 4) << "\n";
   }
-  if (summary.contains("forward_models")) {  // Figure 13
-    const json& f = summary["forward_models"];
+  if (summary.forward_models) {  // Figure 13
+    const ForwardModelsAnalysis& f = *summary.forward_models;
     t << "\nMean utility of the utility planner with agents trained for " << plan.design.after_actions
       << " actions, by action budget\n  " << std::left << std::setw(12) << "system" << std::right;
-    for (const auto& b : f["budgets"]) t << std::setw(10) << b.get<int>();
+    for (const auto b : f.budgets) t << std::setw(10) << b;
     t << "\n";
     for (const auto& sys : plan.systems) {
       t << "  " << std::left << std::setw(12) << sys << std::right;
-      for (const auto& m : summary["systems"][sys]["utility_mean"]) t << std::setw(10) << fixed(m.get<double>(), 3);
+      if (const auto it = summary.systems.find(sys); it != summary.systems.end() && it->second.utility_mean)
+        for (const double m : *it->second.utility_mean) t << std::setw(10) << fixed(m, 3);
       t << "\n";
     }
-    for (const auto& [pair, ps] : f["p_values"].items()) {
+    for (const auto& [pair, ps] : f.p_values) {
       t << "  " << std::left << std::setw(12) << ("p " + pair) << std::right;
-      for (const auto& v : ps) t << std::setw(10) << p(v);
+      for (const auto& v : ps) t << std::setw(10) << number(v, 4);
       t << "\n";
     }
   }
-  if (summary.contains("search")) {  // Figure 14
-    const json& s = summary["search"];
-    t << "\nActions checked per sub-goal (" << s["system"].get<std::string>() << "): with affordance restriction "
-      << fixed(s["restricted_mean"].get<double>(), 3) << ", without " << fixed(s["unrestricted_mean"].get<double>(), 3)
-      << "; Welch's t-test p = " << (s["p_value"].is_null() ? std::string("-") : fmt::format("{:.3g}", s["p_value"].get<double>()))
-      << "\n";
+  if (summary.search) {  // Figure 14
+    const SearchAnalysis& s = *summary.search;
+    t << "\nActions checked per sub-goal (" << s.system << "): with affordance restriction "
+      << fixed(s.restricted_mean, 3) << ", without " << fixed(s.unrestricted_mean, 3)
+      << "; Welch's t-test p = " << (s.p_value ? fmt::format("{:.3g}", *s.p_value) : std::string("-")) << "\n";
   }
 }
 
 }  // namespace
 
-void printTables(const json& summary, const Plan& plan, const std::string& out_dir) {
+void printTables(const Summary& summary, const Plan& plan, const std::string& out_dir) {
   std::ostringstream t;
-  if (summary.contains("random_tables"))
+  if (summary.random_tables)
     randomTablesText(t, summary);
   else
     learnedTablesText(t, summary, plan);

@@ -1,10 +1,10 @@
-// Presenting an experiment on the console: the tables of its summary.json.
+// Presenting an experiment on the console: the tables of its summary.
 #pragma once
-#include <nlohmann/json.hpp>
 
 #include <string>
 
 #include "experiment/plan/plan.hpp"
+#include "experiment/schema/summary.hpp"
 
 namespace afford {
 
@@ -12,6 +12,6 @@ namespace afford {
 std::string fixed(double v, int digits);
 
 // The mean learned table of each system beside the experiment's table.
-void printTables(const nlohmann::json& summary, const Plan& plan, const std::string& out_dir);
+void printTables(const Summary& summary, const Plan& plan, const std::string& out_dir);
 
 }  // namespace afford

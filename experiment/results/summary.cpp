@@ -18,7 +18,13 @@ using nlohmann::json;
 
 namespace {
 
-using Table = std::vector<std::vector<double>>;
+using Table = SummaryTable;
+
+Table asTable(const AffordanceTable& t) {
+  Table out;
+  for (const auto& row : t) out.emplace_back(row.begin(), row.end());
+  return out;
+}
 
 double meanAbsError(const Table& a, const Table& b) {
   double sum = 0;
@@ -31,24 +37,24 @@ double meanAbsError(const Table& a, const Table& b) {
 // Random tables (issue 11): per condition and system, each table's mean
 // absolute error (mean over its runs), their mean, quartiles and the worst
 // table; and random_tables.csv, random_tables_entries.csv.
-json summariseTables(const Plan& plan, const PhaseRuns& phase, const std::string& out_dir) {
+RandomTables summariseTables(const Plan& plan, const PhaseRuns& phase, const std::string& out_dir) {
   const auto label = [](const std::string& c) { return c.empty() ? std::string("default") : c; };
   std::vector<std::string> names;
   for (const auto& ob : plan.configs.begin()->second.world.objects) names.push_back(ob.name);
   const auto names_of = [&](std::size_t i) { return names[i]; };
-  json rt = {{"seed", plan.tables->seed}, {"count", plan.tables->count}, {"tables", plan.table_list},
-             {"conditions", json::object()}, {"mae", json::object()}};
-  rt["one_way_looks"] = json::array();  // per table: the objects whose look cannot come back once left
-  for (const auto& table : plan.table_list) {
-    json names = json::array();
-    for (std::size_t i : oneWayLooks(table, plan.configs.begin()->second.world.objects)) names.push_back(names_of(i));
-    rt["one_way_looks"].push_back(names);
+  RandomTables rt;
+  rt.seed = plan.tables->seed;
+  rt.count = plan.tables->count;
+  for (const auto& table : plan.table_list) rt.tables.push_back(asTable(table));
+  for (const auto& table : plan.table_list) {  // per table: the objects whose look cannot come back once left
+    std::vector<std::string> one_way;
+    for (std::size_t i : oneWayLooks(table, plan.configs.begin()->second.world.objects)) one_way.push_back(names_of(i));
+    rt.one_way_looks.push_back(one_way);
   }
-  rt["condition_order"] = json::array();
-  rt["system_order"] = plan.systems;
+  rt.system_order = plan.systems;
   for (const auto& [c, settings] : plan.conditions_run) {
-    rt["conditions"][label(c)] = settings;
-    rt["condition_order"].push_back(label(c));
+    rt.conditions[label(c)] = settings;
+    rt.condition_order.push_back(label(c));
   }
   std::ostringstream csv, entries;
   csv << "table,condition,system,seed,run_id,mae\n";
@@ -70,31 +76,29 @@ json summariseTables(const Plan& plan, const PhaseRuns& phase, const std::string
         ++n[static_cast<std::size_t>(p.table)];
         csv << p.table << "," << label(c) << "," << sys << "," << p.spec.seed << "," << p.spec.run_id << "," << mae << "\n";
       }
-      json per_table = json::array();
+      TableErrors& e = rt.mae[label(c)][sys];
       std::vector<double> values;
-      int worst = -1;
       for (std::size_t k = 0; k < sum.size(); ++k) {
-        if (!n[k]) {
-          per_table.push_back(nullptr);
-          continue;
-        }
-        per_table.push_back(sum[k] / n[k]);
+        e.per_table.emplace_back();
+        if (!n[k]) continue;
+        e.per_table.back() = sum[k] / n[k];
         values.push_back(sum[k] / n[k]);
-        if (worst < 0 || sum[k] / n[k] > per_table[static_cast<std::size_t>(worst)].get<double>()) worst = static_cast<int>(k);
+        if (e.worst_table < 0 || sum[k] / n[k] > *e.per_table[static_cast<std::size_t>(e.worst_table)])
+          e.worst_table = static_cast<std::int64_t>(k);
       }
       std::vector<double> sorted = values;
       std::sort(sorted.begin(), sorted.end());
       double mean = 0;
       for (double v : values) mean += v / values.size();
-      rt["mae"][label(c)][sys] = {{"per_table", per_table},
-                                  {"tables", values.size()},
-                                  {"mean", values.empty() ? json(nullptr) : json(mean)},
-                                  {"median", quantile(sorted, 0.5)},
-                                  {"q1", quantile(sorted, 0.25)},
-                                  {"q3", quantile(sorted, 0.75)},
-                                  {"min", sorted.empty() ? json(nullptr) : json(sorted.front())},
-                                  {"worst", sorted.empty() ? json(nullptr) : json(sorted.back())},
-                                  {"worst_table", worst}};
+      e.tables = static_cast<std::int64_t>(values.size());
+      if (!values.empty()) e.mean = mean;
+      e.median = quantile(sorted, 0.5);
+      e.q1 = quantile(sorted, 0.25);
+      e.q3 = quantile(sorted, 0.75);
+      if (!sorted.empty()) {
+        e.min = sorted.front();
+        e.worst = sorted.back();
+      }
     }
   writeWhole(fs::path(out_dir) / "random_tables.csv", csv.str());
   writeWhole(fs::path(out_dir) / "random_tables_entries.csv", entries.str());
@@ -103,7 +107,7 @@ json summariseTables(const Plan& plan, const PhaseRuns& phase, const std::string
 
 }  // namespace
 
-void summariseExtrinsic(json& summary, const Plan& plan, const std::vector<PlannedRun>& tests, const PhaseRuns& phase,
+void summariseExtrinsic(Summary& summary, const Plan& plan, const std::vector<PlannedRun>& tests, const PhaseRuns& phase,
                         const std::string& out_dir) {
   const double solved_share = plan.reference->required("thresholds.table_metric.solved_share");
   const auto& outcomes = phase.outcomes;
@@ -122,11 +126,15 @@ void summariseExtrinsic(json& summary, const Plan& plan, const std::vector<Plann
           << r.extrinsic.sub_goals.size() << "," << active << "," << checks << "," << r.wall_seconds << "\n";
     }
     writeWhole(fs::path(out_dir) / ("extrinsic_" + sys + ".csv"), csv.str());
-    json ex = {{"scenarios", plan.scenarios}, {"tests_per_scenario", plan.tests}, {"table_metric_solved_share", solved_share}};
-    if (plan.conditions.size() > 1) {  // the design's summary compares the conditions
-      summary["systems"][sys]["extrinsic"] = ex;
-      continue;
-    }
+    SystemExtrinsic& ex = summary.systems[sys].extrinsic.emplace();
+    ex.scenarios = plan.scenarios;
+    ex.tests_per_scenario = plan.tests;
+    ex.table_metric_solved_share = solved_share;
+    if (plan.conditions.size() > 1) continue;  // the design's summary compares the conditions
+    auto& table_metric = ex.table_metric.emplace();
+    auto& success_rate = ex.success_rate.emplace();
+    auto& completion = ex.completion_steps.emplace();
+    auto& checked_per_sub_goal = ex.actions_checked_per_sub_goal.emplace();
     std::vector<std::pair<double, double>> solved;  // (sub-goals, completion) of every solved test
     for (const auto& scenario : plan.scenarios) {
       std::map<std::size_t, std::pair<int, int>> per_run;  // intrinsic run -> (successes, tests)
@@ -156,58 +164,59 @@ void summariseExtrinsic(json& summary, const Plan& plan, const std::vector<Plann
       std::sort(steps.begin(), steps.end());
       double mean = 0;
       for (double v : steps) mean += v / steps.size();
-      ex["table_metric"][scenario] = per_run.empty() ? 0.0 : static_cast<double>(good_runs) / per_run.size();
-      ex["success_rate"][scenario] = total ? static_cast<double>(successes) / total : 0.0;
-      ex["completion_steps"][scenario] = {{"n", steps.size()},
-                                          {"sub_goals", plan.sub_goals.at(scenario)},
-                                          {"median", quantile(steps, 0.5)},
-                                          {"q1", quantile(steps, 0.25)},
-                                          {"q3", quantile(steps, 0.75)},
-                                          {"min", steps.empty() ? 0.0 : steps.front()},
-                                          {"max", steps.empty() ? 0.0 : steps.back()},
-                                          {"mean", mean}};
-      ex["actions_checked_per_sub_goal"][scenario] = sub_goal_count ? checked / sub_goal_count : 0.0;
+      table_metric[scenario] = per_run.empty() ? 0.0 : static_cast<double>(good_runs) / per_run.size();
+      success_rate[scenario] = total ? static_cast<double>(successes) / total : 0.0;
+      completion.scenarios[scenario] = {static_cast<std::int64_t>(steps.size()),
+                                        plan.sub_goals.at(scenario),
+                                        quantile(steps, 0.5),
+                                        quantile(steps, 0.25),
+                                        quantile(steps, 0.75),
+                                        steps.empty() ? 0.0 : steps.front(),
+                                        steps.empty() ? 0.0 : steps.back(),
+                                        mean};
+      checked_per_sub_goal[scenario] = sub_goal_count ? checked / sub_goal_count : 0.0;
     }
-    if (const auto fit = fitCompletion(solved)) ex["completion_steps"]["fit"] = {{"a", fit->a}, {"b", fit->b}};
-    summary["systems"][sys]["extrinsic"] = ex;
+    if (const auto fit = fitCompletion(solved)) completion.fit = Fit{fit->a, fit->b};
   }
 }
 
 namespace {
 
 // A finished intrinsic run's entry in its system's "runs".
-json runEntry(const Plan& plan, const PlannedRun& p, const RunOutcome& r, double mae) {
-  json entry = {{"run_id", p.spec.run_id},
-                {"seed", p.spec.seed},
-                {"affordance", r.curve.back().affordance},
-                {"affordance_mae", mae},
-                {"weights_checksum", r.weights_checksum},
-                {"actions_executed", r.executed},
-                {"successes", r.successes},
-                {"looks", r.looks},
-                {"replayed", r.replayed},
-                {"replayed_effects", r.replayed_effects},
-                {"revisits", r.revisits},
-                {"reused_from", r.reused_from.empty() ? json(nullptr) : json(r.reused_from)},
-                {"wall_seconds", r.wall_seconds},
-                {"steps_per_second", r.run_seconds > 0 ? p.spec.steps / r.run_seconds : 0.0}};
+RunEntry runEntry(const Plan& plan, const PlannedRun& p, const RunOutcome& r, double mae) {
+  RunEntry entry;
+  entry.run_id = p.spec.run_id;
+  entry.seed = p.spec.seed;
+  entry.affordance = r.curve.back().affordance;
+  entry.affordance_mae = mae;
+  entry.weights_checksum = r.weights_checksum;
+  entry.actions_executed.assign(r.executed.begin(), r.executed.end());
+  entry.successes.assign(r.successes.begin(), r.successes.end());
+  entry.looks = r.looks;
+  entry.replayed = r.replayed;
+  entry.replayed_effects = r.replayed_effects;
+  entry.revisits = r.revisits;
+  if (!r.reused_from.empty()) entry.reused_from = r.reused_from;
+  entry.wall_seconds = r.wall_seconds;
+  entry.steps_per_second = r.run_seconds > 0 ? p.spec.steps / r.run_seconds : 0.0;
   if (plan.tables) {  // random tables: each run against its own table; no mean table or curve across them
-    entry["table"] = p.table;
-    entry["condition"] = p.intrinsic_condition.empty() ? std::string("default") : p.intrinsic_condition;
-    entry["target"] = p.target;
+    entry.table = p.table;
+    entry.condition = p.intrinsic_condition.empty() ? std::string("default") : p.intrinsic_condition;
+    entry.target = p.target;
     return entry;
   }
-  entry["log_dir"] = r.log_dir.empty() ? json(nullptr) : json(r.log_dir);
-  entry["checkpoint"] = r.checkpoint;
-  entry["peak_rss_kb"] = r.peak_rss_kb;
-  entry["log_bytes"] = r.log_bytes;
-  entry["log_bytes_per_step"] = static_cast<double>(r.log_bytes) / p.spec.steps;
+  entry.log_dir.emplace();
+  if (!r.log_dir.empty()) entry.log_dir = Nullable<std::string>(r.log_dir);
+  entry.checkpoint = Nullable<std::string>(r.checkpoint);
+  entry.peak_rss_kb = std::map<std::string, std::int64_t>(r.peak_rss_kb.begin(), r.peak_rss_kb.end());
+  entry.log_bytes = r.log_bytes;
+  entry.log_bytes_per_step = static_cast<double>(r.log_bytes) / p.spec.steps;
   return entry;
 }
 
 // A system's final tables: their mean, least and greatest entries, and how far each is from the target;
 // and affordance_<system>.csv.
-void summariseFinals(json& js, const std::string& sys, const Table& target, const std::vector<Table>& finals,
+void summariseFinals(SystemSummary& js, const std::string& sys, const Table& target, const std::vector<Table>& finals,
                      const std::vector<double>& maes, const std::vector<std::string>& object_names,
                      const std::string& out_dir) {
   Table mean = target, mn = target, mx = target;
@@ -225,11 +234,11 @@ void summariseFinals(json& js, const std::string& sys, const Table& target, cons
     }
   double mae_sum = 0;
   for (double m : maes) mae_sum += m;
-  js["affordance"] = mean;
-  js["affordance_min"] = mn;
-  js["affordance_max"] = mx;
-  js["affordance_mae"] = mae_sum / maes.size();
-  js["affordance_mae_of_mean"] = meanAbsError(mean, target);
+  js.affordance = mean;
+  js.affordance_min = mn;
+  js.affordance_max = mx;
+  js.affordance_mae = mae_sum / maes.size();
+  js.affordance_mae_of_mean = meanAbsError(mean, target);
   std::ostringstream csv;
   csv << "system,object,action,target,mean,min,max\n";
   for (std::size_t i = 0; i < target.size(); ++i)
@@ -240,12 +249,13 @@ void summariseFinals(json& js, const std::string& sys, const Table& target, cons
 }
 
 // One system's summary of its finished intrinsic runs; and curves_<system>.csv.
-json summariseSystem(const Plan& plan, const std::string& sys, const PhaseRuns& phase,
+SystemSummary summariseSystem(const Plan& plan, const std::string& sys, const PhaseRuns& phase,
                      const std::vector<std::string>& object_names, const std::string& out_dir) {
   const RunConfig& cfg = plan.configs.at(sys);
   Table target;
   for (const auto& ob : cfg.world.objects) target.emplace_back(ob.affordance.begin(), ob.affordance.end());
-  json js = {{"target", target}, {"runs", json::array()}};
+  SystemSummary js;
+  if (!plan.tables) js.target = target;
   std::vector<Table> finals;
   std::vector<double> maes;
   std::ostringstream curves_csv;
@@ -255,16 +265,18 @@ json summariseSystem(const Plan& plan, const std::string& sys, const PhaseRuns& 
     if (p.system != sys || !phase.finished[p.index]) continue;
     const RunOutcome& r = phase.outcomes[p.index];
     if (!r.ok || r.curve.empty()) {
-      js["failed_runs"].push_back({{"run_id", p.spec.run_id}, {"seed", p.spec.seed}, {"error", r.error}});
+      if (!js.failed_runs) js.failed_runs.emplace();
+      js.failed_runs->push_back({p.spec.run_id, p.spec.seed, r.error});
       continue;
     }
     // Every run reports its table at the same steps (run.curve_interval): a snapshot lost on the
     // way would bias the mean curve at that step, so say so.
     if (r.curve.size() != static_cast<std::size_t>(cfg.steps / cfg.curve_interval + 1) + (cfg.steps % cfg.curve_interval != 0))
-      js["curve_gaps"].push_back({{"run_id", p.spec.run_id}, {"snapshots", r.curve.size()}});
+      (js.curve_gaps ? *js.curve_gaps : js.curve_gaps.emplace())
+          .push_back({p.spec.run_id, static_cast<std::int64_t>(r.curve.size())});
     finals.push_back(r.curve.back().affordance);
     maes.push_back(meanAbsError(finals.back(), p.target));
-    js["runs"].push_back(runEntry(plan, p, r, maes.back()));
+    js.runs.push_back(runEntry(plan, p, r, maes.back()));
     if (plan.tables) continue;
     for (const auto& snap : r.curve) {
       auto& [sum, n] = curve_sum[snap.step];
@@ -280,24 +292,22 @@ json summariseSystem(const Plan& plan, const std::string& sys, const PhaseRuns& 
   }
   if (!finals.empty() && !plan.tables) {
     summariseFinals(js, sys, target, finals, maes, object_names, out_dir);
-    json steps = json::array(), means = json::array();
+    Curves& curves = js.curves.emplace();
     for (auto& [step, sn] : curve_sum) {
       auto& [sum, n] = sn;
       for (auto& row : sum)
         for (auto& v : row) v /= n;
-      steps.push_back(step);
-      means.push_back(sum);
+      curves.steps.push_back(step);
+      curves.mean.push_back(sum);
     }
-    js["curves"] = {{"steps", steps}, {"mean", means}};
   }
   if (!plan.tables) writeWhole(fs::path(out_dir) / ("curves_" + sys + ".csv"), curves_csv.str());
-  if (plan.tables) js.erase("target");
   return js;
 }
 
 // The paper's numbers for the same experiment (config/reference.yaml), beside ours: its mean absolute
 // errors, the floors of random tables, its extrinsic tables and completion fit.
-void addReference(json& summary, const Plan& plan) {
+void addReference(Summary& summary, const Plan& plan) {
   const auto& exp = plan.exp;
   if (!exp.file.empty()) return;  // an experiment from a file elsewhere has none beside it
   const Reference& ref = *plan.reference;
@@ -305,49 +315,48 @@ void addReference(json& summary, const Plan& plan) {
   const std::string key = exp.name + ".";
   for (const auto& sys : plan.systems)
     if (reference && reference["affordance_mae"] && reference["affordance_mae"][sys])
-      summary["systems"][sys]["reference_affordance_mae"] =
+      summary.systems[sys].reference_affordance_mae =
           ref.number(reference["affordance_mae"][sys], key + "affordance_mae." + sys);
-  if (reference && reference["source"]) summary["reference_source"] = ref.text(reference["source"], key + "source");
+  if (reference && reference["source"]) summary.reference_source = ref.text(reference["source"], key + "source");
   if (plan.tables && reference && reference["floors"])  // what issue 11 asks of the memory options, shown beside
-    summary["random_tables"]["floors"] = {{"mean", ref.number(reference["floors"]["mean"], key + "floors.mean")},
-                                          {"worst", ref.number(reference["floors"]["worst"], key + "floors.worst")},
-                                          {"source", ref.text(reference["floors"]["source"], key + "floors.source")}};
+    summary.random_tables->floors = Floors{ref.number(reference["floors"]["mean"], key + "floors.mean"),
+                                           ref.number(reference["floors"]["worst"], key + "floors.worst"),
+                                           ref.text(reference["floors"]["source"], key + "floors.source")};
   const std::string ekey = exp.name + "_extrinsic";
   const YAML::Node ext = ref.entry(ekey);
   if (ext && ext["table_metric"])
     for (const auto& sys : plan.systems)
       if (ext["table_metric"][sys]) {  // the paper's scenarios 1-5
         const auto row = ref.numbers(ext["table_metric"][sys], ekey + ".table_metric." + sys);
-        for (std::size_t k = 0; k < row.size(); ++k)
-          summary["systems"][sys]["reference_table_metric"]["scenario" + std::to_string(k + 1)] = row[k];
+        auto& metric = summary.systems[sys].reference_table_metric.emplace();
+        for (std::size_t k = 0; k < row.size(); ++k) metric["scenario" + std::to_string(k + 1)] = row[k];
       }
   if (ext && ext["completion_fit"])
-    summary["reference_completion_fit"] = {{"a", ref.number(ext["completion_fit"]["a"], ekey + ".completion_fit.a")},
-                                           {"b", ref.number(ext["completion_fit"]["b"], ekey + ".completion_fit.b")}};
-  if (ext && ext["source"]) summary["reference_extrinsic_source"] = ref.text(ext["source"], ekey + ".source");
+    summary.reference_completion_fit = Fit{ref.number(ext["completion_fit"]["a"], ekey + ".completion_fit.a"),
+                                           ref.number(ext["completion_fit"]["b"], ekey + ".completion_fit.b")};
+  if (ext && ext["source"]) summary.reference_extrinsic_source = ref.text(ext["source"], ekey + ".source");
 }
 
 }  // namespace
 
 // summary.json content (docs/results-schema.md) of the finished runs; also writes the CSV files.
-json summarise(const Plan& plan, const Hosting& hosting, const PhaseRuns& phase, const std::string& out_dir) {
-  std::vector<std::string> object_names;
-  for (const auto& ob : plan.configs.begin()->second.world.objects) object_names.push_back(ob.name);
-  json summary = {{"experiment", plan.exp.name},
-                  {"description", plan.exp.description},
-                  {"steps", plan.runs.front().spec.steps},
-                  {"repetitions", plan.reps},
-                  {"seed", plan.seed},
-                  {"transport", hosting.transport},
-                  {"network", hosting.network},
-                  {"afford_version", AFFORD_VERSION},
-                  {"objects", object_names},
-                  {"actions", std::vector<std::string>(kActionNames.begin(), kActionNames.end())},
-                  {"systems", json::object()}};
-  if (!plan.exp.file.empty()) summary["experiment_file"] = plan.exp.file;
-  if (!hosting.processes.empty()) summary["processes"] = hosting.processes;  // --process: the commands run in place of ours
-  for (const auto& sys : plan.systems) summary["systems"][sys] = summariseSystem(plan, sys, phase, object_names, out_dir);
-  if (plan.tables) summary["random_tables"] = summariseTables(plan, phase, out_dir);
+Summary summarise(const Plan& plan, const Hosting& hosting, const PhaseRuns& phase, const std::string& out_dir) {
+  Summary summary;
+  for (const auto& ob : plan.configs.begin()->second.world.objects) summary.objects.push_back(ob.name);
+  summary.experiment = plan.exp.name;
+  summary.description = plan.exp.description;
+  summary.steps = plan.runs.front().spec.steps;
+  summary.repetitions = plan.reps;
+  summary.seed = plan.seed;
+  summary.transport = hosting.transport;
+  summary.network = hosting.network;
+  summary.afford_version = AFFORD_VERSION;
+  summary.actions.assign(kActionNames.begin(), kActionNames.end());
+  if (!plan.exp.file.empty()) summary.experiment_file = plan.exp.file;
+  if (!hosting.processes.empty()) summary.processes = hosting.processes;  // --process: the commands run in place of ours
+  for (const auto& sys : plan.systems)
+    summary.systems[sys] = summariseSystem(plan, sys, phase, summary.objects, out_dir);
+  if (plan.tables) summary.random_tables = summariseTables(plan, phase, out_dir);
   addReference(summary, plan);
   return summary;
 }

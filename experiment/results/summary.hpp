@@ -10,6 +10,7 @@
 #include "experiment/design/design.hpp"
 #include "experiment/execute/execute.hpp"
 #include "experiment/plan/plan.hpp"
+#include "experiment/schema/summary.hpp"
 
 namespace afford {
 
@@ -20,13 +21,13 @@ struct Hosting {
   std::map<std::string, std::string> processes;  // --process: the commands run in place of the shipped processes
 };
 
-// summary.json content of the finished intrinsic runs; also writes the CSV files into out_dir.
-nlohmann::json summarise(const Plan& plan, const Hosting& hosting, const PhaseRuns& phase, const std::string& out_dir);
+// The summary of the finished intrinsic runs; also writes the CSV files into out_dir.
+Summary summarise(const Plan& plan, const Hosting& hosting, const PhaseRuns& phase, const std::string& out_dir);
 
 // Per system: the paper's Table 2 metric, raw success, completion steps and
 // their fit a x^2 + b x (Figure 6), actions checked per sub-goal; and a CSV.
 // Only the finished tests count (all of them, unless a signal stopped the phase).
-void summariseExtrinsic(nlohmann::json& summary, const Plan& plan, const std::vector<PlannedRun>& tests,
+void summariseExtrinsic(Summary& summary, const Plan& plan, const std::vector<PlannedRun>& tests,
                         const PhaseRuns& phase, const std::string& out_dir);
 
 // The finished tests as the design's summary takes them.

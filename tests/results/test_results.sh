@@ -3,7 +3,8 @@
 # equal those recorded in tests/data/results/, but for timings, memory, sizes,
 # paths and the network (tests/results/normalise.py): summary.json, checksums
 # included, and every CSV file. A case marked @shards runs as two shards
-# merged (afford merge), and must equal the same experiment run whole.
+# merged (afford merge), and must equal the same experiment run whole. Every
+# summary.json reads through its structure and writes back the same.
 #   tests/results/test_results.sh BUILD_DIR WORK_DIR [--write]
 # --write records the results of this build as the expected ones.
 set -euo pipefail
@@ -45,6 +46,9 @@ while IFS='|' read -r name args; do
     run "$name" "$out/$name" "$out/$name-logs" "${argv[@]}"
   fi
   "$py" "$here/normalise.py" "$out/$name" >"$out/$name.norm"
+  # Every summary.json (a sweep's conditions' too) reads through its structure and writes back the same.
+  mapfile -t summaries < <(find "$out/$name" "$out/$name-merged" -name summary.json -printf '%h\n' 2>/dev/null)
+  "$build/bin/summary-roundtrip" "${summaries[@]}" || { echo "$name: a summary.json does not read back"; failed=1; }
   [[ $(wc -l <"$out/$name.norm") -gt 20 ]] || { echo "$name: hardly any results"; exit 1; }
   if [[ $write == --write ]]; then
     mkdir -p "$expected" && cp "$out/$name.norm" "$expected/$name.txt"

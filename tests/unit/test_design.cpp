@@ -70,18 +70,20 @@ TEST(Design, UtilityAnalysisComparesThePlannersPerBudget) {
       tests.push_back(t);
     }
   tests[0].ok = false;  // an infrastructure failure is not a result
-  nlohmann::json summary;
+  Summary summary;
   summariseDesign(summary, tests, cs, d, {"IMP"}, {"utility"});
-  const auto& u = summary["utility"];
-  EXPECT_EQ(u["budgets"], nlohmann::json({1, 2}));
-  EXPECT_NEAR(u["goal_mean"][0].get<double>(), (4 * 1.0 + 5 * 2.0) / 9, 1e-12);
-  EXPECT_NEAR(u["utility_mean"][1].get<double>(), 4.5, 1e-12);
-  EXPECT_LT(u["p_values"][0].get<double>(), 1e-6);
-  const auto& cond = summary["systems"]["IMP"]["extrinsic"]["conditions"][0]["scenarios"]["utility"];
-  EXPECT_EQ(cond["tests"], 10);
-  EXPECT_EQ(cond["tests_completed"], 9);
-  EXPECT_NEAR(cond["actions_checked_per_sub_goal"]["mean"].get<double>(), 1.5, 1e-12);
-  EXPECT_EQ(cond["utility_agent_means"].size(), 2u);
+  ASSERT_TRUE(summary.utility);
+  const UtilityAnalysis& u = *summary.utility;
+  EXPECT_EQ(u.budgets, std::vector<std::int64_t>({1, 2}));
+  EXPECT_NEAR(u.goal_mean[0], (4 * 1.0 + 5 * 2.0) / 9, 1e-12);
+  EXPECT_NEAR(u.utility_mean[1], 4.5, 1e-12);
+  ASSERT_TRUE(u.p_values[0]);
+  EXPECT_LT(*u.p_values[0], 1e-6);
+  const auto& cond = summary.systems.at("IMP").extrinsic->conditions->at(0).scenarios.at("utility");
+  EXPECT_EQ(cond.tests, 10);
+  EXPECT_EQ(cond.tests_completed, 9);
+  EXPECT_NEAR(cond.actions_checked_per_sub_goal.mean, 1.5, 1e-12);
+  EXPECT_EQ(cond.utility_agent_means.size(), 2u);
 }
 
 TEST(Design, TheCompletionFitRecoversAQuadraticAndNeedsTwoSubGoalCounts) {
@@ -115,24 +117,25 @@ TEST(Design, EachConditionHasItsOwnCompletionFit) {
         t.completion = t.success ? (c == 0 ? k * k : 2 * k) : 0;
         tests.push_back(t);
       }
-  nlohmann::json summary;
+  Summary summary;
   summariseDesign(summary, tests, cs, d, {"IMP"}, {"s1", "s2", "s3", "s4"});
-  const auto& conds = summary["systems"]["IMP"]["extrinsic"]["conditions"];
-  EXPECT_NEAR(conds[0]["completion_fit"]["a"].get<double>(), 1.0, 1e-9);
-  EXPECT_NEAR(conds[0]["completion_fit"]["b"].get<double>(), 0.0, 1e-9);
-  EXPECT_NEAR(conds[1]["completion_fit"]["a"].get<double>(), 0.0, 1e-9);
-  EXPECT_NEAR(conds[1]["completion_fit"]["b"].get<double>(), 2.0, 1e-9);
-  const auto& s3 = conds[0]["scenarios"]["s3"];
-  EXPECT_EQ(s3["sub_goals"], 3);
-  EXPECT_EQ(s3["completion_steps"]["n"], 2);
-  EXPECT_NEAR(s3["completion_steps"]["median"].get<double>(), 9.0, 1e-12);
+  const auto& conds = *summary.systems.at("IMP").extrinsic->conditions;
+  ASSERT_TRUE(conds[0].completion_fit && conds[1].completion_fit);
+  EXPECT_NEAR(conds[0].completion_fit->a, 1.0, 1e-9);
+  EXPECT_NEAR(conds[0].completion_fit->b, 0.0, 1e-9);
+  EXPECT_NEAR(conds[1].completion_fit->a, 0.0, 1e-9);
+  EXPECT_NEAR(conds[1].completion_fit->b, 2.0, 1e-9);
+  const auto& s3 = conds[0].scenarios.at("s3");
+  EXPECT_EQ(s3.sub_goals, 3);
+  EXPECT_EQ(s3.completion_steps.n, 2);
+  EXPECT_NEAR(s3.completion_steps.median, 9.0, 1e-12);
 }
 
 TEST(Design, AnAnalysisWithoutItsConditionsSaysWhatIsMissing) {
   ExtrinsicDesign d;
   d.vary = {{"planner.kind", {"goal", "utility"}}};
   d.analysis = "utility";
-  nlohmann::json summary;
+  Summary summary;
   try {
     summariseDesign(summary, {}, conditionsOf(d), d, {"IMP"}, {"utility"});
     FAIL() << "no error";

@@ -303,9 +303,9 @@ TEST(Layers, NoFileIncludesAHeaderOfAHigherLayerAndThereIsNoCycle) {
     return second.empty() ? top : top + "/" + second;
   };
   const std::map<std::string, int> rank = {
-      {"experiment/design", 1}, {"experiment/run", 1},      {"experiment/plan", 2},    {"experiment/execute", 3},
-      {"experiment/replay", 3}, {"experiment/results", 4},  {"experiment/present", 5}, {"experiment", 6},
-      {"processes/afford", 7}};
+      {"experiment/schema", 1},  {"experiment/design", 2},  {"experiment/run", 2},     {"experiment/plan", 3},
+      {"experiment/execute", 4}, {"experiment/replay", 4},  {"experiment/results", 5}, {"experiment/present", 6},
+      {"experiment", 7},         {"processes/afford", 8}};
   const auto rankOf = [&](const std::string& folder) {
     const auto r = rank.find(folder);
     return r == rank.end() ? 0 : r->second;  // common/ and the processes' own folders

@@ -13,6 +13,7 @@
 #include "afford/commands.hpp"
 #include "afford/config.hpp"
 #include "experiment/experiment.hpp"
+#include "experiment/schema/summary.hpp"
 #include "experiment/state.hpp"
 
 namespace afford {
@@ -53,8 +54,14 @@ ExperimentRequest mergeOptions(const std::vector<std::string>& dirs, const std::
       count = n;
       first_plan = planOptions(options);
       o = requestFromJson(options);
-      std::ifstream in(fs::path(dir) / "summary.json");
-      if (in) o.merged_network = json::parse(in, nullptr, false).value("network", std::string());
+      try {  // where the shards ran, said in the merged summary
+        const json summary = readSummaryJson(dir);
+        const std::string file = (fs::path(dir) / "summary.json").string();
+        o.merged_network = isSweepSummary(summary) ? sweepSummaryFromJson(summary, file).network
+                                                   : summaryFromJson(summary, file).network;
+      } catch (const SummaryError& e) {
+        throw ConfigError(std::string("afford merge: ") + e.what());
+      }
     } else {
       if (n != count)
         throw ConfigError("afford merge: " + dir + " is shard " + std::to_string(index) + " of " + std::to_string(n) +

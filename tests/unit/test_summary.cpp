@@ -1,0 +1,112 @@
+// The structure of summary.json (experiment/schema/summary.hpp): what it
+// writes reads back the same, and what it cannot read is named by its path.
+#include <gtest/gtest.h>
+
+#include <string>
+
+#include "experiment/schema/summary.hpp"
+
+namespace afford {
+namespace {
+
+using nlohmann::json;
+
+// A summary with every optional part there, and nulls where a key may be null.
+Summary fullSummary() {
+  Summary s;
+  s.experiment = "base";
+  s.steps = 60;
+  s.repetitions = 2;
+  s.seed = 3;
+  s.experiment_file = "/x/e.yaml";
+  s.processes = std::map<std::string, std::string>{{"motivation", "my-motivation"}};
+  s.objects = {"red square"};
+  s.actions = {"move", "turn green", "turn red", "turn blue"};
+  s.reference_completion_fit = Fit{1.3, -0.9};
+  SystemSummary& imp = s.systems["IMP"];
+  imp.target = SummaryTable{{1, 0, 1, 1}};
+  RunEntry run;
+  run.run_id = "r-IMP-s3";
+  run.affordance = {{0.9, 0.1, 0.8, 0.7}};
+  run.actions_executed = {5, 6, 7, 8};
+  run.log_dir = Nullable<std::string>();  // hosted, its log not kept
+  run.checkpoint = Nullable<std::string>("logs/r/predictors.ckpt");
+  run.peak_rss_kb = std::map<std::string, std::int64_t>{{"environment", 11000}};
+  imp.runs.push_back(run);
+  imp.curve_gaps = std::vector<CurveGap>{{"r-IMP-s3", 4}};
+  SystemExtrinsic& ex = imp.extrinsic.emplace();
+  ex.scenarios = {"scenario1"};
+  ex.completion_steps.emplace().scenarios["scenario1"].n = 3;
+  ex.completion_steps->fit = Fit{1.0, 0.5};
+  PlannerCondition c;
+  c.label = "planner.kind=goal";
+  c.settings = {{"planner.kind", "goal"}};
+  c.points.push_back(DesignPoint{});
+  ex.conditions = std::vector<PlannerCondition>{c};
+  DesignSummary& d = s.extrinsic_design.emplace();
+  d.generate = GenerateSummary{{1, 2}, {}, 1, 7, {true, 0}};
+  SearchAnalysis& search = s.search.emplace();
+  search.p_value = 1e-9;  // t and df stay null
+  s.interrupted = Interruption{"SIGINT", "intrinsic", 1, 2, {{"r-IMP-s4", "step 9", {}}}, {}, true, "afford ...", "/w"};
+  return s;
+}
+
+TEST(SummarySchema, WhatItWritesReadsBackTheSame) {
+  const json j = toJson(fullSummary());
+  EXPECT_EQ(toJson(summaryFromJson(j)).dump(), j.dump());
+  // Absent and null are kept apart: an empty optional is no key, an empty Nullable is null.
+  const json& run = j["systems"]["IMP"]["runs"][0];
+  EXPECT_TRUE(run["log_dir"].is_null());
+  EXPECT_TRUE(run["reused_from"].is_null());
+  EXPECT_FALSE(run.contains("table"));
+  EXPECT_TRUE(j["search"]["t"].is_null());
+  EXPECT_EQ(j["extrinsic_design"]["generate"]["multi_step"], "all");
+  EXPECT_EQ(j["systems"]["IMP"]["extrinsic"]["completion_steps"]["fit"]["a"], 1.0);
+  EXPECT_TRUE(j["steps"].is_number_integer());
+  EXPECT_TRUE(j["systems"]["IMP"]["target"][0][0].is_number_float());  // a table is real numbers
+
+  SweepSummary sweep;
+  sweep.sweep.keys["motivation.leak"] = {"0.1", "0.3"};
+  sweep.sweep.conditions.push_back({"motivation.leak=0.1", {"motivation.leak=0.1"}, "conditions/motivation.leak=0.1"});
+  sweep.conditions["motivation.leak=0.1"] = fullSummary();
+  const json w = toJson(sweep);
+  EXPECT_TRUE(isSweepSummary(w));
+  EXPECT_FALSE(isSweepSummary(j));
+  EXPECT_EQ(toJson(sweepSummaryFromJson(w)).dump(), w.dump());
+}
+
+std::string errorOf(const json& j) {
+  try {
+    summaryFromJson(j, "out/summary.json");
+  } catch (const SummaryError& e) {
+    return e.what();
+  }
+  return "";
+}
+
+TEST(SummarySchema, AKeyMissingUnknownOrOfAnotherTypeIsNamedByItsPath) {
+  const json good = toJson(fullSummary());
+  EXPECT_EQ(errorOf(good), "");
+  json j = good;
+  j["systems"]["IMP"]["runs"][0]["seed"] = "three";
+  EXPECT_EQ(errorOf(j), "out/summary.json: key 'systems.IMP.runs[0].seed': expected an integer, got a string");
+  j = good;
+  j["systems"]["IMP"]["runs"][0]["seed"] = 3.5;  // an integer key holds no fraction
+  EXPECT_NE(errorOf(j).find("'systems.IMP.runs[0].seed': expected an integer, got a number"), std::string::npos);
+  j = good;
+  j["systems"]["IMP"].erase("runs");
+  EXPECT_EQ(errorOf(j), "out/summary.json: key 'systems.IMP.runs': missing");
+  j = good;
+  j["systems"]["IMP"]["extrinsic"]["tabel_metric"] = json::object();
+  EXPECT_EQ(errorOf(j), "out/summary.json: key 'systems.IMP.extrinsic.tabel_metric': unknown key");
+  j = good;
+  j["extrinsic_design"]["generate"]["multi_step"] = "some";
+  EXPECT_NE(errorOf(j).find("'extrinsic_design.generate.multi_step': expected an integer or \"all\""), std::string::npos);
+  j = good;
+  j["systems"]["IMP"]["affordance_mae"] = nullptr;  // absent or a number, never null
+  EXPECT_NE(errorOf(j).find("'systems.IMP.affordance_mae': expected a number, got null"), std::string::npos);
+  EXPECT_NE(errorOf(json::array()).find("key '<top>': expected a map, got a list"), std::string::npos);
+}
+
+}  // namespace
+}  // namespace afford
