@@ -267,15 +267,7 @@ SweepSummary sweepSummary(const std::vector<Part>& parts, std::vector<Summary>& 
     }
   }
   for (const auto& [file, hr] : csvs) writeWhole(fs::path(out_dir) / file, hr.first + "\n" + hr.second);
-  const Summary& first = summaries.front();
-  whole.experiment = first.experiment;
-  whole.description = first.description;
-  whole.steps = first.steps;
-  whole.repetitions = first.repetitions;
-  whole.seed = first.seed;
-  whole.transport = first.transport;
-  whole.network = first.network;
-  whole.afford_version = first.afford_version;
+  static_cast<ExperimentHeader&>(whole) = summaries.front();  // what every condition shares
   whole.settings = sweep.fixed;
   return whole;
 }

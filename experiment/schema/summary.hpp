@@ -464,13 +464,28 @@ struct ShardSummary {
   }
 };
 
-// One experiment's summary.json (a sweep condition's too).
-struct Summary {
+// What an experiment's summary and a sweep's both begin with.
+struct ExperimentHeader {
   std::string experiment, description;
   std::int64_t steps = 0, repetitions = 0, seed = 0;
+  std::string transport, network, afford_version;
+  template <class V>
+  void visit(V& v) {
+    v("experiment", experiment);
+    v("description", description);
+    v("steps", steps);
+    v("repetitions", repetitions);
+    v("seed", seed);
+    v("transport", transport);
+    v("network", network);
+    v("afford_version", afford_version);
+  }
+};
+
+// One experiment's summary.json (a sweep condition's too).
+struct Summary : ExperimentHeader {
   std::optional<std::string> experiment_file;           // --config FILE
   std::optional<std::map<std::string, std::string>> processes;  // --process
-  std::string transport, network, afford_version;
   std::vector<std::string> objects, actions;  // the rows and columns of every table
   std::optional<std::string> reference_source, reference_extrinsic_source;
   std::optional<Fit> reference_completion_fit;
@@ -491,16 +506,9 @@ struct Summary {
   double wall_seconds = 0;
   template <class V>
   void visit(V& v) {
-    v("experiment", experiment);
-    v("description", description);
-    v("steps", steps);
-    v("repetitions", repetitions);
-    v("seed", seed);
+    ExperimentHeader::visit(v);
     v("experiment_file", experiment_file);
     v("processes", processes);
-    v("transport", transport);
-    v("network", network);
-    v("afford_version", afford_version);
     v("objects", objects);
     v("actions", actions);
     v("reference_source", reference_source);
@@ -547,10 +555,7 @@ struct SweepKeys {
 };
 
 // A sweep's own summary.json: every condition's summary under its name.
-struct SweepSummary {
-  std::string experiment, description;
-  std::int64_t steps = 0, repetitions = 0, seed = 0;
-  std::string transport, network, afford_version;
+struct SweepSummary : ExperimentHeader {
   std::vector<std::string> settings;  // the --set keys with one value
   SweepKeys sweep;
   std::map<std::string, Summary> conditions;
@@ -558,14 +563,7 @@ struct SweepSummary {
   double wall_seconds = 0;
   template <class V>
   void visit(V& v) {
-    v("experiment", experiment);
-    v("description", description);
-    v("steps", steps);
-    v("repetitions", repetitions);
-    v("seed", seed);
-    v("transport", transport);
-    v("network", network);
-    v("afford_version", afford_version);
+    ExperimentHeader::visit(v);
     v("settings", settings);
     v("sweep", sweep);
     v("conditions", conditions);
