@@ -1,6 +1,7 @@
 #include "experiment/present/plots.hpp"
 
 #include "experiment/design/design.hpp"
+#include "experiment/schema/summary.hpp"
 
 #include <nlohmann/json.hpp>
 
@@ -48,12 +49,15 @@ void runGnuplot(const fs::path& script) {
 
 std::string quoted(const std::string& s) { return "'" + s + "'"; }
 
-std::string pText(const json& p) {
-  if (p.is_null()) return "p: -";
+std::string pText(const Nullable<double>& p) {
+  if (!p) return "p: -";
   char buf[32];
-  std::snprintf(buf, sizeof buf, "p=%.2g", p.get<double>());
+  std::snprintf(buf, sizeof buf, "p=%.2g", *p);
   return buf;
 }
+
+// A number in a figure's CSV as summary.json writes it (all its digits).
+json asWritten(double v) { return json(v); }
 
 // One box of a box plot: its x, series (colour and legend) and values.
 struct BoxItem {
@@ -112,64 +116,82 @@ std::string boxPlot(const fs::path& dir, const std::string& name, const std::str
   return png.string();
 }
 
-// The per-agent means of a condition's statistic, from summary.json.
-std::vector<double> agentMeans(const json& system, int condition, const std::string& scenario, const char* key) {
-  return system["extrinsic"]["conditions"][condition]["scenarios"][scenario][key].get<std::vector<double>>();
+const SystemSummary& systemOf(const Summary& s, const std::string& sys) {
+  const auto it = s.systems.find(sys);
+  if (it == s.systems.end()) throw std::runtime_error("summary.json has no system " + sys);
+  return it->second;
 }
 
-int conditionWith(const json& system, const std::string& key, const std::string& value, const std::string& key2 = "",
-                  const std::string& value2 = "") {
-  const json& cs = system["extrinsic"]["conditions"];
-  for (std::size_t i = 0; i < cs.size(); ++i) {
-    const json& st = cs[i]["settings"];
-    if (st.value(key, std::string()) == value && (key2.empty() || st.value(key2, std::string()) == value2))
-      return static_cast<int>(i);
-  }
+// The planner conditions of a system's tests.
+const std::vector<PlannerCondition>& conditionsOf(const SystemSummary& system) {
+  if (!system.extrinsic || !system.extrinsic->conditions)
+    throw std::runtime_error("summary.json has no planner conditions of the extrinsic tests");
+  return *system.extrinsic->conditions;
+}
+
+// The condition whose settings give key=value (and key2=value2, if given).
+const PlannerCondition& conditionWith(const SystemSummary& system, const std::string& key, const std::string& value,
+                                      const std::string& key2 = "", const std::string& value2 = "") {
+  const auto setting = [](const PlannerCondition& c, const std::string& k) {
+    const auto it = c.settings.find(k);
+    return it == c.settings.end() ? std::string() : it->second;
+  };
+  for (const PlannerCondition& c : conditionsOf(system))
+    if (setting(c, key) == value && (key2.empty() || setting(c, key2) == value2)) return c;
   throw std::runtime_error("summary.json has no condition with " + key + "=" + value);
+}
+
+// One scenario's statistics under a condition.
+const ConditionScenario& scenarioOf(const PlannerCondition& c, const std::string& scenario) {
+  const auto it = c.scenarios.find(scenario);
+  if (it == c.scenarios.end()) throw std::runtime_error("summary.json: condition '" + c.label + "' has no scenario " + scenario);
+  return it->second;
 }
 
 // A sweep (issue 13): each condition's own figures in its folder, and
 // figures comparing the conditions: the runs' final errors, and the tests'
 // success rates over the scenarios, per condition and system.
-std::vector<std::string> plotSweep(const fs::path& dir, const json& s) {
+std::vector<std::string> plotSweep(const fs::path& dir, const SweepSummary& s) {
   std::vector<std::string> written;
-  const json& conditions = s["sweep"]["conditions"];
+  const std::vector<SweepEntry>& conditions = s.sweep.conditions;
   std::string keys;
-  for (auto& [k, _] : s["sweep"]["keys"].items()) keys += (keys.empty() ? "" : ", ") + k;
+  for (const auto& [k, _] : s.sweep.keys) keys += (keys.empty() ? "" : ", ") + k;
   for (std::size_t at = 0; (at = keys.find('_', at)) != std::string::npos; at += 2) keys.insert(at, "\\");  // not a subscript
+  const auto summaryOf = [&](const std::string& name) -> const Summary& {
+    const auto it = s.conditions.find(name);
+    if (it == s.conditions.end()) throw std::runtime_error("summary.json: sweep condition " + name + " has no summary");
+    return it->second;
+  };
   std::vector<std::string> systems;
   for (const auto& c : conditions)
-    for (auto& [sys, _] : s["conditions"][c["name"].get<std::string>()]["systems"].items())
+    for (const auto& [sys, _] : summaryOf(c.name).systems)
       if (std::find(systems.begin(), systems.end(), sys) == systems.end()) systems.push_back(sys);
   std::vector<std::pair<double, std::string>> xtics;
   std::map<std::string, std::string> colours;
   for (const auto& sys : systems) colours[sys] = kSystemColour(sys);
   std::vector<BoxItem> mae, success;
   for (std::size_t k = 0; k < conditions.size(); ++k) {
-    const std::string name = conditions[k]["name"];
-    for (const auto& f : plotExperiment((dir / conditions[k]["folder"].get<std::string>()).string())) written.push_back(f);
+    for (const auto& f : plotExperiment((dir / conditions[k].folder).string())) written.push_back(f);
     std::string tic;  // the values only: the keys are in the axis label
-    for (const auto& kv : conditions[k]["settings"]) {
-      const std::string setting = kv;
+    for (const std::string& setting : conditions[k].settings)
       tic += (tic.empty() ? "" : ", ") + setting.substr(setting.find('=') + 1);
-    }
     xtics.emplace_back(k + 1.0, tic);
-    const json& cs = s["conditions"][name];
+    const Summary& cs = summaryOf(conditions[k].name);
     for (std::size_t j = 0; j < systems.size(); ++j) {
-      if (!cs["systems"].contains(systems[j])) continue;
-      const json& js = cs["systems"][systems[j]];
+      const auto it = cs.systems.find(systems[j]);
+      if (it == cs.systems.end()) continue;
+      const SystemSummary& js = it->second;
       const double x = k + 1 + (static_cast<double>(j) - (systems.size() - 1) / 2.0) * 0.28;
       BoxItem e{x, systems[j], {}}, t{x, systems[j], {}};
-      for (const auto& r : js["runs"]) e.values.push_back(r["affordance_mae"].get<double>());
-      if (js.contains("extrinsic"))
-        for (const auto& c : js["extrinsic"]["conditions"])
-          for (auto& [scn, sc] : c["scenarios"].items()) t.values.push_back(sc["success_rate"].get<double>());
+      for (const RunEntry& r : js.runs) e.values.push_back(r.affordance_mae);
+      if (js.extrinsic && js.extrinsic->conditions)
+        for (const PlannerCondition& c : *js.extrinsic->conditions)
+          for (const auto& [scn, sc] : c.scenarios) t.values.push_back(sc.success_rate);
       mae.push_back(e);
       if (!t.values.empty()) success.push_back(t);
     }
   }
-  const std::string title = s.value("experiment", std::string("experiment")) + ", " +
-                            std::to_string(s.value("steps", 0)) + " steps, swept over " + keys;
+  const std::string title = s.experiment + ", " + std::to_string(s.steps) + " steps, swept over " + keys;
   written.push_back(boxPlot(dir, "fig_sweep_mae", "Final mean absolute error per run (" + title + ")", keys,
                             "mean absolute error of the learned table", mae, xtics, {}, colours));
   if (!success.empty())
@@ -186,7 +208,7 @@ namespace {
 // What every figure of an experiment folder is drawn from.
 struct Figures {
   fs::path dir;
-  json s;  // its summary.json
+  Summary s;  // its summary.json
   std::vector<std::string> objects, actions, systems;
   std::string title;                 // "<experiment>, <steps> steps"
   std::vector<std::string> written;  // the figures drawn so far
@@ -195,12 +217,11 @@ struct Figures {
 // Random tables (issue 11): one box per system and condition, of the tables' errors (as Figure 5's boxes)
 void plotRandomTables(Figures& f) {
   const fs::path& dir = f.dir;
-  const json& s = f.s;
   const std::string& title_base = f.title;
   std::vector<std::string>& written = f.written;
-  const json& rt = s["random_tables"];
-  const auto conditions = rt.at("condition_order").get<std::vector<std::string>>();
-  const auto order = rt.at("system_order").get<std::vector<std::string>>();
+  const RandomTables& rt = *f.s.random_tables;
+  const std::vector<std::string>& conditions = rt.condition_order;
+  const std::vector<std::string>& order = rt.system_order;
   static const char* kConditionColour[] = {"#999999", "#009e73", "#e69f00", "#56b4e9", "#cc79a7", "#0072b2"};
   std::vector<BoxItem> items;
   std::vector<std::pair<double, std::string>> xtics;
@@ -211,14 +232,17 @@ void plotRandomTables(Figures& f) {
       BoxItem it;
       it.x = k + 1 + (static_cast<double>(c) - (conditions.size() - 1) / 2.0) * 0.3;
       it.series = conditions[c];
-      for (const auto& v : rt["mae"][conditions[c]][order[k]]["per_table"])
-        if (!v.is_null()) it.values.push_back(v.get<double>());
+      const auto by_condition = rt.mae.find(conditions[c]);
+      if (by_condition != rt.mae.end())
+        if (const auto e = by_condition->second.find(order[k]); e != by_condition->second.end())
+          for (const auto& v : e->second.per_table)
+            if (v) it.values.push_back(*v);
       items.push_back(it);
       colours[conditions[c]] = kConditionColour[c % 6];
     }
   }
   written.push_back(boxPlot(dir, "fig_random_tables",
-                            "Mean absolute error on " + std::to_string(rt["count"].get<int>()) +
+                            "Mean absolute error on " + std::to_string(rt.count) +
                                 " random affordance tables (" + title_base + "); box: quartiles, bars: min-max, x: mean",
                             "system", "mean absolute error of the learned table", items, xtics, {}, colours));
 }
@@ -226,7 +250,7 @@ void plotRandomTables(Figures& f) {
 // Final affordances: box plots (Figures 5, 10)
 void plotAffordances(Figures& f) {
   const fs::path& dir = f.dir;
-  const json& s = f.s;
+  const Summary& s = f.s;
   const std::vector<std::string>& objects = f.objects;
   const std::vector<std::string>& actions = f.actions;
   const std::vector<std::string>& systems = f.systems;
@@ -239,14 +263,14 @@ void plotAffordances(Figures& f) {
     for (std::size_t a = 0; a < actions.size(); ++a)
       for (std::size_t i = 0; i < objects.size(); ++i)
         for (std::size_t k = 0; k < systems.size(); ++k) {
-          const json& js = s["systems"][systems[k]];
+          const SystemSummary& js = systemOf(s, systems[k]);
           std::vector<double> v;
-          for (const auto& r : js["runs"]) v.push_back(r["affordance"][i][a].get<double>());
-          if (v.empty()) continue;
+          for (const RunEntry& r : js.runs) v.push_back(r.affordance.at(i).at(a));
+          if (v.empty() || !js.target) continue;
           const Box b = box(v);
           const double x = i + 1 + (static_cast<double>(k) - (systems.size() - 1) / 2.0) * 0.25;
           out << a << ",\"" << objects[i] << "\"," << systems[k] << "," << x << "," << b.min << "," << b.q1 << ","
-              << b.median << "," << b.q3 << "," << b.max << "," << js["target"][i][a].get<double>() << "\n";
+              << b.median << "," << b.q3 << "," << b.max << "," << js.target->at(i).at(a) << "\n";
         }
     out.close();
     std::ofstream g(gp);
@@ -277,15 +301,15 @@ void plotAffordances(Figures& f) {
 // Learning curves (Figures 7-9)
 void plotCurves(Figures& f) {
   const fs::path& dir = f.dir;
-  const json& s = f.s;
   const std::vector<std::string>& objects = f.objects;
   const std::vector<std::string>& actions = f.actions;
   const std::vector<std::string>& systems = f.systems;
   const std::string& title_base = f.title;
   std::vector<std::string>& written = f.written;
   for (const auto& sys : systems) {
-    const json& js = s["systems"][sys];
-    if (!js.contains("curves")) continue;
+    const SystemSummary& js = systemOf(f.s, sys);
+    if (!js.curves) continue;
+    const Curves& curves = *js.curves;
     const fs::path csv = dir / ("fig_curves_" + sys + ".csv"), gp = dir / ("fig_curves_" + sys + ".gp"),
                    png = dir / ("fig_curves_" + sys + ".png");
     std::ofstream out(csv);
@@ -293,18 +317,17 @@ void plotCurves(Figures& f) {
     for (std::size_t a = 0; a < actions.size(); ++a)
       for (const auto& o : objects) out << ",\"" << actions[a] << ": " << o << "\"";
     out << "\n";
-    const auto& steps = js["curves"]["steps"];
-    for (std::size_t t = 0; t < steps.size(); ++t) {
-      out << steps[t].get<long>();
+    for (std::size_t t = 0; t < curves.steps.size() && t < curves.mean.size(); ++t) {
+      out << curves.steps[t];
       for (std::size_t a = 0; a < actions.size(); ++a)
-        for (std::size_t i = 0; i < objects.size(); ++i) out << "," << js["curves"]["mean"][t][i][a].get<double>();
+        for (std::size_t i = 0; i < objects.size(); ++i) out << "," << curves.mean[t].at(i).at(a);
       out << "\n";
     }
     out.close();
     std::ofstream g(gp);
     g << "set terminal pngcairo size 1400,1000 font 'DejaVu Sans,10'\nset output " << quoted(png.string()) << "\n"
       << "set datafile separator ','\nset multiplot layout 2,2 title "
-      << quoted(sys + ": mean affordance predictions over " + std::to_string(js["runs"].size()) + " run(s), " + title_base) << "\n"
+      << quoted(sys + ": mean affordance predictions over " + std::to_string(js.runs.size()) + " run(s), " + title_base) << "\n"
       << "set yrange [-0.05:1.05]\nset grid\nset xlabel 'step'\nset key outside right\n";
     for (std::size_t a = 0; a < actions.size(); ++a) {
       g << "set title " << quoted(actions[a]) << "\nplot ";
@@ -320,33 +343,39 @@ void plotCurves(Figures& f) {
   }
 }
 
+// The completion steps of a system's tests per scenario, if it has them.
+const CompletionSteps* completionOf(const Summary& s, const std::string& sys) {
+  const SystemSummary& js = systemOf(s, sys);
+  return js.extrinsic && js.extrinsic->completion_steps ? &*js.extrinsic->completion_steps : nullptr;
+}
+
 // Completion steps (Figure 6)
 void plotCompletion(Figures& f) {
   const fs::path& dir = f.dir;
-  const json& s = f.s;
+  const Summary& s = f.s;
   const std::vector<std::string>& systems = f.systems;
   const std::string& title_base = f.title;
   std::vector<std::string>& written = f.written;
   bool any_extrinsic = false;
-  for (const auto& sys : systems)
-    any_extrinsic |= s["systems"][sys].contains("extrinsic") && s["systems"][sys]["extrinsic"].contains("completion_steps");
+  for (const auto& sys : systems) any_extrinsic |= completionOf(s, sys) != nullptr;
   if (any_extrinsic) {
     const fs::path csv = dir / "fig_completion.csv", gp = dir / "fig_completion.gp", png = dir / "fig_completion.png";
     std::ofstream out(csv);
     out << "system,sub_goals,x,n,min,q1,median,q3,max,fit_a,fit_b\n";
     double top = 1;
     for (std::size_t k = 0; k < systems.size(); ++k) {
-      const json& js = s["systems"][systems[k]];
-      if (!js.contains("extrinsic") || !js["extrinsic"].contains("completion_steps")) continue;
-      const json& cs = js["extrinsic"]["completion_steps"];
-      const double a = cs.contains("fit") ? cs["fit"]["a"].get<double>() : 0, b = cs.contains("fit") ? cs["fit"]["b"].get<double>() : 0;
-      for (const auto& sc : js["extrinsic"]["scenarios"]) {
-        const json& c = cs[sc.get<std::string>()];
-        const int x = c["sub_goals"].get<int>();
-        top = std::max(top, c["max"].get<double>());
+      const CompletionSteps* cs = completionOf(s, systems[k]);
+      if (!cs) continue;
+      const double a = cs->fit ? cs->fit->a : 0, b = cs->fit ? cs->fit->b : 0;
+      for (const auto& sc : systemOf(s, systems[k]).extrinsic->scenarios) {
+        const auto it = cs->scenarios.find(sc);
+        if (it == cs->scenarios.end()) continue;
+        const ScenarioSteps& c = it->second;
+        const auto x = c.sub_goals;
+        top = std::max(top, c.max);
         out << systems[k] << "," << x << "," << x + (static_cast<double>(k) - (systems.size() - 1) / 2.0) * 0.2 << ","
-            << c["n"] << "," << c["min"] << "," << c["q1"] << "," << c["median"] << "," << c["q3"] << "," << c["max"]
-            << "," << a << "," << b << "\n";
+            << c.n << "," << asWritten(c.min) << "," << asWritten(c.q1) << "," << asWritten(c.median) << ","
+            << asWritten(c.q3) << "," << asWritten(c.max) << "," << a << "," << b << "\n";
       }
     }
     out.close();
@@ -357,24 +386,23 @@ void plotCompletion(Figures& f) {
       << "set xrange [0.4:5.6]\nset yrange [0:" << top * 1.08 << "]\nplot ";
     bool first = true;
     for (std::size_t k = 0; k < systems.size(); ++k) {
-      const json& js = s["systems"][systems[k]];
-      if (!js.contains("extrinsic") || !js["extrinsic"].contains("completion_steps")) continue;
-      const json& cs = js["extrinsic"]["completion_steps"];
+      const CompletionSteps* cs = completionOf(s, systems[k]);
+      if (!cs) continue;
       g << (first ? "" : ", ") << quoted(csv.string()) << " using (strcol(1) eq " << quoted(systems[k])
         << " ? $3 : NaN):6:5:9:8 with candlesticks whiskerbars lc rgb '" << kSystemColour(systems[k])
         << "' fs solid 0.4 title " << quoted(systems[k]) << ", '' using (strcol(1) eq " << quoted(systems[k])
         << " ? $3 : NaN):7:7:7:7 with candlesticks lc rgb 'black' notitle";
-      if (cs.contains("fit")) {
+      if (cs->fit) {
         std::ostringstream f;
-        f << cs["fit"]["a"].get<double>() << "*x**2 + (" << cs["fit"]["b"].get<double>() << ")*x";
+        f << cs->fit->a << "*x**2 + (" << cs->fit->b << ")*x";
         g << ", " << f.str() << " lc rgb '" << kSystemColour(systems[k]) << "' dt 2 title "
           << quoted(systems[k] + " fit");
       }
       first = false;
     }
-    if (s.contains("reference_completion_fit"))
-      g << ", " << s["reference_completion_fit"]["a"].get<double>() << "*x**2 + ("
-        << s["reference_completion_fit"]["b"].get<double>() << ")*x lc rgb 'black' dt 3 title 'paper, IMP'";
+    if (s.reference_completion_fit)
+      g << ", " << s.reference_completion_fit->a << "*x**2 + (" << s.reference_completion_fit->b
+        << ")*x lc rgb 'black' dt 3 title 'paper, IMP'";
     g << "\n";
     g.close();
     runGnuplot(gp);
@@ -385,7 +413,6 @@ void plotCompletion(Figures& f) {
 // Stochastic affordances: final predictions against the probabilities (Figure 11)
 void plotStochastic(Figures& f) {
   const fs::path& dir = f.dir;
-  const json& s = f.s;
   const std::vector<std::string>& objects = f.objects;
   const std::vector<std::string>& actions = f.actions;
   const std::vector<std::string>& systems = f.systems;
@@ -393,21 +420,21 @@ void plotStochastic(Figures& f) {
   std::vector<std::string>& written = f.written;
   bool stochastic = false;
   for (const auto& sys : systems)
-    for (const auto& row : s["systems"][sys]["target"])
-      for (const auto& v : row) stochastic |= v.get<double>() > 0 && v.get<double>() < 1;
+    for (const auto& row : systemOf(f.s, sys).target.value_or(SummaryTable{}))
+      for (const double v : row) stochastic |= v > 0 && v < 1;
   if (stochastic) {
     const fs::path csv = dir / "fig_stochastic.csv", gp = dir / "fig_stochastic.gp", png = dir / "fig_stochastic.png";
     std::ofstream out(csv);
     out << "system,action,object,x,target,mean,min,max\n";
     for (std::size_t k = 0; k < systems.size(); ++k) {
-      const json& js = s["systems"][systems[k]];
-      if (!js.contains("affordance")) continue;
+      const SystemSummary& js = systemOf(f.s, systems[k]);
+      if (!js.affordance || !js.target || !js.affordance_min || !js.affordance_max) continue;
       for (std::size_t a = 0; a < actions.size(); ++a)
         for (std::size_t i = 0; i < objects.size(); ++i)
           out << systems[k] << "," << a << ",\"" << objects[i] << "\","
-              << i + 1 + (static_cast<double>(k) - (systems.size() - 1) / 2.0) * 0.22 << ","
-              << js["target"][i][a].get<double>() << "," << js["affordance"][i][a].get<double>() << ","
-              << js["affordance_min"][i][a].get<double>() << "," << js["affordance_max"][i][a].get<double>() << "\n";
+              << i + 1 + (static_cast<double>(k) - (systems.size() - 1) / 2.0) * 0.22 << "," << js.target->at(i).at(a)
+              << "," << js.affordance->at(i).at(a) << "," << js.affordance_min->at(i).at(a) << ","
+              << js.affordance_max->at(i).at(a) << "\n";
     }
     out.close();
     std::ofstream g(gp);
@@ -437,21 +464,22 @@ void plotStochastic(Figures& f) {
 // Goal-based vs utility-based planner (Figure 12)
 void plotUtility(Figures& f) {
   const fs::path& dir = f.dir;
-  const json& s = f.s;
   std::vector<std::string>& written = f.written;
-  if (s.contains("utility")) {
-    const json& u = s["utility"];
-    const std::string sys = u["system"], sc = u["scenario"];
-    const json& js = s["systems"][sys];
+  if (f.s.utility) {
+    const UtilityAnalysis& u = *f.s.utility;
+    const std::string &sys = u.system, &sc = u.scenario;
+    const SystemSummary& js = systemOf(f.s, sys);
     std::vector<BoxItem> items;
     std::vector<std::pair<double, std::string>> xtics, labels;
-    for (std::size_t k = 0; k < u["budgets"].size(); ++k) {
-      const std::string b = std::to_string(u["budgets"][k].get<int>());
+    for (std::size_t k = 0; k < u.budgets.size(); ++k) {
+      const std::string b = std::to_string(u.budgets[k]);
       const double x = static_cast<double>(k + 1);
-      items.push_back({x - 0.15, "goal-based", agentMeans(js, conditionWith(js, "planner.kind", "goal", "planner.max_attempts", b), sc, "utility_agent_means")});
-      items.push_back({x + 0.15, "utility-based", agentMeans(js, conditionWith(js, "planner.kind", "utility", "planner.max_attempts", b), sc, "utility_agent_means")});
+      const auto& goal = conditionWith(js, "planner.kind", "goal", "planner.max_attempts", b);
+      const auto& utility = conditionWith(js, "planner.kind", "utility", "planner.max_attempts", b);
+      items.push_back({x - 0.15, "goal-based", scenarioOf(goal, sc).utility_agent_means});
+      items.push_back({x + 0.15, "utility-based", scenarioOf(utility, sc).utility_agent_means});
       xtics.emplace_back(x, b);
-      labels.emplace_back(x, pText(u["p_values"][k]));
+      labels.emplace_back(x, pText(k < u.p_values.size() ? u.p_values[k] : Nullable<double>()));
     }
     written.push_back(boxPlot(dir, "fig_utility", "Utility gained per test (" + sys + "; boxes over agents, x: mean)",
                               "action budget", "utility", items, xtics, labels,
@@ -462,31 +490,31 @@ void plotUtility(Figures& f) {
 // Forward models after a number of actions (Figure 13)
 void plotForwardModels(Figures& f) {
   const fs::path& dir = f.dir;
-  const json& s = f.s;
   const std::vector<std::string>& systems = f.systems;
   std::vector<std::string>& written = f.written;
-  if (s.contains("forward_models")) {
-    const json& fm = s["forward_models"];
-    const std::string sc = fm["scenario"];
+  if (f.s.forward_models) {
+    const ForwardModelsAnalysis& fm = *f.s.forward_models;
+    const std::string& sc = fm.scenario;
     std::vector<BoxItem> items;
     std::vector<std::pair<double, std::string>> xtics, labels;
     std::map<std::string, std::string> colours;
-    for (std::size_t k = 0; k < fm["budgets"].size(); ++k) {
-      const std::string b = std::to_string(fm["budgets"][k].get<int>());
+    for (std::size_t k = 0; k < fm.budgets.size(); ++k) {
+      const std::string b = std::to_string(fm.budgets[k]);
       const double x = static_cast<double>(k + 1);
       for (std::size_t j = 0; j < systems.size(); ++j) {
-        const json& js = s["systems"][systems[j]];
+        const SystemSummary& js = systemOf(f.s, systems[j]);
         items.push_back({x + (static_cast<double>(j) - (systems.size() - 1) / 2.0) * 0.28, systems[j],
-                         agentMeans(js, conditionWith(js, "planner.max_attempts", b), sc, "utility_agent_means")});
+                         scenarioOf(conditionWith(js, "planner.max_attempts", b), sc).utility_agent_means});
         colours[systems[j]] = kSystemColour(systems[j]);
       }
       xtics.emplace_back(x, b);
       std::string text;
-      for (const auto& [pair, ps] : fm["p_values"].items()) text += (text.empty() ? "" : "\\n") + pair + " " + pText(ps[k]);
+      for (const auto& [pair, ps] : fm.p_values)
+        text += (text.empty() ? "" : "\\n") + pair + " " + pText(k < ps.size() ? ps[k] : Nullable<double>());
       labels.emplace_back(x, text);
     }
     written.push_back(boxPlot(dir, "fig_forward_models", "Utility planner with the weights after " +
-                                  std::to_string(s.value("after_actions", 0)) + " actions (boxes over agents, x: mean)",
+                                  std::to_string(f.s.after_actions.value_or(0)) + " actions (boxes over agents, x: mean)",
                               "action budget", "utility", items, xtics, labels, colours));
   }
 }
@@ -494,18 +522,18 @@ void plotForwardModels(Figures& f) {
 // Affordance-restricted search (Figure 14)
 void plotSearch(Figures& f) {
   const fs::path& dir = f.dir;
-  const json& s = f.s;
   std::vector<std::string>& written = f.written;
-  if (s.contains("search")) {
-    const json& r = s["search"];
-    const std::string sys = r["system"], sc = r["scenario"];
-    const json& js = s["systems"][sys];
-    std::vector<BoxItem> items{
-        {1, "restricted", agentMeans(js, conditionWith(js, "planner.restrict_by_affordance", "true"), sc, "actions_checked_agent_means")},
-        {2, "not restricted", agentMeans(js, conditionWith(js, "planner.restrict_by_affordance", "false"), sc, "actions_checked_agent_means")}};
+  if (f.s.search) {
+    const SearchAnalysis& r = *f.s.search;
+    const std::string &sys = r.system, &sc = r.scenario;
+    const SystemSummary& js = systemOf(f.s, sys);
+    const auto means = [&](const char* restricted) {
+      return scenarioOf(conditionWith(js, "planner.restrict_by_affordance", restricted), sc).actions_checked_agent_means;
+    };
+    std::vector<BoxItem> items{{1, "restricted", means("true")}, {2, "not restricted", means("false")}};
     written.push_back(boxPlot(dir, "fig_search", "Actions checked per sub-goal (" + sys + "; boxes over agents, x: mean)",
                               "", "actions checked per sub-goal", items,
-                              {{1, "affordance > 0.5 only"}, {2, "all actions"}}, {{1.5, pText(r["p_value"])}},
+                              {{1, "affordance > 0.5 only"}, {2, "all actions"}}, {{1.5, pText(r.p_value)}},
                               {{"restricted", "#009e73"}, {"not restricted", "#999999"}}));
   }
 }
@@ -513,18 +541,18 @@ void plotSearch(Figures& f) {
 // Generated scenarios (issue 12): completion steps and success per point, one line per condition
 void plotGenerated(Figures& f) {
   const fs::path& dir = f.dir;
-  const json& s = f.s;
+  const Summary& s = f.s;
   const std::vector<std::string>& systems = f.systems;
   std::vector<std::string>& written = f.written;
-  if (s.contains("extrinsic_design") && s["extrinsic_design"].contains("generate")) {
-    const json& gen = s["extrinsic_design"]["generate"];
-    const bool by_objects = gen["objects"].size() > 1;  // else by sub-goals
-    const std::string xname = by_objects ? "objects" : "sub_goals";
+  if (s.extrinsic_design && s.extrinsic_design->generate) {
+    const GenerateSummary& gen = *s.extrinsic_design->generate;
+    const bool by_objects = gen.objects.size() > 1;  // else by sub-goals
+    const auto xOf = [&](const DesignPoint& p) { return static_cast<double>(by_objects ? p.objects : p.sub_goals); };
     static const char* kColour[] = {"#0072b2", "#d55e00", "#009e73", "#cc79a7", "#e69f00", "#56b4e9"};
     for (const auto& sys : systems) {
-      const json& js = s["systems"][sys];
-      if (!js.contains("extrinsic") || !js["extrinsic"].contains("conditions")) continue;
-      const json& conds = js["extrinsic"]["conditions"];
+      const SystemSummary& js = systemOf(s, sys);
+      if (!js.extrinsic || !js.extrinsic->conditions) continue;
+      const std::vector<PlannerCondition>& conds = *js.extrinsic->conditions;
       const std::string stem = "fig_generated" + (systems.size() > 1 ? "_" + sys : std::string());
       const fs::path csv = dir / (stem + ".csv"), gp = dir / (stem + ".gp"), png = dir / (stem + ".png");
       std::ofstream out(csv);
@@ -532,27 +560,27 @@ void plotGenerated(Figures& f) {
              "steps_per_sub_goal_median,fit_a,fit_b\n";
       double top = 1, xmin = 1e9, xmax = 0;
       for (std::size_t c = 0; c < conds.size(); ++c) {
-        const json& cd = conds[c];
-        const double a = cd.contains("completion_fit") ? cd["completion_fit"]["a"].get<double>() : 0;
-        const double b = cd.contains("completion_fit") ? cd["completion_fit"]["b"].get<double>() : 0;
-        for (const auto& p : cd["points"]) {
-          const double x = p[xname].get<double>() + (static_cast<double>(c) - (conds.size() - 1) / 2.0) * 0.12;
-          const json& cs = p["completion_steps"];
-          top = std::max(top, cs["q3"].get<double>());
-          xmin = std::min(xmin, p[xname].get<double>());
-          xmax = std::max(xmax, p[xname].get<double>());
-          out << c << ",\"" << cd["label"].get<std::string>() << "\"," << p["sub_goals"] << "," << p["objects"] << ","
-              << p["multi_step"] << "," << x << "," << p["tests_completed"] << "," << p["success_rate"] << ","
-              << cs["n"] << "," << cs["q1"] << "," << cs["median"] << "," << cs["q3"] << ","
-              << p["steps_per_sub_goal"]["median"] << "," << a << "," << b << "\n";
+        const PlannerCondition& cd = conds[c];
+        const double a = cd.completion_fit ? cd.completion_fit->a : 0;
+        const double b = cd.completion_fit ? cd.completion_fit->b : 0;
+        for (const DesignPoint& p : cd.points) {
+          const double x = xOf(p) + (static_cast<double>(c) - (conds.size() - 1) / 2.0) * 0.12;
+          const Stats& cs = p.completion_steps;
+          top = std::max(top, cs.q3);
+          xmin = std::min(xmin, xOf(p));
+          xmax = std::max(xmax, xOf(p));
+          out << c << ",\"" << cd.label << "\"," << p.sub_goals << "," << p.objects << "," << p.multi_step << "," << x
+              << "," << p.tests_completed << "," << asWritten(p.success_rate) << "," << cs.n << "," << asWritten(cs.q1)
+              << "," << asWritten(cs.median) << "," << asWritten(cs.q3) << "," << asWritten(p.steps_per_sub_goal.median)
+              << "," << a << "," << b << "\n";
         }
       }
       out.close();
       std::ofstream g(gp);
       g << "set terminal pngcairo size 1200,520 font 'DejaVu Sans,11' noenhanced\nset output " << quoted(png.string())
         << "\nset datafile separator ','\nset multiplot layout 1,2 title "
-        << quoted(s.value("experiment", std::string("")) + ", " + sys + ": generated scenarios, " +
-                  std::to_string(gen["per_point"].get<int>()) + " per point, seed " + std::to_string(gen["seed"].get<std::int64_t>()))
+        << quoted(s.experiment + ", " + sys + ": generated scenarios, " + std::to_string(gen.per_point) +
+                  " per point, seed " + std::to_string(gen.seed))
         << "\nset grid\nset key left top\nset xrange [" << xmin - 0.6 << ":" << xmax + 0.6 << "]\n"
         << "set xlabel " << quoted(by_objects ? "objects in the scene" : "sub-goals") << "\n"
         << "set title 'completion steps of solved tests (median, quartiles)'\nset ylabel 'steps'\nset yrange [0:"
@@ -560,15 +588,15 @@ void plotGenerated(Figures& f) {
       for (std::size_t c = 0; c < conds.size(); ++c) {
         const std::string colour = kColour[c % 6];
         g << (c ? ", " : "") << quoted(csv.string()) << " using ($1 == " << c << " ? $6 : NaN):11:10:12 with yerrorlines lc rgb '"
-          << colour << "' pt 7 title " << quoted(conds[c]["label"].get<std::string>());
-        if (!by_objects && conds[c].contains("completion_fit"))
-          g << ", " << conds[c]["completion_fit"]["a"].get<double>() << "*x**2 + (" << conds[c]["completion_fit"]["b"].get<double>()
-            << ")*x lc rgb '" << colour << "' dt 2 notitle";
+          << colour << "' pt 7 title " << quoted(conds[c].label);
+        if (!by_objects && conds[c].completion_fit)
+          g << ", " << conds[c].completion_fit->a << "*x**2 + (" << conds[c].completion_fit->b << ")*x lc rgb '"
+            << colour << "' dt 2 notitle";
       }
       g << "\nset key right bottom\nset title 'tests solved'\nset ylabel 'share solved'\nset yrange [0:1.05]\nplot ";
       for (std::size_t c = 0; c < conds.size(); ++c)
         g << (c ? ", " : "") << quoted(csv.string()) << " using ($1 == " << c << " ? $6 : NaN):8 with linespoints lc rgb '"
-          << kColour[c % 6] << "' pt 7 title " << quoted(conds[c]["label"].get<std::string>());
+          << kColour[c % 6] << "' pt 7 title " << quoted(conds[c].label);
       g << "\nunset multiplot\n";
       g.close();
       runGnuplot(gp);
@@ -582,15 +610,15 @@ void plotGenerated(Figures& f) {
 std::vector<std::string> plotExperiment(const std::string& dir_name) {
   Figures f;
   f.dir = dir_name;
-  std::ifstream in(f.dir / "summary.json");
-  if (!in) throw std::runtime_error("no summary.json in " + f.dir.string());
-  f.s = json::parse(in);
-  if (f.s.contains("sweep")) return plotSweep(f.dir, f.s);
-  f.objects = f.s.at("objects").get<std::vector<std::string>>();
-  f.actions = f.s.at("actions").get<std::vector<std::string>>();
-  for (auto& [name, _] : f.s.at("systems").items()) f.systems.push_back(name);
-  f.title = f.s.value("experiment", std::string("experiment")) + ", " + std::to_string(f.s.value("steps", 0)) + " steps";
-  if (f.s.contains("random_tables")) {  // its own figure only
+  const json j = readSummaryJson(dir_name);
+  const std::string file = (f.dir / "summary.json").string();
+  if (isSweepSummary(j)) return plotSweep(f.dir, sweepSummaryFromJson(j, file));
+  f.s = summaryFromJson(j, file);
+  f.objects = f.s.objects;
+  f.actions = f.s.actions;
+  for (const auto& [name, _] : f.s.systems) f.systems.push_back(name);
+  f.title = f.s.experiment + ", " + std::to_string(f.s.steps) + " steps";
+  if (f.s.random_tables) {  // its own figure only
     plotRandomTables(f);
     return f.written;
   }

@@ -19,6 +19,7 @@
 
 #include "experiment/design/reference.hpp"
 #include "experiment/run/outcome.hpp"
+#include "experiment/schema/summary.hpp"
 
 namespace afford {
 namespace fs = std::filesystem;
@@ -35,7 +36,7 @@ std::string num(double v, int digits = 2) {
 // One experiment output folder, as read.
 struct Folder {
   std::string dir;    // as given
-  json summary;       // summary.json
+  Summary summary;    // summary.json
   json state;         // experiment.json; null when the folder has none
   std::string label;  // unique among the report's folders: headings and figure subfolder
   std::string shown;  // the folder's path relative to the report's folder
@@ -52,23 +53,14 @@ json readJson(const fs::path& file, const std::string& dir) {
   }
 }
 
-// The folder's summary.json, checked for the keys every part of the report reads.
-json loadSummary(const std::string& dir) {
+// The folder's summary.json, read through its structure: one of another shape is an error naming the folder.
+Summary loadSummary(const std::string& dir) {
   if (!fs::is_directory(dir)) throw std::runtime_error("report: no folder " + dir);
-  const fs::path file = fs::path(dir) / "summary.json";
-  if (!fs::exists(file))
-    throw std::runtime_error("report: folder " + dir + " has no summary.json (is it an `afford experiment --out` folder?)");
-  json s = readJson(file, dir);
-  const auto need = [&](const char* key, bool ok) {
-    if (!ok)
-      throw std::runtime_error("report: " + file.string() + " (folder " + dir + ") has no valid \"" + key +
-                               "\" (docs/results-schema.md)");
-  };
-  need("experiment", s.is_object() && s.contains("experiment") && s["experiment"].is_string());
-  need("systems", s.contains("systems") && s["systems"].is_object());
-  need("steps", s.contains("steps") && s["steps"].is_number());
-  need("repetitions", s.contains("repetitions") && s["repetitions"].is_number());
-  return s;
+  try {
+    return readSummary(dir);
+  } catch (const SummaryError& e) {
+    throw std::runtime_error(std::string("report: ") + e.what() + " (docs/results-schema.md)");
+  }
 }
 
 // experiment.json beside it (the options of the command), or null when there is none.
@@ -124,11 +116,11 @@ std::string folderName(const std::string& dir) {
 }
 
 // Does the folder's summary hold numbers of the paper (or the authors' code) beside ours?
-bool hasPaperNumbers(const json& s) {
-  if (s.contains("experiment_file")) return false;
-  if (s.contains("reference_extrinsic_source") || s.contains("reference_completion_fit")) return true;
-  for (const auto& [sys, js] : s["systems"].items())
-    if (js.contains("reference_affordance_mae") || js.contains("reference_table_metric")) return true;
+bool hasPaperNumbers(const Summary& s) {
+  if (s.experiment_file) return false;
+  if (s.reference_extrinsic_source || s.reference_completion_fit) return true;
+  for (const auto& [sys, js] : s.systems)
+    if (js.reference_affordance_mae || js.reference_table_metric) return true;
   return false;
 }
 
@@ -139,13 +131,12 @@ std::string joined(const std::vector<std::string>& items, const std::string& sep
 }
 
 // The seeds of a folder's runs (finished and failed), first-last when they are consecutive.
-std::string seedsOf(const json& s) {
+std::string seedsOf(const Summary& s) {
   std::set<std::int64_t> seeds;
-  for (const auto& [sys, js] : s["systems"].items())
-    for (const char* key : {"runs", "failed_runs"})
-      if (js.contains(key))
-        for (const auto& r : js[key])
-          if (r.contains("seed") && r["seed"].is_number_integer()) seeds.insert(r["seed"].get<std::int64_t>());
+  for (const auto& [sys, js] : s.systems) {
+    for (const RunEntry& r : js.runs) seeds.insert(r.seed);
+    for (const FailedRun& r : js.failed_runs.value_or(std::vector<FailedRun>{})) seeds.insert(r.seed);
+  }
   if (seeds.empty()) return "-";
   const std::int64_t first = *seeds.begin(), last = *seeds.rbegin();
   if (last - first + 1 == static_cast<std::int64_t>(seeds.size()))
@@ -167,91 +158,75 @@ struct Ran {
 };
 
 Ran whatRan(const Folder& f, bool one_network) {
-  const json& s = f.summary;
+  const Summary& s = f.summary;
   Ran r;
   std::vector<std::string> systems;
   std::optional<std::int64_t> tests_per_scenario;
-  for (const auto& [sys, js] : s["systems"].items()) {
+  for (const auto& [sys, js] : s.systems) {
     systems.push_back(sys);
-    r.runs += js.contains("runs") ? js["runs"].size() : 0;
-    r.failed += js.contains("failed_runs") ? js["failed_runs"].size() : 0;
-    if (js.contains("extrinsic") && js["extrinsic"].contains("tests_per_scenario"))
-      tests_per_scenario = js["extrinsic"]["tests_per_scenario"].get<std::int64_t>();
+    r.runs += js.runs.size();
+    r.failed += js.failed_runs ? js.failed_runs->size() : 0;
+    if (js.extrinsic) tests_per_scenario = js.extrinsic->tests_per_scenario;
   }
-  r.tests = s.value("extrinsic_tests", static_cast<std::size_t>(0));
-  r.wall = s.value("wall_seconds", 0.0);
-  const json design = s.value("extrinsic_design", json::object());
-  const bool varied = design.contains("vary") && design["vary"].is_object() && !design["vary"].empty();
+  r.tests = static_cast<std::size_t>(s.extrinsic_tests);
+  r.wall = s.wall_seconds;
+  const DesignSummary design = s.extrinsic_design.value_or(DesignSummary{});
+  const bool varied = !design.vary.empty();
   std::string tests = std::to_string(r.tests);
-  if (design.contains("generate") && design.contains("tests"))
-    tests += " (" + design["tests"].dump() + " of each generated scenario per agent" + (varied ? " and condition)" : ")");
-  else if (varied && design.contains("tests"))
-    tests += " (" + design["tests"].dump() + " per scenario, condition and agent)";
+  if (s.extrinsic_design && design.generate)
+    tests += " (" + std::to_string(design.tests) + " of each generated scenario per agent" + (varied ? " and condition)" : ")");
+  else if (varied)
+    tests += " (" + std::to_string(design.tests) + " per scenario, condition and agent)";
   else if (tests_per_scenario)
     tests += " (" + std::to_string(*tests_per_scenario) + " per scenario and agent)";
   std::ostringstream row;
-  row << "| " << f.label << " | `" << f.shown << "` | " << joined(systems) << " | " << s["repetitions"].dump() << " | "
-      << r.runs << (r.failed ? " (" + std::to_string(r.failed) + " failed)" : std::string()) << " | " << seedsOf(s)
-      << " | " << s["steps"].dump() << " | " << (r.tests || s.contains("extrinsic_design") ? tests : std::string("none"))
-      << " | " << s.value("afford_version", std::string("?")) << " | "
-      << (r.wall > 0 ? num(r.wall / 60.0, 1) + " min" : std::string("-")) << " |\n";
+  row << "| " << f.label << " | `" << f.shown << "` | " << joined(systems) << " | " << s.repetitions << " | " << r.runs
+      << (r.failed ? " (" + std::to_string(r.failed) + " failed)" : std::string()) << " | " << seedsOf(s) << " | "
+      << s.steps << " | " << (r.tests || s.extrinsic_design ? tests : std::string("none")) << " | " << s.afford_version
+      << " | " << (r.wall > 0 ? num(r.wall / 60.0, 1) + " min" : std::string("-")) << " |\n";
   r.row = row.str();
 
   // --set, the experiment file, the conditions, the network, an interruption.
   std::vector<std::string>& m = r.remarks;
-  if (s.contains("description") && s["description"].is_string() && !s["description"].get<std::string>().empty())
-    m.push_back(s["description"].get<std::string>());
+  if (!s.description.empty()) m.push_back(s.description);
   if (f.state.is_null() || !f.state.contains("options") || !f.state["options"].contains("settings")) {
     m.push_back("its `--set` settings are not recorded (no experiment.json)");
   } else {
     std::vector<std::string> sets;
-    for (const auto& v : f.state["options"]["settings"]) sets.push_back("`--set " + v.get<std::string>() + "`");
+    for (const auto& v : f.state["options"]["settings"])
+      if (v.is_string()) sets.push_back("`--set " + v.get<std::string>() + "`");
     m.push_back(sets.empty() ? "no `--set`" : joined(sets));
   }
-  if (s.contains("sweep_condition") && s["sweep_condition"].is_string())
-    m.push_back("sweep condition `" + s["sweep_condition"].get<std::string>() + "`");
-  if (s.contains("experiment_file") && s["experiment_file"].is_string())
-    m.push_back("experiment file `" + s["experiment_file"].get<std::string>() + "`");
-  if (r.tests > 0 && design.contains("scenarios") && !design.contains("generate")) {
-    std::vector<std::string> names;
-    for (const auto& sc : design["scenarios"]) names.push_back(sc.get<std::string>());
-    m.push_back("extrinsic scenarios: " + joined(names));
-  }
+  if (s.sweep_condition) m.push_back("sweep condition `" + *s.sweep_condition + "`");
+  if (s.experiment_file) m.push_back("experiment file `" + *s.experiment_file + "`");
+  if (r.tests > 0 && s.extrinsic_design && !design.generate) m.push_back("extrinsic scenarios: " + joined(design.scenarios));
   if (varied) {
     std::vector<std::string> axes;
-    for (const auto& [key, values] : design["vary"].items()) {
-      std::vector<std::string> vs;
-      for (const auto& v : values) vs.push_back(v.is_string() ? v.get<std::string>() : v.dump());
-      axes.push_back("`" + key + "` = " + joined(vs));
-    }
+    for (const auto& [key, values] : design.vary) axes.push_back("`" + key + "` = " + joined(values));
     std::size_t count = 0;
-    for (const auto& [sys, js] : s["systems"].items())
-      if (js.contains("extrinsic") && js["extrinsic"].contains("conditions"))
-        count = std::max(count, js["extrinsic"]["conditions"].size());
+    for (const auto& [sys, js] : s.systems)
+      if (js.extrinsic && js.extrinsic->conditions) count = std::max(count, js.extrinsic->conditions->size());
     m.push_back("planner conditions: " + joined(axes, "; ") + (count ? " (" + std::to_string(count) + " conditions)" : ""));
   }
-  if (s.contains("random_tables")) {
-    const json& rt = s["random_tables"];
+  if (s.random_tables) {
+    const RandomTables& rt = *s.random_tables;
     std::vector<std::string> conditions;
-    for (const auto& c : rt.value("condition_order", json::array())) {
-      const std::string name = c.get<std::string>();
+    for (const auto& name : rt.condition_order) {
       std::vector<std::string> sets;
-      if (rt.contains("conditions") && rt["conditions"].contains(name))
-        for (const auto& v : rt["conditions"][name]) sets.push_back("`" + v.get<std::string>() + "`");
+      if (const auto c = rt.conditions.find(name); c != rt.conditions.end())
+        for (const auto& v : c->second) sets.push_back("`" + v + "`");
       conditions.push_back(name + " (" + (sets.empty() ? std::string("no settings") : joined(sets)) + ")");
     }
-    m.push_back(rt.value("count", json(0)).dump() + " random tables from seed " + rt.value("seed", json(0)).dump() +
+    m.push_back(std::to_string(rt.count) + " random tables from seed " + std::to_string(rt.seed) +
                 "; conditions: " + joined(conditions, ", "));
   }
-  if (!one_network) m.push_back("over " + s.value("network", std::string("?")));
-  if (s.contains("interrupted")) {
-    const json& i = s["interrupted"];
+  if (!one_network) m.push_back("over " + s.network);
+  if (s.interrupted) {
+    const Interruption& i = *s.interrupted;
     std::ostringstream t;
-    t << "**incomplete**: interrupted by " << i.value("signal", std::string("a signal")) << " in the "
-      << i.value("phase", std::string("?")) << " phase, " << i.value("finished", json(0)).dump() << " of "
-      << i.value("planned", json(0)).dump() << (i.value("phase", std::string()) == "extrinsic" ? " tests" : " runs")
-      << " finished";
-    if (i.value("extrinsic_tests_to_come", false)) t << ", the extrinsic tests not begun";
+    t << "**incomplete**: interrupted by " << i.signal << " in the " << i.phase << " phase, " << i.finished << " of "
+      << i.planned << (i.phase == "extrinsic" ? " tests" : " runs") << " finished";
+    if (i.extrinsic_tests_to_come) t << ", the extrinsic tests not begun";
     m.push_back(t.str());
   } else if (!f.state.is_null() && f.state.value("state", std::string("finished")) != "finished") {
     m.push_back("**incomplete**: its experiment.json says \"" + f.state.value("state", std::string()) +
@@ -260,17 +235,17 @@ Ran whatRan(const Folder& f, bool one_network) {
   return r;
 }
 
-std::string pValue(const json& p) {
-  if (p.is_null()) return "-";
+std::string pValue(const Nullable<double>& p) {
+  if (!p) return "-";
   char buf[32];
-  std::snprintf(buf, sizeof buf, "%.2g", p.get<double>());
+  std::snprintf(buf, sizeof buf, "%.2g", *p);
   return buf;
 }
 
 // The paper's claim for a shipped experiment (reference.yaml: <experiment>_claims).
-std::string claim(const Reference& ref, const json& s) {
-  if (s.contains("experiment_file")) return "";
-  const std::string key = s["experiment"].get<std::string>();
+std::string claim(const Reference& ref, const Summary& s) {
+  if (s.experiment_file) return "";
+  const std::string& key = s.experiment;
   const YAML::Node c = ref.entry(key + "_claims");
   if (!c || !c["claim"]) return "";
   std::string source = ref.text(c["source"], key + "_claims.source");
@@ -280,7 +255,7 @@ std::string claim(const Reference& ref, const json& s) {
 
 // " (label)" after a heading named by the paper, when the label is not the experiment's name.
 std::string labelled(const Folder& f) {
-  return f.label == f.summary["experiment"].get<std::string>() ? "" : " (" + f.label + ")";
+  return f.label == f.summary.experiment ? "" : " (" + f.label + ")";
 }
 
 // Links to the project's documentation, relative to the report's folder.
@@ -301,63 +276,62 @@ std::string stochasticSections(const std::vector<Folder>& folders, const Referen
   const double move_red = ref.required("thresholds.stochastic_checks.move_red");
   std::ostringstream md;
   for (const auto& f : folders) {
-    const json& s = f.summary;
-    const std::string exp = s["experiment"];
-    if (exp == "stochastic") {
+    const Summary& s = f.summary;
+    if (s.experiment == "stochastic") {
       md << "\n## Stochastic affordances (paper 3.2.1, Table 7, Figure 11)" << labelled(f) << "\n" << claim(ref, s)
          << "\n| system | mean absolute error vs Table 7 | IMP check: turn blue (" << num(turn_blue, 1)
          << ") | move, red objects (" << num(move_red, 1) << ") |\n|---|---|---|---|\n";
-      for (const auto& [sys, js] : s["systems"].items()) {
-        if (!js.contains("affordance")) continue;
+      for (const auto& [sys, js] : s.systems) {
+        if (!js.affordance || !js.target) continue;
         double blue = 0, move = 0;
         int nb = 0, nm = 0;
-        for (std::size_t i = 0; i < js["target"].size(); ++i) {
-          if (std::abs(js["target"][i][3].get<double>() - turn_blue) < 1e-9) blue += js["affordance"][i][3].get<double>(), ++nb;
-          if (std::abs(js["target"][i][0].get<double>() - move_red) < 1e-9) move += js["affordance"][i][0].get<double>(), ++nm;
+        for (std::size_t i = 0; i < js.target->size() && i < js.affordance->size(); ++i) {
+          const auto &target = js.target->at(i), &learned = js.affordance->at(i);
+          if (std::abs(target.at(3) - turn_blue) < 1e-9) blue += learned.at(3), ++nb;
+          if (std::abs(target.at(0) - move_red) < 1e-9) move += learned.at(0), ++nm;
         }
-        md << "| " << sys << " | " << num(js["affordance_mae"].get<double>(), 3);
-        if (js.contains("reference_affordance_mae"))
-          md << " (" << num(js["reference_affordance_mae"].get<double>(), 3) << " authors' code)";
+        md << "| " << sys << " | " << num(js.affordance_mae.value_or(0.0), 3);
+        if (js.reference_affordance_mae) md << " (" << num(*js.reference_affordance_mae, 3) << " authors' code)";
         md << " | " << (nb ? num(blue / nb) : "-") << " | " << (nm ? num(move / nm) : "-") << " |\n";
       }
     }
-    if (s.contains("utility")) {
-      const json& u = s["utility"];
+    if (s.utility) {
+      const UtilityAnalysis& u = *s.utility;
       md << "\n## Goal-based vs utility-based planner (paper 3.2.2, Table 8, Figure 12)" << labelled(f) << "\n"
-         << claim(ref, s) << "\nMean utility gained per test (" << u["system"].get<std::string>() << " agents, scenario "
-         << u["scenario"].get<std::string>() << "), with Welch's two-sided t-test:\n\n"
+         << claim(ref, s) << "\nMean utility gained per test (" << u.system << " agents, scenario " << u.scenario
+         << "), with Welch's two-sided t-test:\n\n"
          << "| action budget | goal-based | utility-based | p |\n|---|---|---|---|\n";
-      for (std::size_t k = 0; k < u["budgets"].size(); ++k)
-        md << "| " << u["budgets"][k].get<int>() << " | " << num(u["goal_mean"][k].get<double>(), 3) << " | "
-           << num(u["utility_mean"][k].get<double>(), 3) << " | " << pValue(u["p_values"][k]) << " |\n";
+      for (std::size_t k = 0; k < u.budgets.size() && k < u.goal_mean.size() && k < u.utility_mean.size(); ++k)
+        md << "| " << u.budgets[k] << " | " << num(u.goal_mean[k], 3) << " | " << num(u.utility_mean[k], 3) << " | "
+           << pValue(k < u.p_values.size() ? u.p_values[k] : Nullable<double>()) << " |\n";
     }
-    if (s.contains("forward_models")) {
-      const json& fm = s["forward_models"];
-      md << "\n## Forward models after " << s.value("after_actions", 0) << " actions (paper 3.2.3, Figure 13)"
+    if (s.forward_models) {
+      const ForwardModelsAnalysis& fm = *s.forward_models;
+      md << "\n## Forward models after " << s.after_actions.value_or(0) << " actions (paper 3.2.3, Figure 13)"
          << labelled(f) << "\n" << claim(ref, s)
          << "\nMean utility of the utility planner, by action budget, and Welch's t-test p values:\n\n| system |";
-      for (const auto& b : fm["budgets"]) md << " budget " << b.get<int>() << " |";
+      for (const auto b : fm.budgets) md << " budget " << b << " |";
       md << "\n|---|";
-      for (std::size_t k = 0; k < fm["budgets"].size(); ++k) md << "---|";
+      for (std::size_t k = 0; k < fm.budgets.size(); ++k) md << "---|";
       md << "\n";
-      for (const auto& [sys, js] : s["systems"].items()) {
-        if (!js.contains("utility_mean")) continue;
+      for (const auto& [sys, js] : s.systems) {
+        if (!js.utility_mean) continue;
         md << "| " << sys << " |";
-        for (const auto& m : js["utility_mean"]) md << " " << num(m.get<double>(), 3) << " |";
+        for (const double m : *js.utility_mean) md << " " << num(m, 3) << " |";
         md << "\n";
       }
-      for (const auto& [pair, ps] : fm["p_values"].items()) {
+      for (const auto& [pair, ps] : fm.p_values) {
         md << "| p " << pair << " |";
         for (const auto& p : ps) md << " " << pValue(p) << " |";
         md << "\n";
       }
     }
-    if (s.contains("search")) {
-      const json& r = s["search"];
+    if (s.search) {
+      const SearchAnalysis& r = *s.search;
       md << "\n## Affordance-restricted search (paper 3.2.4, Figure 14)" << labelled(f) << "\n" << claim(ref, s)
-         << "\nMean actions checked per sub-goal (" << r["system"].get<std::string>() << " agents): with restriction "
-         << num(r["restricted_mean"].get<double>(), 3) << ", without " << num(r["unrestricted_mean"].get<double>(), 3)
-         << "; Welch's t-test p = " << pValue(r["p_value"]) << ".\n";
+         << "\nMean actions checked per sub-goal (" << r.system << " agents): with restriction "
+         << num(r.restricted_mean, 3) << ", without " << num(r.unrestricted_mean, 3)
+         << "; Welch's t-test p = " << pValue(r.p_value) << ".\n";
     }
   }
   return md.str();
@@ -369,7 +343,7 @@ std::string memorySections(const std::vector<Folder>& folders, const Docs& docs)
   std::ostringstream md;
   const auto find = [&](const std::string& exp) -> const Folder* {
     for (const auto& f : folders)
-      if (f.summary["experiment"] == exp) return &f;
+      if (f.summary.experiment == exp) return &f;
     return nullptr;
   };
   bool header = false;
@@ -381,32 +355,33 @@ std::string memorySections(const std::vector<Folder>& folders, const Docs& docs)
     header = true;
   };
   for (const auto& f : folders) {
-    const json& s = f.summary;
-    if (!s.contains("random_tables")) continue;
+    const Summary& s = f.summary;
+    if (!s.random_tables) continue;
     heading();
-    const json& rt = s["random_tables"];
-    md << "\n### Random affordance tables (" << f.label << ")\n\n" << rt["count"].get<int>()
-       << " tables drawn from seed " << rt["seed"].get<std::int64_t>() << " (entries 0 or 1, every row and column mixed, "
-       << "an object's own colour never afforded), the base test's nine objects, " << s["steps"] << " steps, "
-       << s["repetitions"] << " run(s) per table, system and condition. Mean absolute error of each learned table "
-       << "against its own table, over the tables";
-    if (rt.contains("floors")) md << " (" << rt["floors"]["source"].get<std::string>() << ")";
+    const RandomTables& rt = *s.random_tables;
+    md << "\n### Random affordance tables (" << f.label << ")\n\n" << rt.count << " tables drawn from seed " << rt.seed
+       << " (entries 0 or 1, every row and column mixed, an object's own colour never afforded), the base test's nine "
+       << "objects, " << s.steps << " steps, " << s.repetitions << " run(s) per table, system and condition. Mean "
+       << "absolute error of each learned table against its own table, over the tables";
+    if (rt.floors) md << " (" << rt.floors->source << ")";
     md << ":\n\n| condition | system | mean | median | quartiles | worst (table) |\n|---|---|---|---|---|---|\n";
-    for (const auto& c : rt["condition_order"])
-      for (const auto& sys : rt["system_order"]) {
-        const json& m = rt["mae"][c.get<std::string>()][sys.get<std::string>()];
-        if (m["mean"].is_null()) continue;
-        md << "| " << c.get<std::string>() << " | " << sys.get<std::string>() << " | " << num(m["mean"].get<double>(), 3)
-           << " | " << num(m["median"].get<double>(), 3) << " | " << num(m["q1"].get<double>(), 3) << " - "
-           << num(m["q3"].get<double>(), 3) << " | " << num(m["worst"].get<double>(), 3) << " (t"
-           << m["worst_table"].get<int>() << ") |\n";
+    for (const auto& c : rt.condition_order)
+      for (const auto& sys : rt.system_order) {
+        const auto by_condition = rt.mae.find(c);
+        if (by_condition == rt.mae.end()) continue;
+        const auto e = by_condition->second.find(sys);
+        if (e == by_condition->second.end() || !e->second.mean) continue;
+        const TableErrors& m = e->second;
+        md << "| " << c << " | " << sys << " | " << num(*m.mean, 3) << " | " << num(m.median, 3) << " | "
+           << num(m.q1, 3) << " - " << num(m.q3, 3) << " | " << num(m.worst.value.value_or(0.0), 3) << " (t"
+           << m.worst_table << ") |\n";
       }
   }
   for (const std::string n : {"1", "2", "3"}) {
     const Folder* paper_agent = find("late" + n);
     for (const auto& mf : folders) {
-      if (mf.summary["experiment"] != "late" + n + "-memory") continue;
-      const json& memory = mf.summary;
+      if (mf.summary.experiment != "late" + n + "-memory") continue;
+      const Summary& memory = mf.summary;
       heading();
       const std::string ours = paper_agent ? paper_agent->label : "late" + n;
       md << "\n### late" << n << " with the memory options" << labelled(mf) << "\n\nTable metric per scenario: the paper's, "
@@ -414,28 +389,24 @@ std::string memorySections(const std::vector<Folder>& folders, const Docs& docs)
          << "absolute error of the learned affordances.\n\n| system | agent | scenario1 | scenario2 | scenario3 | "
          << "scenario4 | scenario5 | affordance error |\n|---|---|---|---|---|---|---|---|\n";
       for (const std::string sys : {"FIX", "IGN", "IMP"}) {
-        if (!memory["systems"].contains(sys)) continue;
-        const json& mj = memory["systems"][sys];
-        const auto row = [&](const std::string& agent, const json& js, bool reference) {
+        const auto mj = memory.systems.find(sys);
+        if (mj == memory.systems.end()) continue;
+        const auto row = [&](const std::string& agent, const SystemSummary& js, bool reference) {
           md << "| " << sys << " | " << agent << " |";
+          const std::optional<std::map<std::string, double>>& metric =
+              reference ? js.reference_table_metric
+                        : (js.extrinsic ? js.extrinsic->table_metric : std::optional<std::map<std::string, double>>());
           for (int k = 1; k <= 5; ++k) {
-            const std::string sc = "scenario" + std::to_string(k);
-            const json* v = nullptr;
-            if (reference && js.contains("reference_table_metric") && js["reference_table_metric"].contains(sc))
-              v = &js["reference_table_metric"][sc];
-            if (!reference && js.contains("extrinsic") && js["extrinsic"].contains("table_metric") &&
-                js["extrinsic"]["table_metric"].contains(sc))
-              v = &js["extrinsic"]["table_metric"][sc];
-            md << " " << (v ? num(v->get<double>(), reference ? 1 : 2) : std::string("-")) << " |";
+            const auto v = metric ? metric->find("scenario" + std::to_string(k)) : std::map<std::string, double>::const_iterator();
+            md << " " << (metric && v != metric->end() ? num(v->second, reference ? 1 : 2) : std::string("-")) << " |";
           }
-          md << " "
-             << (reference || !js.contains("affordance_mae") ? std::string("-") : num(js["affordance_mae"].get<double>(), 3))
-             << " |\n";
+          md << " " << (reference || !js.affordance_mae ? std::string("-") : num(*js.affordance_mae, 3)) << " |\n";
         };
-        row("paper", mj, true);
-        if (paper_agent && paper_agent->summary["systems"].contains(sys))
-          row("ours", paper_agent->summary["systems"][sys], false);
-        row("ours, memory", mj, false);
+        row("paper", mj->second, true);
+        if (paper_agent)
+          if (const auto pj = paper_agent->summary.systems.find(sys); pj != paper_agent->summary.systems.end())
+            row("ours", pj->second, false);
+        row("ours, memory", mj->second, false);
       }
     }
   }
@@ -449,8 +420,8 @@ std::string generatedSections(const std::vector<Folder>& folders, const Referenc
   std::ostringstream md;
   bool header = false;
   for (const auto& f : folders) {
-    const json& s = f.summary;
-    if (!s.contains("extrinsic_design") || !s["extrinsic_design"].contains("generate")) continue;
+    const Summary& s = f.summary;
+    if (!s.extrinsic_design || !s.extrinsic_design->generate) continue;
     if (!header)
       md << "\n## Beyond the paper: top-down attention, multi-step plans, larger worlds (issue 12)\n\nScenarios drawn by "
             "the generator ("
@@ -461,39 +432,39 @@ std::string generatedSections(const std::vector<Folder>& folders, const Referenc
          << "). Completion steps are planner iterations of solved tests; "
             "steps per sub-goal are completion / k.\n";
     header = true;
-    const std::string exp = s["experiment"];
-    const json& gen = s["extrinsic_design"]["generate"];
-    md << "\n### " << f.label << "\n\n" << s.value("description", std::string("")) << ". " << gen["per_point"].get<int>()
-       << " scenarios per point (seed " << gen["seed"].get<std::int64_t>() << "), " << s["repetitions"]
+    const std::string& exp = s.experiment;
+    const GenerateSummary& gen = *s.extrinsic_design->generate;
+    md << "\n### " << f.label << "\n\n" << s.description << ". " << gen.per_point << " scenarios per point (seed "
+       << gen.seed << "), " << s.repetitions
        << " trained agent(s) per system, one test of each scenario per agent and condition.\n";
-    if (!s.contains("experiment_file") && ref && ref[exp] && ref[exp]["floors"])
+    if (!s.experiment_file && ref && ref[exp] && ref[exp]["floors"])
       md << "\nFloors (" << reference.text(ref[exp]["source"], "generated." + exp + ".source") << "): "
          << reference.text(ref[exp]["floors"], "generated." + exp + ".floors") << ".\n";
 
-    for (const auto& [sys, js] : s["systems"].items()) {
-      if (!js.contains("extrinsic") || !js["extrinsic"].contains("conditions")) continue;
+    for (const auto& [sys, js] : s.systems) {
+      if (!js.extrinsic || !js.extrinsic->conditions) continue;
+      const std::vector<PlannerCondition>& conditions = *js.extrinsic->conditions;
       md << "\n| " << sys << ": condition | k | n | m | tests | solved | completion median (quartiles) | steps per sub-goal |\n"
          << "|---|---|---|---|---|---|---|---|\n";
-      for (const auto& c : js["extrinsic"]["conditions"])
-        for (const auto& p : c["points"]) {
-          const json& cs = p["completion_steps"];
-          md << "| " << c["label"].get<std::string>() << " | " << p["sub_goals"] << " | " << p["objects"] << " | "
-             << p["multi_step"] << " | " << p["tests_completed"] << " | " << num(p["success_rate"].get<double>()) << " | ";
-          if (cs["n"].get<int>() > 0)
-            md << num(cs["median"].get<double>(), 1) << " (" << num(cs["q1"].get<double>(), 1) << " - "
-               << num(cs["q3"].get<double>(), 1) << ") | " << num(p["steps_per_sub_goal"]["median"].get<double>()) << " |\n";
+      for (const PlannerCondition& c : conditions)
+        for (const DesignPoint& p : c.points) {
+          const Stats& cs = p.completion_steps;
+          md << "| " << c.label << " | " << p.sub_goals << " | " << p.objects << " | " << p.multi_step << " | "
+             << p.tests_completed << " | " << num(p.success_rate) << " | ";
+          if (cs.n > 0)
+            md << num(cs.median, 1) << " (" << num(cs.q1, 1) << " - " << num(cs.q3, 1) << ") | "
+               << num(p.steps_per_sub_goal.median) << " |\n";
           else
             md << "- | - |\n";
         }
       bool fits = false;
-      for (const auto& c : js["extrinsic"]["conditions"]) fits |= c.contains("completion_fit");
-      if (fits && gen["objects"].empty()) {
+      for (const PlannerCondition& c : conditions) fits |= c.completion_fit.has_value();
+      if (fits && gen.objects.empty()) {
         md << "\nCompletion fit a x^2 + b x over the solved tests (the paper's bottom-up IMP: 1.364 x^2 - 0.808 x):\n\n"
               "| condition | a | b |\n|---|---|---|\n";
-        for (const auto& c : js["extrinsic"]["conditions"])
-          if (c.contains("completion_fit"))
-            md << "| " << c["label"].get<std::string>() << " | " << num(c["completion_fit"]["a"].get<double>(), 3) << " | "
-               << num(c["completion_fit"]["b"].get<double>(), 3) << " |\n";
+        for (const PlannerCondition& c : conditions)
+          if (c.completion_fit)
+            md << "| " << c.label << " | " << num(c.completion_fit->a, 3) << " | " << num(c.completion_fit->b, 3) << " |\n";
       }
     }
   }
@@ -528,7 +499,7 @@ void whatWasRun(std::ostringstream& md, const std::vector<Folder>& folders, cons
   std::set<std::string> networks;
   bool paper = false;
   for (const auto& f : folders) {
-    networks.insert(f.summary.value("network", std::string("?")));
+    networks.insert(f.summary.network);
     paper |= hasPaperNumbers(f.summary);
   }
   md << "# Results\n\nWritten by `afford report` on " << date << " from " << folders.size()
@@ -571,37 +542,37 @@ void intrinsicSection(std::ostringstream& md, const std::vector<Folder>& folders
   for (const auto& s : systems) md << " " << s << " |";
   md << "\n|---|---|---|---|---|\n";
   for (const auto& f : folders) {
-    const json& s = f.summary;
-    if (s.contains("random_tables")) continue;  // no one table: see the random-tables section
-    md << "| " << f.label << " | " << s["steps"] << " |";
+    const Summary& s = f.summary;
+    if (s.random_tables) continue;  // no one table: see the random-tables section
+    md << "| " << f.label << " | " << s.steps << " |";
     for (const auto& sys : systems) {
-      if (!s["systems"].contains(sys)) {
+      const auto js = s.systems.find(sys);
+      if (js == s.systems.end()) {
         md << " |";
         continue;
       }
-      const json& js = s["systems"][sys];
-      md << " " << num(js.value("affordance_mae", 0.0), 3);
-      if (js.contains("reference_affordance_mae")) md << " (" << num(js["reference_affordance_mae"].get<double>(), 3) << " authors' code)";
+      md << " " << num(js->second.affordance_mae.value_or(0.0), 3);
+      if (js->second.reference_affordance_mae)
+        md << " (" << num(*js->second.reference_affordance_mae, 3) << " authors' code)";
       md << " |";
     }
     md << "\n";
   }
   for (const auto& f : folders) {
-    const json& s = f.summary;
-    if (s["experiment"] != "base" || s["systems"].empty()) continue;
-    const json& target = s["systems"].begin().value()["target"];  // the experiment's table: the same for every system
+    const Summary& s = f.summary;
+    if (s.experiment != "base" || s.systems.empty() || !s.systems.begin()->second.target) continue;
+    const SummaryTable& target = *s.systems.begin()->second.target;  // the experiment's table: the same for every system
     md << "\nBase test" << labelled(f)
        << ", mean final prediction per object and action (FIX / IGN / IMP; the paper's table in brackets):\n\n"
        << "| object | move | turn green | turn red | turn blue |\n|---|---|---|---|---|\n";
-    const auto objects = s["objects"].get<std::vector<std::string>>();
-    for (std::size_t i = 0; i < objects.size(); ++i) {
-      md << "| " << objects[i] << " |";
-      for (int a = 0; a < 4; ++a) {
+    for (std::size_t i = 0; i < s.objects.size() && i < target.size(); ++i) {
+      md << "| " << s.objects[i] << " |";
+      for (std::size_t a = 0; a < 4 && a < target[i].size(); ++a) {
         std::string cell;
         for (const auto& sys : systems)
-          if (s["systems"].contains(sys))
-            cell += (cell.empty() ? "" : " / ") + num(s["systems"][sys]["affordance"][i][a].get<double>());
-        md << " " << cell << " (" << num(target[i][a].get<double>(), 0) << ") |";
+          if (const auto js = s.systems.find(sys); js != s.systems.end() && js->second.affordance)
+            cell += (cell.empty() ? "" : " / ") + num(js->second.affordance->at(i).at(a));
+        md << " " << cell << " (" << num(target[i][a], 0) << ") |";
       }
       md << "\n";
     }
@@ -615,39 +586,45 @@ void extrinsicSection(std::ostringstream& md, const std::vector<Folder>& folders
      << "Table metric: the share of trained agents that solved more than 90% of their tests of the scenario. "
         "Below it, the share of all tests solved.\n";
   for (const auto& f : folders) {
-    const json& s = f.summary;
-    const auto measured = [&](const std::string& sys) {
-      return s["systems"].contains(sys) && s["systems"][sys].contains("extrinsic") &&
-             s["systems"][sys]["extrinsic"].contains("table_metric");
+    const Summary& s = f.summary;
+    const auto measured = [&](const std::string& sys) -> const SystemExtrinsic* {
+      const auto js = s.systems.find(sys);
+      if (js == s.systems.end() || !js->second.extrinsic || !js->second.extrinsic->table_metric ||
+          !js->second.extrinsic->success_rate)
+        return nullptr;
+      return &*js->second.extrinsic;
     };
     bool any = false;
-    for (const auto& sys : systems) any |= measured(sys);
+    for (const auto& sys : systems) any |= measured(sys) != nullptr;
     if (!any) continue;
     md << "\n### " << f.label;
-    if (s.contains("reference_extrinsic_source")) md << " (" << s["reference_extrinsic_source"].get<std::string>() << ")";
+    if (s.reference_extrinsic_source) md << " (" << *s.reference_extrinsic_source << ")";
     md << "\n\n| system |";
     for (const auto& sys : systems)
-      if (measured(sys)) {
-        for (const auto& sc : s["systems"][sys]["extrinsic"]["scenarios"]) md << " " << sc.get<std::string>() << " |";
+      if (const SystemExtrinsic* ex = measured(sys)) {
+        for (const auto& sc : ex->scenarios) md << " " << sc << " |";
         md << "\n|---|";
-        for (std::size_t k = 0; k < s["systems"][sys]["extrinsic"]["scenarios"].size(); ++k) md << "---|";
+        for (std::size_t k = 0; k < ex->scenarios.size(); ++k) md << "---|";
         md << "\n";
         break;
       }
+    const auto cell = [](const std::map<std::string, double>& m, const std::string& k) {
+      const auto it = m.find(k);
+      return it == m.end() ? std::string("-") : num(it->second);
+    };
     for (const auto& sys : systems) {
-      if (!measured(sys)) continue;
-      const json& js = s["systems"][sys];
-      const json& ex = js["extrinsic"];
+      const SystemExtrinsic* ex = measured(sys);
+      if (!ex) continue;
+      const SystemSummary& js = s.systems.at(sys);
       md << "| " << sys << " |";
-      for (const auto& sc : ex["scenarios"]) {
-        const std::string name = sc.get<std::string>();
-        md << " " << num(ex["table_metric"][name].get<double>());
-        if (js.contains("reference_table_metric") && js["reference_table_metric"].contains(name))
-          md << " (" << num(js["reference_table_metric"][name].get<double>(), 1) << ")";
+      for (const auto& name : ex->scenarios) {
+        md << " " << cell(*ex->table_metric, name);
+        if (js.reference_table_metric && js.reference_table_metric->count(name))
+          md << " (" << num(js.reference_table_metric->at(name), 1) << ")";
         md << " |";
       }
       md << "\n| " << sys << " tests solved |";
-      for (const auto& sc : ex["scenarios"]) md << " " << num(ex["success_rate"][sc.get<std::string>()].get<double>()) << " |";
+      for (const auto& name : ex->scenarios) md << " " << cell(*ex->success_rate, name) << " |";
       md << "\n";
     }
   }
@@ -659,27 +636,24 @@ void completionSection(std::ostringstream& md, const std::vector<Folder>& folder
   md << "\n## Completion steps (paper Figure 6)\n\nMedian iterations of the solved tests, by number of sub-goals, "
         "and the least-squares fit of a x^2 + b x";
   for (const auto& f : folders)
-    if (f.summary.contains("reference_completion_fit")) {
-      const json& fit = f.summary["reference_completion_fit"];
-      md << " (paper, IMP, base: " << num(fit["a"].get<double>(), 3) << " x^2 " << num(fit["b"].get<double>(), 3) << " x)";
+    if (f.summary.reference_completion_fit) {
+      const Fit& fit = *f.summary.reference_completion_fit;
+      md << " (paper, IMP, base: " << num(fit.a, 3) << " x^2 " << num(fit.b, 3) << " x)";
       break;
     }
   md << ":\n\n| experiment | system | 1 | 2 | 3 | 4 | 5 | fit |\n|---|---|---|---|---|---|---|---|\n";
   for (const auto& f : folders)
     for (const auto& sys : systems) {
-      const json& s = f.summary;
-      if (!s["systems"].contains(sys) || !s["systems"][sys].contains("extrinsic") ||
-          !s["systems"][sys]["extrinsic"].contains("completion_steps"))
-        continue;
-      const json& ex = s["systems"][sys]["extrinsic"];
+      const auto js = f.summary.systems.find(sys);
+      if (js == f.summary.systems.end() || !js->second.extrinsic || !js->second.extrinsic->completion_steps) continue;
+      const SystemExtrinsic& ex = *js->second.extrinsic;
+      const CompletionSteps& cs = *ex.completion_steps;
       md << "| " << f.label << " | " << sys << " |";
-      for (const auto& sc : ex["scenarios"]) {
-        const json& c = ex["completion_steps"][sc.get<std::string>()];
-        md << " " << (c["n"].get<int>() ? num(c["median"].get<double>(), 1) : std::string("-")) << " |";
+      for (const auto& sc : ex.scenarios) {
+        const auto c = cs.scenarios.find(sc);
+        md << " " << (c != cs.scenarios.end() && c->second.n ? num(c->second.median, 1) : std::string("-")) << " |";
       }
-      const json& cs = ex["completion_steps"];
-      md << " " << (cs.contains("fit") ? num(cs["fit"]["a"].get<double>(), 3) + " x^2 " + num(cs["fit"]["b"].get<double>(), 3) + " x" : "-")
-         << " |\n";
+      md << " " << (cs.fit ? num(cs.fit->a, 3) + " x^2 " + num(cs.fit->b, 3) + " x" : "-") << " |\n";
     }
 }
 
@@ -689,7 +663,7 @@ void figuresSection(std::ostringstream& md, const std::vector<Folder>& folders, 
   std::set<std::string> sweeps_shown;
   for (const auto& f : folders) {
     if (!f.sweep.empty() && sweeps_shown.insert(f.sweep).second) {  // the conditions side by side, once per sweep
-      const std::string label = f.summary["experiment"].get<std::string>() + "-sweep-" + folderName(f.sweep);
+      const std::string label = f.summary.experiment + "-sweep-" + folderName(f.sweep);
       bool heading = false;
       for (const char* name : {"fig_sweep_mae", "fig_sweep_success"}) {
         const fs::path png = fs::path(f.sweep) / (std::string(name) + ".png");
@@ -771,24 +745,33 @@ ReportWritten writeReport(const ReportRequest& request) {
   std::vector<Folder> folders;
   std::vector<std::string> dirs;  // per folder (a sweep's conditions one by one)
   for (const auto& d : request.dirs) {
-    const json top = fs::exists(fs::path(d) / "summary.json") ? readJson(fs::path(d) / "summary.json", d) : json();
-    if (!top.is_object() || !top.contains("sweep")) {
+    const fs::path file = fs::path(d) / "summary.json";
+    json top;
+    try {
+      if (fs::exists(file)) top = readSummaryJson(d);
+    } catch (const SummaryError& e) {
+      throw std::runtime_error(std::string("report: ") + e.what() + " (folder " + d + ")");
+    }
+    if (!isSweepSummary(top)) {
       folders.push_back({d, loadSummary(d), loadState(d), "", "", ""});
       dirs.push_back(d);
       continue;
     }
     // A sweep: each condition's folder is an experiment folder of its own, its settings those of the
     // sweep's command with the condition's.
+    SweepSummary sweep;
+    try {
+      sweep = sweepSummaryFromJson(top, file.string());
+    } catch (const SummaryError& e) {
+      throw std::runtime_error(std::string("report: ") + e.what() + " (docs/results-schema.md)");
+    }
     const json state = loadState(d);
-    if (!top["sweep"].contains("conditions") || !top["sweep"]["conditions"].is_array())
-      throw std::runtime_error("report: " + (fs::path(d) / "summary.json").string() + " (folder " + d +
-                               ") has a sweep without conditions (docs/results-schema.md)");
-    for (const auto& c : top["sweep"]["conditions"]) {
-      const std::string dir = (fs::path(d) / c.at("folder").get<std::string>()).string();
+    for (const SweepEntry& c : sweep.sweep.conditions) {
+      const std::string dir = (fs::path(d) / c.folder).string();
       json cs = state;
       if (cs.is_object() && cs.contains("options")) {
-        json sets = top.value("settings", json::array());
-        for (const auto& v : c.at("settings")) sets.push_back(v);
+        std::vector<std::string> sets = sweep.settings;
+        sets.insert(sets.end(), c.settings.begin(), c.settings.end());
         cs["options"]["settings"] = sets;
       }
       folders.push_back({dir, loadSummary(dir), cs, "", "", d});
@@ -807,27 +790,26 @@ ReportWritten writeReport(const ReportRequest& request) {
   where.note = request.note;
 
   std::vector<std::string> experiments;
-  for (const auto& f : folders) experiments.push_back(f.summary["experiment"].get<std::string>());
+  for (const auto& f : folders) experiments.push_back(f.summary.experiment);
   const auto labels = folderLabels(experiments, dirs);
   for (std::size_t i = 0; i < folders.size(); ++i) {
     folders[i].label = labels[i];
     folders[i].shown = relativeTo(fs::absolute(folders[i].dir).lexically_normal(), where.out_dir);
   }
-  // Each folder alone first, so that a summary of another shape is an error naming its folder.
+  // Each folder alone first, so that a summary that does not fit is an error naming its folder.
   for (const auto& f : folders) {
     try {
       render({f}, reference, where);
-    } catch (const json::exception& e) {
+    } catch (const std::out_of_range& e) {
       throw std::runtime_error("report: " + (fs::path(f.dir) / "summary.json").string() + " (folder " + f.dir +
-                               ") does not have the shape of docs/results-schema.md: " + e.what());
+                               ") does not fit together (a table or condition missing where another names it): " +
+                               e.what());
+    } catch (const json::exception& e) {
+      throw std::runtime_error("report: " + (fs::path(f.dir) / "experiment.json").string() + " (folder " + f.dir +
+                               ") does not have the shape `afford experiment` writes: " + e.what());
     }
   }
-  Rendered rendered;
-  try {
-    rendered = render(folders, reference, where);
-  } catch (const json::exception& e) {
-    throw std::runtime_error(std::string("report: the summaries do not fit together: ") + e.what());
-  }
+  const Rendered rendered = render(folders, reference, where);
 
   // Everything is read: now write.
   fs::create_directories(where.out_dir);

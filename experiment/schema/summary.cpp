@@ -1,5 +1,6 @@
 #include "experiment/schema/summary.hpp"
 
+#include <algorithm>
 #include <filesystem>
 #include <fstream>
 #include <set>
@@ -184,10 +185,57 @@ void in(const json& j, const std::string& path, const Context& c, T& value) {
   }
 }
 
+// Every table is objects x actions, and random tables' lists are one per table: what the readers index by.
+void checkShapes(const Summary& s, const std::string& path, const Context& c) {
+  const std::string at = path.empty() ? "" : path + ".";
+  const auto table = [&](const SummaryTable& t, const std::string& key) {
+    if (t.size() != s.objects.size())
+      c.fail(at + key, std::to_string(t.size()) + " rows, not one per object (" + std::to_string(s.objects.size()) + ")");
+    for (std::size_t i = 0; i < t.size(); ++i)
+      if (t[i].size() != s.actions.size())
+        c.fail(at + key + "[" + std::to_string(i) + "]",
+               std::to_string(t[i].size()) + " entries, not one per action (" + std::to_string(s.actions.size()) + ")");
+  };
+  for (const auto& [sys, js] : s.systems) {
+    const std::string sp = "systems." + sys + ".";
+    for (const auto* t : {&js.target, &js.affordance, &js.affordance_min, &js.affordance_max})
+      if (*t) table(**t, sp + (t == &js.target ? "target" : t == &js.affordance ? "affordance"
+                                                          : t == &js.affordance_min ? "affordance_min" : "affordance_max"));
+    for (std::size_t r = 0; r < js.runs.size(); ++r) {
+      const std::string rp = sp + "runs[" + std::to_string(r) + "].";
+      table(js.runs[r].affordance, rp + "affordance");
+      if (js.runs[r].target) table(*js.runs[r].target, rp + "target");
+    }
+    if (js.curves) {
+      if (js.curves->steps.size() != js.curves->mean.size())
+        c.fail(at + sp + "curves.mean", "not one table per step of curves.steps");
+      for (std::size_t k = 0; k < js.curves->mean.size(); ++k)
+        table(js.curves->mean[k], sp + "curves.mean[" + std::to_string(k) + "]");
+    }
+  }
+  if (s.random_tables) {
+    const RandomTables& rt = *s.random_tables;
+    const auto count = static_cast<std::size_t>(std::max<std::int64_t>(rt.count, 0));
+    if (rt.tables.size() != count) c.fail(at + "random_tables.tables", "not one table per random_tables.count");
+    if (rt.one_way_looks.size() != count) c.fail(at + "random_tables.one_way_looks", "not one list per table");
+    for (std::size_t k = 0; k < rt.tables.size(); ++k) table(rt.tables[k], "random_tables.tables[" + std::to_string(k) + "]");
+    for (const auto& [condition, systems] : rt.mae)
+      for (const auto& [sys, e] : systems)
+        if (e.per_table.size() != count)
+          c.fail(at + "random_tables.mae." + condition + "." + sys + ".per_table", "not one value per table");
+  }
+}
+
 template <class T>
 T parse(const json& j, const std::string& what) {
   T value;
   in(j, "", Context{what}, value);
+  const Context c{what};
+  if constexpr (std::is_same_v<T, Summary>) {
+    checkShapes(value, "", c);
+  } else {
+    for (const auto& [name, condition] : value.conditions) checkShapes(condition, "conditions." + name, c);
+  }
   return value;
 }
 
@@ -203,8 +251,12 @@ json readSummaryJson(const std::string& dir) {
   const std::filesystem::path file = std::filesystem::path(dir) / "summary.json";
   std::ifstream f(file);
   if (!f) throw SummaryError("no summary.json in " + dir + " (is it an `afford experiment --out` folder?)");
-  json j = json::parse(f, nullptr, false);
-  if (j.is_discarded()) throw SummaryError(file.string() + ": not JSON");
+  json j;
+  try {
+    j = json::parse(f);
+  } catch (const json::parse_error& e) {
+    throw SummaryError(file.string() + ": not JSON (" + e.what() + ")");
+  }
   if (!j.is_object()) throw SummaryError(file.string() + ": expected a map at the top, got " + kindOf(j));
   return j;
 }

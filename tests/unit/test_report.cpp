@@ -11,6 +11,7 @@
 #include <sstream>
 
 #include "experiment/present/report.hpp"
+#include "experiment/schema/summary.hpp"
 #include "tests/support.hpp"
 
 namespace afford {
@@ -60,65 +61,65 @@ Made made(const std::string& version, std::vector<std::string> systems, int reps
   return m;
 }
 
-// summary.json of an `afford experiment base` with those counts (docs/results-schema.md).
+// summary.json of an `afford experiment base` with those counts, as afford writes it (experiment/schema/summary.hpp).
 json summaryOf(const Made& m) {
-  const json table = json::array({{1, 1, 0, 1}, {1, 0, 1, 1}, {1, 1, 1, 0}, {1, 1, 0, 1}, {1, 0, 1, 1},
-                                  {1, 1, 1, 0}, {1, 1, 0, 1}, {1, 0, 1, 1}, {1, 1, 1, 0}});
-  json s = {{"experiment", "base"},
-            {"description", "base test, deterministic affordances (paper Table 1)"},
-            {"steps", m.steps},
-            {"repetitions", m.reps},
-            {"seed", m.first_seed},
-            {"transport", "memq"},
-            {"network", "in-process memq://"},
-            {"afford_version", m.version},
-            {"objects", {"red square", "green square", "blue square", "red circle", "green circle", "blue circle",
-                         "red rectangle", "green rectangle", "blue rectangle"}},
-            {"actions", {"move", "turn green", "turn red", "turn blue"}},
-            {"systems", json::object()},
-            {"wall_seconds", 90.0},
-            {"extrinsic_tests", m.reps * m.tests_per_scenario * static_cast<int>(m.systems.size())},
-            {"extrinsic_design",
-             {{"scenarios", {"scenario1"}}, {"tests", m.tests_per_scenario}, {"after_actions", 0}, {"analysis", ""},
-              {"vary", json::object()}}}};
+  const SummaryTable table = {{1, 1, 0, 1}, {1, 0, 1, 1}, {1, 1, 1, 0}, {1, 1, 0, 1}, {1, 0, 1, 1},
+                              {1, 1, 1, 0}, {1, 1, 0, 1}, {1, 0, 1, 1}, {1, 1, 1, 0}};
+  Summary s;
+  s.experiment = "base";
+  s.description = "base test, deterministic affordances (paper Table 1)";
+  s.steps = m.steps;
+  s.repetitions = m.reps;
+  s.seed = m.first_seed;
+  s.transport = "memq";
+  s.network = "in-process memq://";
+  s.afford_version = m.version;
+  s.objects = {"red square",   "green square",  "blue square",     "red circle",    "green circle",
+               "blue circle",  "red rectangle", "green rectangle", "blue rectangle"};
+  s.actions = {"move", "turn green", "turn red", "turn blue"};
+  s.wall_seconds = 90.0;
+  s.extrinsic_tests = m.reps * m.tests_per_scenario * static_cast<int>(m.systems.size());
+  DesignSummary& design = s.extrinsic_design.emplace();
+  design.scenarios = {"scenario1"};
+  design.tests = m.tests_per_scenario;
   if (m.experiment_file.empty()) {
-    s["reference_source"] = "authors' code";
-    s["reference_extrinsic_source"] = "paper Table 2 (base test)";
-    s["reference_completion_fit"] = {{"a", 1.364}, {"b", -0.808}};
+    s.reference_source = "authors' code";
+    s.reference_extrinsic_source = "paper Table 2 (base test)";
+    s.reference_completion_fit = Fit{1.364, -0.808};
   } else {
-    s["experiment_file"] = m.experiment_file;
+    s.experiment_file = m.experiment_file;
   }
   for (const auto& sys : m.systems) {
-    json js = {{"target", table}, {"affordance", table}, {"affordance_mae", 0.04}, {"runs", json::array()}};
+    SystemSummary& js = s.systems[sys];
+    js.target = js.affordance = table;
+    js.affordance_mae = 0.04;
     if (m.experiment_file.empty()) {
-      js["reference_affordance_mae"] = 0.026;
-      js["reference_table_metric"] = {{"scenario1", 1.0}};
+      js.reference_affordance_mae = 0.026;
+      js.reference_table_metric = std::map<std::string, double>{{"scenario1", 1.0}};
     }
     for (int r = 0; r < m.reps; ++r) {
-      const std::int64_t seed = m.first_seed + r;
-      js["runs"].push_back({{"run_id", "t-base-" + sys + "-s" + std::to_string(seed)},
-                            {"seed", seed},
-                            {"log_dir", nullptr},
-                            {"affordance", table},
-                            {"affordance_mae", 0.04},
-                            {"weights_checksum", "0123456789abcdef"}});
+      RunEntry run;
+      run.seed = m.first_seed + r;
+      run.run_id = "t-base-" + sys + "-s" + std::to_string(run.seed);
+      run.log_dir = Nullable<std::string>();
+      run.affordance = table;
+      run.affordance_mae = 0.04;
+      run.weights_checksum = "0123456789abcdef";
+      js.runs.push_back(run);
     }
-    js["extrinsic"] = {{"scenarios", {"scenario1"}},
-                       {"tests_per_scenario", m.tests_per_scenario},
-                       {"table_metric", {{"scenario1", 1.0}}},
-                       {"table_metric_solved_share", 0.9},
-                       {"success_rate", {{"scenario1", 1.0}}},
-                       {"completion_steps",
-                        {{"scenario1", {{"n", 2}, {"sub_goals", 1}, {"median", 1}, {"q1", 1}, {"q3", 1}, {"min", 1},
-                                        {"max", 1}, {"mean", 1.0}}}}},
-                       {"actions_checked_per_sub_goal", {{"scenario1", 2.0}}}};
-    s["systems"][sys] = js;
+    SystemExtrinsic& ex = js.extrinsic.emplace();
+    ex.scenarios = {"scenario1"};
+    ex.tests_per_scenario = m.tests_per_scenario;
+    ex.table_metric = std::map<std::string, double>{{"scenario1", 1.0}};
+    ex.table_metric_solved_share = 0.9;
+    ex.success_rate = std::map<std::string, double>{{"scenario1", 1.0}};
+    ex.completion_steps.emplace().scenarios["scenario1"] = ScenarioSteps{2, 1, 1, 1, 1, 1, 1, 1.0};
+    ex.actions_checked_per_sub_goal = std::map<std::string, double>{{"scenario1", 2.0}};
   }
   if (m.interrupted)
-    s["interrupted"] = {{"signal", "SIGINT"}, {"phase", "intrinsic"}, {"finished", m.reps - 1}, {"planned", m.reps},
-                        {"cut", json::array()}, {"not_started", json::array()}, {"extrinsic_tests_to_come", true},
-                        {"resume", "afford experiment --resume --out x"}, {"resume_in", "/"}};
-  return s;
+    s.interrupted = Interruption{"SIGINT", "intrinsic", m.reps - 1, m.reps, {}, {}, true,
+                                 "afford experiment --resume --out x", "/"};
+  return toJson(s);
 }
 
 // An experiment folder: summary.json, experiment.json (its options), a figure and its CSV, whose bytes name the folder.

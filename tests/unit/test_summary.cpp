@@ -108,5 +108,29 @@ TEST(SummarySchema, AKeyMissingUnknownOrOfAnotherTypeIsNamedByItsPath) {
   EXPECT_NE(errorOf(json::array()).find("key '<top>': expected a map, got a list"), std::string::npos);
 }
 
+// The readers index tables by object and action: a table of another shape is named before any of them reads it.
+TEST(SummarySchema, ATableOfAnotherShapeThanObjectsByActionsIsNamed) {
+  const json good = toJson(fullSummary());
+  json j = good;
+  j["systems"]["IMP"]["runs"][0]["affordance"][0] = {0.5, 0.5};
+  EXPECT_EQ(errorOf(j), "out/summary.json: key 'systems.IMP.runs[0].affordance[0]': 2 entries, not one per action (4)");
+  j = good;
+  j["systems"]["IMP"]["target"].push_back({1.0, 1.0, 1.0, 1.0});
+  EXPECT_EQ(errorOf(j), "out/summary.json: key 'systems.IMP.target': 2 rows, not one per object (1)");
+  j = good;
+  j["systems"]["IMP"]["curves"] = {{"steps", {0, 100}}, {"mean", {{{0.1, 0.2, 0.3, 0.4}}}}};
+  EXPECT_EQ(errorOf(j), "out/summary.json: key 'systems.IMP.curves.mean': not one table per step of curves.steps");
+  SweepSummary sweep;
+  sweep.conditions["a"] = fullSummary();
+  json w = toJson(sweep);
+  w["conditions"]["a"]["systems"]["IMP"]["affordance"] = {{0.5}};
+  try {
+    sweepSummaryFromJson(w);
+    FAIL() << "a condition's table of another shape was read";
+  } catch (const SummaryError& e) {
+    EXPECT_NE(std::string(e.what()).find("'conditions.a.systems.IMP.affordance[0]'"), std::string::npos) << e.what();
+  }
+}
+
 }  // namespace
 }  // namespace afford
