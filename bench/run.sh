@@ -20,10 +20,15 @@
 #   bench/run.sh python [--steps N] [--reps R] [--floor F] [--transports memq,udpm] [--out DIR]
 #     components written in Python (ports of the paper's motivation and affordance predictor) against the
 #     all-C++ run: steps per second and their ratio (floor 0.5 for the motivation; exit 1 below it), checksums.
+#   bench/run.sh full [--runs N] [--steps S] [--jobs J] [--reps R] [--transports udpm,memq] [--floor F] [--out DIR]
+#     a full machine: N runs at --jobs = cores over each transport, steps per second in all and per run, the
+#     ratio udpm / memq (floor 0.8; exit 1 below it), and wake-ups per step of each kind of process.
 set -euo pipefail
 cd "$(dirname "$0")/.."
 [[ ${1:-} == loss ]] && { shift; exec bench/loss.sh "$@"; }
 [[ ${1:-} == python ]] && { shift; [[ -x build/bin/afford ]] || scripts/setup.sh;
   PYTHONPATH=build/python exec /usr/bin/python3 bench/python_bench.py "$@"; }
+[[ ${1:-} == full ]] && { shift; [[ -x build/bin/afford ]] || scripts/setup.sh;
+  exec /usr/bin/python3 bench/full_machine.py "$@"; }
 [[ -x build/bin/afford-bench ]] || scripts/setup.sh
 exec build/bin/afford-bench "$@"
