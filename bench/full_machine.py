@@ -107,13 +107,13 @@ def main():
     for name in ("runs", "steps", "jobs", "reps"):
         if getattr(args, name) < 1:
             sys.exit(f"full: --{name} must be at least 1")
-    # Each invocation in a folder of its own: experiment folders and run ids are never reused.
-    out_dir = pathlib.Path(args.out).resolve() / time.strftime("%Y%m%d-%H%M%S")
-    out_dir.mkdir(parents=True, exist_ok=False)
     transports = [t for t in args.transports.split(",") if t]
     for t in transports:
         if t not in ("udpm", "memq"):
             sys.exit(f"full: --transports: '{t}' is neither udpm nor memq")
+    # Each invocation in a folder of its own: experiment folders and run ids are never reused.
+    out_dir = pathlib.Path(args.out).resolve() / time.strftime("%Y%m%d-%H%M%S")
+    out_dir.mkdir(parents=True, exist_ok=False)
     print(f"full machine: {args.runs} runs of {args.steps} steps (base, IMP, no logs, every run trains), "
           f"--jobs {args.jobs} on {os.cpu_count()} cores, {args.reps} rep(s) per transport")
     results = {}
