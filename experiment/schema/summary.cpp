@@ -247,10 +247,17 @@ Summary summaryFromJson(const json& j, const std::string& what) { return parse<S
 SweepSummary sweepSummaryFromJson(const json& j, const std::string& what) { return parse<SweepSummary>(j, what); }
 bool isSweepSummary(const json& j) { return j.is_object() && j.contains("sweep"); }
 
-json readSummaryJson(const std::string& dir) {
+json readSummaryJson(const std::string& dir, std::uintmax_t max_bytes) {
   const std::filesystem::path file = std::filesystem::path(dir) / "summary.json";
   std::ifstream f(file);
   if (!f) throw SummaryError("no summary.json in " + dir + " (is it an `afford experiment --out` folder?)");
+  std::error_code ec;
+  const std::uintmax_t size = std::filesystem::file_size(file, ec);
+  if (ec || !std::filesystem::is_regular_file(file, ec))
+    throw SummaryError(file.string() + ": not a regular file");
+  if (size > max_bytes)
+    throw SummaryError(file.string() + ": " + std::to_string(size) + " bytes, more than a summary holds (at most " +
+                       std::to_string(max_bytes) + ")");
   json j;
   try {
     j = json::parse(f);

@@ -582,8 +582,10 @@ SweepSummary sweepSummaryFromJson(const nlohmann::json& j, const std::string& wh
 bool isSweepSummary(const nlohmann::json& j);
 
 // An experiment folder's summary.json, read and parsed: throws SummaryError
-// naming the file for one missing, unreadable, not JSON, or not a summary.
-nlohmann::json readSummaryJson(const std::string& dir);
+// naming the file for one missing, unreadable, larger than max_bytes (a
+// summary of thousands of runs is a few MB), not JSON, or not a summary.
+constexpr std::uintmax_t kMaxSummaryBytes = std::uintmax_t{256} << 20;
+nlohmann::json readSummaryJson(const std::string& dir, std::uintmax_t max_bytes = kMaxSummaryBytes);
 Summary readSummary(const std::string& dir);
 
 }  // namespace afford

@@ -2,6 +2,10 @@
 // writes reads back the same, and what it cannot read is named by its path.
 #include <gtest/gtest.h>
 
+#include <unistd.h>
+
+#include <filesystem>
+#include <fstream>
 #include <string>
 
 #include "experiment/schema/summary.hpp"
@@ -130,6 +134,28 @@ TEST(SummarySchema, ATableOfAnotherShapeThanObjectsByActionsIsNamed) {
   } catch (const SummaryError& e) {
     EXPECT_NE(std::string(e.what()).find("'conditions.a.systems.IMP.affordance[0]'"), std::string::npos) << e.what();
   }
+}
+
+// A file given to a reader: too large, not JSON or missing, it is named and not read whole.
+TEST(SummarySchema, AFileTooLargeNotJsonOrMissingIsNamed) {
+  namespace fs = std::filesystem;
+  const fs::path dir = fs::temp_directory_path() / ("afford-summary-" + std::to_string(::getpid()));
+  fs::create_directories(dir);
+  const auto errorOfDir = [&](std::uintmax_t max_bytes) {
+    try {
+      readSummaryJson(dir.string(), max_bytes);
+    } catch (const SummaryError& e) {
+      return std::string(e.what());
+    }
+    return std::string();
+  };
+  EXPECT_NE(errorOfDir(kMaxSummaryBytes).find("no summary.json in " + dir.string()), std::string::npos);
+  std::ofstream(dir / "summary.json") << toJson(fullSummary()).dump();
+  EXPECT_EQ(errorOfDir(kMaxSummaryBytes), "");
+  EXPECT_NE(errorOfDir(100).find("bytes, more than a summary holds (at most 100)"), std::string::npos);
+  std::ofstream(dir / "summary.json") << "{\"experiment\": ";
+  EXPECT_NE(errorOfDir(kMaxSummaryBytes).find("summary.json: not JSON (") , std::string::npos);
+  fs::remove_all(dir);
 }
 
 }  // namespace
