@@ -9,7 +9,8 @@ Each measurement is `afford experiment base --system IMP` without logs and
 without stored agents (every run trains), in DIR/<date-time>/. Wake-ups are the voluntary and
 involuntary context switches of every thread of every afford process, read
 from /proc while the runs go (the last reading of a thread before it ends
-counts), divided by the steps of all runs. Exit 1 when udpm / memq is below
+counts), divided by the steps of all runs, for the main thread and the
+others (LCM's receive thread, workers) apart. Exit 1 when udpm / memq is below
 the floor.
 """
 import argparse
@@ -85,13 +86,14 @@ def measure(transport, args, out_dir, rep):
     summary = json.loads((folder / "summary.json").read_text())
     per_run = [r["steps_per_second"] for r in summary["systems"]["IMP"]["runs"]]
     steps = args.runs * args.steps
-    wakes = {}
-    for (pid, _), (kind, n) in seen.items():
-        wakes.setdefault(kind, [0, set()])
-        wakes[kind][0] += n
-        wakes[kind][1].add(pid)
+    wakes = {}  # kind -> [main thread's, other threads', processes]
+    for (pid, tid), (kind, n) in seen.items():
+        w = wakes.setdefault(kind, [0, 0, set()])
+        w[0 if str(pid) == tid else 1] += n
+        w[2].add(pid)
     return {"wall": wall, "in_all": steps / wall, "per_run": statistics.median(per_run),
-            "wakes_per_step": {k: (n / steps, len(pids)) for k, (n, pids) in sorted(wakes.items())}}
+            "wakes_per_step": {k: (main / steps, other / steps, len(pids))
+                               for k, (main, other, pids) in sorted(wakes.items())}}
 
 
 def main():
@@ -124,8 +126,9 @@ def main():
         walls = ", ".join(f"{m['wall']:.1f}" for m in reps)
         print(f"  {t}: wall {walls} s; best: {best['in_all']:.0f} steps/s in all, "
               f"{best['per_run']:.0f} steps/s per run (median)")
-        for kind, (per_step, n) in best["wakes_per_step"].items():
-            print(f"      {kind:22s} {per_step:6.2f} wake-ups per step of all runs ({n} process(es))")
+        for kind, (main, other, n) in best["wakes_per_step"].items():
+            print(f"      {kind:22s} {main + other:6.2f} wake-ups per step of all runs: main thread {main:.2f}, "
+                  f"other threads (LCM's receive thread, workers) {other:.2f} ({n} process(es))")
     code = 0
     if "udpm" in results and "memq" in results:
         ratio = results["udpm"]["in_all"] / results["memq"]["in_all"]
