@@ -145,10 +145,7 @@ Interruption interruption(const std::string& phase_name, const std::vector<Plann
 int stopHere(const Interruption& in, const ExperimentRequest& o, json& state, spdlog::logger& log) {
   const std::string &signal = in.signal, &phase_name = in.phase, &cwd = in.resume_in, &command = in.resume;
   state["state"] = "interrupted";
-  json cut = json::array();
-  for (const CutRun& c : in.cut)
-    cut.push_back({{"run_id", c.run_id}, {"where", c.where}, {"log_dir", c.log_dir ? json(*c.log_dir) : json(nullptr)}});
-  state["interruptions"].push_back({{"signal", signal}, {"phase", phase_name}, {"cut", cut}});
+  state["interruptions"].push_back({{"signal", signal}, {"phase", phase_name}, {"cut", toJson(in)["cut"]}});
   writeWhole(statePath(o.write.out_dir), state.dump(2) + "\n");
 
   const std::string what = phase_name == "intrinsic" ? "intrinsic run(s)" : "extrinsic test(s)";
@@ -356,7 +353,7 @@ class Executor {
 // Runs them here, J at a time: a fresh experiment, a resumed one, a shard.
 class Hosted : public Executor {
  public:
-  Hosted(Experiment& x, spdlog::logger& log)
+  Hosted(const Experiment& x, spdlog::logger& log)
       : x_(x), log_(log), agents_((fs::path(x.o.plan.log_root) / "agents").string()),
         // The store knows the shipped processes' code (its key), not what a swapped command runs.
         reuse_(x.o.host.reuse_agents && x.o.host.processes.empty()) {}
@@ -372,7 +369,7 @@ class Hosted : public Executor {
   }
 
  private:
-  Experiment& x_;
+  const Experiment& x_;
   spdlog::logger& log_;
   const AgentStore agents_;
   const bool reuse_;  // agents taken from and kept in the store

@@ -205,8 +205,7 @@ RunEntry runEntry(const Plan& plan, const PlannedRun& p, const RunOutcome& r, do
     entry.target = p.target;
     return entry;
   }
-  entry.log_dir.emplace();
-  if (!r.log_dir.empty()) entry.log_dir = Nullable<std::string>(r.log_dir);
+  entry.log_dir = r.log_dir.empty() ? Nullable<std::string>() : Nullable<std::string>(r.log_dir);
   entry.checkpoint = Nullable<std::string>(r.checkpoint);
   entry.peak_rss_kb = std::map<std::string, std::int64_t>(r.peak_rss_kb.begin(), r.peak_rss_kb.end());
   entry.log_bytes = r.log_bytes;

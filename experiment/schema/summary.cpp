@@ -243,6 +243,7 @@ T parse(const json& j, const std::string& what) {
 
 json toJson(const Summary& s) { return out(s); }
 json toJson(const SweepSummary& s) { return out(s); }
+json toJson(const Interruption& i) { return out(i); }
 Summary summaryFromJson(const json& j, const std::string& what) { return parse<Summary>(j, what); }
 SweepSummary sweepSummaryFromJson(const json& j, const std::string& what) { return parse<SweepSummary>(j, what); }
 bool isSweepSummary(const json& j) { return j.is_object() && j.contains("sweep"); }

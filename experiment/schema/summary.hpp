@@ -574,6 +574,7 @@ struct SweepSummary : ExperimentHeader {
 
 nlohmann::json toJson(const Summary& s);
 nlohmann::json toJson(const SweepSummary& s);
+nlohmann::json toJson(const Interruption& i);  // as in summary.json (experiment.json keeps its cut runs too)
 // Throw SummaryError naming the key (its path from the top) that is missing,
 // unknown or of the wrong type; `what` begins the message (a file's name).
 Summary summaryFromJson(const nlohmann::json& j, const std::string& what = "summary.json");
