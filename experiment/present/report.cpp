@@ -43,7 +43,12 @@ struct Folder {
   std::string sweep;  // a sweep's condition: the sweep's folder (its comparison figures), else ""
 };
 
+// experiment.json: a regular file no larger than a summary may be (opening a FIFO would wait for a writer).
 json readJson(const fs::path& file, const std::string& dir) {
+  std::error_code ec;
+  if (!fs::is_regular_file(file, ec) || fs::file_size(file, ec) > kMaxSummaryBytes || ec)
+    throw std::runtime_error("report: " + file.string() + " (folder " + dir + ") is not a regular file of at most " +
+                             std::to_string(kMaxSummaryBytes) + " bytes");
   std::ifstream in(file);
   if (!in) throw std::runtime_error("report: cannot read " + file.string() + " (folder " + dir + ")");
   try {

@@ -250,15 +250,18 @@ bool isSweepSummary(const json& j) { return j.is_object() && j.contains("sweep")
 
 json readSummaryJson(const std::string& dir, std::uintmax_t max_bytes) {
   const std::filesystem::path file = std::filesystem::path(dir) / "summary.json";
-  std::ifstream f(file);
-  if (!f) throw SummaryError("no summary.json in " + dir + " (is it an `afford experiment --out` folder?)");
+  // Checked before it is opened: opening a FIFO would wait for a writer.
   std::error_code ec;
+  if (!std::filesystem::exists(file, ec))
+    throw SummaryError("no summary.json in " + dir + " (is it an `afford experiment --out` folder?)");
+  if (!std::filesystem::is_regular_file(file, ec)) throw SummaryError(file.string() + ": not a regular file");
   const std::uintmax_t size = std::filesystem::file_size(file, ec);
-  if (ec || !std::filesystem::is_regular_file(file, ec))
-    throw SummaryError(file.string() + ": not a regular file");
+  if (ec) throw SummaryError(file.string() + ": cannot read its size (" + ec.message() + ")");
   if (size > max_bytes)
     throw SummaryError(file.string() + ": " + std::to_string(size) + " bytes, more than a summary holds (at most " +
                        std::to_string(max_bytes) + ")");
+  std::ifstream f(file);
+  if (!f) throw SummaryError(file.string() + ": cannot be read");
   json j;
   try {
     j = json::parse(f);

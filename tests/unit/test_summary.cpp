@@ -2,6 +2,7 @@
 // writes reads back the same, and what it cannot read is named by its path.
 #include <gtest/gtest.h>
 
+#include <sys/stat.h>
 #include <unistd.h>
 
 #include <filesystem>
@@ -136,7 +137,7 @@ TEST(SummarySchema, ATableOfAnotherShapeThanObjectsByActionsIsNamed) {
   }
 }
 
-// A file given to a reader: too large, not JSON or missing, it is named and not read whole.
+// A file given to a reader: too large, not JSON, missing or not a regular file, it is named and not read whole.
 TEST(SummarySchema, AFileTooLargeNotJsonOrMissingIsNamed) {
   namespace fs = std::filesystem;
   const fs::path dir = fs::temp_directory_path() / ("afford-summary-" + std::to_string(::getpid()));
@@ -155,6 +156,9 @@ TEST(SummarySchema, AFileTooLargeNotJsonOrMissingIsNamed) {
   EXPECT_NE(errorOfDir(100).find("bytes, more than a summary holds (at most 100)"), std::string::npos);
   std::ofstream(dir / "summary.json") << "{\"experiment\": ";
   EXPECT_NE(errorOfDir(kMaxSummaryBytes).find("summary.json: not JSON (") , std::string::npos);
+  fs::remove(dir / "summary.json");
+  ASSERT_EQ(::mkfifo((dir / "summary.json").c_str(), 0600), 0);  // opening it would wait for a writer
+  EXPECT_NE(errorOfDir(kMaxSummaryBytes).find("summary.json: not a regular file"), std::string::npos);
   fs::remove_all(dir);
 }
 
