@@ -410,6 +410,84 @@ TEST_F(LcmPatches, AMessageLargerThanMaxMessageSizeIsDropped) {
   EXPECT_EQ(bad_[1].size(), 900u);
 }
 
+// Datagrams the kernel dropped at this namespace's sockets bound to port kPort (the last column of
+// /proc/net/udp): full receive buffers, and since 0010 the socket filter.
+long socketDrops() {
+  char port[8];
+  std::snprintf(port, sizeof port, ":%04X", kPort);
+  std::ifstream in("/proc/net/udp");
+  long drops = 0;
+  for (std::string line; std::getline(in, line);) {
+    std::istringstream fields(line);
+    std::vector<std::string> f;
+    for (std::string w; fields >> w;) f.push_back(w);
+    if (f.size() > 12 && f[1].size() > 5 && f[1].substr(f[1].size() - 5) == port) drops += std::stol(f.back());
+  }
+  return drops;
+}
+
+// Channels a handler took, by name.
+struct Taken {
+  std::map<std::string, int> by_channel;
+  void on(const lcm::ReceiveBuffer*, const std::string& channel) { ++by_channel[channel]; }
+};
+
+// 0010: every process on a port was woken for every datagram of the port, and LCM dropped those of
+// channels nobody here took only then, in user space. Now the kernel drops them at the socket.
+TEST_F(LcmPatches, TheKernelDropsShortMessagesOfChannelsNotSubscribed) {
+  listen("");  // BAD and SYNC
+  Taken taken;
+  // Names of 1 to 9 bytes: the filter compares a name and its NUL in words, half words and bytes.
+  for (int n = 1; n <= 9; ++n) lcm_->subscribe(std::string(n, 'K'), &Taken::on, &taken);
+  Sender s;
+  sync(s);
+  const long before = socketDrops();
+  for (int n = 1; n <= 9; ++n) {
+    s.sendShort(std::string(n, 'K'), pattern(40, 1));                   // taken
+    s.sendShort(std::string(n - 1, 'K') + "J", pattern(40, 2));         // last byte differs
+    s.sendShort(std::string(n, 'K') + "J", pattern(40, 3));             // one byte longer
+    s.sendShort(std::string(n, 'K'), {}, false);                        // no NUL, ends in the name
+  }
+  for (int i = 0; i < 20; ++i) s.sendShort("OTHER", pattern(100, static_cast<std::uint8_t>(i)));
+  s.sendShort("BA", pattern(10, 4));
+  s.sendShort("BAD", pattern(10, 5));
+  s.sendFragmented(30, "OTHER", pattern(70000, 6));  // fragments pass the kernel; LCM drops the message
+  sync(s);
+  EXPECT_EQ(socketDrops() - before, 9 * 3 + 20 + 1) << "datagrams of channels not subscribed reached LCM";
+  for (int n = 1; n <= 9; ++n) EXPECT_EQ(taken.by_channel[std::string(n, 'K')], 1) << n << " K";
+  EXPECT_EQ(taken.by_channel.size(), 9u);
+  ASSERT_EQ(bad_.size(), 1u);
+  EXPECT_EQ(bad_[0].size(), 10u);
+}
+
+// 0010: a subscription by pattern takes every channel, so nothing is dropped while it stands.
+TEST_F(LcmPatches, ASubscriptionByPatternTakesEveryChannelUntilItIsGone) {
+  listen("");
+  Taken all;
+  lcm::Subscription* sub = lcm_->subscribe("OTH.*", &Taken::on, &all);
+  Sender s;
+  sync(s);
+  long before = socketDrops();
+  for (int i = 0; i < 10; ++i) s.sendShort(i % 2 ? "OTHER" : "ELSE", pattern(20, 1));
+  sync(s);
+  EXPECT_EQ(socketDrops() - before, 0);
+  EXPECT_EQ(all.by_channel["OTHER"], 5);
+  EXPECT_EQ(all.by_channel.count("ELSE"), 0u);
+  lcm_->unsubscribe(sub);
+  before = socketDrops();
+  for (int i = 0; i < 10; ++i) s.sendShort(i % 2 ? "OTHER" : "ELSE", pattern(20, 1));
+  sync(s);
+  EXPECT_EQ(socketDrops() - before, 10) << "the filter did not come back when the pattern went";
+  EXPECT_EQ(all.by_channel["OTHER"], 5);
+  // A pattern that is not a regular expression is refused, and leaves the filter as it was.
+  EXPECT_EQ(lcm_subscribe(lcm_->getUnderlyingLCM(), "OTH[", [](const lcm_recv_buf_t*, const char*, void*) {}, nullptr),
+            nullptr);
+  before = socketDrops();
+  s.sendShort("OTHER", pattern(20, 1));
+  sync(s);
+  EXPECT_EQ(socketDrops() - before, 1);
+}
+
 // 0007: a data length of 0x7FFFFFFF overflowed 'datalen + 1' and the reader wrote through a null pointer.
 TEST(LcmEventLog, AnEventClaimingTheLargestLengthIsRefused) {
   const std::string file = test::tempDir("lcm-eventlog") + "/huge.lcm";
