@@ -123,6 +123,10 @@ bool Edge::blocked(const std::string& channel) const {
 }
 
 Turn::Kind Edge::attempt(Pending& p) {
+  // Waiting for an input since our last publication, if this message is taken (before its handler, which may
+  // publish again).
+  const bool answered = awaiting_ && p.serial >= 0;  // a run message: a peer's STATUS says nothing of the pace
+  const Clock::time_point came = Clock::now(), published = last_published_;
   Turn t = Turn::take();
   try {
     t = p.call();
@@ -133,7 +137,13 @@ Turn::Kind Edge::attempt(Pending& p) {
     fail(p.channel, "an unknown exception");
     return Turn::Kind::Refuse;
   }
-  if (t.kind() == Turn::Kind::Take) last_activity_ = Clock::now();
+  if (t.kind() == Turn::Kind::Take) {
+    last_activity_ = Clock::now();
+    if (answered) {
+      usual_wait_ += (came - published - usual_wait_) / 8;
+      awaiting_ = last_published_ > came;  // the handler published: a new wait begins
+    }
+  }
   if (t.kind() == Turn::Kind::Refuse) refused(p, t.why());
   return t.kind();
 }

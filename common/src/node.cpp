@@ -126,7 +126,8 @@ void NodeBase::leaveRun() {
     log_->error("leaving run '{}': {}", run_id_, e.what());
     detail_ = e.what();
   }
-  log_->info("left run '{}' at step {}", run_id_, last_step_);
+  log_->info("left run '{}' at step {} (it waits {:.2f} ms for an input, usually)", run_id_, last_step_,
+             std::chrono::duration<double, std::milli>(edge_.usualWait()).count());
   stop_pending_ = false;
   edge_.leave();
   run_id_.clear();
@@ -175,11 +176,12 @@ void NodeBase::tick() {
   const bool in_run = state_ == process_status_t::RUNNING || state_ == process_status_t::DONE;
   if (in_run && !edge_.counts().empty()) {
     // Idle after publishing: say what we published, in case the last of it was lost.
-    const auto idle = milliseconds(protocol().idle_announce_ms);
+    const auto idle = idleAnnounceAfter();
     if (edge_.lastActivity() > announced_at_ || announce_wait_ == Clock::duration{}) announce_wait_ = idle;
     if (now - edge_.lastActivity() >= idle && now - announced_at_ >= announce_wait_) {
       const auto wait = announce_wait_;
       publishStatus();
+      edge_.waitAnnounced();
       announce_wait_ = std::min<Clock::duration>(wait * 2, milliseconds(protocol().heartbeat_ms));
     }
   }
@@ -190,11 +192,17 @@ void NodeBase::tick() {
   }
 }
 
+auto NodeBase::idleAnnounceAfter() const -> Clock::duration {
+  const Clock::duration least = milliseconds(protocol().idle_announce_ms);
+  return std::min<Clock::duration>(std::max(least, edge_.usualWait() * protocol().idle_announce_pace),
+                                   std::max<Clock::duration>(least, milliseconds(protocol().heartbeat_ms)));
+}
+
 int NodeBase::msUntilDue() const {
   const auto now = Clock::now();
   Clock::time_point due = std::min(next_beat_, edge_.nextDue());
   if ((state_ == process_status_t::RUNNING || state_ == process_status_t::DONE) && !edge_.counts().empty()) {
-    const auto idle = milliseconds(protocol().idle_announce_ms);
+    const auto idle = idleAnnounceAfter();
     due = std::min(due, std::max(edge_.lastActivity() + idle, announced_at_ + std::max<Clock::duration>(announce_wait_, idle)));
   }
   if (stop_pending_) due = std::min(due, stop_deadline_);

@@ -33,6 +33,8 @@ using OnStep = std::function<void(std::int64_t)>;
 struct Slot {
   int index = 0;
   std::string url;
+  // As many slots as cores, or more: no core is free for the eye to scan ahead with (its `--speculate`).
+  bool machine_full = false;
   std::unique_ptr<ProcessGroup> group;   // environment, eye, predictors, and motivation or planner
   bool extrinsic = false;                // which of the two the group (or the host) has
   std::unique_ptr<ProcessGroup> logger;  // started with the slot's first recorded run, kept for the others
@@ -106,11 +108,10 @@ RunOutcome runOverUdpm(const PlannedRun& run, const HostRequest& o, const std::s
   if (!attached && (!slot.group || !slot.group->health().empty() || slot.extrinsic != run.spec.extrinsic)) {
     slot.group.reset();
     slot.extrinsic = run.spec.extrinsic;
+    std::map<std::string, std::vector<std::string>> own{{"predictors", {"--checkpoint-dir", log_root}}};
+    if (!o.processes.count("eye")) own["eye"] = {"--speculate", slot.machine_full ? "off" : "on"};  // ours only
     slot.group = std::make_unique<ProcessGroup>(bin, runProcesses(run.spec.extrinsic, /*recorded=*/false), slot.url,
-                                                out, common,
-                                                std::map<std::string, std::vector<std::string>>{
-                                                    {"predictors", {"--checkpoint-dir", log_root}}},
-                                                o.processes);
+                                                out, common, own, o.processes);
   }
   // The logger serves the slot's runs one after another; those not to be kept
   // say so in their configuration (run.record), and it stays free during them.
@@ -223,6 +224,7 @@ void executeRuns(const std::vector<PlannedRun>& runs, PhaseRuns& phase, const Ho
   auto worker = [&](int slot_index) {
     Slot slot;
     slot.index = slot_index;
+    slot.machine_full = slots >= static_cast<int>(std::max(1u, std::thread::hardware_concurrency()));
     // A 2 MB receive buffer per socket (the kernel's default is 208 KB): every process hears every
     // datagram of its slot, and one descheduled for a while must not lose any (the kernel caps the
     // request at net.core.rmem_max).

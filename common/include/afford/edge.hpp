@@ -178,6 +178,12 @@ class Edge {
   std::size_t deferred() const { return deferred_.size(); }
   // Last time a message of the run was taken or published.
   std::chrono::steady_clock::time_point lastActivity() const { return last_activity_; }
+  // How long this process usually waits, after publishing, for the next message it takes (a moving average
+  // over the runs so far): the pace of the runs on this machine, which a lost message breaks.
+  std::chrono::steady_clock::duration usualWait() const { return usual_wait_; }
+  // The process announced its counts while it waited: the wait may be a loss's, not the pace (counting it would
+  // lengthen the next waits before an announcement, and so the next losses' waits).
+  void waitAnnounced() { awaiting_ = false; }
   // When the edge next has something to do by itself (a request's retry).
   std::chrono::steady_clock::time_point nextDue() const { return serials_.nextDue(); }
 
@@ -265,6 +271,9 @@ class Edge {
   std::deque<Pending> deferred_;
   bool retrying_ = false;
   std::chrono::steady_clock::time_point last_activity_{};
+  std::chrono::steady_clock::time_point last_published_{};
+  bool awaiting_ = false;  // published since the last message taken
+  std::chrono::steady_clock::duration usual_wait_{};
   std::map<std::string, Chain> chains_;     // what was taken, by channel
   // The last message refused on each channel (serial, digest): the same one
   // refused again, after it was asked for, is the channel's genuine message
@@ -402,7 +411,8 @@ void Edge::publish(const Channel<Msg>& typed, Msg& msg) {
   h.last_digest = msg.digest;
   h.messages.push_back(std::move(bytes));
   h.republished.emplace_back();
-  last_activity_ = std::chrono::steady_clock::now();
+  last_activity_ = last_published_ = std::chrono::steady_clock::now();
+  awaiting_ = true;
 }
 
 }  // namespace afford

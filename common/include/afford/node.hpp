@@ -249,7 +249,10 @@ class NodeBase {
   int64_t last_step_ = -1;
   std::int64_t beat_ = 0;  // STATUS messages published so far
   Clock::time_point next_beat_{};
-  // Idle announcement: when the last one went out, and how long until the next.
+  // Idle announcement: after protocol.idle_announce_ms, or idle_announce_pace times the usual wait for an
+  // input if longer (never longer than the heartbeat).
+  Clock::duration idleAnnounceAfter() const;
+  // When the last one went out, and how long until the next.
   Clock::time_point announced_at_{};
   Clock::duration announce_wait_{};
   bool stop_pending_ = false;
