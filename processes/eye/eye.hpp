@@ -84,6 +84,10 @@ class Eye {
     cv::Mat stats;      // blob bounding boxes
     cv::Mat centroids;  // blob centroids (CV_64F, pixel indices)
     int n_labels = 1;
+    // smooth_then_noise: the pixels of `smooth` within 2 * noise of its
+    // maximum, ascending, the only ones a scan can land on; the same for every
+    // scan of this image, so found once.
+    std::vector<int> contenders;
     Focus focus;
   };
   void setImage(Retina& r, cv::Mat image) const;
@@ -100,9 +104,8 @@ class Eye {
   // The same place looked at again on a new image.
   Focus refocus(const Retina& r) const;
   Focus peekScan(const Retina& r, std::int64_t step, int purpose) const;
-  // argmax of base + uniform noise (keyed), exact over the whole image.
-  int noisyArgmax(const Retina& r, const cv::Mat& base, std::int64_t step, int purpose, std::uint64_t attempt,
-                  const cv::Mat* extra) const;
+  // argmax of r's saliency (+ extra) + uniform noise (keyed), exact over the whole image.
+  int noisyArgmax(const Retina& r, std::int64_t step, int purpose, std::uint64_t attempt, const cv::Mat* extra) const;
 
   RunConfig config_;
   Retina outer_;   // the scene
