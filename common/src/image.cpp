@@ -4,6 +4,7 @@
 #include <zlib.h>
 
 #include <cmath>
+#include <cstring>
 #include <stdexcept>
 
 namespace afford {
@@ -126,6 +127,15 @@ cv::Mat scenarioPicture(const Scenario& s, const WorldConfig& world) {
                 cv::Scalar(255, 255, 255), 1, cv::LINE_AA);
   }
   return out;
+}
+
+bool sameImage(const cv::Mat& a, const cv::Mat& b) {
+  if (a.dims != 2 || b.dims != 2 || a.size() != b.size() || a.type() != b.type()) return false;
+  if (a.data == b.data && a.step[0] == b.step[0]) return true;  // one image
+  const std::size_t row = static_cast<std::size_t>(a.cols) * a.elemSize();
+  for (int r = 0; r < a.rows; ++r)
+    if (std::memcmp(a.ptr(r), b.ptr(r), row) != 0) return false;
+  return true;
 }
 
 std::vector<std::uint8_t> encodeScene(const cv::Mat& scene) {

@@ -32,7 +32,11 @@ void EnvironmentNode::onConfigured(const RunConfig& config) {
   next_decision_ = 0;
 }
 
-void EnvironmentNode::onStop() { env_.reset(); }
+void EnvironmentNode::onStop() {
+  env_.reset();
+  sent_scene_.release();
+  sent_data_.clear();
+}
 
 void EnvironmentNode::onStart() {
   if (extrinsic()) {  // paper 2.4.3: the goal is shown and memorised, then the objects are set up
@@ -67,7 +71,12 @@ void EnvironmentNode::publishScene(std::int64_t step, int8_t cause, bool scan, i
   s.goal_distance = extrinsic() ? env_->goalDistance() : -1.0;
   s.goal_utility = extrinsic() ? env_->goalUtility() : -1.0;
   s.encoding = scene_t::ENCODING_ZLIB_RGB8;
-  s.data = encodeScene(image ? *image : env_->render());
+  const cv::Mat scene = image ? *image : env_->render();
+  if (!sameImage(scene, sent_scene_)) {
+    sent_data_ = encodeScene(scene);
+    scene.copyTo(sent_scene_);
+  }
+  s.data = sent_data_;
   s.size = static_cast<int32_t>(s.data.size());
   publish(ch::scene, s);
 }

@@ -28,6 +28,11 @@ class EnvironmentNode : public NodeBase {
 
   std::unique_ptr<Environment> env_;
   std::int64_t next_decision_ = 0;  // the step whose decision is awaited
+  // The last scene published and its compressed bytes: an action that changes
+  // nothing (a third of a run's actions fail) shows that scene again, and its
+  // bytes are not compressed again.
+  cv::Mat sent_scene_;
+  std::vector<std::uint8_t> sent_data_;
 };
 
 }  // namespace afford

@@ -244,10 +244,13 @@ Focus Eye::peekScan(const Retina& r, std::int64_t step, int purpose) const {
 Effect Eye::scanEffect(std::int64_t step, cv::Mat after, int action) {
   Effect e;
   e.before = outer_.focus;
-  cv::Mat change = blur(positiveChange(outer_.rgb, after), config_.eye.change_sigma_px);
-  setScene(std::move(after));
-  double max_change;
-  cv::minMaxLoc(change, nullptr, &max_change);
+  cv::Mat change;
+  double max_change = 0;
+  if (!sameImage(outer_.rgb, after)) {  // else the action changed nothing: the retina stands as it is
+    change = blur(positiveChange(outer_.rgb, after), config_.eye.change_sigma_px);
+    setScene(std::move(after));
+    cv::minMaxLoc(change, nullptr, &max_change);
+  }
   if (max_change > 0) {
     const int i = noisyArgmax(outer_, step, static_cast<int>(Purpose::EffectNoise), 0, &change);
     const Pixel p{i % outer_.labels.cols, i / outer_.labels.cols};

@@ -84,11 +84,13 @@ void EyeNode::onConfigured(const RunConfig& config) {
   last_scene_ = -1;
   outer_scene_ = -1;
   scenes_.clear();
+  seen_data_.clear();
 }
 
 void EyeNode::onStop() {
   eye_.reset();
   scenes_.clear();
+  seen_data_.clear();
 }
 
 void EyeNode::publishFocus(std::int64_t step, const Focus& f, int8_t kind, int32_t seq) {
@@ -129,6 +131,7 @@ void EyeNode::answer(const look_t& l) {
   if (l.scene != outer_scene_) {
     auto it = scenes_.find(l.scene);
     eye_->setScene(std::move(it->second));
+    seen_data_.clear();
     outer_scene_ = l.scene;
     scenes_.erase(scenes_.begin(), std::next(it));  // LOOKs come in order: no later one names these
   }
@@ -166,10 +169,15 @@ void EyeNode::answer(const look_t& l) {
 void EyeNode::see(const scene_t& s) {
   const bool is_action = s.cause == scene_t::CAUSE_ACTION;
   cv::Mat image;
-  try {
-    image = decodeScene(s.data, s.width, s.height);
-  } catch (const std::exception& e) {
-    throw Refusal(e.what());
+  if (eye_->hasScene() && s.data == seen_data_ && s.width == eye_->scene().cols && s.height == eye_->scene().rows) {
+    image = eye_->scene();
+  } else {
+    try {
+      image = decodeScene(s.data, s.width, s.height);
+    } catch (const std::exception& e) {
+      throw Refusal(e.what());
+    }
+    seen_data_ = s.data;
   }
   guess_.reset();  // the scene changes: a guess made on the old one is void
 

@@ -47,6 +47,9 @@ class EyeNode : public NodeBase {
   focus_t focusMessage(std::int64_t step, const Focus& f, int8_t kind, int32_t seq) const;
 
   std::unique_ptr<Eye> eye_;
+  // Intrinsic phase: the bytes of the scene the eye holds. A scene with the
+  // same bytes (an action that changed nothing) is that scene: not inflated again.
+  std::vector<std::uint8_t> seen_data_;
   std::int64_t last_scanned_ = -1;   // last step whose FOCUS was published
   std::int64_t last_effect_ = -1;    // last step whose EFFECT was published
   bool speculate_;

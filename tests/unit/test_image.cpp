@@ -181,6 +181,24 @@ TEST(Image, SceneEncodingIsCompress2sOutputByteForByte) {
   }
 }
 
+// An action that changes nothing shows the same scene again: the environment
+// sends its bytes again and the eye keeps its maps (sameImage decides).
+TEST(Image, SameImageComparesSizeTypeAndEveryPixel) {
+  cv::Mat a = blankScene(150);
+  paintObject(a, Shape::Square, Colour::Red, 0.3, 0.4, world());
+  const cv::Mat b = a.clone();
+  EXPECT_TRUE(sameImage(a, b));
+  EXPECT_TRUE(sameImage(a, a));
+  cv::Mat c = a.clone();
+  c.at<cv::Vec3b>(149, 149)[2] = 1;  // the very last byte
+  EXPECT_FALSE(sameImage(a, c));
+  EXPECT_FALSE(sameImage(a, blankScene(100)));
+  EXPECT_FALSE(sameImage(a, cv::Mat()));
+  EXPECT_FALSE(sameImage(a, cv::Mat(150, 150, CV_8UC1, cv::Scalar(0))));
+  EXPECT_TRUE(sameImage(a(cv::Rect(10, 10, 50, 50)), b(cv::Rect(10, 10, 50, 50))));  // views, rows apart
+  EXPECT_FALSE(sameImage(a(cv::Rect(10, 10, 50, 50)), a(cv::Rect(11, 10, 50, 50))));
+}
+
 TEST(Image, CorruptOrMisSizedSceneDataIsRejected) {
   cv::Mat scene = blankScene(150);
   auto bytes = encodeScene(scene);

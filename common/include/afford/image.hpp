@@ -59,6 +59,9 @@ cv::Mat renderScenario(const Scenario& s, bool goal, const WorldConfig& world);
 // Goal and initial scenes side by side, enlarged, labelled, as BGR for imwrite.
 cv::Mat scenarioPicture(const Scenario& s, const WorldConfig& world);
 
+// The same size, type and pixels.
+bool sameImage(const cv::Mat& a, const cv::Mat& b);
+
 // Lossless scene transport: zlib of the raw RGB bytes (as Drake's lcmt_image).
 std::vector<std::uint8_t> encodeScene(const cv::Mat& scene);
 // Throws std::runtime_error naming the problem when the data does not decode to size x size x 3.
