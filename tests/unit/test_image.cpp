@@ -9,6 +9,7 @@
 #include <zlib.h>
 
 #include "afford/image.hpp"
+#include "afford/seal.hpp"
 #include "tests/support.hpp"
 
 namespace afford {
@@ -197,6 +198,27 @@ TEST(Image, SameImageComparesSizeTypeAndEveryPixel) {
   EXPECT_FALSE(sameImage(a, cv::Mat(150, 150, CV_8UC1, cv::Scalar(0))));
   EXPECT_TRUE(sameImage(a(cv::Rect(10, 10, 50, 50)), b(cv::Rect(10, 10, 50, 50))));  // views, rows apart
   EXPECT_FALSE(sameImage(a(cv::Rect(10, 10, 50, 50)), a(cv::Rect(11, 10, 50, 50))));
+}
+
+// The digest of messages and the weights checksum: FNV-1a 64 byte by byte,
+// however the bytes run (words of zeros are taken eight bytes at once).
+TEST(Seal, Fnv1aIsTheByteByByteHashWhateverTheRunsOfZeros) {
+  auto reference = [](const std::vector<std::uint8_t>& v) {
+    std::uint64_t h = 0xCBF29CE484222325ull;
+    for (std::uint8_t b : v) {
+      h ^= b;
+      h *= 0x100000001B3ull;
+    }
+    return h;
+  };
+  std::mt19937 gen(3);
+  for (int k = 0; k < 200; ++k) {
+    std::vector<std::uint8_t> v(gen() % 100);
+    for (auto& b : v) b = gen() % 3 == 0 ? static_cast<std::uint8_t>(gen()) : 0;
+    EXPECT_EQ(fnv1a64(v.data(), v.size()), reference(v)) << "bytes " << v.size();
+    const std::size_t cut = v.empty() ? 0 : gen() % v.size();  // continued, from any place
+    EXPECT_EQ(fnv1a64(fnv1a64(v.data(), cut), v.data() + cut, v.size() - cut), reference(v));
+  }
 }
 
 TEST(Image, CorruptOrMisSizedSceneDataIsRejected) {

@@ -5,17 +5,13 @@
 #include <cstdio>
 #include <string>
 
+#include "afford/seal.hpp"
+
 namespace afford {
 
 class Fnv1a {
  public:
-  void add(const void* data, std::size_t n) {
-    const auto* p = static_cast<const unsigned char*>(data);
-    for (std::size_t i = 0; i < n; ++i) {
-      h_ ^= p[i];
-      h_ *= 0x100000001B3ull;
-    }
-  }
+  void add(const void* data, std::size_t n) { h_ = fnv1a64(h_, data, n); }
   std::string hex() const {
     char buf[17];
     std::snprintf(buf, sizeof buf, "%016llx", static_cast<unsigned long long>(h_));

@@ -15,6 +15,8 @@ namespace afford {
 
 // FNV-1a 64 of `n` bytes.
 std::uint64_t fnv1a64(const void* data, std::size_t n);
+// The FNV-1a 64 state `h` continued over `n` more bytes.
+std::uint64_t fnv1a64(std::uint64_t h, const void* data, std::size_t n);
 
 // True if the last 8 bytes of the buffer are the digest of the bytes before them.
 bool sealIntact(const void* data, std::size_t n);
