@@ -169,8 +169,9 @@ TEST(Image, SceneEncodingIsLossless) {
 TEST(Image, SceneEncodingIsCompress2sOutputByteForByte) {
   std::mt19937 gen(5);
   std::uniform_real_distribution<double> where(0.2, 0.8);
-  for (int k = 0; k < 6; ++k) {
+  for (int k = 0; k < 7; ++k) {
     cv::Mat scene = blankScene(150);
+    if (k == 6) scene.setTo(cv::Scalar(255, 1, 128));  // no zeros (the Adler-32 takes words of zeros at once)
     for (int o = 0; o <= k; ++o)
       paintObject(scene, static_cast<Shape>(o % 3), static_cast<Colour>(o % 3), where(gen), where(gen), world());
     const uLong raw = static_cast<uLong>(scene.total() * 3);
@@ -218,6 +219,38 @@ TEST(Seal, Fnv1aIsTheByteByByteHashWhateverTheRunsOfZeros) {
     EXPECT_EQ(fnv1a64(v.data(), v.size()), reference(v)) << "bytes " << v.size();
     const std::size_t cut = v.empty() ? 0 : gen() % v.size();  // continued, from any place
     EXPECT_EQ(fnv1a64(fnv1a64(v.data(), cut), v.data() + cut, v.size() - cut), reference(v));
+  }
+}
+
+// The scene decoder inflates raw and checks the zlib header and Adler-32
+// itself: it accepts what uncompress accepts, decoding to the same bytes, and
+// refuses the rest, on scenes and on every kind of damage to them.
+TEST(Image, SceneDecodingAcceptsExactlyWhatUncompressAccepts) {
+  std::mt19937 gen(9);
+  std::uniform_real_distribution<double> where(0.1, 0.9);
+  for (int k = 0; k < 120; ++k) {
+    cv::Mat scene = blankScene(150);
+    if (k % 7 == 6) scene.setTo(cv::Scalar(255, 1, 128));  // no zeros at all
+    for (int o = 0; o < k % 10; ++o)
+      paintObject(scene, static_cast<Shape>(o % 3), static_cast<Colour>(gen() % 3), where(gen), where(gen), world());
+    std::vector<std::uint8_t> bytes = encodeScene(scene);
+    switch (k % 6) {  // 0: intact
+      case 1: bytes[gen() % bytes.size()] ^= static_cast<std::uint8_t>(1 + gen() % 255); break;
+      case 2: bytes.resize(gen() % bytes.size()); break;
+      case 3: bytes[gen() % 2] = static_cast<std::uint8_t>(gen()); break;  // the header
+      case 4: bytes[bytes.size() - 1 - gen() % 4] ^= 0x10; break;        // the Adler-32
+      case 5: bytes.push_back(static_cast<std::uint8_t>(gen())); break;  // a byte after the end
+    }
+    std::vector<std::uint8_t> expected(scene.total() * 3);
+    uLongf n = expected.size();
+    const bool ok = uncompress(expected.data(), &n, bytes.data(), static_cast<uLong>(bytes.size())) == Z_OK &&
+                    n == expected.size();
+    if (!ok) {
+      EXPECT_THROW(decodeScene(bytes, 150, 150), std::runtime_error) << "case " << k;
+      continue;
+    }
+    const cv::Mat back = decodeScene(bytes, 150, 150);
+    EXPECT_EQ(std::vector<std::uint8_t>(back.data, back.data + back.total() * 3), expected) << "case " << k;
   }
 }
 
