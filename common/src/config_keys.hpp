@@ -27,9 +27,11 @@ void declareProtocol(V& v, ProtocolConfig& c) {
   v.integer("idle_announce_ms", c.idle_announce_ms, 1, 60'000,
             "a process of a run idle this long announces its counts at once (then backing off to the heartbeat): "
             "a lost last message is asked for within milliseconds");
-  v.integer("idle_announce_pace", c.idle_announce_pace, 1, 1'000,
-            "... once idle this many times as long as it usually waits for its next input after publishing "
-            "(0 ms at first, a moving average): on a loaded machine every wait is longer, and none is a loss");
+  v.given("idle_announce_pace", [&] {  // the runs of older logs announced after idle_announce_ms alone
+    v.integer("idle_announce_pace", c.idle_announce_pace, 1, 1'000,
+              "... once idle this many times as long as it usually waits for its next input after publishing "
+              "(0 ms at first, a moving average): on a loaded machine every wait is longer, and none is a loss");
+  });
   v.integer("retry_ms", c.retry_ms, 1, 60'000,
             "an unanswered `RESEND` is asked again after this, doubling up to the heartbeat; the runner says a "
             "configuration again on the same schedule");

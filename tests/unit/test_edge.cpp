@@ -8,9 +8,11 @@
 #include <gtest/gtest.h>
 #include <spdlog/sinks/null_sink.h>
 
+#include <chrono>
 #include <string>
 
 #include "afford/bus.hpp"
+#include "afford/decision_t.hpp"
 #include "afford/protocol.hpp"
 #include "afford/edge.hpp"
 #include "afford/image.hpp"
@@ -248,6 +250,61 @@ TEST_F(EdgeOnTheBus, ForgedProcessIdsCannotGrowWhatAReceiverRemembers) {
   }
   EXPECT_EQ(heard, forged);
   EXPECT_EQ(runner.drops().peers_forgotten, forged - protocol.limits.peers);
+}
+
+// What paces a process's idle announcements (NodeBase): how long it usually waits, after publishing, for the
+// next run message it takes. A message taken with nothing published before it, or after a wait in which the
+// process announced its counts, does not count (a loss's wait would lengthen the next announcement's).
+TEST(UsualWait, IsTheTimeFromAPublicationToTheNextRunMessageTakenUnlessAnnouncedIn) {
+  using Clock = std::chrono::steady_clock;
+  lcm::LCM lcm{"memq://"};
+  RunConfig config = test::shippedConfig();
+  ProtocolConfig protocol = test::shippedProtocol();
+  Edge environment{lcm, quiet("environment"), "environment", protocol};
+  Edge motivation{lcm, quiet("motivation"), "motivation", protocol};
+  environment.join("run-1", &config);
+  motivation.join("run-1", &config);
+  int taken = 0;
+  motivation.subscribe(ch::scene,
+      [&](const scene_t&) {
+        ++taken;
+        return Turn::take();
+      },
+      Scope::Run, Order::Serial);
+  auto deliver = [&](std::int64_t step) {
+    scene_t s = sceneOf("run-1", step);
+    environment.publish(ch::scene, s);
+    while (lcm.handleTimeout(0) > 0) {
+    }
+  };
+  auto decide = [&](std::int64_t step) {
+    decision_t d{};
+    d.run_id = "run-1";
+    d.step = step;
+    d.action = decision_t::NONE;
+    motivation.publish(ch::decision, d);
+    return Clock::now();
+  };
+  const auto elapse = [](Clock::time_point since, Clock::duration d) {  // the wait under test, by the clock
+    while (Clock::now() - since < d) {
+    }
+  };
+  const Clock::duration gap = std::chrono::milliseconds(2);
+
+  deliver(0);
+  EXPECT_EQ(motivation.usualWait(), Clock::duration::zero()) << "nothing was published before it";
+  elapse(decide(0), gap);
+  deliver(1);
+  const Clock::duration first = motivation.usualWait();
+  EXPECT_GE(first, gap / 8) << "a moving average (1/8) of waits of at least " << gap.count() << " ns";
+  deliver(2);
+  EXPECT_EQ(motivation.usualWait(), first) << "a second message after one publication is no wait";
+  const Clock::time_point decided = decide(1);
+  motivation.waitAnnounced();
+  elapse(decided, gap);
+  deliver(3);
+  EXPECT_EQ(motivation.usualWait(), first) << "a wait in which the process announced is not counted";
+  EXPECT_EQ(taken, 4);
 }
 
 TEST(Bus, AUdpmUrlGetsTheBusBoundsUnlessItSetsThemAndOtherProvidersAreRefused) {

@@ -261,7 +261,7 @@ struct BusConfig {
 struct ProtocolConfig {
   int heartbeat_ms = 0;       // STATUS period
   int idle_announce_ms = 0;   // a process of a run idle this long announces its counts at once
-  int idle_announce_pace = 0; // ... and idle this many times its usual wait for an input
+  int idle_announce_pace = 0; // ... and idle this many times its usual wait for an input (0: absent, older logs)
   int retry_ms = 0;           // an unanswered RESEND is asked again after this (then doubling up to heartbeat_ms)
   int resend_batch = 0;       // serials asked for in one RESEND
   int resend_cap = 0;         // serials a publisher republishes for one RESEND
