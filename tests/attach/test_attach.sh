@@ -49,5 +49,12 @@ echo "attached: $(sum "$out/attached")  hosted: $(sum "$out/hosted")"
 # LCM's plain logger heard the same run (among heartbeats): it replays the same way.
 wait_until 30 grep -a -q "RESULT" "$out/lcm-logger.lcm" || { echo "lcm-logger did not record the run's result"; exit 1; }
 kill -INT "$plain"; wait "$plain" || true
-"$build/bin/afford" replay "$out/lcm-logger.lcm" | tee "$out/replay-lcm-logger.txt"
-grep -q "weights_checksum: ${hosted_sum:-x}" "$out/replay-lcm-logger.txt" || { echo "the lcm-logger log replays differently"; exit 1; }
+"$build/bin/afford" replay "$out/lcm-logger.lcm" | tee "$out/replay-lcm-logger.txt" || true  # judged below
+# lcm-logger cannot ask for what it missed, and Debian's LCM queues at most 30 messages per subscription
+# while its main thread is away: on 2 busy cores a fast run loses a burst now and then (the processes ask for
+# theirs again; afford-logger's log above is whole). Then the replay must agree as far as the record goes.
+if ! grep -q "weights_checksum: ${hosted_sum:-x}" "$out/replay-lcm-logger.txt"; then
+  grep -q "replay equals the record as far as it goes, but the record is missing messages" "$out/replay-lcm-logger.txt" &&
+    grep -q "^decisions: .* 0 differing" "$out/replay-lcm-logger.txt" || { echo "the lcm-logger log replays differently"; exit 1; }
+  echo "note: lcm-logger missed datagrams; its record replays the same as far as it goes"
+fi
