@@ -4,12 +4,15 @@
 #include <unistd.h>
 
 #include <chrono>
+#include <condition_variable>
 #include <csignal>
 #include <filesystem>
 #include <fstream>
 #include <map>
 #include <memory>
+#include <mutex>
 #include <set>
+#include <thread>
 
 #include "afford/auth.hpp"
 #include "afford/config.hpp"
@@ -350,11 +353,45 @@ class Executor {
   virtual void execute(const std::vector<PlannedRun>& runs, bool extrinsic, PhaseRuns& phase) = 0;
 };
 
-// Runs them here, J at a time: a fresh experiment, a resumed one, a shard.
+// The experiments of a queue claim their agents in the queue's order (see
+// AgentClaims): entry k claims once every entry before it has claimed, or
+// will claim nothing.
+class Turns {
+ public:
+  void wait(std::size_t k) {
+    std::unique_lock<std::mutex> lock(mutex_);
+    moved_.wait(lock, [&] { return turn_ >= k; });
+  }
+  void pass(std::size_t k) {
+    {
+      std::lock_guard<std::mutex> lock(mutex_);
+      passed_.insert(k);
+      while (passed_.count(turn_)) ++turn_;
+    }
+    moved_.notify_all();
+  }
+
+ private:
+  std::mutex mutex_;
+  std::condition_variable moved_;
+  std::set<std::size_t> passed_;
+  std::size_t turn_ = 0;  // every entry before it has passed
+};
+
+// What an experiment shares with the others of its queue (none when it runs alone).
+struct Shared {
+  SlotPool* pool = nullptr;
+  AgentClaims* claims = nullptr;
+  Turns* turns = nullptr;
+  std::size_t position = 0;  // in the queue
+  std::string network;       // where the queue's slots run
+};
+
+// Runs them here on the job slots: a fresh experiment, a resumed one, a shard.
 class Hosted : public Executor {
  public:
-  Hosted(const Experiment& x, spdlog::logger& log)
-      : x_(x), log_(log), agents_((fs::path(x.o.plan.log_root) / "agents").string()),
+  Hosted(const Experiment& x, spdlog::logger& log, SlotPool& pool, const Shared& share)
+      : x_(x), log_(log), pool_(pool), share_(share), agents_((fs::path(x.o.plan.log_root) / "agents").string()),
         // The store knows the shipped processes' code (its key), not what a swapped command runs.
         reuse_(x.o.host.reuse_agents && x.o.host.processes.empty()) {}
   void gather(const std::vector<PlannedRun>&, bool) override {}
@@ -363,14 +400,61 @@ class Hosted : public Executor {
       log_.info("--process: the agents of this experiment are neither taken from nor kept in {}/agents",
                 x_.o.plan.log_root);
     const bool reuse = !extrinsic && reuse_;
+    const OnFinished store = [&](std::size_t i) { storeAgent(runs[i], phase, agents_, log_); };
     if (reuse) takeStoredAgents(runs, x_.plan().design.after_actions, phase, agents_, x_.o.write.out_dir, log_);
-    executeRuns(runs, phase, x_.o.host, x_.o.plan.log_root, x_.o.write.out_dir, x_.plan().protocol, x_.bin, log_);
-    if (reuse) storeAgents(runs, phase, agents_, log_);
+    if (reuse && share_.claims) {
+      queued(runs, phase, store);
+      return;
+    }
+    if (!extrinsic && share_.turns) share_.turns->pass(share_.position);  // it claims nothing: the next may
+    run(runs, phase, reuse ? store : OnFinished());
   }
 
  private:
+  void run(const std::vector<PlannedRun>& runs, PhaseRuns& phase, const OnFinished& on_finished) {
+    executeRuns(runs, phase, x_.o.host, x_.o.plan.log_root, x_.o.write.out_dir, x_.plan().protocol, x_.bin, log_,
+                pool_, on_finished);
+  }
+
+  // In a queue: an agent another experiment of the queue trains already (claimed first, in the queue's
+  // order) is waited for and taken from the store, not trained twice.
+  void queued(const std::vector<PlannedRun>& runs, PhaseRuns& phase, const OnFinished& store) {
+    using ClaimPtr = std::shared_ptr<AgentClaims::Claim>;
+    std::vector<ClaimPtr> mine(runs.size()), theirs(runs.size());
+    const std::int64_t after = x_.plan().design.after_actions;
+    const std::vector<char> elsewhere = phase.elsewhere;
+    share_.turns->wait(share_.position);
+    for (std::size_t i = 0; i < runs.size(); ++i)
+      if (!phase.finished[i] && (elsewhere.empty() || !elsewhere[i]))
+        theirs[i] = share_.claims->claim(agentKey(runs[i].spec.config_yaml), after, runs[i].spec.run_id, mine[i]);
+    share_.turns->pass(share_.position);
+    std::size_t waiting = 0;
+    phase.elsewhere.assign(runs.size(), 0);
+    for (std::size_t i = 0; i < runs.size(); ++i) {
+      phase.elsewhere[i] = (!elsewhere.empty() && elsewhere[i]) || theirs[i] != nullptr;
+      waiting += theirs[i] != nullptr;
+    }
+    if (waiting)
+      log_.info("{}: {} intrinsic run(s) take the agent another experiment of the queue trains (the same "
+                "configuration and seed), once it is stored",
+                x_.plan().exp.name, waiting);
+    run(runs, phase, [&](std::size_t i) {
+      store(i);
+      share_.claims->settle(mine[i]);
+    });
+    for (const ClaimPtr& c : mine) share_.claims->settle(c);  // those not run (a stop signal) or failed
+    phase.elsewhere = elsewhere;
+    if (!waiting) return;
+    for (const ClaimPtr& c : theirs)
+      if (c) share_.claims->wait(c);
+    takeStoredAgents(runs, static_cast<int>(after), phase, agents_, x_.o.write.out_dir, log_);
+    run(runs, phase, store);  // an agent the other run did not store (it failed, or was stopped): trained here
+  }
+
   const Experiment& x_;
   spdlog::logger& log_;
+  SlotPool& pool_;
+  const Shared share_;
   const AgentStore agents_;
   const bool reuse_;  // agents taken from and kept in the store
 };
@@ -603,20 +687,25 @@ int finish(Experiment& x, Summaries& s, const PhaseRuns& intrinsic, const Tests&
 
 }  // namespace
 
-int runExperiment(const ExperimentRequest& request, spdlog::logger& log) {
-  const auto began = std::chrono::steady_clock::now();
-  Experiment x = prepare(request);  // everything is checked before anything is written or started
+namespace {
+
+// A prepared experiment, run: alone (its own slots), or in a queue (`share`).
+int runPrepared(Experiment& x, const std::chrono::steady_clock::time_point began, spdlog::logger& log,
+                const Shared& share) {
   std::unique_ptr<Executor> exec;
+  std::unique_ptr<SlotPool> own;  // alone: the slots serve this experiment's phases, then stop
   if (x.merging()) {
     exec = std::make_unique<Merged>(x, log);
   } else {
     if (x.o.host.attach.empty() && x.o.host.transport == "udpm") {
-      x.hosting.network = prepareNetwork(x.o.host.netns);
+      x.hosting.network = share.pool ? share.network : prepareNetwork(x.o.host.netns);
       x.bin = executableDir();
     }
-    exec = std::make_unique<Hosted>(x, log);
+    SlotPool* pool = share.pool;
+    if (!pool) pool = (own = std::make_unique<SlotPool>(x.o.host, false)).get();
+    exec = std::make_unique<Hosted>(x, log, *pool, share);
   }
-  installInterruptHandlers(resumeCommand(x.o));  // from here a signal stops the experiment in order
+  if (!share.pool) installInterruptHandlers(resumeCommand(x.o));  // from here a signal stops the experiment in order
   openFolder(x);
   sayWhatRuns(x, log);
   const PhaseRuns intrinsic = runPhase(x, *exec, x.runs, false, log);
@@ -635,6 +724,72 @@ int runExperiment(const ExperimentRequest& request, spdlog::logger& log) {
     return stopHere(in, x.o, x.state, log);
   }
   return finish(x, s, intrinsic, tests, log);
+}
+
+}  // namespace
+
+int runExperiment(const ExperimentRequest& request, spdlog::logger& log) {
+  const auto began = std::chrono::steady_clock::now();
+  Experiment x = prepare(request);  // everything is checked before anything is written or started
+  return runPrepared(x, began, log, Shared{});
+}
+
+int runQueue(const std::vector<ExperimentRequest>& requests, const std::string& resume, spdlog::logger& log) {
+  const auto began = std::chrono::steady_clock::now();
+  if (requests.empty()) throw ConfigError("the queue is empty: give experiment names, or a --plan file with entries");
+  // Every experiment is checked and planned before any is written or started.
+  std::vector<Experiment> xs;
+  std::map<std::string, std::string> folders;  // out dir -> the experiment writing there
+  for (const ExperimentRequest& r : requests) {
+    const std::string name = r.plan.experiment.empty() ? r.write.out_dir : r.plan.experiment;
+    try {
+      xs.push_back(prepare(r));
+    } catch (const ConfigError& e) {
+      throw ConfigError("queue entry " + std::to_string(xs.size() + 1) + " (" + name + "): " + e.what());
+    }
+    const std::string dir = fs::weakly_canonical(fs::absolute(r.write.out_dir)).string();
+    if (const auto [it, fresh] = folders.emplace(dir, name); !fresh)
+      throw ConfigError("queue entries " + it->second + " and " + name + " would both write to " + r.write.out_dir +
+                        ": give each its own --out");
+  }
+  const HostRequest& host = xs.front().o.host;
+  Shared share;
+  if (host.transport == "udpm") share.network = prepareNetwork(host.netns);
+  installInterruptHandlers(resume);
+  SlotPool pool(host, true, "queue of " + std::to_string(xs.size()) + " experiment(s), runs and tests");
+  AgentClaims claims;
+  Turns turns;
+  share.pool = &pool;
+  share.claims = &claims;
+  share.turns = &turns;
+  log.info("queue: {} experiment(s) side by side on {} job slot(s) over {}", xs.size(), host.jobs, host.transport);
+  std::vector<int> codes(xs.size(), 0);
+  std::vector<std::thread> threads;
+  for (std::size_t k = 0; k < xs.size(); ++k)
+    threads.emplace_back([&, k] {
+      Shared mine = share;
+      mine.position = k;
+      try {
+        codes[k] = runPrepared(xs[k], std::chrono::steady_clock::now(), log, mine);
+      } catch (const ConfigError& e) {
+        log.error("{}: {}", xs[k].plan().exp.name, e.what());
+        codes[k] = 2;
+      } catch (const std::exception& e) {
+        log.error("{}: {}", xs[k].plan().exp.name, e.what());
+        codes[k] = 1;
+      }
+      turns.pass(k);  // one that stopped before claiming its agents lets the next claim
+    });
+  for (auto& t : threads) t.join();
+  int code = 0;
+  for (std::size_t k = 0; k < xs.size(); ++k) {
+    if (codes[k] != 0) log.warn("queue: {} ({}) exited with status {}", xs[k].plan().exp.name, xs[k].out().string(), codes[k]);
+    code = std::max(code, codes[k]);
+  }
+  if (g_signal) log.warn("to resume the whole queue: {}", resume);
+  log.info("queue: {} experiment(s) in {}", xs.size(),
+           durationText(std::chrono::duration<double>(std::chrono::steady_clock::now() - began).count()));
+  return code;
 }
 
 }  // namespace afford

@@ -42,6 +42,14 @@ std::map<std::string, std::string> parseProcessSwaps(const std::vector<std::stri
 // Returns the process exit code (0 when every run succeeded).
 int runExperiment(const ExperimentRequest& request, spdlog::logger& log);
 
+// Several experiments side by side, their runs and tests in one queue of job
+// slots (the first request's --jobs, --transport, --base-port, --netns,
+// --progress): each writes its own folder as it would alone; an agent two of
+// them share is trained once, by the first in the queue's order that needs it,
+// and taken by the others once it is stored. `resume`: the command that
+// resumes the queue, said on SIGINT or SIGTERM. Returns the highest exit code.
+int runQueue(const std::vector<ExperimentRequest>& requests, const std::string& resume, spdlog::logger& log);
+
 // For a host that goes on after an experiment (the Python package): the
 // SIGINT and SIGTERM handlers in place at its construction are put back at its
 // destruction, and the signal runExperiment received is forgotten, so that the

@@ -137,17 +137,44 @@ void takeStoredAgents(const std::vector<PlannedRun>& runs, int after_actions, Ph
              "--no-reuse-agents runs them again)", taken, runs.size(), agents.root());
 }
 
+void storeAgent(const PlannedRun& p, const PhaseRuns& phase, const AgentStore& agents, spdlog::logger& log) {
+  const RunOutcome& r = phase.outcomes[p.index];
+  if (!phase.finished[p.index] || !r.ok || !r.reused_from.empty()) return;
+  try {
+    agents.keep(agentKey(p.spec.config_yaml), p.spec.run_id, p.spec.experiment, r);
+  } catch (const std::exception& e) {  // the experiment's own results stand; only the reuse is lost
+    log.warn("run '{}': its agent could not be stored for reuse ({})", p.spec.run_id, e.what());
+  }
+}
+
 void storeAgents(const std::vector<PlannedRun>& runs, const PhaseRuns& phase, const AgentStore& agents,
                  spdlog::logger& log) {
-  for (const auto& p : runs) {
-    const RunOutcome& r = phase.outcomes[p.index];
-    if (!phase.finished[p.index] || !r.ok || !r.reused_from.empty()) continue;
-    try {
-      agents.keep(agentKey(p.spec.config_yaml), p.spec.run_id, p.spec.experiment, r);
-    } catch (const std::exception& e) {  // the experiment's own results stand; only the reuse is lost
-      log.warn("run '{}': its agent could not be stored for reuse ({})", p.spec.run_id, e.what());
-    }
+  for (const auto& p : runs) storeAgent(p, phase, agents, log);
+}
+
+std::shared_ptr<AgentClaims::Claim> AgentClaims::claim(const std::string& key, std::int64_t after_actions,
+                                                       const std::string& run_id, std::shared_ptr<Claim>& mine) {
+  std::lock_guard<std::mutex> lock(mutex_);
+  auto [from, to] = claims_.equal_range(key);
+  for (auto it = from; it != to; ++it)  // one that writes the checkpoint this run needs, if it needs one
+    if (after_actions <= 0 || it->second->after_actions == after_actions) return it->second;
+  mine = std::make_shared<Claim>(Claim{run_id, after_actions, false});
+  claims_.emplace(key, mine);
+  return nullptr;
+}
+
+void AgentClaims::settle(const std::shared_ptr<Claim>& c) {
+  if (!c) return;
+  {
+    std::lock_guard<std::mutex> lock(mutex_);
+    c->settled = true;
   }
+  settled_.notify_all();
+}
+
+void AgentClaims::wait(const std::shared_ptr<Claim>& c) {
+  std::unique_lock<std::mutex> lock(mutex_);
+  settled_.wait(lock, [&] { return c->settled; });
 }
 
 }  // namespace afford

@@ -7,8 +7,12 @@
 // intrinsic runs (stochastic, utility, forward-models, search-reduction; base,
 // attention, multi-step) train each agent once.
 #pragma once
+#include <condition_variable>
 #include <cstdint>
 #include <filesystem>
+#include <map>
+#include <memory>
+#include <mutex>
 #include <optional>
 #include <string>
 #include <vector>
@@ -61,5 +65,32 @@ void takeStoredAgents(const std::vector<PlannedRun>& runs, int after_actions, Ph
 // Every intrinsic run that finished here (not one taken from the store) is stored for reuse.
 void storeAgents(const std::vector<PlannedRun>& runs, const PhaseRuns& phase, const AgentStore& agents,
                  spdlog::logger& log);
+// ... one of them (p.index in phase).
+void storeAgent(const PlannedRun& p, const PhaseRuns& phase, const AgentStore& agents, spdlog::logger& log);
+
+// The agents under way in a queue of experiments run side by side: the first
+// run to claim a key trains it; a run of another experiment with the same key
+// waits for it (then takes it from the store) instead of training it again.
+// A claim that would not write the after-N-actions checkpoint a run needs is
+// not waited for.
+class AgentClaims {
+ public:
+  struct Claim {
+    std::string run_id;
+    std::int64_t after_actions = 0;
+    bool settled = false;  // its run ended: stored, failed or not run
+  };
+  // The claim of `key` this run must wait for, or nullptr: the key is now this run's (`mine` is set).
+  std::shared_ptr<Claim> claim(const std::string& key, std::int64_t after_actions, const std::string& run_id,
+                               std::shared_ptr<Claim>& mine);
+  // The claim's run ended (its agent stored, or not): those waiting for it go on.
+  void settle(const std::shared_ptr<Claim>& c);
+  void wait(const std::shared_ptr<Claim>& c);
+
+ private:
+  std::mutex mutex_;
+  std::condition_variable settled_;
+  std::multimap<std::string, std::shared_ptr<Claim>> claims_;
+};
 
 }  // namespace afford

@@ -6,7 +6,8 @@
 #include <sys/syscall.h>
 #include <unistd.h>
 
-#include <atomic>
+#include <condition_variable>
+#include <deque>
 #include <functional>
 #include <mutex>
 #include <thread>
@@ -23,16 +24,12 @@ namespace afford {
 namespace fs = std::filesystem;
 using nlohmann::json;
 
-namespace {
-
-// Handle what is pending (up to a batch), or wait briefly for something.
-void pumpLcm(lcm::LCM& lcm) { pumpBus(lcm, 5, 512); }
-
-using OnStep = std::function<void(std::int64_t)>;
-
 struct Slot {
   int index = 0;
   std::string url;
+  // What the slot's processes (or nodes) were started for: the experiment folder they write in, the log
+  // root, the transport and the options they were started with. A run for another starts them afresh.
+  std::string serving;
   // As many slots as cores, or more: no core is free for the eye to scan ahead with (its `--speculate`).
   bool machine_full = false;
   std::unique_ptr<ProcessGroup> group;   // environment, eye, predictors, and motivation or planner
@@ -46,6 +43,30 @@ struct Slot {
   // udpm slot keeps its processes (declared after the bus they are on).
   std::unique_ptr<InProcessHost> host;
 };
+
+namespace {
+
+// Handle what is pending (up to a batch), or wait briefly for something.
+void pumpLcm(lcm::LCM& lcm) { pumpBus(lcm, 5, 512); }
+
+using OnStep = std::function<void(std::int64_t)>;
+
+
+
+// Start the slot afresh (its bus, driver and processes or nodes) when the run is of the other phase, or for
+// another folder, log root, transport or process options: the driver's memory of the processes is of theirs.
+void serve(Slot& slot, const PlannedRun& run, const HostRequest& o, const std::string& log_root,
+           const std::string& out_dir) {
+  std::string key = std::string(run.spec.extrinsic ? "extrinsic" : "intrinsic") + '\n' + o.transport + '\n' + out_dir + '\n' + log_root + '\n' + o.bus_key + '\n' + o.process_log_level;
+  for (const auto& [name, cmd] : o.processes) key += '\n' + name + '=' + cmd;
+  if (key == slot.serving) return;
+  slot.host.reset();  // its nodes are on the slot's bus: gone first
+  slot.logger.reset();
+  slot.group.reset();
+  slot.driver.reset();
+  slot.lcm.reset();
+  slot.serving = std::move(key);
+}
 
 RunOutcome runInProcess(const PlannedRun& run, const HostRequest& o, const std::string& log_root,
                         const ProtocolConfig& protocol, Slot& slot, const OnStep& on_step) {
@@ -201,86 +222,159 @@ json moveUnfinishedAside(const std::vector<PlannedRun>& runs, const PhaseRuns& p
   return moved;
 }
 
-// Run every planned run not finished yet (nor run elsewhere), J at a time, and keep each outcome
-// in DIR/runs/ as it comes. After a SIGINT or SIGTERM no run starts; a run it
-// stopped is cut, not finished.
+// ---- the slots ---------------------------------------------------------------
+
+struct SlotPool::Impl {
+  struct Job {
+    Work* work;
+    std::size_t* left;  // of its runAll
+  };
+  int jobs = 1, base_port = 7700;
+  std::string attach;
+  bool queue = false;
+  Progress progress;
+  std::mutex mutex;
+  std::condition_variable wake, finished;
+  std::deque<Job> waiting;
+  bool closing = false;
+  std::vector<std::thread> threads;
+
+  Impl(const HostRequest& o, bool q, std::string label)
+      : jobs(o.jobs), base_port(o.base_port), attach(o.attach), queue(q),
+        progress(ProgressOptions{o.progress, o.progress_every}, std::move(label), o.jobs, {}, 0, 0) {}
+
+  void serveSlot(int index) {
+    Slot slot;
+    slot.index = index;
+    slot.machine_full = jobs >= static_cast<int>(std::max(1u, std::thread::hardware_concurrency()));
+    // A 2 MB receive buffer per socket (the kernel's default is 208 KB): every process hears every
+    // datagram of its slot, and one descheduled for a while must not lose any (the kernel caps the
+    // request at net.core.rmem_max).
+    slot.url = "udpm://239.255.76.67:" + std::to_string(base_port + index) + "?ttl=0&recv_buf_size=2097152";
+    if (!attach.empty()) slot.url = attach;
+    for (;;) {
+      Job job{};
+      {
+        std::unique_lock<std::mutex> lock(mutex);
+        wake.wait(lock, [&] { return closing || !waiting.empty(); });
+        if (waiting.empty()) return;
+        job = waiting.front();
+        waiting.pop_front();
+      }
+      // After a stop signal the works not begun are dropped; a work never lets an exception out.
+      if (!stopRequested()) try {
+          (*job.work)(slot);
+        } catch (const std::exception&) {
+        }
+      std::lock_guard<std::mutex> lock(mutex);
+      --*job.left;
+      finished.notify_all();
+    }
+  }
+};
+
+SlotPool::SlotPool(const HostRequest& o, bool queue, std::string label)
+    : impl_(std::make_unique<Impl>(o, queue, std::move(label))) {
+  for (int k = 0; k < o.jobs; ++k) impl_->threads.emplace_back([this, k] { impl_->serveSlot(k); });
+}
+
+SlotPool::~SlotPool() {
+  {
+    std::lock_guard<std::mutex> lock(impl_->mutex);
+    impl_->closing = true;
+  }
+  impl_->wake.notify_all();
+  for (auto& t : impl_->threads) t.join();
+}
+
+void SlotPool::runAll(std::vector<Work>& works) {
+  std::size_t left = works.size();
+  {
+    std::lock_guard<std::mutex> lock(impl_->mutex);
+    for (Work& w : works) impl_->waiting.push_back(Impl::Job{&w, &left});
+  }
+  impl_->wake.notify_all();
+  std::unique_lock<std::mutex> lock(impl_->mutex);
+  impl_->finished.wait(lock, [&] { return left == 0; });
+}
+
+Progress& SlotPool::progress() { return impl_->progress; }
+bool SlotPool::queue() const { return impl_->queue; }
+int SlotPool::slots() const { return impl_->jobs; }
+
+// Run every planned run not finished yet (nor run elsewhere) on the pool's
+// slots, and keep each outcome in DIR/runs/ as it comes. After a SIGINT or
+// SIGTERM no run starts; a run it stopped is cut, not finished.
 void executeRuns(const std::vector<PlannedRun>& runs, PhaseRuns& phase, const HostRequest& o,
                  const std::string& log_root, const std::string& out_dir, const ProtocolConfig& protocol,
-                 const std::string& bin, spdlog::logger& log) {
+                 const std::string& bin, spdlog::logger& log, SlotPool& pool, const OnFinished& on_finished) {
   std::vector<std::size_t> todo;
   for (std::size_t i = 0; i < runs.size(); ++i)
     if (!phase.finished[i] && (phase.elsewhere.empty() || !phase.elsewhere[i])) todo.push_back(i);
-  std::atomic<std::size_t> next{0};
   std::size_t done = phase.finishedCount();
   std::mutex mutex;
-  const int slots = std::min<int>(o.jobs, static_cast<int>(todo.size()));
   std::vector<std::int64_t> steps;
   for (std::size_t i : todo) steps.push_back(runs[i].spec.steps);
   std::size_t planned = runs.size();
   for (std::size_t i = 0; i < runs.size(); ++i) planned -= !phase.elsewhere.empty() && phase.elsewhere[i];
-  Progress progress(ProgressOptions{o.progress, o.progress_every},
-                    !runs.empty() && runs.front().spec.extrinsic ? "extrinsic tests" : "intrinsic runs", slots,
-                    std::move(steps), done, planned);
-  auto worker = [&](int slot_index) {
-    Slot slot;
-    slot.index = slot_index;
-    slot.machine_full = slots >= static_cast<int>(std::max(1u, std::thread::hardware_concurrency()));
-    // A 2 MB receive buffer per socket (the kernel's default is 208 KB): every process hears every
-    // datagram of its slot, and one descheduled for a while must not lose any (the kernel caps the
-    // request at net.core.rmem_max).
-    slot.url = "udpm://239.255.76.67:" + std::to_string(o.base_port + slot_index) + "?ttl=0&recv_buf_size=2097152";
-    if (!o.attach.empty()) slot.url = o.attach;
-    for (std::size_t k; !stopRequested() && (k = next.fetch_add(1)) < todo.size();) {
-      const std::size_t i = todo[k];
-      const std::string& id = runs[i].spec.run_id;
-      RunOutcome r;
-      progress.started(slot_index, id, runs[i].spec.steps);
-      const OnStep on_step = [&progress, slot_index](std::int64_t step) { progress.step(slot_index, step); };
-      PlannedRun run = runs[i];
-      run.spec.stall_seconds = o.stall_seconds;
-      try {
-        r = o.transport == "memq" ? runInProcess(run, o, log_root, protocol, slot, on_step)
-                                  : runOverUdpm(run, o, log_root, out_dir, protocol, slot, bin, on_step);
+  Progress& progress = pool.progress();
+  if (pool.queue())
+    progress.add(steps, done, planned);
+  else
+    progress.restart(!runs.empty() && runs.front().spec.extrinsic ? "extrinsic tests" : "intrinsic runs",
+                     std::move(steps), done, planned);
+  auto runOne = [&](std::size_t i, Slot& slot) {
+    const int slot_index = slot.index;
+    const std::string& id = runs[i].spec.run_id;
+    RunOutcome r;
+    progress.started(slot_index, id, runs[i].spec.steps);
+    const OnStep on_step = [&progress, slot_index](std::int64_t step) { progress.step(slot_index, step); };
+    PlannedRun run = runs[i];
+    run.spec.stall_seconds = o.stall_seconds;
+    try {
+      serve(slot, run, o, log_root, out_dir);
+      r = o.transport == "memq" ? runInProcess(run, o, log_root, protocol, slot, on_step)
+                                : runOverUdpm(run, o, log_root, out_dir, protocol, slot, bin, on_step);
+    } catch (const std::exception& e) {
+      slot.host.reset();  // (memq) nodes left mid-run are not reused
+      r.ok = false;
+      r.error = "run '" + id + "': " + e.what();
+    }
+    // A run that fails while the processes are being stopped failed because of it: cut too.
+    const bool cut = r.interrupted || (!r.ok && stopRequested());
+    if (r.ok && !r.log_dir.empty()) {
+      std::error_code ec;
+      for (const auto& f : fs::directory_iterator(r.log_dir, ec))
+        if (f.path().extension() == ".lcm") r.log_bytes += fs::file_size(f.path(), ec);
+    }
+    if (!cut) try {
+        keepOutcome(out_dir, id, r);
+        // What `afford clean` reads to tell the experiment of a run's folder (a folder without a log has no manifest).
+        if (const fs::path dir = fs::path(log_root) / id; fs::is_directory(dir))
+          writeWhole(dir / "run.json", json{{"run_id", id},
+                                            {"experiment", runs[i].spec.experiment},
+                                            {"out_dir", fs::absolute(out_dir).string()}}
+                                           .dump() + "\n");
       } catch (const std::exception& e) {
-        slot.host.reset();  // (memq) nodes left mid-run are not reused
-        r.ok = false;
-        r.error = "run '" + id + "': " + e.what();
+        log.error("cannot keep the outcome of run '{}' ({}): --resume would run it again", id, e.what());
       }
-      // A run that fails while the processes are being stopped failed because of it: cut too.
-      const bool cut = r.interrupted || (!r.ok && stopRequested());
-      if (r.ok && !r.log_dir.empty()) {
-        std::error_code ec;
-        for (const auto& f : fs::directory_iterator(r.log_dir, ec))
-          if (f.path().extension() == ".lcm") r.log_bytes += fs::file_size(f.path(), ec);
-      }
-      if (!cut) try {
-          keepOutcome(out_dir, id, r);
-          // What `afford clean` reads to tell the experiment of a run's folder (a folder without a log has no manifest).
-          if (const fs::path dir = fs::path(log_root) / id; fs::is_directory(dir))
-            writeWhole(dir / "run.json", json{{"run_id", id},
-                                              {"experiment", runs[i].spec.experiment},
-                                              {"out_dir", fs::absolute(out_dir).string()}}
-                                             .dump() + "\n");
-        } catch (const std::exception& e) {
-          log.error("cannot keep the outcome of run '{}' ({}): --resume would run it again", id, e.what());
-        }
-      progress.ended(slot_index, !cut);
-      std::lock_guard<std::mutex> lock(mutex);
-      if (cut) {
-        const std::string prefix = "run '" + id + "': ";
-        std::string where = r.error.rfind(prefix, 0) == 0 ? r.error.substr(prefix.size()) : r.error;
-        // (The step is the last one the processes reported, in their heartbeats.)
-        if (const std::string none = "at step -1"; where.size() > none.size() && where.substr(where.size() - none.size()) == none)
-          where = where.substr(0, where.size() - none.size()) + "before any step was reported";
-        phase.cut[i] = where;
-        progress.say([&] { log.warn("{}: {}", id, phase.cut[i]); });
-        continue;
-      }
-      phase.outcomes[i] = std::move(r);
-      phase.finished[i] = 1;
-      const RunOutcome& out = phase.outcomes[i];
-      ++done;
-      progress.say([&] {
+    progress.ended(slot_index, !cut);
+    std::unique_lock<std::mutex> lock(mutex);
+    if (cut) {
+      const std::string prefix = "run '" + id + "': ";
+      std::string where = r.error.rfind(prefix, 0) == 0 ? r.error.substr(prefix.size()) : r.error;
+      // (The step is the last one the processes reported, in their heartbeats.)
+      if (const std::string none = "at step -1"; where.size() > none.size() && where.substr(where.size() - none.size()) == none)
+        where = where.substr(0, where.size() - none.size()) + "before any step was reported";
+      phase.cut[i] = where;
+      progress.say([&] { log.warn("{}: {}", id, phase.cut[i]); });
+      return;
+    }
+    phase.outcomes[i] = std::move(r);
+    phase.finished[i] = 1;
+    const RunOutcome& out = phase.outcomes[i];
+    ++done;
+    progress.say([&] {
       if (out.ok && runs[i].spec.extrinsic)
         log.info("[{}/{}] {}: {}, {} action(s), utility {}", done, runs.size(), id,
                  out.extrinsic.success ? "solved in " + std::to_string(out.extrinsic.completion) + " steps" : "not solved",
@@ -290,12 +384,13 @@ void executeRuns(const std::vector<PlannedRun>& runs, PhaseRuns& phase, const Ho
                  out.weights_checksum);
       else
         log.error("[{}/{}] {}", done, runs.size(), out.error);
-      });
-    }
+    });
+    lock.unlock();
+    if (on_finished) on_finished(i);
   };
-  std::vector<std::thread> threads;
-  for (int j = 0; j < slots; ++j) threads.emplace_back(worker, j);
-  for (auto& t : threads) t.join();
+  std::vector<SlotPool::Work> works;
+  for (std::size_t i : todo) works.emplace_back([&runOne, i](Slot& slot) { runOne(i, slot); });
+  pool.runAll(works);
 }
 
 }  // namespace afford

@@ -6,12 +6,15 @@
 
 #include <cstddef>
 #include <filesystem>
+#include <functional>
 #include <map>
+#include <memory>
 #include <string>
 #include <vector>
 
 #include <nlohmann/json.hpp>
 
+#include "experiment/execute/progress.hpp"
 #include "experiment/execute/request.hpp"
 #include "experiment/plan/plan.hpp"
 #include "experiment/run/driver.hpp"
@@ -40,12 +43,45 @@ PhaseRuns slicePhase(const PhaseRuns& all, std::size_t offset, std::size_t n);
 nlohmann::json moveUnfinishedAside(const std::vector<PlannedRun>& runs, const PhaseRuns& phase,
                                    const std::string& log_root, spdlog::logger& log);
 
-// Run every planned run not finished yet (nor run elsewhere), J at a time, and keep each outcome
-// in DIR/runs/ as it comes. After a SIGINT or SIGTERM no run starts; a run it
-// stopped is cut, not finished.
+struct Slot;
+
+// The job slots: J worker threads, slot k on the LCM URL of port base_port + k
+// (udpm) or its own in-process bus (memq). A slot keeps its process group (or
+// its memq nodes) from run to run while they serve the same experiment folder,
+// log root and transport. One pool serves every phase of an experiment, or
+// every experiment of a queue run side by side (afford experiment A B ...,
+// --plan FILE): their runs share the slots, first come first served.
+class SlotPool {
+ public:
+  // `o`: jobs, base_port, attach and progress are read; `queue`: the board
+  // shows every phase of every experiment in one count, under `label`.
+  SlotPool(const HostRequest& o, bool queue, std::string label = "");
+  ~SlotPool();  // the slots' processes stop
+  SlotPool(const SlotPool&) = delete;
+  SlotPool& operator=(const SlotPool&) = delete;
+
+  using Work = std::function<void(Slot&)>;
+  // Runs every work on a free slot, in order; returns once each has run (after
+  // a SIGINT or SIGTERM the works not begun are dropped).
+  void runAll(std::vector<Work>& works);
+  Progress& progress();
+  bool queue() const;
+  int slots() const;
+
+ private:
+  struct Impl;
+  std::unique_ptr<Impl> impl_;
+};
+
+// Called on the slot's thread when run i finished (kept in DIR/runs/), before the next is taken.
+using OnFinished = std::function<void(std::size_t i)>;
+
+// Run every planned run not finished yet (nor run elsewhere) on the pool's
+// slots, and keep each outcome in DIR/runs/ as it comes. After a SIGINT or
+// SIGTERM no run starts; a run it stopped is cut, not finished.
 // Each run's folder is log_root/<run-id>; the outcomes go to out_dir/runs/.
 void executeRuns(const std::vector<PlannedRun>& runs, PhaseRuns& phase, const HostRequest& o,
                  const std::string& log_root, const std::string& out_dir, const ProtocolConfig& protocol,
-                 const std::string& bin, spdlog::logger& log);
+                 const std::string& bin, spdlog::logger& log, SlotPool& pool, const OnFinished& on_finished = {});
 
 }  // namespace afford

@@ -39,6 +39,23 @@ Progress::~Progress() {
   erase();
 }
 
+void Progress::restart(std::string phase, std::vector<std::int64_t> steps, std::size_t done, std::size_t planned) {
+  std::lock_guard<std::mutex> lock(mutex_);
+  phase_ = std::move(phase);
+  total_steps_ = std::accumulate(steps.begin(), steps.end(), std::int64_t{0});
+  done_steps_ = 0;
+  done_ = done;
+  planned_ = planned;
+  began_ = drawn_at_ = Clock::now();
+}
+
+void Progress::add(const std::vector<std::int64_t>& steps, std::size_t done, std::size_t planned) {
+  std::lock_guard<std::mutex> lock(mutex_);
+  total_steps_ += std::accumulate(steps.begin(), steps.end(), std::int64_t{0});
+  done_ += done;
+  planned_ += planned;
+}
+
 void Progress::started(int slot, const std::string& run_id, std::int64_t steps) {
   std::lock_guard<std::mutex> lock(mutex_);
   slots_.at(static_cast<std::size_t>(slot)) = {run_id, 0, steps, Clock::now()};

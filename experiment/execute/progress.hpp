@@ -31,6 +31,11 @@ class Progress {
   Progress(const Progress&) = delete;
   Progress& operator=(const Progress&) = delete;
 
+  // A new phase on the same board: its runs and steps replace the last phase's.
+  void restart(std::string phase, std::vector<std::int64_t> steps, std::size_t done, std::size_t planned);
+  // More runs for the board (a queue of experiments: each phase of each adds its own).
+  void add(const std::vector<std::int64_t>& steps, std::size_t done, std::size_t planned);
+
   void started(int slot, const std::string& run_id, std::int64_t steps);
   void step(int slot, std::int64_t step);
   void ended(int slot, bool finished);

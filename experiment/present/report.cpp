@@ -527,7 +527,8 @@ void whatWasRun(std::ostringstream& md, const std::vector<Folder>& folders, cons
     remarks << "- **" << f.label << "**: " << joined(r.remarks, "; ") << ".\n";
   }
   md << "| all | | | | " << runs << (failed ? " (" + std::to_string(failed) + " failed)" : std::string()) << " | | | "
-     << tests << " | | " << num(total / 60.0, 1) << " min |\n\n"
+     // Experiments run side by side (one queue) overlap: then the caller's wall time is the whole's.
+     << tests << " | | " << num((where.wall_seconds > 0 ? where.wall_seconds : total) / 60.0, 1) << " min |\n\n"
      << remarks.str();
   if (!where.note.empty()) md << "\n" << where.note << "\n";
   if (paper) {

@@ -15,6 +15,7 @@ namespace afford {
 struct FrontDoor {
   std::string config_dir;
   std::string program;  // argv[0]
+  std::vector<std::string> args;  // argv[1...]
   spdlog::logger* log = nullptr;
 };
 

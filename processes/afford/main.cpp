@@ -15,7 +15,7 @@ int main(int argc, char** argv) {
   CLI::App app{"afford: an embodied agent learning affordances (intrinsic phase) and solving extrinsic tasks", "afford"};
   app.require_subcommand(1);
   auto log = afford::makeLogger("afford");
-  afford::FrontDoor door{afford::defaultConfigDir(), argv[0], log.get()};
+  afford::FrontDoor door{afford::defaultConfigDir(), argv[0], std::vector<std::string>(argv + 1, argv + argc), log.get()};
   app.add_option("--config-dir", door.config_dir, "folder with defaults.yaml and experiments/")->capture_default_str();
   const std::vector<afford::Command> commands = {
       afford::experimentCommand(app, door), afford::experimentsCommand(app, door), afford::configCommand(app, door),

@@ -80,6 +80,63 @@ TEST(Workflow, AnExperimentSharingTheIntrinsicRunsReusesTheStoredAgents) {
   EXPECT_EQ(d.text.find("reuse a stored agent"), std::string::npos) << d.text;
 }
 
+// A queue (afford experiment A B, or --plan FILE): the experiments run side
+// by side on the same slots; an agent two of them share is trained once, by
+// the first in the queue's order, and taken by the other once stored; each
+// folder holds what the experiment alone would write.
+TEST(Workflow, AQueueTrainsASharedAgentOnceAndEachExperimentGetsWhatItWouldAlone) {
+  const std::string dir = test::tempDir("queue");
+  const std::string small = " --system IMP --reps 2 --steps 300 --extrinsic-reps 1 --scenarios scenario1";
+  {
+    std::ofstream plan(dir + "/plan.yaml");
+    plan << "# attention and base share their agents; late1 trains its own\n"
+         << "- attention" << small << "\n- base" << small << "\n- late1" << small << " --seed 3 --out " << dir
+         << "/late1-here\n";
+  }
+  Output q = run("experiment --plan " + dir + "/plan.yaml --transport memq --jobs 2 --quiet --run-prefix q --out " +
+                 dir + "/queue --log-root " + dir + "/logs");
+  ASSERT_EQ(q.status, 0) << q.text;
+  EXPECT_NE(q.text.find("base: 2 intrinsic run(s) take the agent another experiment of the queue trains"),
+            std::string::npos) << q.text;
+  EXPECT_TRUE(fs::exists(dir + "/logs/q-attention-IMP-s1"));  // attention came first: it trained them
+  EXPECT_FALSE(fs::exists(dir + "/logs/q-base-IMP-s1"));
+  for (const std::string exp : {"attention", "base"}) {
+    Output alone = run("experiment " + exp + small + " --transport memq --quiet --no-reuse-agents --run-prefix a --out " +
+                       dir + "/alone-" + exp + " --log-root " + dir + "/logs-alone");
+    ASSERT_EQ(alone.status, 0) << alone.text;
+    const json a = readJson(dir + "/alone-" + exp + "/summary.json"), b = readJson(dir + "/queue/" + exp + "/summary.json");
+    EXPECT_EQ(checksums(a), checksums(b)) << exp;
+    EXPECT_EQ(a["systems"]["IMP"]["extrinsic"]["conditions"], b["systems"]["IMP"]["extrinsic"]["conditions"]) << exp;
+  }
+  EXPECT_EQ(readJson(dir + "/queue/base/summary.json")["systems"]["IMP"]["runs"][0]["reused_from"], "q-attention-IMP-s1");
+  EXPECT_TRUE(fs::exists(dir + "/late1-here/summary.json"));  // an entry's own --out
+  // Resumed when every experiment finished: nothing to run.
+  Output r = run("experiment --plan " + dir + "/plan.yaml --transport memq --resume --quiet --run-prefix q --out " +
+                 dir + "/queue --log-root " + dir + "/logs");
+  EXPECT_EQ(r.status, 0) << r.text;
+  EXPECT_NE(r.text.find("every experiment of the queue finished already"), std::string::npos) << r.text;
+}
+
+TEST(Workflow, AQueueRefusesEntriesItCannotRunNamingThem) {
+  const std::string dir = test::tempDir("queue-bad");
+  const auto refused = [&](const std::string& plan_text, const std::string& says) {
+    std::ofstream(dir + "/plan.yaml") << plan_text;
+    Output o = run("experiment --plan " + dir + "/plan.yaml --transport memq --out " + dir + "/out --log-root " + dir);
+    EXPECT_EQ(o.status, 2) << plan_text << o.text;
+    EXPECT_NE(o.text.find(says), std::string::npos) << plan_text << o.text;
+    EXPECT_FALSE(fs::exists(dir + "/out")) << plan_text;  // nothing written or started
+  };
+  refused("- base --jobs 4\n", "plan.yaml entry 1: --jobs is the queue's option");
+  refused("- base --steps 100\n- late1 --bogus\n", "plan.yaml entry 2");
+  refused("- base --out x\n- late1 --out x\n", "would both write to x");
+  refused("- base\n- no-such-experiment\n", "entry 2 (no-such-experiment)");
+  refused("base: 1\n", "a YAML list of experiments");
+  refused("- [base, 1]\n", "entry 1 is not an argument line");
+  Output o = run("experiment base late1 --shard 0/2 --run-prefix s --out " + dir + "/out");
+  EXPECT_EQ(o.status, 2) << o.text;
+  EXPECT_NE(o.text.find("--shard is for one experiment, not a queue"), std::string::npos) << o.text;
+}
+
 TEST(Workflow, KeepCheckpointsFirstRemovesTheOthersOnceTheTestsAreDone) {
   const std::string dir = test::tempDir("keep-ckpt");
   Output a = run("experiment base" + kSmall + " --keep-logs none --keep-checkpoints first --no-reuse-agents --out " + dir +

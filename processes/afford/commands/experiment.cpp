@@ -1,11 +1,16 @@
-// afford experiment NAME ...: run an experiment's repetitions and summarise them.
+// afford experiment NAME ...: run an experiment's repetitions and summarise them;
+// afford experiment A B ... or --plan FILE: several side by side, in one queue of job slots.
+#include <yaml-cpp/yaml.h>
+
 #include <filesystem>
 #include <limits>
 #include <memory>
+#include <set>
 
 #include "afford/commands.hpp"
 #include "afford/config.hpp"
 #include "experiment/experiment.hpp"
+#include "experiment/state.hpp"
 
 namespace afford {
 
@@ -13,7 +18,8 @@ namespace {
 
 struct Args {
   ExperimentRequest o;
-  std::string system, netns = "auto", file, shard;
+  std::vector<std::string> names;
+  std::string system, netns = "auto", file, shard, plan;
   std::vector<std::string> processes;
   int reps = 0, tables = 0;
   std::int64_t steps = 0, table_seed = 0;
@@ -24,7 +30,13 @@ struct Args {
 // The options --help lists first: the experiment, its counts and seed, jobs, transport, what is kept, settings.
 void addFirstOptions(CLI::App* exp, Args& a) {
   ExperimentRequest& o = a.o;
-  exp->add_option("name", o.plan.experiment, "experiment (see `afford experiments`); optional with --resume");
+  exp->add_option("name", a.names,
+                  "experiment (see `afford experiments`); optional with --resume. Several run side by side in one "
+                  "queue of job slots, each in <out>/<name>");
+  exp->add_option("--plan", a.plan,
+                  "a YAML list of experiments to run side by side in one queue, each an argument line of `afford "
+                  "experiment` (e.g. \"late1 --system all --extrinsic-reps 10\"); the command line's options apply "
+                  "to every entry that does not give its own");
   exp->add_option("--system", a.system, "FIX, IGN, IMP, all, or a list (FIX,IMP) (default: the experiment's systems, else all)");
   exp->add_option("--reps", a.reps, "repetitions per system (default: the experiment's)");
   exp->add_option("--steps", a.steps, "intrinsic steps per run (default: the experiment's)");
@@ -99,13 +111,18 @@ void addMoreOptions(CLI::App* exp, Args& a) {
 }
 
 // The request the options make (checked as far as no file is needed).
-ExperimentRequest requestOf(Args& a, const CLI::App& app, const CLI::App* exp, const FrontDoor& door) {
+// `also_given`: options of the command line a queue entry takes as its own.
+ExperimentRequest requestOf(Args& a, const CLI::App& app, const CLI::App* exp, const FrontDoor& door,
+                            const std::set<std::string>& also_given = {}) {
   ExperimentRequest o = a.o;
   o.plan.config_dir = door.config_dir;
   o.write.program = door.program;
+  o.given = also_given;
   for (const CLI::Option* opt : exp->get_options())
     if (opt->count() > 0) o.given.insert(opt->get_name());
   if (app.count("--config-dir") > 0) o.given.insert("--config-dir");
+  if (a.names.size() > 1) throw ConfigError("one experiment NAME per queue entry, not " + std::to_string(a.names.size()));
+  o.plan.experiment = a.names.empty() ? std::string() : a.names.front();
   if (!a.file.empty()) {
     if (!o.plan.experiment.empty())
       throw ConfigError("give an experiment NAME or --config FILE, not both");
@@ -134,8 +151,8 @@ ExperimentRequest requestOf(Args& a, const CLI::App& app, const CLI::App* exp, c
   o.host.processes = parseProcessSwaps(a.processes, "--process");
   if (a.reps) o.plan.reps = a.reps;
   if (a.steps) o.plan.steps = a.steps;
-  if (a.tables_option->count()) o.plan.tables = a.tables;
-  if (a.table_seed_option->count()) o.plan.table_seed = a.table_seed;
+  if (o.given.count("--tables")) o.plan.tables = a.tables;
+  if (o.given.count("--table-seed")) o.plan.table_seed = a.table_seed;
   if (!a.system.empty()) o.plan.systems = parseSystems({a.system}, "--system");
   if (a.netns == "auto")
     o.host.netns = NetnsMode::Auto;
@@ -148,6 +165,102 @@ ExperimentRequest requestOf(Args& a, const CLI::App& app, const CLI::App* exp, c
   return o;
 }
 
+// The options of the queue as a whole: a queue entry does not give them.
+const std::set<std::string> kQueueOptions = {"--jobs",     "--transport", "--base-port", "--netns", "--progress",
+                                             "--progress-every", "--attach", "--shard", "--plan", "--resume"};
+
+// The entries of a --plan file: a YAML list of argument lines.
+std::vector<std::string> planEntries(const std::string& file) {
+  YAML::Node root;
+  try {
+    root = YAML::LoadFile(file);
+  } catch (const YAML::Exception& e) {
+    throw ConfigError("--plan " + file + ": " + e.what());
+  }
+  if (!root.IsSequence())
+    throw ConfigError("--plan " + file + ": a YAML list of experiments, each an argument line of `afford experiment` "
+                      "(e.g. - late1 --system all)");
+  std::vector<std::string> lines;
+  for (std::size_t k = 0; k < root.size(); ++k) {
+    if (!root[k].IsScalar() || root[k].as<std::string>().empty())
+      throw ConfigError("--plan " + file + ": entry " + std::to_string(k + 1) +
+                        " is not an argument line (a string such as \"late1 --system all\")");
+    lines.push_back(root[k].as<std::string>());
+  }
+  return lines;
+}
+
+// The folder an entry writes when it gives no --out: <out>/<name> (a --config file: its stem).
+std::string entryFolder(const std::string& out, const std::string& name) {
+  const std::filesystem::path p(name);
+  return (std::filesystem::path(out) / (isExperimentPath(name) ? p.stem() : p)).string();
+}
+
+// afford experiment A B ... / --plan FILE: every entry's request, then the queue.
+int runQueueOf(Args& a, CLI::App& app, const CLI::App* exp, const FrontDoor& door) {
+  std::set<std::string> common;  // what the command line gives every entry
+  for (const CLI::Option* opt : exp->get_options())
+    if (opt->count() > 0 && opt->get_name() != "name" && opt->get_name() != "--plan") common.insert(opt->get_name());
+  if (!a.file.empty()) throw ConfigError("--config runs one experiment file: give it in a --plan entry instead");
+  for (const char* alone : {"--shard", "--attach"})
+    if (common.count(alone)) throw ConfigError(std::string(alone) + " is for one experiment, not a queue");
+  struct Entry {
+    std::string what, line;  // how the error names it; the argument line ("" for a name)
+  };
+  std::vector<Entry> entries;
+  for (const std::string& name : a.names) entries.push_back({"experiment " + name, name});
+  if (!a.plan.empty()) {
+    std::size_t k = 0;
+    for (std::string& line : planEntries(a.plan)) entries.push_back({a.plan + " entry " + std::to_string(++k), line});
+  }
+  std::vector<ExperimentRequest> requests;
+  for (const Entry& entry : entries) {
+    Args e = a;  // the command line's values, an entry's own options replacing them
+    e.names.clear();
+    e.plan.clear();
+    CLI::App sub{"afford experiment (a queue entry)", "experiment"};
+    addFirstOptions(&sub, e);
+    addMoreOptions(&sub, e);
+    try {
+      sub.parse(entry.line, false);
+    } catch (const CLI::ParseError& err) {
+      throw ConfigError(entry.what + " (\"" + entry.line + "\"): " + err.what());
+    }
+    for (const CLI::Option* opt : sub.get_options())
+      if (opt->count() > 0 && kQueueOptions.count(opt->get_name()))
+        throw ConfigError(entry.what + ": " + opt->get_name() + " is the queue's option: give it on the command line");
+    ExperimentRequest o;
+    try {
+      o = requestOf(e, app, &sub, door, common);
+    } catch (const ConfigError& err) {
+      throw ConfigError(entry.what + ": " + err.what());
+    }
+    if (!sub.get_option("--out")->count()) o.write.out_dir = entryFolder(a.o.write.out_dir, o.plan.experiment);
+    // --resume: each entry goes on where it stopped; one that finished is kept, one not begun starts.
+    if (a.o.resume) {
+      const auto state = std::filesystem::path(o.write.out_dir) / "experiment.json";
+      o.resume = std::filesystem::exists(state);
+      if (o.resume && readState(o.write.out_dir).value("state", "") == "finished") {
+        door.log->info("{} finished already in {}", entry.what, o.write.out_dir);
+        continue;
+      }
+    }
+    requests.push_back(std::move(o));
+  }
+  std::string resume = shellQuoted(door.program);
+  bool resuming = false;
+  for (const std::string& arg : door.args) {
+    resume += " " + shellQuoted(arg);
+    resuming = resuming || arg == "--resume";
+  }
+  if (!resuming) resume += " --resume";
+  if (requests.empty()) {
+    door.log->info("every experiment of the queue finished already");
+    return 0;
+  }
+  return runQueue(requests, resume, *door.log);
+}
+
 }  // namespace
 
 Command experimentCommand(CLI::App& app, const FrontDoor& door) {
@@ -155,7 +268,10 @@ Command experimentCommand(CLI::App& app, const FrontDoor& door) {
   auto* exp = app.add_subcommand("experiment", "run an experiment's repetitions and summarise them");
   addFirstOptions(exp, *a);
   addMoreOptions(exp, *a);
-  return {exp, [&app, exp, a, &door] { return runExperiment(requestOf(*a, app, exp, door), *door.log); }};
+  return {exp, [&app, exp, a, &door] {
+            if (a->names.size() > 1 || !a->plan.empty()) return runQueueOf(*a, app, exp, door);
+            return runExperiment(requestOf(*a, app, exp, door), *door.log);
+          }};
 }
 
 }  // namespace afford
