@@ -224,10 +224,15 @@ json moveUnfinishedAside(const std::vector<PlannedRun>& runs, const PhaseRuns& p
 
 // ---- the slots ---------------------------------------------------------------
 
+struct SlotPool::Batch {
+  std::vector<Work> works;
+  std::size_t left = 0;  // works not run nor dropped yet
+};
+
 struct SlotPool::Impl {
   struct Job {
-    Work* work;
-    std::size_t* left;  // of its runAll
+    std::shared_ptr<Batch> batch;
+    std::size_t index = 0;
   };
   int jobs = 1, base_port = 7700;
   std::string attach;
@@ -253,21 +258,21 @@ struct SlotPool::Impl {
     slot.url = "udpm://239.255.76.67:" + std::to_string(base_port + index) + "?ttl=0&recv_buf_size=2097152";
     if (!attach.empty()) slot.url = attach;
     for (;;) {
-      Job job{};
+      Job job;
       {
         std::unique_lock<std::mutex> lock(mutex);
         wake.wait(lock, [&] { return closing || !waiting.empty(); });
         if (waiting.empty()) return;
-        job = waiting.front();
+        job = std::move(waiting.front());
         waiting.pop_front();
       }
       // After a stop signal the works not begun are dropped; a work never lets an exception out.
       if (!stopRequested()) try {
-          (*job.work)(slot);
+          job.batch->works[job.index](slot);
         } catch (const std::exception&) {
         }
       std::lock_guard<std::mutex> lock(mutex);
-      --*job.left;
+      --job.batch->left;
       finished.notify_all();
     }
   }
@@ -287,110 +292,183 @@ SlotPool::~SlotPool() {
   for (auto& t : impl_->threads) t.join();
 }
 
-void SlotPool::runAll(std::vector<Work>& works) {
-  std::size_t left = works.size();
+std::shared_ptr<SlotPool::Batch> SlotPool::submit(std::vector<Work> works) {
+  auto batch = std::make_shared<Batch>();
+  batch->works = std::move(works);
+  batch->left = batch->works.size();
   {
     std::lock_guard<std::mutex> lock(impl_->mutex);
-    for (Work& w : works) impl_->waiting.push_back(Impl::Job{&w, &left});
+    for (std::size_t i = 0; i < batch->works.size(); ++i) impl_->waiting.push_back(Impl::Job{batch, i});
   }
   impl_->wake.notify_all();
+  return batch;
+}
+
+void SlotPool::wait(const std::shared_ptr<Batch>& batch) {
   std::unique_lock<std::mutex> lock(impl_->mutex);
-  impl_->finished.wait(lock, [&] { return left == 0; });
+  impl_->finished.wait(lock, [&] { return batch->left == 0; });
 }
 
 Progress& SlotPool::progress() { return impl_->progress; }
 bool SlotPool::queue() const { return impl_->queue; }
 int SlotPool::slots() const { return impl_->jobs; }
 
+namespace {
+
+// What the runs of one executeRuns (or RunsAhead) share while they run.
+struct PhaseState {
+  const std::vector<PlannedRun>* runs = nullptr;
+  PhaseRuns* phase = nullptr;
+  RunContext c;
+  OnFinished on_finished;
+  std::mutex mutex;
+  std::size_t done = 0;  // finished, for the [k/N] lines
+};
+
+// Run i on the slot, and keep its outcome.
+void runOne(PhaseState& st, std::size_t i, Slot& slot, Progress& progress) {
+  const std::vector<PlannedRun>& runs = *st.runs;
+  PhaseRuns& phase = *st.phase;
+  const RunContext& c = st.c;
+  const HostRequest& o = c.o;
+  spdlog::logger& log = *c.log;
+  const int slot_index = slot.index;
+  const std::string& id = runs[i].spec.run_id;
+  RunOutcome r;
+  progress.started(slot_index, id, runs[i].spec.steps);
+  const OnStep on_step = [&progress, slot_index](std::int64_t step) { progress.step(slot_index, step); };
+  PlannedRun run = runs[i];
+  run.spec.stall_seconds = o.stall_seconds;
+  try {
+    serve(slot, run, o, c.log_root, c.out_dir);
+    r = o.transport == "memq" ? runInProcess(run, o, c.log_root, c.protocol, slot, on_step)
+                              : runOverUdpm(run, o, c.log_root, c.out_dir, c.protocol, slot, c.bin, on_step);
+  } catch (const std::exception& e) {
+    slot.host.reset();  // (memq) nodes left mid-run are not reused
+    r.ok = false;
+    r.error = "run '" + id + "': " + e.what();
+  }
+  if (!r.ok) slot.serving.clear();  // the next run starts the slot afresh: its bus, driver and processes
+  // A run that fails while the processes are being stopped failed because of it: cut too.
+  const bool cut = r.interrupted || (!r.ok && stopRequested());
+  if (r.ok && !r.log_dir.empty()) {
+    std::error_code ec;
+    for (const auto& f : fs::directory_iterator(r.log_dir, ec))
+      if (f.path().extension() == ".lcm") r.log_bytes += fs::file_size(f.path(), ec);
+  }
+  if (!cut) try {
+      keepOutcome(c.out_dir, id, r);
+      // What `afford clean` reads to tell the experiment of a run's folder (a folder without a log has no manifest).
+      if (const fs::path dir = fs::path(c.log_root) / id; fs::is_directory(dir))
+        writeWhole(dir / "run.json", json{{"run_id", id},
+                                          {"experiment", runs[i].spec.experiment},
+                                          {"out_dir", fs::absolute(c.out_dir).string()}}
+                                         .dump() + "\n");
+    } catch (const std::exception& e) {
+      log.error("cannot keep the outcome of run '{}' ({}): --resume would run it again", id, e.what());
+    }
+  progress.ended(slot_index, !cut);
+  std::unique_lock<std::mutex> lock(st.mutex);
+  if (cut) {
+    const std::string prefix = "run '" + id + "': ";
+    std::string where = r.error.rfind(prefix, 0) == 0 ? r.error.substr(prefix.size()) : r.error;
+    // (The step is the last one the processes reported, in their heartbeats.)
+    if (const std::string none = "at step -1"; where.size() > none.size() && where.substr(where.size() - none.size()) == none)
+      where = where.substr(0, where.size() - none.size()) + "before any step was reported";
+    phase.cut[i] = where;
+    progress.say([&] { log.warn("{}: {}", id, phase.cut[i]); });
+    return;
+  }
+  phase.outcomes[i] = std::move(r);
+  phase.finished[i] = 1;
+  const RunOutcome& out = phase.outcomes[i];
+  const std::size_t done = ++st.done;
+  progress.say([&] {
+    if (out.ok && runs[i].spec.extrinsic)
+      log.info("[{}/{}] {}: {}, {} action(s), utility {}", done, runs.size(), id,
+               out.extrinsic.success ? "solved in " + std::to_string(out.extrinsic.completion) + " steps" : "not solved",
+               out.extrinsic.attempts, out.extrinsic.utility);
+    else if (out.ok)
+      log.info("[{}/{}] {} done in {:.1f} s, weights {}", done, runs.size(), id, out.wall_seconds,
+               out.weights_checksum);
+    else
+      log.error("[{}/{}] {}", done, runs.size(), out.error);
+  });
+  lock.unlock();
+  if (st.on_finished) st.on_finished(i);
+}
+
+// The works of the runs not finished yet (nor run elsewhere), and their steps.
+std::vector<SlotPool::Work> worksOf(const std::shared_ptr<PhaseState>& st, SlotPool& pool,
+                                    std::vector<std::int64_t>& steps) {
+  std::vector<SlotPool::Work> works;
+  const PhaseRuns& phase = *st->phase;
+  for (std::size_t i = 0; i < st->runs->size(); ++i)
+    if (!phase.finished[i] && (phase.elsewhere.empty() || !phase.elsewhere[i])) {
+      works.emplace_back([st, i, &pool](Slot& slot) { runOne(*st, i, slot, pool.progress()); });
+      steps.push_back((*st->runs)[i].spec.steps);
+    }
+  return works;
+}
+
+}  // namespace
+
 // Run every planned run not finished yet (nor run elsewhere) on the pool's
 // slots, and keep each outcome in DIR/runs/ as it comes. After a SIGINT or
 // SIGTERM no run starts; a run it stopped is cut, not finished.
-void executeRuns(const std::vector<PlannedRun>& runs, PhaseRuns& phase, const HostRequest& o,
-                 const std::string& log_root, const std::string& out_dir, const ProtocolConfig& protocol,
-                 const std::string& bin, spdlog::logger& log, SlotPool& pool, const OnFinished& on_finished) {
-  std::vector<std::size_t> todo;
-  for (std::size_t i = 0; i < runs.size(); ++i)
-    if (!phase.finished[i] && (phase.elsewhere.empty() || !phase.elsewhere[i])) todo.push_back(i);
-  std::size_t done = phase.finishedCount();
-  std::mutex mutex;
+void executeRuns(const std::vector<PlannedRun>& runs, PhaseRuns& phase, const RunContext& c, SlotPool& pool,
+                 const OnFinished& on_finished) {
+  auto st = std::make_shared<PhaseState>();
+  st->runs = &runs;
+  st->phase = &phase;
+  st->c = c;
+  st->on_finished = on_finished;
+  st->done = phase.finishedCount();
   std::vector<std::int64_t> steps;
-  for (std::size_t i : todo) steps.push_back(runs[i].spec.steps);
+  std::vector<SlotPool::Work> works = worksOf(st, pool, steps);
   std::size_t planned = runs.size();
   for (std::size_t i = 0; i < runs.size(); ++i) planned -= !phase.elsewhere.empty() && phase.elsewhere[i];
   Progress& progress = pool.progress();
   if (pool.queue())
-    progress.add(steps, done, planned);
+    progress.add(steps, st->done, planned);
   else
     progress.restart(!runs.empty() && runs.front().spec.extrinsic ? "extrinsic tests" : "intrinsic runs",
-                     std::move(steps), done, planned);
-  auto runOne = [&](std::size_t i, Slot& slot) {
-    const int slot_index = slot.index;
-    const std::string& id = runs[i].spec.run_id;
-    RunOutcome r;
-    progress.started(slot_index, id, runs[i].spec.steps);
-    const OnStep on_step = [&progress, slot_index](std::int64_t step) { progress.step(slot_index, step); };
-    PlannedRun run = runs[i];
-    run.spec.stall_seconds = o.stall_seconds;
-    try {
-      serve(slot, run, o, log_root, out_dir);
-      r = o.transport == "memq" ? runInProcess(run, o, log_root, protocol, slot, on_step)
-                                : runOverUdpm(run, o, log_root, out_dir, protocol, slot, bin, on_step);
-    } catch (const std::exception& e) {
-      slot.host.reset();  // (memq) nodes left mid-run are not reused
-      r.ok = false;
-      r.error = "run '" + id + "': " + e.what();
-    }
-    // A run that fails while the processes are being stopped failed because of it: cut too.
-    const bool cut = r.interrupted || (!r.ok && stopRequested());
-    if (r.ok && !r.log_dir.empty()) {
-      std::error_code ec;
-      for (const auto& f : fs::directory_iterator(r.log_dir, ec))
-        if (f.path().extension() == ".lcm") r.log_bytes += fs::file_size(f.path(), ec);
-    }
-    if (!cut) try {
-        keepOutcome(out_dir, id, r);
-        // What `afford clean` reads to tell the experiment of a run's folder (a folder without a log has no manifest).
-        if (const fs::path dir = fs::path(log_root) / id; fs::is_directory(dir))
-          writeWhole(dir / "run.json", json{{"run_id", id},
-                                            {"experiment", runs[i].spec.experiment},
-                                            {"out_dir", fs::absolute(out_dir).string()}}
-                                           .dump() + "\n");
-      } catch (const std::exception& e) {
-        log.error("cannot keep the outcome of run '{}' ({}): --resume would run it again", id, e.what());
-      }
-    progress.ended(slot_index, !cut);
-    std::unique_lock<std::mutex> lock(mutex);
-    if (cut) {
-      const std::string prefix = "run '" + id + "': ";
-      std::string where = r.error.rfind(prefix, 0) == 0 ? r.error.substr(prefix.size()) : r.error;
-      // (The step is the last one the processes reported, in their heartbeats.)
-      if (const std::string none = "at step -1"; where.size() > none.size() && where.substr(where.size() - none.size()) == none)
-        where = where.substr(0, where.size() - none.size()) + "before any step was reported";
-      phase.cut[i] = where;
-      progress.say([&] { log.warn("{}: {}", id, phase.cut[i]); });
-      return;
-    }
-    phase.outcomes[i] = std::move(r);
-    phase.finished[i] = 1;
-    const RunOutcome& out = phase.outcomes[i];
-    ++done;
-    progress.say([&] {
-      if (out.ok && runs[i].spec.extrinsic)
-        log.info("[{}/{}] {}: {}, {} action(s), utility {}", done, runs.size(), id,
-                 out.extrinsic.success ? "solved in " + std::to_string(out.extrinsic.completion) + " steps" : "not solved",
-                 out.extrinsic.attempts, out.extrinsic.utility);
-      else if (out.ok)
-        log.info("[{}/{}] {} done in {:.1f} s, weights {}", done, runs.size(), id, out.wall_seconds,
-                 out.weights_checksum);
-      else
-        log.error("[{}/{}] {}", done, runs.size(), out.error);
-    });
-    lock.unlock();
-    if (on_finished) on_finished(i);
-  };
-  std::vector<SlotPool::Work> works;
-  for (std::size_t i : todo) works.emplace_back([&runOne, i](Slot& slot) { runOne(i, slot); });
-  pool.runAll(works);
+                     std::move(steps), st->done, planned);
+  pool.wait(pool.submit(std::move(works)));
+}
+
+struct RunsAhead::State : PhaseState {
+  std::vector<PlannedRun> owned_runs;
+  PhaseRuns owned_phase;
+};
+
+RunsAhead::RunsAhead(std::vector<PlannedRun> runs, const RunContext& c, SlotPool& pool)
+    : state_(std::make_shared<State>()), pool_(pool) {
+  state_->owned_runs = std::move(runs);
+  state_->owned_phase.outcomes.resize(state_->owned_runs.size());
+  state_->owned_phase.finished.assign(state_->owned_runs.size(), 0);
+  state_->runs = &state_->owned_runs;
+  state_->phase = &state_->owned_phase;
+  state_->c = c;
+  std::vector<std::int64_t> steps;
+  const std::shared_ptr<PhaseState> st = state_;
+  std::vector<SlotPool::Work> works = worksOf(st, pool, steps);
+  pool.progress().add(steps, 0, works.size());
+  if (!pool.queue()) pool.progress().relabel("intrinsic runs, and the tests of the agents trained");
+  batch_ = pool.submit(std::move(works));
+}
+
+RunsAhead::~RunsAhead() { wait(); }
+
+std::size_t RunsAhead::wait() {
+  pool_.wait(batch_);
+  return state_->owned_phase.finishedCount();
+}
+
+std::map<std::string, std::string> RunsAhead::cut() const {
+  std::map<std::string, std::string> out;
+  for (const auto& [i, where] : state_->owned_phase.cut) out[state_->owned_runs[i].spec.run_id] = where;
+  return out;
 }
 
 }  // namespace afford

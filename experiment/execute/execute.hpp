@@ -61,9 +61,12 @@ class SlotPool {
   SlotPool& operator=(const SlotPool&) = delete;
 
   using Work = std::function<void(Slot&)>;
-  // Runs every work on a free slot, in order; returns once each has run (after
-  // a SIGINT or SIGTERM the works not begun are dropped).
-  void runAll(std::vector<Work>& works);
+  struct Batch;
+  // Queues the works, to run each on a free slot, in order (after a SIGINT or
+  // SIGTERM the works not begun are dropped) ...
+  std::shared_ptr<Batch> submit(std::vector<Work> works);
+  // ... and returns once each has run or was dropped.
+  void wait(const std::shared_ptr<Batch>& batch);
   Progress& progress();
   bool queue() const;
   int slots() const;
@@ -76,12 +79,40 @@ class SlotPool {
 // Called on the slot's thread when run i finished (kept in DIR/runs/), before the next is taken.
 using OnFinished = std::function<void(std::size_t i)>;
 
+// Where a phase's runs go and what they are run with.
+struct RunContext {
+  HostRequest o;
+  std::string log_root, out_dir;  // each run's folder is log_root/<run-id>; the outcomes go to out_dir/runs/
+  ProtocolConfig protocol;
+  std::string bin;                // the processes' executables (udpm)
+  spdlog::logger* log = nullptr;
+};
+
 // Run every planned run not finished yet (nor run elsewhere) on the pool's
 // slots, and keep each outcome in DIR/runs/ as it comes. After a SIGINT or
 // SIGTERM no run starts; a run it stopped is cut, not finished.
-// Each run's folder is log_root/<run-id>; the outcomes go to out_dir/runs/.
-void executeRuns(const std::vector<PlannedRun>& runs, PhaseRuns& phase, const HostRequest& o,
-                 const std::string& log_root, const std::string& out_dir, const ProtocolConfig& protocol,
-                 const std::string& bin, spdlog::logger& log, SlotPool& pool, const OnFinished& on_finished = {});
+void executeRuns(const std::vector<PlannedRun>& runs, PhaseRuns& phase, const RunContext& c, SlotPool& pool,
+                 const OnFinished& on_finished = {});
+
+// Runs started ahead of their phase (an agent's tests as soon as it is
+// trained): they run on the pool while the caller goes on; their outcomes are
+// kept in DIR/runs/ like any run's, where their phase finds them.
+class RunsAhead {
+ public:
+  RunsAhead(std::vector<PlannedRun> runs, const RunContext& c, SlotPool& pool);
+  ~RunsAhead();  // waits for them
+  RunsAhead(const RunsAhead&) = delete;
+  RunsAhead& operator=(const RunsAhead&) = delete;
+  // Returns once every one has run (or was dropped after a stop signal); how many finished.
+  std::size_t wait();
+  // After wait(): the runs a stop signal cut, and where (run id -> where).
+  std::map<std::string, std::string> cut() const;
+
+ private:
+  struct State;
+  std::shared_ptr<State> state_;
+  SlotPool& pool_;
+  std::shared_ptr<SlotPool::Batch> batch_;
+};
 
 }  // namespace afford

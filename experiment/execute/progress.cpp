@@ -3,6 +3,7 @@
 #include <unistd.h>
 
 #include <cmath>
+#include <algorithm>
 #include <numeric>
 #include <stdexcept>
 
@@ -54,6 +55,18 @@ void Progress::add(const std::vector<std::int64_t>& steps, std::size_t done, std
   total_steps_ += std::accumulate(steps.begin(), steps.end(), std::int64_t{0});
   done_ += done;
   planned_ += planned;
+}
+
+void Progress::relabel(std::string phase) {
+  std::lock_guard<std::mutex> lock(mutex_);
+  phase_ = std::move(phase);
+}
+
+void Progress::uncount(std::size_t finished) {
+  std::lock_guard<std::mutex> lock(mutex_);
+  finished = std::min({finished, done_, planned_});
+  done_ -= finished;
+  planned_ -= finished;
 }
 
 void Progress::started(int slot, const std::string& run_id, std::int64_t steps) {

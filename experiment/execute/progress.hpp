@@ -35,6 +35,10 @@ class Progress {
   void restart(std::string phase, std::vector<std::int64_t> steps, std::size_t done, std::size_t planned);
   // More runs for the board (a queue of experiments: each phase of each adds its own).
   void add(const std::vector<std::int64_t>& steps, std::size_t done, std::size_t planned);
+  // What the board's first line calls the runs.
+  void relabel(std::string phase);
+  // Runs counted twice (started ahead of their phase, then counted again as kept by it): once less.
+  void uncount(std::size_t finished);
 
   void started(int slot, const std::string& run_id, std::int64_t steps);
   void step(int slot, std::int64_t step);

@@ -5,6 +5,7 @@
 // `afford merge`.
 #include <gtest/gtest.h>
 
+#include <algorithm>
 #include <array>
 #include <cstdio>
 #include <filesystem>
@@ -115,6 +116,24 @@ TEST(Workflow, AQueueTrainsASharedAgentOnceAndEachExperimentGetsWhatItWouldAlone
                  dir + "/queue --log-root " + dir + "/logs");
   EXPECT_EQ(r.status, 0) << r.text;
   EXPECT_NE(r.text.find("every experiment of the queue finished already"), std::string::npos) << r.text;
+}
+
+// Three agents on two slots: the first two train side by side, the third
+// takes the first free slot, and the other slot runs the tests of an agent
+// already trained meanwhile, before the third is over.
+TEST(Workflow, AnAgentsTestsStartAsSoonAsItIsTrained) {
+  const std::string dir = test::tempDir("ahead");
+  Output o = run("experiment base --transport memq --system IMP --reps 3 --steps 2500 --extrinsic-reps 1 --quiet "
+                 "--no-reuse-agents --keep-logs none --jobs 2 --run-prefix h --out " + dir + "/out --log-root " + dir + "/logs");
+  ASSERT_EQ(o.status, 0) << o.text;
+  std::vector<fs::file_time_type> agents, tests;
+  for (const auto& f : fs::directory_iterator(dir + "/out/runs"))
+    (f.path().stem().string().find("-scenario") == std::string::npos ? agents : tests).push_back(fs::last_write_time(f));
+  ASSERT_EQ(agents.size(), 3u);
+  ASSERT_EQ(tests.size(), 15u);
+  EXPECT_LT(*std::min_element(tests.begin(), tests.end()), *std::max_element(agents.begin(), agents.end()));
+  // And the summary is the one of tests run after every agent (the extrinsic phase finds them kept).
+  EXPECT_EQ(readJson(dir + "/out/summary.json")["extrinsic_tests"], 15);
 }
 
 TEST(Workflow, AQueueRefusesEntriesItCannotRunNamingThem) {
