@@ -44,7 +44,7 @@ class Unit {
 // so a sparse input touches whole columns.
 class Layer {
  public:
-  Layer(int outputs, int dim, bool sigmoid) : w_(Eigen::MatrixXd::Zero(outputs, dim)), sigmoid_(sigmoid) {}
+  Layer(int outputs, int dim, bool sigmoid);
   Eigen::VectorXd output(const SparseInput& x) const;
   void train(const SparseInput& x, const Eigen::VectorXd& target, double learning_rate);
   Eigen::MatrixXd& weights() { return w_; }
