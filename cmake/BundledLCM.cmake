@@ -41,7 +41,10 @@ function(afford_bundled_lcm target)
   endif()
   if(NOT old_stamp STREQUAL stamp_text OR NOT EXISTS ${src}/lcm/lcm.c)
     file(REMOVE_RECURSE ${src} ${stamp})
-    file(ARCHIVE_EXTRACT INPUT ${tarball} DESTINATION ${deps})
+    # TOUCH: the extracted files are new to make, so every object built from the earlier extraction is
+    # built again (with the archive's dates, a file a removed patch had changed, or a header, kept its old
+    # object: code built against another layout of LCM's structures, which crashed).
+    file(ARCHIVE_EXTRACT INPUT ${tarball} DESTINATION ${deps} TOUCH)
     find_program(PATCH_EXECUTABLE patch REQUIRED)
     foreach(p ${patches})
       execute_process(COMMAND ${PATCH_EXECUTABLE} -p1 --forward --batch --silent -i ${p}
