@@ -418,10 +418,7 @@ class Hosted : public Executor {
     };
     // (The tests of an agent trained before a resume run in the extrinsic phase, which first moves aside
     // the folders a stop signal left.)
-    const std::vector<char> kept = phase.finished;
-    if (reuse_) takeStoredAgents(runs, x_.plan().design.after_actions, phase, agents_, x_.o.write.out_dir, log_);
-    for (std::size_t i = 0; i < runs.size(); ++i)
-      if (phase.finished[i] && !kept[i]) testAhead(i, phase);
+    if (reuse_) takeStored(runs, phase);
     if (reuse_ && share_.claims) {
       queued(runs, phase, trained);
       return;
@@ -436,6 +433,14 @@ class Hosted : public Executor {
   }
   void run(const std::vector<PlannedRun>& runs, PhaseRuns& phase, const OnFinished& on_finished) {
     executeRuns(runs, phase, context(), pool_, on_finished);
+  }
+
+  // The agents stored already, taken, and their tests started.
+  void takeStored(const std::vector<PlannedRun>& runs, PhaseRuns& phase) {
+    const std::vector<char> before = phase.finished;
+    takeStoredAgents(runs, x_.plan().design.after_actions, phase, agents_, x_.o.write.out_dir, log_);
+    for (std::size_t i = 0; i < runs.size(); ++i)
+      if (phase.finished[i] && !before[i]) testAhead(i, phase);
   }
 
   // The tests of trained agent i not kept yet, started on the slots now (a stop signal: none).
@@ -508,10 +513,7 @@ class Hosted : public Executor {
     if (!waiting) return;
     for (const ClaimPtr& c : theirs)
       if (c) share_.claims->wait(c);
-    std::vector<char> before = phase.finished;
-    takeStoredAgents(runs, static_cast<int>(after), phase, agents_, x_.o.write.out_dir, log_);
-    for (std::size_t i = 0; i < runs.size(); ++i)
-      if (phase.finished[i] && !before[i]) testAhead(i, phase);
+    takeStored(runs, phase);
     run(runs, phase, trained);  // an agent the other run did not store (it failed, or was stopped): trained here
   }
 

@@ -771,6 +771,25 @@ ExtrinsicDesign parseDesign(const YAML::Node& node, const std::string& file) {
   return d;
 }
 
+}  // namespace
+
+YAML::Node loadGivenYaml(const std::string& file, const std::string& what, std::uintmax_t max_bytes) {
+  std::error_code ec;
+  if (!std::filesystem::exists(file, ec)) throw ConfigError(what + " " + file + ": no such file");
+  if (!std::filesystem::is_regular_file(file, ec)) throw ConfigError(what + " " + file + ": not a regular file");
+  const std::uintmax_t size = std::filesystem::file_size(file, ec);
+  if (ec || size > max_bytes)
+    throw ConfigError(what + " " + file + ": " + (ec ? "cannot read its size" : std::to_string(size) + " bytes, more than " +
+                                                                                 std::to_string(max_bytes)));
+  try {
+    return YAML::LoadFile(file);
+  } catch (const YAML::Exception& e) {
+    throw ConfigError(what + " " + file + ": " + e.what());
+  }
+}
+
+namespace {
+
 // `key: none` (or an empty value) in an experiment file: drop what the extended experiment had.
 bool isNone(const YAML::Node& n) { return n.IsNull() || (n.IsScalar() && n.Scalar() == "none"); }
 

@@ -147,11 +147,6 @@ void storeAgent(const PlannedRun& p, const PhaseRuns& phase, const AgentStore& a
   }
 }
 
-void storeAgents(const std::vector<PlannedRun>& runs, const PhaseRuns& phase, const AgentStore& agents,
-                 spdlog::logger& log) {
-  for (const auto& p : runs) storeAgent(p, phase, agents, log);
-}
-
 std::shared_ptr<AgentClaims::Claim> AgentClaims::claim(const std::string& key, std::int64_t after_actions,
                                                        const std::string& run_id, std::shared_ptr<Claim>& mine) {
   std::lock_guard<std::mutex> lock(mutex_);

@@ -62,10 +62,7 @@ class AgentStore {
 void takeStoredAgents(const std::vector<PlannedRun>& runs, int after_actions, PhaseRuns& phase,
                       const AgentStore& agents, const std::string& out_dir, spdlog::logger& log);
 
-// Every intrinsic run that finished here (not one taken from the store) is stored for reuse.
-void storeAgents(const std::vector<PlannedRun>& runs, const PhaseRuns& phase, const AgentStore& agents,
-                 spdlog::logger& log);
-// ... one of them (p.index in phase).
+// An intrinsic run that finished here (not one taken from the store) is stored for reuse (p.index in phase).
 void storeAgent(const PlannedRun& p, const PhaseRuns& phase, const AgentStore& agents, spdlog::logger& log);
 
 // The agents under way in a queue of experiments run side by side: the first

@@ -79,12 +79,7 @@ Sweep planSweep(const std::vector<std::string>& settings, const std::string& swe
       addKey(s, setting.substr(0, eq), std::move(values), "--set " + setting);
   }
   if (!sweep_file.empty()) {
-    YAML::Node doc;
-    try {
-      doc = YAML::LoadFile(sweep_file);
-    } catch (const YAML::Exception& e) {
-      throw ConfigError("sweep file " + sweep_file + ": " + e.what());
-    }
+    const YAML::Node doc = loadGivenYaml(sweep_file, "sweep file");
     if (!doc.IsMap())
       throw ConfigError("sweep file " + sweep_file + ": expected a map of config keys to lists of values "
                         "(e.g. motivation.leak: [0.1, 0.2])");

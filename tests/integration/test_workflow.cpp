@@ -151,6 +151,9 @@ TEST(Workflow, AQueueRefusesEntriesItCannotRunNamingThem) {
   refused("- base\n- no-such-experiment\n", "entry 2 (no-such-experiment)");
   refused("base: 1\n", "a YAML list of experiments");
   refused("- [base, 1]\n", "entry 1 is not an argument line");
+  Output fifo = run("experiment --plan " + dir + " --transport memq --out " + dir + "/out");  // a folder, not a file
+  EXPECT_EQ(fifo.status, 2) << fifo.text;
+  EXPECT_NE(fifo.text.find("--plan " + dir + ": not a regular file"), std::string::npos) << fifo.text;
   Output o = run("experiment base late1 --shard 0/2 --run-prefix s --out " + dir + "/out");
   EXPECT_EQ(o.status, 2) << o.text;
   EXPECT_NE(o.text.find("--shard is for one experiment, not a queue"), std::string::npos) << o.text;

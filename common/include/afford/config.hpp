@@ -415,6 +415,10 @@ std::vector<std::string> listExperiments(const std::string& config_dir);
 ExperimentFile loadExperiment(const std::string& config_dir, const std::string& name);
 bool isExperimentPath(const std::string& name);
 
+// A YAML file a user names on the command line (`what`: how errors name it, e.g. "--plan"), read only if it
+// is a regular file of at most max_bytes: a FIFO would wait for a writer, a huge file hold the memory.
+YAML::Node loadGivenYaml(const std::string& file, const std::string& what, std::uintmax_t max_bytes = 1u << 20);
+
 struct RunRequest {
   std::string experiment;
   System system = System::IMP;

@@ -171,15 +171,14 @@ const std::set<std::string> kQueueOptions = {"--jobs",     "--transport", "--bas
 
 // The entries of a --plan file: a YAML list of argument lines.
 std::vector<std::string> planEntries(const std::string& file) {
-  YAML::Node root;
-  try {
-    root = YAML::LoadFile(file);
-  } catch (const YAML::Exception& e) {
-    throw ConfigError("--plan " + file + ": " + e.what());
-  }
+  const YAML::Node root = loadGivenYaml(file, "--plan");
   if (!root.IsSequence())
     throw ConfigError("--plan " + file + ": a YAML list of experiments, each an argument line of `afford experiment` "
                       "(e.g. - late1 --system all)");
+  constexpr std::size_t kMostEntries = 1000;  // each runs on a thread of its own
+  if (root.size() > kMostEntries)
+    throw ConfigError("--plan " + file + ": " + std::to_string(root.size()) + " entries, more than a queue takes (" +
+                      std::to_string(kMostEntries) + ")");
   std::vector<std::string> lines;
   for (std::size_t k = 0; k < root.size(); ++k) {
     if (!root[k].IsScalar() || root[k].as<std::string>().empty())
