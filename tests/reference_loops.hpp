@@ -21,7 +21,7 @@ inline Predictors runIntrinsic(const RunConfig& c) {
   Eye eye(c);
   Predictors predictors(c);
   Motivation motivation(c);
-  eye.setScene(env.render());
+  eye.setScene(env.render(), env.centres());
   for (std::int64_t t = 0; t < c.steps; ++t) {
     const Focus f = eye.scan(t);
     const Prediction p = predictors.see(f.image, t);
@@ -29,7 +29,7 @@ inline Predictors runIntrinsic(const RunConfig& c) {
     const bool more = t + 1 < c.steps;
     if (d.act) {
       const ActionOutcome out = env.execute(t, d.action, f.x, f.y);
-      const Effect e = eye.scanEffect(t, env.render(), d.action);
+      const Effect e = eye.scanEffect(t, env.render(), d.action, env.centres());
       Experience x;
       x.action = d.action;
       x.before_image = f.image;
@@ -46,7 +46,7 @@ inline Predictors runIntrinsic(const RunConfig& c) {
     } else {
       predictors.trainEffects(predictors.replay(t));  // a pass: the step's replay alone
     }
-    if (more && env.introduceObjectsAt(t + 1)) eye.setScene(env.render());
+    if (more && env.introduceObjectsAt(t + 1)) eye.setScene(env.render(), env.centres());
   }
   return predictors;
 }
@@ -63,8 +63,8 @@ struct GoalTestOutcome {
 inline GoalTestOutcome runGoalTest(const RunConfig& c, const Scenario& s, const Predictors& predictors) {
   Environment env(c, s);
   Eye eye(c);
-  eye.setGoal(env.goalScene());
-  eye.setScene(env.render());
+  eye.setGoal(env.goalScene(), env.goalCentres());
+  eye.setScene(env.render(), env.centres());
   Planner planner(c.planner, goalValues(s));
   GoalTestOutcome out;
   auto asView = [](const Focus& f) { return View{f.image, f.x, f.y}; };
@@ -106,7 +106,7 @@ inline GoalTestOutcome runGoalTest(const RunConfig& c, const Scenario& s, const 
           std::optional<std::pair<double, double>> target;
           if (r.action == kMove) target = std::make_pair(r.x, r.y);
           env.execute(step, r.action, r.object_x, r.object_y, target);
-          eye.setScene(env.render());
+          eye.setScene(env.render(), env.centres());
           r = planner.onActed();
           break;
         }

@@ -327,6 +327,11 @@ inline scene_t sample(const scene_t*) {
   m.encoding = scene_t::ENCODING_ZLIB_RGB8;
   m.data = encodeScene(scene);
   m.size = static_cast<int32_t>(m.data.size());
+  for (const ObjectSpec& o : c.world.objects) {
+    m.object_x.push_back(o.x);
+    m.object_y.push_back(o.y);
+  }
+  m.n_objects = static_cast<int16_t>(m.object_x.size());
   m.digest = 0x1234;
   return m;
 }

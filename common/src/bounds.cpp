@@ -4,6 +4,7 @@
 
 #include <zlib.h>
 
+#include <algorithm>
 #include <cstdint>
 #include <iterator>
 
@@ -39,6 +40,13 @@ Max objects(const BoundsContext& c) {
 Max sceneBytes(const BoundsContext& c) {
   const auto px = static_cast<uLong>(c.run ? c.run->world.size_px : c.protocol->limits.scene_side);
   return Max(static_cast<std::int64_t>(compressBound(3 * px * px)));
+}
+// Objects a scene lists (eye.fovea = true_centre): those of the world, or of
+// the run's scenario, whichever a run has more of.
+Max sceneObjects(const BoundsContext& c) {
+  if (!c.run) return Max(c.protocol->limits.objects);
+  const std::size_t n = std::max(c.run->world.objects.size(), c.run->scenario ? c.run->scenario->objects.size() : 0);
+  return Max(static_cast<std::int64_t>(n));
 }
 // Places where a goal and a scene differ: each object of the scenario (or of
 // the world) at most twice, where the goal shows it and where the scene does.
@@ -120,7 +128,7 @@ wire::run_result_t_bounds boundsOf(const BoundsContext& c, const run_result_t*) 
 }
 
 wire::scene_t_bounds boundsOf(const BoundsContext& c, const scene_t*) {
-  return {nameBytes(c), /*size*/ sceneBytes(c)};
+  return {nameBytes(c), /*size*/ sceneBytes(c), /*n_objects*/ sceneObjects(c)};
 }
 
 wire::sub_goal_t_bounds boundsOf(const BoundsContext&, const sub_goal_t*) { return {}; }

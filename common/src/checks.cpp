@@ -79,7 +79,7 @@ std::string checkProbability(const std::string& field, double v) { return checkR
 
 std::string checkMessage(const scene_t& m, const BoundsContext& c) {
   const int side = c.run ? c.run->world.size_px : 0;
-  return first({checkStep(m.step, c), checkSerial(m.serial),
+  const std::string why = first({checkStep(m.step, c), checkSerial(m.serial),
                 c.run ? checkSize("width", m.width, side) : checkInt("width", m.width, 1, c.protocol->limits.scene_side),
                 c.run ? checkSize("height", m.height, side) : checkInt("height", m.height, 1, c.protocol->limits.scene_side),
                 m.cause == scene_t::CAUSE_START || m.cause == scene_t::CAUSE_ACTION ||
@@ -90,7 +90,17 @@ std::string checkMessage(const scene_t& m, const BoundsContext& c) {
                 checkTarget("action_target_x", m.action_target_x), checkTarget("action_target_y", m.action_target_y),
                 m.goal_distance == -1.0 ? "" : checkRange("goal_distance", m.goal_distance, 0.0, 1.0),
                 m.goal_utility == -1.0 ? "" : checkRange("goal_utility", m.goal_utility, 0.0, 1e12),
-                m.encoding == scene_t::ENCODING_ZLIB_RGB8 ? "" : "field encoding = " + std::to_string(m.encoding) + " is unknown"});
+                m.encoding == scene_t::ENCODING_ZLIB_RGB8 ? "" : "field encoding = " + std::to_string(m.encoding) + " is unknown",
+                checkInt("n_objects", m.n_objects, 0, INT16_MAX)});
+  if (!why.empty()) return why;
+  for (int i = 0; i < m.n_objects; ++i) {
+    const std::string at = "[" + std::to_string(i) + "]";
+    if (auto w = first({checkRange(("object_x" + at).c_str(), m.object_x[i], 0.0, 1.0),
+                        checkRange(("object_y" + at).c_str(), m.object_y[i], 0.0, 1.0)});
+        !w.empty())
+      return w;
+  }
+  return "";
 }
 
 std::string checkMessage(const focus_t& m, const BoundsContext& c) {

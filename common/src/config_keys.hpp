@@ -130,6 +130,12 @@ void declareEye(V& v, RunConfig& c) {
     v.choice("attention", e.attention, kAttentionNames,
              "`bottom_up`: the paper's saliency scans of goal and scene; `top_down`: one look at where scene and "
              "goal differ, objects remembered by the planner, inhibition of return (docs/model.md)");
+    v.given("fovea", [&] {  // the runs of older logs had the centroid eye
+      v.choice("fovea", e.fovea, kFoveaNames,
+               "`blob_centroid`: the window on the found blob's centroid, from the image alone; `true_centre`: on "
+               "the true centre of the object the blob shows, which the environment then lists in every SCENE (the "
+               "authors' eye; the eye no longer works from the image alone: docs/model.md#fovea)");
+    });
   });
 }
 

@@ -91,6 +91,25 @@ bool Environment::placeFree(double x, double y, const Shape* shape, Counts count
   return true;
 }
 
+std::vector<cv::Point2d> Environment::centres() const {
+  std::vector<cv::Point2d> out;
+  for (const WorldObject& o : objects_)
+    if (o.present) out.emplace_back(o.x, o.y);
+  return out;
+}
+
+std::vector<cv::Point2d> Environment::goalCentres() const {
+  if (!scenario_) throw std::logic_error("Environment: no scenario, so no goal");
+  std::vector<cv::Point2d> out;
+  for (const auto& so : scenario_->objects) {
+    WorldObject o;
+    o.shape = so.shape;
+    place(o, so.goal.x, so.goal.y);
+    out.emplace_back(o.x, o.y);
+  }
+  return out;
+}
+
 const cv::Mat& Environment::goalScene() const {
   if (!scenario_) throw std::logic_error("Environment: no scenario, so no goal");
   return goal_;

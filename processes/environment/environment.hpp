@@ -63,6 +63,11 @@ class Environment {
   bool objectsAppearAt(std::int64_t step) const;
 
   const std::vector<WorldObject>& objects() const { return objects_; }
+  // The true centres of the objects in the scene (render), or in the goal
+  // (goalScene), in the environment's order: what a SCENE lists for the
+  // eye's true_centre fovea (issue 28).
+  std::vector<cv::Point2d> centres() const;
+  std::vector<cv::Point2d> goalCentres() const;
   // Index into objects() of the present object covering a pixel, or -1; where
   // objects overlap, the one drawn last (on top).
   int objectAt(Pixel p) const;

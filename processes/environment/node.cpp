@@ -41,7 +41,8 @@ void EnvironmentNode::onStop() {
 void EnvironmentNode::onStart() {
   if (extrinsic()) {  // paper 2.4.3: the goal is shown and memorised, then the objects are set up
     const cv::Mat goal = env_->goalScene();
-    publishScene(0, scene_t::CAUSE_GOAL, false, -1, -1.0, -1.0, &goal);
+    const std::vector<cv::Point2d> where = env_->goalCentres();
+    publishScene(0, scene_t::CAUSE_GOAL, false, -1, -1.0, -1.0, &goal, &where);
     publishScene(0, scene_t::CAUSE_START, false, -1, -1.0, -1.0);
     return;
   }
@@ -57,7 +58,7 @@ void EnvironmentNode::onStart() {
 }
 
 void EnvironmentNode::publishScene(std::int64_t step, int8_t cause, bool scan, int action, double tx, double ty,
-                                   const cv::Mat* image) {
+                                   const cv::Mat* image, const std::vector<cv::Point2d>* centres) {
   scene_t s;
   s.run_id = runId();
   s.step = step;
@@ -78,6 +79,13 @@ void EnvironmentNode::publishScene(std::int64_t step, int8_t cause, bool scan, i
   }
   s.data = sent_data_;
   s.size = static_cast<int32_t>(s.data.size());
+  if (config().eye.fovea == Fovea::TrueCentre) {  // the eye's true_centre window needs them; it alone reads them
+    for (const cv::Point2d& c : centres ? *centres : env_->centres()) {
+      s.object_x.push_back(c.x);
+      s.object_y.push_back(c.y);
+    }
+  }
+  s.n_objects = static_cast<int16_t>(s.object_x.size());
   publish(ch::scene, s);
 }
 

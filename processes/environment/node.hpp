@@ -3,6 +3,7 @@
 // Channels out: PROBE (once, at START), SCENE (when the scene changes), STATUS
 // Extrinsic phase: at START the goal scene (to memorise), then the initial
 // scene; then a scene after every action the planner decides.
+// With eye.fovea = true_centre each SCENE also lists its objects' true centres.
 #pragma once
 #include <memory>
 
@@ -23,7 +24,7 @@ class EnvironmentNode : public NodeBase {
   void decide(const decision_t& d);  // intrinsic: a step's decision
   void act(const decision_t& d);     // extrinsic: the planner's action
   void publishScene(std::int64_t step, int8_t cause, bool scan, int action, double tx, double ty,
-                    const cv::Mat* image = nullptr);
+                    const cv::Mat* image = nullptr, const std::vector<cv::Point2d>* centres = nullptr);
   bool extrinsic() const { return config().phase == Phase::Extrinsic; }
 
   std::unique_ptr<Environment> env_;

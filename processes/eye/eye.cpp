@@ -4,6 +4,8 @@
 
 #include <cmath>
 #include <limits>
+#include <stdexcept>
+#include <string>
 #include <tuple>
 
 #include "afford/actions.hpp"
@@ -98,19 +100,52 @@ Eye::Eye(const RunConfig& config) : config_(config) {
   }
 }
 
-void Eye::setImage(Retina& r, cv::Mat image) const {
-  r.rgb = std::move(image);
-  r.gray = meanChannels(r.rgb);
-  r.smooth = blur(r.gray, config_.eye.saliency_sigma_px);
-  cv::Mat mask = r.gray > 0;
-  r.n_labels = cv::connectedComponentsWithStats(mask, r.labels, r.stats, r.centroids, 8, CV_32S);
+void Eye::setImage(Retina& r, cv::Mat image, std::vector<cv::Point2d> objects) const {
+  Retina n;  // built aside: an image refused leaves the retina as it was
+  n.rgb = std::move(image);
+  n.gray = meanChannels(n.rgb);
+  n.smooth = blur(n.gray, config_.eye.saliency_sigma_px);
+  cv::Mat mask = n.gray > 0;
+  n.n_labels = cv::connectedComponentsWithStats(mask, n.labels, n.stats, n.centroids, 8, CV_32S);
+  if (config_.eye.fovea == Fovea::TrueCentre) {
+    n.objects = std::move(objects);
+    matchObjects(n);  // throws: a blob without an object
+  }
   if (config_.eye.saliency_order == SaliencyOrder::SmoothThenNoise)
-    r.contenders = contenders(r.smooth, config_.eye.saliency_noise);
+    n.contenders = contenders(n.smooth, config_.eye.saliency_noise);
+  n.focus = std::move(r.focus);
+  r = std::move(n);
   if (!r.focus.image.empty()) r.focus = refocus(r);
 }
 
-void Eye::setScene(cv::Mat scene) { setImage(outer_, std::move(scene)); }
-void Eye::setGoal(cv::Mat goal) { setImage(inner_, std::move(goal)); }
+void Eye::matchObjects(Retina& r) const {
+  const int size = config_.world.size_px;
+  r.object_of.assign(static_cast<std::size_t>(r.n_labels), -1);
+  std::vector<double> best(static_cast<std::size_t>(r.n_labels), std::numeric_limits<double>::infinity());
+  for (std::size_t i = 0; i < r.objects.size(); ++i) {
+    const cv::Point2d& o = r.objects[i];
+    const int label = labelAt(r, toPixel(o.x, o.y, size));
+    if (label == 0) continue;  // a listed object the image does not show: never looked at
+    const double d = std::hypot(o.x * size - r.centroids.at<double>(label, 0), o.y * size - r.centroids.at<double>(label, 1));
+    if (d < best[static_cast<std::size_t>(label)]) {
+      best[static_cast<std::size_t>(label)] = d;
+      r.object_of[static_cast<std::size_t>(label)] = static_cast<int>(i);
+    }
+  }
+  for (int label = 1; label < r.n_labels; ++label)
+    if (r.object_of[static_cast<std::size_t>(label)] < 0)
+      throw std::invalid_argument(
+          "object_x, object_y: the object seen at pixel (" + std::to_string(r.stats.at<int>(label, cv::CC_STAT_LEFT)) + ", " +
+          std::to_string(r.stats.at<int>(label, cv::CC_STAT_TOP)) + ") holds none of the " + std::to_string(r.objects.size()) +
+          " object centres listed, and eye.fovea = true_centre places the window on an object's true centre");
+}
+
+void Eye::setScene(cv::Mat scene, std::vector<cv::Point2d> objects) { setImage(outer_, std::move(scene), std::move(objects)); }
+void Eye::setGoal(cv::Mat goal, std::vector<cv::Point2d> objects) { setImage(inner_, std::move(goal), std::move(objects)); }
+void Eye::checkScene(cv::Mat scene, std::vector<cv::Point2d> objects) const {
+  Retina r;
+  setImage(r, std::move(scene), std::move(objects));
+}
 
 int Eye::labelAt(const Retina& r, Pixel p) {
   if (p.row < 0 || p.col < 0 || p.row >= r.labels.rows || p.col >= r.labels.cols) return 0;
@@ -143,6 +178,10 @@ Focus Eye::focusOn(const Retina& r, double x, double y) const {
 }
 
 Focus Eye::focusOnBlob(const Retina& r, int label) const {
+  if (config_.eye.fovea == Fovea::TrueCentre) {  // setImage matched every blob to an object
+    const cv::Point2d& o = r.objects[static_cast<std::size_t>(r.object_of[static_cast<std::size_t>(label)])];
+    return focusOn(r, o.x, o.y);
+  }
   if (config_.world.positions == Positions::Pixel) return focusAt(r, blobCentre(r, label));
   const double size = config_.world.size_px;
   return focusOn(r, r.centroids.at<double>(label, 0) / size, r.centroids.at<double>(label, 1) / size);
@@ -241,15 +280,17 @@ Focus Eye::peekScan(const Retina& r, std::int64_t step, int purpose) const {
   return chosen > 0 ? focusOnBlob(r, chosen) : refocus(r);
 }
 
-Effect Eye::scanEffect(std::int64_t step, cv::Mat after, int action) {
+Effect Eye::scanEffect(std::int64_t step, cv::Mat after, int action, std::vector<cv::Point2d> objects) {
   Effect e;
   e.before = outer_.focus;
   cv::Mat change;
   double max_change = 0;
   if (!sameImage(outer_.rgb, after)) {  // else the action changed nothing: the retina stands as it is
     change = blur(positiveChange(outer_.rgb, after), config_.eye.change_sigma_px);
-    setScene(std::move(after));
+    setScene(std::move(after), std::move(objects));
     cv::minMaxLoc(change, nullptr, &max_change);
+  } else if (config_.eye.fovea == Fovea::TrueCentre && objects != outer_.objects) {
+    setScene(std::move(after), std::move(objects));  // the same pixels, objects moved within them: later looks see where
   }
   if (max_change > 0) {
     const int i = noisyArgmax(outer_, step, static_cast<int>(Purpose::EffectNoise), 0, &change);

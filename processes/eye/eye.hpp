@@ -1,7 +1,9 @@
 // Eye core (paper 2.3.1): bottom-up saliency scan with keyed noise, the
 // change-driven scan of action effects, the focus image and the change tests.
 // Object identity comes from connected blobs on the black background; the
-// fovea is centred on the chosen blob (docs/parameters.md, "saliency scan").
+// fovea is centred on the chosen blob (docs/parameters.md, "saliency scan"),
+// or, with eye.fovea = true_centre, on the true centre of the object the blob
+// shows, from the list of centres given with the image (docs/model.md#fovea).
 // No LCM here.
 #pragma once
 #include <opencv2/core.hpp>
@@ -32,8 +34,11 @@ class Eye {
  public:
   explicit Eye(const RunConfig& config);
 
-  // Replace the scene the eye looks at (after a scene message).
-  void setScene(cv::Mat scene);
+  // Replace the scene the eye looks at (after a scene message). `objects`: the
+  // true centres of the objects in it (scene units), read only with
+  // eye.fovea = true_centre; then every blob must hold one of them, or
+  // std::invalid_argument names the blob (and the eye keeps what it had).
+  void setScene(cv::Mat scene, std::vector<cv::Point2d> objects = {});
   bool hasScene() const { return !outer_.rgb.empty(); }
   const cv::Mat& scene() const { return outer_.rgb; }
   const Focus& focus() const { return outer_.focus; }
@@ -51,12 +56,15 @@ class Eye {
   // Change-driven scan after `action` was executed at `step` (ScanEffect and
   // Affordance): looks at the changed object in `after` and compares it with
   // the focus before the action. The eye then looks at `after`.
-  Effect scanEffect(std::int64_t step, cv::Mat after, int action);
+  // `objects` as for setScene.
+  Effect scanEffect(std::int64_t step, cv::Mat after, int action, std::vector<cv::Point2d> objects = {});
   // The object blob label under a pixel of the scene (0 = background).
   int labelAt(Pixel p) const { return labelAt(outer_, p); }
 
   // Extrinsic phase (paper 2.4.3). The inner eye looks at the memorised goal image.
-  void setGoal(cv::Mat goal);
+  void setGoal(cv::Mat goal, std::vector<cv::Point2d> objects = {});
+  // What setScene would refuse of this image and list, without taking it.
+  void checkScene(cv::Mat scene, std::vector<cv::Point2d> objects) const;
   bool hasGoal() const { return !inner_.rgb.empty(); }
   // Scan: the inner eye's saliency scan of the goal image (a sub-goal).
   const Focus& scanGoal(std::int64_t step);
@@ -84,13 +92,20 @@ class Eye {
     cv::Mat stats;      // blob bounding boxes
     cv::Mat centroids;  // blob centroids (CV_64F, pixel indices)
     int n_labels = 1;
+    // eye.fovea = true_centre: the objects' true centres (scene units), and
+    // for each blob label the one it shows (-1 for the background).
+    std::vector<cv::Point2d> objects;
+    std::vector<int> object_of;
     // smooth_then_noise: the pixels of `smooth` within 2 * noise of its
     // maximum, ascending, the only ones a scan can land on; the same for every
     // scan of this image, so found once.
     std::vector<int> contenders;
     Focus focus;
   };
-  void setImage(Retina& r, cv::Mat image) const;
+  void setImage(Retina& r, cv::Mat image, std::vector<cv::Point2d> objects) const;
+  // true_centre: which listed object each blob shows (its centre's pixel is
+  // in the blob; of several, the nearest to the blob's centroid).
+  void matchObjects(Retina& r) const;
   static int labelAt(const Retina& r, Pixel p);
   static Pixel blobCentre(const Retina& r, int label);
   Focus focusAt(const Retina& r, Pixel p) const;
@@ -100,6 +115,7 @@ class Eye {
   Focus focusOn(const Retina& r, double x, double y) const;
   // The focus on a blob: continuous world, on its centroid (the eye's estimate
   // of the object's real centre); pixel world, on its bounding box's centre.
+  // With eye.fovea = true_centre, on the true centre of the object it shows.
   Focus focusOnBlob(const Retina& r, int label) const;
   // The same place looked at again on a new image.
   Focus refocus(const Retina& r) const;

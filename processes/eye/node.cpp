@@ -112,25 +112,37 @@ focus_t EyeNode::focusMessage(std::int64_t step, const Focus& f, int8_t kind, in
   return m;
 }
 
+namespace {
+// The objects' true centres a SCENE lists (eye.fovea = true_centre).
+std::vector<cv::Point2d> listedObjects(const scene_t& s) {
+  std::vector<cv::Point2d> out;
+  out.reserve(static_cast<std::size_t>(s.n_objects));
+  for (int i = 0; i < s.n_objects; ++i) out.emplace_back(s.object_x[i], s.object_y[i]);
+  return out;
+}
+}  // namespace
+
 void EyeNode::keep(const scene_t& s) {
   cv::Mat image;
   try {
     image = decodeScene(s.data, s.width, s.height);
+    if (s.cause == scene_t::CAUSE_GOAL) {
+      eye_->setGoal(std::move(image), listedObjects(s));  // memorised: the inner eye's image
+    } else {
+      if (config().eye.fovea == Fovea::TrueCentre) eye_->checkScene(image, listedObjects(s));  // refused now, not at its LOOK
+      scenes_[s.serial] = {std::move(image), listedObjects(s)};  // the outer eye's, once a LOOK names it
+    }
   } catch (const std::exception& e) {
     throw Refusal(e.what());
   }
   last_scene_ = s.step;
-  if (s.cause == scene_t::CAUSE_GOAL)
-    eye_->setGoal(std::move(image));  // memorised: the inner eye's image
-  else
-    scenes_[s.serial] = std::move(image);  // the outer eye's, once a LOOK names it
 }
 
 void EyeNode::answer(const look_t& l) {
   // The scene the planner looked on when it asked (a LOOK can overtake its scene).
   if (l.scene != outer_scene_) {
     auto it = scenes_.find(l.scene);
-    eye_->setScene(std::move(it->second));
+    eye_->setScene(std::move(it->second.first), std::move(it->second.second));  // checked when kept
     seen_data_.clear();
     outer_scene_ = l.scene;
     scenes_.erase(scenes_.begin(), std::next(it));  // LOOKs come in order: no later one names these
@@ -169,7 +181,8 @@ void EyeNode::answer(const look_t& l) {
 void EyeNode::see(const scene_t& s) {
   const bool is_action = s.cause == scene_t::CAUSE_ACTION;
   cv::Mat image;
-  if (eye_->hasScene() && s.data == seen_data_ && s.width == eye_->scene().cols && s.height == eye_->scene().rows) {
+  const bool same = eye_->hasScene() && s.data == seen_data_ && s.width == eye_->scene().cols && s.height == eye_->scene().rows;
+  if (same) {
     image = eye_->scene();
   } else {
     try {
@@ -177,12 +190,21 @@ void EyeNode::see(const scene_t& s) {
     } catch (const std::exception& e) {
       throw Refusal(e.what());
     }
-    seen_data_ = s.data;
   }
+  std::optional<Effect> effect;
+  try {  // a list of objects that does not fit the image (eye.fovea = true_centre) is refused, the eye unchanged
+    if (is_action)
+      effect = eye_->scanEffect(s.step - 1, image, s.action, listedObjects(s));
+    else
+      eye_->setScene(image, listedObjects(s));
+  } catch (const std::invalid_argument& e) {
+    throw Refusal(e.what());
+  }
+  if (!same) seen_data_ = s.data;
   guess_.reset();  // the scene changes: a guess made on the old one is void
 
-  if (is_action) {
-    const Effect e = eye_->scanEffect(s.step - 1, image, s.action);
+  if (effect) {
+    const Effect& e = *effect;
     effect_t m;
     m.run_id = runId();
     m.step = s.step - 1;
@@ -204,8 +226,6 @@ void EyeNode::see(const scene_t& s) {
     publish(ch::effect, m);
     last_effect_ = s.step - 1;
     handled(s.step - 1);
-  } else {
-    eye_->setScene(image);
   }
   if (s.changes_next != objectsAppearAt(s.step + 1))
     log_->warn("SCENE of step {} says objects appear at the next step: {}, the run's world.objects: {}", s.step,

@@ -56,7 +56,8 @@ class EyeNode : public NodeBase {
   std::int32_t last_look_ = -1;      // extrinsic: last LOOK answered
   std::int64_t last_scene_ = -1;     // extrinsic: step of the last scene
   std::int64_t outer_scene_ = -1;    // extrinsic: serial of the scene the outer eye holds
-  std::map<std::int64_t, cv::Mat> scenes_;  // extrinsic: scenes taken, not yet named by a LOOK (by serial)
+  // extrinsic: scenes taken, not yet named by a LOOK (by serial), with the objects they list
+  std::map<std::int64_t, std::pair<cv::Mat, std::vector<cv::Point2d>>> scenes_;
   std::optional<std::pair<std::int64_t, Focus>> guess_;  // peekScan of the next step, if computed
   std::optional<std::int64_t> next_step_;  // a step to start now (set by an input, started by afterInput)
 };

@@ -156,8 +156,8 @@ class World {
     env_ = scenario_ ? std::make_unique<Environment>(config_, *scenario_) : std::make_unique<Environment>(config_);
     eye_ = std::make_unique<Eye>(config_);
     step_ = 0;
-    eye_->setScene(env_->render());
-    if (scenario_) eye_->setGoal(env_->goalScene());
+    eye_->setScene(env_->render(), env_->centres());
+    if (scenario_) eye_->setGoal(env_->goalScene(), env_->goalCentres());
     eye_->scan(step_);
   }
 
@@ -190,12 +190,12 @@ class World {
       const ActionOutcome out = env_->execute(step_, act, f.x, f.y);
       info["on_object"] = out.on_object;
       info["succeeded"] = out.succeeded;
-      const Effect e = eye_->scanEffect(step_, env_->render(), act);
+      const Effect e = eye_->scanEffect(step_, env_->render(), act, env_->centres());
       info["image_changed"] = e.image_changed;
       info["position_changed"] = e.position_changed;
     }
     ++step_;
-    if (env_->introduceObjectsAt(step_)) eye_->setScene(env_->render());
+    if (env_->introduceObjectsAt(step_)) eye_->setScene(env_->render(), env_->centres());
     eye_->scan(step_);
     info["goal_distance"] = scenario_ ? env_->goalDistance() : -1.0;
     return info;

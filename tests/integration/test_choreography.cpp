@@ -6,6 +6,7 @@
 #include <cmath>
 #include <limits>
 #include <map>
+#include <set>
 #include <memory>
 #include <sstream>
 
@@ -292,6 +293,50 @@ TEST(Choreography, ExtrinsicTestsMatchThePlainPlanner) {
       EXPECT_EQ(got.sub_goals[i].actions_checked, ref.sub_goals[i].actions_checked) << scenario << " sub-goal " << i;
       EXPECT_EQ(got.sub_goals[i].reached, ref.sub_goals[i].reached) << scenario << " sub-goal " << i;
     }
+  }
+}
+
+// With the authors' eye (issue 28) the choreography computes what the plain
+// loops compute, in both phases: every SCENE lists its objects' true centres
+// (the goal's for the goal scene), and the eye's windows go there. Without the
+// option no SCENE lists any, and the agent learns otherwise.
+TEST(Choreography, WithTheAuthorsEyeComputesWhatThePlainAlgorithmComputes) {
+  const std::vector<std::string> option = {"eye.fovea=true_centre"};
+  const std::string yaml = test::shippedConfigYaml("base", System::IMP, 3, 400, option);
+  InProcessRun run(yaml, System::IMP, 3, 400);
+  ASSERT_TRUE(run.outcome.ok) << run.outcome.error;
+  EXPECT_EQ(run.outcome.weights_checksum, test::runIntrinsic(parseRunConfigText(yaml)).weightsChecksum());
+  const auto listed = [](const InProcessRun& r) {
+    std::set<int> counts;
+    for (const auto& e : r.events)
+      if (e.channel == ch::scene.name) {
+        scene_t m;
+        m.decode(e.data.data(), 0, static_cast<int>(e.data.size()));
+        counts.insert(m.n_objects);
+      }
+    return counts;
+  };
+  EXPECT_EQ(listed(run), std::set<int>{9});
+  InProcessRun ours(test::shippedConfigYaml("base", System::IMP, 3, 400), System::IMP, 3, 400);
+  ASSERT_TRUE(ours.outcome.ok) << ours.outcome.error;
+  EXPECT_EQ(listed(ours), std::set<int>{0});
+  EXPECT_NE(ours.outcome.weights_checksum, run.outcome.weights_checksum);
+
+  const std::string dir = test::tempDir("authors-eye");
+  const std::string config_dir = std::string(AFFORD_SOURCE_DIR) + "/config";
+  test::runIntrinsic(parseRunConfigText(test::shippedConfigYaml("base", System::IMP, 5, 3000, option)))
+      .save(dir + "/predictors.ckpt");
+  for (const std::string scenario : {"scenario3", "scenario5"}) {
+    const std::string test_yaml = emitYaml(extrinsicConfig(
+        config_dir, RunRequest{"base", System::IMP, 53, std::nullopt, option}, dir + "/predictors.ckpt", scenario));
+    const BothWays both = runBothWays(test_yaml, 53, dir + "/predictors.ckpt");
+    ASSERT_TRUE(both.run.ok) << both.run.error;
+    EXPECT_EQ(both.run.extrinsic.success, both.plain.success) << scenario;
+    EXPECT_EQ(both.run.extrinsic.completion, both.plain.completion) << scenario;
+    EXPECT_EQ(both.run.extrinsic.attempts, both.plain.attempts) << scenario;
+    ASSERT_EQ(both.run.extrinsic.sub_goals.size(), both.plain.sub_goals.size()) << scenario;
+    for (std::size_t i = 0; i < both.plain.sub_goals.size(); ++i)
+      EXPECT_EQ(both.run.extrinsic.sub_goals[i].actions_checked, both.plain.sub_goals[i].actions_checked) << scenario;
   }
 }
 
@@ -615,6 +660,27 @@ std::vector<BadInput> badInputs() {
          sc.height = 150;
          sc.encoding = scene_t::ENCODING_ZLIB_RGB8;
          sc.size = 0;
+         sc.n_objects = 0;
+         l.publish("SCENE", &sc);
+       }},
+      {"SceneObjectOutsideTheScene", "SCENE", "field object_x[1] = 2 is out of range [0, 1]",
+       [](lcm::LCM& l, const std::string& run, std::int64_t s, const Bytes&) {
+         scene_t sc;
+         sc.run_id = run;
+         sc.step = s + 1;
+         sc.serial = 0;
+         sc.cause = scene_t::CAUSE_OBJECTS_APPEARED;
+         sc.scan = true;
+         sc.changes_next = false;
+         sc.action = -1;
+         sc.action_target_x = sc.action_target_y = -1;
+         sc.goal_distance = sc.goal_utility = -1;
+         sc.width = sc.height = 150;
+         sc.encoding = scene_t::ENCODING_ZLIB_RGB8;
+         sc.size = 0;
+         sc.n_objects = 2;
+         sc.object_x = {0.5, 2.0};
+         sc.object_y = {0.5, 0.5};
          l.publish("SCENE", &sc);
        }},
   };

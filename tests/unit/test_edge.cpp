@@ -42,6 +42,7 @@ scene_t sceneOf(const std::string& run, std::int64_t step) {
   s.encoding = scene_t::ENCODING_ZLIB_RGB8;
   s.data = encodeScene(blankScene(150));
   s.size = static_cast<int32_t>(s.data.size());
+  s.n_objects = 0;
   return s;
 }
 

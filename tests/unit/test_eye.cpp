@@ -223,6 +223,97 @@ TEST(Eye, OverlappingObjectsAreOneBlobTheEyeLooksAtAndActsOn) {
   FAIL() << "no seed in 1..200 put two late objects over each other";
 }
 
+// The authors' eye (issue 28, eye.fovea = true_centre). A rectangle 10 pixels
+// wide covers the same pixels at two real centres a fraction of a pixel apart,
+// while the window placed on its true centre lands a column apart: the
+// centroid eye sees one image, the authors' eye two, and reports the true centre.
+TEST(Eye, TheAuthorsEyeSeesARectanglesTwoDrawingPhasesAndTheCentroidEyeOne) {
+  const RunConfig ours = test::shippedConfig("base");
+  const RunConfig authors = test::shippedConfig("base", System::IMP, 1, {"eye.fovea=true_centre"});
+  const double y = 0.5;
+  double x0 = -1, x1 = -1;
+  for (int k = 0; k < 1500 && x1 < 0; ++k) {  // two centres, the same pixels, windows a column apart
+    const double a = 0.4 + k / 15000.0, b = a + 1.0 / 1500;
+    if (shapePixels(Shape::Rectangle, a, y, ours.world) == shapePixels(Shape::Rectangle, b, y, ours.world) &&
+        windowCorner(a, y, 21, 150).col != windowCorner(b, y, 21, 150).col) {
+      x0 = a;
+      x1 = b;
+    }
+  }
+  ASSERT_GT(x1, 0) << "no two centres draw the same rectangle";
+  const auto look = [&](const RunConfig& c, double x) {
+    cv::Mat scene = blankScene(150);
+    paintObject(scene, Shape::Rectangle, Colour::Green, x, y, c.world);
+    Eye eye(c);
+    eye.setScene(scene, {{x, y}});
+    return eye.scan(0);
+  };
+  const Focus c0 = look(ours, x0), c1 = look(ours, x1);
+  EXPECT_EQ(c0.image, c1.image) << "the centroid eye sees both phases alike";
+  EXPECT_DOUBLE_EQ(c0.x, c1.x);
+  const Focus t0 = look(authors, x0), t1 = look(authors, x1);
+  EXPECT_NE(t0.image, t1.image) << "the authors' eye sees the two phases";
+  EXPECT_DOUBLE_EQ(t0.x, x0);
+  EXPECT_DOUBLE_EQ(t1.x, x1);
+  EXPECT_DOUBLE_EQ(t0.y, y);
+}
+
+// Every scan, effect and look of the authors' eye is on a listed object's true
+// centre; the centroid eye ignores the list.
+TEST(Eye, TheAuthorsEyeLooksAtTrueCentresAndOursIgnoresTheList) {
+  const RunConfig authors = test::shippedConfig("base", System::IMP, 1, {"eye.fovea=true_centre"});
+  Environment env(authors);
+  Eye eye(authors);
+  eye.setScene(env.render(), env.centres());
+  for (int step = 0; step < 60; ++step) {
+    const Focus f = eye.scan(step);
+    bool on_centre = false;
+    for (const WorldObject& o : env.objects()) on_centre = on_centre || (f.x == o.x && f.y == o.y);
+    ASSERT_TRUE(on_centre) << "step " << step << " at " << f.x << "," << f.y;
+    if (step % 3 == 0) {
+      ASSERT_TRUE(env.execute(step, kMove, f.x, f.y).succeeded);
+      const Effect e = eye.scanEffect(step, env.render(), kMove, env.centres());
+      bool moved_there = false;
+      for (const WorldObject& o : env.objects()) moved_there = moved_there || (e.after.x == o.x && e.after.y == o.y);
+      EXPECT_TRUE(moved_there) << "step " << step;
+    }
+  }
+  const RunConfig ours = test::shippedConfig("base");
+  Environment env2(ours);
+  Eye with(ours), without(ours);
+  with.setScene(env2.render(), {{0.9, 0.9}});  // not even where the objects are: never read
+  without.setScene(env2.render());
+  for (int step = 0; step < 20; ++step) EXPECT_EQ(with.scan(step).image, without.scan(step).image);
+}
+
+// A list that leaves an object out is refused, naming the fields, and the eye
+// keeps the scene it had.
+TEST(Eye, TheAuthorsEyeRefusesAListWithoutAnObjectItSees) {
+  const RunConfig c = test::shippedConfig("base", System::IMP, 1, {"eye.fovea=true_centre"});
+  Environment env(c);
+  Eye eye(c);
+  eye.setScene(env.render(), env.centres());
+  const Focus before = eye.scan(0);
+  std::vector<cv::Point2d> short_list = env.centres();
+  short_list.pop_back();
+  for (const auto& list : {short_list, std::vector<cv::Point2d>{}}) {
+    cv::Mat other = env.render();
+    other.setTo(cv::Scalar(0, 0, 0));
+    paintObject(other, Shape::Square, Colour::Blue, 0.5, 0.5, c.world);
+    paintObject(other, Shape::Square, Colour::Red, 0.3, 0.3, c.world);
+    try {
+      eye.setScene(env.render(), list);
+      FAIL() << "a list of " << list.size() << " objects was taken";
+    } catch (const std::invalid_argument& e) {
+      EXPECT_NE(std::string(e.what()).find("object_x, object_y"), std::string::npos) << e.what();
+    }
+    EXPECT_THROW(eye.checkScene(other, {{0.5, 0.5}}), std::invalid_argument);
+    EXPECT_NO_THROW(eye.checkScene(other, {{0.5, 0.5}, {0.3, 0.3}}));
+  }
+  EXPECT_EQ(eye.atGaze().image, before.image);
+  EXPECT_TRUE(sameImage(eye.scene(), env.render()));
+}
+
 }  // namespace
 }  // namespace afford
 

@@ -70,6 +70,10 @@ struct WorldConfig {
 // bottom-up saliency scans, or a top-down look at where scene and goal differ,
 // remembered by the planner.
 enum class Attention { BottomUp, TopDown };
+// Where the eye puts its window on an object it found (issue 28): on the blob's
+// centroid, from the image alone (ours); or on the object's true centre, which
+// the environment then lists in each SCENE (the authors' eye).
+enum class Fovea { BlobCentroid, TrueCentre };
 
 struct EyeConfig {
   int focus_side = 0;                     // pixels
@@ -82,6 +86,7 @@ struct EyeConfig {
   double position_change_threshold = 0; // tau_p
   int max_scan_draws = 0;                // redraws until the gaze lands on another object
   Attention attention = Attention::BottomUp;  // extrinsic phase (issue 12)
+  Fovea fovea = Fovea::BlobCentroid;
 };
 
 // The agent's memory of past experiences (issue 11, docs/model.md#memory):
@@ -212,6 +217,8 @@ inline constexpr std::array<Named<SaliencyOrder>, 2> kSaliencyOrderNames{
     {{"smooth_then_noise", SaliencyOrder::SmoothThenNoise}, {"noise_then_smooth", SaliencyOrder::NoiseThenSmooth}}};
 inline constexpr std::array<Named<Attention>, 2> kAttentionNames{
     {{"bottom_up", Attention::BottomUp}, {"top_down", Attention::TopDown}}};
+inline constexpr std::array<Named<Fovea>, 2> kFoveaNames{
+    {{"blob_centroid", Fovea::BlobCentroid}, {"true_centre", Fovea::TrueCentre}}};
 inline constexpr std::array<Named<MemoryKeep>, 3> kMemoryKeepNames{
     {{"auto", MemoryKeep::Auto}, {"always", MemoryKeep::Always}, {"never", MemoryKeep::Never}}};
 inline constexpr std::array<Named<ReplaySampling>, 2> kReplaySamplingNames{
