@@ -11,7 +11,9 @@
 #                                        replay and revisits, beside the paper's agent, and
 #                                        random-tables (every system, 20 tables, with and without
 #                                        them); (issue 12) attention, multi-step, world-size on
-#                                        generated scenarios; about 8 min on 2 cores
+#                                        generated scenarios; (issue 28) base, late1 and
+#                                        forward-models with the authors' eye (eye.fovea:
+#                                        true_centre); about 12 min on 2 cores
 #   scripts/reproduce.sh all             all three
 #   scripts/reproduce.sh NAME...         only these experiments (e.g. late3 utility)
 # Environment: JOBS (runs at a time, default: cores), REPS and EXT_REPS (default: the
@@ -30,7 +32,8 @@ set -euo pipefail
 cd "$(dirname "$0")/.."
 deterministic=(base late1 late2 late3)
 stochastic=(stochastic utility forward-models search-reduction)
-beyond=(late1-memory late2-memory late3-memory random-tables attention multi-step world-size)
+beyond=(late1-memory late2-memory late3-memory random-tables attention multi-step world-size
+        base-true-centre late1-true-centre forward-models-true-centre)
 [[ $# -eq 0 ]] && set -- deterministic
 experiments=()
 for what in "$@"; do
@@ -66,7 +69,7 @@ echo "# written by scripts/reproduce.sh $*" > "$plan"
 for exp in "${experiments[@]}"; do
   rm -rf "${out:?}/$exp"
   line=$exp
-  case " ${deterministic[*]} late1-memory late2-memory late3-memory " in
+  case " ${deterministic[*]} late1-memory late2-memory late3-memory base-true-centre late1-true-centre " in
     *" $exp "*) line+=" --system all --extrinsic-reps ${EXT_REPS:-10}" ;;
     *) [[ -n ${EXT_REPS:-} && $exp != stochastic && $exp != random-tables ]] && line+=" --extrinsic-reps $EXT_REPS" ;;
   esac

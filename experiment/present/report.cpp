@@ -275,6 +275,14 @@ struct Docs {
   bool has(const std::string& name) const { return !dir.empty() && fs::exists(dir / name); }
 };
 
+// An experiment with the authors' eye (issue 28): NAME-true-centre, shown
+// beside NAME in its own section (authorsEyeSections).
+const std::string kAuthorsEyeSuffix = "-true-centre";
+bool withTheAuthorsEye(const std::string& experiment) {
+  return experiment.size() > kAuthorsEyeSuffix.size() &&
+         experiment.compare(experiment.size() - kAuthorsEyeSuffix.size(), kAuthorsEyeSuffix.size(), kAuthorsEyeSuffix) == 0;
+}
+
 // Section 3.2 of the paper: stochastic affordances (Figure 11) and the planner tests (Figures 12-14).
 std::string stochasticSections(const std::vector<Folder>& folders, const Reference& ref) {
   const double turn_blue = ref.required("thresholds.stochastic_checks.turn_blue");
@@ -310,7 +318,7 @@ std::string stochasticSections(const std::vector<Folder>& folders, const Referen
         md << "| " << u.budgets[k] << " | " << num(u.goal_mean[k], 3) << " | " << num(u.utility_mean[k], 3) << " | "
            << pValue(k < u.p_values.size() ? u.p_values[k] : Nullable<double>()) << " |\n";
     }
-    if (s.forward_models) {
+    if (s.forward_models && !withTheAuthorsEye(s.experiment)) {
       const ForwardModelsAnalysis& fm = *s.forward_models;
       md << "\n## Forward models after " << s.after_actions.value_or(0) << " actions (paper 3.2.3, Figure 13)"
          << labelled(f) << "\n" << claim(ref, s)
@@ -337,6 +345,83 @@ std::string stochasticSections(const std::vector<Folder>& folders, const Referen
          << "\nMean actions checked per sub-goal (" << r.system << " agents): with restriction "
          << num(r.restricted_mean, 3) << ", without " << num(r.unrestricted_mean, 3)
          << "; Welch's t-test p = " << pValue(r.p_value) << ".\n";
+    }
+  }
+  return md.str();
+}
+
+// A row of a table-metric comparison: system, agent, scenarios 1-5 (the
+// paper's, from reference.yaml, when `reference`), the affordance error.
+void tableMetricRow(std::ostream& md, const std::string& sys, const std::string& agent, const SystemSummary& js,
+                    bool reference) {
+  md << "| " << sys << " | " << agent << " |";
+  const std::optional<std::map<std::string, double>>& metric =
+      reference ? js.reference_table_metric
+                : (js.extrinsic ? js.extrinsic->table_metric : std::optional<std::map<std::string, double>>());
+  for (int k = 1; k <= 5; ++k) {
+    const auto v = metric ? metric->find("scenario" + std::to_string(k)) : std::map<std::string, double>::const_iterator();
+    md << " " << (metric && v != metric->end() ? num(v->second, reference ? 1 : 2) : std::string("-")) << " |";
+  }
+  md << " " << (reference || !js.affordance_mae ? std::string("-") : num(*js.affordance_mae, 3)) << " |\n";
+}
+
+// Issue 28: an experiment with the authors' eye (NAME-true-centre) beside the
+// same experiment with ours (NAME) and, where the paper has a table, the paper's.
+std::string authorsEyeSections(const std::vector<Folder>& folders, const Docs& docs) {
+  std::ostringstream md;
+  bool header = false;
+  for (const auto& tf : folders) {
+    const std::string& exp = tf.summary.experiment;
+    if (!withTheAuthorsEye(exp)) continue;
+    const std::string plain = exp.substr(0, exp.size() - kAuthorsEyeSuffix.size());
+    const Folder* ours = nullptr;
+    for (const auto& f : folders)
+      if (f.summary.experiment == plain) ours = &f;
+    if (!header)
+      md << "\n## Beyond the paper: the authors' eye (issue 28)\n\nThe same experiments with `eye.fovea: true_centre`: "
+         << "the eye's window goes on the true centre of the object whose blob it found, as the authors' eye does, "
+         << "and the environment lists its objects' centres in every SCENE for it, so the eye no longer works from "
+         << "the image alone (" << docs.link("model.md", "fovea") << "). Ours places the window on the blob's "
+         << "centroid. What changes, and why: " << docs.link("results-discussion.md", "authors-eye") << ".\n";
+    header = true;
+    const std::string ours_label = ours ? ours->label : plain;
+    if (tf.summary.forward_models) {
+      md << "\n### " << plain << " with the authors' eye" << labelled(tf) << "\n\nMean utility of the utility planner "
+         << "by action budget: ours (" << ours_label << "), with the authors' eye (" << tf.label << ").\n\n| system | eye |";
+      for (const auto b : tf.summary.forward_models->budgets) md << " budget " << b << " |";
+      md << "\n|---|---|";
+      for (std::size_t k = 0; k < tf.summary.forward_models->budgets.size(); ++k) md << "---|";
+      md << "\n";
+      for (const auto& [sys, js] : tf.summary.systems) {
+        const auto utility = [&](const std::string& eye, const SystemSummary& one) {
+          if (!one.utility_mean) return;
+          md << "| " << sys << " | " << eye << " |";
+          for (const double m : *one.utility_mean) md << " " << num(m, 3) << " |";
+          md << "\n";
+        };
+        if (ours)
+          if (const auto oj = ours->summary.systems.find(sys); oj != ours->summary.systems.end()) utility("ours", oj->second);
+        utility("authors'", js);
+      }
+      for (const auto& [pair, ps] : tf.summary.forward_models->p_values) {
+        md << "| p " << pair << " | authors' |";
+        for (const auto& p : ps) md << " " << pValue(p) << " |";
+        md << "\n";
+      }
+      continue;
+    }
+    md << "\n### " << plain << " with the authors' eye" << labelled(tf) << "\n\nTable metric per scenario: the "
+       << "paper's, ours (" << ours_label << "), with the authors' eye (" << tf.label << "); then the mean absolute error "
+       << "of the learned affordances.\n\n| system | agent | scenario1 | scenario2 | scenario3 | scenario4 | scenario5 | "
+       << "affordance error |\n|---|---|---|---|---|---|---|---|\n";
+    for (const std::string sys : {"FIX", "IGN", "IMP"}) {
+      const auto tj = tf.summary.systems.find(sys);
+      if (tj == tf.summary.systems.end()) continue;
+      if (tj->second.reference_table_metric) tableMetricRow(md, sys, "paper", tj->second, true);
+      if (ours)
+        if (const auto oj = ours->summary.systems.find(sys); oj != ours->summary.systems.end())
+          tableMetricRow(md, sys, "ours", oj->second, false);
+      tableMetricRow(md, sys, "authors' eye", tj->second, false);
     }
   }
   return md.str();
@@ -397,15 +482,7 @@ std::string memorySections(const std::vector<Folder>& folders, const Docs& docs)
         const auto mj = memory.systems.find(sys);
         if (mj == memory.systems.end()) continue;
         const auto row = [&](const std::string& agent, const SystemSummary& js, bool reference) {
-          md << "| " << sys << " | " << agent << " |";
-          const std::optional<std::map<std::string, double>>& metric =
-              reference ? js.reference_table_metric
-                        : (js.extrinsic ? js.extrinsic->table_metric : std::optional<std::map<std::string, double>>());
-          for (int k = 1; k <= 5; ++k) {
-            const auto v = metric ? metric->find("scenario" + std::to_string(k)) : std::map<std::string, double>::const_iterator();
-            md << " " << (metric && v != metric->end() ? num(v->second, reference ? 1 : 2) : std::string("-")) << " |";
-          }
-          md << " " << (reference || !js.affordance_mae ? std::string("-") : num(*js.affordance_mae, 3)) << " |\n";
+          tableMetricRow(md, sys, agent, js, reference);
         };
         row("paper", mj->second, true);
         if (paper_agent)
@@ -710,6 +787,7 @@ Rendered render(const std::vector<Folder>& folders, const Reference& reference, 
   completionSection(md, folders);
   md << stochasticSections(folders, reference);
   md << memorySections(folders, where.docs);
+  md << authorsEyeSections(folders, where.docs);
   md << generatedSections(folders, reference, where.docs);
   figuresSection(md, folders, where, out);
   out.markdown = md.str();

@@ -46,6 +46,8 @@ struct Made {
   std::vector<std::string> settings;
   std::string experiment_file;  // --config FILE: no reference numbers
   bool interrupted = false;
+  std::string experiment = "base";
+  double table_metric = 1.0;  // of scenario1, every system
 };
 
 Made made(const std::string& version, std::vector<std::string> systems, int reps, std::int64_t first_seed,
@@ -66,7 +68,7 @@ json summaryOf(const Made& m) {
   const SummaryTable table = {{1, 1, 0, 1}, {1, 0, 1, 1}, {1, 1, 1, 0}, {1, 1, 0, 1}, {1, 0, 1, 1},
                               {1, 1, 1, 0}, {1, 1, 0, 1}, {1, 0, 1, 1}, {1, 1, 1, 0}};
   Summary s;
-  s.experiment = "base";
+  s.experiment = m.experiment;
   s.description = "base test, deterministic affordances (paper Table 1)";
   s.steps = m.steps;
   s.repetitions = m.reps;
@@ -110,7 +112,7 @@ json summaryOf(const Made& m) {
     SystemExtrinsic& ex = js.extrinsic.emplace();
     ex.scenarios = {"scenario1"};
     ex.tests_per_scenario = m.tests_per_scenario;
-    ex.table_metric = std::map<std::string, double>{{"scenario1", 1.0}};
+    ex.table_metric = std::map<std::string, double>{{"scenario1", m.table_metric}};
     ex.table_metric_solved_share = 0.9;
     ex.success_rate = std::map<std::string, double>{{"scenario1", 1.0}};
     ex.completion_steps.emplace().scenarios["scenario1"] = ScenarioSteps{2, 1, 1, 1, 1, 1, 1, 1.0};
@@ -125,9 +127,9 @@ json summaryOf(const Made& m) {
 // An experiment folder: summary.json, experiment.json (its options), a figure and its CSV, whose bytes name the folder.
 std::string makeFolder(const fs::path& dir, const Made& m) {
   spit(dir / "summary.json", summaryOf(m).dump(2));
-  const json options = {{"experiment", "base"}, {"systems", m.systems}, {"reps", m.reps}, {"seed", m.first_seed},
+  const json options = {{"experiment", m.experiment}, {"systems", m.systems}, {"reps", m.reps}, {"seed", m.first_seed},
                         {"settings", m.settings}, {"extrinsic_reps", m.tests_per_scenario}};
-  spit(dir / "experiment.json", json({{"experiment", "base"}, {"state", "finished"}, {"options", options}}).dump(2));
+  spit(dir / "experiment.json", json({{"experiment", m.experiment}, {"state", "finished"}, {"options", options}}).dump(2));
   spit(dir / "fig_affordances.png", "PNG of " + dir.string());
   spit(dir / "fig_affordances.csv", "csv of " + dir.string());
   return dir.string();
@@ -242,6 +244,32 @@ TEST_F(TwoBaseFolders, ABrokenSummaryIsAnErrorNamingItsFolderAndTheJsonError) {
     EXPECT_NE(std::string(e.what()).find("parse error"), std::string::npos) << e.what();
   }
   EXPECT_FALSE(fs::exists(root / "reports"));
+}
+
+// An experiment with the authors' eye (issue 28) is shown beside the same
+// experiment with ours and the paper's table, in its own section.
+TEST(Report, TheAuthorsEyeIsShownBesideOursAndThePapers) {
+  const fs::path root = test::tempDir("report-eye");
+  Made ours = made("0.1.0+aaaaaaa", {"FIX", "IMP"}, 2, 1, 300, 1);
+  Made authors = ours;
+  authors.experiment = "base-true-centre";
+  authors.table_metric = 0.5;
+  ReportRequest r;
+  r.dirs = {makeFolder(root / "base", ours), makeFolder(root / "base-true-centre", authors)};
+  r.out = (root / "report.md").string();
+  r.config_dir = kConfigDir;
+  r.docs_dir = kDocsDir;
+  writeReport(r);
+  const std::string md = slurp(root / "report.md");
+  const auto section = md.find("### base with the authors' eye");
+  ASSERT_NE(section, std::string::npos) << md;
+  const std::string rows = md.substr(section);
+  for (const std::string sys : {"FIX", "IMP"}) {
+    EXPECT_NE(rows.find("| " + sys + " | paper | 1.0 |"), std::string::npos) << rows;
+    EXPECT_NE(rows.find("| " + sys + " | ours | 1.00 |"), std::string::npos) << rows;
+    EXPECT_NE(rows.find("| " + sys + " | authors' eye | 0.50 |"), std::string::npos) << rows;
+  }
+  EXPECT_NE(md.find("results-discussion.md#authors-eye"), std::string::npos);
 }
 
 TEST(Report, AnInterruptedFolderIsMarkedIncomplete) {
