@@ -440,6 +440,26 @@ struct BadInput {
   Injector inject;
 };
 
+// A scene of newcomers at `step`, empty (no image bytes), unsealed: a test
+// changes the field it is about.
+scene_t newcomersScene(const std::string& run, std::int64_t step) {
+  scene_t sc;
+  sc.run_id = run;
+  sc.step = step;
+  sc.serial = 0;
+  sc.cause = scene_t::CAUSE_OBJECTS_APPEARED;
+  sc.scan = true;
+  sc.changes_next = false;
+  sc.action = -1;
+  sc.action_target_x = sc.action_target_y = -1;
+  sc.goal_distance = sc.goal_utility = -1;
+  sc.width = sc.height = 150;
+  sc.encoding = scene_t::ENCODING_ZLIB_RGB8;
+  sc.size = 0;
+  sc.n_objects = 0;
+  return sc;
+}
+
 focus_t validFocus(const std::string& run, std::int64_t step) {
   focus_t f;
   f.run_id = run;
@@ -647,37 +667,13 @@ std::vector<BadInput> badInputs() {
        }},
       {"WrongSceneSize", "SCENE", "field width has size 100, expected 150",
        [](lcm::LCM& l, const std::string& run, std::int64_t s, const Bytes&) {
-         scene_t sc;
-         sc.run_id = run;
-         sc.step = s + 1;
-         sc.serial = 0;
-         sc.cause = scene_t::CAUSE_OBJECTS_APPEARED;
-         sc.scan = true;
-         sc.changes_next = false;
-         sc.action = -1;
-         sc.action_target_x = sc.action_target_y = -1;
+         scene_t sc = newcomersScene(run, s + 1);
          sc.width = 100;
-         sc.height = 150;
-         sc.encoding = scene_t::ENCODING_ZLIB_RGB8;
-         sc.size = 0;
-         sc.n_objects = 0;
          l.publish("SCENE", &sc);
        }},
       {"SceneObjectOutsideTheScene", "SCENE", "field object_x[1] = 2 is out of range [0, 1]",
        [](lcm::LCM& l, const std::string& run, std::int64_t s, const Bytes&) {
-         scene_t sc;
-         sc.run_id = run;
-         sc.step = s + 1;
-         sc.serial = 0;
-         sc.cause = scene_t::CAUSE_OBJECTS_APPEARED;
-         sc.scan = true;
-         sc.changes_next = false;
-         sc.action = -1;
-         sc.action_target_x = sc.action_target_y = -1;
-         sc.goal_distance = sc.goal_utility = -1;
-         sc.width = sc.height = 150;
-         sc.encoding = scene_t::ENCODING_ZLIB_RGB8;
-         sc.size = 0;
+         scene_t sc = newcomersScene(run, s + 1);
          sc.n_objects = 2;
          sc.object_x = {0.5, 2.0};
          sc.object_y = {0.5, 0.5};
