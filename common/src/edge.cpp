@@ -263,7 +263,7 @@ void Edge::claim(const process_status_t& st) {
     const std::string& ch = st.channels[i];
     if (std::find(tracked_.begin(), tracked_.end(), ch) == tracked_.end()) continue;
     if (publisherOf(ch, extrinsic) != st.process) continue;  // only a channel's publisher speaks for it
-    serials_.claim(ch, st.counts[i]);
+    serials_.claim(ch, st.counts[i], /*final=*/st.run_id != st.counts_run);  // it has left the run
     any = true;
   }
   if (any) askMissing();

@@ -14,6 +14,7 @@ void SerialTracker::expect(const std::string& channel, std::int64_t next) {
 SerialTracker::Verdict SerialTracker::offer(const std::string& channel, std::int64_t serial) {
   Channel& c = channels_[channel];
   if (serial < c.expected) return Verdict::Repeat;
+  if (c.final >= 0 && serial >= c.final) return Verdict::Beyond;
   // (a serial of INT64_MAX claims no more than that: 1 + it would overflow)
   c.evidence = std::max(c.evidence, serial == INT64_MAX ? serial : serial + 1);
   if (serial > c.expected) return Verdict::Gap;
@@ -27,10 +28,22 @@ void SerialTracker::rewind(const std::string& channel, std::int64_t serial) {
   c.asked_last = -1;  // ask again at once
 }
 
-void SerialTracker::claim(const std::string& channel, std::int64_t count) {
+void SerialTracker::claim(const std::string& channel, std::int64_t count, bool final) {
   Channel& c = channels_[channel];
-  c.claimed = std::max<std::int64_t>(0, count);
+  count = std::max<std::int64_t>(0, count);
+  if (final) {
+    c.final = c.final < 0 ? count : std::min(c.final, count);
+    count = c.final;
+  } else if (c.final >= 0) {
+    return;  // a claim from within the run it has left: an old STATUS, or a forged one
+  }
+  c.claimed = count;
   c.evidence = c.expected;
+}
+
+std::int64_t SerialTracker::finalCount(const std::string& channel) const {
+  auto it = channels_.find(channel);
+  return it == channels_.end() ? -1 : it->second.final;
 }
 
 std::vector<SerialTracker::Request> SerialTracker::due(Clock::time_point now,

@@ -4,6 +4,8 @@
 // what was believed before, a refused message expected again.
 #include <gtest/gtest.h>
 
+#include <cstdint>
+
 #include "afford/serials.hpp"
 
 namespace afford {
@@ -96,6 +98,34 @@ TEST(Serials, ThePublishersClaimReplacesAForgedCountOrSerial) {
   t.claim("FOCUS", 1);  // ... until the publisher's next
   EXPECT_EQ(t.missing(), 0);
   EXPECT_EQ(t.offer("FOCUS", 1), V::Accept);
+}
+
+// After the publisher has left the run, nothing undoes a forged serial or
+// count: its final count stands, later claims only lower it, and a serial at
+// or beyond it is dropped, not waited for (the hostile flood found a forged
+// serial arriving after the last STATUS of a run's publisher).
+TEST(Serials, OnceThePublisherHasLeftItsFinalCountStands) {
+  SerialTracker t = tracker();
+  for (int s = 0; s < 3; ++s) ASSERT_EQ(t.offer("DECISION", s), V::Accept);
+  EXPECT_EQ(t.finalCount("DECISION"), -1);
+  t.claim("DECISION", 3, /*final=*/true);
+  EXPECT_EQ(t.finalCount("DECISION"), 3);
+  EXPECT_EQ(t.offer("DECISION", INT64_MAX), V::Beyond);
+  EXPECT_EQ(t.offer("DECISION", 3), V::Beyond);
+  EXPECT_EQ(t.offer("DECISION", 2), V::Repeat);
+  EXPECT_EQ(t.missing(), 0);
+  t.claim("DECISION", 3007);  // an in-run STATUS, late or forged
+  EXPECT_EQ(t.missing(), 0);
+  t.claim("DECISION", INT64_MAX / 2, /*final=*/true);  // a forged final one
+  EXPECT_EQ(t.missing(), 0);
+  EXPECT_EQ(t.finalCount("DECISION"), 3);
+  // A final count above what was had: the last message was lost, and is asked for.
+  t.claim("FOCUS", 0);
+  t.claim("FOCUS", 2, /*final=*/true);
+  EXPECT_EQ(t.missing(), 2);
+  EXPECT_EQ(t.offer("FOCUS", 0), V::Accept);
+  EXPECT_EQ(t.offer("FOCUS", 1), V::Accept);
+  EXPECT_EQ(t.missing(), 0);
 }
 
 TEST(Serials, AChannelNotAllowedToAskWaits) {

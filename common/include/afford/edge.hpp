@@ -377,6 +377,10 @@ void Edge::receive(const std::string& channel, const lcm::ReceiveBuffer* rb, con
                     serials_.expected(channel));
         askMissing();
         return;
+      case SerialTracker::Verdict::Beyond:
+        return drop(channel, "field serial = " + std::to_string(msg->serial) + " is at or beyond the " +
+                                 std::to_string(serials_.finalCount(channel)) +
+                                 " messages its publisher published in the run before it left");
       case SerialTracker::Verdict::Accept:
         break;
     }

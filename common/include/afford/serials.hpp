@@ -9,7 +9,11 @@
 // receiver also notices a lost last message, and a restarted receiver pulls
 // the whole run it missed. A channel's publisher is its only authority: its
 // latest claim replaces its earlier ones and any higher serial seen before it,
-// so a forged count or serial costs a few requests, never a wait. The wall
+// so a forged count or serial costs a few requests, never a wait. Once the
+// publisher has left the run its count is final: a later claim can only
+// lower it (the publisher publishes no more in a run it left, so a higher one
+// is forged), and a serial at or beyond it is forged too, with no claim to
+// come that would undo it: dropped, never waited for. The wall
 // clock paces the requests only; it never decides what a process does with a
 // message.
 #pragma once
@@ -25,7 +29,8 @@ namespace afford {
 class SerialTracker {
  public:
   using Clock = std::chrono::steady_clock;
-  enum class Verdict { Accept, Repeat, Gap };
+  // Beyond: at or past the publisher's final count (a forgery).
+  enum class Verdict { Accept, Repeat, Gap, Beyond };
   struct Request {
     std::string channel;
     std::int64_t first = 0, last = 0;  // inclusive
@@ -44,8 +49,11 @@ class SerialTracker {
   // A message accepted at `serial` turned out not to be the channel's: expect
   // that serial again (the messages accepted after it are had no more).
   void rewind(const std::string& channel, std::int64_t serial);
-  // The channel's publisher says it has published `count` messages.
-  void claim(const std::string& channel, std::int64_t count);
+  // The channel's publisher says it has published `count` messages; `final`:
+  // it has left the run, so it will publish none there again.
+  void claim(const std::string& channel, std::int64_t count, bool final = false);
+  // The publisher's final count, or -1 while it has not left the run.
+  std::int64_t finalCount(const std::string& channel) const;
   // Requests due now: each channel behind what is known to exist, at most
   // `batch` messages, not again while an earlier request stands, and only
   // for channels `may_ask` allows (a channel whose messages wait for their
@@ -63,6 +71,7 @@ class SerialTracker {
     std::int64_t expected = 0;   // the next serial to accept
     std::int64_t claimed = 0;    // the publisher's latest claim
     std::int64_t evidence = 0;   // 1 + the highest serial seen since that claim
+    std::int64_t final = -1;     // the least count it claimed once it had left the run; -1: it has not
     std::int64_t asked_last = -1, asked_from = -1;
     Clock::time_point asked_at{};
     Clock::duration wait{};      // how long the standing request stands
