@@ -71,10 +71,29 @@ Layer::Layer(int outputs, int dim, bool sigmoid) : w_(outputs, dim), sigmoid_(si
   w_.setZero();
 }
 
+namespace {
+// The columns a sparse input touches are 10.6 KB apart (a what-effect layer):
+// each is one sequential stream, but the jump to the next is one the
+// hardware prefetcher cannot foresee. While one column is summed, the next is
+// asked for, a cache line at a time. Only memory traffic changes: the values
+// and the order of every operation are the same.
+template <int kWrite>
+void prefetchColumn(const double* column, Eigen::Index rows) {
+  constexpr std::size_t kLine = 64;
+  const char* p = reinterpret_cast<const char*>(column);
+  const char* const end = p + static_cast<std::size_t>(rows) * sizeof(double);
+  for (; p < end; p += kLine) __builtin_prefetch(p, kWrite, 3);
+}
+}  // namespace
+
 Eigen::VectorXd Layer::output(const SparseInput& x) const {
   assert(x.dim == w_.cols());
   Eigen::VectorXd a = Eigen::VectorXd::Zero(w_.rows());
-  for (std::size_t k = 0; k < x.index.size(); ++k) a.noalias() += w_.col(x.index[k]) * x.value[k];
+  const std::size_t n = x.index.size();
+  for (std::size_t k = 0; k < n; ++k) {
+    if (k + 1 < n) prefetchColumn<0>(w_.col(x.index[k + 1]).data(), w_.rows());
+    a.noalias() += w_.col(x.index[k]) * x.value[k];
+  }
   if (sigmoid_) a = a.unaryExpr([](double v) { return sigmoid(v); });
   return a;
 }
@@ -84,7 +103,11 @@ void Layer::train(const SparseInput& x, const Eigen::VectorXd& target, double le
   Eigen::VectorXd delta = target - y;
   if (sigmoid_) delta = delta.cwiseProduct(y.cwiseProduct(Eigen::VectorXd::Ones(y.size()) - y));
   delta *= learning_rate;
-  for (std::size_t k = 0; k < x.index.size(); ++k) w_.col(x.index[k]).noalias() += delta * x.value[k];
+  const std::size_t n = x.index.size();
+  for (std::size_t k = 0; k < n; ++k) {
+    if (k + 1 < n) prefetchColumn<1>(w_.col(x.index[k + 1]).data(), w_.rows());
+    w_.col(x.index[k]).noalias() += delta * x.value[k];
+  }
 }
 
 }  // namespace afford
