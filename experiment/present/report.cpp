@@ -350,6 +350,13 @@ std::string stochasticSections(const std::vector<Folder>& folders, const Referen
   return md.str();
 }
 
+// The folder of an experiment among the report's (the first, if several), or null.
+const Folder* folderOf(const std::vector<Folder>& folders, const std::string& experiment) {
+  for (const auto& f : folders)
+    if (f.summary.experiment == experiment) return &f;
+  return nullptr;
+}
+
 // A row of a table-metric comparison: system, agent, scenarios 1-5 (the
 // paper's, from reference.yaml, when `reference`), the affordance error.
 void tableMetricRow(std::ostream& md, const std::string& sys, const std::string& agent, const SystemSummary& js,
@@ -374,9 +381,7 @@ std::string authorsEyeSections(const std::vector<Folder>& folders, const Docs& d
     const std::string& exp = tf.summary.experiment;
     if (!withTheAuthorsEye(exp)) continue;
     const std::string plain = exp.substr(0, exp.size() - kAuthorsEyeSuffix.size());
-    const Folder* ours = nullptr;
-    for (const auto& f : folders)
-      if (f.summary.experiment == plain) ours = &f;
+    const Folder* ours = folderOf(folders, plain);
     if (!header)
       md << "\n## Beyond the paper: the authors' eye (issue 28)\n\nThe same experiments with `eye.fovea: true_centre`: "
          << "the eye's window goes on the true centre of the object whose blob it found, as the authors' eye does, "
@@ -431,11 +436,6 @@ std::string authorsEyeSections(const std::vector<Folder>& folders, const Docs& d
 // agent and the paper's tables.
 std::string memorySections(const std::vector<Folder>& folders, const Docs& docs) {
   std::ostringstream md;
-  const auto find = [&](const std::string& exp) -> const Folder* {
-    for (const auto& f : folders)
-      if (f.summary.experiment == exp) return &f;
-    return nullptr;
-  };
   bool header = false;
   const auto heading = [&] {
     if (!header)
@@ -468,7 +468,7 @@ std::string memorySections(const std::vector<Folder>& folders, const Docs& docs)
       }
   }
   for (const std::string n : {"1", "2", "3"}) {
-    const Folder* paper_agent = find("late" + n);
+    const Folder* paper_agent = folderOf(folders, "late" + n);
     for (const auto& mf : folders) {
       if (mf.summary.experiment != "late" + n + "-memory") continue;
       const Summary& memory = mf.summary;
@@ -481,14 +481,11 @@ std::string memorySections(const std::vector<Folder>& folders, const Docs& docs)
       for (const std::string sys : {"FIX", "IGN", "IMP"}) {
         const auto mj = memory.systems.find(sys);
         if (mj == memory.systems.end()) continue;
-        const auto row = [&](const std::string& agent, const SystemSummary& js, bool reference) {
-          tableMetricRow(md, sys, agent, js, reference);
-        };
-        row("paper", mj->second, true);
+        tableMetricRow(md, sys, "paper", mj->second, true);
         if (paper_agent)
           if (const auto pj = paper_agent->summary.systems.find(sys); pj != paper_agent->summary.systems.end())
-            row("ours", pj->second, false);
-        row("ours, memory", mj->second, false);
+            tableMetricRow(md, sys, "ours", pj->second, false);
+        tableMetricRow(md, sys, "ours, memory", mj->second, false);
       }
     }
   }

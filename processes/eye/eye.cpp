@@ -101,20 +101,27 @@ Eye::Eye(const RunConfig& config) : config_(config) {
 }
 
 void Eye::setImage(Retina& r, cv::Mat image, std::vector<cv::Point2d> objects) const {
-  Retina n;  // built aside: an image refused leaves the retina as it was
+  // With true_centre an image can be refused (a blob without a listed object):
+  // it is then built aside, so that a refused one leaves the retina as it was.
+  // Otherwise the retina takes it in place, its buffers reused scene to scene.
+  const bool checked = config_.eye.fovea == Fovea::TrueCentre;
+  Retina aside;
+  Retina& n = checked ? aside : r;
   n.rgb = std::move(image);
   n.gray = meanChannels(n.rgb);
   n.smooth = blur(n.gray, config_.eye.saliency_sigma_px);
   cv::Mat mask = n.gray > 0;
   n.n_labels = cv::connectedComponentsWithStats(mask, n.labels, n.stats, n.centroids, 8, CV_32S);
-  if (config_.eye.fovea == Fovea::TrueCentre) {
+  if (checked) {
     n.objects = std::move(objects);
     matchObjects(n);  // throws: a blob without an object
   }
   if (config_.eye.saliency_order == SaliencyOrder::SmoothThenNoise)
     n.contenders = contenders(n.smooth, config_.eye.saliency_noise);
-  n.focus = std::move(r.focus);
-  r = std::move(n);
+  if (checked) {
+    n.focus = std::move(r.focus);
+    r = std::move(n);
+  }
   if (!r.focus.image.empty()) r.focus = refocus(r);
 }
 
