@@ -11,6 +11,7 @@
 #include <zlib.h>
 
 #include <iterator>
+#include <limits>
 #include <sstream>
 
 #include "afford/checksum.hpp"
@@ -156,41 +157,145 @@ void Predictors::forEachWeightArray(F&& f) const {
   }
 }
 
+namespace {
+
+// The plain checkpoint's bytes fed to zlib's deflate as they come, piece by
+// piece (the weight arrays where they lie): no copy of the whole checkpoint
+// is made, only the deflated bytes are kept.
+class Deflater {
+ public:
+  explicit Deflater(const std::string& path) : path_(path) {
+    if (deflateInit(&z_, Z_BEST_SPEED) != Z_OK) throw std::runtime_error("cannot compress checkpoint " + path_);
+  }
+  ~Deflater() { deflateEnd(&z_); }
+  Deflater(const Deflater&) = delete;
+  Deflater& operator=(const Deflater&) = delete;
+
+  void write(const void* data, std::size_t n) {
+    plain_ += n;
+    const auto* p = static_cast<const Bytef*>(data);
+    while (n > 0) {  // zlib takes at most a uInt at a time
+      const auto part = static_cast<uInt>(std::min<std::size_t>(n, 1u << 30));
+      z_.next_in = const_cast<Bytef*>(p);
+      z_.avail_in = part;
+      pump(Z_NO_FLUSH);
+      p += part;
+      n -= part;
+    }
+  }
+  // The deflated bytes, once the plain ones are all written.
+  const std::string& finish() {
+    z_.next_in = nullptr;
+    z_.avail_in = 0;
+    pump(Z_FINISH);
+    return packed_;
+  }
+  std::uint64_t plainSize() const { return plain_; }
+
+ private:
+  void pump(int flush) {
+    for (;;) {
+      z_.next_out = out_.data();
+      z_.avail_out = static_cast<uInt>(out_.size());
+      const int r = deflate(&z_, flush);
+      if (r == Z_STREAM_ERROR) throw std::runtime_error("cannot compress checkpoint " + path_);
+      packed_.append(reinterpret_cast<const char*>(out_.data()), out_.size() - z_.avail_out);
+      // Room left: deflate took all the input (Z_NO_FLUSH), or said the end (Z_FINISH).
+      if (flush == Z_FINISH ? r == Z_STREAM_END : z_.avail_out != 0) return;
+    }
+  }
+  std::string path_, packed_;
+  std::vector<Bytef> out_ = std::vector<Bytef>(std::size_t{1} << 18);
+  z_stream z_{};
+  std::uint64_t plain_ = 0;
+};
+
+}  // namespace
+
+namespace {
+
+// The plain checkpoint, inflated from `file` as it is read (a streambuf for loadFrom's istream).
+class Inflater : public std::streambuf {
+ public:
+  explicit Inflater(std::istream& file) : file_(file) {
+    if (inflateInit(&z_) != Z_OK) broken_ = true;
+  }
+  ~Inflater() override { inflateEnd(&z_); }
+  Inflater(const Inflater&) = delete;
+  Inflater& operator=(const Inflater&) = delete;
+  bool broken() const { return broken_; }
+  std::uint64_t produced() const { return produced_; }
+
+ protected:
+  int_type underflow() override {
+    while (!broken_ && !ended_) {
+      if (z_.avail_in == 0) {
+        file_.read(reinterpret_cast<char*>(in_.data()), static_cast<std::streamsize>(in_.size()));
+        z_.next_in = in_.data();
+        z_.avail_in = static_cast<uInt>(file_.gcount());
+        if (z_.avail_in == 0) {  // the file ended before the deflated stream did
+          broken_ = true;
+          break;
+        }
+      }
+      z_.next_out = reinterpret_cast<Bytef*>(out_.data());
+      z_.avail_out = static_cast<uInt>(out_.size());
+      const int r = inflate(&z_, Z_NO_FLUSH);
+      if (r == Z_STREAM_END) ended_ = true;
+      else if (r != Z_OK && r != Z_BUF_ERROR) broken_ = true;
+      const std::size_t n = out_.size() - z_.avail_out;
+      if (n > 0) {
+        produced_ += n;
+        setg(out_.data(), out_.data(), out_.data() + n);
+        return traits_type::to_int_type(out_[0]);
+      }
+    }
+    return traits_type::eof();
+  }
+
+ private:
+  std::istream& file_;
+  z_stream z_{};
+  std::vector<Bytef> in_ = std::vector<Bytef>(std::size_t{1} << 16);
+  std::vector<char> out_ = std::vector<char>(std::size_t{1} << 18);
+  std::uint64_t produced_ = 0;
+  bool broken_ = false, ended_ = false;
+};
+
+}  // namespace
+
 void Predictors::save(const std::string& path, const std::string& checksum) const {
-  // The checkpoint's bytes, then deflated: most of the forward models' weights
-  // stay at their start, and a checkpoint shrinks about twentyfold, losslessly.
-  std::ostringstream raw(std::ios::binary);
+  // The checkpoint's bytes, deflated as they are written: most of the forward
+  // models' weights stay at their start, and a checkpoint shrinks about
+  // twentyfold, losslessly.
+  Deflater raw(path);
   raw.write(kMagic, sizeof kMagic);
   // The paper's component: format 2, as ever; another: format 3, which names it.
   const bool paper = config_.predictors.affordance_kind == "paper";
   const std::uint32_t header[2] = {paper ? 2u : kVersion, static_cast<std::uint32_t>(input_size_)};
-  raw.write(reinterpret_cast<const char*>(header), sizeof header);
+  raw.write(header, sizeof header);
   if (!paper) {
     const auto& kind = config_.predictors.affordance_kind;
     const auto size = static_cast<std::uint32_t>(kind.size());
-    raw.write(reinterpret_cast<const char*>(&size), sizeof size);
-    raw.write(kind.data(), static_cast<std::streamsize>(kind.size()));
+    raw.write(&size, sizeof size);
+    raw.write(kind.data(), kind.size());
   }
-  forEachWeightArray([&](const double* d, std::size_t n) {
-    raw.write(reinterpret_cast<const char*>(d), static_cast<std::streamsize>(n * sizeof(double)));
-  });
-  raw.write(reinterpret_cast<const char*>(executed_.data()), sizeof executed_);
-  raw.write(reinterpret_cast<const char*>(successes_.data()), sizeof successes_);
+  forEachWeightArray([&](const double* d, std::size_t n) { raw.write(d, n * sizeof(double)); });
+  raw.write(executed_.data(), sizeof executed_);
+  raw.write(successes_.data(), sizeof successes_);
   const char has_memory = memory_ ? 1 : 0;
   raw.write(&has_memory, 1);
   if (memory_) {
-    raw.write(reinterpret_cast<const char*>(&replayed_), sizeof replayed_);
-    raw.write(reinterpret_cast<const char*>(&replayed_effects_), sizeof replayed_effects_);
-    memory_->save(raw);
+    raw.write(&replayed_, sizeof replayed_);
+    raw.write(&replayed_effects_, sizeof replayed_effects_);
+    std::ostringstream memory(std::ios::binary);
+    memory_->save(memory);
+    const std::string bytes = memory.str();
+    raw.write(bytes.data(), bytes.size());
   }
   const std::string sum = checksum.empty() ? weightsChecksum() : checksum;
-  raw.write(sum.data(), static_cast<std::streamsize>(sum.size()));
-  const std::string bytes = raw.str();
-  uLongf packed_size = compressBound(static_cast<uLong>(bytes.size()));
-  std::string packed(packed_size, '\0');
-  if (compress2(reinterpret_cast<Bytef*>(packed.data()), &packed_size, reinterpret_cast<const Bytef*>(bytes.data()),
-                static_cast<uLong>(bytes.size()), Z_BEST_SPEED) != Z_OK)
-    throw std::runtime_error("cannot compress checkpoint " + path);
+  raw.write(sum.data(), sum.size());
+  const std::string& packed = raw.finish();
   // A file of this process's own, renamed into place: a reader never sees half
   // a checkpoint, and two writers of the same path do not clobber each other.
   const std::string tmp = path + ".tmp." + std::to_string(getpid());
@@ -200,10 +305,10 @@ void Predictors::save(const std::string& path, const std::string& checksum) cons
   {
     std::ofstream out(tmp, std::ios::binary);
     if (!out) throw std::runtime_error("cannot write checkpoint " + tmp);
-    const std::uint64_t size = bytes.size();
+    const std::uint64_t size = raw.plainSize();
     out.write(kPackedMagic, sizeof kPackedMagic);
     out.write(reinterpret_cast<const char*>(&size), sizeof size);
-    out.write(packed.data(), static_cast<std::streamsize>(packed_size));
+    out.write(packed.data(), static_cast<std::streamsize>(packed.size()));
     if (!out) throw std::runtime_error("cannot write checkpoint " + tmp);
   }
   if (std::rename(tmp.c_str(), path.c_str()) != 0) throw std::runtime_error("cannot rename " + tmp + " to " + path);
@@ -219,15 +324,20 @@ void Predictors::load(const std::string& path) {
     file.read(reinterpret_cast<char*>(&size), sizeof size);
     if (!file || size > (std::uint64_t{1} << 34))
       throw std::runtime_error("checkpoint " + path + ": truncated or of an impossible size");
-    const std::string packed((std::istreambuf_iterator<char>(file)), std::istreambuf_iterator<char>());
-    std::string bytes(size, '\0');
-    uLongf unpacked = static_cast<uLongf>(size);
-    if (uncompress(reinterpret_cast<Bytef*>(bytes.data()), &unpacked, reinterpret_cast<const Bytef*>(packed.data()),
-                   static_cast<uLong>(packed.size())) != Z_OK ||
-        unpacked != size)
-      throw std::runtime_error("checkpoint " + path + ": its compressed data is corrupt or truncated");
-    std::istringstream in(bytes, std::ios::binary);
-    loadFrom(in, path);
+    // Inflated as it is read, into the weights where they lie (no copy of the whole checkpoint is made). A
+    // stream that ends early, breaks, or holds more or less than it says is refused.
+    Inflater plain(file);
+    std::istream in(&plain);
+    bool whole = false;
+    try {
+      loadFrom(in, path);
+      whole = in.peek() == std::char_traits<char>::eof() && !plain.broken() && plain.produced() == size;
+    } catch (const std::runtime_error&) {
+      in.clear();
+      in.ignore(std::numeric_limits<std::streamsize>::max());  // the rest, to tell a whole stream from a broken one
+      if (!plain.broken() && plain.produced() == size) throw;  // the data was whole: its content is refused
+    }
+    if (!whole) throw std::runtime_error("checkpoint " + path + ": its compressed data is corrupt or truncated");
     return;
   }
   file.clear();
