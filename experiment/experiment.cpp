@@ -337,6 +337,7 @@ struct Experiment {
   std::vector<PlannedRun> runs;  // every part's intrinsic runs, in one list
   Hosting hosting;
   std::string bin;               // the processes' executables (udpm)
+  OutDirLock lock;               // its folder's, from openFolder until it is over
   bool merging() const { return !o.merged_from.empty(); }
   const Plan& plan() const { return parts.front().plan; }  // what every part shares
   std::filesystem::path out() const { return o.write.out_dir; }
@@ -550,18 +551,33 @@ class Merged : public Executor {
 
 // The request as it will run (a resumed one: as stored), checked and planned.
 // Nothing is written or started here.
+// The sweep, the parts and the runs of x.o's plan.
+void planRuns(Experiment& x) {
+  x.sweep = planSweep(x.o.plan.settings, x.o.plan.sweep_file);
+  x.parts = planParts(x.o.plan, x.o.write.out_dir, x.sweep);
+  std::vector<std::vector<PlannedRun>> part_runs;
+  for (const auto& part : x.parts) part_runs.push_back(part.plan.runs);
+  std::vector<std::size_t> offsets;
+  x.runs = concatRuns(part_runs, offsets);
+  for (std::size_t k = 0; k < x.parts.size(); ++k) x.parts[k].offset = offsets[k];
+}
+
 Experiment prepare(const ExperimentRequest& request) {
   Experiment x;
   x.o = request;
+  bool stamped = false;  // the run prefix is the wall clock's, to be reserved once all is checked
   if (request.resume) {
     x.state = unfinishedState(request);
     x.o = resumedRequest(request, x.state);
   } else {
-    refuseUnfinished(request);
+    refuseUsedOutDir(request);
     if (x.o.plan.run_prefix.empty() && x.o.host.shard_count)
       throw ConfigError("--shard needs --run-prefix: every shard must give the runs the same ids "
                         "(scripts/slurm-submit.sh gives one)");
-    if (x.o.plan.run_prefix.empty()) x.o.plan.run_prefix = defaultPrefix();  // stored: --resume plans the same run ids
+    if (x.o.plan.run_prefix.empty() && !x.merging()) {
+      x.o.plan.run_prefix = defaultPrefix();
+      stamped = true;
+    }
   }
   const ExperimentRequest& o = x.o;
   try {
@@ -570,18 +586,21 @@ Experiment prepare(const ExperimentRequest& request) {
     throw ConfigError(e.what());
   }
   checkHostRequest(o.host);
-  x.sweep = planSweep(o.plan.settings, o.plan.sweep_file);
-  x.parts = planParts(o.plan, o.write.out_dir, x.sweep);
-  std::vector<std::vector<PlannedRun>> part_runs;
-  for (const auto& part : x.parts) part_runs.push_back(part.plan.runs);
-  std::vector<std::size_t> offsets;
-  x.runs = concatRuns(part_runs, offsets);
-  for (std::size_t k = 0; k < x.parts.size(); ++k) x.parts[k].offset = offsets[k];
+  planRuns(x);
   if (o.resume) {
     refuseChangedPlan(request, requestFromJson(x.state.at("options")), x.plan());
     refuseOtherPlan(x.state.at("runs"), fingerprint(x.runs), "intrinsic runs");
   }
   if (!x.merging()) checkProcesses(o.host, x.runs);
+  // Everything checked: the prefix is reserved in the log root (stored, so --resume plans the same run ids),
+  // and if another experiment took this second's, the runs are planned again with the one reserved.
+  if (stamped) {
+    const std::string reserved = reservePrefix(o.plan.log_root);
+    if (reserved != x.o.plan.run_prefix) {
+      x.o.plan.run_prefix = reserved;
+      planRuns(x);
+    }
+  }
   if (!o.resume && !x.merging()) refuseUsedLogFolders(x.runs, shardMask(o.host, x.runs.size()), o.plan.log_root);
   x.hosting = {o.host.transport, "in-process memq://", o.host.processes};
   if (x.merging())
@@ -591,15 +610,15 @@ Experiment prepare(const ExperimentRequest& request) {
   return x;
 }
 
-// The folder: locked, the state of a fresh experiment written (the outcomes of
-// the finished one it replaces removed), marked running.
+// The folder: locked, the state of a fresh experiment written (the files of
+// the finished one it replaces, with --replace, removed), marked running.
 void openFolder(Experiment& x) {
   const fs::path out = x.out();
   fs::create_directories(out);
-  lockOutDir(out);
+  x.lock = OutDirLock(out);
   if (!x.o.resume) {
-    fs::remove_all(out / "runs");
-    fs::remove_all(out / "conditions");
+    refuseUsedOutDir(x.o);  // again, now that no other runner can write here
+    clearReplaced(x.o);
     x.state = {{"experiment", x.plan().exp.name},
                {"cwd", fs::current_path().string()},
                {"options", requestToJson(x.o)},
@@ -747,11 +766,13 @@ int finish(Experiment& x, Summaries& s, const PhaseRuns& intrinsic, const Tests&
         std::printf("\n== condition %s (%s)\n", x.parts[k].condition.c_str(), x.parts[k].out_dir.c_str());
       printTables(s.parts[k], x.parts[k].plan, x.parts[k].out_dir);
     }
-  const auto failed = [](const RunOutcome& r) { return !r.ok; };
-  auto failures = static_cast<std::size_t>(std::count_if(tests.phase.outcomes.begin(), tests.phase.outcomes.end(), failed));
-  for (std::size_t i = 0; i < x.runs.size(); ++i) failures += intrinsic.finished[i] && !intrinsic.outcomes[i].ok;
-  if (failures) log.error("{} run(s) failed; see summary.json failed_runs", failures);
-  return failures || !tests.untested.empty() ? 1 : 0;
+  std::size_t failed_runs = 0, failed_tests = 0;
+  for (std::size_t i = 0; i < tests.runs.size(); ++i) failed_tests += tests.phase.finished[i] && !tests.phase.outcomes[i].ok;
+  for (std::size_t i = 0; i < x.runs.size(); ++i) failed_runs += intrinsic.finished[i] && !intrinsic.outcomes[i].ok;
+  if (failed_runs) log.error("{} intrinsic run(s) failed; see summary.json, systems.<S>.failed_runs", failed_runs);
+  if (failed_tests)
+    log.error("{} extrinsic test(s) failed to run; see summary.json, systems.<S>.extrinsic.failed_tests", failed_tests);
+  return failed_runs || failed_tests || !tests.untested.empty() ? 1 : 0;
 }
 
 }  // namespace

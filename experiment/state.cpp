@@ -4,6 +4,7 @@
 #include <sys/file.h>
 #include <unistd.h>
 
+#include <algorithm>
 #include <fstream>
 
 #include "afford/checksum.hpp"
@@ -141,22 +142,114 @@ std::string resumeCommand(const ExperimentRequest& o) {
   return shellQuoted(o.write.program) + " experiment --resume --out " + shellQuoted(o.write.out_dir);
 }
 
-// One runner per output folder, until it exits (closed on exec: the children do not hold it).
-void lockOutDir(const fs::path& out) {
+OutDirLock::OutDirLock(const fs::path& out) {
   const fs::path lock = out / ".lock";
-  const int fd = open(lock.c_str(), O_RDWR | O_CREAT | O_CLOEXEC, 0644);
-  if (fd < 0 || flock(fd, LOCK_EX | LOCK_NB) != 0)
-    throw ConfigError("another afford experiment is writing to " + out.string() + " (it holds " + lock.string() + ")");
+  fd_ = open(lock.c_str(), O_RDWR | O_CREAT | O_CLOEXEC, 0644);
+  if (fd_ >= 0 && flock(fd_, LOCK_EX | LOCK_NB) == 0) return;
+  if (fd_ >= 0) close(fd_);
+  fd_ = -1;
+  throw ConfigError("another afford experiment is writing to " + out.string() + " (it holds " + lock.string() + ")");
 }
 
-// A fresh experiment never replaces one that did not finish.
-void refuseUnfinished(const ExperimentRequest& o) {
-  if (!fs::exists(statePath(o.write.out_dir))) return;
-  const json state = readState(o.write.out_dir);
-  if (state.value("state", "") == "finished") return;
-  throw ConfigError("--out " + o.write.out_dir + " holds an experiment that did not finish (" +
-                    state.value("experiment", "?") + ", " + state.value("state", "?") + "): continue it with `" +
-                    resumeCommand(o) + "`, or choose another --out");
+OutDirLock::~OutDirLock() {
+  if (fd_ >= 0) close(fd_);
+}
+
+OutDirLock& OutDirLock::operator=(OutDirLock&& other) noexcept {
+  if (this != &other) {
+    if (fd_ >= 0) close(fd_);
+    fd_ = other.fd_;
+    other.fd_ = -1;
+  }
+  return *this;
+}
+
+namespace {
+
+// An entry of an experiment folder that afford writes: the experiment (its state, summary, CSV files,
+// kept outcomes, sweep conditions, lock) and `afford plot` (fig_*).
+bool writtenByAfford(const fs::path& entry) {
+  const std::string name = entry.filename().string();
+  if (name == "experiment.json" || name == "summary.json" || name == ".lock" || name == "runs" ||
+      name == "conditions" || name == "processes")  // processes/slot<j>/<process>.log: their output (udpm)
+    return true;
+  const std::string ext = entry.extension().string();
+  if (ext == ".csv") return true;
+  return name.rfind("fig_", 0) == 0 && (ext == ".png" || ext == ".gp");
+}
+
+bool sameFolder(const fs::path& a, const fs::path& b) {
+  std::error_code ec;
+  return fs::weakly_canonical(fs::absolute(a), ec) == fs::weakly_canonical(fs::absolute(b), ec);
+}
+
+// An entry of `out` that is the request's own though afford's experiment did not write it: its log root;
+// for a merge, the shards' folders it merges and scripts/slurm-submit.sh's `slurm` folder beside them.
+bool requestsOwn(const ExperimentRequest& o, const fs::path& entry) {
+  if (sameFolder(entry, o.plan.log_root)) return true;
+  if (o.merged_from.empty()) return false;
+  if (entry.filename() == "slurm") return true;
+  return std::any_of(o.merged_from.begin(), o.merged_from.end(), [&](const std::string& shard) { return sameFolder(entry, shard); });
+}
+
+// The entries of `out` that are not afford's.
+std::vector<std::string> foreignEntries(const ExperimentRequest& o) {
+  std::vector<std::string> names;
+  std::error_code ec;
+  for (const auto& e : fs::directory_iterator(o.write.out_dir, ec))
+    if (!writtenByAfford(e.path()) && !requestsOwn(o, e.path())) names.push_back(e.path().filename().string());
+  std::sort(names.begin(), names.end());
+  return names;
+}
+
+std::string someNames(const std::vector<std::string>& names) {
+  std::string s;
+  for (std::size_t k = 0; k < names.size() && k < 5; ++k) s += (k ? ", " : "") + names[k];
+  return names.size() > 5 ? s + ", ... (" + std::to_string(names.size()) + " in all)" : s;
+}
+
+}  // namespace
+
+void refuseUsedOutDir(const ExperimentRequest& o) {
+  const fs::path out = o.write.out_dir;
+  std::error_code ec;
+  if (!fs::exists(out, ec)) return;
+  if (!fs::is_directory(out, ec)) throw ConfigError("--out " + out.string() + " is not a folder");
+  if (!fs::exists(statePath(out))) {
+    const std::vector<std::string> foreign = foreignEntries(o);
+    bool afford_files = false;
+    for (const auto& e : fs::directory_iterator(out, ec))
+      afford_files |= writtenByAfford(e.path()) && e.path().filename() != ".lock";  // (the lock: a runner's, or ours)
+    if (foreign.empty() && !afford_files) return;  // empty (but for its log root)
+    throw ConfigError("--out " + out.string() + " is not empty and holds no afford experiment (it holds " +
+                      someNames(foreign.empty() ? std::vector<std::string>{"summary or CSV files without "
+                                                                           "experiment.json"}
+                                                : foreign) +
+                      "): an experiment writes into a folder of its own; choose a new or empty --out");
+  }
+  const json state = readState(out);
+  const std::string what = state.value("experiment", "?");
+  if (state.value("state", "") != "finished")
+    throw ConfigError("--out " + out.string() + " holds an experiment that did not finish (" + what + ", " +
+                      state.value("state", "?") + "): continue it with `" + resumeCommand(o) +
+                      "`, or choose another --out");
+  if (!o.write.replace)
+    throw ConfigError("--out " + out.string() + " holds a finished experiment (" + what + "; its results: " +
+                      (out / "summary.json").string() +
+                      "): choose another --out to keep both, or give --replace to remove it and write this one "
+                      "in its place");
+  if (const std::vector<std::string> foreign = foreignEntries(o); !foreign.empty())
+    throw ConfigError("--replace: " + out.string() + " holds files afford did not write (" + someNames(foreign) +
+                      "); move them away or choose another --out: --replace removes only an experiment's own files");
+}
+
+void clearReplaced(const ExperimentRequest& o) {
+  if (!o.write.replace || !fs::exists(statePath(o.write.out_dir))) return;
+  std::error_code ec;
+  std::vector<fs::path> gone;
+  for (const auto& e : fs::directory_iterator(o.write.out_dir, ec))
+    if (writtenByAfford(e.path()) && e.path().filename() != ".lock") gone.push_back(e.path());
+  for (const fs::path& p : gone) fs::remove_all(p);
 }
 
 // The stored experiment's options, with the run options given now (--jobs, --transport, ...).

@@ -29,10 +29,30 @@ void refuseOtherPlan(const nlohmann::json& stored, const nlohmann::json& now, co
 std::string shellQuoted(const std::string& s);
 std::string resumeCommand(const ExperimentRequest& o);
 
-// One runner per output folder, until it exits (closed on exec: the children do not hold it).
-void lockOutDir(const std::filesystem::path& out);
-// A fresh experiment never replaces one that did not finish.
-void refuseUnfinished(const ExperimentRequest& o);
+// One runner per output folder, for as long as the lock lives (closed on exec: the children do not hold it;
+// a host that goes on after the experiment, the Python package, lets it go).
+class OutDirLock {
+ public:
+  OutDirLock() = default;
+  explicit OutDirLock(const std::filesystem::path& out);  // throws ConfigError if another runner holds it
+  ~OutDirLock();
+  OutDirLock(OutDirLock&& other) noexcept : fd_(other.fd_) { other.fd_ = -1; }
+  OutDirLock& operator=(OutDirLock&& other) noexcept;
+  OutDirLock(const OutDirLock&) = delete;
+  OutDirLock& operator=(const OutDirLock&) = delete;
+
+ private:
+  int fd_ = -1;
+};
+// A fresh experiment writes into a folder of its own: one that does not exist
+// or is empty, or (with --replace) one holding a finished experiment and
+// nothing but what afford writes. It never replaces one that did not finish,
+// never mixes with another's files. Throws ConfigError naming the folder,
+// what it holds and the ways on; nothing is written here.
+void refuseUsedOutDir(const ExperimentRequest& o);
+// With --replace: what the finished experiment of the folder wrote is removed
+// (its log root, if inside, stays). After refuseUsedOutDir, under the lock.
+void clearReplaced(const ExperimentRequest& o);
 // The stored experiment's request, with the run options given now (--jobs, --transport, ...).
 ExperimentRequest resumedRequest(const ExperimentRequest& given, const nlohmann::json& state);
 // The stored experiment of DIR, if it did not finish.

@@ -1,6 +1,7 @@
 #include "afford/config.hpp"
 
 #include <algorithm>
+#include <cctype>
 #include <cmath>
 #include <deque>
 #include <filesystem>
@@ -14,6 +15,35 @@
 #include "config_keys.hpp"
 
 namespace afford {
+
+std::string closestName(const std::string& name, const std::vector<std::string>& known) {
+  // Levenshtein distance, one row at a time; close enough: at most a third of the name's letters (1 to 3).
+  const auto distance = [](const std::string& a, const std::string& b) {
+    std::vector<std::size_t> row(b.size() + 1);
+    for (std::size_t j = 0; j <= b.size(); ++j) row[j] = j;
+    for (std::size_t i = 1; i <= a.size(); ++i) {
+      std::size_t diagonal = row[0];
+      row[0] = i;
+      for (std::size_t j = 1; j <= b.size(); ++j) {
+        const std::size_t up = row[j];
+        row[j] = std::min({row[j] + 1, row[j - 1] + 1, diagonal + (a[i - 1] == b[j - 1] ? 0 : 1)});
+        diagonal = up;
+      }
+    }
+    return row[b.size()];
+  };
+  if (name.size() > 200) return "";
+  const std::size_t most = std::clamp<std::size_t>(name.size() / 3, 1, 3);
+  std::string best;
+  std::size_t best_distance = most + 1;
+  for (const auto& k : known) {
+    if (k == name || k.size() > 200) continue;
+    const std::size_t d = distance(name, k);
+    if (d < best_distance) best = k, best_distance = d;
+  }
+  return best;
+}
+
 namespace {
 
 std::string join(const std::string& path, const std::string& key) {
@@ -21,7 +51,13 @@ std::string join(const std::string& path, const std::string& key) {
 }
 
 [[noreturn]] void fail(const std::string& key, const std::string& what) {
-  throw ConfigError("config key '" + key + "': " + what);
+  throw ConfigError("config key '" + key + "': " + what, key);
+}
+
+// "unknown key", and the known key (of the map at `path`) it is probably a typo of.
+std::string unknownKey(const std::string& path, const std::string& key, const std::vector<std::string>& known) {
+  const std::string near = closestName(key, known);
+  return near.empty() ? "unknown key" : "unknown key; did you mean '" + (path.empty() ? near : path + "." + near) + "'?";
 }
 
 std::string describe(const YAML::Node& n) {
@@ -82,7 +118,7 @@ class Reader {
   void finish() const {
     for (const auto& kv : node_) {
       const std::string k = kv.first.Scalar();
-      if (!used_.count(k)) fail(join(path_, k), "unknown key");
+      if (!used_.count(k)) fail(join(path_, k), unknownKey(path_, k, {used_.begin(), used_.end()}));
     }
   }
 
@@ -418,7 +454,12 @@ std::vector<std::string> parseSystems(const std::vector<std::string>& given, con
       try {
         add(toString(parseSystem(item)));
       } catch (const ConfigError&) {
-        throw ConfigError(option + ": unknown system \"" + item + "\" in \"" + g + "\" (FIX, IGN, IMP, all, or a list: FIX,IMP)");
+        std::string upper = item;
+        for (char& c : upper) c = static_cast<char>(std::toupper(static_cast<unsigned char>(c)));
+        const bool cased = upper == "FIX" || upper == "IGN" || upper == "IMP";
+        throw ConfigError(option + ": unknown system \"" + item + "\" in \"" + g + "\"" +
+                          (cased ? "; did you mean " + upper + "? (systems are written in capitals)" : "") +
+                          " (FIX, IGN, IMP, all, or a list: FIX,IMP)");
       }
     }
     if (!any) throw ConfigError(option + ": empty (FIX, IGN, IMP, all, or a list: FIX,IMP)");
@@ -680,8 +721,10 @@ std::filesystem::path namedFile(const std::string& config_dir, const char* folde
   if (std::find(known.begin(), known.end(), name) == known.end()) {
     std::string list;
     for (const auto& k : known) list += (list.empty() ? "" : ", ") + k;
-    throw ConfigError(std::string("unknown ") + kind + " \"" + name + "\" (known in " + config_dir + "/" + folder +
-                      ": " + list + ")");
+    const std::string near = closestName(name, known);
+    throw ConfigError(std::string("unknown ") + kind + " \"" + name + "\"" +
+                      (near.empty() ? "" : "; did you mean \"" + near + "\"?") + " (known in " + config_dir + "/" +
+                      folder + ": " + list + ")");
   }
   return std::filesystem::path(config_dir) / folder / (name + ".yaml");
 }
@@ -793,6 +836,14 @@ namespace {
 // `key: none` (or an empty value) in an experiment file: drop what the extended experiment had.
 bool isNone(const YAML::Node& n) { return n.IsNull() || (n.IsScalar() && n.Scalar() == "none"); }
 
+// Every key a node sets (maps to any depth; a list is one key), under `path`, as set by `where`.
+void recordKeys(const YAML::Node& node, const std::string& path, const std::string& where,
+                std::map<std::string, std::string>& out) {
+  if (!path.empty()) out[path] = where;
+  if (node.IsMap())
+    for (const auto& kv : node) recordKeys(kv.second, join(path, kv.first.Scalar()), where, out);
+}
+
 ExperimentFile loadExperimentChain(const std::string& config_dir, const std::string& name, int depth,
                                    const std::filesystem::path& from = {}) {
   const bool path = isExperimentPath(name);
@@ -880,10 +931,15 @@ ExperimentFile loadExperimentChain(const std::string& config_dir, const std::str
     } else if (key == "systems") {
       if (!e.systems.IsMap()) e.systems = YAML::Node(YAML::NodeType::Map);
       mergeInto(e.systems, kv.second);
+      if (kv.second.IsMap())
+        for (const auto& s : kv.second)
+          recordKeys(s.second, "", "experiment file " + file.string() + ", block systems." + s.first.Scalar(),
+                     e.system_sources[s.first.Scalar()]);
     } else {
       YAML::Node over(YAML::NodeType::Map);
       over[key] = kv.second;
       mergeInto(e.overlay, over);
+      recordKeys(kv.second, key, "experiment file " + file.string() + ", block " + key, e.sources);
     }
   }
   if (!e.conditions.empty() && !e.tables)
@@ -906,9 +962,12 @@ YAML::Node effectiveConfig(const std::string& config_dir, const RunRequest& requ
   const ExperimentFile e = loadExperiment(config_dir, request.experiment);
   mergeInto(root, e.overlay);
   const std::string sys = toString(request.system);
+  std::map<std::string, std::string> sources = e.sources;  // config key -> where it was given
   if (e.systems.IsMap() && e.systems[sys].IsDefined()) {
     if (!e.systems[sys].IsMap()) fail("systems." + sys, "expected a map of overrides");
     mergeInto(root, e.systems[sys]);
+    if (const auto it = e.system_sources.find(sys); it != e.system_sources.end())
+      for (const auto& [k, where] : it->second) sources[k] = where;
   }
   root["experiment"] = e.name;
   root["system"] = sys;
@@ -929,15 +988,38 @@ YAML::Node effectiveConfig(const std::string& config_dir, const RunRequest& requ
     std::stringstream ss(path);
     for (std::string part; std::getline(ss, part, '.');) parts.push_back(part);
     std::vector<YAML::Node> chain{root};
+    const auto keysOf = [](const YAML::Node& map) {
+      std::vector<std::string> keys;
+      for (const auto& kv : map) keys.push_back(kv.first.Scalar());
+      return keys;
+    };
     for (std::size_t i = 0; i + 1 < parts.size(); ++i) {
       YAML::Node next = chain.back()[parts[i]];
-      if (!next.IsDefined() || !next.IsMap()) fail(path, "unknown key (no map '" + parts[i] + "')");
+      if (!next.IsDefined() || !next.IsMap()) {
+        const std::string near = closestName(parts[i], keysOf(chain.back()));
+        fail(path, "unknown key (no map '" + parts[i] + "'" + (near.empty() ? "" : "; did you mean '" + near + "'?") + ")");
+      }
       chain.push_back(next);
     }
-    if (!chain.back()[parts.back()].IsDefined()) fail(path, "unknown key");
+    if (!chain.back()[parts.back()].IsDefined())
+      fail(path, unknownKey(path.substr(0, path.size() - parts.back().size() - (parts.size() > 1 ? 1 : 0)),
+                            parts.back(), keysOf(chain.back())));
     chain.back()[parts.back()] = value;
+    sources[path] = "--set " + setting;
   }
-  parseRunConfig(root);  // validate now, before any process starts
+  try {
+    parseRunConfig(root);  // validate now, before any process starts
+  } catch (const ConfigError& e) {
+    // Say where the key was given: the experiment file and its block, or --set.
+    std::string where;
+    for (std::string k = e.key(); !k.empty() && where.empty();) {
+      if (auto it = sources.find(k); it != sources.end()) where = it->second;
+      const auto dot = k.rfind('.');
+      k = dot == std::string::npos ? std::string() : k.substr(0, dot);
+    }
+    if (where.empty()) throw;
+    throw ConfigError(where + ": " + e.what(), e.key());
+  }
   return root;
 }
 

@@ -1,5 +1,6 @@
 #include "afford/node.hpp"
 
+#include <cstdlib>
 #include <filesystem>
 
 #include <CLI/CLI.hpp>
@@ -248,6 +249,11 @@ std::string installedShareDir() {
 std::string defaultConfigDir() {
   const std::string share = installedShareDir();
   return share.empty() ? std::string(AFFORD_SOURCE_DIR) + "/config" : share + "/config";
+}
+
+std::string defaultLogRoot() {
+  const char* env = std::getenv("AFFORD_LOGS");
+  return env && *env ? std::string(env) : std::string("logs");
 }
 
 void CLIHook::option(const std::string& name, std::string& target, const std::string& help) {

@@ -21,7 +21,9 @@ void checkPlanRequest(const PlanRequest& o) {
   if (o.keep_checkpoints != "all" && o.keep_checkpoints != "first" && o.keep_checkpoints != "none")
     throw ConfigError("--keep-checkpoints must be all, first or none, not \"" + o.keep_checkpoints + "\"");
   if (o.extrinsic_reps < 0) throw ConfigError("--extrinsic-reps must be 0 or more");
-  if (o.reps && *o.reps < 1) throw ConfigError("--reps must be at least 1");
+  if (o.reps && *o.reps < 1) throw ConfigError("--reps must be at least 1, not " + std::to_string(*o.reps));
+  if (o.steps && *o.steps < 1) throw ConfigError("--steps must be at least 1, not " + std::to_string(*o.steps));
+  if (o.seed < 0) throw ConfigError("--seed must be 0 or more, not " + std::to_string(o.seed));
 }
 
 std::string defaultPrefix() {
@@ -29,6 +31,31 @@ std::string defaultPrefix() {
   char buf[32];
   std::strftime(buf, sizeof buf, "%Y%m%d-%H%M%S", std::localtime(&t));
   return buf;
+}
+
+std::string reservePrefix(const std::string& log_root) {
+  const std::string stamp = defaultPrefix();
+  const fs::path reserved = fs::path(log_root) / ".prefixes";
+  std::error_code ec;
+  fs::create_directories(reserved, ec);
+  if (ec) throw ConfigError("--log-root " + log_root + ": cannot make " + reserved.string() + " (" + ec.message() + ")");
+  // A prefix is taken when its name is reserved, or when a run folder of the log root starts with it (an
+  // experiment of an earlier build, or one given --run-prefix).
+  const auto used = [&](const std::string& prefix) {
+    for (const auto& e : fs::directory_iterator(log_root, ec))
+      if (e.path().filename().string().rfind(prefix + "-", 0) == 0) return true;
+    return false;
+  };
+  for (int k = 1; k < 100000; ++k) {
+    const std::string prefix = k == 1 ? stamp : stamp + "-" + std::to_string(k);
+    if (!fs::create_directory(reserved / prefix, ec)) {
+      if (ec) throw ConfigError("--log-root " + log_root + ": cannot reserve a run prefix in " + reserved.string() +
+                                " (" + ec.message() + ")");
+      continue;  // another experiment has it
+    }
+    if (!used(prefix)) return prefix;
+  }
+  throw ConfigError("--log-root " + log_root + ": no free run prefix for " + stamp + ": give --run-prefix");
 }
 
 // Everything that can be wrong with the request is found here, before any process starts.

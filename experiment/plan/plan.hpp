@@ -63,6 +63,12 @@ struct Plan {
 // The run ids' first part when none is given: the wall clock (names only).
 std::string defaultPrefix();
 
+// A default prefix that no other experiment of `log_root` has or will take:
+// the wall clock, then "-2", "-3", ... when an experiment of that second (in
+// this process or another) took it. The name is reserved as a folder in
+// <log_root>/.prefixes/ (made atomically, so two runners never take one).
+std::string reservePrefix(const std::string& log_root);
+
 Plan planExperiment(const PlanRequest& o);
 
 // A fresh experiment's runs (those of this shard: `elsewhere[i]` false) may

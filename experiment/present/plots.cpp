@@ -37,9 +37,12 @@ std::string objectStyle(const std::string& name) {
   const std::string colour = name.find("red") != std::string::npos     ? "#d62728"
                              : name.find("green") != std::string::npos ? "#2ca02c"
                                                                        : "#1f77b4";
-  const int pt = name.find("square") != std::string::npos ? 5 : name.find("circle") != std::string::npos ? 7 : 3;
-  const std::string dash = name.find("green") != std::string::npos ? "2" : name.find("blue") != std::string::npos ? "3" : "1";
-  return "lc rgb '" + colour + "' pt " + std::to_string(pt) + " dt " + dash;
+  // The colour is the object's; its shape gives the line's dashes and the marker, so that the three objects of a
+  // colour differ all along their lines, not only at the markers.
+  const bool square = name.find("square") != std::string::npos, circle = name.find("circle") != std::string::npos;
+  const int pt = square ? 5 : circle ? 7 : 3;
+  const std::string dash = square ? "1" : circle ? "(10,5)" : "(2,4)";
+  return "lc rgb '" + colour + "' lw 1.6 pt " + std::to_string(pt) + " dt " + dash;
 }
 
 void runGnuplot(const fs::path& script) {
@@ -259,7 +262,8 @@ void plotAffordances(Figures& f) {
   {
     const fs::path csv = dir / "fig_affordances.csv", gp = dir / "fig_affordances.gp", png = dir / "fig_affordances.png";
     std::ofstream out(csv);
-    out << "action,object,system,x,min,q1,median,q3,max,target\n";
+    out << "action,object,system,x,min,q1,median,q3,max,target,n\n";
+    bool single = false, several = false;  // a system with one run: a bar of its prediction, not a flat box
     for (std::size_t a = 0; a < actions.size(); ++a)
       for (std::size_t i = 0; i < objects.size(); ++i)
         for (std::size_t k = 0; k < systems.size(); ++k) {
@@ -267,15 +271,18 @@ void plotAffordances(Figures& f) {
           std::vector<double> v;
           for (const RunEntry& r : js.runs) v.push_back(r.affordance.at(i).at(a));
           if (v.empty() || !js.target) continue;
+          (v.size() == 1 ? single : several) = true;
           const Box b = box(v);
           const double x = i + 1 + (static_cast<double>(k) - (systems.size() - 1) / 2.0) * 0.25;
           out << a << ",\"" << objects[i] << "\"," << systems[k] << "," << x << "," << b.min << "," << b.q1 << ","
-              << b.median << "," << b.q3 << "," << b.max << "," << js.target->at(i).at(a) << "\n";
+              << b.median << "," << b.q3 << "," << b.max << "," << js.target->at(i).at(a) << "," << v.size() << "\n";
         }
     out.close();
+    const std::string legend = std::string(several ? "box: quartiles over the runs, bars: min-max" : "") +
+                               (several && single ? "; " : "") + (single ? "a filled bar: the prediction of the one run" : "");
     std::ofstream g(gp);
     g << "set terminal pngcairo size 1400,1000 font 'DejaVu Sans,10'\nset output " << quoted(png.string()) << "\n"
-      << "set datafile separator ','\nset multiplot layout 2,2 title " << quoted("Final affordance predictions (" + title_base + "), box: quartiles, bars: min-max") << "\n"
+      << "set datafile separator ','\nset multiplot layout 2,2 title " << quoted("Final affordance predictions (" + title_base + "), " + legend) << "\n"
       << "set yrange [-0.05:1.05]\nset xrange [0.4:" << objects.size() + 0.6 << "]\nset boxwidth 0.2\nset grid ytics\n"
       << "set key outside bottom center horizontal\n";
     g << "set xtics (";
@@ -283,11 +290,15 @@ void plotAffordances(Figures& f) {
     g << ") rotate by 30 right\n";
     for (std::size_t a = 0; a < actions.size(); ++a) {
       g << "set title " << quoted(actions[a]) << "\nplot ";
-      for (std::size_t k = 0; k < systems.size(); ++k)
-        g << (k ? ", " : "") << quoted(csv.string()) << " using ($1==" << a << " && strcol(3) eq " << quoted(systems[k])
-          << " ? $4 : NaN):6:5:9:8 with candlesticks whiskerbars lc rgb '" << kSystemColour(systems[k])
-          << "' fs solid 0.4 title " << quoted(systems[k]) << ", '' using ($1==" << a << " && strcol(3) eq "
-          << quoted(systems[k]) << " ? $4 : NaN):7:7:7:7 with candlesticks lc rgb 'black' notitle";
+      for (std::size_t k = 0; k < systems.size(); ++k) {
+        const std::string mine = "$1==" + std::to_string(a) + " && strcol(3) eq " + quoted(systems[k]);
+        g << (k ? ", " : "") << quoted(csv.string()) << " using (" << mine
+          << " && $11 > 1 ? $4 : NaN):6:5:9:8 with candlesticks whiskerbars lc rgb '" << kSystemColour(systems[k])
+          << "' fs solid 0.4 " << (several ? "title " + quoted(systems[k]) : "notitle") << ", '' using (" << mine
+          << " && $11 > 1 ? $4 : NaN):7:7:7:7 with candlesticks lc rgb 'black' notitle, '' using (" << mine
+          << " && $11 == 1 ? $4 : NaN):7 with boxes lc rgb '" << kSystemColour(systems[k]) << "' fs solid 0.6 "
+          << (several ? "notitle" : "title " + quoted(systems[k]));
+      }
       g << ", " << quoted(csv.string()) << " using ($1==" << a
         << " ? $4 : NaN):10 with points pt 1 ps 1.2 lc rgb 'black' title 'table'\n";
     }
@@ -329,11 +340,12 @@ void plotCurves(Figures& f) {
       << "set datafile separator ','\nset multiplot layout 2,2 title "
       << quoted(sys + ": mean affordance predictions over " + std::to_string(js.runs.size()) + " run(s), " + title_base) << "\n"
       << "set yrange [-0.05:1.05]\nset grid\nset xlabel 'step'\nset key outside right\n";
+    const std::size_t marker_every = std::max<std::size_t>(1, curves.steps.size() / 8);  // about 8 markers a line
     for (std::size_t a = 0; a < actions.size(); ++a) {
       g << "set title " << quoted(actions[a]) << "\nplot ";
       for (std::size_t i = 0; i < objects.size(); ++i)
         g << (i ? ", " : "") << quoted(csv.string()) << " using 1:" << 2 + a * objects.size() + i
-          << " with linespoints pi 10 " << objectStyle(objects[i]) << " title " << quoted(objects[i]);
+          << " with linespoints pi " << marker_every << " " << objectStyle(objects[i]) << " title " << quoted(objects[i]);
       g << "\n";
     }
     g << "unset multiplot\n";

@@ -2,6 +2,7 @@
 
 #include <spdlog/fmt/fmt.h>
 
+#include <cmath>
 #include <cstdio>
 #include <filesystem>
 #include <iomanip>
@@ -16,6 +17,10 @@ std::string fixed(double v, int digits) {
   std::ostringstream s;
   s << std::fixed << std::setprecision(digits) << v;
   return s.str();
+}
+
+std::string fitText(double a, double b, int digits) {
+  return fixed(a, digits) + " x^2 " + (b < 0 ? "- " : "+ ") + fixed(std::abs(b), digits) + " x";
 }
 
 namespace {
@@ -122,11 +127,14 @@ void extrinsicText(std::ostringstream& t, const Summary& summary, const Plan& pl
     for (const auto& name : ex->scenarios) t << std::setw(14) << at(*ex->success_rate, name);
     t << "\n";
   }
+  for (const auto& sys : plan.systems)  // a test that failed to run is no result: "-" where none ran
+    if (const SystemExtrinsic* ex = extrinsicOf(summary, sys); ex && ex->failed_tests && !ex->failed_tests->empty())
+      t << "  " << sys << ": " << ex->failed_tests->size() << " test(s) failed to run and are not counted (summary.json: "
+        << "systems." << sys << ".extrinsic.failed_tests); the first: " << ex->failed_tests->front().error << "\n";
   if (!header) return;
   t << "\nCompletion steps (median over solved tests) by number of sub-goals; fit a x^2 + b x";
   if (summary.reference_completion_fit)
-    t << " (paper, IMP: " << fixed(summary.reference_completion_fit->a, 3) << " x^2 "
-      << fixed(summary.reference_completion_fit->b, 3) << " x)";
+    t << " (paper, IMP: " << fitText(summary.reference_completion_fit->a, summary.reference_completion_fit->b) << ")";
   t << "\n";
   for (const auto& sys : plan.systems) {
     const SystemExtrinsic* ex = extrinsicOf(summary, sys);
@@ -137,7 +145,7 @@ void extrinsicText(std::ostringstream& t, const Summary& summary, const Plan& pl
       const auto c = cs.scenarios.find(s);  // none solved: no median to show
       t << std::setw(14) << (c != cs.scenarios.end() && c->second.n ? fixed(c->second.median, 1) : std::string("-"));
     }
-    if (cs.fit) t << "   fit " << fixed(cs.fit->a, 3) << " x^2 " << fixed(cs.fit->b, 3) << " x";
+    if (cs.fit) t << "   fit " << fitText(cs.fit->a, cs.fit->b);
     t << "\n";
   }
 }

@@ -11,6 +11,9 @@ namespace afford {
 // `v` with `digits` decimals.
 std::string fixed(double v, int digits);
 
+// A completion fit a x^2 + b x as a reader writes it: "1.364 x^2 - 0.808 x".
+std::string fitText(double a, double b, int digits = 3);
+
 // The mean learned table of each system beside the experiment's table.
 void printTables(const Summary& summary, const Plan& plan, const std::string& out_dir);
 

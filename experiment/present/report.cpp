@@ -18,6 +18,7 @@
 #include <stdexcept>
 
 #include "experiment/design/reference.hpp"
+#include "experiment/present/present.hpp"
 #include "experiment/run/outcome.hpp"
 #include "experiment/schema/summary.hpp"
 
@@ -718,7 +719,7 @@ void completionSection(std::ostringstream& md, const std::vector<Folder>& folder
   for (const auto& f : folders)
     if (f.summary.reference_completion_fit) {
       const Fit& fit = *f.summary.reference_completion_fit;
-      md << " (paper, IMP, base: " << num(fit.a, 3) << " x^2 " << num(fit.b, 3) << " x)";
+      md << " (paper, IMP, base: " << fitText(fit.a, fit.b) << ")";
       break;
     }
   md << ":\n\n| experiment | system | 1 | 2 | 3 | 4 | 5 | fit |\n|---|---|---|---|---|---|---|---|\n";
@@ -733,7 +734,7 @@ void completionSection(std::ostringstream& md, const std::vector<Folder>& folder
         const auto c = cs.scenarios.find(sc);
         md << " " << (c != cs.scenarios.end() && c->second.n ? num(c->second.median, 1) : std::string("-")) << " |";
       }
-      md << " " << (cs.fit ? num(cs.fit->a, 3) + " x^2 " + num(cs.fit->b, 3) + " x" : "-") << " |\n";
+      md << " " << (cs.fit ? fitText(cs.fit->a, cs.fit->b) : "-") << " |\n";
     }
 }
 

@@ -243,14 +243,14 @@ std::vector<std::string> processesToReplay(const ReplayOptions& o, const RunConf
       into.push_back("planner");
     else if (own_motivation)
       result.decider_skipped = "motivation.kind '" + config.motivation.kind +
-                               "' is not built in (it ran as a process of its own): its recorded decisions "
-                               "are fed to the predictors";
+                               "' is not one of afford's own (a class in Python or a program of one's own "
+                               "decided): its recorded decisions are fed to the predictors";
     else
       into.push_back("motivation");
   } else if (own_motivation && !result.extrinsic && std::find(into.begin(), into.end(), "motivation") != into.end()) {
     throw std::runtime_error("--into motivation: the run's motivation.kind '" + config.motivation.kind +
-                             "' is not built in (it ran as a process of its own), so it cannot be replayed here; "
-                             "replay --into predictors");
+                             "' is not one of afford's own (a class in Python or a program of one's own "
+                             "decided), so it cannot be replayed here; replay --into predictors");
   }
   const auto affordance_kinds = affordanceKinds();
   if (std::find(into.begin(), into.end(), "predictors") != into.end() &&

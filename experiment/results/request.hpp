@@ -8,6 +8,7 @@ namespace afford {
 struct WriteRequest {
   std::string out_dir = "out";     // summary.json, the CSV files, the kept outcomes (DIR/runs/)
   bool quiet = false;              // no table at the end
+  bool replace = false;            // a finished experiment in out_dir is removed first (else: refused)
   std::string program = "afford";  // how the command was called (in the resume command it prints)
 };
 

@@ -115,9 +115,14 @@ void summariseExtrinsic(Summary& summary, const Plan& plan, const std::vector<Pl
     std::ostringstream csv;
     csv << "system,intrinsic_run_id,seed,scenario,condition,rep,success,completion,attempts,utility,sub_goals,"
            "active_sub_goals,actions_checked,wall_seconds\n";
+    std::vector<FailedRun> failed;  // failed to run (a process, a checkpoint): no result, not counted
     for (const auto& t : tests) {
       if (t.system != sys || !phase.finished[t.index]) continue;
       const RunOutcome& r = outcomes[t.index];
+      if (!r.ok) {
+        failed.push_back({t.spec.run_id, t.spec.seed, r.error});
+        continue;
+      }
       int checks = 0, active = 0;
       for (const auto& g : r.extrinsic.sub_goals) checks += g.actions_checked, active += g.iterations > 0;
       csv << sys << "," << plan.runs[t.intrinsic].spec.run_id << "," << t.spec.seed << "," << t.scenario << ",\""
@@ -130,6 +135,7 @@ void summariseExtrinsic(Summary& summary, const Plan& plan, const std::vector<Pl
     ex.scenarios = plan.scenarios;
     ex.tests_per_scenario = plan.tests;
     ex.table_metric_solved_share = solved_share;
+    if (!failed.empty()) ex.failed_tests = failed;
     if (plan.conditions.size() > 1) continue;  // the design's summary compares the conditions
     auto& table_metric = ex.table_metric.emplace();
     auto& success_rate = ex.success_rate.emplace();
@@ -142,9 +148,9 @@ void summariseExtrinsic(Summary& summary, const Plan& plan, const std::vector<Pl
       double checked = 0;
       int sub_goal_count = 0, successes = 0, total = 0;
       for (const auto& t : tests) {
-        if (t.system != sys || t.scenario != scenario || !phase.finished[t.index]) continue;
+        if (t.system != sys || t.scenario != scenario || !phase.finished[t.index] || !outcomes[t.index].ok) continue;
         const RunOutcome& r = outcomes[t.index];
-        const bool ok = r.ok && r.extrinsic.success;
+        const bool ok = r.extrinsic.success;
         auto& [s, n] = per_run[t.intrinsic];
         s += ok;
         ++n;
@@ -164,8 +170,9 @@ void summariseExtrinsic(Summary& summary, const Plan& plan, const std::vector<Pl
       std::sort(steps.begin(), steps.end());
       double mean = 0;
       for (double v : steps) mean += v / steps.size();
-      table_metric[scenario] = per_run.empty() ? 0.0 : static_cast<double>(good_runs) / per_run.size();
-      success_rate[scenario] = total ? static_cast<double>(successes) / total : 0.0;
+      if (per_run.empty()) continue;  // no test of it ran: no share to state (the table shows "-")
+      table_metric[scenario] = static_cast<double>(good_runs) / per_run.size();
+      success_rate[scenario] = static_cast<double>(successes) / total;
       completion.scenarios[scenario] = {static_cast<std::int64_t>(steps.size()),
                                         plan.sub_goals.at(scenario),
                                         quantile(steps, 0.5),

@@ -233,6 +233,7 @@ struct SystemExtrinsic {
   std::optional<std::map<std::string, double>> table_metric, success_rate, actions_checked_per_sub_goal;
   std::optional<CompletionSteps> completion_steps;
   std::optional<std::vector<PlannerCondition>> conditions;
+  std::optional<std::vector<FailedRun>> failed_tests;  // tests that failed to run (not counted above), and why
   template <class V>
   void visit(V& v) {
     v("scenarios", scenarios);
@@ -243,6 +244,7 @@ struct SystemExtrinsic {
     v("completion_steps", completion_steps);
     v("actions_checked_per_sub_goal", actions_checked_per_sub_goal);
     v("conditions", conditions);
+    v("failed_tests", failed_tests);
   }
 };
 

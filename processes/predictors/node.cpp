@@ -86,13 +86,19 @@ PredictorsNode::PredictorsNode(lcm::LCM& lcm, std::shared_ptr<spdlog::logger> lo
 
 void PredictorsNode::checkCheckpointPath(const RunConfig& config) const {
   namespace fs = std::filesystem;
-  const std::string where = "this process's checkpoint folder " + checkpoint_root_ + " (--checkpoint-dir)";
+  const std::string where = "this process's checkpoint folder '" + checkpoint_root_ + "' (--checkpoint-dir)";
+  // A checkpoint in another folder: the run's log root is not this process's --checkpoint-dir.
+  const auto elsewhere = [&](const std::string& key, const fs::path& file, const std::string& verb) {
+    return ConfigError(key + ": the run " + verb + " '" + printable(file.string()) + "', outside " + where +
+                           ": start afford-predictors with --checkpoint-dir set to the runner's --log-root (here "
+                           "probably '" + printable(file.parent_path().parent_path().string()) +
+                           "'); a run's configuration does not choose where the predictors read or write",
+                       key);
+  };
   if (config.phase == Phase::Extrinsic) {
     const fs::path file = config.extrinsic_checkpoint;
     std::error_code ec;
-    if (!insideFolder(file, checkpoint_root_))
-      throw ConfigError("extrinsic.checkpoint: '" + printable(file.string()) + "' is not inside " + where +
-                        ": a run's configuration does not choose what the predictors read");
+    if (!insideFolder(file, checkpoint_root_)) throw elsewhere("extrinsic.checkpoint", file, "loads its agent from");
     if (!fs::is_regular_file(file, ec)) throw ConfigError("extrinsic.checkpoint: '" + printable(file.string()) + "' is not a file");
     return;
   }
@@ -100,14 +106,15 @@ void PredictorsNode::checkCheckpointPath(const RunConfig& config) const {
   const fs::path file = config.checkpoint;
   const fs::path own = fs::path(checkpoint_root_) / runId();
   std::error_code ec;
-  const bool in_own = insideFolder(file, checkpoint_root_) &&
-                      fs::weakly_canonical(fs::absolute(file.parent_path(), ec), ec) ==
-                          fs::weakly_canonical(fs::absolute(own, ec), ec) &&
-                      file.extension() == ".ckpt";
-  if (!in_own)
-    throw ConfigError("run.checkpoint: '" + printable(file.string()) + "' is not a .ckpt file in " + own.string() +
-                      "/: the predictors write only into the run's own folder in " + where +
-                      "; a run's configuration does not choose where");
+  if (!insideFolder(file, checkpoint_root_)) throw elsewhere("run.checkpoint", file, "writes its checkpoint to");
+  const bool in_own = fs::weakly_canonical(fs::absolute(file.parent_path(), ec), ec) ==
+                      fs::weakly_canonical(fs::absolute(own, ec), ec);
+  if (!in_own || file.extension() != ".ckpt")
+    throw ConfigError("run.checkpoint: '" + printable(file.string()) + "' is " +
+                          (in_own ? "not a .ckpt file" : "not in the run's own folder " + own.string() + "/") +
+                          ": the predictors write only <run-id>/*.ckpt in " + where +
+                          "; a run's configuration does not choose where",
+                      "run.checkpoint");
 }
 
 void PredictorsNode::onConfigured(const RunConfig& config) {

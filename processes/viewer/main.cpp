@@ -37,6 +37,7 @@ struct Listener {
   spdlog::logger& log;
   afford::Edge& edge;
   afford::RunConfig config;  // of the run shown
+  std::string shown;         // its id
 
   afford::Turn onConfig(const afford::run_config_t& m) {
     try {
@@ -45,6 +46,8 @@ struct Listener {
       return afford::Turn::refuse(std::string("its configuration is refused: ") + e.what());
     }
     edge.join(m.run_id, &config);
+    if (m.run_id == shown) return afford::Turn::take();  // the runner says a run's configuration more than once
+    shown = m.run_id;
     viewer.onRun(m.run_id, std::string(config.phase == afford::Phase::Extrinsic ? "extrinsic " : "intrinsic ") +
                                m.experiment + " " + m.system);
     log.info("showing run '{}'", m.run_id);
@@ -117,7 +120,7 @@ int main(int argc, char** argv) {
   afford::Edge edge(lcm, log, "viewer", protocol);
   edge.useKey(key);
   edge.warnOtherRuns(false);
-  Listener listener{viewer, *log, edge, {}};
+  Listener listener{viewer, *log, edge, {}, {}};
   using afford::Order;
   using afford::Scope;
   edge.subscribe(afford::ch::runConfig, [&](const afford::run_config_t& m) { return listener.onConfig(m); }, Scope::Any,

@@ -412,13 +412,26 @@ TEST(Choreography, AnExtrinsicRunWithABadCheckpointIsRefusedNamingTheFile) {
 // naming the key, and nothing is written there.
 TEST(Choreography, ACheckpointPathOutsideThePredictorsFolderIsRefusedAndNothingIsWritten) {
   const std::string elsewhere = test::tempDir("elsewhere");
-  for (const std::string& path : {elsewhere + "/predictors.ckpt", test::checkpointRoot() + "/../x/predictors.ckpt",
-                                   std::string("relative/../../predictors.ckpt")}) {
+  // Outside the folder, the refusal says so and which option to give (not that the file is no checkpoint);
+  // inside it, that it is not the run's own folder.
+  const std::string outside = "', outside this process's checkpoint folder";
+  for (const auto& [path, said] :
+       {std::pair<std::string, std::string>{test::checkpointRoot() + "/../x/predictors.ckpt", outside},
+        {"relative/../../predictors.ckpt", outside},
+        {elsewhere + "/predictors.ckpt", "' is not in the run's own folder "},
+        {test::checkpointRoot() + "/another-run/predictors.ckpt", "' is not in the run's own folder "}}) {
     YAML::Node root = YAML::Load(baseYaml(System::IMP, 50));
     root["run"]["checkpoint"] = path;
     InProcessRun run(emitYaml(root), System::IMP, 3, 50);
     EXPECT_FALSE(run.outcome.ok) << path;
-    EXPECT_NE(run.outcome.error.find("run.checkpoint"), std::string::npos) << run.outcome.error;
+    EXPECT_NE(run.outcome.error.find(said), std::string::npos) << run.outcome.error;
+    if (said == outside) {
+      EXPECT_NE(run.outcome.error.find("run.checkpoint: the run writes its checkpoint to '" + path + said +
+                                       " '" + test::checkpointRoot() + "' (--checkpoint-dir): start afford-predictors "
+                                       "with --checkpoint-dir set to the runner's --log-root"),
+                std::string::npos)
+          << run.outcome.error;
+    }
     EXPECT_FALSE(std::filesystem::exists(path)) << path;
   }
   const std::string config_dir = std::string(AFFORD_SOURCE_DIR) + "/config";
@@ -426,7 +439,8 @@ TEST(Choreography, ACheckpointPathOutsideThePredictorsFolderIsRefusedAndNothingI
       extrinsicConfig(config_dir, RunRequest{"base", System::IMP, 1, std::nullopt, {}}, "/etc/passwd", "scenario1"));
   InProcessRun run(yaml, System::IMP, 1, 125);
   EXPECT_FALSE(run.outcome.ok);
-  EXPECT_NE(run.outcome.error.find("extrinsic.checkpoint: '/etc/passwd' is not inside"), std::string::npos)
+  EXPECT_NE(run.outcome.error.find("extrinsic.checkpoint: the run loads its agent from '/etc/passwd', outside"),
+            std::string::npos)
       << run.outcome.error;
 }
 

@@ -510,11 +510,11 @@ TEST(Processes, AnAgentWithoutACheckpointIsNotTestedAndTheExperimentSaysWhy) {
 }
 
 TEST(Processes, AKilledProcessEndsTheRunWithinSecondsNamingIt) {
-  const std::string dir = test::tempDir("kill");
+  const std::string dir = test::tempDir("kill"), said = test::tempDir("kill-said");  // (the experiment's folder is its own)
   const int port = 7840;
   const std::string cmd = experimentIn(
       dir, "base --system IMP --reps 1 --steps 10000000 --keep-logs none --base-port " + std::to_string(port));
-  std::system(("sh -c '(" + cmd + " > " + dir + "/out.txt 2>&1; echo $? > " + dir + "/rc) &'").c_str());
+  std::system(("sh -c '(" + cmd + " > " + said + "/out.txt 2>&1; echo $? > " + said + "/rc) &'").c_str());
   const fs::path eye_log = fs::path(dir) / "processes" / "slot0" / "eye.log";
   const auto deadline = std::chrono::steady_clock::now() + std::chrono::seconds(20);
   while (slurp(eye_log).find("configured") == std::string::npos) {
@@ -524,12 +524,12 @@ TEST(Processes, AKilledProcessEndsTheRunWithinSecondsNamingIt) {
   // Configured for a run of 10^7 steps: from here on it is mid-run.
   const auto killed = std::chrono::steady_clock::now();
   test::runCommand("pkill -9 -f 'afford-eye --lcm-url udpm://239.255.76.67:" + std::to_string(port) + "'");
-  while (!fs::exists(fs::path(dir) / "rc") || slurp(fs::path(dir) / "rc").empty()) {
+  while (!fs::exists(fs::path(said) / "rc") || slurp(fs::path(said) / "rc").empty()) {
     ASSERT_LT(std::chrono::steady_clock::now() - killed, std::chrono::seconds(10)) << "the run did not end";
     std::this_thread::sleep_for(std::chrono::milliseconds(50));
   }
-  EXPECT_NE(std::stoi(slurp(fs::path(dir) / "rc")), 0);
-  const std::string out = slurp(fs::path(dir) / "out.txt");
+  EXPECT_NE(std::stoi(slurp(fs::path(said) / "rc")), 0);
+  const std::string out = slurp(fs::path(said) / "out.txt");
   EXPECT_NE(out.find("process 'eye'"), std::string::npos) << out;
   EXPECT_NE(out.find("SIGKILL"), std::string::npos) << out;
   // No process of the run is left behind.

@@ -36,3 +36,6 @@ echo "frames written: $frames"
 # 6000 intrinsic steps at one frame per 250, and the extrinsic test's first frame.
 [[ $frames -ge 20 ]] || { echo "too few frames"; ls "$out/frames"; exit 1; }
 ls "$out/frames" | grep -q -- "-scenario3-e0_" || { echo "no frame of the extrinsic test"; exit 1; }
+# Each run is announced once, however often the runner says its configuration (2 runs: the intrinsic and the test).
+shown=$(grep -c "showing run" "$out/viewer-window.log")
+[[ $shown -eq 2 ]] || { grep "showing run" "$out/viewer-window.log"; echo "'showing run' said $shown times for 2 runs"; exit 1; }

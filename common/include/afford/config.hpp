@@ -19,8 +19,16 @@ namespace afford {
 
 class ConfigError : public std::runtime_error {
  public:
-  using std::runtime_error::runtime_error;
+  explicit ConfigError(const std::string& what, std::string key = {}) : std::runtime_error(what), key_(std::move(key)) {}
+  // The config key the error is about ("motivation.leak"), when it is about one.
+  const std::string& key() const { return key_; }
+
+ private:
+  std::string key_;
 };
+
+// Of `known`, the name closest to `name` by edit distance, if close enough to be a typo of it ("" if none).
+std::string closestName(const std::string& name, const std::vector<std::string>& known);
 
 enum class Shape { Square, Circle, Rectangle };
 enum class Colour { Red, Green, Blue };
@@ -406,6 +414,10 @@ struct ExperimentFile {
   std::vector<std::pair<std::string, std::vector<std::string>>> conditions;
   // The `extrinsic:` and `tables:` sections as written, merged along `extends` (the designs are parsed from them).
   YAML::Node extrinsic_node, tables_node;
+  // Where each config key it sets was set (dotted key -> "experiment file F" or "... F, block systems.IMP"):
+  // an error about a key names the file and block that gave it.
+  std::map<std::string, std::string> sources;
+  std::map<std::string, std::map<std::string, std::string>> system_sources;  // system -> key -> where
 };
 
 std::vector<std::string> listExperiments(const std::string& config_dir);

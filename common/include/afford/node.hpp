@@ -291,6 +291,10 @@ std::string installedShareDir();
 // share/afford/config, else the source tree's config/.
 std::string defaultConfigDir();
 
+// Where runs' folders go when a process is not told (the logger's --log-dir, the predictors'
+// --checkpoint-dir): $AFFORD_LOGS if set (as scripts/procs.sh sets it), else "logs".
+std::string defaultLogRoot();
+
 // Large transient buffers (LCM's reassembly of fragmented messages) go back to
 // the kernel when freed, so a flood of them does not stay resident.
 void boundHeapGrowth();

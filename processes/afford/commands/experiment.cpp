@@ -43,6 +43,9 @@ void addFirstOptions(CLI::App* exp, Args& a) {
   exp->add_option("--jobs,-j", o.host.jobs, "runs at a time")->capture_default_str();
   exp->add_option("--seed", o.plan.seed, "seed of the first repetition (then seed+1, ...)")->capture_default_str();
   exp->add_option("--out", o.write.out_dir, "folder for summary.json and CSV files")->capture_default_str();
+  exp->add_flag("--replace", o.write.replace,
+                "--out holds a finished experiment: remove its files and write this one in their place (without "
+                "it, such a folder is refused)");
   exp->add_option("--transport", o.host.transport, "udpm (real processes) or memq (one process)")->capture_default_str();
   exp->add_option("--keep-logs", o.plan.keep_logs, "which runs keep an LCM log: all, first or none")->capture_default_str();
   exp->add_option("--keep-checkpoints", o.plan.keep_checkpoints,
@@ -130,6 +133,9 @@ ExperimentRequest requestOf(Args& a, const CLI::App& app, const CLI::App* exp, c
     o.plan.experiment = std::filesystem::absolute(a.file).lexically_normal().string();
     o.given.insert("name");
   }
+  if (o.resume && o.write.replace)
+    throw ConfigError("--resume continues the unfinished experiment of --out, --replace starts a new one in place of a "
+                      "finished one: give one of them");
   if (!o.resume && o.plan.experiment.empty())
     throw ConfigError("which experiment? `afford experiment NAME` (see `afford experiments`), or "
                       "`afford experiment --resume --out DIR` to continue an interrupted one");
@@ -149,8 +155,9 @@ ExperimentRequest requestOf(Args& a, const CLI::App& app, const CLI::App* exp, c
       throw ConfigError("--shard must be i/n with 0 <= i < n, not \"" + a.shard + "\"");
   }
   o.host.processes = parseProcessSwaps(a.processes, "--process");
-  if (a.reps) o.plan.reps = a.reps;
-  if (a.steps) o.plan.steps = a.steps;
+  // Given is given: `--steps 0` is refused (checkPlanRequest), not read as "the experiment's".
+  if (o.given.count("--reps")) o.plan.reps = a.reps;
+  if (o.given.count("--steps")) o.plan.steps = a.steps;
   if (o.given.count("--tables")) o.plan.tables = a.tables;
   if (o.given.count("--table-seed")) o.plan.table_seed = a.table_seed;
   if (!a.system.empty()) o.plan.systems = parseSystems({a.system}, "--system");

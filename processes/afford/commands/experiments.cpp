@@ -1,4 +1,5 @@
 // afford experiments: list the experiments of the config folder.
+#include <algorithm>
 #include <cstdio>
 
 #include "afford/commands.hpp"
@@ -9,10 +10,12 @@ namespace afford {
 Command experimentsCommand(CLI::App& app, const FrontDoor& door) {
   auto* list = app.add_subcommand("experiments", "list the experiments in the config folder");
   return {list, [&door] {
-            for (const auto& n : listExperiments(door.config_dir)) {
-              const auto e = loadExperiment(door.config_dir, n);
-              std::printf("%-16s %s\n", n.c_str(), e.description.c_str());
-            }
+            const std::vector<std::string> names = listExperiments(door.config_dir);
+            std::size_t width = 0;  // the longest name, so that every description starts in one column
+            for (const auto& n : names) width = std::max(width, n.size());
+            for (const auto& n : names)
+              std::printf("%-*s  %s\n", static_cast<int>(width), n.c_str(),
+                          loadExperiment(door.config_dir, n).description.c_str());
             return 0;
           }};
 }

@@ -96,7 +96,7 @@ Command mergeCommand(CLI::App& app, const FrontDoor& door) {
   struct Args {
     std::vector<std::string> dirs;
     std::string out = "out";
-    bool quiet = false;
+    bool quiet = false, replace = false;
   };
   auto a = std::make_shared<Args>();
   auto* merge = app.add_subcommand(
@@ -105,9 +105,11 @@ Command mergeCommand(CLI::App& app, const FrontDoor& door) {
   merge->add_option("dirs", a->dirs, "the shards' output folders (every shard, once)")->required();
   merge->add_option("--out", a->out, "folder for the merged summary.json and CSV files")->capture_default_str();
   merge->add_flag("--quiet", a->quiet, "do not print the table at the end");
+  merge->add_flag("--replace", a->replace, "--out holds a finished experiment: remove its files first");
   return {merge, [a, &door] {
             ExperimentRequest o = mergeOptions(a->dirs, a->out);
             o.write.quiet = a->quiet;
+            o.write.replace = a->replace;
             o.write.program = door.program;
             return runExperiment(o, *door.log);
           }};

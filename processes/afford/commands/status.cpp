@@ -1,6 +1,8 @@
 // afford status: list the processes heard on a bus (pid, state, run, last step).
 #include <lcm/lcm-cpp.hpp>
 
+#include <spdlog/fmt/fmt.h>
+
 #include <algorithm>
 #include <chrono>
 #include <cstdio>
@@ -81,13 +83,25 @@ Command statusCommand(CLI::App& app, const FrontDoor& door) {
             };
             const auto until = std::chrono::steady_clock::now() + std::chrono::duration<double>(a->seconds);
             while (std::chrono::steady_clock::now() < until && !(awaited.size() && allHeard())) pumpBus(bus, 50);
-            std::printf("%-12s %8s  %-8s %10s  %s\n", "process", "pid", "state", "last step", "run");
+            // Columns as wide as what they hold; "detail": what a process adds (the logger: its log's state).
+            // What a message says is printed as text only: no byte of it reaches the terminal as a control.
+            int run_width = 3;
+            bool any_detail = false;
+            for (const auto& [id, entry] : heard) {
+              run_width = std::max(run_width, static_cast<int>(printable(entry.first.run_id, 200).size()));
+              any_detail = any_detail || !entry.first.detail.empty();
+            }
+            const auto line = [&](std::string text) {  // without trailing blanks
+              text.erase(text.find_last_not_of(' ') + 1);
+              std::printf("%s\n", text.c_str());
+            };
+            line(fmt::format("{:<12} {:>8}  {:<8} {:>10}  {:<{}}  {}", "process", "pid", "state", "last step", "run",
+                             run_width, any_detail ? "detail" : ""));
             for (const auto& [id, entry] : heard) {
               const process_status_t& m = entry.first;
-              // What a message says is printed as text only: no byte of it reaches the terminal as a control.
-              std::printf("%-12s %8d  %-8s %10lld  %s%s%s\n", printable(m.process, 64).c_str(), m.pid, states[m.state],
-                          static_cast<long long>(m.step), m.run_id.empty() ? "-" : m.run_id.c_str(),
-                          m.detail.empty() ? "" : "  ", printable(m.detail, 400).c_str());
+              line(fmt::format("{:<12} {:>8}  {:<8} {:>10}  {:<{}}  {}", printable(m.process, 64), m.pid,
+                               states[m.state], m.step, m.run_id.empty() ? "-" : printable(m.run_id, 200), run_width,
+                               printable(m.detail, 400)));
             }
             if (forgotten > 0)
               std::printf("(and %lld more process ids heard, beyond protocol.limits.peers = %d: not listed)\n",

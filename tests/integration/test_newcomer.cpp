@@ -1,0 +1,277 @@
+// What a newcomer trips on (issue 38), through the `afford` command: an
+// experiment folder is never mixed with another experiment, `afford clean`
+// leaves alone what it cannot attribute or what is in use, a test that failed
+// to run is no result, and errors say what was wrong and where.
+#include <fcntl.h>
+#include <sys/file.h>
+#include <unistd.h>
+
+#include <gtest/gtest.h>
+
+#include <array>
+#include <cstdio>
+#include <filesystem>
+#include <fstream>
+#include <iterator>
+#include <nlohmann/json.hpp>
+#include <regex>
+#include <set>
+#include <sstream>
+
+#include "tests/support.hpp"
+
+namespace afford {
+namespace {
+
+namespace fs = std::filesystem;
+using nlohmann::json;
+
+struct Output {
+  int status = -1;
+  std::string text;  // stdout and stderr
+};
+
+Output run(const std::string& args) {
+  Output o;
+  FILE* p = popen((test::afford(args) + " 2>&1").c_str(), "r");
+  std::array<char, 4096> buf{};
+  for (std::size_t n; (n = fread(buf.data(), 1, buf.size(), p)) > 0;) o.text.append(buf.data(), n);
+  const int st = pclose(p);
+  o.status = WIFEXITED(st) ? WEXITSTATUS(st) : -1;
+  return o;
+}
+
+json readJson(const fs::path& p) {
+  std::ifstream in(p);
+  return json::parse(in);
+}
+
+std::string slurp(const fs::path& p) {
+  std::ifstream in(p);
+  return std::string(std::istreambuf_iterator<char>(in), {});
+}
+
+void spit(const fs::path& p, const std::string& text) {
+  fs::create_directories(p.parent_path());
+  std::ofstream(p) << text;
+}
+
+const std::string kTiny = " --transport memq --system IMP --reps 1 --quiet --progress none";
+
+// A second experiment into a finished one's folder is refused, naming the ways
+// on; with --replace the folder holds the second only (no CSV, figure or test
+// of the first); a folder afford did not make is never written into.
+TEST(Newcomer, AFinishedExperimentsFolderIsRefusedOrReplacedWholeNeverMixed) {
+  const std::string dir = test::tempDir("replace");
+  const std::string out = dir + "/out", logs = " --log-root " + dir + "/logs";
+  ASSERT_EQ(run("experiment base" + kTiny + " --steps 200 --extrinsic-reps 1 --scenarios scenario1 --out " + out + logs)
+                .status,
+            0);
+  ASSERT_EQ(run("plot " + out).status, 0);
+  ASSERT_TRUE(fs::exists(out + "/extrinsic_IMP.csv") && fs::exists(out + "/fig_completion.png"));
+  const std::string before = slurp(out + "/summary.json");
+
+  Output again = run("experiment base" + kTiny + " --steps 100 --out " + out + logs);
+  EXPECT_EQ(again.status, 2) << again.text;
+  EXPECT_NE(again.text.find("--out " + out + " holds a finished experiment (base"), std::string::npos) << again.text;
+  EXPECT_NE(again.text.find("choose another --out"), std::string::npos) << again.text;
+  EXPECT_NE(again.text.find("--replace"), std::string::npos) << again.text;
+  EXPECT_EQ(slurp(out + "/summary.json"), before);  // nothing written
+
+  Output replaced = run("experiment base" + kTiny + " --steps 100 --replace --out " + out + logs);
+  ASSERT_EQ(replaced.status, 0) << replaced.text;
+  EXPECT_EQ(readJson(out + "/summary.json")["steps"], 100);
+  for (const char* gone : {"extrinsic_IMP.csv", "fig_completion.png", "fig_completion.csv", "fig_affordances.gp"})
+    EXPECT_FALSE(fs::exists(fs::path(out) / gone)) << gone;
+
+  spit(out + "/notes.txt", "my notes");
+  Output foreign = run("experiment base" + kTiny + " --steps 100 --replace --out " + out + logs);
+  EXPECT_EQ(foreign.status, 2) << foreign.text;
+  EXPECT_NE(foreign.text.find("files afford did not write (notes.txt)"), std::string::npos) << foreign.text;
+  EXPECT_EQ(slurp(out + "/notes.txt"), "my notes");
+  EXPECT_EQ(readJson(out + "/summary.json")["steps"], 100);
+
+  spit(dir + "/mine/draft.md", "a draft");
+  Output other = run("experiment base" + kTiny + " --steps 100 --out " + dir + "/mine" + logs);
+  EXPECT_EQ(other.status, 2) << other.text;
+  EXPECT_NE(other.text.find("is not empty and holds no afford experiment (it holds draft.md)"), std::string::npos)
+      << other.text;
+  EXPECT_FALSE(fs::exists(dir + "/mine/summary.json"));
+  EXPECT_NE(run("experiment base --resume --replace --out " + out).text.find("--replace"), std::string::npos);
+}
+
+// Without --run-prefix, two experiments of one log root in the same second
+// take different prefixes: the second gets "-2".
+TEST(Newcomer, DefaultRunIdsOfOneSecondDoNotCollide) {
+  const std::string dir = test::tempDir("prefixes");
+  std::vector<std::string> ids;
+  for (int k = 0; k < 3; ++k) {
+    Output o = run("experiment base" + kTiny + " --steps 5 --keep-logs none --no-reuse-agents --out " + dir + "/o" +
+                   std::to_string(k) + " --log-root " + dir + "/logs");
+    ASSERT_EQ(o.status, 0) << o.text;
+    ids.push_back(readJson(dir + "/o" + std::to_string(k) + "/summary.json")["systems"]["IMP"]["runs"][0]["run_id"]);
+  }
+  EXPECT_NE(ids[0], ids[1]);
+  EXPECT_NE(ids[1], ids[2]);
+  EXPECT_NE(ids[0], ids[2]);
+  // Each is reserved in the log root, so that another runner passes it over.
+  for (const auto& e : fs::directory_iterator(dir + "/logs/.prefixes"))
+    EXPECT_TRUE(std::regex_match(e.path().filename().string(), std::regex(R"(\d{8}-\d{6}(-\d+)?)")))
+        << e.path();
+}
+
+// --steps 0 and --reps 0 are refused, not read as "the experiment's"; a negative seed is named as the
+// option, and a name nearly right with the one meant.
+TEST(Newcomer, CountsOutOfRangeAndNamesNearlyRightAreRefusedNamingWhatWasMeant) {
+  const std::string dir = test::tempDir("zero");
+  Output steps = run("experiment base --transport memq --steps 0 --out " + dir + "/a");
+  EXPECT_EQ(steps.status, 2) << steps.text;
+  EXPECT_NE(steps.text.find("--steps must be at least 1, not 0"), std::string::npos) << steps.text;
+  Output reps = run("experiment base --transport memq --reps 0 --out " + dir + "/b");
+  EXPECT_EQ(reps.status, 2) << reps.text;
+  EXPECT_NE(reps.text.find("--reps must be at least 1, not 0"), std::string::npos) << reps.text;
+  Output seed = run("experiment base --transport memq --seed -1 --out " + dir + "/c");
+  EXPECT_NE(seed.text.find("--seed must be 0 or more, not -1"), std::string::npos) << seed.text;
+  EXPECT_FALSE(fs::exists(dir + "/a/summary.json") || fs::exists(dir + "/b/summary.json"));
+  // A name nearly right is named with the one meant.
+  Output name = run("experiment basee --out " + dir + "/d");
+  EXPECT_NE(name.text.find("unknown experiment \"basee\"; did you mean \"base\"?"), std::string::npos) << name.text;
+  Output system = run("experiment base --system imp --out " + dir + "/e");
+  EXPECT_NE(system.text.find("did you mean IMP? (systems are written in capitals)"), std::string::npos) << system.text;
+}
+
+// A typo in one's own experiment file names the file, its block and the key
+// meant; in a system's block, that block; on --set, the setting.
+TEST(Newcomer, AConfigTypoNamesTheFileTheBlockAndTheClosestKey) {
+  const std::string dir = test::tempDir("typo");
+  spit(dir + "/mine.yaml", "extends: base\nmotivation:\n  leek: 0.3\n");
+  Output file = run("experiment --config " + dir + "/mine.yaml --transport memq --out " + dir + "/o");
+  EXPECT_EQ(file.status, 2) << file.text;
+  EXPECT_NE(file.text.find("experiment file " + dir + "/mine.yaml, block motivation: config key 'motivation.leek': "
+                           "unknown key; did you mean 'motivation.leak'?"),
+            std::string::npos)
+      << file.text;
+  spit(dir + "/sys.yaml", "extends: base\nsystems:\n  IMP:\n    motivation:\n      leak: fast\n");
+  Output block = run("experiment --config " + dir + "/sys.yaml --system IMP --transport memq --out " + dir + "/o");
+  EXPECT_NE(block.text.find("experiment file " + dir + "/sys.yaml, block systems.IMP: config key 'motivation.leak': "
+                            "expected a number"),
+            std::string::npos)
+      << block.text;
+  Output set = run("experiment base --set motivaton.leak=0.2 --transport memq --out " + dir + "/o");
+  EXPECT_NE(set.text.find("no map 'motivaton'; did you mean 'motivation'?"), std::string::npos) << set.text;
+  Output value = run("experiment base --set motivation.leak=fast --transport memq --out " + dir + "/o");
+  EXPECT_NE(value.text.find("--set motivation.leak=fast: config key 'motivation.leak': expected a number"),
+            std::string::npos)
+      << value.text;
+}
+
+// A test that failed to run is no result: its scenario shows "-", not 0.00,
+// and the console says how many failed and why (here the predictors cannot
+// read the stored agent's checkpoint, damaged since it was stored).
+TEST(Newcomer, TestsThatFailedToRunAreNotCountedAsUnsolved) {
+  const std::string dir = test::tempDir("failed-tests");
+  const std::string logs = " --log-root " + dir + "/logs";
+  ASSERT_EQ(run("experiment base" + kTiny + " --steps 100 --out " + dir + "/a" + logs).status, 0);
+  for (const auto& agent : fs::directory_iterator(dir + "/logs/agents"))
+    fs::resize_file(agent.path() / "predictors.ckpt", 100);
+  Output o = run("experiment base --transport memq --system IMP --reps 1 --steps 100 --progress none "
+                 "--extrinsic-reps 1 --scenarios scenario1 scenario2 --out " + dir + "/b" + logs);
+  EXPECT_EQ(o.status, 1) << o.text;
+  const json ex = readJson(dir + "/b/summary.json")["systems"]["IMP"]["extrinsic"];
+  EXPECT_EQ(ex["table_metric"].size(), 0u) << ex.dump();
+  EXPECT_EQ(ex["success_rate"].size(), 0u) << ex.dump();
+  ASSERT_EQ(ex["failed_tests"].size(), 2u) << ex.dump();
+  EXPECT_NE(ex["failed_tests"][0]["error"].get<std::string>().find("predictors.ckpt"), std::string::npos) << ex.dump();
+  EXPECT_EQ(o.text.find("0.00 (1.0)"), std::string::npos) << o.text;
+  EXPECT_TRUE(std::regex_search(o.text, std::regex(R"(IMP +- \(1\.0\) +- \(1\.0\))"))) << o.text;
+  EXPECT_NE(o.text.find("IMP: 2 test(s) failed to run and are not counted"), std::string::npos) << o.text;
+  EXPECT_NE(o.text.find("2 extrinsic test(s) failed to run"), std::string::npos) << o.text;
+  EXPECT_EQ(slurp(dir + "/b/extrinsic_IMP.csv").find("scenario1"), std::string::npos);  // no row of a non-result
+}
+
+// Run folders are offered only when attributable and not in use: a group's
+// folder (its key, its live pids), a run whose experiment is running (it holds
+// its folder's lock) and a folder nothing attributes are left alone, and said.
+TEST(Newcomer, CleanLeavesAloneGroupsRunningExperimentsAndWhatItCannotAttribute) {
+  const std::string dir = test::tempDir("clean-alone");
+  const fs::path logs = fs::path(dir) / "logs";
+  spit(logs / "demo/lcm-url", "udpm://239.255.76.67:7700?ttl=0\n");
+  spit(logs / "demo/bus.key", "key");
+  // The group's eye: this test process, with its start time as procs.sh records it.
+  std::ifstream stat("/proc/self/stat");
+  std::string line;
+  std::getline(stat, line);
+  std::istringstream fields(line.substr(line.rfind(')') + 2));
+  std::vector<std::string> f{std::istream_iterator<std::string>(fields), {}};
+  spit(logs / "demo/eye.pid", std::to_string(getpid()) + "\n");
+  spit(logs / "demo/eye.started", f.at(19) + "\n");
+  spit(logs / "mystery/data.bin", "?");
+  spit(logs / "r-running/run.json", json{{"run_id", "r-running"}, {"experiment", "base"}, {"out_dir", dir + "/busy"}}.dump());
+  spit(logs / "r-done/run.json", json{{"run_id", "r-done"}, {"experiment", "base"}, {"out_dir", dir + "/done"}}.dump());
+  spit(fs::path(dir) / "busy/.lock", "");
+  const int lock = open((dir + "/busy/.lock").c_str(), O_RDWR);
+  ASSERT_EQ(flock(lock, LOCK_EX | LOCK_NB), 0);  // as the runner of busy/ holds it
+
+  Output dry = run("clean --all --delete --log-root " + logs.string());
+  ASSERT_EQ(dry.status, 0) << dry.text;
+  EXPECT_NE(dry.text.find("removed") , std::string::npos) << dry.text;
+  EXPECT_FALSE(fs::exists(logs / "r-done"));
+  for (const char* kept : {"demo", "mystery", "r-running"}) EXPECT_TRUE(fs::exists(logs / kept)) << kept;
+  EXPECT_NE(dry.text.find("/demo: a scripts/procs.sh group (running: eye)"), std::string::npos) << dry.text;
+  EXPECT_NE(dry.text.find("/mystery: nothing in it says whose it is"), std::string::npos) << dry.text;
+  EXPECT_NE(dry.text.find("/r-running: its experiment is running (in " + dir + "/busy)"), std::string::npos)
+      << dry.text;
+  close(lock);  // the experiment is over: its run may go
+  Output after = run("clean --all --delete --log-root " + logs.string());
+  EXPECT_FALSE(fs::exists(logs / "r-running")) << after.text;
+  EXPECT_TRUE(fs::exists(logs / "demo") && fs::exists(logs / "mystery")) << after.text;
+}
+
+// Names a person reads: the experiments' list in one column however long a
+// name, the completion fit with its sign.
+TEST(Newcomer, TheListAndTheFitReadAsWritten) {
+  const std::string dir = test::tempDir("reading");
+  Output list = run("experiments");
+  ASSERT_EQ(list.status, 0);
+  std::istringstream lines(list.text);
+  std::set<std::size_t> columns;  // where each description starts
+  for (std::string l; std::getline(lines, l);) {
+    const auto name_end = l.find(' ');
+    columns.insert(l.find_first_not_of(' ', name_end));
+  }
+  EXPECT_EQ(columns.size(), 1u) << list.text;
+  Output o = run("experiment base --transport memq --system IMP --reps 1 --progress none --steps 100 --extrinsic-reps 1 "
+                 "--scenarios scenario1 --out " + dir + "/out --log-root " + dir + "/logs");
+  ASSERT_EQ(o.status, 0) << o.text;
+  EXPECT_NE(o.text.find("(paper, IMP: 1.364 x^2 - 0.808 x)"), std::string::npos) << o.text;
+  EXPECT_EQ(o.text.find(" x^2 -0."), std::string::npos) << o.text;
+}
+
+// afford plot: with one run per system the final predictions are bars (a
+// box of one value is a flat line); the curves tell apart the three objects
+// of a colour by their lines' dashes, all along them.
+TEST(Newcomer, PlotsOfOneRunShowBarsAndCurvesOfOneColourDifferAllAlong) {
+  const std::string dir = test::tempDir("plots");
+  ASSERT_EQ(run("experiment base" + kTiny + " --steps 600 --out " + dir + "/out --log-root " + dir + "/logs").status, 0);
+  Output p = run("plot " + dir + "/out");
+  ASSERT_EQ(p.status, 0) << p.text;
+  const std::string boxes = slurp(dir + "/out/fig_affordances.gp");
+  EXPECT_NE(boxes.find("$11 == 1 ? $4 : NaN):7 with boxes"), std::string::npos) << boxes;
+  EXPECT_NE(boxes.find("a filled bar: the prediction of the one run"), std::string::npos) << boxes;
+  std::istringstream csv(slurp(dir + "/out/fig_affordances.csv"));
+  std::string header, row;
+  std::getline(csv, header);
+  EXPECT_EQ(header.substr(header.rfind(',') + 1), "n");
+  while (std::getline(csv, row)) EXPECT_EQ(row.substr(row.rfind(',') + 1), "1") << row;
+  const std::string curves = slurp(dir + "/out/fig_curves_IMP.gp");
+  std::set<std::string> red_dashes;
+  for (const char* object : {"red square", "red circle", "red rectangle"}) {
+    std::smatch m;
+    ASSERT_TRUE(std::regex_search(curves, m, std::regex(std::string("dt (\\S+) title '") + object + "'"))) << curves;
+    red_dashes.insert(m[1]);
+  }
+  EXPECT_EQ(red_dashes.size(), 3u) << curves;
+}
+
+}  // namespace
+}  // namespace afford
