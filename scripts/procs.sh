@@ -13,16 +13,21 @@
 #   scripts/procs.sh status  RUN [OPTIONS]      pid and liveness, then each process's state,
 #                                               run id and last step handled (its STATUS)
 #   scripts/procs.sh run     RUN EXPERIMENT [afford experiment options...]
-#                                               drive runs on the group (run ids RUN-<exp>-<sys>-s<seed>)
+#                                               drive runs on the group (run ids RUN-<exp>-<sys>-s<seed>;
+#                                               RUN-2-..., RUN-3-... once those exist; or --run-prefix P)
 #   scripts/procs.sh exec    RUN COMMAND...     run a command on RUN's bus (spy, viewer, lcm-logger)
 #
 # PROCESS: environment eye predictors motivation planner logger.
-# Each process's output goes to logs/RUN/<process>.log (appended), its pid to
-# logs/RUN/<process>.pid, its command line to logs/RUN/<process>.cmd (and a
-# --process command to logs/RUN/<process>.process); the bus to
-# logs/RUN/lcm-url. The bus is $AFFORD_URL (default below) at `start`.
+# Where: a group's folder is LOGS/RUN and its runs' logs and checkpoints are
+# LOGS/<run-id>, LOGS being $AFFORD_LOGS, else the checkout's logs/ (an
+# installed copy: ./logs). Each process's output goes to LOGS/RUN/<process>.log
+# (appended), its pid to LOGS/RUN/<process>.pid, its command line to
+# LOGS/RUN/<process>.cmd (and a --process command to LOGS/RUN/<process>.process);
+# the bus to LOGS/RUN/lcm-url. The bus is $AFFORD_URL (default below) at `start`.
+# A stopped group's folder stays (its key, its processes' output): remove it
+# yourself; `afford clean` leaves it alone.
 #
-# The group's bus is keyed (docs/security.md): `start` makes logs/RUN/bus.key
+# The group's bus is keyed (docs/security.md): `start` makes LOGS/RUN/bus.key
 # (a new random key) if there is none, and every process, `status`, `run` and
 # `exec` use it, so a process must carry the key's tags to be heard. lcm-spy
 # still decodes every channel. AFFORD_PROCS_KEY=off starts a group without a key.
@@ -31,7 +36,9 @@
 # namespace "afford" (created at the first start: loopback only, multicast
 # routed over lo), which every terminal can enter, so no datagram leaves the
 # machine. AFFORD_NETNS=none uses the current namespace instead (it must
-# route 224.0.0.0/4, e.g. inside `unshare --net`).
+# route 224.0.0.0/4, e.g. inside `unshare --net`). The namespace stays after
+# `stop` (other groups may use it); once no group runs, `ip netns delete
+# afford` removes it (the next `start` makes it again).
 set -euo pipefail
 root=$(cd "$(dirname "$0")/.." && pwd)
 if [[ -f $root/config/defaults.yaml && -x $root/../../bin/afford && ! -d $root/build ]]; then
@@ -46,7 +53,7 @@ netns=${AFFORD_NETNS:-afford}
 grace=${AFFORD_GRACE:-5}
 mapfile -t all < <("$bin/afford" processes)  # the registry of processes
 
-usage() { sed -n '2,34p' "$0" | sed 's/^# \{0,1\}//'; exit 2; }
+usage() { sed -n '2,/^set -euo/p' "$0" | sed '$d' | sed 's/^# \{0,1\}//'; exit 2; }
 die() { echo "procs.sh: $*" >&2; exit 1; }
 [[ $# -ge 2 ]] || usage
 cmd=$1 run=$2
@@ -165,6 +172,7 @@ case $cmd in
     done
     [[ ${#procs[@]} -gt 0 ]] || procs=("${all[@]}")
     for p in "${procs[@]}"; do start_one "$p" "$u"; done
+    echo "group folder: $dir (each process's output, pid and command; runs' logs in $logs)"
     if [[ $netns == none ]]; then echo "bus: $u"; else echo "bus: $u (network namespace '$netns')"; fi
     [[ -n ${AFFORD_BUS_KEY:-} ]] && echo "key: $AFFORD_BUS_KEY (every process of the group needs it: --bus-key)"
     true
@@ -174,6 +182,10 @@ case $cmd in
     procs=("$@")
     [[ ${#procs[@]} -gt 0 ]] || procs=("${all[@]}")
     for p in "${procs[@]}"; do stop_one "$p"; done
+    if [[ $netns != none ]] && ip netns list | grep -qw "^$netns" && ! ip netns pids "$netns" | grep -q .; then
+      echo "no process runs in the network namespace '$netns' now: \`ip netns delete $netns\` removes it" \
+        "(the next start makes it again)"
+    fi
     ;;
   restart)
     [[ $# -ge 1 ]] || usage
@@ -208,7 +220,18 @@ case $cmd in
   run)
     [[ $# -ge 1 ]] || usage
     u=$(url)
-    in_ns "$bin/afford" experiment "$@" --attach "$u" --run-prefix "$run" --log-root "$logs"
+    # The run ids' prefix: --run-prefix if given, else RUN, or RUN-2, RUN-3, ... once runs of RUN exist.
+    prefix=()
+    for a in "$@"; do [[ $a == --run-prefix || $a == --run-prefix=* ]] && prefix=(none); done
+    if [[ ${#prefix[@]} -eq 0 ]]; then
+      p=$run k=1
+      while compgen -G "$logs/$p-*" >/dev/null; do k=$((k + 1)); p=$run-$k; done
+      prefix=(--run-prefix "$p")
+      echo "run ids: $p-<experiment>-<system>-s<seed> (logs in $logs)"
+    else
+      prefix=()
+    fi
+    in_ns "$bin/afford" experiment "$@" --attach "$u" "${prefix[@]}" --log-root "$logs"
     ;;
   exec)
     [[ $# -ge 1 ]] || usage

@@ -3,19 +3,41 @@
 # (scripts/fetch-lcm.sh), then configure and build a Release build into build/
 # (executables in build/bin/, the Python package in build/python/, put on
 # /usr/bin/python3's path).
-# Usage: scripts/setup.sh [--no-build]
+# Usage: scripts/setup.sh [--main] [--no-build] [--dry-run]
+#   --main      only what the main job needs (scripts/main.sh): the packages to
+#               build and run the processes and the `afford` command, and those
+#               targets; scripts/test.sh installs and builds the rest
+#   --no-build  install and fetch only
+#   --dry-run   say what would be installed, fetched and run; do none of it
 # Works as root on a fresh Debian bookworm with only the compiler toolchain.
 set -euo pipefail
 cd "$(dirname "$0")/.."
 
+main=0 build=1 dry=0
+for arg in "$@"; do
+  case $arg in
+    --main) main=1 ;;
+    --no-build) build=0 ;;
+    --dry-run) dry=1 ;;
+    *) echo "setup.sh: unknown option '$arg' (--main, --no-build, --dry-run)" >&2; exit 2 ;;
+  esac
+done
+run() { if ((dry)); then echo "would run: $*"; else "$@"; fi; }
+
+# What the processes and the `afford` command need to build and run (over udpm in a private network namespace).
 packages=(
   build-essential cmake pkg-config git ca-certificates patch
-  liblcm-bin liblcm-java libglib2.0-dev  # lcm-gen, the LCM tools and lcm.jar; liblcm itself is built (below)
+  liblcm-bin libglib2.0-dev  # lcm-gen and the LCM tools; liblcm itself is built (below)
   libeigen3-dev libopencv-dev libspdlog-dev libfmt-dev
   libcli11-dev libyaml-cpp-dev nlohmann-json3-dev zlib1g-dev libgsl-dev libsodium-dev
+  iproute2 util-linux procps
+)
+# ... and what the tests, the figures, lcm-spy, the cluster scripts and the Python package need.
+((main)) || packages+=(
+  liblcm-java  # lcm.jar, for lcm-spy's types jar
   libgtest-dev libgmock-dev
   default-jdk-headless default-jre libjchart2d-java
-  iproute2 iptables util-linux procps gnuplot-nox time
+  iptables gnuplot-nox time
   xvfb imagemagick x11-utils
   slurmctld slurmd slurm-client munge  # scripts/slurm-submit.sh; tests/cluster/slurm-local.sh
   clang libclang-rt-14-dev llvm  # scripts/fuzz.sh: libFuzzer, ASan, UBSan, llvm-symbolizer
@@ -28,7 +50,9 @@ missing=()
 for p in "${packages[@]}"; do
   dpkg-query -W -f='${Status}' "$p" 2>/dev/null | grep -q "install ok installed" || missing+=("$p")
 done
-if ((${#missing[@]})); then
+if ((dry)); then
+  echo "would install: ${missing[*]:-(nothing: every package is there)}"
+elif ((${#missing[@]})); then
   sudo=""; [[ $(id -u) -eq 0 ]] || sudo="sudo"
   echo "setup: installing ${missing[*]}"
   export DEBIAN_FRONTEND=noninteractive
@@ -37,11 +61,20 @@ if ((${#missing[@]})); then
 fi
 
 # LCM's source, which the build patches (third_party/lcm/README.md).
-scripts/fetch-lcm.sh
+run scripts/fetch-lcm.sh
 
-[[ ${1:-} == --no-build ]] && exit 0
-cmake -S . -B build -DCMAKE_BUILD_TYPE=Release >/dev/null
-cmake --build build -j"$(nproc)"
+((build)) || exit 0
+configure() { if ((dry)); then echo "would run: cmake $*"; else cmake "$@" >/dev/null; fi; }
+if ((main)); then
+  # The main job's targets only: the processes and the front door (no tests, benchmarks or Python).
+  configure -S . -B build -DCMAKE_BUILD_TYPE=Release -DAFFORD_TESTS=OFF -DAFFORD_EXTRAS=OFF
+  run cmake --build build -j"$(nproc)" --target afford afford-environment afford-eye afford-predictors \
+    afford-motivation afford-planner afford-logger
+  exit 0
+fi
+configure -S . -B build -DCMAKE_BUILD_TYPE=Release -DAFFORD_TESTS=ON -DAFFORD_EXTRAS=ON
+run cmake --build build -j"$(nproc)"
+((dry)) && exit 0
 
 # `import afford` in Debian's /usr/bin/python3: a .pth file in its site folder
 # for local installs names the package built in build/python.

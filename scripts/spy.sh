@@ -16,5 +16,15 @@ jar=$root/build/share/afford-lcmtypes.jar
 for f in "$jar" /usr/share/java/lcm.jar /usr/share/java/jchart2d.jar; do
   [[ -f $f ]] || { echo "spy.sh: $f is missing (run scripts/setup.sh)" >&2; exit 2; }
 done
+# lcm-spy is a window: say so before Java does, with the ways to get one and what works without.
+no_display() {
+  echo "spy.sh: lcm-spy opens a window, and there is no display ($1). Run it on a desktop, over ssh -X," >&2
+  echo "  or in a virtual display: xvfb-run -a scripts/spy.sh URL (then screenshot it: xwd or import)." >&2
+  echo "  Without a window: build/bin/afford status --lcm-url URL (each process's state and step), or" >&2
+  echo "  build/bin/afford-viewer --lcm-url URL --png DIR (the viewer's frames as PNG files)." >&2
+  exit 2
+}
+[[ -n ${DISPLAY:-} ]] || no_display "DISPLAY is not set"
+if command -v xdpyinfo >/dev/null && ! xdpyinfo >/dev/null 2>&1; then no_display "cannot open display '$DISPLAY'"; fi
 exec java -Djava.net.preferIPv4Stack=true -Xmx256m -Xms64m \
   -cp "$jar:/usr/share/java/lcm.jar:/usr/share/java/jchart2d.jar" lcm.spy.Spy --lcm-url="$url" "$@"

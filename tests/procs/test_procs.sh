@@ -11,6 +11,7 @@ procs=$root/scripts/procs.sh
 
 "$procs" start demo | tee "$out/start.txt"
 [[ $(grep -c "started (pid" "$out/start.txt") -eq 6 ]] || { echo "expected 6 processes started"; exit 1; }
+grep -q "^group folder: $out/logs/demo " "$out/start.txt" || { echo "start does not say where the group is kept"; exit 1; }
 "$procs" status demo --wait-for environment,eye,predictors,motivation,planner,logger --state waiting --seconds 30 |
   tee "$out/status.txt"
 [[ $(grep -c " yes$" "$out/status.txt") -eq 6 ]] || { echo "expected 6 live processes"; exit 1; }
@@ -27,6 +28,24 @@ wait "$runner" || { cat "$out/run.txt"; echo "the run failed"; exit 1; }
 grep -q "process eye is free again" "$out/run.txt" || { cat "$out/run.txt"; echo "the eye did not rejoin"; exit 1; }
 [[ $(grep -c "=== .* start:" "$out/logs/demo/eye.log") -eq 2 ]] || { echo "the eye's log should hold both starts"; exit 1; }
 [[ -f $out/logs/demo-base-FIX-s2/log.00.lcm ]] || { echo "no run log"; exit 1; }
+# Every column of afford status is labelled: the logger's is where it wrote the run's log.
+"$procs" status demo | tee "$out/status-done.txt"
+grep -Eq "^process +pid +state +last step +run +detail$" "$out/status-done.txt" &&
+  grep -Eq "^logger +[0-9]+  [a-z]+ +-?[0-9]+  [^ ]+ +$out/logs/demo-base-FIX-s2$" "$out/status-done.txt" ||
+  { echo "afford status: the logger's column is unlabelled or misplaced"; exit 1; }
+
+# The same run again: new run ids (demo-2-...), and --run-prefix is the user's to give.
+"$procs" run demo base --system FIX --reps 1 --steps 200 --seed 2 --quiet --out "$out/run2" >"$out/run2.txt" 2>&1 ||
+  { cat "$out/run2.txt"; echo "a second run with the same seed failed"; exit 1; }
+[[ -f $out/logs/demo-2-base-FIX-s2/log.00.lcm ]] || { cat "$out/run2.txt"; echo "the second run is not demo-2-..."; exit 1; }
+"$procs" run demo base --system FIX --reps 1 --steps 200 --seed 2 --quiet --no-reuse-agents --run-prefix mine --out "$out/run3" \
+  >"$out/run3.txt" 2>&1 || { cat "$out/run3.txt"; echo "--run-prefix with procs.sh run failed"; exit 1; }
+[[ -f $out/logs/mine-base-FIX-s2/log.00.lcm ]] || { echo "--run-prefix mine was not used"; exit 1; }
+# afford clean never offers the live group's folder (its key, its pids).
+"$build/bin/afford" clean --log-root "$out/logs" --all | tee "$out/clean.txt"
+grep -q "would remove.*logs/demo$" "$out/clean.txt" && { echo "clean would remove the live group's folder"; exit 1; }
+grep -q "^left alone .*logs/demo: a scripts/procs.sh group (running: " "$out/clean.txt" ||
+  { echo "clean does not say it leaves the live group alone"; exit 1; }
 
 "$procs" restart demo predictors | tee "$out/restart.txt"
 grep -q "predictors (pid [0-9]*) stopped" "$out/restart.txt" || { echo "restart did not stop with SIGINT"; exit 1; }

@@ -11,6 +11,15 @@ set -euo pipefail
 root=$(cd "$(dirname "$0")/../.." && pwd)
 source "$root/tests/netns.sh"
 enter_test "$0" "$@"
+# Without a display, spy.sh says so and how to get one (no Java stack trace).
+set +e
+DISPLAY= "$root/scripts/spy.sh" "udpm://239.255.76.67:7990?ttl=0" >"$out/no-display.log" 2>&1
+code=$?
+set -e
+cat "$out/no-display.log"
+[[ $code -eq 2 ]] && grep -q "no display (DISPLAY is not set)" "$out/no-display.log" &&
+  grep -q "xvfb-run" "$out/no-display.log" && ! grep -q "Exception" "$out/no-display.log" ||
+  { echo "spy.sh without a display: exit $code"; exit 1; }
 start_xvfb 1280x900 "$out/xvfb.log"
 
 port=7990
