@@ -71,7 +71,8 @@ def main():
             rates, sums = [], set()
             for r in range(a.reps):
                 e = afford.run("base", system="IMP", reps=1, steps=a.steps, transport=transport, keep_logs="none",
-                               out=out / transport / f"{name.replace(' ', '-')}-{r}", set=settings, **kw)
+                               out=out / transport / f"{name.replace(' ', '-')}-{r}", set=settings, replace=True,
+                               **kw)
                 rates.append(float(e.runs["steps_per_second"].iloc[0]))
                 sums.add(e.runs["weights_checksum"].iloc[0])
             rate = statistics.median(rates)

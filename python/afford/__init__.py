@@ -8,7 +8,7 @@
 from . import _afford
 from .components import (ACTIONS, AffordancePredictor, Decision, KeyedRng, Motivation, register_affordance,
                          register_motivation)
-from .experiments import run
+from .experiments import ExperimentError, run
 from .logs import Message, RunLog, read_log
 from .results import Experiment, load
 
@@ -17,4 +17,4 @@ ConfigError = _afford.ConfigError
 channels = _afford.channels
 
 __all__ = ["Motivation", "Decision", "KeyedRng", "ACTIONS", "register_motivation", "AffordancePredictor",
-           "register_affordance", "run", "load", "Experiment", "read_log", "RunLog", "Message", "ConfigError", "channels"]
+           "register_affordance", "run", "ExperimentError", "load", "Experiment", "read_log", "RunLog", "Message", "ConfigError", "channels"]

@@ -112,6 +112,26 @@ def _dict(d):
 
 PASS = 4  # the action that does nothing
 
+GAZE_COLOUR = (255, 255, 0)  # yellow, as afford-viewer's gaze box
+
+
+def gaze_box(scene: np.ndarray, gaze, side: int) -> np.ndarray:
+    """A copy of `scene` (H x W x 3) with a one-pixel frame around the side x side window centred at
+    `gaze` ((x, y) in [0, 1], y down the rows), drawn just outside the window; clipped at the edges."""
+    out = np.array(scene, copy=True)
+    height, width = out.shape[:2]
+    cx, cy = int(round(float(gaze[0]) * width)), int(round(float(gaze[1]) * height))
+    left, top = cx - side // 2 - 1, cy - side // 2 - 1
+    right, bottom = left + side + 1, top + side + 1
+    rows, cols = slice(max(top, 0), min(bottom, height - 1) + 1), slice(max(left, 0), min(right, width - 1) + 1)
+    for r in (top, bottom):
+        if 0 <= r < height:
+            out[r, cols] = GAZE_COLOUR
+    for c in (left, right):
+        if 0 <= c < width:
+            out[rows, c] = GAZE_COLOUR
+    return out
+
 
 class AffordEnv(gymnasium.Env if gymnasium else object):
     """The world of an experiment (its objects, affordances and eye), a step at a time.
@@ -188,7 +208,12 @@ class AffordEnv(gymnasium.Env if gymnasium else object):
         return self._world.observation(), reward, terminated, truncated, info
 
     def render(self):
-        return self._world.observation()["scene"] if self.render_mode == "rgb_array" else None
+        """With render_mode "rgb_array": the scene with the gaze box (yellow, as afford-viewer draws it),
+        a frame just outside the focus window the eye looks through."""
+        if self.render_mode != "rgb_array":
+            return None
+        obs = self._world.observation()
+        return gaze_box(obs["scene"], obs["gaze"], self._world.focus_side)
 
     def close(self):
         pass

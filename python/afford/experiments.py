@@ -18,6 +18,26 @@ def _setting(key: str, value: Any) -> str:
     return f"{key}={value}"
 
 
+class ExperimentError(RuntimeError):
+    """An experiment that ran but failed (a run or a test failed, an agent could not be tested).
+
+    The message says why (the errors the runner said, the last of them);
+    `errors` holds them, `out` the experiment's folder (its summary.json
+    lists each failed run and test with its reason), `exit_code` the exit
+    status `afford experiment` would have had.
+    """
+
+    def __init__(self, message: str, errors: list[str], out: Path, exit_code: int):
+        super().__init__(message)
+        self.errors, self.out, self.exit_code = errors, out, exit_code
+
+
+def _count(name: str, value: Any) -> None:
+    if value is not None and (isinstance(value, bool) or not isinstance(value, int) or value < 1):
+        raise ValueError(f"afford.run({name}={value!r}): {name} is a whole number, at least 1 (or None: the "
+                         f"experiment's own)")
+
+
 def run(experiment: str, system: str | Iterable[str] | None = None, reps: int | None = None,
         steps: int | None = None, set: dict[str, Any] | None = None, transport: str = "memq",
         out: str | Path | None = None, log_root: str | Path | None = None, seed: int = 1, jobs: int = 1,
@@ -25,7 +45,7 @@ def run(experiment: str, system: str | Iterable[str] | None = None, reps: int | 
         run_prefix: str = "", reuse_agents: bool = True, progress: str = "none",
         log_level: str = "warn", motivation: Any = None, affordance: Any = None,
         processes: dict[str, str] | None = None,
-        tables: int | None = None, table_seed: int | None = None) -> Experiment:
+        tables: int | None = None, table_seed: int | None = None, replace: bool = False) -> Experiment:
     """Run an experiment as `afford experiment` does and return what afford.load returns.
 
     `experiment`: a name of config/experiments/ (base, late1, ...) or an
@@ -49,7 +69,16 @@ def run(experiment: str, system: str | Iterable[str] | None = None, reps: int | 
     the place of the paper's affordance and learning-progress predictors, in
     this process (memq); predictors.affordance.kind is set to its kind.
     `tables`, `table_seed`: random tables (--tables, --table-seed).
+    `replace`: `out` holds a finished experiment: remove its files and
+    write this one in their place (without it, such a folder raises
+    ConfigError; an experiment never mixes with another's files).
+
+    Run ids start with the date and time, made unique in `log_root`: calls
+    in a loop, or from several processes, never collide. A run or test
+    that fails raises afford.ExperimentError (a RuntimeError) saying why.
     """
+    _count("reps", reps)
+    _count("steps", steps)
     if experiment.endswith((".yaml", ".yml")) or "/" in experiment:
         experiment = str(Path(experiment).resolve())
     settings = dict(set or {})
@@ -71,12 +100,15 @@ def run(experiment: str, system: str | Iterable[str] | None = None, reps: int | 
         "processes": dict(processes or {}),
         "extrinsic_reps": extrinsic_reps, "scenarios": list(scenarios), "run_prefix": run_prefix,
         "progress": progress, "reuse_agents": reuse_agents, "log_level": log_level,
-        "tables": tables, "table_seed": table_seed,
+        "tables": tables, "table_seed": table_seed, "replace": bool(replace),
     }
-    code, signal = _afford.run_experiment(request)
+    code, signal, errors = _afford.run_experiment(request)
     if signal:
         raise KeyboardInterrupt(f"afford.run({experiment!r}) was interrupted: what finished is in {out}; "
                                 f"`afford experiment --resume --out {out}` completes it")
     if code != 0:
-        raise RuntimeError(f"afford.run({experiment!r}) failed (exit {code}); see the messages above and {out}")
+        said = "\n  ".join(errors[-5:]) if errors else "no error was said; see the messages above"
+        more = f" (the last 5 of {len(errors)})" if len(errors) > 5 else ""
+        raise ExperimentError(f"afford.run({experiment!r}) failed (exit {code}) in {out}{more}:\n  {said}",
+                              list(errors), out, code)
     return load(out)

@@ -9,6 +9,7 @@ side x side RGB pixels) as side x side x 3 arrays.
 from __future__ import annotations
 
 import math
+from collections.abc import Mapping
 from dataclasses import dataclass
 from pathlib import Path
 from typing import Any, Iterator
@@ -34,14 +35,43 @@ def _shaped(fields: dict[str, Any]) -> dict[str, Any]:
     return fields
 
 
-@dataclass(frozen=True)
-class Message:
+def _short(value: Any) -> str:
+    """A field's value as a repr shows it: arrays by shape and type, long text and lists cut."""
+    if isinstance(value, np.ndarray):
+        return f"<{value.dtype} array {'x'.join(map(str, value.shape)) or 'scalar'}>"
+    if isinstance(value, (list, tuple)) and len(value) > 8:
+        return f"<{type(value).__name__} of {len(value)}>"
+    text = repr(value)
+    return text if len(text) <= 60 else text[:57] + "...'" if isinstance(value, str) else text[:57] + "..."
+
+
+@dataclass(frozen=True, eq=False)
+class Message(Mapping):
+    """One message of a run's log: its channel, when it was recorded, and its fields.
+
+    A read-only mapping of its fields (m["step"], m.keys(), m.items(),
+    dict(m)); `fields` is the same dict.
+    """
+
     channel: str
     utime: int                 # when the logger recorded it, microseconds
     fields: dict[str, Any]     # the message's fields by name (docs/processes-and-channels.md)
 
     def __getitem__(self, name: str) -> Any:
-        return self.fields[name]
+        try:
+            return self.fields[name]
+        except KeyError:
+            raise KeyError(f"{self.channel} has no field {name!r} (its fields: {', '.join(self.fields)})") from None
+
+    def __iter__(self) -> Iterator[str]:
+        return iter(self.fields)
+
+    def __len__(self) -> int:
+        return len(self.fields)
+
+    def __repr__(self) -> str:
+        shown = ", ".join(f"{k}={_short(v)}" for k, v in self.fields.items())
+        return f"Message({self.channel}, utime={self.utime}: {shown})"
 
 
 @dataclass

@@ -104,6 +104,47 @@ class PythonObject {
 
 // ---- the motivation ---------------------------------------------------------------------
 
+// What decide() must return, said with what it returned instead.
+constexpr const char* kDecideReturns =
+    "decide() returns an afford.Decision(act, action, motivation, threshold), or a dict or an object with those "
+    "four: act a bool, action 0..3 when acting, motivation and threshold numbers";
+
+// decide()'s answer as a Decision; anything else is refused naming what came and what is expected.
+Decision decisionOf(const py::object& r, const std::string& at) {
+  const std::string type = py::str(py::type::of(r).attr("__name__")).cast<std::string>();
+  const bool mapping = py::isinstance<py::dict>(r);
+  if (r.is_none() || py::isinstance<py::tuple>(r) || py::isinstance<py::list>(r) || py::isinstance<py::str>(r) ||
+      py::isinstance<py::bool_>(r) || py::isinstance<py::int_>(r) || py::isinstance<py::float_>(r))
+    throw std::runtime_error(at + " returned " + (r.is_none() ? std::string("None") : "a " + type) + ": " +
+                             kDecideReturns);
+  const auto get = [&](const char* name, bool needed) -> py::object {
+    if (mapping ? r.cast<py::dict>().contains(name) : py::hasattr(r, name)) return field(r, name);
+    if (!needed) return py::none();
+    throw std::runtime_error(at + " returned a " + type + " without '" + name + "': " + kDecideReturns);
+  };
+  const auto number = [&](const char* name, py::object v, auto as) {
+    try {
+      return v.cast<decltype(as)>();
+    } catch (py::cast_error&) {
+      throw std::runtime_error(at + " returned " + name + " = " + py::repr(v).cast<std::string>() + ": " +
+                               kDecideReturns);
+    }
+  };
+  Decision d;
+  const py::object act = get("act", true);
+  if (!py::isinstance<py::bool_>(act) && !py::isinstance<py::int_>(act) &&
+      !py::hasattr(act, "__bool__"))  // numpy's bool_ has __bool__
+    throw std::runtime_error(at + " returned act = " + py::repr(act).cast<std::string>() + ": " + kDecideReturns);
+  d.act = py::bool_(act);
+  d.action = d.act ? number("action", get("action", true), int{}) : -1;
+  if (d.act && (d.action < 0 || d.action >= kNumActions))
+    throw std::runtime_error(at + " returned action " + std::to_string(d.action) + ", not one of 0.." +
+                             std::to_string(kNumActions - 1));
+  d.motivation = number("motivation", get("motivation", true), double{});
+  d.threshold = number("threshold", get("threshold", true), double{});
+  return d;
+}
+
 class PythonMotivation : public MotivationComponent {
  public:
   PythonMotivation(const std::string& kind, const py::object& cls, const RunConfig& config)
@@ -121,20 +162,9 @@ class PythonMotivation : public MotivationComponent {
       percept["tried_ago"] = p.tried_ago ? py::object(py::array_t<std::int64_t>(kNumActions, p.tried_ago->data()))
                                          : py::object(py::none());
       percept["last_change"] = p.last_change ? py::object(py::float_(*p.last_change)) : py::object(py::none());
-      const py::object r = py_.obj().attr("decide")(percept);
-      Decision d;
-      d.act = field(r, "act").cast<bool>();
-      d.action = d.act ? field(r, "action").cast<int>() : -1;
-      if (d.act && (d.action < 0 || d.action >= kNumActions))
-        throw std::runtime_error(at + " returned action " + std::to_string(d.action) + ", not one of 0.." +
-                                 std::to_string(kNumActions - 1));
-      d.motivation = field(r, "motivation").cast<double>();
-      d.threshold = field(r, "threshold").cast<double>();
-      return d;
+      return decisionOf(py_.obj().attr("decide")(percept), at);
     } catch (py::error_already_set& e) {
       throw std::runtime_error(at + " raised " + e.what());
-    } catch (py::cast_error& e) {
-      throw std::runtime_error(at + " returned no act, action, motivation and threshold (" + e.what() + ")");
     }
   }
   // Asked before each step: a motivation may need the report only after some steps (IMP's observed change).

@@ -7,6 +7,8 @@
 #include <pybind11/pybind11.h>
 #include <pybind11/stl.h>
 #include <spdlog/sinks/null_sink.h>
+#include <spdlog/sinks/ringbuffer_sink.h>
+#include <spdlog/sinks/stdout_color_sinks.h>
 
 #include <cstring>
 #include <memory>
@@ -82,7 +84,7 @@ py::dict readLog(const std::string& path, const std::string& run_id, const std::
   return out;
 }
 
-// `afford experiment` in this process: (exit code, the signal that stopped it or 0).
+// `afford experiment` in this process: (exit code, the signal that stopped it or 0, the last errors said).
 // The GIL is released while it runs; SIGINT (a notebook's interrupt) stops
 // it as it stops the command, and Python's own handlers are put back after.
 py::tuple runExperimentFrom(const py::dict& request) {
@@ -114,8 +116,18 @@ py::tuple runExperimentFrom(const py::dict& request) {
       }(),
       "processes");
   o.write.quiet = true;
+  o.write.replace = request["replace"].cast<bool>();
   o.write.program = "python3 -c 'import afford; afford.run(...)'; or: build/bin/afford";
-  auto log = makeLogger("afford", request["log_level"].cast<std::string>());
+  // Said on stderr at the level asked; the errors also kept (the last 20), for the exception that says why.
+  const spdlog::level::level_enum level = parseLevel(request["log_level"].cast<std::string>());
+  auto console = std::make_shared<spdlog::sinks::stderr_color_sink_mt>();
+  console->set_level(level);
+  auto errors = std::make_shared<spdlog::sinks::ringbuffer_sink_mt>(20);
+  errors->set_level(spdlog::level::err);
+  auto log = std::make_shared<spdlog::logger>("afford", spdlog::sinks_init_list{console, errors});
+  log->set_level(std::min(level, spdlog::level::err));
+  log->set_pattern("[%H:%M:%S.%e] [%n] [%^%l%$] %v");
+  errors->set_pattern("%v");
   int code = 0, signal = 0;
   {
     py::gil_scoped_release free;
@@ -123,7 +135,7 @@ py::tuple runExperimentFrom(const py::dict& request) {
     code = runExperiment(o, *log);
     signal = scope.signal();
   }
-  return py::make_tuple(code, signal);
+  return py::make_tuple(code, signal, errors->last_formatted());
 }
 
 
@@ -239,7 +251,7 @@ PYBIND11_MODULE(_afford, m) {
         py::arg("channels") = std::vector<std::string>{},
         "The messages of one run of a log folder (or .lcm file), read and checked by the project's reader.");
   m.def("run_experiment", &afford::runExperimentFrom, py::arg("request"),
-        "Run an experiment in this process (afford experiment); returns (exit code, signal or 0).");
+        "Run an experiment in this process (afford experiment); returns (exit code, signal or 0, the last errors).");
   m.def("channels", [] { return afford::channelNames(); }, "Every channel of the protocol, in the protocol's order.");
   afford::defineComponents(m);
   py::class_<afford::World>(m, "World", "The environment and the eye of one run, a step at a time (afford.env).")

@@ -92,3 +92,14 @@ class Broken(afford.Motivation):
         if p["step"] == 7:
             raise ValueError("no decision at step seven")
         return afford.Decision(False)
+
+
+class ReturnsNothing(afford.Motivation):
+    """A decide() that forgets to return (or returns a tuple): the run fails saying what decide() returns."""
+
+    kind = "returns-nothing"
+
+    def decide(self, p):
+        if p["step"] == 3:
+            return (True, 0)
+        return None if p["step"] >= 2 else afford.Decision(False)

@@ -7,7 +7,7 @@ from pathlib import Path
 import pytest
 
 import afford
-from motivations import Broken, PyNovelty, PyPaper, PyRandom
+from motivations import Broken, PyNovelty, PyPaper, PyRandom, ReturnsNothing
 from predictors import Frozen, PyPerceptrons
 
 HERE = Path(__file__).resolve().parent
@@ -24,9 +24,13 @@ def test_a_python_motivation_in_process_equals_the_cpp_one(tmp_path):
     assert checksum(py) == checksum(cpp)
     paper = afford.run("base", system="IMP", reps=1, steps=1500, out=tmp_path / "paper")
     assert checksum(paper) != checksum(cpp)  # the motivation made a difference
-    # its log replays: the predictors to the same weights; the decider is said not to be replayed
+    # its log replays: the predictors to the same weights; the decider is said not to be replayed, and why
     log = afford.read_log(py.runs["log_dir"].iloc[0], channels=["DECISION"])
     assert len(log) == 1500 and all(d["threshold"] == 0.1 for d in log)
+    said = subprocess.run([BIN / "afford", "replay", py.runs["log_dir"].iloc[0]], capture_output=True, text=True)
+    assert said.returncode == 0, said.stdout + said.stderr
+    assert "motivation.kind 'py-novelty' is not one of afford's own (a class in Python" in said.stdout + said.stderr
+    assert "process of its own" not in said.stdout + said.stderr
 
 
 def test_a_python_motivation_as_a_process_on_the_bus_equals_the_cpp_example(tmp_path, monkeypatch):
@@ -44,11 +48,21 @@ def test_a_python_motivation_as_a_process_on_the_bus_equals_the_cpp_example(tmp_
 
 
 def test_a_python_error_fails_the_run_naming_the_step_and_the_error(tmp_path):
-    with pytest.raises(RuntimeError, match="failed"):
+    said = "motivation 'broken' (Python): decide() at step 7 raised ValueError: no decision at step seven"
+    with pytest.raises(afford.ExperimentError) as failed:  # the reason is in the exception, not only on stderr
         afford.run("base", system="IMP", reps=1, steps=100, out=tmp_path / "b", motivation=Broken)
+    assert said in str(failed.value) and failed.value.out == tmp_path / "b" and failed.value.exit_code == 1
+    assert isinstance(failed.value, RuntimeError) and any(said in e for e in failed.value.errors)
     e = afford.load(tmp_path / "b")
     error = e.summary["systems"]["IMP"]["failed_runs"][0]["error"]
-    assert "motivation 'broken' (Python): decide() at step 7 raised ValueError: no decision at step seven" in error
+    assert said in error
+
+
+def test_a_decide_that_returns_no_decision_is_told_what_to_return(tmp_path):
+    with pytest.raises(afford.ExperimentError, match=r"decide\(\) at step 2 returned None: decide\(\) returns an "
+                                                     r"afford.Decision\(act, action, motivation, threshold\)"):
+        afford.run("base", system="IMP", reps=1, steps=20, out=tmp_path / "none", motivation=ReturnsNothing,
+                   log_level="off")
 
 
 def test_bad_classes_are_named():

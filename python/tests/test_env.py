@@ -24,6 +24,23 @@ def test_the_gymnasium_contract():
     assert np.array_equal(env.render(), obs["scene"]) if env.render_mode else env.render() is None
 
 
+def test_render_draws_the_gaze_box_around_the_focus_window():
+    env = AffordEnv(world="base", seed=2, render_mode="rgb_array")
+    obs, _ = env.reset(seed=2)
+    frame = env.render()
+    changed = np.any(frame != obs["scene"], axis=2)
+    rows, cols = np.nonzero(changed)
+    side = obs["focus"].shape[0]
+    # a frame of side + 2 pixels around the gaze, in the viewer's yellow; the window inside it untouched
+    assert rows.max() - rows.min() == side + 1 and cols.max() - cols.min() == side + 1
+    assert abs((rows.max() + rows.min()) / 2 - obs["gaze"][1] * 150) <= 1
+    assert abs((cols.max() + cols.min()) / 2 - obs["gaze"][0] * 150) <= 1
+    assert np.all(frame[changed] == [255, 255, 0])
+    inside = frame[rows.min() + 1:rows.max(), cols.min() + 1:cols.max()]
+    assert np.array_equal(inside, obs["scene"][rows.min() + 1:rows.max(), cols.min() + 1:cols.max()])
+    assert AffordEnv(world="base", seed=2).render() is None
+
+
 def trajectory(seed, steps=60):
     env = AffordEnv(world="base", seed=0)
     obs, _ = env.reset(seed=seed)  # the action space is seeded from it too

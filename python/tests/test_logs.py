@@ -35,6 +35,16 @@ def test_a_runs_messages_come_by_channel_with_images_as_arrays(made):
     assert len(frame) == 400 and {"step", "acted", "action", "motivation"} <= set(frame.columns)
 
 
+def test_a_message_is_a_mapping_of_its_fields_and_its_repr_is_short(made):
+    focus = afford.read_log(made / "logs" / run_of(made)["run_id"], channels=["FOCUS"]).messages[0]
+    assert dict(focus) == focus.fields and set(focus.keys()) == set(focus.fields) and len(focus) == len(focus.fields)
+    assert dict(focus.items())["step"] == focus["step"] and focus.get("nothing", 7) == 7 and "image" in focus
+    text = repr(focus)
+    assert text.startswith("Message(FOCUS, utime=") and "image=<uint8 array 21x21x3>" in text and len(text) < 600
+    with pytest.raises(KeyError, match="FOCUS has no field 'nothing'"):
+        focus["nothing"]
+
+
 def test_channels_keeps_only_those(made):
     log = afford.read_log(made / "logs" / run_of(made)["run_id"], channels=["DECISION"])
     assert {m.channel for m in log} == {"DECISION"}

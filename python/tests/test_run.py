@@ -25,8 +25,10 @@ def test_settings_are_config_keys(tmp_path):
     a = afford.run("base", system="IMP", reps=1, steps=300, out=tmp_path / "a", set={"motivation.leak": 0.3})
     b = afford.run("base", system="IMP", reps=1, steps=300, out=tmp_path / "b")
     assert a.runs["weights_checksum"].iloc[0] != b.runs["weights_checksum"].iloc[0]
-    with pytest.raises(afford.ConfigError, match="motivation.leek"):
+    with pytest.raises(afford.ConfigError, match="'motivation.leek': unknown key; did you mean 'motivation.leak'"):
         afford.run("base", system="IMP", reps=1, steps=300, out=tmp_path / "c", set={"motivation.leek": 0.3})
+    with pytest.raises(ValueError, match="steps is a whole number, at least 1"):
+        afford.run("base", system="IMP", reps=1, steps=0, out=tmp_path / "e")
     with pytest.raises(ValueError):  # a ConfigError is one
         afford.run("no-such-experiment", out=tmp_path / "d")
 
@@ -60,3 +62,29 @@ def test_ctrl_c_stops_it_as_it_stops_the_command_and_python_goes_on(tmp_path):
     assert "after: 1" in r.stdout
     summary = json.loads((tmp_path / "cut" / "summary.json").read_text())
     assert summary["interrupted"]["signal"] == "SIGINT"
+
+
+def test_calls_in_a_loop_with_one_log_root_never_collide(tmp_path):
+    # run ids start with the second; twenty calls within a few seconds take twenty prefixes
+    ids = set()
+    for k in range(20):
+        e = afford.run("base", system="IMP", reps=1, steps=5, out=tmp_path / f"o{k}", log_root=tmp_path / "logs",
+                       reuse_agents=False, keep_logs="none")
+        ids.update(e.runs["run_id"])
+    assert len(ids) == 20
+
+
+def test_an_experiment_never_mixes_with_another_in_its_folder(tmp_path):
+    out = tmp_path / "out"
+    first = afford.run("base", system="IMP", reps=1, steps=60, out=out, extrinsic_reps=1, scenarios=["scenario1"])
+    assert len(first.extrinsic) == 1
+    with pytest.raises(afford.ConfigError, match="holds a finished experiment .* --replace"):
+        afford.run("base", system="IMP", reps=1, steps=40, out=out)
+    (out / "fig_old.png").write_bytes(b"a figure of the first experiment")
+    second = afford.run("base", system="IMP", reps=1, steps=40, out=out, replace=True)
+    assert second.summary["steps"] == 40 and len(second.extrinsic) == 0
+    assert not (out / "extrinsic_IMP.csv").exists() and not (out / "fig_old.png").exists()
+    (out / "notes.txt").write_text("mine")
+    with pytest.raises(afford.ConfigError, match=r"files afford did not write \(notes.txt\)"):
+        afford.run("base", system="IMP", reps=1, steps=40, out=out, replace=True)
+    assert (out / "notes.txt").read_text() == "mine" and afford.load(out).summary["steps"] == 40
