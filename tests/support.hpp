@@ -8,6 +8,8 @@
 #include <cstdio>
 #include <cstdlib>
 #include <filesystem>
+#include <fstream>
+#include <iterator>
 #include <memory>
 #include <set>
 #include <string>
@@ -72,6 +74,18 @@ inline CommandResult runCommand(const std::string& command) {
 }
 
 inline std::string afford(const std::string& args) { return std::string(AFFORD_BIN_DIR) + "/afford " + args; }
+// `afford ARGS`, its exit code and output.
+inline CommandResult runAfford(const std::string& args) { return runCommand(afford(args)); }
+
+// A file's text ("" if it cannot be read); a JSON file parsed.
+inline std::string slurp(const std::filesystem::path& p) {
+  std::ifstream in(p);
+  return std::string(std::istreambuf_iterator<char>(in), {});
+}
+inline nlohmann::json readJson(const std::filesystem::path& p) {
+  std::ifstream in(p);
+  return nlohmann::json::parse(in);
+}
 
 struct Event {
   std::string channel;

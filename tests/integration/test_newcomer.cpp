@@ -8,8 +8,6 @@
 
 #include <gtest/gtest.h>
 
-#include <array>
-#include <cstdio>
 #include <filesystem>
 #include <fstream>
 #include <iterator>
@@ -26,30 +24,10 @@ namespace {
 namespace fs = std::filesystem;
 using nlohmann::json;
 
-struct Output {
-  int status = -1;
-  std::string text;  // stdout and stderr
-};
-
-Output run(const std::string& args) {
-  Output o;
-  FILE* p = popen((test::afford(args) + " 2>&1").c_str(), "r");
-  std::array<char, 4096> buf{};
-  for (std::size_t n; (n = fread(buf.data(), 1, buf.size(), p)) > 0;) o.text.append(buf.data(), n);
-  const int st = pclose(p);
-  o.status = WIFEXITED(st) ? WEXITSTATUS(st) : -1;
-  return o;
-}
-
-json readJson(const fs::path& p) {
-  std::ifstream in(p);
-  return json::parse(in);
-}
-
-std::string slurp(const fs::path& p) {
-  std::ifstream in(p);
-  return std::string(std::istreambuf_iterator<char>(in), {});
-}
+using Output = test::CommandResult;
+const auto run = test::runAfford;
+using test::readJson;
+using test::slurp;
 
 void spit(const fs::path& p, const std::string& text) {
   fs::create_directories(p.parent_path());
@@ -65,39 +43,39 @@ TEST(Newcomer, AFinishedExperimentsFolderIsRefusedOrReplacedWholeNeverMixed) {
   const std::string dir = test::tempDir("replace");
   const std::string out = dir + "/out", logs = " --log-root " + dir + "/logs";
   ASSERT_EQ(run("experiment base" + kTiny + " --steps 200 --extrinsic-reps 1 --scenarios scenario1 --out " + out + logs)
-                .status,
+                .exit_code,
             0);
-  ASSERT_EQ(run("plot " + out).status, 0);
+  ASSERT_EQ(run("plot " + out).exit_code, 0);
   ASSERT_TRUE(fs::exists(out + "/extrinsic_IMP.csv") && fs::exists(out + "/fig_completion.png"));
   const std::string before = slurp(out + "/summary.json");
 
   Output again = run("experiment base" + kTiny + " --steps 100 --out " + out + logs);
-  EXPECT_EQ(again.status, 2) << again.text;
-  EXPECT_NE(again.text.find("--out " + out + " holds a finished experiment (base"), std::string::npos) << again.text;
-  EXPECT_NE(again.text.find("choose another --out"), std::string::npos) << again.text;
-  EXPECT_NE(again.text.find("--replace"), std::string::npos) << again.text;
+  EXPECT_EQ(again.exit_code, 2) << again.output;
+  EXPECT_NE(again.output.find("--out " + out + " holds a finished experiment (base"), std::string::npos) << again.output;
+  EXPECT_NE(again.output.find("choose another --out"), std::string::npos) << again.output;
+  EXPECT_NE(again.output.find("--replace"), std::string::npos) << again.output;
   EXPECT_EQ(slurp(out + "/summary.json"), before);  // nothing written
 
   Output replaced = run("experiment base" + kTiny + " --steps 100 --replace --out " + out + logs);
-  ASSERT_EQ(replaced.status, 0) << replaced.text;
+  ASSERT_EQ(replaced.exit_code, 0) << replaced.output;
   EXPECT_EQ(readJson(out + "/summary.json")["steps"], 100);
   for (const char* gone : {"extrinsic_IMP.csv", "fig_completion.png", "fig_completion.csv", "fig_affordances.gp"})
     EXPECT_FALSE(fs::exists(fs::path(out) / gone)) << gone;
 
   spit(out + "/notes.txt", "my notes");
   Output foreign = run("experiment base" + kTiny + " --steps 100 --replace --out " + out + logs);
-  EXPECT_EQ(foreign.status, 2) << foreign.text;
-  EXPECT_NE(foreign.text.find("files afford did not write (notes.txt)"), std::string::npos) << foreign.text;
+  EXPECT_EQ(foreign.exit_code, 2) << foreign.output;
+  EXPECT_NE(foreign.output.find("files afford did not write (notes.txt)"), std::string::npos) << foreign.output;
   EXPECT_EQ(slurp(out + "/notes.txt"), "my notes");
   EXPECT_EQ(readJson(out + "/summary.json")["steps"], 100);
 
   spit(dir + "/mine/draft.md", "a draft");
   Output other = run("experiment base" + kTiny + " --steps 100 --out " + dir + "/mine" + logs);
-  EXPECT_EQ(other.status, 2) << other.text;
-  EXPECT_NE(other.text.find("is not empty and holds no afford experiment (it holds draft.md)"), std::string::npos)
-      << other.text;
+  EXPECT_EQ(other.exit_code, 2) << other.output;
+  EXPECT_NE(other.output.find("is not empty and holds no afford experiment (it holds draft.md)"), std::string::npos)
+      << other.output;
   EXPECT_FALSE(fs::exists(dir + "/mine/summary.json"));
-  EXPECT_NE(run("experiment base --resume --replace --out " + out).text.find("--replace"), std::string::npos);
+  EXPECT_NE(run("experiment base --resume --replace --out " + out).output.find("--replace"), std::string::npos);
 }
 
 // Without --run-prefix, two experiments of one log root in the same second
@@ -108,7 +86,7 @@ TEST(Newcomer, DefaultRunIdsOfOneSecondDoNotCollide) {
   for (int k = 0; k < 3; ++k) {
     Output o = run("experiment base" + kTiny + " --steps 5 --keep-logs none --no-reuse-agents --out " + dir + "/o" +
                    std::to_string(k) + " --log-root " + dir + "/logs");
-    ASSERT_EQ(o.status, 0) << o.text;
+    ASSERT_EQ(o.exit_code, 0) << o.output;
     ids.push_back(readJson(dir + "/o" + std::to_string(k) + "/summary.json")["systems"]["IMP"]["runs"][0]["run_id"]);
   }
   EXPECT_NE(ids[0], ids[1]);
@@ -125,19 +103,19 @@ TEST(Newcomer, DefaultRunIdsOfOneSecondDoNotCollide) {
 TEST(Newcomer, CountsOutOfRangeAndNamesNearlyRightAreRefusedNamingWhatWasMeant) {
   const std::string dir = test::tempDir("zero");
   Output steps = run("experiment base --transport memq --steps 0 --out " + dir + "/a");
-  EXPECT_EQ(steps.status, 2) << steps.text;
-  EXPECT_NE(steps.text.find("--steps must be at least 1, not 0"), std::string::npos) << steps.text;
+  EXPECT_EQ(steps.exit_code, 2) << steps.output;
+  EXPECT_NE(steps.output.find("--steps must be at least 1, not 0"), std::string::npos) << steps.output;
   Output reps = run("experiment base --transport memq --reps 0 --out " + dir + "/b");
-  EXPECT_EQ(reps.status, 2) << reps.text;
-  EXPECT_NE(reps.text.find("--reps must be at least 1, not 0"), std::string::npos) << reps.text;
+  EXPECT_EQ(reps.exit_code, 2) << reps.output;
+  EXPECT_NE(reps.output.find("--reps must be at least 1, not 0"), std::string::npos) << reps.output;
   Output seed = run("experiment base --transport memq --seed -1 --out " + dir + "/c");
-  EXPECT_NE(seed.text.find("--seed must be 0 or more, not -1"), std::string::npos) << seed.text;
+  EXPECT_NE(seed.output.find("--seed must be 0 or more, not -1"), std::string::npos) << seed.output;
   EXPECT_FALSE(fs::exists(dir + "/a/summary.json") || fs::exists(dir + "/b/summary.json"));
   // A name nearly right is named with the one meant.
   Output name = run("experiment basee --out " + dir + "/d");
-  EXPECT_NE(name.text.find("unknown experiment \"basee\"; did you mean \"base\"?"), std::string::npos) << name.text;
+  EXPECT_NE(name.output.find("unknown experiment \"basee\"; did you mean \"base\"?"), std::string::npos) << name.output;
   Output system = run("experiment base --system imp --out " + dir + "/e");
-  EXPECT_NE(system.text.find("did you mean IMP? (systems are written in capitals)"), std::string::npos) << system.text;
+  EXPECT_NE(system.output.find("did you mean IMP? (systems are written in capitals)"), std::string::npos) << system.output;
 }
 
 // A typo in one's own experiment file names the file, its block and the key
@@ -146,23 +124,23 @@ TEST(Newcomer, AConfigTypoNamesTheFileTheBlockAndTheClosestKey) {
   const std::string dir = test::tempDir("typo");
   spit(dir + "/mine.yaml", "extends: base\nmotivation:\n  leek: 0.3\n");
   Output file = run("experiment --config " + dir + "/mine.yaml --transport memq --out " + dir + "/o");
-  EXPECT_EQ(file.status, 2) << file.text;
-  EXPECT_NE(file.text.find("experiment file " + dir + "/mine.yaml, block motivation: config key 'motivation.leek': "
+  EXPECT_EQ(file.exit_code, 2) << file.output;
+  EXPECT_NE(file.output.find("experiment file " + dir + "/mine.yaml, block motivation: config key 'motivation.leek': "
                            "unknown key; did you mean 'motivation.leak'?"),
             std::string::npos)
-      << file.text;
+      << file.output;
   spit(dir + "/sys.yaml", "extends: base\nsystems:\n  IMP:\n    motivation:\n      leak: fast\n");
   Output block = run("experiment --config " + dir + "/sys.yaml --system IMP --transport memq --out " + dir + "/o");
-  EXPECT_NE(block.text.find("experiment file " + dir + "/sys.yaml, block systems.IMP: config key 'motivation.leak': "
+  EXPECT_NE(block.output.find("experiment file " + dir + "/sys.yaml, block systems.IMP: config key 'motivation.leak': "
                             "expected a number"),
             std::string::npos)
-      << block.text;
+      << block.output;
   Output set = run("experiment base --set motivaton.leak=0.2 --transport memq --out " + dir + "/o");
-  EXPECT_NE(set.text.find("no map 'motivaton'; did you mean 'motivation'?"), std::string::npos) << set.text;
+  EXPECT_NE(set.output.find("no map 'motivaton'; did you mean 'motivation'?"), std::string::npos) << set.output;
   Output value = run("experiment base --set motivation.leak=fast --transport memq --out " + dir + "/o");
-  EXPECT_NE(value.text.find("--set motivation.leak=fast: config key 'motivation.leak': expected a number"),
+  EXPECT_NE(value.output.find("--set motivation.leak=fast: config key 'motivation.leak': expected a number"),
             std::string::npos)
-      << value.text;
+      << value.output;
 }
 
 // A test that failed to run is no result: its scenario shows "-", not 0.00,
@@ -171,21 +149,21 @@ TEST(Newcomer, AConfigTypoNamesTheFileTheBlockAndTheClosestKey) {
 TEST(Newcomer, TestsThatFailedToRunAreNotCountedAsUnsolved) {
   const std::string dir = test::tempDir("failed-tests");
   const std::string logs = " --log-root " + dir + "/logs";
-  ASSERT_EQ(run("experiment base" + kTiny + " --steps 100 --out " + dir + "/a" + logs).status, 0);
+  ASSERT_EQ(run("experiment base" + kTiny + " --steps 100 --out " + dir + "/a" + logs).exit_code, 0);
   for (const auto& agent : fs::directory_iterator(dir + "/logs/agents"))
     fs::resize_file(agent.path() / "predictors.ckpt", 100);
   Output o = run("experiment base --transport memq --system IMP --reps 1 --steps 100 --progress none "
                  "--extrinsic-reps 1 --scenarios scenario1 scenario2 --out " + dir + "/b" + logs);
-  EXPECT_EQ(o.status, 1) << o.text;
+  EXPECT_EQ(o.exit_code, 1) << o.output;
   const json ex = readJson(dir + "/b/summary.json")["systems"]["IMP"]["extrinsic"];
   EXPECT_EQ(ex["table_metric"].size(), 0u) << ex.dump();
   EXPECT_EQ(ex["success_rate"].size(), 0u) << ex.dump();
   ASSERT_EQ(ex["failed_tests"].size(), 2u) << ex.dump();
   EXPECT_NE(ex["failed_tests"][0]["error"].get<std::string>().find("predictors.ckpt"), std::string::npos) << ex.dump();
-  EXPECT_EQ(o.text.find("0.00 (1.0)"), std::string::npos) << o.text;
-  EXPECT_TRUE(std::regex_search(o.text, std::regex(R"(IMP +- \(1\.0\) +- \(1\.0\))"))) << o.text;
-  EXPECT_NE(o.text.find("IMP: 2 test(s) failed to run and are not counted"), std::string::npos) << o.text;
-  EXPECT_NE(o.text.find("2 extrinsic test(s) failed to run"), std::string::npos) << o.text;
+  EXPECT_EQ(o.output.find("0.00 (1.0)"), std::string::npos) << o.output;
+  EXPECT_TRUE(std::regex_search(o.output, std::regex(R"(IMP +- \(1\.0\) +- \(1\.0\))"))) << o.output;
+  EXPECT_NE(o.output.find("IMP: 2 test(s) failed to run and are not counted"), std::string::npos) << o.output;
+  EXPECT_NE(o.output.find("2 extrinsic test(s) failed to run"), std::string::npos) << o.output;
   EXPECT_EQ(slurp(dir + "/b/extrinsic_IMP.csv").find("scenario1"), std::string::npos);  // no row of a non-result
 }
 
@@ -213,18 +191,18 @@ TEST(Newcomer, CleanLeavesAloneGroupsRunningExperimentsAndWhatItCannotAttribute)
   ASSERT_EQ(flock(lock, LOCK_EX | LOCK_NB), 0);  // as the runner of busy/ holds it
 
   Output dry = run("clean --all --delete --log-root " + logs.string());
-  ASSERT_EQ(dry.status, 0) << dry.text;
-  EXPECT_NE(dry.text.find("removed") , std::string::npos) << dry.text;
+  ASSERT_EQ(dry.exit_code, 0) << dry.output;
+  EXPECT_NE(dry.output.find("removed") , std::string::npos) << dry.output;
   EXPECT_FALSE(fs::exists(logs / "r-done"));
   for (const char* kept : {"demo", "mystery", "r-running"}) EXPECT_TRUE(fs::exists(logs / kept)) << kept;
-  EXPECT_NE(dry.text.find("/demo: a scripts/procs.sh group (running: eye)"), std::string::npos) << dry.text;
-  EXPECT_NE(dry.text.find("/mystery: nothing in it says whose it is"), std::string::npos) << dry.text;
-  EXPECT_NE(dry.text.find("/r-running: its experiment is running (in " + dir + "/busy)"), std::string::npos)
-      << dry.text;
+  EXPECT_NE(dry.output.find("/demo: a scripts/procs.sh group (running: eye)"), std::string::npos) << dry.output;
+  EXPECT_NE(dry.output.find("/mystery: nothing in it says whose it is"), std::string::npos) << dry.output;
+  EXPECT_NE(dry.output.find("/r-running: its experiment is running (in " + dir + "/busy)"), std::string::npos)
+      << dry.output;
   close(lock);  // the experiment is over: its run may go
   Output after = run("clean --all --delete --log-root " + logs.string());
-  EXPECT_FALSE(fs::exists(logs / "r-running")) << after.text;
-  EXPECT_TRUE(fs::exists(logs / "demo") && fs::exists(logs / "mystery")) << after.text;
+  EXPECT_FALSE(fs::exists(logs / "r-running")) << after.output;
+  EXPECT_TRUE(fs::exists(logs / "demo") && fs::exists(logs / "mystery")) << after.output;
 }
 
 // Names a person reads: the experiments' list in one column however long a
@@ -232,19 +210,19 @@ TEST(Newcomer, CleanLeavesAloneGroupsRunningExperimentsAndWhatItCannotAttribute)
 TEST(Newcomer, TheListAndTheFitReadAsWritten) {
   const std::string dir = test::tempDir("reading");
   Output list = run("experiments");
-  ASSERT_EQ(list.status, 0);
-  std::istringstream lines(list.text);
+  ASSERT_EQ(list.exit_code, 0);
+  std::istringstream lines(list.output);
   std::set<std::size_t> columns;  // where each description starts
   for (std::string l; std::getline(lines, l);) {
     const auto name_end = l.find(' ');
     columns.insert(l.find_first_not_of(' ', name_end));
   }
-  EXPECT_EQ(columns.size(), 1u) << list.text;
+  EXPECT_EQ(columns.size(), 1u) << list.output;
   Output o = run("experiment base --transport memq --system IMP --reps 1 --progress none --steps 100 --extrinsic-reps 1 "
                  "--scenarios scenario1 --out " + dir + "/out --log-root " + dir + "/logs");
-  ASSERT_EQ(o.status, 0) << o.text;
-  EXPECT_NE(o.text.find("(paper, IMP: 1.364 x^2 - 0.808 x)"), std::string::npos) << o.text;
-  EXPECT_EQ(o.text.find(" x^2 -0."), std::string::npos) << o.text;
+  ASSERT_EQ(o.exit_code, 0) << o.output;
+  EXPECT_NE(o.output.find("(paper, IMP: 1.364 x^2 - 0.808 x)"), std::string::npos) << o.output;
+  EXPECT_EQ(o.output.find(" x^2 -0."), std::string::npos) << o.output;
 }
 
 // afford plot: with one run per system the final predictions are bars (a
@@ -252,9 +230,9 @@ TEST(Newcomer, TheListAndTheFitReadAsWritten) {
 // of a colour by their lines' dashes, all along them.
 TEST(Newcomer, PlotsOfOneRunShowBarsAndCurvesOfOneColourDifferAllAlong) {
   const std::string dir = test::tempDir("plots");
-  ASSERT_EQ(run("experiment base" + kTiny + " --steps 600 --out " + dir + "/out --log-root " + dir + "/logs").status, 0);
+  ASSERT_EQ(run("experiment base" + kTiny + " --steps 600 --out " + dir + "/out --log-root " + dir + "/logs").exit_code, 0);
   Output p = run("plot " + dir + "/out");
-  ASSERT_EQ(p.status, 0) << p.text;
+  ASSERT_EQ(p.exit_code, 0) << p.output;
   const std::string boxes = slurp(dir + "/out/fig_affordances.gp");
   EXPECT_NE(boxes.find("$11 == 1 ? $4 : NaN):7 with boxes"), std::string::npos) << boxes;
   EXPECT_NE(boxes.find("a filled bar: the prediction of the one run"), std::string::npos) << boxes;

@@ -22,15 +22,9 @@ namespace {
 namespace fs = std::filesystem;
 using nlohmann::json;
 
-json readJson(const fs::path& p) {
-  std::ifstream in(p);
-  return json::parse(in);
-}
+using test::readJson;
 
-std::string slurp(const fs::path& p) {
-  std::ifstream in(p);
-  return std::string(std::istreambuf_iterator<char>(in), {});
-}
+using test::slurp;
 
 // `afford experiment ARGS` writing into DIR, with a log root of its own, DIR/logs:
 // tests running at the same time never share a run folder (checkpoints live there).

@@ -38,10 +38,7 @@ Output run(const std::string& args) {
   return o;
 }
 
-json readJson(const fs::path& p) {
-  std::ifstream in(p);
-  return json::parse(in);
-}
+using test::readJson;
 
 const std::string kSmall = " --transport memq --system IMP --reps 2 --steps 300 --extrinsic-reps 1 --scenarios scenario1 --quiet";
 
