@@ -16,24 +16,9 @@
 #include <string>
 #include <vector>
 
-#include "experiment/execute/request.hpp"
-#include "experiment/plan/request.hpp"
-#include "experiment/results/request.hpp"
+#include "experiment/stored/request.hpp"
 
 namespace afford {
-
-// An experiment request: what plans, what hosts and what writes, and how it
-// is executed (afresh, resumed, or merged from shards' folders).
-struct ExperimentRequest {
-  PlanRequest plan;
-  HostRequest host;
-  WriteRequest write;
-  bool resume = false;                     // continue the unfinished experiment stored in write.out_dir
-  std::vector<std::string> merged_from;    // afford merge: the shards' folders (nothing is run)
-  std::string merged_network;              // ... and the network they ran over
-  std::set<std::string> given;             // options given on the command line ("--reps", "name", ...): with
-                                           // resume, plan options must match the stored ones, run options override
-};
 
 // --process NAME=CMD options (`option` names them in errors): NAME a process of the registry, CMD not empty,
 // each NAME once.

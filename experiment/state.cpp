@@ -15,120 +15,6 @@ namespace afford {
 namespace fs = std::filesystem;
 using nlohmann::json;
 
-namespace {
-const char* netnsName(NetnsMode m) { return m == NetnsMode::On ? "on" : m == NetnsMode::Off ? "off" : "auto"; }
-}  // namespace
-
-fs::path statePath(const fs::path& out) { return out / "experiment.json"; }
-
-json requestToJson(const ExperimentRequest& o) {
-  return {{"experiment", o.plan.experiment},
-          {"systems", o.plan.systems},
-          {"reps", o.plan.reps ? json(*o.plan.reps) : json(nullptr)},
-          {"steps", o.plan.steps ? json(*o.plan.steps) : json(nullptr)},
-          {"seed", o.plan.seed},
-          {"keep_logs", o.plan.keep_logs},
-          {"keep_checkpoints", o.plan.keep_checkpoints},
-          {"reuse_agents", o.host.reuse_agents},
-          {"log_root", o.plan.log_root},
-          {"run_prefix", o.plan.run_prefix},
-          {"config_dir", o.plan.config_dir},
-          {"settings", o.plan.settings},
-          {"sweep_file", o.plan.sweep_file},
-          {"shard", o.host.shard_count ? json{{"index", o.host.shard_index}, {"count", o.host.shard_count}} : json(nullptr)},
-          {"merged_from", o.merged_from},  // a merge resumes as one: it gathers its shards again
-          {"merged_network", o.merged_network},
-          {"extrinsic_reps", o.plan.extrinsic_reps},
-          {"scenarios", o.plan.scenarios},
-          {"tables", o.plan.tables ? json(*o.plan.tables) : json(nullptr)},
-          {"processes", o.host.processes},
-          {"table_seed", o.plan.table_seed ? json(*o.plan.table_seed) : json(nullptr)},
-          // run options: --resume uses them unless given again
-          {"jobs", o.host.jobs},
-          {"transport", o.host.transport},
-          {"netns", netnsName(o.host.netns)},
-          {"base_port", o.host.base_port},
-          {"process_log_level", o.host.process_log_level},
-          {"stall_seconds", o.host.stall_seconds},
-          {"quiet", o.write.quiet},
-          {"progress", o.host.progress},
-          {"progress_every", o.host.progress_every},
-          {"attach", o.host.attach}};
-}
-
-ExperimentRequest requestFromJson(const json& j) {
-  ExperimentRequest o;
-  o.plan.experiment = j.at("experiment").get<std::string>();
-  o.plan.systems = j.at("systems").get<std::vector<std::string>>();
-  if (!j.at("reps").is_null()) o.plan.reps = j["reps"].get<int>();
-  if (!j.at("steps").is_null()) o.plan.steps = j["steps"].get<std::int64_t>();
-  o.plan.seed = j.at("seed").get<std::int64_t>();
-  o.plan.keep_logs = j.at("keep_logs").get<std::string>();
-  o.plan.keep_checkpoints = j.value("keep_checkpoints", std::string("all"));  // stored before issue 13: all were kept
-  o.host.reuse_agents = j.value("reuse_agents", false);
-  o.plan.log_root = j.at("log_root").get<std::string>();
-  o.plan.run_prefix = j.at("run_prefix").get<std::string>();
-  o.plan.config_dir = j.at("config_dir").get<std::string>();
-  o.plan.settings = j.at("settings").get<std::vector<std::string>>();
-  o.plan.sweep_file = j.value("sweep_file", std::string());  // stored before issue 13: no sweeps, no shards
-  if (j.contains("shard") && !j["shard"].is_null()) {
-    o.host.shard_index = j["shard"].at("index").get<int>();
-    o.host.shard_count = j["shard"].at("count").get<int>();
-  }
-  o.merged_from = j.value("merged_from", std::vector<std::string>());
-  o.merged_network = j.value("merged_network", std::string());
-  o.plan.extrinsic_reps = j.at("extrinsic_reps").get<int>();
-  o.plan.scenarios = j.at("scenarios").get<std::vector<std::string>>();
-  if (j.contains("tables") && !j["tables"].is_null()) o.plan.tables = j["tables"].get<int>();
-  o.host.processes = j.value("processes", std::map<std::string, std::string>());  // stored before issue 24: none
-  if (j.contains("table_seed") && !j["table_seed"].is_null()) o.plan.table_seed = j["table_seed"].get<std::int64_t>();
-  o.host.jobs = j.at("jobs").get<int>();
-  o.host.transport = j.at("transport").get<std::string>();
-  const std::string netns = j.at("netns").get<std::string>();
-  o.host.netns = netns == "on" ? NetnsMode::On : netns == "off" ? NetnsMode::Off : NetnsMode::Auto;
-  o.host.base_port = j.at("base_port").get<int>();
-  o.host.process_log_level = j.at("process_log_level").get<std::string>();
-  o.host.stall_seconds = j.at("stall_seconds").get<double>();
-  o.write.quiet = j.at("quiet").get<bool>();
-  o.host.progress = j.value("progress", std::string("auto"));  // stored before issue 13: the default
-  o.host.progress_every = j.value("progress_every", -1.0);
-  o.host.attach = j.at("attach").get<std::string>();
-  return o;
-}
-
-json readState(const fs::path& out) {
-  std::ifstream in(statePath(out));
-  try {
-    return json::parse(in);
-  } catch (const std::exception& e) {
-    throw ConfigError("cannot read " + statePath(out).string() + ": " + e.what());
-  }
-}
-
-// Each run's id and the FNV-1a of its configuration: a resumed experiment
-// must plan the very same runs.
-json fingerprint(const std::vector<PlannedRun>& runs) {
-  json f = json::array();
-  for (const auto& p : runs) {
-    Fnv1a h;
-    h.add(p.spec.config_yaml.data(), p.spec.config_yaml.size());
-    f.push_back({{"run_id", p.spec.run_id}, {"config", h.hex()}});
-  }
-  return f;
-}
-
-void refuseOtherPlan(const json& stored, const json& now, const std::string& what) {
-  for (std::size_t i = 0; i < std::max(stored.size(), now.size()); ++i) {
-    if (i < stored.size() && i < now.size() && stored[i] == now[i]) continue;
-    const std::string id = (i < stored.size() ? stored[i] : now[i])["run_id"].get<std::string>();
-    throw ConfigError("--resume: the " + what + " differ from those stored: run '" + id +
-                      (i < stored.size() && i < now.size() && stored[i]["run_id"] == now[i]["run_id"]
-                           ? "' now has another configuration (did the config folder change since?)"
-                           : "' is not in both") +
-                      "; start a new experiment with another --out instead");
-  }
-}
-
 std::string shellQuoted(const std::string& s) {
   if (!s.empty() && s.find_first_not_of("abcdefghijklmnopqrstuvwxyzABCDEFGHIJKLMNOPQRSTUVWXYZ0123456789_./:=@%+,-") ==
                         std::string::npos)
@@ -227,11 +113,11 @@ void refuseUsedOutDir(const ExperimentRequest& o) {
                                                 : foreign) +
                       "): an experiment writes into a folder of its own; choose a new or empty --out");
   }
-  const json state = readState(out);
-  const std::string what = state.value("experiment", "?");
-  if (state.value("state", "") != "finished")
+  const ExperimentState state = readState(out);
+  const std::string& what = state.experiment;
+  if (state.state != "finished")
     throw ConfigError("--out " + out.string() + " holds an experiment that did not finish (" + what + ", " +
-                      state.value("state", "?") + "): continue it with `" + resumeCommand(o) +
+                      state.state + "): continue it with `" + resumeCommand(o) +
                       "`, or choose another --out");
   if (!o.write.replace)
     throw ConfigError("--out " + out.string() + " holds a finished experiment (" + what + "; its results: " +
@@ -253,8 +139,8 @@ void clearReplaced(const ExperimentRequest& o) {
 }
 
 // The stored experiment's options, with the run options given now (--jobs, --transport, ...).
-ExperimentRequest resumedRequest(const ExperimentRequest& given, const json& state) {
-  ExperimentRequest o = requestFromJson(state.at("options"));
+ExperimentRequest resumedRequest(const ExperimentRequest& given, const ExperimentState& state) {
+  ExperimentRequest o = state.options;
   o.write.out_dir = given.write.out_dir;
   o.resume = true;
   o.given = given.given;
@@ -271,7 +157,7 @@ ExperimentRequest resumedRequest(const ExperimentRequest& given, const json& sta
   if (has("--progress-every")) o.host.progress_every = given.host.progress_every;
   if (has("--attach")) o.host.attach = given.host.attach;
   if (has("--reuse-agents")) o.host.reuse_agents = given.host.reuse_agents;
-  const std::string cwd = state.at("cwd").get<std::string>();
+  const std::string& cwd = state.cwd;
   if (fs::current_path() != fs::path(cwd))
     for (const auto& [option, path] : {std::pair{"--log-root", o.plan.log_root}, {"--config-dir", o.plan.config_dir}})
       if (fs::path(path).is_relative())
@@ -281,13 +167,13 @@ ExperimentRequest resumedRequest(const ExperimentRequest& given, const json& sta
 }
 
 // The stored experiment of DIR, if it did not finish.
-json unfinishedState(const ExperimentRequest& given) {
+ExperimentState unfinishedState(const ExperimentRequest& given) {
   if (!fs::exists(statePath(given.write.out_dir)))
     throw ConfigError("--resume: " + given.write.out_dir + " holds no experiment to resume (no " +
                       statePath(given.write.out_dir).string() + "): is --out right?");
-  json state = readState(given.write.out_dir);
-  if (state.value("state", "") == "finished")
-    throw ConfigError("--resume: the experiment in " + given.write.out_dir + " (" + state.value("experiment", "?") +
+  ExperimentState state = readState(given.write.out_dir);
+  if (state.state == "finished")
+    throw ConfigError("--resume: the experiment in " + given.write.out_dir + " (" + state.experiment +
                       ") finished: its results are in " + (fs::path(given.write.out_dir) / "summary.json").string());
   return state;
 }

@@ -5,26 +5,19 @@
 #pragma once
 #include <nlohmann/json.hpp>
 
+#include <cstdint>
 #include <filesystem>
+#include <optional>
 #include <string>
 #include <vector>
 
-#include "experiment/experiment.hpp"
+#include "experiment/stored/request.hpp"
+#include "experiment/stored/state_file.hpp"
+#include "experiment/execute/execute.hpp"
 #include "experiment/plan/plan.hpp"
+#include "experiment/schema/summary.hpp"
 
 namespace afford {
-
-std::filesystem::path statePath(const std::filesystem::path& out);
-
-nlohmann::json requestToJson(const ExperimentRequest& o);
-ExperimentRequest requestFromJson(const nlohmann::json& j);
-
-nlohmann::json readState(const std::filesystem::path& out);
-
-// Each run's id and the FNV-1a of its configuration: a resumed experiment
-// must plan the very same runs.
-nlohmann::json fingerprint(const std::vector<PlannedRun>& runs);
-void refuseOtherPlan(const nlohmann::json& stored, const nlohmann::json& now, const std::string& what);
 
 std::string shellQuoted(const std::string& s);
 std::string resumeCommand(const ExperimentRequest& o);
@@ -54,9 +47,9 @@ void refuseUsedOutDir(const ExperimentRequest& o);
 // (its log root, if inside, stays). After refuseUsedOutDir, under the lock.
 void clearReplaced(const ExperimentRequest& o);
 // The stored experiment's request, with the run options given now (--jobs, --transport, ...).
-ExperimentRequest resumedRequest(const ExperimentRequest& given, const nlohmann::json& state);
+ExperimentRequest resumedRequest(const ExperimentRequest& given, const ExperimentState& state);
 // The stored experiment of DIR, if it did not finish.
-nlohmann::json unfinishedState(const ExperimentRequest& given);
+ExperimentState unfinishedState(const ExperimentRequest& given);
 
 // With --resume, a plan option given again must say what the stored experiment
 // says (`stored`: its request; `plan`: what they resolved to).

@@ -20,6 +20,7 @@
 #include "afford/config.hpp"
 #include "afford/prediction_t.hpp"
 #include "afford/run_result_t.hpp"
+#include "experiment/design/experiment_file.hpp"
 
 namespace afford::test {
 

@@ -94,19 +94,50 @@ std::array<std::uint8_t, BusKey::kTagBytes> BusKey::tag(const std::string& chann
   return out;
 }
 
-std::vector<std::uint8_t> BusKey::tagged(const std::string& channel, const void* data, std::size_t size) const {
-  std::vector<std::uint8_t> out(size + kTagBytes);
+namespace {
+
+void putBig(std::uint8_t* out, std::uint64_t v) {
+  for (int i = 7; i >= 0; --i, v >>= 8) out[i] = static_cast<std::uint8_t>(v & 0xff);
+}
+std::uint64_t getBig(const std::uint8_t* in) {
+  std::uint64_t v = 0;
+  for (int i = 0; i < 8; ++i) v = (v << 8) | in[i];
+  return v;
+}
+
+}  // namespace
+
+std::vector<std::uint8_t> BusKey::tagged(const std::string& channel, const void* data, std::size_t size,
+                                         const Stamp& stamp) const {
+  std::vector<std::uint8_t> out(size + kTrailerBytes);
   if (size > 0) std::memcpy(out.data(), data, size);
-  const auto t = tag(channel, data, size);
-  std::memcpy(out.data() + size, t.data(), t.size());
+  std::uint8_t* s = out.data() + size;
+  putBig(s, stamp.session);
+  putBig(s + 8, stamp.counter);
+  putBig(s + 16, static_cast<std::uint64_t>(stamp.sent_ms));
+  const auto t = tag(channel, out.data(), size + kStampBytes);
+  std::memcpy(out.data() + size + kStampBytes, t.data(), t.size());
   return out;
 }
 
-bool BusKey::verify(const std::string& channel, const void* data, std::size_t size_with_tag) const {
-  if (size_with_tag < kTagBytes) return false;
-  const std::size_t size = size_with_tag - kTagBytes;
-  const auto want = tag(channel, data, size);
-  return crypto_verify_32(want.data(), static_cast<const unsigned char*>(data) + size) == 0;
+bool BusKey::verify(const std::string& channel, const void* data, std::size_t size_with_trailer, Stamp* stamp) const {
+  if (size_with_trailer < kTrailerBytes) return false;
+  const std::size_t stamped = size_with_trailer - kTagBytes;
+  const auto want = tag(channel, data, stamped);
+  const auto* bytes = static_cast<const unsigned char*>(data);
+  if (crypto_verify_32(want.data(), bytes + stamped) != 0) return false;
+  if (stamp) {
+    const std::uint8_t* s = bytes + stamped - kStampBytes;
+    *stamp = {getBig(s), getBig(s + 8), static_cast<std::int64_t>(getBig(s + 16))};
+  }
+  return true;
+}
+
+std::uint64_t BusKey::newSession() {
+  initSodium();
+  std::uint64_t session = 0;
+  randombytes_buf(&session, sizeof session);
+  return session;
 }
 
 std::string busKeySource(const std::string& option) {

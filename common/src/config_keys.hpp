@@ -32,6 +32,11 @@ void declareProtocol(V& v, ProtocolConfig& c) {
               "... once idle this many times as long as it usually waits for its next input after publishing "
               "(0 ms at first, a moving average): on a loaded machine every wait is longer, and none is a loss");
   });
+  v.given("freshness_ms", [&] {  // the runs of older logs had no freshness on a keyed bus
+    v.integer("freshness_ms", c.freshness_ms, 0, 86'400'000,
+              "on a keyed bus, a message of a sender this process has not heard yet is taken only if it was sent "
+              "less than this long ago by its clock (0: any); a sender heard is held to its counter's window");
+  });
   v.integer("retry_ms", c.retry_ms, 1, 60'000,
             "an unanswered `RESEND` is asked again after this, doubling up to the heartbeat; the runner says a "
             "configuration again on the same schedule");

@@ -7,12 +7,13 @@
 #include "motivation/component.hpp"
 #include "motivation/node.hpp"
 #include "afford/rng.hpp"
+#include "afford/process_main.hpp"
 
 namespace {
 
 class RandomMotivation : public afford::MotivationComponent {
  public:
-  explicit RandomMotivation(const afford::RunConfig& config) : seed_(config.seed) {}
+  explicit RandomMotivation(const afford::MotivationParams& params) : seed_(params.seed) {}
 
   afford::Decision decide(const afford::Percept& p) override {
     constexpr std::uint64_t kMine = 0x72616e646f6d;  // "random": this component's sub-key
@@ -32,7 +33,7 @@ class RandomMotivation : public afford::MotivationComponent {
 }  // namespace
 
 int main(int argc, char** argv) {
-  afford::registerMotivation("random", [](const afford::RunConfig& c) { return std::make_unique<RandomMotivation>(c); });
+  afford::registerMotivation("random", [](const afford::MotivationParams& p) { return std::make_unique<RandomMotivation>(p); });
   return afford::processMain(
       argc, argv, {"motivation", "a motivation of one's own: a random action at every step (motivation.kind: random)"},
       [](afford::CLIHook&) {},

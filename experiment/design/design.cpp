@@ -1,4 +1,5 @@
 #include "experiment/design/design.hpp"
+#include "experiment/design/experiment_file.hpp"
 
 #include <gsl/gsl_cdf.h>
 

@@ -12,6 +12,7 @@
 
 #include "afford/config.hpp"
 #include "experiment/schema/summary.hpp"
+#include "experiment/design/experiment_file.hpp"
 
 namespace afford {
 

@@ -10,6 +10,7 @@
 #include "afford/image.hpp"
 #include "afford/rng.hpp"
 #include "environment/environment.hpp"
+#include "experiment/design/experiment_file.hpp"
 
 namespace afford {
 namespace {

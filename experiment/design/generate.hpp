@@ -7,6 +7,7 @@
 #include <vector>
 
 #include "afford/config.hpp"
+#include "experiment/design/experiment_file.hpp"
 
 namespace afford {
 

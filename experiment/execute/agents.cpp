@@ -1,11 +1,14 @@
 #include "experiment/execute/agents.hpp"
 
+#include "experiment/schema/codec.hpp"
+
 #include <unistd.h>
 #include <yaml-cpp/yaml.h>
 
 #include <filesystem>
 #include <fstream>
 
+#include "afford/version.hpp"
 #include "afford/checksum.hpp"
 #include "afford/config.hpp"
 #include "experiment/run/group.hpp"
@@ -52,7 +55,7 @@ std::string agentKey(const std::string& config_yaml) {
     node["run"].remove("record");
     node["run"].remove("checkpoint_after_actions");
   }
-  const std::string text = std::string(AFFORD_VERSION) + "\n" + codeFingerprint() + "\n" + emitYaml(node);
+  const std::string text = std::string(affordVersion()) + "\n" + codeFingerprint() + "\n" + emitYaml(node);
   Fnv1a h;
   h.add(text.data(), text.size());
   return h.hex();
@@ -60,20 +63,37 @@ std::string agentKey(const std::string& config_yaml) {
 
 AgentStore::AgentStore(std::string root) : root_(std::move(root)) {}
 
+namespace {
+
+// A stored agent's outcome.json: whose run it was, of which experiment, its content key, and its outcome.
+struct StoredAgent {
+  std::string run_id, experiment, key;
+  RunOutcome outcome;
+  template <class V>
+  void visit(V& v) {
+    v("run_id", run_id);
+    v("experiment", experiment);
+    v("key", key);
+    v("outcome", outcome);
+  }
+};
+
+}  // namespace
+
 std::optional<RunOutcome> AgentStore::find(const std::string& key, std::int64_t after_actions) const {
   const fs::path dir = fs::path(root_) / key;
   const fs::path file = dir / "outcome.json";
-  if (!fs::exists(file)) return std::nullopt;
-  json j;
+  std::error_code ec;
+  if (!fs::exists(file, ec)) return std::nullopt;
+  StoredAgent stored;
   try {
-    std::ifstream in(file);
-    j = json::parse(in);
+    stored = fromJsonOf<StoredAgent>(readJsonFile(file, kMostOutcomeBytes), file.string());
   } catch (const std::exception& e) {
     throw ConfigError("the stored agent " + file.string() + " cannot be read (" + e.what() +
                       "): remove its folder (afford clean) or run with --no-reuse-agents");
   }
-  RunOutcome r = outcomeFromJson(j.at("outcome"));
-  r.reused_from = j.at("run_id").get<std::string>();
+  RunOutcome r = std::move(stored.outcome);
+  r.reused_from = stored.run_id;
   r.checkpoint = (dir / "predictors.ckpt").string();
   if (!fs::exists(r.checkpoint)) return std::nullopt;
   if (after_actions > 0 && !fs::exists(actionsCheckpoint(r.checkpoint, after_actions))) return std::nullopt;
@@ -111,7 +131,7 @@ void AgentStore::keep(const std::string& key, const std::string& run_id, const s
   link(part, false);
   RunOutcome kept = r;
   kept.reused_from.clear();
-  writeWhole(part / "outcome.json", json{{"run_id", run_id}, {"experiment", experiment}, {"key", key}, {"outcome", outcomeToJson(kept)}}.dump() + "\n");
+  writeWhole(part / "outcome.json", toJsonOf(StoredAgent{run_id, experiment, key, kept}).dump() + "\n");
   std::error_code ec;
   fs::rename(part, dir, ec);
   if (ec) fs::remove_all(part);  // another runner kept the same agent first

@@ -19,6 +19,7 @@
 #include "experiment/execute/progress.hpp"
 #include "experiment/run/outcome.hpp"
 #include "afford/config.hpp"
+#include "afford/process_main.hpp"
 
 namespace afford {
 namespace fs = std::filesystem;
@@ -206,9 +207,9 @@ PhaseRuns keptRuns(const std::vector<PlannedRun>& runs, const fs::path& out) {
 // A run that did not finish may have left its folder (an incomplete log): it
 // is never reused nor deleted, but moved aside as <run-id>.cut-<k>, and the
 // run starts afresh.
-json moveUnfinishedAside(const std::vector<PlannedRun>& runs, const PhaseRuns& phase, const std::string& log_root,
-                         spdlog::logger& log) {
-  json moved = json::array();
+std::vector<MovedAside> moveUnfinishedAside(const std::vector<PlannedRun>& runs, const PhaseRuns& phase,
+                                            const std::string& log_root, spdlog::logger& log) {
+  std::vector<MovedAside> moved;
   for (std::size_t i = 0; i < runs.size(); ++i) {
     const fs::path dir = fs::path(log_root) / runs[i].spec.run_id;
     if (phase.finished[i] || !fs::exists(dir)) continue;
@@ -216,7 +217,7 @@ json moveUnfinishedAside(const std::vector<PlannedRun>& runs, const PhaseRuns& p
     for (int k = 1; fs::exists(aside = dir.string() + ".cut-" + std::to_string(k)); ++k) {
     }
     fs::rename(dir, aside);
-    moved.push_back({{"run_id", runs[i].spec.run_id}, {"to", aside.string()}});
+    moved.push_back({runs[i].spec.run_id, aside.string()});
     log.info("run '{}' did not finish: its folder is now {}; the run starts again", runs[i].spec.run_id, aside.string());
   }
   return moved;

@@ -37,11 +37,20 @@ PhaseRuns keptRuns(const std::vector<PlannedRun>& runs, const std::filesystem::p
 // The `n` runs of `all` from `offset` on, as a phase of their own.
 PhaseRuns slicePhase(const PhaseRuns& all, std::size_t offset, std::size_t n);
 
+// A cut run's folder, moved aside when the experiment was resumed (kept in DIR/experiment.json).
+struct MovedAside {
+  std::string run_id, to;
+  template <class V>
+  void visit(V& v) {
+    v("run_id", run_id);
+    v("to", to);
+  }
+};
 // A run that did not finish may have left its folder (an incomplete log): it
 // is never reused nor deleted, but moved aside as <run-id>.cut-<k>, and the
-// run starts afresh. Returns what was moved where ([{run_id, to}]).
-nlohmann::json moveUnfinishedAside(const std::vector<PlannedRun>& runs, const PhaseRuns& phase,
-                                   const std::string& log_root, spdlog::logger& log);
+// run starts afresh. Returns what was moved where.
+std::vector<MovedAside> moveUnfinishedAside(const std::vector<PlannedRun>& runs, const PhaseRuns& phase,
+                                            const std::string& log_root, spdlog::logger& log);
 
 struct Slot;
 

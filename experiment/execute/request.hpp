@@ -8,6 +8,7 @@
 #include <vector>
 
 #include "experiment/run/netns.hpp"
+#include "experiment/schema/codec.hpp"
 
 namespace afford {
 
@@ -27,6 +28,36 @@ struct HostRequest {
   std::map<std::string, std::string> processes;
   std::string bus_key;                     // key file of a keyed bus (afford/auth.hpp; "": $AFFORD_BUS_KEY, or none)
   int shard_index = 0, shard_count = 0;    // --shard i/n: run intrinsic run k (and its tests) iff k mod n == i
+
+  // A shard as an experiment keeps it: {"index": i, "count": n}, or null without shards.
+  struct Shard {
+    int index = 0, count = 0;
+    template <class V>
+    void visit(V& v) {
+      v("index", index);
+      v("count", count);
+    }
+  };
+  // What an experiment keeps of it (DIR/experiment.json): --resume uses it unless given again. The key
+  // file is not kept (its path may be gone, or another, when the experiment is resumed).
+  template <class V>
+  void visit(V& v) {
+    v.since("reuse_agents", reuse_agents, false);  // (stored before issue 13: no reuse)
+    std::optional<Shard> shard;
+    if (shard_count) shard = Shard{shard_index, shard_count};
+    visitNullable(v, "shard", shard);
+    if constexpr (V::kReads) shard_index = shard ? shard->index : 0, shard_count = shard ? shard->count : 0;
+    v.since("processes", processes, std::map<std::string, std::string>());  // (before issue 24: none)
+    v("jobs", jobs);
+    v("transport", transport);
+    v("netns", netns);
+    v("base_port", base_port);
+    v("process_log_level", process_log_level);
+    v("stall_seconds", stall_seconds);
+    v.since("progress", progress, std::string("auto"));  // (before issue 13: the default)
+    v.since("progress_every", progress_every, -1.0);
+    v("attach", attach);
+  }
 };
 
 // The checks of a request that need no file: each names its option.

@@ -2,6 +2,7 @@
 
 #include "afford/names.hpp"
 #include "afford/node.hpp"
+#include "afford/process_main.hpp"
 
 #include <algorithm>
 #include <ctime>
@@ -11,6 +12,7 @@
 #include "experiment/design/design.hpp"
 #include "experiment/design/generate.hpp"
 #include "afford/processes.hpp"
+#include "experiment/design/experiment_file.hpp"
 
 namespace afford {
 namespace fs = std::filesystem;

@@ -16,7 +16,8 @@
 #include "experiment/design/design.hpp"
 #include "experiment/design/generate.hpp"
 #include "experiment/design/reference.hpp"
-#include "afford/tables.hpp"
+#include "experiment/design/tables.hpp"
+#include "experiment/design/experiment_file.hpp"
 
 namespace afford {
 

@@ -8,6 +8,8 @@
 #include <string>
 #include <vector>
 
+#include "experiment/schema/codec.hpp"
+
 namespace afford {
 
 struct PlanRequest {
@@ -27,6 +29,26 @@ struct PlanRequest {
   std::string keep_logs = "all";           // all | first | none: which runs are recorded
   std::string keep_checkpoints = "all";    // all | first | none: the intrinsic runs' checkpoints kept at the end
   std::string log_root = "logs";           // each run's folder (its log and checkpoints) is log_root/<run-id>
+  // What an experiment keeps of it (DIR/experiment.json, experiment/state.hpp).
+  template <class V>
+  void visit(V& v) {
+    v("experiment", experiment);
+    v("systems", systems);
+    visitNullable(v, "reps", reps);
+    visitNullable(v, "steps", steps);
+    v("seed", seed);
+    v("keep_logs", keep_logs);
+    v.since("keep_checkpoints", keep_checkpoints, std::string("all"));  // (stored before issue 13: all were kept)
+    v("log_root", log_root);
+    v("run_prefix", run_prefix);
+    v("config_dir", config_dir);
+    v("settings", settings);
+    v.since("sweep_file", sweep_file, std::string());  // (before issue 13: no sweeps)
+    v("extrinsic_reps", extrinsic_reps);
+    v("scenarios", scenarios);
+    visitNullable(v, "tables", tables);
+    visitNullable(v, "table_seed", table_seed);
+  }
 };
 
 // The checks of a request that need no file: each names its option.

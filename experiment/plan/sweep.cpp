@@ -8,6 +8,7 @@
 
 #include "afford/checksum.hpp"
 #include "afford/config.hpp"
+#include "experiment/design/experiment_file.hpp"
 
 namespace afford {
 namespace fs = std::filesystem;

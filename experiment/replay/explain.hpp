@@ -124,10 +124,6 @@ Explanation explainRunEvents(const RunEvents& run, const std::string& where, std
 // first run, or `run_id`'s.
 Explanation explainLog(const std::string& log_path, const std::string& run_id, spdlog::logger& log);
 
-std::string explanationText(const Explanation& e);
-// With `steps` false, the per-iteration record is left out (summaries).
-nlohmann::json explanationJson(const Explanation& e, bool steps = true);
-
 // ---- a folder of run logs ------------------------------------------------------------
 
 struct ExplainSummary {
@@ -141,8 +137,6 @@ struct ExplainSummary {
 bool isLogRoot(const std::string& path);
 // Every extrinsic test under `root` (one level down). Throws when there is none.
 ExplainSummary explainLogRoot(const std::string& root, spdlog::logger& log);
-std::string summaryText(const ExplainSummary& s);
-nlohmann::json summaryJson(const ExplainSummary& s);
 
 // ---- per agent and sub-goal (afford explain ROOT --by-agent) --------------------------
 
@@ -181,7 +175,5 @@ struct SystemSubGoal {
 // Keyed and ordered by experiment, system, scenario, sub-goal place, agent.
 std::vector<AgentSubGoal> subGoalsByAgent(const ExplainSummary& s);
 std::vector<SystemSubGoal> subGoalsBySystem(const std::vector<AgentSubGoal>& agents);
-std::string byAgentText(const ExplainSummary& s);
-nlohmann::json byAgentJson(const ExplainSummary& s);
 
 }  // namespace afford

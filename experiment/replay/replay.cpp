@@ -26,6 +26,7 @@
 #include "motivation/component.hpp"
 #include "predictors/affordance.hpp"
 #include "logger/logger.hpp"
+#include "afford/process_main.hpp"
 
 namespace afford {
 namespace fs = std::filesystem;
@@ -67,7 +68,7 @@ RecordedLog readRecordedLog(const fs::path& log_path, spdlog::logger& log, const
       std::vector<LogEvent> tagged;
       for (LogEvent& e : part.events) {
         if (key->verify(e.channel, e.data.data(), e.data.size())) {
-          e.data.resize(e.data.size() - BusKey::kTagBytes);
+          e.data.resize(e.data.size() - BusKey::kTrailerBytes);
           tagged.push_back(std::move(e));
         } else if (out.untagged++ < 10) {
           log.warn("{}: offset {}: a {} event without a valid tag of the key: skipped", f.string(), e.offset,

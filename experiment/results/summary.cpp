@@ -7,10 +7,11 @@
 #include <filesystem>
 #include <sstream>
 
+#include "afford/version.hpp"
 #include "afford/actions.hpp"
 #include "experiment/design/reference.hpp"
 #include "experiment/run/outcome.hpp"
-#include "afford/tables.hpp"
+#include "experiment/design/tables.hpp"
 
 namespace afford {
 namespace fs = std::filesystem;
@@ -356,7 +357,7 @@ Summary summarise(const Plan& plan, const Hosting& hosting, const PhaseRuns& pha
   summary.seed = plan.seed;
   summary.transport = hosting.transport;
   summary.network = hosting.network;
-  summary.afford_version = AFFORD_VERSION;
+  summary.afford_version = affordVersion();
   summary.actions.assign(kActionNames.begin(), kActionNames.end());
   if (!plan.exp.file.empty()) summary.experiment_file = plan.exp.file;
   if (!hosting.processes.empty()) summary.processes = hosting.processes;  // --process: the commands run in place of ours

@@ -10,6 +10,7 @@
 #include "afford/processes.hpp"
 #include "afford/extrinsic_result_t.hpp"
 #include "afford/node.hpp"
+#include "afford/process_main.hpp"
 #include "afford/process_status_t.hpp"
 #include "afford/run_config_t.hpp"
 #include "afford/run_control_t.hpp"
@@ -19,27 +20,49 @@ namespace afford {
 
 using std::chrono::milliseconds;
 
+namespace {
+
+// Where the run's messages meet its outcome: one converter per pair.
+TableSnapshot snapshotOf(const affordance_table_t& m) { return {m.step, m.affordance}; }
+
+ExtrinsicOutcome extrinsicOutcomeOf(const extrinsic_result_t& m) {
+  ExtrinsicOutcome e;
+  e.scenario = m.scenario;
+  e.success = m.success;
+  e.completion = m.completion;
+  e.attempts = m.attempts;
+  e.utility = m.utility;
+  for (const sub_goal_t& g : m.sub_goals)
+    e.sub_goals.push_back({g.x, g.y, g.iterations, g.actions_checked, g.actions_taken, g.reached != 0});
+  return e;
+}
+
+// RESULT's counts (its checksum and checkpoint are checked by the driver).
+void takeCounts(RunOutcome& o, const run_result_t& m) {
+  o.executed = m.actions_executed;
+  o.successes = m.successes;
+  o.looks = m.looks;
+  o.replayed = m.replayed;
+  o.replayed_effects = m.replayed_effects;
+  o.revisits = m.revisits;
+}
+
+}  // namespace
+
 RunDriver::RunDriver(lcm::LCM& lcm, std::shared_ptr<spdlog::logger> log, const ProtocolConfig& protocol)
     : lcm_(lcm), log_(std::move(log)), edge_(lcm, log_, "runner", protocol) {
   edge_.warnOtherRuns(false);  // late messages of the slot's previous run are normal
   edge_.subscribe(ch::status, [this](const process_status_t& m) { return onStatus(m); }, Scope::Any, Order::None);
   edge_.subscribe(ch::affordanceTable,
       [this](const affordance_table_t& m) {
-        if (outcome_) outcome_->curve.push_back({m.step, m.affordance});
+        if (outcome_) outcome_->curve.push_back(snapshotOf(m));
         return Turn::take();
       },
       Scope::Run, Order::Serial);
   edge_.subscribe(ch::extrinsicResult,
       [this](const extrinsic_result_t& m) {
         if (!outcome_) return Turn::take();
-        ExtrinsicOutcome& e = outcome_->extrinsic;
-        e.scenario = m.scenario;
-        e.success = m.success;
-        e.completion = m.completion;
-        e.attempts = m.attempts;
-        e.utility = m.utility;
-        for (const auto& g : m.sub_goals)
-          e.sub_goals.push_back({g.x, g.y, g.iterations, g.actions_checked, g.actions_taken, g.reached != 0});
+        outcome_->extrinsic = extrinsicOutcomeOf(m);
         have_result_ = true;
         return Turn::take();
       },
@@ -54,12 +77,7 @@ RunDriver::RunDriver(lcm::LCM& lcm, std::shared_ptr<spdlog::logger> log, const P
         else
           log_->warn("RESULT of run '{}' names the checkpoint '{}', not the run's: not taken", m.run_id,
                      printable(m.checkpoint));
-        outcome_->executed = m.actions_executed;
-        outcome_->successes = m.successes;
-        outcome_->looks = m.looks;
-        outcome_->replayed = m.replayed;
-        outcome_->replayed_effects = m.replayed_effects;
-        outcome_->revisits = m.revisits;
+        takeCounts(*outcome_, m);
         have_result_ = true;
         return Turn::take();
       },

@@ -25,6 +25,7 @@
 
 #include "afford/config.hpp"
 #include "afford/edge.hpp"
+#include "afford/process_main.hpp"
 
 namespace afford {
 
@@ -43,15 +44,31 @@ struct RunSpec {
   std::string log_root = "logs";
 };
 
+// The outcome of a run and its parts, each declaring its keys once (visit(): the kept outcome's JSON,
+// experiment/run/outcome.hpp, and its reading come from it).
 struct TableSnapshot {
   std::int64_t step = 0;
   std::vector<std::vector<double>> affordance;  // objects x actions
+  template <class V>
+  void visit(V& v) {
+    v("step", step);
+    v("affordance", affordance);
+  }
 };
 
 struct SubGoalOutcome {
   double x = 0, y = 0;
   int iterations = 0, actions_checked = 0, actions_taken = 0;
   bool reached = false;
+  template <class V>
+  void visit(V& v) {
+    v("x", x);
+    v("y", y);
+    v("iterations", iterations);
+    v("actions_checked", actions_checked);
+    v("actions_taken", actions_taken);
+    v("reached", reached);
+  }
 };
 
 struct ExtrinsicOutcome {
@@ -61,6 +78,15 @@ struct ExtrinsicOutcome {
   int attempts = 0;
   double utility = 0;  // summed value of the objects in their goal state at the end
   std::vector<SubGoalOutcome> sub_goals;
+  template <class V>
+  void visit(V& v) {
+    v("scenario", scenario);
+    v("success", success);
+    v("completion", completion);
+    v("attempts", attempts);
+    v("utility", utility);
+    v("sub_goals", sub_goals);
+  }
 };
 
 struct RunOutcome {
@@ -80,6 +106,28 @@ struct RunOutcome {
   std::map<std::string, long> peak_rss_kb;    // per process (VmHWM), filled by the runner
   std::uintmax_t log_bytes = 0;               // size of the run's log, if any
   ExtrinsicOutcome extrinsic;                 // extrinsic runs
+  // Kept (DIR/runs/<run-id>.json) but for `interrupted`: a cut run is not kept.
+  template <class V>
+  void visit(V& v) {
+    v("ok", ok);
+    v("error", error);
+    v("weights_checksum", weights_checksum);
+    v("checkpoint", checkpoint);
+    v.since("reused_from", reused_from);  // (outcomes kept before issue 13 have none)
+    v("curve", curve);
+    v("executed", executed);
+    v("successes", successes);
+    v.since("looks", looks);  // (nor these before issue 11)
+    v.since("replayed", replayed);
+    v.since("replayed_effects", replayed_effects);
+    v.since("revisits", revisits);
+    v("log_dir", log_dir);
+    v("wall_seconds", wall_seconds);
+    v("run_seconds", run_seconds);
+    v("peak_rss_kb", peak_rss_kb);
+    v("log_bytes", log_bytes);
+    v("extrinsic", extrinsic);
+  }
 };
 
 class RunDriver {

@@ -16,6 +16,16 @@
 #include <stdexcept>
 
 namespace afford {
+
+nlohmann::json out(const NetnsMode& m) { return m == NetnsMode::On ? "on" : m == NetnsMode::Off ? "off" : "auto"; }
+
+void in(const nlohmann::json& j, const std::string& path, const codec::Context& c, NetnsMode& m) {
+  const std::string s = j.is_string() ? j.get<std::string>() : std::string();
+  if (s == "auto" || s == "on" || s == "off")
+    m = s == "on" ? NetnsMode::On : s == "off" ? NetnsMode::Off : NetnsMode::Auto;
+  else
+    c.fail(path, "expected \"auto\", \"on\" or \"off\", got " + (j.is_string() ? "\"" + s + "\"" : codec::kindOf(j)));
+}
 namespace {
 
 void writeFile(const std::string& path, const std::string& text) {

@@ -3,6 +3,7 @@
 #include <fstream>
 
 #include "afford/config.hpp"
+#include "experiment/schema/codec.hpp"
 
 namespace afford {
 namespace fs = std::filesystem;
@@ -25,71 +26,9 @@ void writeWhole(const fs::path& path, const std::string& text) {
   fs::rename(part, path);
 }
 
-json outcomeToJson(const RunOutcome& r) {
-  json curve = json::array();
-  for (const auto& s : r.curve) curve.push_back({{"step", s.step}, {"affordance", s.affordance}});
-  json goals = json::array();
-  for (const auto& g : r.extrinsic.sub_goals)
-    goals.push_back({{"x", g.x}, {"y", g.y}, {"iterations", g.iterations}, {"actions_checked", g.actions_checked},
-                     {"actions_taken", g.actions_taken}, {"reached", g.reached}});
-  return {{"ok", r.ok},
-          {"error", r.error},
-          {"weights_checksum", r.weights_checksum},
-          {"checkpoint", r.checkpoint},
-          {"reused_from", r.reused_from},
-          {"curve", curve},
-          {"executed", r.executed},
-          {"successes", r.successes},
-          {"looks", r.looks},
-          {"replayed", r.replayed},
-          {"replayed_effects", r.replayed_effects},
-          {"revisits", r.revisits},
-          {"log_dir", r.log_dir},
-          {"wall_seconds", r.wall_seconds},
-          {"run_seconds", r.run_seconds},
-          {"peak_rss_kb", r.peak_rss_kb},
-          {"log_bytes", r.log_bytes},
-          {"extrinsic",
-           {{"scenario", r.extrinsic.scenario},
-            {"success", r.extrinsic.success},
-            {"completion", r.extrinsic.completion},
-            {"attempts", r.extrinsic.attempts},
-            {"utility", r.extrinsic.utility},
-            {"sub_goals", goals}}}};
-}
+json outcomeToJson(const RunOutcome& r) { return toJsonOf(r); }
 
-RunOutcome outcomeFromJson(const json& j) {
-  RunOutcome r;
-  r.ok = j.at("ok").get<bool>();
-  r.error = j.at("error").get<std::string>();
-  r.weights_checksum = j.at("weights_checksum").get<std::string>();
-  r.checkpoint = j.at("checkpoint").get<std::string>();
-  r.reused_from = j.value("reused_from", std::string());  // outcomes kept before issue 13 have none
-  for (const auto& s : j.at("curve"))
-    r.curve.push_back({s.at("step").get<std::int64_t>(), s.at("affordance").get<std::vector<std::vector<double>>>()});
-  r.executed = j.at("executed").get<std::vector<std::int64_t>>();
-  r.successes = j.at("successes").get<std::vector<std::int64_t>>();
-  r.looks = j.value("looks", 0);  // outcomes kept before issue 11 have none of these
-  r.replayed = j.value("replayed", std::int64_t{0});
-  r.replayed_effects = j.value("replayed_effects", std::int64_t{0});
-  r.revisits = j.value("revisits", std::int64_t{0});
-  r.log_dir = j.at("log_dir").get<std::string>();
-  r.wall_seconds = j.at("wall_seconds").get<double>();
-  r.run_seconds = j.at("run_seconds").get<double>();
-  r.peak_rss_kb = j.at("peak_rss_kb").get<std::map<std::string, long>>();
-  r.log_bytes = j.at("log_bytes").get<std::uintmax_t>();
-  const json& e = j.at("extrinsic");
-  r.extrinsic.scenario = e.at("scenario").get<std::string>();
-  r.extrinsic.success = e.at("success").get<bool>();
-  r.extrinsic.completion = e.at("completion").get<int>();
-  r.extrinsic.attempts = e.at("attempts").get<int>();
-  r.extrinsic.utility = e.at("utility").get<double>();
-  for (const auto& g : e.at("sub_goals"))
-    r.extrinsic.sub_goals.push_back({g.at("x").get<double>(), g.at("y").get<double>(), g.at("iterations").get<int>(),
-                                     g.at("actions_checked").get<int>(), g.at("actions_taken").get<int>(),
-                                     g.at("reached").get<bool>()});
-  return r;
-}
+RunOutcome outcomeFromJson(const json& j, const std::string& what) { return fromJsonOf<RunOutcome>(j, what); }
 
 // A finished run's outcome, kept as it finishes: --resume does not run it again.
 void keepOutcome(const fs::path& out, const std::string& run_id, const RunOutcome& r) {
@@ -99,14 +38,34 @@ void keepOutcome(const fs::path& out, const std::string& run_id, const RunOutcom
 
 std::optional<RunOutcome> keptOutcome(const fs::path& out, const std::string& run_id) {
   const fs::path path = outcomePath(out, run_id);
-  if (!fs::exists(path)) return std::nullopt;
+  std::error_code ec;
+  if (!fs::exists(path, ec)) return std::nullopt;
   try {
-    std::ifstream in(path);
-    const json j = json::parse(in);
-    if (j.at("run_id") != run_id) throw std::runtime_error("it is the outcome of run '" + j["run_id"].dump() + "'");
-    return outcomeFromJson(j.at("outcome"));
+    const json j = readJsonFile(path, kMostOutcomeBytes);
+    if (!j.is_object() || !j.contains("run_id") || j["run_id"] != run_id)
+      throw std::runtime_error("it is not the outcome of run '" + run_id + "'");
+    if (j.size() != 2 || !j.contains("outcome")) throw std::runtime_error("expected the keys run_id and outcome");
+    return outcomeFromJson(j.at("outcome"), path.string() + ": outcome");
   } catch (const std::exception& e) {
     throw ConfigError("cannot read " + path.string() + ": " + e.what());
+  }
+}
+
+json readJsonFile(const fs::path& file, std::uintmax_t max_bytes) {
+  // Checked before it is opened: a FIFO would wait for a writer, a huge file hold the memory.
+  std::error_code ec;
+  if (!fs::is_regular_file(file, ec)) throw std::runtime_error(file.string() + ": not a regular file");
+  const std::uintmax_t size = fs::file_size(file, ec);
+  if (ec) throw std::runtime_error(file.string() + ": cannot read its size (" + ec.message() + ")");
+  if (size > max_bytes)
+    throw std::runtime_error(file.string() + ": " + std::to_string(size) + " bytes, more than such a file holds (at most " +
+                             std::to_string(max_bytes) + ")");
+  std::ifstream in(file);
+  if (!in) throw std::runtime_error(file.string() + ": cannot be read");
+  try {
+    return json::parse(in);
+  } catch (const json::parse_error& e) {
+    throw std::runtime_error(file.string() + ": not JSON (" + e.what() + ")");
   }
 }
 

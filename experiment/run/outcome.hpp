@@ -16,8 +16,15 @@ namespace afford {
 // over it (an interruption leaves the previous version or the new one).
 void writeWhole(const std::filesystem::path& path, const std::string& text);
 
+// The outcome as JSON and back (its keys declared once: RunOutcome::visit); reading is strict, an error
+// naming the key and `what`.
 nlohmann::json outcomeToJson(const RunOutcome& r);
-RunOutcome outcomeFromJson(const nlohmann::json& j);
+RunOutcome outcomeFromJson(const nlohmann::json& j, const std::string& what = "outcome");
+
+// A JSON file, read only if it is a regular file of at most max_bytes (a FIFO would wait for a writer, a huge
+// file hold the memory); throws std::runtime_error naming the file and what is wrong.
+nlohmann::json readJsonFile(const std::filesystem::path& file, std::uintmax_t max_bytes);
+inline constexpr std::uintmax_t kMostOutcomeBytes = 64u << 20;  // a kept outcome: its curve, at most 64 MB
 
 // A finished run's outcome, kept as it finishes: --resume does not run it again.
 void keepOutcome(const std::filesystem::path& out, const std::string& run_id, const RunOutcome& r);

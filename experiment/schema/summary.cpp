@@ -9,181 +9,39 @@
 namespace afford {
 using nlohmann::json;
 
-namespace {
-
-template <class T>
-struct IsVector : std::false_type {};
-template <class T>
-struct IsVector<std::vector<T>> : std::true_type {};
-template <class T>
-struct IsMap : std::false_type {};
-template <class T>
-struct IsMap<std::map<std::string, T>> : std::true_type {};
-template <class T>
-struct IsOptional : std::false_type {};
-template <class T>
-struct IsOptional<std::optional<T>> : std::true_type {};
-template <class T>
-struct IsNullable : std::false_type {};
-template <class T>
-struct IsNullable<Nullable<T>> : std::true_type {};
-
-// ---- to JSON
-
-template <class T>
-json out(const T& value);
-json out(const MultiStep& m);
-json out(const CompletionSteps& c);
-
-struct Writer {
-  json& j;
-  template <class T>
-  void operator()(const char* key, const T& value) {
-    if constexpr (IsOptional<T>::value) {
-      if (value) j[key] = out(*value);
-    } else {
-      j[key] = out(value);
-    }
-  }
-};
-
+// The two types summary.json spells its own way (found by argument-dependent lookup from the codec).
 json out(const MultiStep& m) { return m.all ? json("all") : json(m.count); }
 
 json out(const CompletionSteps& c) {
   json j = json::object();
-  for (const auto& [scenario, steps] : c.scenarios) j[scenario] = out(steps);
-  if (c.fit) j["fit"] = out(*c.fit);
+  for (const auto& [scenario, steps] : c.scenarios) j[scenario] = codec::out(steps);
+  if (c.fit) j["fit"] = codec::out(*c.fit);
   return j;
 }
 
-template <class T>
-json out(const T& value) {
-  if constexpr (std::is_arithmetic_v<T> || std::is_same_v<T, std::string>) {
-    return json(value);
-  } else if constexpr (IsVector<T>::value) {
-    json a = json::array();
-    for (const auto& e : value) a.push_back(out(e));
-    return a;
-  } else if constexpr (IsMap<T>::value) {
-    json o = json::object();
-    for (const auto& [k, e] : value) o[k] = out(e);
-    return o;
-  } else if constexpr (IsNullable<T>::value) {
-    return value ? out(*value) : json(nullptr);
-  } else {
-    json o = json::object();
-    Writer w{o};
-    const_cast<T&>(value).visit(w);  // visit() only reads through a Writer
-    return o;
-  }
-}
-
-// ---- from JSON
-
-struct Context {
-  std::string what;  // the file (or "summary.json")
-  [[noreturn]] void fail(const std::string& path, const std::string& problem) const {
-    throw SummaryError(what + ": key '" + (path.empty() ? std::string("<top>") : path) + "': " + problem);
-  }
-};
-
-std::string join(const std::string& path, const std::string& key) { return path.empty() ? key : path + "." + key; }
-
-std::string kindOf(const json& j) {
-  if (j.is_null()) return "null";
-  if (j.is_boolean()) return "a boolean";
-  if (j.is_number_integer()) return "an integer";
-  if (j.is_number()) return "a number";
-  if (j.is_string()) return "a string";
-  if (j.is_array()) return "a list";
-  return "a map";
-}
-
-template <class T>
-void in(const json& j, const std::string& path, const Context& c, T& value);
-void in(const json& j, const std::string& path, const Context& c, MultiStep& m);
-void in(const json& j, const std::string& path, const Context& c, CompletionSteps& s);
-
-struct Reader {
-  const json& j;
-  std::string path;
-  const Context& c;
-  std::set<std::string> known;
-  template <class T>
-  void operator()(const char* key, T& value) {
-    known.insert(key);
-    const auto it = j.find(key);
-    if constexpr (IsOptional<T>::value) {
-      value.reset();
-      if (it == j.end()) return;
-      value.emplace();
-      in(*it, join(path, key), c, *value);
-    } else {
-      if (it == j.end()) c.fail(join(path, key), "missing");
-      in(*it, join(path, key), c, value);
-    }
-  }
-  void unknownKeys() const {
-    for (const auto& [key, v] : j.items())
-      if (!known.count(key)) c.fail(join(path, key), "unknown key");
-  }
-};
-
-void in(const json& j, const std::string& path, const Context& c, MultiStep& m) {
+void in(const json& j, const std::string& path, const codec::Context& c, MultiStep& m) {
   if (j.is_string() && j.get<std::string>() == "all") {
     m = {true, 0};
   } else if (j.is_number_integer()) {
     m = {false, j.get<std::int64_t>()};
   } else {
-    c.fail(path, "expected an integer or \"all\", got " + kindOf(j));
+    c.fail(path, "expected an integer or \"all\", got " + codec::kindOf(j));
   }
 }
 
-void in(const json& j, const std::string& path, const Context& c, CompletionSteps& s) {
-  if (!j.is_object()) c.fail(path, "expected a map, got " + kindOf(j));
+void in(const json& j, const std::string& path, const codec::Context& c, CompletionSteps& s) {
+  if (!j.is_object()) c.fail(path, "expected a map, got " + codec::kindOf(j));
   for (const auto& [key, v] : j.items()) {
     if (key == "fit")
-      in(v, join(path, key), c, s.fit.emplace());
+      codec::in(v, codec::join(path, key), c, s.fit.emplace());
     else
-      in(v, join(path, key), c, s.scenarios[key]);
+      codec::in(v, codec::join(path, key), c, s.scenarios[key]);
   }
 }
 
-template <class T>
-void in(const json& j, const std::string& path, const Context& c, T& value) {
-  const auto expect = [&](bool ok, const char* kind) {
-    if (!ok) c.fail(path, std::string("expected ") + kind + ", got " + kindOf(j));
-  };
-  if constexpr (std::is_same_v<T, bool>) {
-    expect(j.is_boolean(), "a boolean");
-    value = j.get<bool>();
-  } else if constexpr (std::is_integral_v<T>) {
-    expect(j.is_number_integer(), "an integer");
-    value = j.get<T>();
-  } else if constexpr (std::is_floating_point_v<T>) {
-    expect(j.is_number(), "a number");
-    value = j.get<T>();
-  } else if constexpr (std::is_same_v<T, std::string>) {
-    expect(j.is_string(), "a string");
-    value = j.get<std::string>();
-  } else if constexpr (IsVector<T>::value) {
-    expect(j.is_array(), "a list");
-    value.assign(j.size(), {});
-    for (std::size_t i = 0; i < j.size(); ++i) in(j[i], path + "[" + std::to_string(i) + "]", c, value[i]);
-  } else if constexpr (IsMap<T>::value) {
-    expect(j.is_object(), "a map");
-    value.clear();
-    for (const auto& [k, e] : j.items()) in(e, join(path, k), c, value[k]);
-  } else if constexpr (IsNullable<T>::value) {
-    value.value.reset();
-    if (!j.is_null()) in(j, path, c, value.value.emplace());
-  } else {
-    expect(j.is_object(), "a map");
-    Reader r{j, path, c, {}};
-    value.visit(r);
-    r.unknownKeys();
-  }
-}
+namespace {
+
+using codec::Context;
 
 // Every table is objects x actions, and random tables' lists are one per table: what the readers index by.
 void checkShapes(const Summary& s, const std::string& path, const Context& c) {
@@ -228,8 +86,7 @@ void checkShapes(const Summary& s, const std::string& path, const Context& c) {
 
 template <class T>
 T parse(const json& j, const std::string& what) {
-  T value;
-  in(j, "", Context{what}, value);
+  T value = fromJsonOf<T>(j, what);
   const Context c{what};
   if constexpr (std::is_same_v<T, Summary>) {
     checkShapes(value, "", c);
@@ -241,9 +98,9 @@ T parse(const json& j, const std::string& what) {
 
 }  // namespace
 
-json toJson(const Summary& s) { return out(s); }
-json toJson(const SweepSummary& s) { return out(s); }
-json toJson(const Interruption& i) { return out(i); }
+json toJson(const Summary& s) { return toJsonOf(s); }
+json toJson(const SweepSummary& s) { return toJsonOf(s); }
+json toJson(const Interruption& i) { return toJsonOf(i); }
 Summary summaryFromJson(const json& j, const std::string& what) { return parse<Summary>(j, what); }
 SweepSummary sweepSummaryFromJson(const json& j, const std::string& what) { return parse<SweepSummary>(j, what); }
 bool isSweepSummary(const json& j) { return j.is_object() && j.contains("sweep"); }
@@ -268,7 +125,7 @@ json readSummaryJson(const std::string& dir, std::uintmax_t max_bytes) {
   } catch (const json::parse_error& e) {
     throw SummaryError(file.string() + ": not JSON (" + e.what() + ")");
   }
-  if (!j.is_object()) throw SummaryError(file.string() + ": expected a map at the top, got " + kindOf(j));
+  if (!j.is_object()) throw SummaryError(file.string() + ": expected a map at the top, got " + codec::kindOf(j));
   return j;
 }
 

@@ -1,6 +1,6 @@
 // summary.json as a structure (docs/results-schema.md): every key it may
 // hold, each declared once with its type in a visit() below, from which come
-// the one conversion to JSON and the one from it. Reading is strict: a key of
+// the one conversion to JSON and the one from it (experiment/schema/codec.hpp). Reading is strict: a key of
 // the wrong type, a missing one or an unknown one throws SummaryError naming
 // its path (systems.IMP.runs[2].seed), so a reader never meets a summary it
 // does not know.
@@ -17,20 +17,9 @@
 #include <string>
 #include <vector>
 
+#include "experiment/schema/codec.hpp"
+
 namespace afford {
-
-struct SummaryError : std::runtime_error {
-  using std::runtime_error::runtime_error;
-};
-
-template <class T>
-struct Nullable {
-  std::optional<T> value;
-  Nullable() = default;
-  Nullable(T v) : value(std::move(v)) {}  // NOLINT: a value is a present one
-  explicit operator bool() const { return value.has_value(); }
-  const T& operator*() const { return *value; }
-};
 
 using SummaryTable = std::vector<std::vector<double>>;  // objects x actions
 using Settings = std::map<std::string, std::string>;     // key path -> value

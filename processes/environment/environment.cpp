@@ -19,7 +19,7 @@ int clearanceOf(const std::vector<WorldObject>& objects, const WorldConfig& w, i
 }
 }  // namespace
 
-Environment::Environment(const RunConfig& config) : config_(config) {
+Environment::Environment(const EnvironmentParams& params) : config_(params) {
   const auto& w = config_.world;
   for (std::size_t i = 0; i < w.objects.size(); ++i) {
     const ObjectSpec& spec = w.objects[i];
@@ -31,11 +31,11 @@ Environment::Environment(const RunConfig& config) : config_(config) {
     o.present = false;
     objects_.push_back(o);
   }
-  free_half_ = clearanceOf(objects_, w, config_.eye.focus_side);
+  free_half_ = clearanceOf(objects_, w, config_.focus_side);
   introduceObjectsAt(0);
 }
 
-Environment::Environment(const RunConfig& config, const Scenario& scenario) : config_(config), scenario_(scenario) {
+Environment::Environment(const EnvironmentParams& params, const Scenario& scenario) : config_(params), scenario_(scenario) {
   for (const auto& so : scenario.objects) {
     WorldObject o;
     o.shape = so.shape;
@@ -45,7 +45,7 @@ Environment::Environment(const RunConfig& config, const Scenario& scenario) : co
     o.table_index = -1;
     objects_.push_back(o);
   }
-  free_half_ = clearanceOf(objects_, config_.world, config_.eye.focus_side);
+  free_half_ = clearanceOf(objects_, config_.world, config_.focus_side);
   goal_ = renderScenario(scenario, true, config_.world);
 }
 
@@ -62,8 +62,8 @@ bool Environment::placeFree(double x, double y, const Shape* shape, Counts count
   const int size = config_.world.size_px;
   Pixel lo, hi;  // the window, inclusive
   if (continuous()) {
-    lo = windowCorner(x, y, config_.eye.focus_side, size);
-    hi = {lo.col + config_.eye.focus_side - 1, lo.row + config_.eye.focus_side - 1};
+    lo = windowCorner(x, y, config_.focus_side, size);
+    hi = {lo.col + config_.focus_side - 1, lo.row + config_.focus_side - 1};
   } else {
     const Pixel c = toPixel(x, y, size);
     lo = {c.col - free_half_, c.row - free_half_};
@@ -160,7 +160,7 @@ std::vector<std::vector<std::uint8_t>> Environment::probeImages() const {
   for (const auto& spec : config_.world.objects) {
     cv::Mat scene = blankScene(config_.world.size_px);
     paintObject(scene, spec.shape, spec.colour, u, u, config_.world);
-    out.push_back(cropFocus(scene, {mid, mid}, config_.eye.focus_side));
+    out.push_back(cropFocus(scene, {mid, mid}, config_.focus_side));
   }
   return out;
 }

@@ -30,12 +30,23 @@ struct ActionOutcome {
   double target_y = -1.0;
 };
 
+// What the environment is given of the run's configuration: the world (its objects and their table), the
+// eye's window side (a move target's window must be free, paper 2.3.2) and the run's seed.
+struct EnvironmentParams {
+  WorldConfig world;
+  int focus_side = 0;
+  std::int64_t seed = 0;
+  EnvironmentParams() = default;
+  EnvironmentParams(const RunConfig& c)  // NOLINT: the sections a run's configuration gives
+      : world(c.world), focus_side(c.eye.focus_side), seed(c.seed) {}
+};
+
 class Environment {
  public:
-  explicit Environment(const RunConfig& config);
+  explicit Environment(const EnvironmentParams& params);
   // Extrinsic phase: the scenario's objects in their initial states. Their
   // affordances come from the experiment's table, by current look.
-  Environment(const RunConfig& config, const Scenario& scenario);
+  Environment(const EnvironmentParams& params, const Scenario& scenario);
 
   // The goal configuration of the scenario (extrinsic phase).
   const cv::Mat& goalScene() const;
@@ -88,7 +99,7 @@ class Environment {
   bool placeFree(double x, double y, const Shape* shape) const;  // of every present object
   bool continuous() const { return config_.world.positions == Positions::Continuous; }
 
-  RunConfig config_;
+  EnvironmentParams config_;
   std::optional<Scenario> scenario_;
   std::vector<WorldObject> objects_;
   int free_half_ = 0;                           // pixel world: half-size of the square a place must have free

@@ -1,5 +1,6 @@
 // afford-environment: the world of the run (paper 2.2, 2.3.2). See node.hpp for channels.
 #include "environment/node.hpp"
+#include "afford/process_main.hpp"
 
 int main(int argc, char** argv) {
   return afford::processMain(

@@ -91,12 +91,12 @@ int dominantChannel(const std::vector<std::uint8_t>& image) {
 
 }  // namespace
 
-Eye::Eye(const RunConfig& config) : config_(config) {
-  const Pixel start = toPixel(config.eye.initial_gaze_x, config.eye.initial_gaze_y, config.world.size_px);
+Eye::Eye(const EyeParams& params) : config_(params) {
+  const Pixel start = toPixel(params.eye.initial_gaze_x, params.eye.initial_gaze_y, params.world.size_px);
   for (Retina* r : {&outer_, &inner_}) {
     r->focus.gaze = start;
-    r->focus.x = toUnit(start.col, config.world.size_px);
-    r->focus.y = toUnit(start.row, config.world.size_px);
+    r->focus.x = toUnit(start.col, params.world.size_px);
+    r->focus.y = toUnit(start.row, params.world.size_px);
   }
 }
 

@@ -30,9 +30,23 @@ struct Effect {
   bool affordance = false;           // the performed action's own effect was seen
 };
 
+// What the eye is given of the run's configuration: its own section, the scene's geometry (its side, how
+// object centres become pixels) and the run's seed.
+struct EyeParams {
+  EyeConfig eye;
+  struct World {
+    int size_px = 0;
+    Positions positions = Positions::Continuous;
+  } world;
+  std::int64_t seed = 0;
+  EyeParams() = default;
+  EyeParams(const RunConfig& c)  // NOLINT: the sections a run's configuration gives
+      : eye(c.eye), world{c.world.size_px, c.world.positions}, seed(c.seed) {}
+};
+
 class Eye {
  public:
-  explicit Eye(const RunConfig& config);
+  explicit Eye(const EyeParams& params);
 
   // Replace the scene the eye looks at (after a scene message). `objects`: the
   // true centres of the objects in it (scene units), read only with
@@ -123,7 +137,7 @@ class Eye {
   // argmax of r's saliency (+ extra) + uniform noise (keyed), exact over the whole image.
   int noisyArgmax(const Retina& r, std::int64_t step, int purpose, std::uint64_t attempt, const cv::Mat* extra) const;
 
-  RunConfig config_;
+  EyeParams config_;
   Retina outer_;   // the scene
   Retina inner_;   // the goal image (extrinsic phase)
 };

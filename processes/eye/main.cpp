@@ -2,6 +2,7 @@
 #include <stdexcept>
 
 #include "eye/node.hpp"
+#include "afford/process_main.hpp"
 
 int main(int argc, char** argv) {
   std::string speculate = "on";

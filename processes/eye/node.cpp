@@ -1,5 +1,7 @@
 #include "eye/node.hpp"
 
+#include "eye/messages.hpp"
+
 #include "afford/actions.hpp"
 #include "afford/protocol.hpp"
 #include "afford/effect_t.hpp"
@@ -38,9 +40,13 @@ EyeNode::EyeNode(lcm::LCM& lcm, std::shared_ptr<spdlog::logger> log, const Proto
         "objects appear at the next step) starts the next step")
       .in(Phase::Intrinsic)
       .waitFor([this](const decision_t& d) { return d.step <= last_scanned_; })
-      .then([this](const decision_t& d) {
-        if (!d.acted && !objectsAppearAt(d.step + 1) && d.step == last_scanned_) next_step_ = d.step + 1;
-      });
+      .ignoreIf([this](const decision_t& d) { return d.acted || objectsAppearAt(d.step + 1); })  // a SCENE follows
+      .refuse([this](const decision_t& d) {
+        return d.step < last_scanned_ ? "the pass of step " + std::to_string(d.step) +
+                                            " is in the past (already scanned step " + std::to_string(last_scanned_) + ")"
+                                      : std::string();
+      })
+      .then([this](const decision_t& d) { next_step_ = d.step + 1; });
   takes(ch::look,
         "extrinsic phase: each LOOK once, in request order, answered with one FOCUS on the scene it names (the "
         "serial of the last SCENE the planner took): a LOOK that overtakes its scene, or the goal, waits for it; "
@@ -94,22 +100,7 @@ void EyeNode::onStop() {
 }
 
 void EyeNode::publishFocus(std::int64_t step, const Focus& f, int8_t kind, int32_t seq) {
-  publish(ch::focus, focusMessage(step, f, kind, seq));
-}
-
-focus_t EyeNode::focusMessage(std::int64_t step, const Focus& f, int8_t kind, int32_t seq) const {
-  focus_t m;
-  m.run_id = runId();
-  m.step = step;
-  m.kind = kind;
-  m.seq = seq;
-  m.x = f.x;
-  m.y = f.y;
-  m.side = config().eye.focus_side;
-  m.image = f.image;
-  m.size = static_cast<int32_t>(f.image.size());
-  m.n_diffs = 0;
-  return m;
+  publish(ch::focus, focusMessage(runId(), step, f, kind, seq, config().eye.focus_side));
 }
 
 namespace {
@@ -153,7 +144,7 @@ void EyeNode::answer(const look_t& l) {
   handled(l.step);
   switch (l.kind) {
     case focus_t::GOAL_DIFF: {
-      focus_t m = focusMessage(l.step, eye_->atGaze(), l.kind, l.seq);
+      focus_t m = focusMessage(runId(), l.step, eye_->atGaze(), l.kind, l.seq, config().eye.focus_side);
       for (Difference& d : eye_->goalDifferences(config().planner.subgoal_match)) {
         m.diff_x.push_back(d.x);
         m.diff_y.push_back(d.y);
@@ -204,23 +195,7 @@ void EyeNode::see(const scene_t& s) {
   guess_.reset();  // the scene changes: a guess made on the old one is void
 
   if (effect) {
-    const Effect& e = *effect;
-    effect_t m;
-    m.run_id = runId();
-    m.step = s.step - 1;
-    m.action = s.action;
-    m.target_x = s.action_target_x;
-    m.target_y = s.action_target_y;
-    m.before_x = e.before.x;
-    m.before_y = e.before.y;
-    m.after_x = e.after.x;
-    m.after_y = e.after.y;
-    m.image_change = e.image_change;
-    m.position_change = e.position_change;
-    m.affordance = e.affordance;
-    m.side = config().eye.focus_side;
-    m.image = e.after.image;
-    m.size = static_cast<int32_t>(m.image.size());
+    const effect_t m = effectMessage(runId(), s, *effect, config().eye.focus_side);
     log_->debug("effect of step {}: action {} image change {:.5f} position change {:.4f} -> affordance {}", m.step,
                 m.action, m.image_change, m.position_change, m.affordance);
     publish(ch::effect, m);

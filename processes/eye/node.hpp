@@ -44,7 +44,6 @@ class EyeNode : public NodeBase {
   // whether or not the step before acted, and that scene starts the step.
   bool objectsAppearAt(std::int64_t step) const;
   void publishFocus(std::int64_t step, const Focus& f, int8_t kind = 0, int32_t seq = 0);
-  focus_t focusMessage(std::int64_t step, const Focus& f, int8_t kind, int32_t seq) const;
 
   std::unique_ptr<Eye> eye_;
   // Intrinsic phase: the bytes of the scene the eye holds. A scene with the

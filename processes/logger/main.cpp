@@ -1,5 +1,6 @@
 // afford-logger: records a run's channels as a standard LCM log. See node.hpp.
 #include "logger/node.hpp"
+#include "afford/process_main.hpp"
 
 int main(int argc, char** argv) {
   std::string log_root = afford::defaultLogRoot();

@@ -4,6 +4,7 @@
 
 #include <filesystem>
 
+#include "afford/version.hpp"
 #include "afford/affordance_table_t.hpp"
 #include "afford/protocol.hpp"
 #include "afford/processes.hpp"
@@ -42,7 +43,7 @@ void LoggerNode::onConfigured(const RunConfig& config) {
   const run_config_t& m = runConfigMessage();
   nlohmann::json manifest = {
       {"run_id", m.run_id},         {"experiment", m.experiment}, {"system", m.system},
-      {"seed", m.seed},             {"steps", config.steps},      {"afford_version", AFFORD_VERSION},
+      {"seed", m.seed},             {"steps", config.steps},      {"afford_version", affordVersion()},
       {"config_yaml", m.config_yaml}, {"segments", nlohmann::json::array()}, {"complete", false},
       {"bus_keyed", edge().key() != nullptr}};  // recorded without the tags either way
   const std::string dir = (std::filesystem::path(log_root_) / m.run_id).string();

@@ -9,7 +9,7 @@ namespace {
 // The paper's motivations (FIX, IGN, IMP by the run's system), with revisits (docs/model.md#revisit).
 class PaperMotivation : public MotivationComponent {
  public:
-  explicit PaperMotivation(const RunConfig& config) : core_(config), revisit_(config.motivation.revisit.enabled) {}
+  explicit PaperMotivation(const MotivationParams& params) : core_(params), revisit_(params.motivation.revisit.enabled) {}
   Decision decide(const Percept& p) override {
     // IMP with observed_change: the threshold takes the observed change the last action caused.
     if (core_.awaitingObservation()) core_.observeChange(*p.last_change);
@@ -23,10 +23,10 @@ class PaperMotivation : public MotivationComponent {
   bool revisit_;
 };
 
-ComponentRegistry<MotivationComponent>& registry() {
-  static ComponentRegistry<MotivationComponent> r(
+ComponentRegistry<MotivationComponent, MotivationParams>& registry() {
+  static ComponentRegistry<MotivationComponent, MotivationParams> r(
       "motivation.kind", "motivation",
-      {{"paper", [](const RunConfig& c) { return std::make_unique<PaperMotivation>(c); }},
+      {{"paper", [](const MotivationParams& p) { return std::make_unique<PaperMotivation>(p); }},
        {"novelty", makeNoveltyMotivation}});
   return r;
 }
@@ -37,8 +37,8 @@ void registerMotivation(const std::string& kind, MotivationFactory factory) { re
 
 std::vector<std::string> motivationKinds() { return registry().kinds(); }
 
-std::unique_ptr<MotivationComponent> makeMotivation(const RunConfig& config) {
-  return registry().make(config, config.motivation.kind);
+std::unique_ptr<MotivationComponent> makeMotivation(const MotivationParams& params) {
+  return registry().make(params, params.motivation.kind);
 }
 
 }  // namespace afford

@@ -55,14 +55,14 @@ class MotivationComponent {
   virtual bool needsMemory() const { return false; }
 };
 
-using MotivationFactory = std::function<std::unique_ptr<MotivationComponent>(const RunConfig&)>;
+using MotivationFactory = std::function<std::unique_ptr<MotivationComponent>(const MotivationParams&)>;
 // Make `kind` available to motivation.kind (a process of one's own does this before processMain).
 void registerMotivation(const std::string& kind, MotivationFactory factory);
 // The kinds registered, the shipped ones first.
 std::vector<std::string> motivationKinds();
 // The component motivation.kind names; throws ConfigError naming the key and the kinds known.
-std::unique_ptr<MotivationComponent> makeMotivation(const RunConfig& config);
+std::unique_ptr<MotivationComponent> makeMotivation(const MotivationParams& params);
 // The shipped novelty motivation (motivation/novelty.cpp).
-std::unique_ptr<MotivationComponent> makeNoveltyMotivation(const RunConfig& config);
+std::unique_ptr<MotivationComponent> makeNoveltyMotivation(const MotivationParams& params);
 
 }  // namespace afford

@@ -1,6 +1,7 @@
 // afford-motivation: the motivation that motivation.kind names (paper: FIX, IGN and IMP, paper 2.4.1;
 // novelty). See node.hpp for channels, component.hpp for writing one.
 #include "motivation/node.hpp"
+#include "afford/process_main.hpp"
 
 int main(int argc, char** argv) {
   return afford::processMain(

@@ -13,10 +13,12 @@ double entropyBits(double p) {
   return -p * std::log2(p) - (1.0 - p) * std::log2(1.0 - p);
 }
 
-Motivation::Motivation(const RunConfig& config)
-    : config_(config),
-      threshold_(config.system == System::FIX ? config.motivation.fixed_threshold
-                                              : config.motivation.initial_threshold) {}
+Motivation::Motivation(const MotivationParams& params)
+    : config_(params.motivation),
+      system_(params.system),
+      seed_(params.seed),
+      threshold_(params.system == System::FIX ? params.motivation.fixed_threshold
+                                              : params.motivation.initial_threshold) {}
 
 int revisitAction(const std::array<std::int64_t, kNumActions>& tried_ago, const RevisitConfig& revisit,
                   std::int64_t seed, std::int64_t step) {
@@ -47,29 +49,29 @@ Decision Motivation::decide(const std::array<double, kNumActions>& affordance,
   Decision d;
   for (int a = 0; a < kNumActions; ++a) {
     const double signal =
-        config_.system == System::IMP ? std::abs(learning_progress[a]) : entropyBits(affordance[a]);
+        system_ == System::IMP ? std::abs(learning_progress[a]) : entropyBits(affordance[a]);
     if (d.action < 0 || signal > d.motivation) {  // ties go to the lowest action index
       d.action = a;
       d.motivation = signal;
     }
   }
   d.threshold = threshold_;
-  if (config_.motivation.revisit.enabled) {
+  if (config_.revisit.enabled) {
     if (!tried_ago) throw std::invalid_argument("motivation.revisit needs what was tried on the look (the predictors' memory)");
-    const int a = revisitAction(*tried_ago, config_.motivation.revisit, config_.seed, step);
+    const int a = revisitAction(*tried_ago, config_.revisit, seed_, step);
     if (a >= 0) {
       // Not an IM-driven choice: the threshold, the opportunity cost of the IM signal's choices, stays as it is.
       d.act = d.revisit = true;
       d.action = a;
-      d.motivation = config_.system == System::IMP ? std::abs(learning_progress[a]) : entropyBits(affordance[a]);
+      d.motivation = system_ == System::IMP ? std::abs(learning_progress[a]) : entropyBits(affordance[a]);
       return d;
     }
   }
-  d.act = d.motivation + config_.motivation.act_margin >= threshold_;
-  if (config_.system == System::FIX) return d;
+  d.act = d.motivation + config_.act_margin >= threshold_;
+  if (system_ == System::FIX) return d;
   if (!d.act)
     leak(0.0);  // Algorithm 1 line 16: no action, the leaky average gets 0
-  else if (config_.system == System::IMP && config_.motivation.imp_threshold_input == ImpThresholdInput::ObservedChange)
+  else if (system_ == System::IMP && config_.imp_threshold_input == ImpThresholdInput::ObservedChange)
     awaiting_ = true;
   else
     leak(d.motivation);  // line 13: the IM signal of the performed action

@@ -34,9 +34,24 @@ struct Decision {
 int revisitAction(const std::array<std::int64_t, kNumActions>& tried_ago, const RevisitConfig& revisit,
                   std::int64_t seed, std::int64_t step);
 
+// What a motivation is given of the run's configuration: its own section, the run's system and seed; and
+// for a component written in another language (Python), the whole configuration as its RUN_CONFIG carries it.
+struct MotivationParams {
+  MotivationConfig motivation;
+  System system = System::IMP;
+  std::int64_t seed = 0;
+  std::int64_t steps = 0;
+  std::string experiment;
+  std::string config_text;  // the run's configuration, YAML (for a component that reads it whole)
+  MotivationParams() = default;
+  MotivationParams(const RunConfig& c)  // NOLINT: the section a run's configuration gives
+      : motivation(c.motivation), system(c.system), seed(c.seed), steps(c.steps), experiment(c.experiment),
+        config_text(c.text) {}
+};
+
 class Motivation {
  public:
-  explicit Motivation(const RunConfig& config);
+  explicit Motivation(const MotivationParams& params);
 
   // Decide for one focused object. Updates the threshold (IGN, IMP) unless the
   // update waits for an observed change (IMP with imp_threshold_input:
@@ -52,9 +67,11 @@ class Motivation {
   double threshold() const { return threshold_; }
 
  private:
-  void leak(double input) { threshold_ += config_.motivation.leak * (input - threshold_); }
+  void leak(double input) { threshold_ += config_.leak * (input - threshold_); }
 
-  RunConfig config_;
+  MotivationConfig config_;
+  System system_;
+  std::int64_t seed_;
   double threshold_;
   bool awaiting_ = false;
 };

@@ -1,9 +1,7 @@
 #include "motivation/node.hpp"
 
-#include <cmath>
-
 #include "afford/protocol.hpp"
-#include "afford/decision_t.hpp"
+#include "motivation/messages.hpp"
 
 namespace afford {
 
@@ -40,30 +38,7 @@ void MotivationNode::onConfigured(const RunConfig& config) {
 void MotivationNode::onStop() { core_.reset(); }
 
 void MotivationNode::decide(const prediction_t& m) {
-  Percept p;
-  p.step = m.step;
-  std::copy(m.affordance.begin(), m.affordance.end(), p.affordance.begin());
-  std::copy(m.learning_progress.begin(), m.learning_progress.end(), p.learning_progress.begin());
-  if (m.n_tried == kNumActions) {
-    p.look = m.look;
-    p.tried_ago.emplace();
-    std::copy(m.tried_ago.begin(), m.tried_ago.end(), p.tried_ago->begin());
-  }
-  if (m.n_trained == 1 && m.trained[0].step == m.step - 1)
-    p.last_change = std::abs(m.trained[0].affordance_after - m.trained[0].affordance_before);
-  const Decision d = core_->decide(p);
-  decision_t out;
-  out.run_id = runId();
-  out.step = m.step;
-  out.acted = d.act;
-  out.action = static_cast<int8_t>(d.act ? d.action : decision_t::NONE);
-  out.x = m.x;
-  out.y = m.y;
-  out.target_x = out.target_y = -1.0;
-  out.motivation = d.motivation;
-  out.threshold = d.threshold;
-  out.revisit = d.revisit;
-  publish(ch::decision, out);
+  publish(ch::decision, decisionMessage(runId(), m, core_->decide(perceptOf(m))));
   last_ = m.step;
   handled(m.step);
   if (m.step == config().steps - 1) setState(process_status_t::DONE);

@@ -15,7 +15,7 @@ namespace {
 
 class Novelty : public MotivationComponent {
  public:
-  explicit Novelty(const RunConfig& config) : threshold_(config.motivation.novelty_threshold) {}
+  explicit Novelty(const MotivationParams& params) : threshold_(params.motivation.novelty_threshold) {}
 
   Decision decide(const Percept& p) override {
     std::array<std::int64_t, kNumActions>& n = counts_[p.look];  // by look: the predictors' memory
@@ -39,8 +39,8 @@ class Novelty : public MotivationComponent {
 
 }  // namespace
 
-std::unique_ptr<MotivationComponent> makeNoveltyMotivation(const RunConfig& config) {
-  return std::make_unique<Novelty>(config);
+std::unique_ptr<MotivationComponent> makeNoveltyMotivation(const MotivationParams& params) {
+  return std::make_unique<Novelty>(params);
 }
 
 }  // namespace afford

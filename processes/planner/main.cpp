@@ -1,5 +1,6 @@
 // afford-planner: Algorithm 2 in the extrinsic phase. See node.hpp for channels.
 #include "planner/node.hpp"
+#include "afford/process_main.hpp"
 
 int main(int argc, char** argv) {
   return afford::processMain(

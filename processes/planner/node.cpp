@@ -1,5 +1,7 @@
 #include "planner/node.hpp"
 
+#include "planner/messages.hpp"
+
 #include "afford/protocol.hpp"
 #include "afford/decision_t.hpp"
 #include "afford/extrinsic_result_t.hpp"
@@ -10,7 +12,9 @@ namespace afford {
 
 PlannerNode::PlannerNode(lcm::LCM& lcm, std::shared_ptr<spdlog::logger> log, const ProtocolConfig& protocol,
                          PlannerObserver* observer)
-    : NodeBase(lcm, "planner", std::move(log), protocol), observer_(observer) {
+    : NodeBase(lcm, "planner", std::move(log), protocol),
+      observer_(observer),
+      object_([this](const focus_t& f, const prediction_t& p) { onObject(f, p); }) {
   // Every input: only while a test goes on (the extrinsic phase, until its result).
   const auto idle = [this](const auto&) { return !core_ || finished_; };
   takes(ch::scene,
@@ -41,7 +45,7 @@ PlannerNode::PlannerNode(lcm::LCM& lcm, std::shared_ptr<spdlog::logger> log, con
       .refuse([this](const focus_t& f) {
         const bool object = f.kind == focus_t::SCENE_SCAN || f.kind == focus_t::SCENE_OBJECT;
         const auto asked = f.kind == focus_t::SCENE_SCAN ? PlannerRequest::ScanScene : PlannerRequest::AttendObject;
-        return object && (last_.kind != asked || object_) ? "an object the planner did not ask for" : "";
+        return object && (last_.kind != asked || object_.hasFirst()) ? "an object the planner did not ask for" : "";
       })
       .refuse([this](const focus_t& f) {
         return f.kind == focus_t::GOAL_DIFF && last_.kind != PlannerRequest::LookAtDifferences
@@ -64,13 +68,9 @@ PlannerNode::PlannerNode(lcm::LCM& lcm, std::shared_ptr<spdlog::logger> log, con
       })
       .waitFor([this](const prediction_t& p) {
         const bool asked = last_.kind == PlannerRequest::ScanScene || last_.kind == PlannerRequest::AttendObject;
-        return asked && p.step == step_ && !affordance_;
+        return asked && p.step == step_ && !object_.hasSecond();
       })
-      .then([this](const prediction_t& p) {
-        affordance_.emplace();
-        std::copy(p.affordance.begin(), p.affordance.end(), affordance_->begin());
-        tryObject();
-      });
+      .then([this](const prediction_t& p) { object_.second(p); });
   takes(ch::forwardPrediction,
         "the FORWARD_PREDICTION that answers the last request, a forward query (its seq); for an imagined "
         "object, with that object's affordances")
@@ -88,6 +88,9 @@ PlannerNode::PlannerNode(lcm::LCM& lcm, std::shared_ptr<spdlog::logger> log, con
                    : std::string();
       })
       .then([this](const forward_prediction_t& m) { onForward(m); });
+  joins(object_, ch::focus, ch::prediction,
+        "the object the current iteration scanned or attended: its FOCUS and the PREDICTION of its affordances, "
+        "in either order, go to the planner once both have come");
 }
 
 void PlannerNode::onConfigured(const RunConfig& config) {
@@ -101,8 +104,6 @@ void PlannerNode::onConfigured(const RunConfig& config) {
   goal_distance_ = goal_utility_ = -1;
   waiting_scene_ = finished_ = false;
   scene_ = -1;
-  object_.reset();
-  affordance_.reset();
 }
 
 void PlannerNode::onStop() { core_.reset(); }
@@ -143,47 +144,18 @@ void PlannerNode::follow(PlannerRequest r) {
     case PlannerRequest::LookAtSceneAt:
       return look(focus_t::SCENE_AT, r.x, r.y);
     case PlannerRequest::ScanScene:
-      object_.reset();
-      affordance_.reset();
+      object_.clear();
       return look(focus_t::SCENE_SCAN);
     case PlannerRequest::AttendObject:
-      object_.reset();
-      affordance_.reset();
+      object_.clear();
       return look(focus_t::SCENE_OBJECT, r.x, r.y);
     case PlannerRequest::LookAtDifferences:
       return look(focus_t::GOAL_DIFF);
-    case PlannerRequest::Forward: {
-      forward_query_t q;
-      q.run_id = runId();
-      q.step = step_;
-      q.seq = ++seq_;
-      q.x = r.object_x;
-      q.y = r.object_y;
-      q.target_x = r.x;
-      q.target_y = r.y;
-      q.image = r.image;
-      q.size = static_cast<int32_t>(q.image.size());
-      for (int a : r.actions) q.actions.push_back(static_cast<int8_t>(a));
-      q.n_actions = static_cast<int32_t>(q.actions.size());
-      for (int a : r.prefix) q.prefix.push_back(static_cast<int8_t>(a));
-      q.n_prefix = static_cast<int8_t>(q.prefix.size());
-      return publish(ch::forwardQuery, q);
-    }
-    case PlannerRequest::Act: {
-      decision_t d;
-      d.run_id = runId();
-      d.step = step_;
-      d.acted = true;
-      d.action = static_cast<int8_t>(r.action);
-      d.x = r.object_x;
-      d.y = r.object_y;
-      d.target_x = r.x;
-      d.target_y = r.y;
-      d.revisit = false;
-      d.motivation = d.threshold = 0.0;
+    case PlannerRequest::Forward:
+      return publish(ch::forwardQuery, forwardQueryMessage(runId(), step_, ++seq_, r));
+    case PlannerRequest::Act:
       waiting_scene_ = true;
-      return publish(ch::decision, d);
-    }
+      return publish(ch::decision, actionMessage(runId(), step_, r));
     case PlannerRequest::IterationDone:
       return endIteration();
   }
@@ -191,34 +163,19 @@ void PlannerNode::follow(PlannerRequest r) {
 
 void PlannerNode::onFocus(const focus_t& f) {
   handled(f.step);
-  if (f.kind == focus_t::SCENE_SCAN || f.kind == focus_t::SCENE_OBJECT) {
-    object_ = f;
-    return tryObject();
-  }
-  if (f.kind == focus_t::GOAL_DIFF) {
-    std::vector<Difference> diffs;
-    for (int i = 0; i < f.n_diffs; ++i)
-      diffs.push_back({f.diff_x[i], f.diff_y[i], f.diff_in[i] == focus_t::DIFF_GOAL, f.diff_image[i]});
-    return follow(core_->onDifferences(diffs));
-  }
-  follow(core_->onView({f.image, f.x, f.y}));
+  if (f.kind == focus_t::SCENE_SCAN || f.kind == focus_t::SCENE_OBJECT) return object_.first(f);
+  if (f.kind == focus_t::GOAL_DIFF) return follow(core_->onDifferences(differencesOf(f)));
+  follow(core_->onView(viewOf(f)));
 }
 
-void PlannerNode::tryObject() {
-  if (!object_ || !affordance_) return;  // the focus and its affordances, in either order
-  follow(core_->onObject({object_->image, object_->x, object_->y}, *affordance_));
+void PlannerNode::onObject(const focus_t& f, const prediction_t& p) {
+  follow(core_->onObject(viewOf(f), affordancesOf(p.affordance)));
 }
 
 void PlannerNode::onForward(const forward_prediction_t& m) {
-  std::vector<ForwardPrediction> preds;
-  for (int i = 0; i < m.n_actions; ++i)
-    preds.push_back({m.actions[i], std::vector<double>(m.what[i].begin(), m.what[i].end()), m.where_x[i], m.where_y[i]});
   std::optional<std::array<double, kNumActions>> input;
-  if (!last_.prefix.empty()) {  // the query imagined its object: its affordances come with the answer
-    input.emplace();
-    std::copy(m.input_affordance.begin(), m.input_affordance.end(), input->begin());
-  }
-  follow(core_->onForward(preds, input));
+  if (!last_.prefix.empty()) input = affordancesOf(m.input_affordance);  // the query imagined its object
+  follow(core_->onForward(forwardPredictionsOf(m), input));
 }
 
 void PlannerNode::endIteration() {
@@ -239,8 +196,7 @@ void PlannerNode::finish(bool success) {
   r.completion = success ? static_cast<int32_t>(step_ + 1) : 0;
   r.attempts = core_->attempts();
   r.utility = goal_utility_;
-  for (const SubGoalRecord& g : core_->subGoals())
-    r.sub_goals.push_back({g.x, g.y, g.iterations, g.actions_checked, g.actions_taken, g.reached});
+  for (const SubGoalRecord& g : core_->subGoals()) r.sub_goals.push_back(subGoalMessage(g));
   r.n_sub_goals = static_cast<int32_t>(r.sub_goals.size());
   publish(ch::extrinsicResult, r);
   log_->info("test '{}' on {}: {} after {} iterations, {} actions", runId(), r.scenario,

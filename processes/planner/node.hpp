@@ -37,7 +37,7 @@ class PlannerNode : public NodeBase {
   // Carry out a request of the core (until it needs an answer).
   void follow(PlannerRequest r);
   void look(int8_t kind, double x = -1, double y = -1);
-  void tryObject();
+  void onObject(const focus_t& f, const prediction_t& p);  // the scanned or attended object, with its affordances
   void endIteration();
   void finish(bool success);
   bool active() const { return core_ && state() == process_status_t::RUNNING && !finished_; }
@@ -51,9 +51,8 @@ class PlannerNode : public NodeBase {
   bool waiting_scene_ = false;      // an action was sent; its scene is awaited
   std::int64_t scene_ = -1;         // serial of the last SCENE taken: each LOOK names it
   bool finished_ = false;
-  std::optional<focus_t> object_;   // the scanned object of this iteration
-  std::optional<std::array<double, kNumActions>> affordance_;
   PlannerRequest last_;             // the request being answered
+  Both<focus_t, prediction_t> object_;  // the scanned object of this iteration and its affordances
 };
 
 }  // namespace afford

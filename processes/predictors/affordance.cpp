@@ -13,17 +13,17 @@ namespace {
 // change of that output, the learning progress (Algorithm 1 lines 7-9).
 class PaperAffordance : public AffordanceComponent {
  public:
-  explicit PaperAffordance(const RunConfig& config) : config_(config) {
-    const int dim = config.eye.focus_side * config.eye.focus_side * 3 + 1;
+  explicit PaperAffordance(const AffordanceParams& params) : config_(params.predictors), system_(params.system) {
+    const int dim = params.focus_side * params.focus_side * 3 + 1;
     for (int a = 0; a < kNumActions; ++a) {
       affordance_.emplace_back(dim, true);  // zero weights: output 0.5, ignorance 1 (paper 2.4.1)
       learning_progress_.emplace_back(dim, false);
       // Learning-progress weights: random sign, fixed magnitude (docs/parameters.md).
-      const KeyedRng rng(config.seed, 0, Purpose::LearningProgressInit, static_cast<std::uint64_t>(a));
+      const KeyedRng rng(params.seed, 0, Purpose::LearningProgressInit, static_cast<std::uint64_t>(a));
       Eigen::VectorXd& w = learning_progress_.back().weights();
       for (int i = 0; i < dim; ++i)
-        w[i] = (rng.bits(static_cast<std::uint64_t>(i)) & 1u) ? config.predictors.learning_progress_init
-                                                              : -config.predictors.learning_progress_init;
+        w[i] = (rng.bits(static_cast<std::uint64_t>(i)) & 1u) ? params.predictors.learning_progress_init
+                                                              : -params.predictors.learning_progress_init;
     }
   }
 
@@ -36,16 +36,16 @@ class PaperAffordance : public AffordanceComponent {
 
   Learned learn(const FocusView& focus, int a, bool succeeded) override {
     Learned r;
-    r.before = affordance_[a].train(focus.input, succeeded ? 1.0 : 0.0, config_.predictors.affordance_learning_rate);
+    r.before = affordance_[a].train(focus.input, succeeded ? 1.0 : 0.0, config_.affordance_learning_rate);
     r.after = affordance_[a].output(focus.input);
     r.learning_progress = learning_progress_[a].output(focus.input);
-    if (config_.system == System::IMP)  // Algorithm 1 line 9: only IMP
-      learning_progress_[a].train(focus.input, r.after - r.before, config_.predictors.learning_progress_learning_rate);
+    if (system_ == System::IMP)  // Algorithm 1 line 9: only IMP
+      learning_progress_[a].train(focus.input, r.after - r.before, config_.learning_progress_learning_rate);
     return r;
   }
 
   void relearn(const FocusView& focus, int a, bool succeeded) override {
-    affordance_[a].train(focus.input, succeeded ? 1.0 : 0.0, config_.predictors.affordance_learning_rate);
+    affordance_[a].train(focus.input, succeeded ? 1.0 : 0.0, config_.affordance_learning_rate);
   }
 
   std::vector<StateArray> state(int a) override {
@@ -55,14 +55,15 @@ class PaperAffordance : public AffordanceComponent {
   }
 
  private:
-  RunConfig config_;
+  PredictorsConfig config_;
+  System system_;
   std::vector<Unit> affordance_, learning_progress_;
 };
 
-ComponentRegistry<AffordanceComponent>& registry() {
-  static ComponentRegistry<AffordanceComponent> r(
+ComponentRegistry<AffordanceComponent, AffordanceParams>& registry() {
+  static ComponentRegistry<AffordanceComponent, AffordanceParams> r(
       "predictors.affordance.kind", "predictors",
-      {{"paper", [](const RunConfig& c) { return std::make_unique<PaperAffordance>(c); }}});
+      {{"paper", [](const AffordanceParams& p) { return std::make_unique<PaperAffordance>(p); }}});
   return r;
 }
 
@@ -72,8 +73,8 @@ void registerAffordance(const std::string& kind, AffordanceFactory factory) { re
 
 std::vector<std::string> affordanceKinds() { return registry().kinds(); }
 
-std::unique_ptr<AffordanceComponent> makeAffordance(const RunConfig& config) {
-  return registry().make(config, config.predictors.affordance_kind);
+std::unique_ptr<AffordanceComponent> makeAffordance(const AffordanceParams& params) {
+  return registry().make(params, params.predictors.affordance_kind);
 }
 
 }  // namespace afford

@@ -27,7 +27,7 @@
 
 #include "afford/actions.hpp"
 #include "afford/config.hpp"
-#include "afford/perceptron.hpp"
+#include "predictors/perceptron.hpp"
 
 namespace afford {
 
@@ -71,12 +71,30 @@ class AffordanceComponent {
   virtual std::vector<StateArray> state(int action) = 0;
 };
 
-using AffordanceFactory = std::function<std::unique_ptr<AffordanceComponent>(const RunConfig&)>;
+// What an affordance predictor is given of the run's configuration: the predictors' section, the focus
+// image's side, the run's system and seed; and for a component written in another language (Python), the
+// whole configuration as its RUN_CONFIG carries it.
+struct AffordanceParams {
+  PredictorsConfig predictors;
+  int focus_side = 0;
+  System system = System::IMP;
+  std::int64_t seed = 0;
+  std::int64_t steps = 0;
+  std::string experiment;
+  std::string motivation_kind;
+  std::string config_text;  // the run's configuration, YAML (for a component that reads it whole)
+  AffordanceParams() = default;
+  AffordanceParams(const RunConfig& c)  // NOLINT: the section a run's configuration gives
+      : predictors(c.predictors), focus_side(c.eye.focus_side), system(c.system), seed(c.seed), steps(c.steps),
+        experiment(c.experiment), motivation_kind(c.motivation.kind), config_text(c.text) {}
+};
+
+using AffordanceFactory = std::function<std::unique_ptr<AffordanceComponent>(const AffordanceParams&)>;
 // Make `kind` available to predictors.affordance.kind (a process of one's own does this before processMain).
 void registerAffordance(const std::string& kind, AffordanceFactory factory);
 // The kinds registered, the shipped ones first.
 std::vector<std::string> affordanceKinds();
 // The component predictors.affordance.kind names; throws ConfigError naming the key and the kinds known.
-std::unique_ptr<AffordanceComponent> makeAffordance(const RunConfig& config);
+std::unique_ptr<AffordanceComponent> makeAffordance(const AffordanceParams& params);
 
 }  // namespace afford

@@ -5,7 +5,7 @@
 #include <cstdint>
 #include <vector>
 
-#include "afford/perceptron.hpp"
+#include "predictors/perceptron.hpp"
 
 namespace afford {
 

@@ -1,5 +1,6 @@
 // afford-predictors: the 16 perceptrons (paper 2.3.3). See node.hpp for channels.
 #include "predictors/node.hpp"
+#include "afford/process_main.hpp"
 
 int main(int argc, char** argv) {
   std::string checkpoint_root = afford::defaultLogRoot();

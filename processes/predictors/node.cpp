@@ -1,5 +1,7 @@
 #include "predictors/node.hpp"
 
+#include "predictors/messages.hpp"
+
 #include "afford/affordance_table_t.hpp"
 #include "afford/protocol.hpp"
 #include "afford/names.hpp"
@@ -176,21 +178,8 @@ void PredictorsNode::publishPrediction(const focus_t& m) {
   // Intrinsic phase: the focus of step m.step, seen once (a memory remembers its look).
   const Prediction p = extrinsic() ? core_->predict(m.image) : core_->see(m.image, m.step);
   if (!extrinsic()) look_ = p.look;
-  prediction_t out;
-  out.run_id = runId();
-  out.step = m.step;
-  out.x = m.x;
-  out.y = m.y;
-  out.n_actions = kNumActions;
-  out.affordance.assign(p.affordance.begin(), p.affordance.end());
-  out.learning_progress.assign(p.learning_progress.begin(), p.learning_progress.end());
-  out.look = p.remembered ? p.look : -1;
-  if (p.remembered) out.tried_ago.assign(p.tried_ago.begin(), p.tried_ago.end());
-  out.n_tried = static_cast<int8_t>(out.tried_ago.size());
-  if (pending_trained_) out.trained.push_back(*pending_trained_);  // the update since the last prediction
+  publish(ch::prediction, predictionMessage(runId(), m, p, pending_trained_));  // with the update since the last
   pending_trained_.reset();
-  out.n_trained = static_cast<int8_t>(out.trained.size());
-  publish(ch::prediction, out);
 }
 
 void PredictorsNode::answer(const forward_query_t& q) {
@@ -237,28 +226,8 @@ void PredictorsNode::decided(const decision_t& m) {
 }
 
 void PredictorsNode::learn(const effect_t& m) {
-  Experience e;
-  e.action = m.action;
-  e.before_image = focus_.image;
-  e.before_x = focus_.x;
-  e.before_y = focus_.y;
-  e.target_x = m.target_x;
-  e.target_y = m.target_y;
-  e.affordance = m.affordance;
-  e.after_image = m.image;
-  e.after_x = m.after_x;
-  e.after_y = m.after_y;
-  TrainingReport r = core_->trainAffordance(e, m.step, look_);
-  trained_t t;
-  t.run_id = runId();
-  t.step = m.step;
-  t.action = static_cast<int8_t>(r.action);
-  t.affordance = r.affordance;
-  t.affordance_before = r.affordance_before;
-  t.affordance_after = r.affordance_after;
-  t.learning_progress = r.learning_progress;
-  t.effect_trained = r.effect_trained;
-  pending_trained_ = t;
+  TrainingReport r = core_->trainAffordance(experienceOf(focus_, m), m.step, look_);
+  pending_trained_ = trainedMessage(runId(), m.step, r);
   pending_effects_ = std::move(r.effect_updates);
   outcome_ = Outcome::Learned;
   saveActionsCheckpoint();

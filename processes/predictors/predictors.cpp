@@ -20,15 +20,18 @@
 
 namespace afford {
 
-Predictors::Predictors(const RunConfig& config)
-    : config_(config), input_size_(config.eye.focus_side * config.eye.focus_side * 3) {
-  affordance_ = makeAffordance(config);
+Predictors::Predictors(const PredictorsParams& params)
+    : config_(params.component.predictors),
+      focus_side_(params.component.focus_side),
+      seed_(params.component.seed),
+      input_size_(focus_side_ * focus_side_ * 3) {
+  affordance_ = makeAffordance(params.component);
   const int dim = input_size_ + 1;
   for (int a = 0; a < kNumActions; ++a) {
     what_.emplace_back(input_size_, dim, true);
     where_.emplace_back(2, a == kMove ? 5 : 3, false);
   }
-  if (config.keepsMemory()) memory_ = std::make_unique<Memory>(config.predictors.memory, config.eye.focus_side);
+  if (params.keeps_memory) memory_ = std::make_unique<Memory>(config_.memory, focus_side_);
 }
 
 Prediction Predictors::see(const std::vector<std::uint8_t>& focus_image, std::int64_t step) {
@@ -92,9 +95,9 @@ std::vector<Memory::Ref> Predictors::replay(std::int64_t step, bool own_effect) 
   // remembered experiences of any look and action drawn by (seed, step): each one delta-rule step of its
   // affordance predictor; and forward-model updates from experiences whose effect was seen, for trainEffects,
   // making up effects_ratio with the step's own.
-  const ReplayConfig& replay = config_.predictors.replay;
+  const ReplayConfig& replay = config_.replay;
   if (!memory_ || !replay.enabled) return {};
-  for (const Memory::Ref& m : memory_->sample(replay.sampling, config_.seed, step, 0, static_cast<std::size_t>(replay.ratio), false)) {
+  for (const Memory::Ref& m : memory_->sample(replay.sampling, seed_, step, 0, static_cast<std::size_t>(replay.ratio), false)) {
     affordance_->relearn(FocusView{m->before_image, m->before_input}, m->action, m->affordance);
     ++replayed_;
   }
@@ -103,7 +106,7 @@ std::vector<Memory::Ref> Predictors::replay(std::int64_t step, bool own_effect) 
                                       std::floor(static_cast<double>(step) * replay.effects_ratio));
   const int more = std::max(0, share - (own_effect ? 1 : 0));
   std::vector<Memory::Ref> effects =
-      memory_->sample(replay.sampling, config_.seed, step, 1, static_cast<std::size_t>(more), true);
+      memory_->sample(replay.sampling, seed_, step, 1, static_cast<std::size_t>(more), true);
   replayed_effects_ += static_cast<std::int64_t>(effects.size());
   return effects;
 }
@@ -117,9 +120,9 @@ void Predictors::trainEffects(const Experience& e) {
   const int a = e.action;
   Eigen::VectorXd target(input_size_);
   for (int i = 0; i < input_size_; ++i) target[i] = e.after_image[i] / 255.0;
-  what_[a].train(inputOf(e), target, config_.predictors.what_effect_learning_rate);
+  what_[a].train(inputOf(e), target, config_.what_effect_learning_rate);
   where_[a].train(whereInput(a, e.before_x, e.before_y, e.target_x, e.target_y), Eigen::Vector2d(e.after_x, e.after_y),
-                  config_.predictors.where_effect_learning_rate);
+                  config_.where_effect_learning_rate);
 }
 
 std::vector<PerAction> Predictors::table(const std::vector<std::vector<std::uint8_t>>& probes) const {
@@ -271,11 +274,11 @@ void Predictors::save(const std::string& path, const std::string& checksum) cons
   Deflater raw(path);
   raw.write(kMagic, sizeof kMagic);
   // The paper's component: format 2, as ever; another: format 3, which names it.
-  const bool paper = config_.predictors.affordance_kind == "paper";
+  const bool paper = config_.affordance_kind == "paper";
   const std::uint32_t header[2] = {paper ? 2u : kVersion, static_cast<std::uint32_t>(input_size_)};
   raw.write(header, sizeof header);
   if (!paper) {
-    const auto& kind = config_.predictors.affordance_kind;
+    const auto& kind = config_.affordance_kind;
     const auto size = static_cast<std::uint32_t>(kind.size());
     raw.write(&size, sizeof size);
     raw.write(kind.data(), kind.size());
@@ -366,9 +369,9 @@ void Predictors::loadFrom(std::istream& in, const std::string& path) {
     kind.assign(size, '\0');
     in.read(kind.data(), size);
   }
-  if (kind != config_.predictors.affordance_kind)
+  if (kind != config_.affordance_kind)
     throw std::runtime_error("checkpoint " + path + ": its affordance predictor is '" + printable(kind) +
-                             "', this run's predictors.affordance.kind is '" + config_.predictors.affordance_kind + "'");
+                             "', this run's predictors.affordance.kind is '" + config_.affordance_kind + "'");
   forEachWeightArray([&](double* d, std::size_t n) {
     in.read(reinterpret_cast<char*>(d), static_cast<std::streamsize>(n * sizeof(double)));
   });
@@ -380,7 +383,7 @@ void Predictors::loadFrom(std::istream& in, const std::string& path) {
   if (has_memory) {
     // The memory travels with the weights (issue 11); an agent that kept one is restored with it, whatever this
     // run's configuration does with it.
-    if (!memory_) memory_ = std::make_unique<Memory>(config_.predictors.memory, config_.eye.focus_side);
+    if (!memory_) memory_ = std::make_unique<Memory>(config_.memory, focus_side_);
     in.read(reinterpret_cast<char*>(&replayed_), sizeof replayed_);
     in.read(reinterpret_cast<char*>(&replayed_effects_), sizeof replayed_effects_);
     memory_->load(in, "checkpoint " + path);

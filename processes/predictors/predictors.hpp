@@ -13,7 +13,7 @@
 
 #include "afford/actions.hpp"
 #include "afford/config.hpp"
-#include "afford/perceptron.hpp"
+#include "predictors/perceptron.hpp"
 #include "predictors/affordance.hpp"
 #include "predictors/experience.hpp"
 #include "predictors/memory.hpp"
@@ -42,9 +42,19 @@ struct TrainingReport {
   std::vector<Memory::Ref> effect_updates;
 };
 
+// What the predictors are given of the run's configuration: their affordance component's (their section,
+// the focus image's side, the run's system and seed), and whether they keep a memory (RunConfig::keepsMemory,
+// which the motivation's section decides too).
+struct PredictorsParams {
+  AffordanceParams component;
+  bool keeps_memory = false;
+  PredictorsParams() = default;
+  PredictorsParams(const RunConfig& c) : component(c), keeps_memory(c.keepsMemory()) {}  // NOLINT: its sections
+};
+
 class Predictors {
  public:
-  explicit Predictors(const RunConfig& config);
+  explicit Predictors(const PredictorsParams& params);
 
   Prediction predict(const std::vector<std::uint8_t>& focus_image) const;
   // The intrinsic phase's prediction for the focus of `step`: predict(), and
@@ -109,7 +119,9 @@ class Predictors {
   template <class F>
   void forEachWeightArray(F&& f) const;
 
-  RunConfig config_;
+  PredictorsConfig config_;
+  int focus_side_;
+  std::int64_t seed_;
   int input_size_;
   std::unique_ptr<AffordanceComponent> affordance_;
   std::vector<Layer> what_, where_;

@@ -22,6 +22,7 @@
 #include "afford/bus.hpp"
 #include "afford/edge.hpp"
 #include "afford/node.hpp"
+#include "afford/process_main.hpp"
 #include "afford/prediction_t.hpp"
 #include "afford/run_config_t.hpp"
 #include "afford/scene_t.hpp"

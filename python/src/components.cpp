@@ -11,6 +11,7 @@
 
 #include "afford/config.hpp"
 #include "afford/node.hpp"
+#include "afford/process_main.hpp"
 #include "afford/rng.hpp"
 #include "motivation/component.hpp"
 #include "motivation/node.hpp"
@@ -51,14 +52,27 @@ py::object fromYaml(const YAML::Node& n) {
 // The run's configuration as a component's constructor gets it: the run's
 // whole configuration (its RUN_CONFIG) as nested dicts, config["motivation"]
 // ["leak"], with `steps` and `motivation_kind` at the top for convenience.
-py::dict configDict(const RunConfig& c) {
+struct Configured {
+  const std::string& text;
+  const std::string& experiment;
+  System system;
+  std::int64_t seed, steps;
+  const std::string& motivation_kind;
+};
+Configured configured(const MotivationParams& p) {
+  return {p.config_text, p.experiment, p.system, p.seed, p.steps, p.motivation.kind};
+}
+Configured configured(const AffordanceParams& p) {
+  return {p.config_text, p.experiment, p.system, p.seed, p.steps, p.motivation_kind};
+}
+py::dict configDict(const Configured& c) {
   py::dict d;
   if (!c.text.empty()) d = fromYaml(YAML::Load(c.text));
   d["experiment"] = c.experiment;
   d["system"] = toString(c.system);
   d["seed"] = c.seed;
   d["steps"] = c.steps;
-  d["motivation_kind"] = c.motivation.kind;
+  d["motivation_kind"] = c.motivation_kind;
   return d;
 }
 
@@ -73,7 +87,7 @@ py::object field(const py::object& r, const char* name) {
 // the run's failure, naming the role, the kind and the Python error.
 class PythonObject {
  public:
-  PythonObject(std::string role, std::string kind, const py::object& cls, const RunConfig& config)
+  PythonObject(std::string role, std::string kind, const py::object& cls, const Configured& config)
       : role_(std::move(role)), kind_(std::move(kind)) {
     py::gil_scoped_acquire gil;
     try {
@@ -147,8 +161,8 @@ Decision decisionOf(const py::object& r, const std::string& at) {
 
 class PythonMotivation : public MotivationComponent {
  public:
-  PythonMotivation(const std::string& kind, const py::object& cls, const RunConfig& config)
-      : py_("motivation", kind, cls, config) {}
+  PythonMotivation(const std::string& kind, const py::object& cls, const MotivationParams& params)
+      : py_("motivation", kind, cls, configured(params)) {}
 
   Decision decide(const Percept& p) override {
     py::gil_scoped_acquire gil;
@@ -195,8 +209,8 @@ PerAction perAction(const py::handle& v, const std::string& what) {
 
 class PythonAffordance : public AffordanceComponent {
  public:
-  PythonAffordance(const std::string& kind, const py::object& cls, const RunConfig& config)
-      : py_("affordance predictor", kind, cls, config), side_(config.eye.focus_side) {
+  PythonAffordance(const std::string& kind, const py::object& cls, const AffordanceParams& params)
+      : py_("affordance predictor", kind, cls, configured(params)), side_(params.focus_side) {
     for (int a = 0; a < kNumActions; ++a) state(a);  // a state the checksum cannot take is refused at once
   }
 
@@ -342,8 +356,8 @@ void defineComponents(py::module_& m) {
       "register_motivation",
       [](const std::string& kind, py::object cls) {
         auto shared = std::make_shared<py::object>(std::move(cls));
-        registerMotivation(kind, [kind, shared](const RunConfig& c) {
-          return std::make_unique<PythonMotivation>(kind, *shared, c);
+        registerMotivation(kind, [kind, shared](const MotivationParams& p) {
+          return std::make_unique<PythonMotivation>(kind, *shared, p);
         });
       },
       py::arg("kind"), py::arg("cls"),
@@ -352,8 +366,8 @@ void defineComponents(py::module_& m) {
       "register_affordance",
       [](const std::string& kind, py::object cls) {
         auto shared = std::make_shared<py::object>(std::move(cls));
-        registerAffordance(kind, [kind, shared](const RunConfig& c) {
-          return std::make_unique<PythonAffordance>(kind, *shared, c);
+        registerAffordance(kind, [kind, shared](const AffordanceParams& p) {
+          return std::make_unique<PythonAffordance>(kind, *shared, p);
         });
       },
       py::arg("kind"), py::arg("cls"),

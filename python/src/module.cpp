@@ -14,6 +14,7 @@
 #include <memory>
 #include <string>
 
+#include "afford/version.hpp"
 #include "afford/config.hpp"
 #include "experiment/experiment.hpp"
 #include "experiment/run/group.hpp"
@@ -27,6 +28,8 @@
 #include "eye/eye.hpp"
 #include "components.hpp"
 #include "afford/to_python.hpp"
+#include "experiment/design/experiment_file.hpp"
+#include "afford/process_main.hpp"
 
 namespace py = pybind11;
 
@@ -267,5 +270,5 @@ PYBIND11_MODULE(_afford, m) {
       .def_property_readonly("focus_side", py::overload_cast<>(&afford::World::focusSide, py::const_))
       .def_property_readonly("success_distance", &afford::World::successDistance)
       .def("goal", &afford::World::goal);
-  m.attr("version") = AFFORD_VERSION;
+  m.attr("version") = afford::affordVersion();
 }

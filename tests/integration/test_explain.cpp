@@ -10,11 +10,12 @@
 #include <nlohmann/json.hpp>
 
 #include "afford/protocol.hpp"
-#include "experiment/replay/explain.hpp"
+#include "experiment/present/explain_text.hpp"
 #include "afford/extrinsic_result_t.hpp"
 #include "tests/in_process.hpp"
 #include "tests/reference_loops.hpp"
 #include "tests/support.hpp"
+#include "experiment/design/experiment_file.hpp"
 
 namespace afford {
 namespace {

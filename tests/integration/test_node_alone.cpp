@@ -32,6 +32,7 @@
 #include "tests/in_process.hpp"
 #include "tests/reference_loops.hpp"
 #include "tests/support.hpp"
+#include "experiment/design/experiment_file.hpp"
 
 namespace afford {
 namespace {

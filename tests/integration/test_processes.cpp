@@ -13,8 +13,9 @@
 #include <thread>
 
 #include "afford/protocol.hpp"
-#include "afford/tables.hpp"
+#include "experiment/design/tables.hpp"
 #include "tests/support.hpp"
+#include "experiment/design/experiment_file.hpp"
 
 namespace afford {
 namespace {

@@ -16,6 +16,7 @@
 #include <nlohmann/json.hpp>
 
 #include "tests/support.hpp"
+#include "experiment/design/experiment_file.hpp"
 
 namespace afford {
 namespace {

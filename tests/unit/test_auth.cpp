@@ -57,22 +57,29 @@ TEST_F(Auth, ABadKeyFileIsRefusedNamingFileAndFault) {
   EXPECT_NE(error(dir_).find("not a readable file"), std::string::npos);
 }
 
-TEST_F(Auth, ATagBindsTheChannelAndEveryByte) {
+TEST_F(Auth, ATagBindsTheChannelEveryByteAndTheStamp) {
   BusKey::writeNew(dir_ / "k");
   const BusKey key = BusKey::fromFile(dir_ / "k");
   std::vector<std::uint8_t> m(1000);
   for (std::size_t i = 0; i < m.size(); ++i) m[i] = static_cast<std::uint8_t>(i);
-  std::vector<std::uint8_t> t = key.tagged("FOCUS", m.data(), m.size());
-  ASSERT_EQ(t.size(), m.size() + BusKey::kTagBytes);
-  EXPECT_TRUE(key.verify("FOCUS", t.data(), t.size()));
+  const Stamp stamp{0x0123456789abcdefULL, 41, 1'764'000'000'123};
+  std::vector<std::uint8_t> t = key.tagged("FOCUS", m.data(), m.size(), stamp);
+  ASSERT_EQ(t.size(), m.size() + BusKey::kTrailerBytes);
+  Stamp read;
+  EXPECT_TRUE(key.verify("FOCUS", t.data(), t.size(), &read));
+  EXPECT_EQ(read.session, stamp.session);
+  EXPECT_EQ(read.counter, stamp.counter);
+  EXPECT_EQ(read.sent_ms, stamp.sent_ms);
   EXPECT_FALSE(key.verify("SCENE", t.data(), t.size()));  // the same bytes on another channel
-  for (std::size_t at : {std::size_t{0}, std::size_t{500}, t.size() - 1}) {
+  // Every byte counts: the message's, the stamp's (a counter or a session changed is no longer tagged), the tag's.
+  for (std::size_t at : {std::size_t{0}, std::size_t{500}, m.size(), m.size() + 8, m.size() + 16, t.size() - 1}) {
     std::vector<std::uint8_t> u = t;
     u[at] ^= 1;
     EXPECT_FALSE(key.verify("FOCUS", u.data(), u.size())) << at;
   }
   EXPECT_FALSE(key.verify("FOCUS", t.data(), t.size() - 1));
-  EXPECT_FALSE(key.verify("FOCUS", t.data(), 10));  // shorter than a tag
+  EXPECT_FALSE(key.verify("FOCUS", t.data(), 40));  // shorter than a trailer
+  EXPECT_NE(BusKey::newSession(), BusKey::newSession());
 }
 
 TEST_F(Auth, TheOptionComesBeforeTheEnvironment) {

@@ -11,6 +11,7 @@
 
 #include "afford/config.hpp"
 #include "tests/support.hpp"
+#include "experiment/design/experiment_file.hpp"
 
 namespace afford {
 namespace {
@@ -401,13 +402,14 @@ TEST(Configuration, TheTablesOfKeysInTheDocsAreThoseTheDeclarationGives) {
   ASSERT_NE(from, std::string::npos) << "docs/configuration.md has no " << begin;
   ASSERT_NE(to, std::string::npos) << "docs/configuration.md has no " << end;
   const std::string documented = text.substr(from + begin.size(), to - from - begin.size());
-  const std::string expected = keysMarkdown(std::string(AFFORD_SOURCE_DIR) + "/config") + "\n";
-  EXPECT_EQ(documented, expected) << "regenerate the tables with scripts/docs-keys.sh";
+  const test::CommandResult keys = test::runAfford("config --keys");
+  ASSERT_EQ(keys.exit_code, 0) << keys.output;
+  EXPECT_EQ(documented, keys.output + "\n") << "regenerate the tables with scripts/docs-keys.sh";
 }
 
 // Every default value has its source: the comment beside it in defaults.yaml begins with it.
 TEST(Configuration, EveryDefaultNamesItsSource) {
-  const std::string md = keysMarkdown(std::string(AFFORD_SOURCE_DIR) + "/config");
+  const std::string md = test::runAfford("config --keys").output;
   std::istringstream rows(md.substr(0, md.find("\n\n")));
   int checked = 0;
   for (std::string line; std::getline(rows, line);) {

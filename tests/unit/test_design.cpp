@@ -1,6 +1,7 @@
 #include <gtest/gtest.h>
 
 #include "experiment/design/design.hpp"
+#include "experiment/design/experiment_file.hpp"
 
 namespace afford {
 namespace {

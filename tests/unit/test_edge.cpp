@@ -136,6 +136,11 @@ struct EdgeOnTheBus : ::testing::Test {
     while (lcm.handleTimeout(0) > 0) {
     }
   }
+  static std::int64_t now() {
+    return std::chrono::duration_cast<std::chrono::milliseconds>(std::chrono::system_clock::now().time_since_epoch())
+        .count();
+  }
+  Stamp fresh() { return {BusKey::newSession(), 0, now()}; }
   void raw(const std::string& channel, const std::vector<std::uint8_t>& b) {
     lcm.publish(channel, b.data(), static_cast<unsigned>(b.size()));
   }
@@ -155,15 +160,45 @@ TEST_F(EdgeOnTheBus, OnAKeyedBusOnlyMessagesWithTheKeysTagAreTaken) {
   scene_t s1 = sceneOf("run-1", 1);
   const std::vector<std::uint8_t> plain = sealed(s1);
   raw(ch::scene.name, plain);
-  raw(ch::scene.name, newKey("other.key")->tagged(ch::scene.name, plain.data(), plain.size()));
-  raw(ch::scene.name, key->tagged(ch::focus.name, plain.data(), plain.size()));
+  raw(ch::scene.name, newKey("other.key")->tagged(ch::scene.name, plain.data(), plain.size(), fresh()));
+  raw(ch::scene.name, key->tagged(ch::focus.name, plain.data(), plain.size(), fresh()));
   pump();
   EXPECT_EQ(taken, std::vector<std::int64_t>{0});
   EXPECT_EQ(receiver.drops().untagged, 3);
   EXPECT_EQ(receiver.drops().refused, 0) << "no untagged message reached the checks behind the tag";
-  raw(ch::scene.name, key->tagged(ch::scene.name, plain.data(), plain.size()));
+  raw(ch::scene.name, key->tagged(ch::scene.name, plain.data(), plain.size(), fresh()));
   pump();
   EXPECT_EQ(taken, (std::vector<std::int64_t>{0, 1}));
+}
+
+// Freshness: a tagged message said again (the same bytes, a recording played back) is dropped and counted,
+// before anything else of it is looked at; the sender's next message is taken.
+TEST_F(EdgeOnTheBus, OnAKeyedBusAMessageSaidAgainIsDroppedAndCounted) {
+  const auto key = newKey("bus.key");
+  receiver.useKey(key);
+  std::vector<std::vector<std::uint8_t>> sent;
+  for (std::int64_t step = 0; step < 3; ++step) {
+    scene_t s = sceneOf("run-1", step);
+    const std::vector<std::uint8_t> plain = sealed(s);
+    sent.push_back(key->tagged(ch::scene.name, plain.data(), plain.size(), {77, static_cast<std::uint64_t>(step), now()}));
+  }
+  raw(ch::scene.name, sent[0]);
+  raw(ch::scene.name, sent[2]);
+  raw(ch::scene.name, sent[0]);  // again
+  raw(ch::scene.name, sent[1]);  // late, within the window: taken
+  raw(ch::scene.name, sent[1]);  // again
+  pump();
+  EXPECT_EQ(taken, (std::vector<std::int64_t>{0, 2, 1}));
+  EXPECT_EQ(receiver.drops().replayed, 2);
+  EXPECT_EQ(receiver.drops().untagged + receiver.drops().refused, 0);
+  // A sender not heard yet, whose message is older than protocol.freshness_ms: a recording's.
+  scene_t old = sceneOf("run-1", 3);
+  const std::vector<std::uint8_t> plain = sealed(old);
+  raw(ch::scene.name, key->tagged(ch::scene.name, plain.data(), plain.size(),
+                                  {78, 0, now() - protocol.freshness_ms - 1000}));
+  pump();
+  EXPECT_EQ(receiver.drops().replayed, 3);
+  EXPECT_EQ(taken.size(), 3u);
 }
 
 TEST_F(EdgeOnTheBus, ATaggedMessageIsRefusedWhereThereIsNoKey) {

@@ -268,16 +268,17 @@ TEST(Reference, ABrokenFileIsAnErrorNamingItAndTheKey) {
 }
 
 // The map of files in docs/processes-and-channels.md names every file of the
-// front door (processes/afford) and of the experiment engine (experiment/).
+// command line (apps/afford) and of the experiment engine (experiment/).
 TEST(Docs, TheMapOfFilesNamesEveryFileOfTheFrontDoorAndTheEngine) {
   const std::filesystem::path root = AFFORD_SOURCE_DIR;
   std::ifstream doc(root / "docs" / "processes-and-channels.md");
   const std::string text((std::istreambuf_iterator<char>(doc)), std::istreambuf_iterator<char>());
-  const auto from = text.find("processes/afford/ ");
-  ASSERT_NE(from, std::string::npos) << "no map of processes/afford/ in docs/processes-and-channels.md";
-  const std::string map = text.substr(from, text.find("```", from) - from);
+  const auto from = text.find("```\ncommon/ ");
+  ASSERT_NE(from, std::string::npos) << "no map of files (beginning with common/) in docs/processes-and-channels.md";
+  ASSERT_NE(text.find("\napps/afford/ ", from), std::string::npos) << "the map of files has no apps/afford/";
+  const std::string map = text.substr(from, text.find("```", from + 3) - from);
   int files = 0;
-  for (const char* folder : {"processes/afford", "experiment"})
+  for (const char* folder : {"apps/afford", "experiment"})
     for (const auto& e : std::filesystem::recursive_directory_iterator(root / folder)) {
       if (!e.is_regular_file()) continue;
       ++files;
@@ -288,13 +289,15 @@ TEST(Docs, TheMapOfFilesNamesEveryFileOfTheFrontDoorAndTheEngine) {
   EXPECT_GT(files, 40);
 }
 
-// The layers of the engine, lowest first: a file includes headers of its own
-// folder or of a lower layer, never of a higher one or of a sibling; and no
-// include cycle. (The processes and common/ are below them all.)
-TEST(Layers, NoFileIncludesAHeaderOfAHigherLayerAndThereIsNoCycle) {
+// The layers, lowest first: common/ (what every process needs), the
+// processes, the experiment engine (itself in layers), the command line
+// (apps/) and the tools beside it, the Python package. A file includes
+// headers of its own folder or of a lower layer, never of a higher one or of
+// a sibling (no process includes another's); and there is no include cycle.
+TEST(Layers, NoFileIncludesAHeaderOfAHigherLayerOrASiblingAndThereIsNoCycle) {
   namespace fs = std::filesystem;
   const fs::path root = AFFORD_SOURCE_DIR;
-  const auto folderOf = [&](const fs::path& file) {  // "experiment/plan", "processes/afford", "common", ...
+  const auto folderOf = [&](const fs::path& file) {  // "experiment/plan", "processes/eye", "apps/afford", "common", ...
     const fs::path rel = fs::relative(file, root);
     auto it = rel.begin();
     const std::string top = (it++)->string();
@@ -303,23 +306,28 @@ TEST(Layers, NoFileIncludesAHeaderOfAHigherLayerAndThereIsNoCycle) {
     return second.empty() ? top : top + "/" + second;
   };
   const std::map<std::string, int> rank = {
-      {"experiment/schema", 1},  {"experiment/design", 2},  {"experiment/run", 2},     {"experiment/plan", 3},
-      {"experiment/execute", 4}, {"experiment/replay", 4},  {"experiment/results", 5}, {"experiment/present", 6},
-      {"experiment", 7},         {"processes/afford", 8}};
+      {"common", 0},           {"experiment/schema", 2},  {"experiment/design", 3},  {"experiment/run", 3},
+      {"experiment/plan", 4},  {"experiment/execute", 5}, {"experiment/replay", 5},  {"experiment/results", 6},
+      {"experiment/stored", 7}, {"experiment/present", 8}, {"experiment", 9},       {"apps/afford", 10},
+      {"python/src", 11}};
   const auto rankOf = [&](const std::string& folder) {
-    const auto r = rank.find(folder);
-    return r == rank.end() ? 0 : r->second;  // common/ and the processes' own folders
+    if (const auto r = rank.find(folder); r != rank.end()) return r->second;
+    if (folder.rfind("processes/", 0) == 0) return 1;
+    if (folder.rfind("tools/", 0) == 0 || folder.rfind("examples/", 0) == 0) return 10;
+    ADD_FAILURE() << "no layer for the folder " << folder;
+    return -1;
   };
-  // Where an include resolves: common's afford/x.hpp, a process's <name>/x.hpp, or experiment/...
-  const auto resolve = [&](const std::string& inc) -> fs::path {
-    for (const fs::path& base : {root / "common" / "include", root / "processes", root})
+  // Where an include resolves: the including file's folder, common's afford/x.hpp, a process's <name>/x.hpp, or
+  // a path from the top (experiment/..., apps/...).
+  const auto resolve = [&](const fs::path& from, const std::string& inc) -> fs::path {
+    for (const fs::path& base : {from.parent_path(), root / "common" / "include", root / "processes", root})
       if (fs::exists(base / inc)) return fs::weakly_canonical(base / inc);
     return {};
   };
   std::map<fs::path, std::vector<fs::path>> graph;
   const std::regex include_re("#include \"([^\"]+)\"");
   int checked = 0;
-  for (const char* top : {"common", "processes", "experiment"})
+  for (const char* top : {"common", "processes", "experiment", "apps", "python/src", "tools", "examples"})
     for (const auto& e : fs::recursive_directory_iterator(root / top)) {
       const std::string ext = e.path().extension().string();
       if (!e.is_regular_file() || (ext != ".hpp" && ext != ".cpp")) continue;
@@ -327,18 +335,15 @@ TEST(Layers, NoFileIncludesAHeaderOfAHigherLayerAndThereIsNoCycle) {
       std::ifstream in(file);
       const std::string text((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());
       for (std::sregex_iterator m(text.begin(), text.end(), include_re), end; m != end; ++m) {
-        const fs::path target = resolve((*m)[1]);
+        const fs::path target = resolve(file, (*m)[1]);
         if (target.empty()) continue;  // generated (lcmtypes) or system
         ++checked;
         graph[file].push_back(target);
         const std::string from = folderOf(file), to = folderOf(target);
         if (from == to) continue;
-        EXPECT_LT(rankOf(to), rankOf(from) + (rankOf(from) == 0 ? 1 : 0))
-            << fs::relative(file, root).string() << " (layer " << from << ") includes " << (*m)[1]
-            << " (layer " << to << ")";
-        if (rankOf(from) == 0) {
-          EXPECT_EQ(rankOf(to), 0) << fs::relative(file, root).string() << " includes " << (*m)[1];
-        }
+        EXPECT_LT(rankOf(to), rankOf(from))
+            << fs::relative(file, root).string() << " (layer " << from << ") includes " << (*m)[1] << " (layer "
+            << to << "): a layer includes only lower ones, and no sibling";
       }
     }
   EXPECT_GT(checked, 300);

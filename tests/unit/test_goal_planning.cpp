@@ -4,6 +4,7 @@
 
 #include "tests/reference_loops.hpp"
 #include "tests/support.hpp"
+#include "experiment/design/experiment_file.hpp"
 
 namespace afford {
 namespace {

@@ -1,6 +1,6 @@
 #include <gtest/gtest.h>
 
-#include "afford/perceptron.hpp"
+#include "predictors/perceptron.hpp"
 
 namespace afford {
 namespace {

@@ -334,7 +334,7 @@ class Tally : public AffordanceComponent {
 };
 
 TEST_F(Fixture, TheAffordanceKindPicksTheComponentAndItsStateIsTheChecksumsAndTheCheckpoints) {
-  registerAffordance("tally", [](const RunConfig&) { return std::make_unique<Tally>(); });
+  registerAffordance("tally", [](const AffordanceParams&) { return std::make_unique<Tally>(); });
   RunConfig tally = imp;
   tally.predictors.affordance_kind = "tally";
   Predictors p(tally), paper(imp);

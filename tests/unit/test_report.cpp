@@ -11,8 +11,10 @@
 #include <sstream>
 
 #include "experiment/present/report.hpp"
+#include "experiment/stored/state_file.hpp"
 #include "experiment/schema/summary.hpp"
 #include "tests/support.hpp"
+#include "experiment/design/experiment_file.hpp"
 
 namespace afford {
 namespace {
@@ -127,9 +129,17 @@ json summaryOf(const Made& m) {
 // An experiment folder: summary.json, experiment.json (its options), a figure and its CSV, whose bytes name the folder.
 std::string makeFolder(const fs::path& dir, const Made& m) {
   spit(dir / "summary.json", summaryOf(m).dump(2));
-  const json options = {{"experiment", m.experiment}, {"systems", m.systems}, {"reps", m.reps}, {"seed", m.first_seed},
-                        {"settings", m.settings}, {"extrinsic_reps", m.tests_per_scenario}};
-  spit(dir / "experiment.json", json({{"experiment", m.experiment}, {"state", "finished"}, {"options", options}}).dump(2));
+  ExperimentState state;  // as the experiment writes it
+  state.experiment = m.experiment;
+  state.cwd = "/";
+  state.state = "finished";
+  state.options.plan.experiment = m.experiment;
+  state.options.plan.systems = m.systems;
+  state.options.plan.reps = m.reps;
+  state.options.plan.seed = m.first_seed;
+  state.options.plan.settings = m.settings;
+  state.options.plan.extrinsic_reps = m.tests_per_scenario;
+  writeState(dir, state);
   spit(dir / "fig_affordances.png", "PNG of " + dir.string());
   spit(dir / "fig_affordances.csv", "csv of " + dir.string());
   return dir.string();

@@ -9,6 +9,7 @@
 #include "experiment/design/generate.hpp"
 #include "environment/environment.hpp"
 #include "tests/support.hpp"
+#include "experiment/design/experiment_file.hpp"
 
 namespace afford {
 namespace {

@@ -7,7 +7,7 @@
 #include <stdexcept>
 #include <vector>
 
-#include "afford/tables.hpp"
+#include "experiment/design/tables.hpp"
 #include "tests/support.hpp"
 
 namespace afford {

@@ -61,6 +61,7 @@
 #include "afford/protocol.hpp"
 #include "afford/config.hpp"
 #include "afford/node.hpp"
+#include "afford/process_main.hpp"
 #include "afford/seal.hpp"
 #include "afford/bounds.hpp"
 #include "afford/edge.hpp"
@@ -336,9 +337,9 @@ class Hostile {
   void onMessage(const lcm::ReceiveBuffer* rb, const std::string& ch) {
     const auto* d = static_cast<const std::uint8_t*>(rb->data);
     std::size_t size = rb->data_size;
-    if (tagged_) {  // the real messages end with a tag this tool cannot make
-      if (size < afford::BusKey::kTagBytes) return;
-      size -= afford::BusKey::kTagBytes;
+    if (tagged_) {  // the real messages end with a stamp and a tag this tool cannot make
+      if (size < afford::BusKey::kTrailerBytes) return;
+      size -= afford::BusKey::kTrailerBytes;
     }
     // Only what looks real is copied (its own bad messages come back to it too).
     if (!afford::sealIntact(d, size)) return;
@@ -428,9 +429,12 @@ class Hostile {
   }
   void publish(const std::string& ch, const Bytes& b) {
     if (tagged_) {  // a tag of another key (or random bytes): a receiver with the bus's key drops it
-      Bytes t = forge_key_ ? forge_key_->tagged(ch, b.data(), b.size()) : b;
+      const afford::Stamp stamp{rng_(), forged_++, std::chrono::duration_cast<std::chrono::milliseconds>(
+                                                         std::chrono::system_clock::now().time_since_epoch())
+                                                         .count()};
+      Bytes t = forge_key_ ? forge_key_->tagged(ch, b.data(), b.size(), stamp) : b;
       if (!forge_key_)
-        for (std::size_t i = 0; i < afford::BusKey::kTagBytes; ++i) t.push_back(static_cast<std::uint8_t>(rng_()));
+        for (std::size_t i = 0; i < afford::BusKey::kTrailerBytes; ++i) t.push_back(static_cast<std::uint8_t>(rng_()));
       lcm_.publish(ch, t.data(), static_cast<unsigned>(t.size()));
     } else {
       lcm_.publish(ch, b.data(), static_cast<unsigned>(b.size()));
@@ -461,6 +465,7 @@ class Hostile {
   };
   std::map<std::string, Last> last_;
   std::size_t sent_ = 0;
+  std::uint64_t forged_ = 0;  // counters of the stamps forged with another key
   std::map<std::string, std::size_t> per_channel_;
 };
 

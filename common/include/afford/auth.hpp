@@ -1,12 +1,16 @@
 // An authenticated bus (docs/security.md). A group of processes may share a
-// key; every message each of them sends then ends with a 32-byte tag, the
-// keyed BLAKE2b (libsodium's crypto_generichash) of the channel name and the
-// message's bytes, and every message each of them receives is dropped unless
-// it ends with the right tag, before anything else of it is looked at (the
-// edge, afford/edge.hpp, step 0). The tag trails the LCM-encoded message, so
-// the wire format of the types is unchanged and lcm-spy still decodes every
-// channel (LCM's decoders ignore bytes after a message). Logs hold the
-// messages without their tags.
+// key; every message each of them sends then ends with a stamp and a 32-byte
+// tag. The stamp says who sent it and when: the sender's session (a random
+// number drawn when its edge is made, so new at each start of a process), a
+// counter of what that session has sent, and the sender's clock in
+// milliseconds. The tag is the keyed BLAKE2b (libsodium's crypto_generichash)
+// of the channel name, the message's bytes and the stamp. Every message a
+// member receives is dropped unless it ends with the right tag, before
+// anything else of it is looked at (the edge, afford/edge.hpp, step 0); the
+// stamp then lets the edge drop a message said twice (afford/edge_peers.hpp).
+// The trailer follows the LCM-encoded message, so the wire format of the
+// types is unchanged and lcm-spy still decodes every channel (LCM's decoders
+// ignore bytes after a message). Logs hold the messages without trailers.
 //
 // A key file holds the key as 64 hexadecimal digits (one line). A process
 // takes it from its --bus-key FILE, else from the file the environment
@@ -23,10 +27,19 @@
 
 namespace afford {
 
+// Who sent a tagged message and when (under its tag): big-endian on the wire.
+struct Stamp {
+  std::uint64_t session = 0;  // the sender's, new at each start
+  std::uint64_t counter = 0;  // what the session sent before this one
+  std::int64_t sent_ms = 0;   // the sender's clock (ms since 1970): a session not heard yet must be recent
+};
+
 class BusKey {
  public:
   static constexpr std::size_t kKeyBytes = 32;
   static constexpr std::size_t kTagBytes = 32;
+  static constexpr std::size_t kStampBytes = 24;
+  static constexpr std::size_t kTrailerBytes = kStampBytes + kTagBytes;  // what a tagged message ends with
   static constexpr const char* kEnvironment = "AFFORD_BUS_KEY";
 
   // Reads a key file; throws std::runtime_error naming the file and what is wrong.
@@ -35,12 +48,15 @@ class BusKey {
   static void writeNew(const std::filesystem::path& file);
   explicit BusKey(const std::array<std::uint8_t, kKeyBytes>& key);
 
-  // The tag of `size` bytes sent on `channel`.
+  // The tag of `size` bytes sent on `channel` followed by their stamp's kStampBytes.
   std::array<std::uint8_t, kTagBytes> tag(const std::string& channel, const void* data, std::size_t size) const;
-  // The message with its tag appended.
-  std::vector<std::uint8_t> tagged(const std::string& channel, const void* data, std::size_t size) const;
-  // Do the last kTagBytes of the buffer tag the bytes before them on `channel`?
-  bool verify(const std::string& channel, const void* data, std::size_t size_with_tag) const;
+  // The message with its stamp and tag appended.
+  std::vector<std::uint8_t> tagged(const std::string& channel, const void* data, std::size_t size,
+                                   const Stamp& stamp) const;
+  // Do the last kTrailerBytes of the buffer stamp and tag the bytes before them on `channel`? The stamp, if so.
+  bool verify(const std::string& channel, const void* data, std::size_t size_with_trailer, Stamp* stamp = nullptr) const;
+  // A new random session (libsodium's generator: not the runs' keyed one, and no decision reads it).
+  static std::uint64_t newSession();
 
  private:
   std::array<std::uint8_t, kKeyBytes> key_;

@@ -10,14 +10,16 @@
 #include <utility>
 #include <vector>
 
-#include "afford/config.hpp"
+#include "afford/config.hpp"  // ConfigError
 
 namespace afford {
 
-template <class Component>
+// Params: what a component is given of the run's configuration (its own section; motivation/component.hpp's
+// MotivationParams, predictors/affordance.hpp's AffordanceParams).
+template <class Component, class Params>
 class ComponentRegistry {
  public:
-  using Factory = std::function<std::unique_ptr<Component>(const RunConfig&)>;
+  using Factory = std::function<std::unique_ptr<Component>(const Params&)>;
 
   // `key`: the config key that picks the kind; `process`: the process whose component it is.
   ComponentRegistry(std::string key, std::string process, std::vector<std::pair<std::string, Factory>> shipped)
@@ -42,7 +44,7 @@ class ComponentRegistry {
   }
 
   // The component of `kind`; throws ConfigError naming the key, the kinds known and how to run one's own.
-  std::unique_ptr<Component> make(const RunConfig& config, const std::string& kind) const {
+  std::unique_ptr<Component> make(const Params& params, const std::string& kind) const {
     Factory factory;
     std::string known;
     {
@@ -56,7 +58,7 @@ class ComponentRegistry {
       throw ConfigError("config key '" + key_ + "': '" + kind + "' is not one of the kinds built into this process (" +
                         known + "); a component of one's own runs in a process of its own: --process " + process_ +
                         "='COMMAND' (docs/writing-a-component.md)");
-    return factory(config);
+    return factory(params);
   }
 
  private:

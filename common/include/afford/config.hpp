@@ -27,9 +27,6 @@ class ConfigError : public std::runtime_error {
   std::string key_;
 };
 
-// Of `known`, the name closest to `name` by edit distance, if close enough to be a typo of it ("" if none).
-std::string closestName(const std::string& name, const std::vector<std::string>& known);
-
 enum class Shape { Square, Circle, Rectangle };
 enum class Colour { Red, Green, Blue };
 enum class System { FIX, IGN, IMP };
@@ -45,9 +42,6 @@ const char* toString(Shape);
 const char* toString(Colour);
 const char* toString(System);
 System parseSystem(const std::string&);  // throws ConfigError
-// The systems `given` names, each a system, `all`, or a comma-separated list of them (FIX,IMP), in the
-// order given, each once; throws ConfigError naming `option` and the unknown name.
-std::vector<std::string> parseSystems(const std::vector<std::string>& given, const std::string& option);
 int colourChannel(Colour);                // R=0, G=1, B=2
 
 struct ObjectSpec {
@@ -277,6 +271,7 @@ struct ProtocolConfig {
   int heartbeat_ms = 0;       // STATUS period
   int idle_announce_ms = 0;   // a process of a run idle this long announces its counts at once
   int idle_announce_pace = 0; // ... and idle this many times its usual wait for an input (0: absent, older logs)
+  int freshness_ms = 0;       // keyed bus: a sender not heard yet is taken only if its message is this recent (0: any)
   int retry_ms = 0;           // an unanswered RESEND is asked again after this (then doubling up to heartbeat_ms)
   int resend_batch = 0;       // serials asked for in one RESEND
   int resend_cap = 0;         // serials a publisher republishes for one RESEND
@@ -328,9 +323,6 @@ struct RunConfig {
 // Parse a scenario (types, names, ranges); `path` prefixes the keys in errors.
 // Geometry (overlaps, reachability) is checked by validateScenario().
 Scenario parseScenario(const YAML::Node& node, const std::string& path, const WorldConfig& world);
-// config/scenarios/<name>.yaml, parsed and validated.
-Scenario loadScenario(const std::string& config_dir, const std::string& name, const WorldConfig& world);
-std::vector<std::string> listScenarios(const std::string& config_dir);
 // Geometry: objects may not overlap (initial or goal), and each object's goal
 // must be one action away: the same state, a colour change in place, or a move
 // to a place no other object starts or ends in. Throws ConfigError naming the field.
@@ -353,10 +345,8 @@ struct KeyInfo {
 };
 std::vector<KeyInfo> configKeys();
 
-// The tables of keys of docs/configuration.md: every key with its value and
-// source in config_dir's defaults.yaml (the comment beside it, up to its first
-// colon) and its meaning; the protocol's keys in a table of their own.
-std::string keysMarkdown(const std::string& config_dir);
+// A YAML tree as text, numbers with every digit they need.
+std::string emitYaml(const YAML::Node& node);
 
 // Parse and validate an effective configuration. Unknown keys are errors too.
 RunConfig parseRunConfig(const YAML::Node& root);
@@ -365,105 +355,5 @@ RunConfig parseRunConfigText(const std::string& yaml_text);
 ProtocolConfig parseProtocol(const YAML::Node& node, const std::string& path = "protocol");
 // The protocol of config_dir/defaults.yaml: what a process uses between runs.
 ProtocolConfig loadProtocol(const std::string& config_dir);
-
-// Experiment files (config/experiments/<name>.yaml): the effective config of one
-// run is defaults.yaml, overlaid by the experiment's keys, overlaid by
-// systems.<S>, overlaid by command-line settings.
-// The extrinsic tests an experiment file declares (`extrinsic:`): which
-// scenarios, how many tests per trained agent, and the planner settings to
-// compare (`vary`: every combination is a condition, tested from every agent).
-// Generated scenarios (`extrinsic.generate`, issue 12): per_point scenarios for
-// every point (k sub-goals on n objects, m of them two-action), drawn from seed.
-struct GenerateDesign {
-  std::vector<int> sub_goals;   // k of each point
-  std::vector<int> objects;     // n of each point; empty: n = k (every object has a sub-goal)
-  int multi_step = 0;           // m of each point (at most k)
-  bool all_multi_step = false;  // m = k
-  int per_point = 1;
-  std::int64_t seed = 1;
-};
-
-struct ExtrinsicDesign {
-  std::vector<std::string> scenarios;
-  std::optional<GenerateDesign> generate;   // scenarios drawn for the tests, beside `scenarios`
-  int tests = 0;                            // per trained agent, condition and scenario
-  std::int64_t after_actions = 0;           // test the weights saved after this many actions (0: the final ones)
-  std::vector<std::pair<std::string, std::vector<std::string>>> vary;  // config key -> values (YAML text)
-  std::string analysis;                     // "", utility, forward-models, search-reduction
-};
-
-// Random affordance tables (an experiment file's `tables:`, issue 11): the
-// experiment is run on `count` tables drawn from `seed` (afford/tables.hpp),
-// each replacing the affordances of the world's objects.
-struct TablesDesign {
-  int count = 0;
-  std::int64_t seed = 0;
-};
-
-struct ExperimentFile {
-  std::string name;
-  std::string file;                        // an experiment file outside the config folder (--config FILE), else ""
-  std::string description;
-  int repetitions = 1;
-  std::vector<std::string> default_systems;  // systems run when none is named (empty: all three)
-  YAML::Node overlay;                      // keys merged over the defaults
-  YAML::Node systems;                      // map System -> overlay
-  std::optional<ExtrinsicDesign> extrinsic;
-  std::optional<TablesDesign> tables;
-  // Intrinsic conditions compared (`conditions:`, with `tables:`): name -> settings ("key.path=value"), in file order.
-  std::vector<std::pair<std::string, std::vector<std::string>>> conditions;
-  // The `extrinsic:` and `tables:` sections as written, merged along `extends` (the designs are parsed from them).
-  YAML::Node extrinsic_node, tables_node;
-  // Where each config key it sets was set (dotted key -> "experiment file F" or "... F, block systems.IMP"):
-  // an error about a key names the file and block that gave it.
-  std::map<std::string, std::string> sources;
-  std::map<std::string, std::map<std::string, std::string>> system_sources;  // system -> key -> where
-};
-
-std::vector<std::string> listExperiments(const std::string& config_dir);
-// `name`: an experiment of <config_dir>/experiments, or the path of an
-// experiment file anywhere (it has a '/' or ends in .yaml; its name is the
-// file's stem). `extends:` names an experiment of the config folder, or a
-// path relative to the extending file's folder; the file then starts from
-// the whole of that experiment and changes what it states: maps (the config
-// keys, `systems`, `extrinsic`, `tables`) are merged to any depth, lists
-// replaced; `extrinsic` stating one source of tests (`scenarios` or
-// `generate`) drops the extended design's other; `conditions` are replaced
-// as a whole;
-// `extrinsic: none` and `tables: none` drop the extended experiment's.
-ExperimentFile loadExperiment(const std::string& config_dir, const std::string& name);
-bool isExperimentPath(const std::string& name);
-
-// A YAML file a user names on the command line (`what`: how errors name it, e.g. "--plan"), read only if it
-// is a regular file of at most max_bytes: a FIFO would wait for a writer, a huge file hold the memory.
-YAML::Node loadGivenYaml(const std::string& file, const std::string& what, std::uintmax_t max_bytes = 1u << 20);
-
-struct RunRequest {
-  std::string experiment;
-  System system = System::IMP;
-  std::int64_t seed = 0;
-  std::optional<std::int64_t> steps;
-  std::vector<std::string> settings;       // "key.path=value"
-};
-
-// The merged YAML tree of one run (validated with parseRunConfig before returning).
-YAML::Node effectiveConfig(const std::string& config_dir, const RunRequest& request);
-std::string emitYaml(const YAML::Node& node);
-
-// The effective configuration of one extrinsic test: the experiment's
-// configuration for `request` (system, seed, settings), in the extrinsic phase,
-// with the trained predictors of `checkpoint` and config/scenarios/<scenario>.yaml.
-// run.steps is the planner's budget. Validated before returning.
-YAML::Node extrinsicConfig(const std::string& config_dir, const RunRequest& request, const std::string& checkpoint,
-                           const std::string& scenario);
-
-// The same with a scenario given whole (a generated one), inlined as it is.
-YAML::Node extrinsicConfig(const std::string& config_dir, const RunRequest& request, const std::string& checkpoint,
-                           const Scenario& scenario);
-// A scenario as its file would say it (parseScenario reads it back equal).
-YAML::Node scenarioNode(const Scenario& scenario);
-
-// Overlay `over` onto `base` (maps merged recursively, everything else replaced).
-void mergeInto(YAML::Node base, const YAML::Node& over);
 
 }  // namespace afford

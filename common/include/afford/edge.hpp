@@ -3,9 +3,11 @@
 // subscriber goes through it: the processes (NodeBase), the runner, the
 // viewer, `afford status` and replay. For each datagram, in this order:
 //
-//   0. tag: on a bus with a key (afford/auth.hpp), the last 32 bytes must be
-//      the tag of the rest on this channel, else the message is dropped and
-//      counted; the tag is taken off, and the steps below see the message;
+//   0. tag: on a bus with a key (afford/auth.hpp), the trailer must hold the
+//      tag of the rest on this channel, else the message is dropped and
+//      counted; and its stamp must be fresh (afford/edge_peers.hpp): a message
+//      said again (taken already, or a recording's) is dropped and counted.
+//      The trailer is taken off, and the steps below see the message;
 //   1. fingerprint: the channel's type, else dropped;
 //   2. run: the run id is read (bounded) before anything is decoded, and must
 //      be a safe name (afford/names.hpp); a message of no run this subscriber
@@ -51,6 +53,9 @@
 
 #include "afford/auth.hpp"
 #include "afford/decode.hpp"
+#include "afford/edge_inbound.hpp"
+#include "afford/edge_outbound.hpp"
+#include "afford/edge_peers.hpp"
 #include "afford/names.hpp"
 #include "afford/config.hpp"
 #include "afford/protocol.hpp"
@@ -59,22 +64,6 @@
 #include "afford/wire.hpp"
 
 namespace afford {
-
-// What a handler makes of a message offered to it.
-class Turn {
- public:
-  enum class Kind { Take, Later, Refuse };
-  static Turn take() { return Turn(Kind::Take, {}); }
-  static Turn later() { return Turn(Kind::Later, {}); }
-  static Turn refuse(std::string why) { return Turn(Kind::Refuse, std::move(why)); }
-  Kind kind() const { return kind_; }
-  const std::string& why() const { return why_; }
-
- private:
-  Turn(Kind k, std::string why) : kind_(k), why_(std::move(why)) {}
-  Kind kind_;
-  std::string why_;
-};
 
 // The bytes a message arrived as (for a handler that records them).
 struct Envelope {
@@ -90,14 +79,6 @@ enum class Scope {
   RunOrAny,   // the run joined; every run while none is (observers)
   Any,        // every message (control channels, STATUS)
 };
-// How a subscription orders a channel (types with a serial).
-enum class Order {
-  Serial,   // in serial order, once; missing messages asked for
-  Follow,   // in serial order, once, but a gap is skipped (observers, which ask for nothing)
-  None,     // as they come (types without a serial)
-};
-
-
 // The run id a message starts with, read without decoding it; false if the
 // buffer cannot hold one of at most `max_bytes`.
 bool peekRunId(const void* data, std::size_t size, int max_bytes, std::string& out);
@@ -116,6 +97,7 @@ bool peekRunHeader(const void* data, std::size_t size, RunHeader& out);
 // What an edge dropped, by kind (each also a log line).
 struct EdgeDrops {
   std::int64_t untagged = 0;        // no valid tag on a keyed bus
+  std::int64_t replayed = 0;        // a keyed bus's message said again: taken already, or too old (freshness)
   std::int64_t refused = 0;         // every other message dropped: malformed, forged, another run's, ...
   std::int64_t peers_forgotten = 0; // (process, pid) pairs forgotten beyond protocol.limits.peers
 };
@@ -149,15 +131,12 @@ class Edge {
   void warnOtherRuns(bool on) { warn_other_runs_ = on; }
   // Called when a handler throws or a bound is reached: (channel, reason).
   // The edge has already stopped taking the run's messages.
-  void onFailure(std::function<void(const std::string&, const std::string&)> f) { on_failure_ = std::move(f); }
-  bool failed() const { return failed_; }
+  void onFailure(std::function<void(const std::string&, const std::string&)> f) { inbound_.onFailure(std::move(f)); }
+  bool failed() const { return inbound_.failed(); }
   // Stop taking the run's messages (the owner failed for another reason).
-  void suspend() {
-    failed_ = true;
-    deferred_.clear();
-  }
+  void suspend() { inbound_.suspend(); }
   // Offer the waiting messages again (the owner's state changed, e.g. START).
-  void retry() { retryDeferred(); }
+  void retry() { inbound_.retryDeferred(); }
 
   // ---- receiving ----------------------------------------------------------------
   // `handler` is called as Turn(const Msg&) or Turn(const Msg&, const Envelope&), Msg being the
@@ -165,27 +144,29 @@ class Edge {
   template <class Msg, class F>
   void subscribe(const Channel<Msg>& channel, F handler, Scope scope, Order order);
   // Take a publisher's counts (its STATUS) as claims on the channels it publishes.
-  void claim(const process_status_t& status);
+  void claim(const process_status_t& status) { inbound_.claim(status); }
   // Ask for what is missing, if due (call from the loop too: retries).
-  void askMissing();
-  std::int64_t missing() const { return serials_.missing(); }
+  void askMissing() { inbound_.askMissing(); }
+  std::int64_t missing() const { return inbound_.missing(); }
   // The channels taken in serial order (Order::Serial): those whose gaps are asked for.
-  const std::vector<std::string>& ordered() const { return tracked_; }
-  std::map<std::string, std::pair<std::int64_t, std::int64_t>> missingRanges() const { return serials_.missingRanges(); }
+  const std::vector<std::string>& ordered() const { return inbound_.tracked(); }
+  std::map<std::string, std::pair<std::int64_t, std::int64_t>> missingRanges() const { return inbound_.missingRanges(); }
   // A restarted recorder goes on from where its earlier record ends: `next`
   // is the serial to expect, `last_digest` the digest of the one before it.
-  void expectSerial(const std::string& channel, std::int64_t next, std::int64_t last_digest);
-  std::size_t deferred() const { return deferred_.size(); }
+  void expectSerial(const std::string& channel, std::int64_t next, std::int64_t last_digest) {
+    inbound_.expectSerial(channel, next, last_digest);
+  }
+  std::size_t deferred() const { return inbound_.deferred(); }
   // Last time a message of the run was taken or published.
-  std::chrono::steady_clock::time_point lastActivity() const { return last_activity_; }
+  std::chrono::steady_clock::time_point lastActivity() const { return inbound_.lastActivity(); }
   // How long this process usually waits, after publishing, for the next message it takes (a moving average
   // over the runs so far): the pace of the runs on this machine, which a lost message breaks.
-  std::chrono::steady_clock::duration usualWait() const { return usual_wait_; }
+  std::chrono::steady_clock::duration usualWait() const { return inbound_.usualWait(); }
   // The process announced its counts while it waited: the wait may be a loss's, not the pace (counting it would
   // lengthen the next waits before an announcement, and so the next losses' waits).
-  void waitAnnounced() { awaiting_ = false; }
+  void waitAnnounced() { inbound_.waitAnnounced(); }
   // When the edge next has something to do by itself (a request's retry).
-  std::chrono::steady_clock::time_point nextDue() const { return serials_.nextDue(); }
+  std::chrono::steady_clock::time_point nextDue() const { return inbound_.nextDue(); }
 
   // ---- publishing ------------------------------------------------------------------
   // A run message: the channel's next serial and the digest are set; its bytes
@@ -201,8 +182,8 @@ class Edge {
   // Answer RESEND requests for what this edge published (processes).
   void answerResends();
   // Per channel published in the history's run: how many messages.
-  std::vector<std::pair<std::string, std::int64_t>> counts() const;
-  const std::string& historyRun() const { return history_run_; }
+  std::vector<std::pair<std::string, std::int64_t>> counts() const { return outbound_.counts(); }
+  const std::string& historyRun() const { return outbound_.run(); }
 
  private:
   struct Subscription {
@@ -210,30 +191,7 @@ class Edge {
     lcm::Subscription* sub = nullptr;
     void on(const lcm::ReceiveBuffer* b, const std::string&) { fn(b); }
   };
-  struct Pending {
-    std::string channel;
-    std::int64_t serial = -1;
-    std::int64_t digest = 0;
-    std::function<Turn()> call;
-  };
-  // The digests of a channel's messages taken in order, from serial `first`.
-  struct Chain {
-    std::int64_t first = 0;
-    std::vector<std::int64_t> digests;
-    bool knows(std::int64_t serial) const {
-      return serial >= first && serial < first + static_cast<std::int64_t>(digests.size());
-    }
-  };
-  // Does a message at the channel's expected serial follow the one taken before it?
-  bool follows(const std::string& channel, std::int64_t serial, std::int64_t prev_digest, Order order);
-  void chained(const std::string& channel, std::int64_t serial, std::int64_t digest);
-  struct History {
-    std::int64_t last_digest = 0;
-    std::vector<std::vector<std::uint8_t>> messages;
-    std::vector<std::chrono::steady_clock::time_point> republished;  // last republication of each
-    std::chrono::steady_clock::time_point window{};                  // start of the budget window
-    int in_window = 0;                                                // republished in it
-  };
+  using Pending = EdgeInbound::Pending;
 
   template <class Msg, class F>
   void receive(const std::string& channel, const lcm::ReceiveBuffer* rb, const std::shared_ptr<const F>& handler,
@@ -244,16 +202,11 @@ class Edge {
   bool untag(const std::string& channel, const lcm::ReceiveBuffer* rb, std::size_t& size);
   bool inScope(const std::string& channel, const std::string& run_id, Scope scope);
   void drop(const std::string& channel, const std::string& why);
-  // Offer an accepted serial message (or queue it behind its channel's waiting ones).
-  void dispatch(Pending p);
-  Turn::Kind attempt(Pending& p);
-  void retryDeferred();
-  void refused(const Pending& p, const std::string& why);
-  void fail(const std::string& channel, const std::string& why);
-  bool blocked(const std::string& channel) const;
-  void onResend(const resend_t& r);
+  void fail(const std::string& channel, const std::string& why) { inbound_.fail(channel, why); }
   // Is this STATUS newer (by beat) than the last one taken from its process and pid?
-  bool newerStatus(const process_status_t& st);
+  bool newerStatus(const process_status_t& st) {
+    return peers_.newerStatus(st, protocol_->limits.peers, drops_.peers_forgotten);
+  }
 
   lcm::LCM& lcm_;
   std::shared_ptr<spdlog::logger> log_;
@@ -264,32 +217,14 @@ class Edge {
   std::string run_;
   const RunConfig* config_ = nullptr;
   bool warn_other_runs_ = true;
-  bool failed_ = false;
-  std::function<void(const std::string&, const std::string&)> on_failure_;
-  SerialTracker serials_;
-  std::vector<std::string> tracked_;       // channels taken in serial order (and asked for)
-  std::deque<Pending> deferred_;
-  bool retrying_ = false;
-  std::chrono::steady_clock::time_point last_activity_{};
-  std::chrono::steady_clock::time_point last_published_{};
-  bool awaiting_ = false;  // published since the last message taken
-  std::chrono::steady_clock::duration usual_wait_{};
-  std::map<std::string, Chain> chains_;     // what was taken, by channel
-  // The last message refused on each channel (serial, digest): the same one
-  // refused again, after it was asked for, is the channel's genuine message
-  // that its handler will never take, and the run fails rather than ask forever.
-  std::map<std::string, std::pair<std::int64_t, std::int64_t>> refused_;
-  std::map<std::string, History> history_;  // what this edge published, by channel
-  std::string history_run_;
   bool answering_ = false;
-  struct Beat {
-    std::int64_t beat = -1;
-    std::uint64_t order = 0;  // when it was last updated (for evicting the oldest)
-  };
-  std::map<std::string, Beat> beats_;  // process#pid -> the last STATUS taken (protocol.limits.peers)
-  std::uint64_t beat_order_ = 0;
   std::shared_ptr<const BusKey> key_;
+  const std::uint64_t session_ = BusKey::newSession();  // this edge's, under its tags (a keyed bus)
+  std::uint64_t sent_ = 0;                              // tagged messages sent: the next one's counter
   EdgeDrops drops_;
+  EdgeInbound inbound_;    // the run's messages in order: chains, deferral, refusals, asking (steps 6 and 7)
+  EdgeOutbound outbound_;  // what was published: serials, history, answering RESEND
+  EdgePeers peers_;        // the processes heard (their STATUS beats)
 };
 
 // ---- template definitions ------------------------------------------------------------
@@ -325,7 +260,7 @@ void Edge::subscribe(const Channel<Msg>& typed, F handler, Scope scope, Order or
   };
   s->sub = lcm_.subscribe(channel, &Subscription::on, s.get());
   s->sub->setQueueCapacity(protocol_->queue_capacity);
-  if (order == Order::Serial) tracked_.push_back(channel);
+  if (order == Order::Serial) inbound_.track(channel);
   subs_.push_back(std::move(s));
 }
 
@@ -360,31 +295,10 @@ void Edge::receive(const std::string& channel, const lcm::ReceiveBuffer* rb, con
     return;
   }
   if constexpr (wire::Bounds<Msg>::kSerial) {
-    if (msg->serial == serials_.expected(channel) && !follows(channel, msg->serial, msg->prev_digest, order))
-      return drop(channel, "field prev_digest does not follow the channel's message " + std::to_string(msg->serial - 1) +
-                               " (a copy given another serial, or another run's)");
-    switch (serials_.offer(channel, msg->serial)) {
-      case SerialTracker::Verdict::Repeat:
-        log_->trace("{}: serial {} already had (a repeat)", channel, msg->serial);
-        return;
-      case SerialTracker::Verdict::Gap:
-        if (order == Order::Follow) {  // an observer goes on from here
-          serials_.expect(channel, msg->serial);
-          serials_.offer(channel, msg->serial);
-          break;
-        }
-        log_->debug("{}: serial {} came before serial {}: asking for the missing ones", channel, msg->serial,
-                    serials_.expected(channel));
-        askMissing();
-        return;
-      case SerialTracker::Verdict::Beyond:
-        return drop(channel, "field serial = " + std::to_string(msg->serial) + " is at or beyond the " +
-                                 std::to_string(serials_.finalCount(channel)) +
-                                 " messages its publisher published in the run before it left");
-      case SerialTracker::Verdict::Accept:
-        break;
-    }
-    chained(channel, msg->serial, msg->digest);
+    bool skip = false;
+    if (std::string why = inbound_.order(channel, msg->serial, msg->prev_digest, msg->digest, order, skip); !why.empty())
+      return drop(channel, why);
+    if (skip) return;
     Pending p;
     p.channel = channel;
     p.serial = msg->serial;
@@ -398,8 +312,8 @@ void Edge::receive(const std::string& channel, const lcm::ReceiveBuffer* rb, con
     } else {
       p.call = [handler, msg]() { return (*handler)(*msg); };
     }
-    dispatch(std::move(p));
-    if (order == Order::Serial && serials_.missing() > 0) askMissing();
+    inbound_.dispatch(std::move(p));
+    if (order == Order::Serial && inbound_.missing() > 0) inbound_.askMissing();
   }
 }
 
@@ -407,16 +321,12 @@ template <class Msg>
 void Edge::publish(const Channel<Msg>& typed, Msg& msg) {
   static_assert(wire::Bounds<Msg>::kSerial, "a message without a serial is sent, not published");
   const std::string channel = typed.name;
-  History& h = history_[channel];
-  msg.serial = static_cast<std::int64_t>(h.messages.size());
-  msg.prev_digest = h.messages.empty() ? chainSeed(history_run_, channel) : h.last_digest;
+  msg.serial = outbound_.nextSerial(channel);
+  msg.prev_digest = outbound_.lastDigest(channel);
   std::vector<std::uint8_t> bytes = sealed(msg);
   transmit(channel, bytes);
-  h.last_digest = msg.digest;
-  h.messages.push_back(std::move(bytes));
-  h.republished.emplace_back();
-  last_activity_ = last_published_ = std::chrono::steady_clock::now();
-  awaiting_ = true;
+  outbound_.kept(channel, msg.digest, std::move(bytes));
+  inbound_.published();
 }
 
 }  // namespace afford

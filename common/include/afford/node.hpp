@@ -18,6 +18,7 @@
 #include <chrono>
 #include <functional>
 #include <memory>
+#include <optional>
 #include <stdexcept>
 #include <string>
 #include <vector>
@@ -149,6 +150,42 @@ class Input {
   int phase_ = -1;       // the phase of what is being added (-1: both)
 };
 
+// Two inputs that make one thing together, whichever comes first (the
+// planner's object: the FOCUS that shows it and the PREDICTION of its
+// affordances). Each input's handler gives its part (first(), second()); once
+// both are held, the join's handler gets them, once. The node says when a new
+// pair begins (clear(); NodeBase clears every join at each RUN_CONFIG), and its
+// inputs' clauses may ask what is held (a second part of one pair is refused or
+// waits by the input's own clauses).
+template <class A, class B>
+class Both {
+ public:
+  using Handler = std::function<void(const A&, const B&)>;
+  explicit Both(Handler handler) : handler_(std::move(handler)) {}
+  void first(const A& a) {
+    a_ = a;
+    fire();
+  }
+  void second(const B& b) {
+    b_ = b;
+    fire();
+  }
+  bool hasFirst() const { return a_.has_value(); }
+  bool hasSecond() const { return b_.has_value(); }
+  void clear() {
+    a_.reset();
+    b_.reset();
+  }
+
+ private:
+  void fire() {
+    if (a_ && b_) handler_(*a_, *b_);
+  }
+  Handler handler_;
+  std::optional<A> a_;
+  std::optional<B> b_;
+};
+
 class NodeBase {
  public:
   // `protocol`: what the process uses between runs (the config folder's defaults).
@@ -197,6 +234,14 @@ class NodeBase {
         },
         Scope::Run, Order::Serial);
     return *input;
+  }
+  // A join of two of the node's inputs (see Both, a member of the node),
+  // stated in words beside the inputs' rules (`afford processes --rules`) as
+  // the two channels joined.
+  template <class A, class B>
+  void joins(Both<A, B>& join, const Channel<A>& first, const Channel<B>& second, std::string rule) {
+    rules_.push_back({std::string(first.name) + " + " + second.name, std::move(rule)});
+    joins_.push_back([&join] { join.clear(); });
   }
   // Called after every message an input took: where what follows from the
   // node's inputs together happens (the eye starts a step there).
@@ -258,51 +303,7 @@ class NodeBase {
   bool stop_pending_ = false;
   Clock::time_point stop_deadline_{};
   std::vector<InputRule> rules_;
+  std::vector<std::function<void()>> joins_;  // clearing each join (at each RUN_CONFIG)
 };
-
-// The main() of every process: flags (--lcm-url, --log-level, --config-dir,
-// --bus-key, plus extras), the node, the loop on handleTimeout until
-// SIGINT/SIGTERM, orderly shutdown.
-struct ProcessSpec {
-  std::string name;         // "eye"
-  std::string description;  // one line for --help
-};
-class CLIHook;
-int processMain(int argc, char** argv, const ProcessSpec& spec, const std::function<void(CLIHook&)>& add_options,
-                const std::function<std::unique_ptr<NodeBase>(lcm::LCM&, std::shared_ptr<spdlog::logger>,
-                                                              const ProtocolConfig&)>& make_node);
-
-// Lets a process add its own flags to the shared command line.
-class CLIHook {
- public:
-  explicit CLIHook(void* app) : app_(app) {}
-  void option(const std::string& name, std::string& target, const std::string& help);
-
- private:
-  void* app_;
-};
-
-// The folder of afford's shared files beside the running executable, as
-// `cmake --install` lays them out (<prefix>/bin/afford, <prefix>/share/afford:
-// config/, docs/, java/, scripts/), or "" when the executable runs from a
-// build tree.
-std::string installedShareDir();
-// The folder of defaults.yaml (--config-dir's default): an installed copy's
-// share/afford/config, else the source tree's config/.
-std::string defaultConfigDir();
-
-// Where runs' folders go when a process is not told (the logger's --log-dir, the predictors'
-// --checkpoint-dir): $AFFORD_LOGS if set (as scripts/procs.sh sets it), else "logs".
-std::string defaultLogRoot();
-
-// Large transient buffers (LCM's reassembly of fragmented messages) go back to
-// the kernel when freed, so a flood of them does not stay resident.
-void boundHeapGrowth();
-
-// Set by SIGINT/SIGTERM.
-bool stopRequested();
-void installStopHandlers();
-// Forget a stop request (a host that goes on after an interrupted run: the Python package).
-void clearStopRequest();
 
 }  // namespace afford

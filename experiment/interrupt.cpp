@@ -1,0 +1,121 @@
+// SIGINT and SIGTERM during an experiment (experiment/pipeline.hpp): the first
+// stops the runs under way in order, what finished is written and the
+// command that resumes is said; a second quits at once.
+#include <unistd.h>
+
+#include <csignal>
+
+#include "afford/process_main.hpp"
+#include <nlohmann/json.hpp>
+
+#include <filesystem>
+
+#include "experiment/pipeline.hpp"
+
+namespace afford {
+namespace fs = std::filesystem;
+using nlohmann::json;
+
+namespace {
+
+volatile std::sig_atomic_t g_signal = 0;  // the first SIGINT or SIGTERM received (0: none)
+void (*g_stop_handler)(int) = nullptr;     // common's handler: it sets stopRequested()
+std::string g_quit_message;                // said on a second signal (set before the handlers, then never changed)
+
+void onInterrupt(int sig) {
+  if (g_signal != 0) {  // a second one: quit now; every file written so far is whole (written aside, then renamed)
+    (void)!write(STDERR_FILENO, g_quit_message.data(), g_quit_message.size());
+    _exit(128 + sig);
+  }
+  g_signal = sig;
+  static const char msg[] =
+      "\nafford: stopping the runs under way, then writing what finished (a second signal quits at once)\n";
+  (void)!write(STDERR_FILENO, msg, sizeof msg - 1);
+  if (g_stop_handler) g_stop_handler(sig);
+}
+
+}  // namespace
+
+void installInterruptHandlers(const std::string& resume) {
+  g_quit_message = "\nafford: a second signal: quitting at once; what finished is kept. To resume: " + resume + "\n";
+  installStopHandlers();
+  struct sigaction common {};
+  sigaction(SIGINT, nullptr, &common);
+  g_stop_handler = common.sa_handler;
+  struct sigaction sa {};
+  sa.sa_handler = onInterrupt;
+  sigemptyset(&sa.sa_mask);
+  sigaddset(&sa.sa_mask, SIGINT);
+  sigaddset(&sa.sa_mask, SIGTERM);
+  sigaction(SIGINT, &sa, nullptr);
+  sigaction(SIGTERM, &sa, nullptr);
+}
+
+InterruptScope::InterruptScope() {
+  sigaction(SIGINT, nullptr, &int_);
+  sigaction(SIGTERM, nullptr, &term_);
+}
+
+InterruptScope::~InterruptScope() {
+  sigaction(SIGINT, &int_, nullptr);
+  sigaction(SIGTERM, &term_, nullptr);
+  g_signal = 0;
+  clearStopRequest();
+}
+
+int InterruptScope::signal() const { return g_signal; }
+
+int stopSignal() { return g_signal; }
+
+namespace {
+std::string signalName(int sig) { return sig == SIGINT ? "SIGINT" : sig == SIGTERM ? "SIGTERM" : std::to_string(sig); }
+
+}  // namespace
+
+// After a SIGINT or SIGTERM, once the runs under way have stopped: the summary
+// of what finished, where the others stopped, and the command that goes on.
+// `phase` is "intrinsic" or "extrinsic".
+Interruption interruption(const std::string& phase_name, const std::vector<PlannedRun>& runs, const PhaseRuns& phase,
+                          bool extrinsic_to_come, const ExperimentRequest& o) {
+  Interruption in;
+  in.signal = signalName(g_signal);
+  in.phase = phase_name;
+  in.finished = static_cast<std::int64_t>(phase.finishedCount());
+  in.planned = static_cast<std::int64_t>(runs.size());
+  for (std::size_t i = 0; i < runs.size(); ++i) {
+    if (phase.finished[i]) continue;
+    const std::string& id = runs[i].spec.run_id;
+    const fs::path dir = fs::path(o.plan.log_root) / id;
+    if (auto c = phase.cut.find(i); c != phase.cut.end())
+      in.cut.push_back({id, c->second, fs::exists(dir) ? Nullable<std::string>(dir.string()) : Nullable<std::string>()});
+    else
+      in.not_started.push_back(id);
+  }
+  in.extrinsic_tests_to_come = extrinsic_to_come;
+  in.resume = resumeCommand(o);
+  in.resume_in = fs::current_path().string();
+  return in;
+}
+
+// Once `in` is in summary.json: the experiment's state says so, and the log what is kept and what comes.
+int stopHere(const Interruption& in, const ExperimentRequest& o, ExperimentState& state, spdlog::logger& log) {
+  const std::string &signal = in.signal, &phase_name = in.phase, &cwd = in.resume_in, &command = in.resume;
+  state.state = "interrupted";
+  state.interruptions.push_back({signal, phase_name, in.cut});
+  writeState(o.write.out_dir, state);
+
+  const std::string what = phase_name == "intrinsic" ? "intrinsic run(s)" : "extrinsic test(s)";
+  log.warn("interrupted by {} during the {} phase", signal, phase_name);
+  log.info("kept: {} of {} {} finished{}, in {} and the CSV files beside it", in.finished, in.planned, what,
+           phase_name == "extrinsic" ? " (and every intrinsic run)" : "",
+           (fs::path(o.write.out_dir) / "summary.json").string());
+  for (const CutRun& c : in.cut)
+    log.info("cut: {} ({}){}", c.run_id, c.where, c.log_dir ? "; its log, incomplete, stays in " + *c.log_dir : "");
+  if (!in.not_started.empty()) log.info("not started: {} {}", in.not_started.size(), what);
+  if (in.extrinsic_tests_to_come) log.info("not started: the extrinsic tests");
+  log.warn("to resume (in {}): {}", cwd, command);
+  return 128 + g_signal;
+}
+
+
+}  // namespace afford

@@ -1,0 +1,51 @@
+#include "experiment/stored/state_file.hpp"
+
+#include <algorithm>
+
+#include "afford/checksum.hpp"
+#include "afford/config.hpp"
+#include "experiment/run/outcome.hpp"
+#include "experiment/schema/codec.hpp"
+
+namespace afford {
+namespace fs = std::filesystem;
+
+fs::path statePath(const fs::path& out) { return out / "experiment.json"; }
+
+ExperimentState readState(const fs::path& out) {
+  const fs::path file = statePath(out);
+  try {
+    return fromJsonOf<ExperimentState>(readJsonFile(file, kMostStateBytes), file.string());
+  } catch (const std::exception& e) {
+    throw ConfigError("cannot read " + file.string() + ": " + e.what());
+  }
+}
+
+void writeState(const fs::path& out, const ExperimentState& state) {
+  writeWhole(statePath(out), toJsonOf(state).dump(2) + "\n");
+}
+
+std::vector<RunFingerprint> fingerprint(const std::vector<PlannedRun>& runs) {
+  std::vector<RunFingerprint> f;
+  for (const auto& p : runs) {
+    Fnv1a h;
+    h.add(p.spec.config_yaml.data(), p.spec.config_yaml.size());
+    f.push_back({p.spec.run_id, h.hex()});
+  }
+  return f;
+}
+
+void refuseOtherPlan(const std::vector<RunFingerprint>& stored, const std::vector<RunFingerprint>& now,
+                     const std::string& what) {
+  for (std::size_t i = 0; i < std::max(stored.size(), now.size()); ++i) {
+    if (i < stored.size() && i < now.size() && stored[i] == now[i]) continue;
+    const std::string id = (i < stored.size() ? stored[i] : now[i]).run_id;
+    throw ConfigError("--resume: the " + what + " differ from those stored: run '" + id +
+                      (i < stored.size() && i < now.size() && stored[i].run_id == now[i].run_id
+                           ? "' now has another configuration (did the config folder change since?)"
+                           : "' is not in both") +
+                      "; start a new experiment with another --out instead");
+  }
+}
+
+}  // namespace afford

@@ -1,0 +1,83 @@
+// DIR/experiment.json: what an experiment keeps of itself so that an
+// interrupted one can be resumed and a finished one read (its request, the
+// fingerprint of its plan, how it stopped), every key declared once and
+// read strictly (experiment/schema/codec.hpp). The runs' outcomes beside it
+// are run/outcome.hpp's.
+#pragma once
+#include <cstdint>
+#include <filesystem>
+#include <optional>
+#include <string>
+#include <vector>
+
+#include "experiment/execute/execute.hpp"
+#include "experiment/plan/plan.hpp"
+#include "experiment/schema/summary.hpp"
+#include "experiment/stored/request.hpp"
+
+namespace afford {
+
+std::filesystem::path statePath(const std::filesystem::path& out);
+
+// A planned run as the experiment keeps it: its id and the FNV-1a of its configuration. A resumed
+// experiment must plan the very same runs.
+struct RunFingerprint {
+  std::string run_id, config;
+  bool operator==(const RunFingerprint& o) const { return run_id == o.run_id && config == o.config; }
+  template <class V>
+  void visit(V& v) {
+    v("run_id", run_id);
+    v("config", config);
+  }
+};
+// Where a stop signal cut the experiment.
+struct StoppedAt {
+  std::string signal, phase;
+  std::vector<CutRun> cut;
+  template <class V>
+  void visit(V& v) {
+    v("signal", signal);
+    v("phase", phase);
+    v("cut", cut);
+  }
+};
+
+// DIR/experiment.json: every key declared once (visit), read strictly.
+struct ExperimentState {
+  std::string experiment;                   // its name
+  std::string cwd;                          // where it was started (relative paths are from there)
+  ExperimentRequest options;                // as it runs (experiment/request.hpp)
+  std::vector<RunFingerprint> runs;         // the intrinsic runs planned
+  std::optional<std::vector<RunFingerprint>> tests;  // the extrinsic tests, once planned
+  std::vector<StoppedAt> interruptions;
+  std::vector<MovedAside> moved_aside;
+  std::optional<std::vector<std::string>> merged_from;  // afford merge: the shards' folders
+  std::string state = "running";            // running, interrupted or finished
+  std::string resume;                       // the command that continues it
+  template <class V>
+  void visit(V& v) {
+    v("experiment", experiment);
+    v("cwd", cwd);
+    v("options", options);
+    v("runs", runs);
+    v("tests", tests);
+    v("interruptions", interruptions);
+    v("moved_aside", moved_aside);
+    v("merged_from", merged_from);
+    v("state", state);
+    v("resume", resume);
+  }
+};
+inline constexpr std::uintmax_t kMostStateBytes = 64u << 20;  // an experiment.json (its plan's fingerprint)
+
+// DIR/experiment.json, read only if it is a regular file of a sane size, strictly; ConfigError naming it.
+ExperimentState readState(const std::filesystem::path& out);
+// ... written whole (aside, then renamed).
+void writeState(const std::filesystem::path& out, const ExperimentState& state);
+
+// The fingerprints of the runs planned; refused when they are not those stored (naming the first that differs).
+std::vector<RunFingerprint> fingerprint(const std::vector<PlannedRun>& runs);
+void refuseOtherPlan(const std::vector<RunFingerprint>& stored, const std::vector<RunFingerprint>& now,
+                     const std::string& what);
+
+}  // namespace afford
