@@ -23,6 +23,11 @@
 #   bench/run.sh full [--runs N] [--steps S] [--jobs J] [--reps R] [--transports udpm,memq] [--floor F] [--out DIR]
 #     a full machine: N runs at --jobs = cores over each transport, steps per second in all and per run, the
 #     ratio udpm / memq (floor 0.8; exit 1 below it), and wake-ups per step of each kind of process.
+#   bench/run.sh long [--lengths 10000,100000,1000000] [--seed S] [--kill PROCESS] [--kill-at STEP] [--no-replay]
+#                     [--out DIR]
+#     runs of any length: steps per second and every process's peak memory at each length, the log's size
+#     beside what `afford experiment` said, the log replayed; with --kill, the longest run again with a process
+#     killed past --kill-at and restarted: its catch-up time and weights. PASS/FAIL against the floors (exit 1).
 #   bench/run.sh reproduction [--reps R] [--ext-reps K] [--jobs J] [--transport memq|udpm] [--out DIR] [WHAT ...]
 #     the whole reproduction (scripts/reproduce.sh WHAT, default all, its report in DIR): wall time beside its
 #     critical path and the share of the time the cores were busy.
@@ -32,6 +37,7 @@ cd "$(dirname "$0")/.."
 [[ ${1:-} == python ]] && { shift; [[ -x build/bin/afford ]] || scripts/setup.sh;
   PYTHONPATH=build/python exec /usr/bin/python3 bench/python_bench.py "$@"; }
 [[ ${1:-} == reproduction ]] && { shift; exec /usr/bin/python3 bench/reproduction.py "$@"; }
+[[ ${1:-} == long ]] && { shift; [[ -x build/bin/afford ]] || scripts/setup.sh; exec /usr/bin/python3 bench/long_run.py "$@"; }
 [[ ${1:-} == full ]] && { shift; [[ -x build/bin/afford ]] || scripts/setup.sh;
   exec /usr/bin/python3 bench/full_machine.py "$@"; }
 [[ -x build/bin/afford-bench ]] || scripts/setup.sh

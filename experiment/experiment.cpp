@@ -1,4 +1,5 @@
 #include "experiment/experiment.hpp"
+
 #include "experiment/pipeline.hpp"
 
 #include <nlohmann/json.hpp>
@@ -22,6 +23,7 @@
 #include "afford/processes.hpp"
 #include "experiment/execute/agents.hpp"
 #include "experiment/execute/execute.hpp"
+#include "experiment/plan/disk.hpp"
 #include "experiment/plan/plan.hpp"
 #include "experiment/plan/sweep.hpp"
 #include "experiment/present/present.hpp"
@@ -180,6 +182,23 @@ void openFolder(Experiment& x) {
   x.saveState();
 }
 
+// What the runs will write, before they run (a million steps keep a log of gigabytes).
+void sayDisk(const Experiment& x, spdlog::logger& log) {
+  std::vector<PlannedRun> mine;
+  const std::vector<char> elsewhere = shardMask(x.o.host, x.runs.size());
+  for (std::size_t i = 0; i < x.runs.size(); ++i)
+    if (i >= elsewhere.size() || !elsewhere[i]) mine.push_back(x.runs[i]);
+  const DiskNeed need = diskNeed(mine, x.o.host.jobs);
+  log.info("{}", diskLine(need));
+  std::error_code ec;
+  fs::path where = x.o.plan.log_root;
+  while (!where.empty() && !fs::exists(where, ec)) where = where.parent_path();
+  const fs::space_info space = fs::space(where.empty() ? fs::path(".") : where, ec);
+  if (!ec)
+    if (const std::string warning = diskWarning(need, space.available, x.o.plan.log_root); !warning.empty())
+      log.warn("{}", warning);
+}
+
 void sayWhatRuns(const Experiment& x, spdlog::logger& log) {
   const ExperimentRequest& o = x.o;
   if (o.host.shard_count) {
@@ -193,6 +212,7 @@ void sayWhatRuns(const Experiment& x, spdlog::logger& log) {
   log.info("experiment {} ({}{}): {} run(s) of {} steps, {} at a time, over {} ({})", x.plan().exp.name, systems,
            x.parts.size() > 1 ? "; " + std::to_string(x.parts.size()) + " sweep conditions" : std::string(),
            x.runs.size(), x.runs.front().spec.steps, o.host.jobs, o.host.transport, x.hosting.network);
+  sayDisk(x, log);
 }
 
 // One phase: the outcomes kept already (resume; a merge's gathered ones), and the others executed.

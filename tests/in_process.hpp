@@ -29,7 +29,7 @@ inline std::string checkpointRoot() { return std::filesystem::temp_directory_pat
 // A node of the named process on `lcm`, as the executables run it (threads of its own).
 inline std::unique_ptr<NodeBase> makeNode(const std::string& p, lcm::LCM& lcm, std::shared_ptr<spdlog::logger> log,
                                           const ProtocolConfig& protocol) {
-  return afford::makeNode(p, lcm, std::move(log), protocol, HostOptions{/*single_thread=*/false, checkpointRoot()});
+  return afford::makeNode(p, lcm, std::move(log), protocol, HostOptions{/*single_thread=*/false, checkpointRoot(), nullptr, ""});
 }
 
 // Publishes something malformed into a running run: (lcm, run id, current
@@ -42,6 +42,7 @@ using Injector = std::function<void(lcm::LCM&, const std::string&, std::int64_t,
 struct Restart {
   std::string process;  // empty: none
   std::int64_t at = 0;
+  std::string snapshots;  // the nodes' snapshot folder (HostOptions::snapshot_root); "": none
 };
 
 struct InProcessRun {
@@ -50,6 +51,7 @@ struct InProcessRun {
   RunOutcome outcome;
   bool restarted = false;
   std::int64_t restarted_at = -1;  // the last step the killed node had handled
+  std::int64_t restored_step = -1; // the step of the snapshot the restarted node went on from (-1: none)
 
   InProcessRun(const std::string& yaml, System system, std::int64_t seed, std::int64_t steps, const Injector& inject = {},
                std::int64_t inject_at = 50, bool leave_stale_run = false, const Restart& restart = {}) {
@@ -63,7 +65,8 @@ struct InProcessRun {
     };
     const ProtocolConfig protocol = shippedProtocol();
     // Both deciders: the run's configuration says which one decides.
-    InProcessHost host(lcm, protocol, logger, HostOptions{/*single_thread=*/false, checkpointRoot()});
+    InProcessHost host(lcm, protocol, logger,
+                       HostOptions{/*single_thread=*/false, checkpointRoot(), nullptr, restart.snapshots});
     host.start(runProcesses(/*extrinsic=*/false, /*recorded=*/false));
     host.start("planner");
     RunDriver driver(lcm, logger("runner"), protocol);
@@ -125,6 +128,7 @@ struct InProcessRun {
       for (int i = 0; i < 50; ++i) pump();
     }
     outcome = driver.run(spec, pump, [] { return std::string(); });
+    if (restarted) restored_step = host.node(restart.process).restoredStep();
     // The STOP the runner sent, and what the processes publish on it, into `events`.
     for (int i = 0; i < 500 && host.inRun(); ++i) pump();
   }

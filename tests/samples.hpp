@@ -248,7 +248,11 @@ inline process_status_t sample(const process_status_t*) {
   m.counts_run = kSampleRunId;
   m.channels = {ch::scene.name, ch::focus.name, ch::prediction.name};
   m.counts = {12, 43, 43};
+  m.held_from = {0, 0, 0};
   m.n_channels = static_cast<int32_t>(m.channels.size());
+  m.takes = {ch::decision.name, ch::effect.name};
+  m.takes_from = {40, 12};
+  m.n_takes = static_cast<int32_t>(m.takes.size());
   m.digest = 0x1234;
   return m;
 }

@@ -105,7 +105,9 @@ wire::process_status_t_bounds boundsOf(const BoundsContext& c, const process_sta
           /*detail*/ textBytes(c),
           /*counts_run*/ nameBytes(c),
           /*n_channels*/ channels(),
-          /*channels*/ nameBytes(c)};
+          /*channels*/ nameBytes(c),
+          /*n_takes*/ channels(),
+          /*takes*/ nameBytes(c)};
 }
 
 wire::resend_t_bounds boundsOf(const BoundsContext& c, const resend_t*) {

@@ -291,8 +291,14 @@ std::string checkMessage(const process_status_t& m, const BoundsContext&) {
                         checkInt("state", m.state, process_status_t::WAITING, process_status_t::FAILED)});
       !why.empty())
     return why;
-  for (int i = 0; i < m.n_channels; ++i)
+  for (int i = 0; i < m.n_channels; ++i) {
     if (m.counts[i] < 0) return "field counts[" + std::to_string(i) + "] is negative";
+    if (m.held_from[i] < 0 || m.held_from[i] > m.counts[i])
+      return "field held_from[" + std::to_string(i) + "] = " + std::to_string(m.held_from[i]) + " is outside [0, counts[" +
+             std::to_string(i) + "]]";
+  }
+  for (int i = 0; i < m.n_takes; ++i)
+    if (m.takes_from[i] < 0) return "field takes_from[" + std::to_string(i) + "] is negative";
   return "";
 }
 

@@ -77,6 +77,22 @@ void declareProtocol(V& v, ProtocolConfig& c) {
               "distinct `RUN_CONFIG` and `RUN_CONTROL` messages the logger records in one run (a run has 3); the "
               "manifest counts the rest");
   });
+  v.given("recovery", [&] {  // the runs of older logs held everything and snapshotted nothing
+    v.section("recovery", [&] {
+      RecoveryConfig& r = c.recovery;
+      v.integer("snapshot_steps", r.snapshot_steps, 0, 1'000'000'000,
+                "each process saves its state in the run (a snapshot) every this many steps, and its peers let go "
+                "of what they published before every reader's latest snapshot (0: never: a restart replays the run)");
+      v.integer("history_keep", r.history_keep, 1, 1'000'000,
+                "messages of each channel a publisher holds whatever its readers' snapshots say (for receivers that "
+                "take no snapshot: the runner, observers)");
+      v.integer("history_mb", r.history_mb, 1, 1'048'576,
+                "what a process holds of what it published, at most, in MiB; beyond it the oldest is let go even if "
+                "a reader's restart would need it (that restart then fails, naming the channel)");
+      v.integer("snapshot_mb", r.snapshot_mb, 1, 1'048'576,
+                "the largest snapshot a restarted process reads back, in MiB (a larger file is refused)");
+    });
+  });
   v.section("bus", [&] {
     BusConfig& b = c.bus;
     v.integer("max_message_bytes", b.max_message_bytes, 65'536, 1 << 30,

@@ -1,6 +1,7 @@
 #include "afford/edge.hpp"
 
 #include <algorithm>
+#include <limits>
 
 #include "afford/protocol.hpp"
 #include "afford/processes.hpp"
@@ -56,7 +57,11 @@ void Edge::join(const std::string& run_id, const RunConfig* config) {
   config_ = config;
   protocol_ = config ? &config->protocol : &own_protocol_;
   inbound_.join(run_id, config, *protocol_);
-  outbound_.join(run_id);
+  std::vector<std::string> readers;
+  if (config)
+    for (const std::string& p : runProcesses(config->phase == Phase::Extrinsic, config->record))
+      if (p != owner_) readers.push_back(p);
+  outbound_.join(run_id, protocol_->recovery, std::move(readers));
   for (const auto& s : subs_) s->sub->setQueueCapacity(protocol_->queue_capacity);
 }
 
@@ -138,6 +143,39 @@ void Edge::answerResends() {
     outbound_.answer(r, *protocol_);
     return Turn::take();
   }, Scope::Any, Order::None);
+}
+
+}  // namespace afford
+
+namespace afford {
+
+void Edge::save(SnapshotWriter& w) const {
+  w.section("taken");
+  const std::vector<EdgeInbound::Position> at = inbound_.positions();
+  w.i64(static_cast<std::int64_t>(at.size()));
+  for (const EdgeInbound::Position& p : at) {
+    w.str(p.channel);
+    w.i64(p.next);
+    w.i64(p.last_digest);
+  }
+  outbound_.save(w);
+}
+
+void Edge::load(SnapshotReader& r) {
+  r.section("taken");
+  const std::int64_t n = r.within("channels taken", 0, static_cast<std::int64_t>(kChannelCount));
+  std::vector<EdgeInbound::Position> at;
+  for (std::int64_t i = 0; i < n; ++i) {
+    EdgeInbound::Position p;
+    p.channel = r.str("channel taken", static_cast<std::size_t>(protocol_->limits.name_bytes));
+    if (std::find(inbound_.tracked().begin(), inbound_.tracked().end(), p.channel) == inbound_.tracked().end())
+      r.refuse("channel taken", "'" + printable(p.channel, 60) + "' is not a channel this process takes");
+    p.next = r.within("next serial", 0, std::numeric_limits<std::int64_t>::max() / 2);
+    p.last_digest = r.i64("digest before it");
+    at.push_back(p);
+  }
+  outbound_.load(r, static_cast<std::size_t>(protocol_->bus.max_message_bytes));
+  inbound_.restore(at);
 }
 
 }  // namespace afford

@@ -24,6 +24,7 @@ void EdgeInbound::join(const std::string& run_id, const RunConfig* config, const
   failed_ = false;
   chains_.clear();
   refused_.clear();
+  handled_.clear();
   last_activity_ = Clock::now();
 }
 
@@ -35,6 +36,7 @@ void EdgeInbound::leave(const ProtocolConfig& protocol) {
   serials_.reset();
   chains_.clear();
   refused_.clear();
+  handled_.clear();
   failed_ = false;
 }
 
@@ -91,6 +93,7 @@ Turn::Kind EdgeInbound::attempt(Pending& p) {
     return Turn::Kind::Refuse;
   }
   if (t.kind() == Turn::Kind::Take) {
+    if (p.serial >= 0) handled(p);
     last_activity_ = Clock::now();
     if (answered) {
       usual_wait_ += (came - published - usual_wait_) / 8;
@@ -106,6 +109,34 @@ void EdgeInbound::expectSerial(const std::string& channel, std::int64_t next, st
   Chain& c = chains_[channel];
   c.first = next - 1;
   c.digests.assign(1, last_digest);
+  handled_[channel] = {next, last_digest};
+}
+
+void EdgeInbound::handled(const Pending& p) {
+  handled_[p.channel] = {p.serial + 1, p.digest};
+  // The chain is needed from the digest before the next message to handle on (a message accepted after it
+  // may still be refused, and its serial expected again): what came before goes.
+  Chain& c = chains_[p.channel];
+  if (!c.knows(p.serial) || p.serial == c.first) return;
+  c.digests.erase(c.digests.begin(), c.digests.begin() + static_cast<std::ptrdiff_t>(p.serial - c.first));
+  c.first = p.serial;
+}
+
+std::vector<EdgeInbound::Position> EdgeInbound::positions() const {
+  std::vector<Position> out;
+  for (const std::string& ch : tracked_) {
+    const auto it = handled_.find(ch);
+    if (it == handled_.end())
+      out.push_back({ch, 0, chainSeed(run_, ch)});
+    else
+      out.push_back({ch, it->second.first, it->second.second});
+  }
+  return out;
+}
+
+void EdgeInbound::restore(const std::vector<Position>& at) {
+  for (const Position& p : at)
+    if (p.next > 0) expectSerial(p.channel, p.next, p.last_digest);
 }
 
 bool EdgeInbound::follows(const std::string& channel, std::int64_t serial, std::int64_t prev_digest, Order order) {
@@ -218,6 +249,13 @@ void EdgeInbound::claim(const process_status_t& st) {
     if (publisherOf(ch, extrinsic) != st.process) continue;  // only a channel's publisher speaks for it
     serials_.claim(ch, st.counts[i], /*final=*/st.run_id != st.counts_run);  // it has left the run
     any = true;
+    const std::int64_t expected = serials_.expected(ch);
+    if (i < static_cast<int>(st.held_from.size()) && st.held_from[i] > expected && st.held_from[i] <= st.counts[i])
+      return fail(ch, "serials " + std::to_string(expected) + ".." + std::to_string(st.held_from[i] - 1) +
+                          " are no longer held by its publisher (" + st.process + " holds it from serial " +
+                          std::to_string(st.held_from[i]) +
+                          "): it let them go once every reader had a later snapshot, so this process cannot catch "
+                          "up without its own latest snapshot (docs/operating.md, \"Killing and restarting a process\")");
   }
   if (any) askMissing();
 }

@@ -30,6 +30,7 @@ NodeBase::NodeBase(lcm::LCM& lcm, std::string process, std::shared_ptr<spdlog::l
   edge_.subscribe(ch::status, [this](const process_status_t& m) { return onStatus(m); }, Scope::Any, Order::None);
   edge_.answerResends();
   edge_.onFailure([this](const std::string& channel, const std::string& why) { failRun(channel + ": " + why); });
+  edge_.onQuiet([this] { maybeSnapshot(); });  // between two messages: the place for a snapshot
 }
 
 Turn NodeBase::onRunConfig(const run_config_t& msg, const Envelope& envelope) {
@@ -60,6 +61,7 @@ Turn NodeBase::onRunConfig(const run_config_t& msg, const Envelope& envelope) {
     edge_.join(run_id_, &config_);
     for (const auto& clear : joins_) clear();
     onConfigured(config_);
+    restoreSnapshot();
     onControl(envelope);
   } catch (const std::exception& e) {
     edge_.leave();
@@ -77,6 +79,7 @@ Turn NodeBase::onRunConfig(const run_config_t& msg, const Envelope& envelope) {
     st.config_digest = msg.digest;  // the configuration refused
     st.detail = detail_.substr(0, static_cast<std::size_t>(protocol().limits.text_bytes));
     st.n_channels = 0;  // nothing published in that run
+    st.n_takes = 0;
     edge_.send(ch::status, st);
     return Turn::take();
   }
@@ -95,9 +98,10 @@ Turn NodeBase::onRunControl(const run_control_t& msg, const Envelope& envelope) 
   if (msg.command == run_control_t::START) {
     if (state_ != process_status_t::READY) return Turn::take();  // already started: idempotent
     setState(process_status_t::RUNNING);
-    onStart();
+    if (restored_step_ < 0) onStart();  // a process gone on from a snapshot had started before it
     edge_.retry();  // messages that came before START
   } else {
+    stop_received_ = true;  // the run is over: its snapshot goes with it
     if (readyToLeave()) {
       leaveRun();
       return Turn::take();
@@ -115,13 +119,17 @@ Turn NodeBase::onStatus(const process_status_t& st) {
   // A process that has just (re)joined our run catches up from what we say we published.
   const bool joined = !run_id_.empty() && st.run_id == run_id_ && st.step == -1 &&
                       (st.state == process_status_t::READY || st.state == process_status_t::RUNNING);
-  if (joined && !edge_.counts().empty() && Clock::now() - announced_at_ >= milliseconds(protocol().idle_announce_ms))
+  if (joined && edge_.publishedAny() && Clock::now() - announced_at_ >= milliseconds(protocol().idle_announce_ms))
     publishStatus();
   return Turn::take();
 }
 
 void NodeBase::leaveRun() {
   if (state_ == process_status_t::WAITING) return;
+  // Leaving without the run's STOP (SIGINT, SIGTERM): a snapshot of where it stands, to go on from it.
+  if (!stop_received_ && state_ == process_status_t::RUNNING) maybeSnapshot(/*now=*/true);
+  if (stop_received_) removeSnapshot();
+  stop_received_ = false;
   try {
     onStop();
   } catch (const std::exception& e) {
@@ -161,11 +169,14 @@ void NodeBase::publishStatus() {
   st.config_digest = run_id_.empty() ? 0 : run_msg_.digest;
   st.detail = detail_.substr(0, static_cast<std::size_t>(protocol().limits.text_bytes));
   st.counts_run = edge_.historyRun();
-  for (const auto& [channel, n] : edge_.counts()) {
-    st.channels.push_back(channel);
-    st.counts.push_back(n);
+  for (const EdgeOutbound::Count& c : edge_.counts()) {
+    st.channels.push_back(c.channel);
+    st.counts.push_back(c.published);
+    st.held_from.push_back(c.held_from);
   }
   st.n_channels = static_cast<int32_t>(st.channels.size());
+  st.n_takes = 0;
+  if (!run_id_.empty()) restartPositions(st);
   edge_.send(ch::status, st);
   const auto now = Clock::now();
   next_beat_ = now + milliseconds(protocol().heartbeat_ms);
@@ -176,7 +187,7 @@ void NodeBase::tick() {
   const auto now = Clock::now();
   if (now >= next_beat_) publishStatus();
   const bool in_run = state_ == process_status_t::RUNNING || state_ == process_status_t::DONE;
-  if (in_run && !edge_.counts().empty()) {
+  if (in_run && edge_.publishedAny()) {
     // Idle after publishing: say what we published, in case the last of it was lost.
     const auto idle = idleAnnounceAfter();
     if (edge_.lastActivity() > announced_at_ || announce_wait_ == Clock::duration{}) announce_wait_ = idle;
@@ -188,6 +199,7 @@ void NodeBase::tick() {
     }
   }
   if (!run_id_.empty()) edge_.askMissing();
+  maybeSnapshot();
   if (stop_pending_ && (readyToLeave() || now > stop_deadline_)) {
     if (!readyToLeave()) onLeaveTimeout();
     leaveRun();
@@ -203,13 +215,108 @@ auto NodeBase::idleAnnounceAfter() const -> Clock::duration {
 int NodeBase::msUntilDue() const {
   const auto now = Clock::now();
   Clock::time_point due = std::min(next_beat_, edge_.nextDue());
-  if ((state_ == process_status_t::RUNNING || state_ == process_status_t::DONE) && !edge_.counts().empty()) {
+  if ((state_ == process_status_t::RUNNING || state_ == process_status_t::DONE) && edge_.publishedAny()) {
     const auto idle = idleAnnounceAfter();
     due = std::min(due, std::max(edge_.lastActivity() + idle, announced_at_ + std::max<Clock::duration>(announce_wait_, idle)));
   }
   if (stop_pending_) due = std::min(due, stop_deadline_);
   const auto ms = std::chrono::duration_cast<milliseconds>(due - now).count();
   return static_cast<int>(std::clamp<long long>(ms, 1, 100));
+}
+
+// ---- snapshots ------------------------------------------------------------------------
+
+std::string NodeBase::snapshotPath(const std::string& run_id) const {
+  if (snapshot_root_.empty() || run_id.empty()) return "";
+  return (std::filesystem::path(snapshot_root_) / run_id / (process_ + ".snapshot")).string();
+}
+
+void NodeBase::restartPositions(process_status_t& st) const {
+  for (const std::string& channel : edge_.ordered()) {
+    std::int64_t from = 0;
+    for (const EdgeInbound::Position& p : snapshot_at_)
+      if (p.channel == channel) from = p.next;
+    st.takes.push_back(channel);
+    st.takes_from.push_back(from);
+  }
+  st.n_takes = static_cast<int32_t>(st.takes.size());
+}
+
+void NodeBase::maybeSnapshot(bool now) {
+  const int every = config_.protocol.recovery.snapshot_steps;
+  if (snapshot_root_.empty() || run_id_.empty() || state_ != process_status_t::RUNNING ||
+      config_.phase != Phase::Intrinsic || every <= 0 || !snapshots() || edge_.failed())
+    return;
+  if ((!now && last_step_ < next_snapshot_) || last_step_ < 0 || !atRest()) return;
+  const std::string path = snapshotPath(run_id_);
+  try {
+    std::vector<EdgeInbound::Position> at = edge_.positions();
+    SnapshotWriter w(path);
+    w.section("run");
+    w.str(run_id_);
+    w.str(process_);
+    w.i64(run_msg_.digest);
+    w.i64(last_step_);
+    edge_.save(w);
+    w.section(process_.c_str());
+    saveState(w);
+    w.commit();
+    snapshot_at_ = std::move(at);
+    ++snapshots_taken_;
+    log_->debug("snapshot of step {} ({} bytes): {}", last_step_, w.size(), path);
+    publishStatus();  // its peers may let go of what came before it
+  } catch (const std::exception& e) {
+    // The run goes on: the earlier snapshot stays, and peers hold what followed it.
+    log_->error("{}: the earlier snapshot stays", e.what());
+  }
+  next_snapshot_ = (last_step_ / every + 1) * every;
+}
+
+void NodeBase::restoreSnapshot() {
+  restored_step_ = -1;
+  snapshot_at_.clear();
+  snapshots_taken_ = 0;
+  const int every = config_.protocol.recovery.snapshot_steps;
+  next_snapshot_ = every;
+  const std::string path = snapshotPath(run_id_);
+  std::error_code ec;
+  if (path.empty() || config_.phase != Phase::Intrinsic || every <= 0 || !snapshots() ||
+      !std::filesystem::exists(path, ec))
+    return;
+  try {
+    SnapshotReader r(path, static_cast<std::uint64_t>(config_.protocol.recovery.snapshot_mb) << 20);
+    r.section("run");
+    if (r.str("run id", 256) != run_id_) r.refuse("run id", "a snapshot of another run");
+    if (r.str("process", 64) != process_) r.refuse("process", "a snapshot of another process");
+    if (r.i64("configuration digest") != run_msg_.digest)
+      r.refuse("configuration digest", "a snapshot of another configuration of run '" + run_id_ + "'");
+    const std::int64_t step = r.within("step", 0, std::max<std::int64_t>(0, config_.steps - 1));
+    edge_.load(r);
+    r.section(process_.c_str());
+    loadState(r);
+    r.end();
+    last_step_ = restored_step_ = step;
+    snapshot_at_ = edge_.positions();
+    next_snapshot_ = (step / every + 1) * every;
+    log_->info("goes on from its snapshot of step {} ({})", step, path);
+  } catch (const std::exception& e) {
+    // A state read in part is no state: the run is taken from its start (its peers may no longer hold it: then
+    // the edge says so, naming the channel).
+    log_->error("{}: the run is taken from its start", e.what());
+    edge_.join(run_id_, &config_);
+    for (const auto& clear : joins_) clear();
+    onConfigured(config_);
+    last_step_ = -1;
+  }
+}
+
+void NodeBase::removeSnapshot() {
+  const std::string path = snapshotPath(run_id_);
+  if (path.empty()) return;
+  std::error_code ec;
+  std::filesystem::remove(path, ec);
+  std::filesystem::remove(path + ".tmp", ec);
+  std::filesystem::remove(std::filesystem::path(path).parent_path(), ec);  // only if nothing else is there
 }
 
 }  // namespace afford

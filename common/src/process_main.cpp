@@ -70,11 +70,16 @@ int processMain(int argc, char** argv, const ProcessSpec& spec, const std::funct
   std::string level = "info";
   std::string config_dir = defaultConfigDir();
   std::string key_file;
+  std::string state_dir = defaultLogRoot();
   app.add_option("--lcm-url", url, "LCM provider URL of the run (one UDP port per run)")->capture_default_str();
   app.add_option("--bus-key", key_file,
                  "key file of a keyed bus (default: the file $AFFORD_BUS_KEY names; none: messages untagged)");
   app.add_option("--log-level", level, "trace, debug, info, warn, error or off")->capture_default_str();
   app.add_option("--config-dir", config_dir, "folder whose defaults.yaml gives the protocol used between runs")
+      ->capture_default_str();
+  app.add_option("--state-dir", state_dir,
+                 "folder of the process's snapshots in a run (<folder>/<run-id>/<process>.snapshot), which a "
+                 "restart goes on from; default $AFFORD_LOGS, else logs")
       ->capture_default_str();
   CLIHook hook(&app);
   add_options(hook);
@@ -124,6 +129,7 @@ int processMain(int argc, char** argv, const ProcessSpec& spec, const std::funct
     return 1;
   }
   node->useBusKey(key);
+  node->keepSnapshotsIn(state_dir);
   log->info("listening on {}{}", url, key ? " (keyed: messages without this key's tag are dropped)" : "");
   while (!stopRequested()) {
     // Everything pending (or what comes before the node's next business), then that business.

@@ -83,7 +83,7 @@ RunOutcome runInProcess(const PlannedRun& run, const HostRequest& o, const std::
     slot.extrinsic = run.spec.extrinsic;
     slot.host = std::make_unique<InProcessHost>(
         *slot.lcm, protocol, [tag, level](const std::string& p) { return makeLogger(p + tag, level); },
-        HostOptions{/*single_thread=*/true, log_root});
+        HostOptions{/*single_thread=*/true, log_root, nullptr, /*snapshot_root=*/log_root});
   }
   // The logger, once started with a recorded run, stays free during the runs not recorded (run.record).
   for (const std::string& p : run.spec.processes)
@@ -132,6 +132,8 @@ RunOutcome runOverUdpm(const PlannedRun& run, const HostRequest& o, const std::s
     slot.extrinsic = run.spec.extrinsic;
     std::map<std::string, std::vector<std::string>> own{{"predictors", {"--checkpoint-dir", log_root}}};
     if (!o.processes.count("eye")) own["eye"] = {"--speculate", slot.machine_full ? "off" : "on"};  // ours only
+    for (const std::string& p : runProcesses(run.spec.extrinsic, /*recorded=*/false))
+      if (!o.processes.count(p)) own[p].insert(own[p].end(), {"--state-dir", log_root});
     slot.group = std::make_unique<ProcessGroup>(bin, runProcesses(run.spec.extrinsic, /*recorded=*/false), slot.url,
                                                 out, common, own, o.processes);
   }
@@ -153,6 +155,7 @@ RunOutcome runOverUdpm(const PlannedRun& run, const HostRequest& o, const std::s
   if (slot.group) r.peak_rss_kb = slot.group->peakRssKb();
   if (slot.logger && run.keep_log)
     for (const auto& [name, kb] : slot.logger->peakRssKb()) r.peak_rss_kb[name] = kb;
+  r.peak_rss_kb["runner"] = peakRssKb(getpid());  // this process: the runs' driver and whatever it keeps
   if (!r.ok) {  // a broken group is not reused
     slot.group.reset();
     slot.logger.reset();

@@ -15,8 +15,9 @@
 
 namespace afford {
 
-std::unique_ptr<NodeBase> makeNode(const std::string& p, lcm::LCM& lcm, std::shared_ptr<spdlog::logger> log,
-                                   const ProtocolConfig& protocol, const HostOptions& options) {
+namespace {
+std::unique_ptr<NodeBase> newNode(const std::string& p, lcm::LCM& lcm, std::shared_ptr<spdlog::logger> log,
+                                  const ProtocolConfig& protocol, const HostOptions& options) {
   if (p == "environment") return std::make_unique<EnvironmentNode>(lcm, std::move(log), protocol);
   if (p == "eye") return std::make_unique<EyeNode>(lcm, std::move(log), protocol, /*speculate=*/!options.single_thread);
   if (p == "predictors")
@@ -29,6 +30,14 @@ std::unique_ptr<NodeBase> makeNode(const std::string& p, lcm::LCM& lcm, std::sha
   for (const ProcessInfo& info : processRegistry()) known += (known.empty() ? "" : ", ") + std::string(info.name);
   throw std::invalid_argument("unknown process \"" + p + "\" (" + known + ")");
 }
+}  // namespace
+
+std::unique_ptr<NodeBase> makeNode(const std::string& p, lcm::LCM& lcm, std::shared_ptr<spdlog::logger> log,
+                                   const ProtocolConfig& protocol, const HostOptions& options) {
+  std::unique_ptr<NodeBase> node = newNode(p, lcm, std::move(log), protocol, options);
+  node->keepSnapshotsIn(options.snapshot_root);  // its peers then hold only what followed its latest one
+  return node;
+}
 
 std::string inputRulesTable(const std::string& config_dir) {
   lcm::LCM bus("memq://");
@@ -36,7 +45,7 @@ std::string inputRulesTable(const std::string& config_dir) {
   auto quiet = std::make_shared<spdlog::logger>("rules", std::make_shared<spdlog::sinks::null_sink_mt>());
   std::string out = "| process | takes | when |\n|---|---|---|\n";
   for (const ProcessInfo& p : processRegistry()) {
-    const std::unique_ptr<NodeBase> node = makeNode(p.name, bus, quiet, protocol, HostOptions{true, ""});
+    const std::unique_ptr<NodeBase> node = makeNode(p.name, bus, quiet, protocol, HostOptions{true, "", nullptr, ""});
     for (const NodeBase::InputRule& r : node->rules())
       out += std::string("| ") + p.name + " | `" + r.channel + "` | " + r.rule + " |\n";
   }

@@ -28,6 +28,8 @@ struct HostOptions {
   std::string log_root = "logs";  // the logger's folder of run logs, and the predictors' of checkpoints
   // The planner core tells it what it checks and decides (afford explain); not owned.
   PlannerObserver* planner_observer = nullptr;
+  // The folder of the nodes' snapshots (NodeBase::keepSnapshotsIn); "": none (replay, explain, the tables).
+  std::string snapshot_root;
 };
 
 using LoggerFactory = std::function<std::shared_ptr<spdlog::logger>(const std::string& process)>;

@@ -280,4 +280,38 @@ bool Environment::introduceObjectsAt(std::int64_t step) {
   return any;
 }
 
+void Environment::save(SnapshotWriter& w) const {
+  w.i64(static_cast<std::int64_t>(objects_.size()));
+  for (const WorldObject& o : objects_) {
+    w.i64(o.table_index);
+    w.i64(static_cast<std::int64_t>(o.shape));
+    w.i64(static_cast<std::int64_t>(o.colour));
+    w.f64(o.x);
+    w.f64(o.y);
+    w.i64(o.centre.col);
+    w.i64(o.centre.row);
+    w.i64(o.present ? 1 : 0);
+    w.i64(static_cast<std::int64_t>(o.pixels.size()));
+    w.bytes(o.pixels.data(), o.pixels.size() * sizeof(Pixel));
+  }
+}
+
+void Environment::load(SnapshotReader& r) {
+  const auto n = r.within("objects", static_cast<std::int64_t>(objects_.size()), static_cast<std::int64_t>(objects_.size()));
+  const std::int64_t side = config_.world.size_px;
+  for (std::int64_t i = 0; i < n; ++i) {
+    WorldObject& o = objects_[static_cast<std::size_t>(i)];
+    o.table_index = static_cast<int>(r.within("object table row", 0, 1'000'000));
+    o.shape = static_cast<Shape>(r.within("object shape", static_cast<int>(o.shape), static_cast<int>(o.shape)));
+    o.colour = static_cast<Colour>(r.within("object colour", 0, static_cast<int>(Colour::Blue)));
+    o.x = r.f64("object x");
+    o.y = r.f64("object y");
+    o.centre.col = static_cast<int>(r.within("object centre", -side, 2 * side));
+    o.centre.row = static_cast<int>(r.within("object centre", -side, 2 * side));
+    o.present = r.within("object present", 0, 1) == 1;
+    o.pixels.resize(static_cast<std::size_t>(r.within("object pixels", 0, side * side)));
+    r.bytes("object pixels", o.pixels.data(), o.pixels.size() * sizeof(Pixel));
+  }
+}
+
 }  // namespace afford

@@ -10,6 +10,7 @@
 
 #include "afford/config.hpp"
 #include "afford/image.hpp"
+#include "afford/snapshot.hpp"
 
 namespace afford {
 
@@ -74,6 +75,10 @@ class Environment {
   bool objectsAppearAt(std::int64_t step) const;
 
   const std::vector<WorldObject>& objects() const { return objects_; }
+  // A snapshot's part (afford/snapshot.hpp): the objects as they are now (the goal and the configuration
+  // come from the run's configuration). load() refuses objects the configuration does not have.
+  void save(SnapshotWriter& w) const;
+  void load(SnapshotReader& r);
   // The true centres of the objects in the scene (render), or in the goal
   // (goalScene), in the environment's order: what a SCENE lists for the
   // eye's true_centre fovea (issue 28).

@@ -123,4 +123,14 @@ void EnvironmentNode::decide(const decision_t& d) {
   if (!more) setState(process_status_t::DONE);
 }
 
+void EnvironmentNode::saveState(SnapshotWriter& w) {
+  w.i64(next_decision_);
+  env_->save(w);
+}
+
+void EnvironmentNode::loadState(SnapshotReader& r) {
+  next_decision_ = r.within("next decision", 0, config().steps);
+  env_->load(r);
+}
+
 }  // namespace afford

@@ -21,6 +21,9 @@ class EnvironmentNode : public NodeBase {
   void onConfigured(const RunConfig& config) override;
   void onStart() override;
   void onStop() override;
+  bool snapshots() const override { return true; }
+  void saveState(SnapshotWriter& w) override;
+  void loadState(SnapshotReader& r) override;
   void decide(const decision_t& d);  // intrinsic: a step's decision
   void act(const decision_t& d);     // extrinsic: the planner's action
   void publishScene(std::int64_t step, int8_t cause, bool scan, int action, double tx, double ty,

@@ -321,4 +321,51 @@ Effect Eye::scanEffect(std::int64_t step, cv::Mat after, int action, std::vector
   return e;
 }
 
+void Eye::save(SnapshotWriter& w) const {
+  const cv::Mat rgb = outer_.rgb.isContinuous() ? outer_.rgb : outer_.rgb.clone();
+  w.i64(rgb.rows);
+  w.i64(rgb.cols);
+  w.bytes(rgb.data, rgb.total() * rgb.elemSize());
+  w.i64(static_cast<std::int64_t>(outer_.objects.size()));
+  for (const cv::Point2d& o : outer_.objects) {
+    w.f64(o.x);
+    w.f64(o.y);
+  }
+  w.i64(outer_.focus.gaze.col);
+  w.i64(outer_.focus.gaze.row);
+  w.f64(outer_.focus.x);
+  w.f64(outer_.focus.y);
+  w.blob(outer_.focus.image);
+}
+
+void Eye::load(SnapshotReader& r) {
+  const int side = config_.world.size_px;
+  const auto rows = static_cast<int>(r.within("scene rows", 0, side));
+  const auto cols = static_cast<int>(r.within("scene columns", rows == 0 ? 0 : side, rows == 0 ? 0 : side));
+  cv::Mat rgb(rows, cols, CV_8UC3);
+  r.bytes("scene", rgb.data, rgb.total() * rgb.elemSize());
+  std::vector<cv::Point2d> objects(static_cast<std::size_t>(r.within("scene objects", 0, 100'000)));
+  for (cv::Point2d& o : objects) {
+    o.x = r.f64("scene object x");
+    o.y = r.f64("scene object y");
+  }
+  Focus f;
+  f.gaze.col = static_cast<int>(r.within("gaze", -side, 2 * side));
+  f.gaze.row = static_cast<int>(r.within("gaze", -side, 2 * side));
+  f.x = r.f64("gaze x");
+  f.y = r.f64("gaze y");
+  const std::size_t focus_bytes = 3u * static_cast<std::size_t>(config_.eye.focus_side) * config_.eye.focus_side;
+  f.image = r.blob("focus image", focus_bytes);
+  if (!f.image.empty() && f.image.size() != focus_bytes) r.refuse("focus image", "not of this run's focus side");
+  outer_ = Retina{};
+  if (rows > 0) {
+    try {
+      setScene(std::move(rgb), std::move(objects));
+    } catch (const std::invalid_argument& e) {
+      r.refuse("scene objects", e.what());
+    }
+  }
+  outer_.focus = std::move(f);
+}
+
 }  // namespace afford

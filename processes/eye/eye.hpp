@@ -13,6 +13,7 @@
 
 #include "afford/config.hpp"
 #include "afford/image.hpp"
+#include "afford/snapshot.hpp"
 
 namespace afford {
 
@@ -74,6 +75,10 @@ class Eye {
   Effect scanEffect(std::int64_t step, cv::Mat after, int action, std::vector<cv::Point2d> objects = {});
   // The object blob label under a pixel of the scene (0 = background).
   int labelAt(Pixel p) const { return labelAt(outer_, p); }
+  // A snapshot's part (afford/snapshot.hpp): the scene, its listed objects and the focus on it (the goal is
+  // the extrinsic phase's, which takes none).
+  void save(SnapshotWriter& w) const;
+  void load(SnapshotReader& r);
 
   // Extrinsic phase (paper 2.4.3). The inner eye looks at the memorised goal image.
   void setGoal(cv::Mat goal, std::vector<cv::Point2d> objects = {});

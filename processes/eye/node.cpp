@@ -238,4 +238,23 @@ void EyeNode::scanStep(std::int64_t step) {
     guess_.emplace(step + 1, eye_->peekScan(step + 1));
 }
 
+// Intrinsic phase (the one with snapshots): the scene held (its bytes, the
+// retina built from them), the focus, the steps scanned and whose effect was
+// seen. A speculated scan is not kept: scan(step) == look(peekScan(step)).
+void EyeNode::saveState(SnapshotWriter& w) {
+  w.i64(last_scanned_);
+  w.i64(last_effect_);
+  w.blob(seen_data_);
+  eye_->save(w);
+}
+
+void EyeNode::loadState(SnapshotReader& r) {
+  last_scanned_ = r.within("last step scanned", -1, config().steps);
+  last_effect_ = r.within("last step whose effect was seen", -1, config().steps);
+  seen_data_ = r.blob("scene bytes", static_cast<std::size_t>(config().protocol.bus.max_message_bytes));
+  eye_->load(r);
+  guess_.reset();
+  next_step_.reset();
+}
+
 }  // namespace afford

@@ -35,6 +35,9 @@ class EyeNode : public NodeBase {
  private:
   void onConfigured(const RunConfig& config) override;
   void onStop() override;
+  bool snapshots() const override { return true; }
+  void saveState(SnapshotWriter& w) override;
+  void loadState(SnapshotReader& r) override;
   void see(const scene_t& s);      // intrinsic: a scene (an action's effect, a scene to scan)
   void keep(const scene_t& s);     // extrinsic: the goal, or a scene for a LOOK to name
   void answer(const look_t& l);    // extrinsic: a LOOK's FOCUS

@@ -160,4 +160,12 @@ void LoggerNode::onStop() {
   if (write_error_.empty()) setState(process_status_t::DONE, dir);
 }
 
+void LoggerNode::restartPositions(process_status_t& st) const {
+  for (const EdgeInbound::Position& p : edge().positions()) {
+    st.takes.push_back(p.channel);
+    st.takes_from.push_back(p.next);
+  }
+  st.n_takes = static_cast<int32_t>(st.takes.size());
+}
+
 }  // namespace afford

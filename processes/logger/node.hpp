@@ -45,6 +45,9 @@ class LoggerNode : public NodeBase {
   void onLeaveTimeout() override;
   void onControl(const Envelope& envelope) override;
   void onPeerStatus(const process_status_t& status) override;
+  // Its log is its snapshot: every event is flushed as it is written, and a restarted logger goes on from
+  // where the log's segments end. So a restart would take each channel again from what it has recorded.
+  void restartPositions(process_status_t& st) const override;
   void write(const Envelope& envelope);
 
   std::string log_root_;

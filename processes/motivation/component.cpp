@@ -17,6 +17,9 @@ class PaperMotivation : public MotivationComponent {
   }
   bool needsLastChange() const override { return core_.awaitingObservation(); }
   bool needsMemory() const override { return revisit_; }
+  bool snapshots() const override { return true; }
+  void save(SnapshotWriter& w) const override { core_.save(w); }
+  void load(SnapshotReader& r) override { core_.load(r); }
 
  private:
   Motivation core_;

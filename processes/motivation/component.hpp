@@ -23,6 +23,7 @@
 
 #include "afford/actions.hpp"
 #include "afford/config.hpp"
+#include "afford/snapshot.hpp"
 #include "motivation/motivation.hpp"
 
 namespace afford {
@@ -53,6 +54,14 @@ class MotivationComponent {
   // Must the percepts say which look the focus is and what was tried on it
   // (the predictors' memory, which they keep for every kind but paper)?
   virtual bool needsMemory() const { return false; }
+  // Snapshots (docs/processes-and-channels.md, "Runs of any length"): a
+  // component that saves its state (what decide() changes) says so and writes
+  // it, then reads it back in the same order. One that does not is restarted
+  // from the run's start: its peers hold what they published for it, up to
+  // protocol.recovery.history_mb.
+  virtual bool snapshots() const { return false; }
+  virtual void save(SnapshotWriter&) const {}
+  virtual void load(SnapshotReader&) {}
 };
 
 using MotivationFactory = std::function<std::unique_ptr<MotivationComponent>(const MotivationParams&)>;

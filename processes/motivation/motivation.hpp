@@ -8,6 +8,7 @@
 
 #include "afford/actions.hpp"
 #include "afford/config.hpp"
+#include "afford/snapshot.hpp"
 
 namespace afford {
 
@@ -65,6 +66,15 @@ class Motivation {
   void observeChange(double absolute_change);
   bool awaitingObservation() const { return awaiting_; }
   double threshold() const { return threshold_; }
+  // Its state for a snapshot: the threshold, and whether it awaits an observed change.
+  void save(SnapshotWriter& w) const {
+    w.f64(threshold_);
+    w.i64(awaiting_ ? 1 : 0);
+  }
+  void load(SnapshotReader& r) {
+    threshold_ = r.f64("threshold");
+    awaiting_ = r.within("awaiting an observed change", 0, 1) == 1;
+  }
 
  private:
   void leak(double input) { threshold_ += config_.leak * (input - threshold_); }

@@ -20,6 +20,15 @@ class MotivationNode : public NodeBase {
  private:
   void onConfigured(const RunConfig& config) override;
   void onStop() override;
+  bool snapshots() const override { return core_ && core_->snapshots(); }
+  void saveState(SnapshotWriter& w) override {
+    w.i64(last_);
+    core_->save(w);
+  }
+  void loadState(SnapshotReader& r) override {
+    last_ = r.within("last step decided", -1, config().steps);
+    core_->load(r);
+  }
   void decide(const prediction_t& m);
 
   std::unique_ptr<MotivationComponent> core_;

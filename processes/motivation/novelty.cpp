@@ -5,6 +5,7 @@
 // Its state, the counts, is a pure function of the percepts in order, so
 // replay and live restart reproduce it. (docs/writing-a-component.md)
 #include <cmath>
+#include <limits>
 #include <map>
 
 #include "motivation/component.hpp"
@@ -31,6 +32,22 @@ class Novelty : public MotivationComponent {
     return d;
   }
   bool needsMemory() const override { return true; }
+  bool snapshots() const override { return true; }
+  void save(SnapshotWriter& w) const override {
+    w.i64(static_cast<std::int64_t>(counts_.size()));
+    for (const auto& [look, n] : counts_) {
+      w.i64(look);
+      for (std::int64_t k : n) w.i64(k);
+    }
+  }
+  void load(SnapshotReader& r) override {
+    counts_.clear();
+    const std::int64_t looks = r.within("looks counted", 0, 100'000'000);
+    for (std::int64_t i = 0; i < looks; ++i) {
+      auto& n = counts_[static_cast<int>(r.within("look", -1, std::numeric_limits<int>::max()))];
+      for (std::int64_t& k : n) k = r.within("times chosen", 0, std::numeric_limits<std::int64_t>::max());
+    }
+  }
 
  private:
   double threshold_;

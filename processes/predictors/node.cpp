@@ -6,7 +6,10 @@
 #include "afford/protocol.hpp"
 #include "afford/names.hpp"
 #include "afford/prediction_t.hpp"
+#include "afford/decode.hpp"
 #include "afford/run_result_t.hpp"
+
+#include <limits>
 
 namespace afford {
 
@@ -303,6 +306,70 @@ void PredictorsNode::finish() {
   log_->info("run '{}' learned: weights checksum {}", runId(), r.weights_checksum);
   handled(config().steps);
   setState(process_status_t::DONE);
+}
+
+// Intrinsic phase (the one with snapshots). The forward models' updates still
+// pending are made first: nothing in the intrinsic phase reads those models,
+// and they get the same updates in the same order, so the run's results are
+// those of a run without snapshots.
+void PredictorsNode::saveState(SnapshotWriter& w) {
+  trainPendingEffects();
+  if (trainer_) trainer_->drain();
+  w.i64(current_);
+  w.i64(static_cast<std::int64_t>(outcome_));
+  w.i64(action_);
+  w.i64(look_);
+  w.i64(revisits_);
+  w.i64(finished_ ? 1 : 0);
+  w.i64(static_cast<std::int64_t>(probes_.size()));
+  for (const auto& p : probes_) w.blob(p);
+  std::vector<std::uint8_t> focus(static_cast<std::size_t>(current_ >= 0 ? focus_.getEncodedSize() : 0));
+  if (!focus.empty()) focus_.encode(focus.data(), 0, static_cast<int>(focus.size()));
+  w.blob(focus);
+  w.i64(pending_trained_ ? 1 : 0);
+  if (pending_trained_) {
+    const trained_t& t = *pending_trained_;
+    w.i64(t.step);
+    w.i64(t.action);
+    w.i64(t.affordance ? 1 : 0);
+    w.f64(t.affordance_before);
+    w.f64(t.affordance_after);
+    w.f64(t.learning_progress);
+    w.i64(t.effect_trained ? 1 : 0);
+  }
+  core_->save(w);
+}
+
+void PredictorsNode::loadState(SnapshotReader& r) {
+  current_ = r.within("current step", -1, config().steps);
+  outcome_ = static_cast<Outcome>(r.within("outcome", static_cast<int>(Outcome::Unknown), static_cast<int>(Outcome::Learned)));
+  action_ = static_cast<int>(r.within("action", -1, kNumActions - 1));
+  look_ = static_cast<int>(r.within("look", -1, std::numeric_limits<int>::max()));
+  revisits_ = r.within("revisits", 0, config().steps);
+  finished_ = r.within("finished", 0, 1) == 1;
+  const std::size_t image = 3u * static_cast<std::size_t>(config().eye.focus_side) * config().eye.focus_side;
+  probes_.resize(static_cast<std::size_t>(r.within("probes", 0, config().protocol.limits.objects)));
+  for (auto& p : probes_) p = r.blob("probe image", image);
+  const std::vector<std::uint8_t> focus = r.blob("focus", static_cast<std::size_t>(config().protocol.bus.max_message_bytes));
+  if (!focus.empty()) {
+    std::string why;
+    if (!decodeChecked(focus.data(), focus.size(), edge().context(), focus_, why)) r.refuse("focus", why);
+  }
+  pending_trained_.reset();
+  if (r.within("pending update report", 0, 1) == 1) {
+    trained_t t;
+    t.run_id = runId();
+    t.step = r.within("report step", 0, config().steps);
+    t.action = static_cast<int8_t>(r.within("report action", 0, kNumActions - 1));
+    t.affordance = r.within("report affordance", 0, 1) == 1;
+    t.affordance_before = r.f64("report affordance before");
+    t.affordance_after = r.f64("report affordance after");
+    t.learning_progress = r.f64("report learning progress");
+    t.effect_trained = r.within("report effect trained", 0, 1) == 1;
+    pending_trained_ = t;
+  }
+  pending_effects_.clear();
+  core_->load(r);
 }
 
 }  // namespace afford

@@ -47,6 +47,9 @@ class PredictorsNode : public NodeBase {
 
   void onConfigured(const RunConfig& config) override;
   void onStop() override;
+  bool snapshots() const override { return true; }
+  void saveState(SnapshotWriter& w) override;
+  void loadState(SnapshotReader& r) override;
   void decided(const decision_t& m);         // intrinsic: the decision of the current step
   void learn(const effect_t& m);             // intrinsic: its effect, learned from
   void answer(const forward_query_t& q);     // extrinsic: what actions would do

@@ -17,6 +17,7 @@
 #include "afford/checksum.hpp"
 #include "afford/names.hpp"
 #include "afford/rng.hpp"
+#include "afford/snapshot.hpp"
 
 namespace afford {
 
@@ -267,11 +268,8 @@ class Inflater : public std::streambuf {
 
 }  // namespace
 
-void Predictors::save(const std::string& path, const std::string& checksum) const {
-  // The checkpoint's bytes, deflated as they are written: most of the forward
-  // models' weights stay at their start, and a checkpoint shrinks about
-  // twentyfold, losslessly.
-  Deflater raw(path);
+template <class Out>
+void Predictors::writePlain(Out& raw, const std::string& checksum, const std::string& memory) const {
   raw.write(kMagic, sizeof kMagic);
   // The paper's component: format 2, as ever; another: format 3, which names it.
   const bool paper = config_.affordance_kind == "paper";
@@ -291,13 +289,86 @@ void Predictors::save(const std::string& path, const std::string& checksum) cons
   if (memory_) {
     raw.write(&replayed_, sizeof replayed_);
     raw.write(&replayed_effects_, sizeof replayed_effects_);
-    std::ostringstream memory(std::ios::binary);
-    memory_->save(memory);
-    const std::string bytes = memory.str();
-    raw.write(bytes.data(), bytes.size());
+    raw.write(memory.data(), memory.size());
   }
-  const std::string sum = checksum.empty() ? weightsChecksum() : checksum;
-  raw.write(sum.data(), sum.size());
+  raw.write(checksum.data(), checksum.size());
+}
+
+namespace {
+// What a plain checkpoint writer is given: the byte count only.
+struct Counter {
+  std::uint64_t n = 0;
+  void write(const void*, std::size_t size) { n += size; }
+};
+// ... or a snapshot.
+struct ToSnapshot {
+  SnapshotWriter& w;
+  void write(const void* data, std::size_t size) { w.bytes(data, size); }
+};
+// A plain checkpoint read from a snapshot: exactly its `size` bytes, in chunks.
+class FromSnapshot : public std::streambuf {
+ public:
+  FromSnapshot(SnapshotReader& r, std::uint64_t size) : r_(r), left_(size) {}
+  std::uint64_t left() const { return left_ + static_cast<std::uint64_t>(egptr() - gptr()); }
+
+ protected:
+  int_type underflow() override {
+    if (left_ == 0) return traits_type::eof();
+    const auto n = static_cast<std::size_t>(std::min<std::uint64_t>(left_, buffer_.size()));
+    r_.bytes("predictors' weights", buffer_.data(), n);
+    left_ -= n;
+    setg(buffer_.data(), buffer_.data(), buffer_.data() + n);
+    return traits_type::to_int_type(buffer_[0]);
+  }
+
+ private:
+  SnapshotReader& r_;
+  std::uint64_t left_;
+  std::vector<char> buffer_ = std::vector<char>(std::size_t{1} << 16);
+};
+
+std::string memoryBytes(const Memory* memory) {
+  if (!memory) return "";
+  std::ostringstream out(std::ios::binary);
+  memory->save(out);
+  return out.str();
+}
+}  // namespace
+
+void Predictors::save(SnapshotWriter& w) const {
+  const std::string memory = memoryBytes(memory_.get());
+  const std::string sum = weightsChecksum();
+  Counter size;
+  writePlain(size, sum, memory);
+  w.i64(static_cast<std::int64_t>(size.n));
+  ToSnapshot out{w};
+  writePlain(out, sum, memory);
+}
+
+std::uint64_t Predictors::stateBytes() const {
+  Counter size;
+  writePlain(size, std::string(16, '0'), memoryBytes(memory_.get()));
+  return size.n;
+}
+
+void Predictors::load(SnapshotReader& r) {
+  const auto size = static_cast<std::uint64_t>(r.within("predictors' weights", 0, std::int64_t{1} << 40));
+  FromSnapshot plain(r, size);
+  std::istream in(&plain);
+  try {
+    loadFrom(in, r.path());
+  } catch (const std::runtime_error& e) {
+    r.refuse("predictors' weights", e.what());
+  }
+  if (plain.left() != 0) r.refuse("predictors' weights", "more bytes than the weights of this run's predictors");
+}
+
+void Predictors::save(const std::string& path, const std::string& checksum) const {
+  // The checkpoint's bytes, deflated as they are written: most of the forward
+  // models' weights stay at their start, and a checkpoint shrinks about
+  // twentyfold, losslessly.
+  Deflater raw(path);
+  writePlain(raw, checksum.empty() ? weightsChecksum() : checksum, memoryBytes(memory_.get()));
   const std::string& packed = raw.finish();
   // A file of this process's own, renamed into place: a reader never sees half
   // a checkpoint, and two writers of the same path do not clobber each other.

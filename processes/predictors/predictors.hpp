@@ -20,6 +20,9 @@
 
 namespace afford {
 
+class SnapshotWriter;
+class SnapshotReader;
+
 struct Prediction {
   PerAction affordance{};
   PerAction learning_progress{};
@@ -105,6 +108,11 @@ class Predictors {
   // pass over every weight), "" to compute it.
   void save(const std::string& path, const std::string& checksum = "") const;
   void load(const std::string& path);
+  // A snapshot's part (afford/snapshot.hpp): the checkpoint's plain content, as save() deflates it.
+  void save(SnapshotWriter& w) const;
+  void load(SnapshotReader& r);
+  // The bytes of that content as things stand (what a snapshot or a plain checkpoint takes).
+  std::uint64_t stateBytes() const;
   const std::array<std::int64_t, kNumActions>& executed() const { return executed_; }
   const std::array<std::int64_t, kNumActions>& successes() const { return successes_; }
   // The memory, if the configuration keeps one (RunConfig::keepsMemory).
@@ -115,6 +123,9 @@ class Predictors {
  private:
   SparseInput whereInput(int action, double x, double y, double tx, double ty) const;
   void loadFrom(std::istream& in, const std::string& path);  // the plain format, from its magic on
+  // The plain format to `out` (write(const void*, size_t)): `memory`, the memory's saved bytes.
+  template <class Out>
+  void writePlain(Out& out, const std::string& checksum, const std::string& memory) const;
   // f(data, size) for every array of the state, in the checksum's order.
   template <class F>
   void forEachWeightArray(F&& f) const;

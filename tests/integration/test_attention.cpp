@@ -135,7 +135,7 @@ TEST(Attention, TheProcessesComputeThePlainLoopAlsoAfterARestart) {
     const std::string what = g.scenario.name + " " + c.attention + " depth " + std::to_string(c.depth) +
                              (*c.restart ? std::string(" restarting the ") + c.restart : std::string());
     const test::InProcessRun run(yaml, System::IMP, 80, parseRunConfigText(yaml).planner.budget, {}, 50, false,
-                                 test::Restart{c.restart, 2});
+                                 test::Restart{c.restart, 2, ""});
     ASSERT_TRUE(run.outcome.ok) << what << ": " << run.outcome.error << "\n" << run.log.str().substr(0, 3000);
     if (*c.restart) {
       EXPECT_TRUE(run.restarted) << what;

@@ -14,6 +14,7 @@
 #include "afford/decision_t.hpp"
 #include "experiment/run/driver.hpp"
 #include "afford/focus_t.hpp"
+#include "afford/resend_t.hpp"
 #include "afford/run_config_t.hpp"
 #include "afford/scene_t.hpp"
 #include "afford/seal.hpp"
@@ -211,18 +212,34 @@ TEST(Choreography, ARejectedConfigFailsTheRunNamingTheKeyBeforeAnyProcessTakesIt
 }
 
 // Live restart in one process: a node destroyed mid-run and made anew is
-// given the run again by the runner, catches up from its peers' histories
-// (RESEND), and the run ends as if nothing had happened.
-TEST(Choreography, AProcessRestartedMidRunCatchesUpAndTheRunIsUnchanged) {
-  const std::string yaml = baseYaml(System::IMP, 400);
-  InProcessRun plain(yaml, System::IMP, 3, 400);
+// given the run again by the runner, goes on from its latest snapshot (taken
+// every 100 steps here), catches up from what its peers still hold (RESEND:
+// only what followed its snapshot), and the run ends as if nothing had
+// happened; the snapshots themselves change nothing of the run. (Restarts
+// from the run's start: the memory options' test below, tests/restart.)
+TEST(Choreography, AProcessRestartedMidRunGoesOnFromItsSnapshotAndTheRunIsUnchanged) {
+  const std::string yaml = test::shippedConfigYaml("base", System::IMP, 3, 400, {"protocol.recovery.snapshot_steps=100"});
+  InProcessRun plain(baseYaml(System::IMP, 400), System::IMP, 3, 400);
   ASSERT_TRUE(plain.outcome.ok) << plain.outcome.error;
   for (const std::string& p : runProcesses(/*extrinsic=*/false, /*recorded=*/false)) {
-    InProcessRun run(yaml, System::IMP, 3, 400, {}, 50, false, Restart{p, 150});
+    const std::string snapshots = test::tempDir("choreography-snapshots-" + p);
+    InProcessRun run(yaml, System::IMP, 3, 400, {}, 50, false, Restart{p, 250, snapshots});
     ASSERT_TRUE(run.outcome.ok) << p << ": " << run.outcome.error;
     ASSERT_TRUE(run.restarted) << p;
-    EXPECT_GE(run.restarted_at, 150) << p;
+    EXPECT_GE(run.restarted_at, 250) << p;
     EXPECT_LT(run.restarted_at, 399) << p;
+    EXPECT_GE(run.restored_step, 200) << p << " went on from no snapshot, or an older one";
+    EXPECT_LE(run.restored_step, run.restarted_at) << p;
+    // What it asked for again came after its snapshot: it did not pull the run from its start.
+    for (const auto& e : run.events)
+      if (e.channel == ch::resend.name) {
+        resend_t r;
+        r.decode(e.data.data(), 0, static_cast<int>(e.data.size()));
+        if (r.requester == p) {
+          EXPECT_GT(r.first, 0) << p << " asked for " << r.channel << " from its start";
+        }
+      }
+    EXPECT_FALSE(std::filesystem::exists(snapshots + "/test-run")) << "the run's end removes its snapshots";
     EXPECT_NE(run.log.str().find(std::string("process ") + p + " is free again"), std::string::npos) << run.log.str();
     EXPECT_EQ(run.outcome.weights_checksum, plain.outcome.weights_checksum) << p;
     ASSERT_EQ(run.outcome.curve.size(), plain.outcome.curve.size()) << p;
@@ -238,7 +255,7 @@ TEST(Choreography, WithTheMemoryOptionsARestartedProcessCatchesUpAndTheRunIsUnch
   InProcessRun plain(yaml, System::IGN, 3, 400);
   ASSERT_TRUE(plain.outcome.ok) << plain.outcome.error;
   for (const char* p : {"predictors", "motivation"}) {
-    InProcessRun run(yaml, System::IGN, 3, 400, {}, 50, false, Restart{p, 150});
+    InProcessRun run(yaml, System::IGN, 3, 400, {}, 50, false, Restart{p, 150, ""});
     ASSERT_TRUE(run.outcome.ok) << p << ": " << run.outcome.error;
     ASSERT_TRUE(run.restarted) << p;
     EXPECT_EQ(run.outcome.weights_checksum, plain.outcome.weights_checksum) << p;
@@ -674,6 +691,7 @@ std::vector<BadInput> badInputs() {
          st.state = process_status_t::RUNNING;
          st.counts_run = run;
          st.n_channels = 0;
+         st.n_takes = 0;
          auto b = sealed(st);
          // n_channels sits after run_id, step, process, pid, beat, state, config_digest, detail and counts_run.
          const std::size_t at = 8 + (4 + run.size() + 1) + 8 + (4 + 4) + 4 + 8 + 1 + 8 + (4 + 1) + (4 + run.size() + 1);

@@ -212,8 +212,9 @@ AloneOutcome feedAlone(const Recording& rec, const std::string& process, Feed fe
       st.beat = beat;
       st.state = process_status_t::RUNNING;
       st.config_digest = 0;
-      for (const auto& [ch, n] : channels) st.channels.push_back(ch), st.counts.push_back(n);
+      for (const auto& [ch, n] : channels) st.channels.push_back(ch), st.counts.push_back(n), st.held_from.push_back(0);
       st.n_channels = static_cast<int32_t>(st.channels.size());
+      st.n_takes = 0;
       publish(ch::status.name, sealed(st));
     }
     ++beat;

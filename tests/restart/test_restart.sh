@@ -32,9 +32,9 @@ steps=3000
 mapfile -t processes < <("$build/bin/afford" processes)  # the registry's
 command_of() {  # the command that starts process $1, the same before and after the kill
   case $1 in
-    logger) echo "$build/bin/afford-logger --lcm-url $url --log-dir $out/logs" ;;
-    predictors) echo "$build/bin/afford-predictors --lcm-url $url --checkpoint-dir $out/logs" ;;
-    *) echo "$build/bin/afford-$1 --lcm-url $url" ;;
+    logger) echo "$build/bin/afford-logger --lcm-url $url --log-dir $out/logs --state-dir $out/logs" ;;
+    predictors) echo "$build/bin/afford-predictors --lcm-url $url --checkpoint-dir $out/logs --state-dir $out/logs" ;;
+    *) echo "$build/bin/afford-$1 --lcm-url $url --state-dir $out/logs" ;;
   esac
 }
 declare -A pid
@@ -43,7 +43,9 @@ for p in "${processes[@]}"; do start "$p"; done
 "$build/bin/afford" status --lcm-url "$url" --wait-for "$(IFS=,; echo "${processes[*]}")" --state waiting \
   --seconds 30 >/dev/null || { echo "the processes did not all come up"; exit 1; }
 
-experiment=(experiment base --system IMP --reps 1 --steps "$steps" --seed "$seed" --quiet --scenarios scenario1 --scenarios scenario2)
+# A snapshot every 500 steps: a kill before step 500 restarts from the run's start, a later one from a snapshot.
+experiment=(experiment base --system IMP --reps 1 --steps "$steps" --seed "$seed" --quiet --scenarios scenario1 --scenarios scenario2
+  --set protocol.recovery.snapshot_steps=500)
 extrinsic=(--extrinsic-reps 3)
 # The planner's tests run their whole budget (no scene is close enough to end
 # one early), so there is time to kill it in the middle of one.
@@ -84,6 +86,7 @@ start "$victim"  # at once: the process is gone (waited for above), and its peer
 wait "$runner" || { cat "$out/attached.txt"; echo "the run with a restarted $victim failed"; exit 1; }
 grep -q "free again" "$out/attached.txt" || { cat "$out/attached.txt"; echo "the runner never re-sent the run"; exit 1; }
 grep -o "process $victim is free again.* at step [0-9]*" "$out/attached.txt" | head -1
+grep -o "goes on from its snapshot of step [0-9]*" "$out/$victim.log" | tail -1 || echo "(it took the run from its start)"
 
 # The same experiment uninterrupted, hosted by the runner in one process.
 # Its own log root: the checkpoint goes there, and the same seed may be run by

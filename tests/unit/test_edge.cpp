@@ -278,6 +278,7 @@ TEST_F(EdgeOnTheBus, ForgedProcessIdsCannotGrowWhatAReceiverRemembers) {
   st.state = process_status_t::WAITING;
   st.config_digest = 0;
   st.n_channels = 0;
+  st.n_takes = 0;
   const int forged = protocol.limits.peers * 3;
   for (int pid = 1; pid <= forged; ++pid) {
     st.pid = pid;

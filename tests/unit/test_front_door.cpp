@@ -213,7 +213,7 @@ TEST(Host, HostsEveryRegisteredProcessAndRefusesOthersByName) {
   const auto null = [](const std::string& n) {
     return std::make_shared<spdlog::logger>(n, std::make_shared<spdlog::sinks::null_sink_mt>());
   };
-  InProcessHost host(lcm, loadProtocol(kConfigDir), null, HostOptions{true, test::tempDir("host-logs")});
+  InProcessHost host(lcm, loadProtocol(kConfigDir), null, HostOptions{true, test::tempDir("host-logs"), nullptr, ""});
   for (const ProcessInfo& p : processRegistry()) {
     host.start(p.name);
     EXPECT_EQ(host.node(p.name).runId(), "") << p.name;

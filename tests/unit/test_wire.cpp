@@ -283,9 +283,10 @@ TEST(Wire, AStatusWithAHugeChannelCountIsRefused) {
   m.pid = 1;
   m.state = process_status_t::WAITING;
   m.n_channels = 0;
+  m.n_takes = 0;
   m.digest = 0;
   Bytes b = encode(m);
-  const std::size_t at = b.size() - 8 - 4;  // n_channels, then digest
+  const std::size_t at = b.size() - 8 - 4 - 4;  // n_channels, n_takes (0), then digest
   put(b, at, 4, 0x01000000);  // LCM's decode would allocate 16 M strings and counts
   std::string why;
   EXPECT_FALSE(

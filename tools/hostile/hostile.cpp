@@ -188,6 +188,7 @@ class Hostile {
       st.state = afford::process_status_t::WAITING;
       st.config_digest = 0;
       st.n_channels = 0;
+      st.n_takes = 0;
       b = afford::sealed(st);
       ch = afford::ch::status.name;
     } else if (k == "forge") {
@@ -243,6 +244,7 @@ class Hostile {
       st.config_digest = config_.digest;
       st.detail = outside_ + "/" + run_;
       st.n_channels = 0;
+      st.n_takes = 0;
       st.counts_run = run_;
       publish(afford::ch::status.name, afford::sealed(st));
       return;
@@ -294,6 +296,7 @@ class Hostile {
       st.config_digest = config_.digest;
       st.detail = "forged failure";
       st.n_channels = 0;
+      st.n_takes = 0;
       publish(afford::ch::status.name, afford::sealed(st));
       return;
     }

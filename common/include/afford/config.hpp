@@ -267,6 +267,13 @@ struct BusConfig {
   int fragment_timeout_ms = 0;  // an incomplete fragmented message is dropped this long after its first fragment
   int queue_bytes = 0;          // received messages waiting to be handled hold at most this together
 };
+// Runs of any length (docs/processes-and-channels.md#runs-of-any-length): what a process holds for a restart.
+struct RecoveryConfig {
+  int snapshot_steps = 0;  // a process saves its state every this many steps (0: never; older logs)
+  int history_keep = 0;    // messages of each channel a publisher holds whatever its readers' snapshots say
+  int history_mb = 0;      // what a process holds of what it published, at most (0: no bound; older logs)
+  int snapshot_mb = 0;     // the largest snapshot a restarted process reads
+};
 struct ProtocolConfig {
   int heartbeat_ms = 0;       // STATUS period
   int idle_announce_ms = 0;   // a process of a run idle this long announces its counts at once
@@ -283,6 +290,7 @@ struct ProtocolConfig {
   int queue_capacity = 0;     // LCM's queue of each subscription, messages
   ProtocolLimits limits;
   BusConfig bus;
+  RecoveryConfig recovery;
 };
 
 struct RunConfig {

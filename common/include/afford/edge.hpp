@@ -61,6 +61,7 @@
 #include "afford/protocol.hpp"
 #include "afford/seal.hpp"
 #include "afford/serials.hpp"
+#include "afford/snapshot.hpp"
 #include "afford/wire.hpp"
 
 namespace afford {
@@ -133,6 +134,9 @@ class Edge {
   // The edge has already stopped taking the run's messages.
   void onFailure(std::function<void(const std::string&, const std::string&)> f) { inbound_.onFailure(std::move(f)); }
   bool failed() const { return inbound_.failed(); }
+  // Called after each message has been dealt with (taken, deferred or dropped), outside every handler: the
+  // process's state is between two messages (NodeBase takes its snapshots there).
+  void onQuiet(std::function<void()> f) { on_quiet_ = std::move(f); }
   // Stop taking the run's messages (the owner failed for another reason).
   void suspend() { inbound_.suspend(); }
   // Offer the waiting messages again (the owner's state changed, e.g. START).
@@ -143,8 +147,12 @@ class Edge {
   // channel's type (afford/protocol.hpp): a handler of another type does not compile.
   template <class Msg, class F>
   void subscribe(const Channel<Msg>& channel, F handler, Scope scope, Order order);
-  // Take a publisher's counts (its STATUS) as claims on the channels it publishes.
-  void claim(const process_status_t& status) { inbound_.claim(status); }
+  // Take a publisher's counts (its STATUS) as claims on the channels it publishes, and a reader's
+  // restart positions as what it may still ask of what this process published.
+  void claim(const process_status_t& status) {
+    inbound_.claim(status);
+    outbound_.readerSaid(status);
+  }
   // Ask for what is missing, if due (call from the loop too: retries).
   void askMissing() { inbound_.askMissing(); }
   std::int64_t missing() const { return inbound_.missing(); }
@@ -181,8 +189,15 @@ class Edge {
   }
   // Answer RESEND requests for what this edge published (processes).
   void answerResends();
-  // Per channel published in the history's run: how many messages.
-  std::vector<std::pair<std::string, std::int64_t>> counts() const { return outbound_.counts(); }
+  // Per channel published in the history's run: how many messages, and the first still held.
+  std::vector<EdgeOutbound::Count> counts() const { return outbound_.counts(); }
+  bool publishedAny() const { return outbound_.any(); }
+  // Per channel taken in serial order: the next serial its handler has not had, and the digest before it
+  // (where a restart from a snapshot taken now would take it again).
+  std::vector<EdgeInbound::Position> positions() const { return inbound_.positions(); }
+  // The snapshot's part of the edge: what was handled of each channel taken, and what was published.
+  void save(SnapshotWriter& w) const;
+  void load(SnapshotReader& r);
   const std::string& historyRun() const { return outbound_.run(); }
 
  private:
@@ -218,6 +233,8 @@ class Edge {
   const RunConfig* config_ = nullptr;
   bool warn_other_runs_ = true;
   bool answering_ = false;
+  int receiving_ = 0;  // messages being dealt with (a handler's publication may be delivered at once)
+  std::function<void()> on_quiet_;
   std::shared_ptr<const BusKey> key_;
   const std::uint64_t session_ = BusKey::newSession();  // this edge's, under its tags (a keyed bus)
   std::uint64_t sent_ = 0;                              // tagged messages sent: the next one's counter
@@ -250,6 +267,7 @@ void Edge::subscribe(const Channel<Msg>& typed, F handler, Scope scope, Order or
   auto shared = std::make_shared<const F>(std::move(handler));
   auto s = std::make_unique<Subscription>();
   s->fn = [this, channel, shared, scope, order](const lcm::ReceiveBuffer* rb) {
+    ++receiving_;
     try {
       receive<Msg>(channel, rb, shared, scope, order);
     } catch (const std::exception& e) {
@@ -257,6 +275,7 @@ void Edge::subscribe(const Channel<Msg>& typed, F handler, Scope scope, Order or
     } catch (...) {
       fail(channel, "an unknown exception");
     }
+    if (--receiving_ == 0 && on_quiet_) on_quiet_();
   };
   s->sub = lcm_.subscribe(channel, &Subscription::on, s.get());
   s->sub->setQueueCapacity(protocol_->queue_capacity);

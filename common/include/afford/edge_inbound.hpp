@@ -95,6 +95,15 @@ class EdgeInbound {
   std::int64_t missing() const { return serials_.missing(); }
   std::map<std::string, std::pair<std::int64_t, std::int64_t>> missingRanges() const { return serials_.missingRanges(); }
   void expectSerial(const std::string& channel, std::int64_t next, std::int64_t last_digest);
+  // Where a channel taken in order stands for its handler: the next serial it has not had (taken, or
+  // ignored by a rule), and the digest of the one before it. A restart from a snapshot taken now would
+  // take each channel again from there (restore()).
+  struct Position {
+    std::string channel;
+    std::int64_t next = 0, last_digest = 0;
+  };
+  std::vector<Position> positions() const;
+  void restore(const std::vector<Position>& at);
   std::size_t deferred() const { return deferred_.size(); }
   Clock::time_point nextDue() const { return serials_.nextDue(); }
 
@@ -138,7 +147,9 @@ class EdgeInbound {
   Clock::time_point last_published_{};
   bool awaiting_ = false;  // published since the last message taken
   Clock::duration usual_wait_{};
-  std::map<std::string, Chain> chains_;  // what was taken, by channel
+  std::map<std::string, Chain> chains_;  // what was accepted, by channel, from the one before the next to handle
+  std::map<std::string, std::pair<std::int64_t, std::int64_t>> handled_;  // channel -> next serial, digest before it
+  void handled(const Pending& p);
   // The last message refused on each channel (serial, digest): the same one
   // refused again, after it was asked for, is the channel's genuine message
   // that its handler will never take, and the run fails rather than ask forever.

@@ -214,6 +214,18 @@ class NodeBase {
   const std::vector<InputRule>& rules() const { return rules_; }
   // A keyed bus (afford/auth.hpp): set before the first message is handled.
   void useBusKey(std::shared_ptr<const BusKey> key) { edge_.useKey(std::move(key)); }
+  // Snapshots (docs/processes-and-channels.md, "Runs of any length"): a node
+  // that says it takes them (snapshots()) saves its state, with the edge's
+  // positions and what it published, every protocol.recovery.snapshot_steps
+  // steps of an intrinsic run, between two messages, as
+  // <folder>/<run-id>/<process>.snapshot; restarted into the same run (same
+  // configuration), it loads it and takes each channel again from where the
+  // snapshot was taken. The run's end (STOP) removes it. "" (the default): none.
+  void keepSnapshotsIn(std::string folder) { snapshot_root_ = std::move(folder); }
+  std::string snapshotPath(const std::string& run_id) const;
+  // The step of the snapshot this process went on from in its run (-1: none).
+  std::int64_t restoredStep() const { return restored_step_; }
+  std::int64_t snapshotsTaken() const { return snapshots_taken_; }
   const EdgeDrops& drops() const { return edge_.drops(); }
 
  protected:
@@ -258,6 +270,7 @@ class NodeBase {
   const RunConfig& config() const { return config_; }
   const run_config_t& runConfigMessage() const { return run_msg_; }
   Edge& edge() { return edge_; }
+  const Edge& edge() const { return edge_; }
 
   // On STOP, leave only once this says so (or after protocol.stop_grace_ms).
   virtual bool readyToLeave() { return true; }
@@ -272,6 +285,16 @@ class NodeBase {
   virtual void onControl(const Envelope&) {}
   // A STATUS of another process (the logger keeps its manifest from them).
   virtual void onPeerStatus(const process_status_t&) {}
+  // Snapshots: does this node take them (in this run)? Can it now (nothing of a step in flight elsewhere, e.g.
+  // on a worker thread)? Its state, written and read back in the same order (SnapshotReader refuses a file
+  // out of step, naming the field).
+  virtual bool snapshots() const { return false; }
+  virtual bool atRest() const { return true; }
+  virtual void saveState(SnapshotWriter&) {}
+  virtual void loadState(SnapshotReader&) {}
+  // Where a restart would take each channel again, as STATUS says it (takes, takes_from): the latest
+  // snapshot's positions (0 without one). The logger says what its log holds.
+  virtual void restartPositions(process_status_t& st) const;
 
   lcm::LCM& lcm_;
   std::shared_ptr<spdlog::logger> log_;
@@ -304,6 +327,16 @@ class NodeBase {
   Clock::time_point stop_deadline_{};
   std::vector<InputRule> rules_;
   std::vector<std::function<void()>> joins_;  // clearing each join (at each RUN_CONFIG)
+  // Snapshots.
+  void maybeSnapshot(bool now = false);  // now: whatever the step (leaving the run without its STOP)
+  void restoreSnapshot();
+  void removeSnapshot();
+  std::string snapshot_root_;
+  std::int64_t next_snapshot_ = 0;  // the step after which the next one is taken
+  std::vector<EdgeInbound::Position> snapshot_at_;  // the latest one's positions (what STATUS says)
+  std::int64_t restored_step_ = -1;
+  std::int64_t snapshots_taken_ = 0;
+  bool stop_received_ = false;
 };
 
 }  // namespace afford
