@@ -60,7 +60,6 @@ std::uint64_t stepBytes(const RunConfig& c, const std::string& run_id) {
 DiskNeed diskNeed(const std::vector<PlannedRun>& runs, int jobs) {
   DiskNeed need;
   std::vector<std::uint64_t> snapshots;  // each intrinsic run's, while it goes
-  std::map<std::string, std::uint64_t> weights;  // by configuration: the predictors' state
   for (const PlannedRun& r : runs) {
     if (r.spec.extrinsic) continue;
     const RunConfig c = parseRunConfigText(r.spec.config_yaml);
@@ -71,23 +70,15 @@ DiskNeed diskNeed(const std::vector<PlannedRun>& runs, int jobs) {
       need.logs += step * static_cast<std::uint64_t>(c.steps);
       ++need.kept_logs;
     }
-    // The predictors' state depends on their sizes and components, not on the run's table or seed.
-    const std::string sizes = std::to_string(c.eye.focus_side) + "/" + std::to_string(c.world.size_px) + "/" +
-                              c.predictors.affordance_kind + "/" + (c.keepsMemory() ? "memory" : "");
-    auto w = weights.find(sizes);
-    if (w == weights.end()) {
-      // Measured on the paper's affordance component: a component of one's own (Python's too) is not run for an
-      // estimate; the forward models, the same whatever the component, are most of the state.
-      RunConfig paper = c;
-      paper.predictors.affordance_kind = "paper";
-      w = weights.emplace(sizes, Predictors(paper).stateBytes()).first;
-    }
-    if (!c.checkpoint.empty() && r.keep_checkpoint) need.checkpoints += w->second;
+    // The predictors' state: their forward models, the same whatever the affordance component (one's own is
+    // not run for an estimate).
+    const std::uint64_t weights = Predictors::forwardModelBytes(c.eye.focus_side);
+    if (!c.checkpoint.empty() && r.keep_checkpoint) need.checkpoints += weights;
     // Snapshots, once the run is past its first: every process's state (the predictors' weights), and what
     // each holds of what it published since its readers' latest (a snapshot's worth of steps, twice).
     const std::int64_t every = c.protocol.recovery.snapshot_steps;
     if (every > 0 && c.steps > every)
-      snapshots.push_back(w->second + std::min<std::uint64_t>(2 * step * static_cast<std::uint64_t>(every),
+      snapshots.push_back(weights + std::min<std::uint64_t>(2 * step * static_cast<std::uint64_t>(every),
                                                               4ull * (static_cast<std::uint64_t>(c.protocol.recovery.history_mb) << 20)));
   }
   std::sort(snapshots.rbegin(), snapshots.rend());

@@ -345,10 +345,11 @@ void Predictors::save(SnapshotWriter& w) const {
   writePlain(out, sum, memory);
 }
 
-std::uint64_t Predictors::stateBytes() const {
-  Counter size;
-  writePlain(size, std::string(16, '0'), memoryBytes(memory_.get()));
-  return size.n;
+std::uint64_t Predictors::forwardModelBytes(int focus_side) {
+  const std::uint64_t input = 3ull * static_cast<std::uint64_t>(focus_side) * static_cast<std::uint64_t>(focus_side);
+  std::uint64_t doubles = 0;
+  for (int a = 0; a < kNumActions; ++a) doubles += input * (input + 1) + 2ull * (a == kMove ? 5 : 3);  // what_, where_
+  return doubles * sizeof(double);
 }
 
 void Predictors::load(SnapshotReader& r) {

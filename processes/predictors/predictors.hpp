@@ -111,8 +111,9 @@ class Predictors {
   // A snapshot's part (afford/snapshot.hpp): the checkpoint's plain content, as save() deflates it.
   void save(SnapshotWriter& w) const;
   void load(SnapshotReader& r);
-  // The bytes of that content as things stand (what a snapshot or a plain checkpoint takes).
-  std::uint64_t stateBytes() const;
+  // The bytes of the forward models' weights for focus images of `focus_side`, without building them: most
+  // of a snapshot's or a plain checkpoint's content (the affordance component and the memory are small).
+  static std::uint64_t forwardModelBytes(int focus_side);
   const std::array<std::int64_t, kNumActions>& executed() const { return executed_; }
   const std::array<std::int64_t, kNumActions>& successes() const { return successes_; }
   // The memory, if the configuration keeps one (RunConfig::keepsMemory).

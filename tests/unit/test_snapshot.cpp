@@ -22,6 +22,8 @@
 #include "afford/protocol.hpp"
 #include "afford/resend_t.hpp"
 #include "afford/snapshot.hpp"
+#include "experiment/plan/disk.hpp"
+#include "tests/in_process.hpp"
 #include "tests/support.hpp"
 
 namespace afford {
@@ -269,6 +271,30 @@ TEST(Snapshot, AReceiverNeedingWhatWasLetGoFailsTheRunNamingTheChannel) {
                          "serial 4000)"),
             std::string::npos)
       << failure;
+}
+
+// What `afford experiment` says a run will write: at least what the run's
+// messages take in its log, and not wildly more (an action at every step).
+TEST(Disk, TheEstimateBoundsWhatARunWritesToItsLog) {
+  const std::int64_t steps = 300;
+  PlannedRun run;
+  run.spec.run_id = "test-run";
+  run.spec.steps = steps;
+  run.spec.config_yaml = test::shippedConfigYaml("base", System::IMP, 3, steps);
+  run.keep_log = true;
+  const DiskNeed need = diskNeed({run}, 1);
+  EXPECT_EQ(need.kept_logs, 1u);
+  EXPECT_EQ(need.snapshots, 0u) << "a run shorter than snapshot_steps takes none";
+  test::InProcessRun live(run.spec.config_yaml, System::IMP, 3, steps);
+  ASSERT_TRUE(live.outcome.ok) << live.outcome.error;
+  std::uint64_t logged = 0;  // the run channels' events, as the logger writes them
+  for (const auto& e : live.events)
+    if (isSerialChannel(e.channel)) logged += 4 + 8 + 8 + 4 + 4 + e.channel.size() + e.data.size();
+  EXPECT_GE(need.logs, logged);
+  EXPECT_LE(need.logs, 3 * logged);
+  EXPECT_NE(diskLine(need).find("of logs (1 kept"), std::string::npos) << diskLine(need);
+  EXPECT_NE(diskWarning(need, need.total() / 2, "logs").find("has "), std::string::npos);
+  EXPECT_EQ(diskWarning(need, need.total(), "logs"), "");
 }
 
 }  // namespace
