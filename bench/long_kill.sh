@@ -4,8 +4,8 @@
 #   bench/long_kill.sh BUILD_DIR WORK_DIR PROCESS SEED STEPS AT
 # Prints one JSON line: the step the run was at when the process was killed,
 # the snapshot's step it went on from, how long it took to catch up (until
-# its STATUS says a step at least the one the run was at), and the run's
-# weights checksum.
+# its STATUS says a step within one of the others'), and the run's weights
+# checksum.
 set -euo pipefail
 root=$(cd "$(dirname "$0")/.." && pwd)
 source "$root/tests/netns.sh"
@@ -13,15 +13,8 @@ enter_test "$0" "$@"
 victim=$3 seed=$4 steps=$5 target=$6
 url="udpm://239.255.76.67:7994?ttl=0&recv_buf_size=2097152"
 mapfile -t processes < <("$build/bin/afford" processes)
-command_of() {
-  case $1 in
-    logger) echo "$build/bin/afford-logger --lcm-url $url --log-dir $out/logs --state-dir $out/logs" ;;
-    predictors) echo "$build/bin/afford-predictors --lcm-url $url --checkpoint-dir $out/logs --state-dir $out/logs" ;;
-    *) echo "$build/bin/afford-$1 --lcm-url $url --state-dir $out/logs" ;;
-  esac
-}
 declare -A pid
-start() { $(command_of "$1") >>"$out/$1.log" 2>&1 & pid[$1]=$!; }
+start() { $(process_command "$1" "$url" "$out/logs") >>"$out/$1.log" 2>&1 & pid[$1]=$!; }
 for p in "${processes[@]}"; do start "$p"; done
 "$build/bin/afford" status --lcm-url "$url" --wait-for "$(IFS=,; echo "${processes[*]}")" --state waiting \
   --seconds 30 >/dev/null || { echo "the processes did not all come up"; exit 1; }
@@ -30,23 +23,26 @@ for p in "${processes[@]}"; do start "$p"; done
   --out "$out/attached" --log-root "$out/logs" >"$out/attached.txt" 2>&1 &
 runner=$!
 run="long-base-IMP-s$seed"
-# The run's step: the furthest process's, from the STATUS heartbeats.
-step_of() {  # $1: a process, or "" for the furthest
+# From the STATUS heartbeats: the victim's step and the furthest step of the others ("VICTIM OTHERS").
+steps() {
   "$build/bin/afford" status --lcm-url "$url" --seconds 0.55 |
-    awk -v p="$1" -v r="$run" '$5 == r && (p == "" || $1 == p) && $4 > max {max = $4} END {print max + 0}'
+    awk -v p="$victim" -v r="$run" '$5 == r && $1 == p {mine = $4} $5 == r && $1 != p && $4 > max {max = $4}
+      END {print mine + 0, max + 0}'
 }
 at=0
 while ((at < target)); do
   kill -0 "$runner" 2>/dev/null || { cat "$out/attached.txt"; echo "the run ended before step $target"; exit 1; }
-  at=$(step_of "")
+  read -r _ at < <(steps)
 done
 kill -9 "${pid[$victim]}"
 wait "${pid[$victim]}" 2>/dev/null || true
 start "$victim"
 began=$(date +%s.%N)
+# Caught up: within a step of the others (in a step's choreography a process is at most one ahead or behind).
 caught=""
 while kill -0 "$runner" 2>/dev/null; do
-  if (($(step_of "$victim") >= at)); then caught=$(date +%s.%N); break; fi
+  read -r mine others < <(steps)
+  if ((mine > 0 && mine + 1 >= others)); then caught=$(date +%s.%N); break; fi
 done
 [[ -n $caught ]] || caught=$(date +%s.%N)  # the run ended first: it caught up by then
 wait "$runner" || { tail -n 20 "$out/attached.txt"; tail -n 20 "$out/$victim.log"; echo "the run with $victim killed failed"; exit 1; }

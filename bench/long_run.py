@@ -9,12 +9,14 @@ kept (`afford experiment`, its processes in a private network namespace):
 steps per second, every process's peak memory (the runner and the logger
 too), the log's size beside what `afford experiment` said it would take, and
 the log replayed (`afford replay`) to the run's weights. Then, with --kill,
-the longest run again on hand-started processes (tests/restart's way), the
-process killed with SIGKILL once the run is past --kill-at (default: half the
-run) and started again with the same command: how long it takes to catch up,
-and its weights beside the uninterrupted run's.
+the longest run again on hand-started processes (tests/restart's way) for
+each process named, killed with SIGKILL once the run is past --kill-at
+(default: half the run) and started again with the same command: how long it
+takes to catch up, and the weights beside the uninterrupted run's.
 
-Floors (exit 1 below one): at the longest length every process's peak within
+The planner's peak is over the extrinsic test that follows each run, the
+runner's over the run and that test (by then it has kept and summarised the
+run's curve). Floors (exit 1 below one): at the longest length every process's peak within
 64 MB of its peak at the shortest; steps per second at least 0.9 of the
 shortest's; the replayed weights equal; the killed run's weights equal and
 its catch-up within 30 s.
@@ -35,10 +37,10 @@ FLOOR_SPEED = 0.9
 FLOOR_CATCH_UP = 30.0
 
 
-def run_length(steps, seed, out, replay):
+def run_length(steps, seed, out, replay, keep_logs):
     folder, logs = out / f"run-{steps}", out / f"logs-{steps}"
     cmd = [str(AFFORD), "experiment", "base", "--system", "IMP", "--reps", "1", "--steps", str(steps),
-           "--seed", str(seed), "--extrinsic-reps", "1", "--scenarios", "scenario1", "--keep-logs", "all",
+           "--seed", str(seed), "--extrinsic-reps", "1", "--scenarios", "scenario1", "--keep-logs", keep_logs,
            "--transport", "udpm", "--run-prefix", "long", "--out", str(folder), "--log-root", str(logs)]
     began = time.monotonic()
     done = subprocess.run(cmd, capture_output=True, text=True)
@@ -47,6 +49,13 @@ def run_length(steps, seed, out, replay):
     disk = next((line.split("disk: ", 1)[1] for line in done.stderr.splitlines() if "disk: " in line), "")
     summary = json.loads((folder / "summary.json").read_text())
     run = summary["systems"]["IMP"]["runs"][0]
+    # The extrinsic test after the run: the planner's peak, and the runner's over the whole experiment so far
+    # (it has kept the run's outcome and summarised it by then: its curve grows with the run).
+    for kept in sorted((folder / "runs").glob("*-e0.json")):
+        test = json.loads(kept.read_text())["outcome"].get("peak_rss_kb") or {}
+        for p in ("planner", "runner"):
+            if p in test:
+                run["peak_rss_kb"][p] = max(run["peak_rss_kb"].get(p, 0), test[p])
     result = {
         "steps": steps,
         "wall_seconds": time.monotonic() - began,
@@ -57,12 +66,17 @@ def run_length(steps, seed, out, replay):
         "weights_checksum": run["weights_checksum"],
         "log_dir": run["log_dir"],
     }
-    if replay:
+    if replay and run["log_dir"]:
         began = time.monotonic()
-        rep = subprocess.run([str(AFFORD), "replay", run["log_dir"]], capture_output=True, text=True)
-        m = re.search(r"weights_checksum: ([0-9a-f]{16})", rep.stdout)
+        said = out / f"replay-{steps}.txt"
+        with open(said, "w") as sink:
+            child = subprocess.Popen([str(AFFORD), "replay", run["log_dir"]], stdout=sink, stderr=subprocess.STDOUT)
+            _, status, usage = os.wait4(child.pid, 0)  # its own peak memory, not the runs' processes'
+        text = said.read_text()
+        m = re.search(r"weights_checksum: ([0-9a-f]{16})", text)
         result["replay_seconds"] = time.monotonic() - began
-        result["replay_checksum"] = m.group(1) if m else f"none (exit {rep.returncode}): {rep.stderr[-500:]}"
+        result["replay_peak_mb"] = usage.ru_maxrss / 1024
+        result["replay_checksum"] = m.group(1) if m else f"none (status {status}): {text[-500:]}"
     # The log of a long run is gigabytes: measured, it goes.
     subprocess.run(["rm", "-rf", str(logs)], check=False)
     return result
@@ -84,20 +98,22 @@ def main():
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     ap.add_argument("--lengths", default="10000,100000,1000000")
     ap.add_argument("--seed", type=int, default=1)
-    ap.add_argument("--kill", default="", help="a process to kill in the longest run (e.g. predictors)")
+    ap.add_argument("--kill", default="", help="processes to kill, one run each, in the longest run (e.g. predictors,logger)")
     ap.add_argument("--kill-at", type=int, default=0, help="the step after which it is killed (default: half)")
     ap.add_argument("--no-replay", action="store_true")
+    ap.add_argument("--keep-logs", default="all", choices=["all", "none"],
+                    help="none: no log (and no replay), as the processes' memory and speed alone are measured")
     ap.add_argument("--out", default="bench-out/long")
     a = ap.parse_args()
     out = Path(a.out).resolve()
     out.mkdir(parents=True, exist_ok=True)
     lengths = [int(x) for x in a.lengths.split(",")]
-    results = [run_length(n, a.seed, out, not a.no_replay) for n in lengths]
+    results = [run_length(n, a.seed, out, not a.no_replay, a.keep_logs) for n in lengths]
     for r in results:
         print(f"{r['steps']} steps: {r['steps_per_second']:.0f} steps/s, " +
               ", ".join(f"{p} {mb:.0f} MB" for p, mb in sorted(r["peak_rss_mb"].items())) +
               f"; log {r['log_bytes'] / 1e6:.0f} MB (said: {r['said']})" +
-              (f"; replay {r['replay_seconds']:.0f} s, {'same weights' if r['replay_checksum'] == r['weights_checksum'] else 'OTHER WEIGHTS ' + r['replay_checksum']}"
+              (f"; replay {r['replay_seconds']:.0f} s, {r['replay_peak_mb']:.0f} MB, {'same weights' if r['replay_checksum'] == r['weights_checksum'] else 'OTHER WEIGHTS ' + r['replay_checksum']}"
                if "replay_checksum" in r else ""), flush=True)
     first, last = results[0], results[-1]
     verdicts = []
@@ -112,19 +128,21 @@ def main():
         if "replay_checksum" in r:
             verdicts.append((f"replay of the {r['steps']}-step log: {r['replay_checksum']}",
                              r["replay_checksum"] == r["weights_checksum"]))
-    kill = None
-    if a.kill:
-        kill = run_kill(last["steps"], a.seed, a.kill, a.kill_at or last["steps"] // 2, out)
-        print(f"{a.kill} killed at step {kill['killed_at']} of {last['steps']}: went on from its snapshot of step "
+    kills = []
+    for victim in filter(None, a.kill.split(",")):
+        kill = run_kill(last["steps"], a.seed, victim, a.kill_at or last["steps"] // 2, out)
+        kill["process"] = victim
+        kills.append(kill)
+        print(f"{victim} killed at step {kill['killed_at']} of {last['steps']}: went on from its snapshot of step "
               f"{kill['restored_step']}, caught up in {kill['catch_up_seconds']:.1f} s; weights {kill['weights_checksum']}",
               flush=True)
-        verdicts.append((f"{a.kill} killed: caught up in {kill['catch_up_seconds']:.1f} s",
+        verdicts.append((f"{victim} killed: caught up in {kill['catch_up_seconds']:.1f} s",
                          kill["catch_up_seconds"] <= FLOOR_CATCH_UP))
-        verdicts.append((f"{a.kill} killed: weights {kill['weights_checksum']}, uninterrupted {last['weights_checksum']}",
+        verdicts.append((f"{victim} killed: weights {kill['weights_checksum']}, uninterrupted {last['weights_checksum']}",
                          kill["weights_checksum"] == last["weights_checksum"]))
     for text, ok in verdicts:
         print(f"{'PASS' if ok else 'FAIL'}  {text}")
-    (out / "long.json").write_text(json.dumps({"lengths": results, "kill": kill,
+    (out / "long.json").write_text(json.dumps({"lengths": results, "kills": kills,
                                                "verdicts": [{"what": t, "pass": ok} for t, ok in verdicts]}, indent=2))
     return 0 if all(ok for _, ok in verdicts) else 1
 

@@ -247,15 +247,15 @@ struct Summaries {
     for (Summary& s : parts) s.wall_seconds = seconds();
     if (x.parts.size() == 1) {
       parts.front().interrupted = stopped;
-      writeWhole(x.out() / "summary.json", toJson(parts.front()).dump(2) + "\n");
+      writeJsonWhole(x.out() / "summary.json", toJson(parts.front()), 2);
       return;
     }
     SweepSummary whole = sweepSummary(x.parts, parts, x.sweep, x.o.write.out_dir);  // names each condition in its summary too
     for (std::size_t k = 0; k < x.parts.size(); ++k)
-      writeWhole(fs::path(x.parts[k].out_dir) / "summary.json", toJson(parts[k]).dump(2) + "\n");
+      writeJsonWhole(fs::path(x.parts[k].out_dir) / "summary.json", toJson(parts[k]), 2);
     whole.interrupted = stopped;
     whole.wall_seconds = seconds();
-    writeWhole(x.out() / "summary.json", toJson(whole).dump(2) + "\n");
+    writeJsonWhole(x.out() / "summary.json", toJson(whole), 2);
   }
 };
 

@@ -5,7 +5,7 @@
 #
 # group_start LABEL [ARGS...]: every process on $url, with ARGS; the group's
 #   roots are $out/LABEL-logs (the logger's --log-dir, the predictors'
-#   --checkpoint-dir: an experiment's --log-root); each one's output in
+#   --checkpoint-dir, everyone's --state-dir: an experiment's --log-root); each one's output in
 #   $out/LABEL-<process>.log, its pid in pid[<process>].
 #   With GROUP_LIMIT_KB, each runs with its address space capped (ulimit -v).
 #   Returns once every process has said it is free (afford status --wait-for;
@@ -34,6 +34,7 @@ group_start() {
     local extra=()
     [[ $p == logger ]] && extra=(--log-dir "$out/$label-logs")
     [[ $p == predictors ]] && extra=(--checkpoint-dir "$out/$label-logs")
+    extra+=(--state-dir "$out/$label-logs")
     if [[ -n ${GROUP_LIMIT_KB:-} ]]; then
       (ulimit -v "$GROUP_LIMIT_KB" && exec "$build/bin/afford-$p" --lcm-url "$url" "$@" "${extra[@]}") \
         >>"$out/$label-$p.log" 2>&1 &

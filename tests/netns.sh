@@ -23,6 +23,17 @@ enter_test() {
   out=$(cd "$3" && pwd)
 }
 
+# process_command PROCESS URL ROOT: the command that starts PROCESS on URL
+# with every folder it writes in ROOT (the logger's logs, the predictors'
+# checkpoints, everyone's snapshots): the same before and after a kill.
+process_command() {
+  case $1 in
+    logger) echo "$build/bin/afford-logger --lcm-url $2 --log-dir $3 --state-dir $3" ;;
+    predictors) echo "$build/bin/afford-predictors --lcm-url $2 --checkpoint-dir $3 --state-dir $3" ;;
+    *) echo "$build/bin/afford-$1 --lcm-url $2 --state-dir $3" ;;
+  esac
+}
+
 # wait_until SECONDS COMMAND...: returns as soon as COMMAND succeeds, or 1
 # after SECONDS. For conditions no event announces (a line in a file); the
 # processes on a bus are waited for with `afford status --wait-for`.

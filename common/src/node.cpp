@@ -128,6 +128,7 @@ void NodeBase::leaveRun() {
   if (state_ == process_status_t::WAITING) return;
   // Leaving without the run's STOP (SIGINT, SIGTERM): a snapshot of where it stands, to go on from it.
   if (!stop_received_ && state_ == process_status_t::RUNNING) maybeSnapshot(/*now=*/true);
+  settleSnapshot(/*wait=*/true);
   if (stop_received_) removeSnapshot();
   stop_received_ = false;
   try {
@@ -242,7 +243,24 @@ void NodeBase::restartPositions(process_status_t& st) const {
   st.n_takes = static_cast<int32_t>(st.takes.size());
 }
 
+void NodeBase::settleSnapshot(bool wait) {
+  if (!durable_.valid()) return;
+  if (!wait && durable_.wait_for(std::chrono::seconds(0)) != std::future_status::ready) return;
+  try {
+    durable_.get();
+    snapshot_at_ = std::move(durable_at_);
+    ++snapshots_taken_;
+    if (!run_id_.empty()) publishStatus();  // its peers may let go of what came before it
+  } catch (const std::exception& e) {
+    // The run goes on: the earlier snapshot stays, and peers hold what followed it.
+    log_->error("{}: the earlier snapshot stays", e.what());
+  }
+  durable_writer_.reset();
+}
+
 void NodeBase::maybeSnapshot(bool now) {
+  settleSnapshot(/*wait=*/now);
+  if (durable_.valid()) return;  // the last one is still being made durable
   const int every = config_.protocol.recovery.snapshot_steps;
   if (snapshot_root_.empty() || run_id_.empty() || state_ != process_status_t::RUNNING ||
       config_.phase != Phase::Intrinsic || every <= 0 || !snapshots() || edge_.failed())
@@ -250,21 +268,23 @@ void NodeBase::maybeSnapshot(bool now) {
   if ((!now && last_step_ < next_snapshot_) || last_step_ < 0 || !atRest()) return;
   const std::string path = snapshotPath(run_id_);
   try {
-    std::vector<EdgeInbound::Position> at = edge_.positions();
-    SnapshotWriter w(path);
-    w.section("run");
-    w.str(run_id_);
-    w.str(process_);
-    w.i64(run_msg_.digest);
-    w.i64(last_step_);
-    edge_.save(w);
-    w.section(process_.c_str());
-    saveState(w);
-    w.commit();
-    snapshot_at_ = std::move(at);
-    ++snapshots_taken_;
-    log_->debug("snapshot of step {} ({} bytes): {}", last_step_, w.size(), path);
-    publishStatus();  // its peers may let go of what came before it
+    auto w = std::make_unique<SnapshotWriter>(path);
+    w->section("run");
+    w->str(run_id_);
+    w->str(process_);
+    w->i64(run_msg_.digest);
+    w->i64(last_step_);
+    edge_.save(*w);
+    w->section(process_.c_str());
+    saveState(*w);
+    w->finish();
+    log_->debug("snapshot of step {} ({} bytes): {}", last_step_, w->size(), path);
+    // On the disk (fsync, rename) off the process's path: it goes on meanwhile, and says the snapshot's
+    // positions once it is there (settleSnapshot).
+    durable_at_ = edge_.positions();
+    durable_writer_ = std::move(w);
+    durable_ = std::async(std::launch::async, [writer = durable_writer_.get()] { writer->commit(); });
+    if (now) settleSnapshot(/*wait=*/true);
   } catch (const std::exception& e) {
     // The run goes on: the earlier snapshot stays, and peers hold what followed it.
     log_->error("{}: the earlier snapshot stays", e.what());

@@ -68,9 +68,17 @@ void SnapshotWriter::blob(const std::vector<std::uint8_t>& b) {
   put(b.data(), b.size());
 }
 
-void SnapshotWriter::commit() {
+void SnapshotWriter::finish() {
+  if (finished_) return;
   const std::uint64_t sum = hash_;
-  if (std::fwrite(&sum, 1, sizeof sum, file_) != sizeof sum || std::fflush(file_) != 0 || ::fsync(fileno(file_)) != 0)
+  if (std::fwrite(&sum, 1, sizeof sum, file_) != sizeof sum || std::fflush(file_) != 0)
+    throw SnapshotError("snapshot " + tmp_ + ": write failed (" + std::strerror(errno) + ")");
+  finished_ = true;
+}
+
+void SnapshotWriter::commit() {
+  finish();
+  if (::fsync(fileno(file_)) != 0)
     throw SnapshotError("snapshot " + tmp_ + ": write failed (" + std::strerror(errno) + ")");
   std::fclose(file_);
   file_ = nullptr;

@@ -69,6 +69,17 @@ void serve(Slot& slot, const PlannedRun& run, const HostRequest& o, const std::s
   slot.serving = std::move(key);
 }
 
+// A run over, its processes' snapshots go: each removes its own on the run's STOP, but a process that never
+// took the STOP (a host replaced between phases, one killed and not restarted) leaves it.
+void removeSnapshots(const fs::path& run_dir) {
+  std::error_code ec;
+  for (const auto& f : fs::directory_iterator(run_dir, ec)) {
+    const fs::path& p = f.path();
+    if (p.extension() == ".snapshot" || (p.extension() == ".tmp" && p.stem().extension() == ".snapshot"))
+      fs::remove(p, ec);
+  }
+}
+
 RunOutcome runInProcess(const PlannedRun& run, const HostRequest& o, const std::string& log_root,
                         const ProtocolConfig& protocol, Slot& slot, const OnStep& on_step) {
   const std::string tag = o.jobs > 1 ? "#" + std::to_string(slot.index) : "";
@@ -353,6 +364,7 @@ void runOne(PhaseState& st, std::size_t i, Slot& slot, Progress& progress) {
     r.error = "run '" + id + "': " + e.what();
   }
   if (!r.ok) slot.serving.clear();  // the next run starts the slot afresh: its bus, driver and processes
+  removeSnapshots(fs::path(c.log_root) / id);
   // A run that fails while the processes are being stopped failed because of it: cut too.
   const bool cut = r.interrupted || (!r.ok && stopRequested());
   if (r.ok && !r.log_dir.empty()) {

@@ -5,6 +5,7 @@
 #include <algorithm>
 #include <cmath>
 #include <filesystem>
+#include <optional>
 #include <sstream>
 
 #include "afford/version.hpp"
@@ -265,8 +266,11 @@ SystemSummary summariseSystem(const Plan& plan, const std::string& sys, const Ph
   if (!plan.tables) js.target = target;
   std::vector<Table> finals;
   std::vector<double> maes;
-  std::ostringstream curves_csv;
-  curves_csv << "system,run_id,seed,step,object,action,prediction\n";
+  // A long run's curve is tens of megabytes of rows: written as they are made.
+  std::optional<WholeFile> curves_file;
+  if (!plan.tables) curves_file.emplace(fs::path(out_dir) / ("curves_" + sys + ".csv"));
+  std::ostream* curves_csv = curves_file ? &curves_file->out() : nullptr;
+  if (curves_csv) *curves_csv << "system,run_id,seed,step,object,action,prediction\n";
   std::map<std::int64_t, std::pair<Table, int>> curve_sum;
   for (const auto& p : plan.runs) {
     if (p.system != sys || !phase.finished[p.index]) continue;
@@ -291,8 +295,8 @@ SystemSummary summariseSystem(const Plan& plan, const std::string& sys, const Ph
       for (std::size_t i = 0; i < snap.affordance.size(); ++i)
         for (int a = 0; a < kNumActions; ++a) {
           sum[i][a] += snap.affordance[i][a];
-          curves_csv << sys << "," << p.spec.run_id << "," << p.spec.seed << "," << snap.step << ",\""
-                     << object_names[i] << "\"," << kActionNames[a] << "," << snap.affordance[i][a] << "\n";
+          *curves_csv << sys << "," << p.spec.run_id << "," << p.spec.seed << "," << snap.step << ",\""
+                      << object_names[i] << "\"," << kActionNames[a] << "," << snap.affordance[i][a] << "\n";
         }
       ++n;
     }
@@ -308,7 +312,7 @@ SystemSummary summariseSystem(const Plan& plan, const std::string& sys, const Ph
       curves.mean.push_back(sum);
     }
   }
-  if (!plan.tables) writeWhole(fs::path(out_dir) / ("curves_" + sys + ".csv"), curves_csv.str());
+  if (curves_file) curves_file->commit();
   return js;
 }
 

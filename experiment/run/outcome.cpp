@@ -1,5 +1,7 @@
 #include "experiment/run/outcome.hpp"
 
+#include <iomanip>
+
 #include <fstream>
 
 #include "afford/config.hpp"
@@ -16,14 +18,33 @@ fs::path outcomePath(const fs::path& out, const std::string& run_id) { return ou
 // `text` into `path`, whole or not at all: written beside it, then renamed
 // over it (an interruption leaves the previous version or the new one).
 void writeWhole(const fs::path& path, const std::string& text) {
-  const fs::path part = path.string() + ".part";
-  {
-    std::ofstream f(part, std::ios::binary | std::ios::trunc);
-    f << text;
-    f.close();
-    if (!f) throw std::runtime_error("cannot write " + part.string());
-  }
-  fs::rename(part, path);
+  WholeFile f(path);
+  f.out() << text;
+  f.commit();
+}
+
+void writeJsonWhole(const fs::path& path, const json& j, int indent) {
+  WholeFile f(path);
+  if (indent >= 0) f.out() << std::setw(indent);
+  f.out() << j << "\n";
+  f.commit();
+}
+
+WholeFile::WholeFile(fs::path path)
+    : path_(std::move(path)), part_(path_.string() + ".part"), file_(part_, std::ios::binary | std::ios::trunc) {}
+
+WholeFile::~WholeFile() {
+  if (committed_) return;
+  file_.close();
+  std::error_code ec;
+  fs::remove(part_, ec);
+}
+
+void WholeFile::commit() {
+  file_.close();
+  if (!file_) throw std::runtime_error("cannot write " + part_.string());
+  fs::rename(part_, path_);
+  committed_ = true;
 }
 
 json outcomeToJson(const RunOutcome& r) { return toJsonOf(r); }
@@ -33,7 +54,7 @@ RunOutcome outcomeFromJson(const json& j, const std::string& what) { return from
 // A finished run's outcome, kept as it finishes: --resume does not run it again.
 void keepOutcome(const fs::path& out, const std::string& run_id, const RunOutcome& r) {
   fs::create_directories(out / "runs");
-  writeWhole(outcomePath(out, run_id), json{{"run_id", run_id}, {"outcome", outcomeToJson(r)}}.dump() + "\n");
+  writeJsonWhole(outcomePath(out, run_id), json{{"run_id", run_id}, {"outcome", outcomeToJson(r)}});
 }
 
 std::optional<RunOutcome> keptOutcome(const fs::path& out, const std::string& run_id) {

@@ -5,6 +5,7 @@
 #include <nlohmann/json.hpp>
 
 #include <filesystem>
+#include <fstream>
 #include <optional>
 #include <string>
 
@@ -15,6 +16,25 @@ namespace afford {
 // `text` into `path`, whole or not at all: written beside it, then renamed
 // over it (an interruption leaves the previous version or the new one).
 void writeWhole(const std::filesystem::path& path, const std::string& text);
+// The same, streamed: what is written to out() goes to <path>.part, renamed over the path by commit(); a file
+// never committed (an exception on the way) is removed. A long run's curves and summary are tens of
+// megabytes: written as they are made, not built in memory first.
+// `j` into `path` whole, as j.dump(indent) + "\n" writes it, streamed (a long run's summary is tens of MB).
+void writeJsonWhole(const std::filesystem::path& path, const nlohmann::json& j, int indent = -1);
+class WholeFile {
+ public:
+  explicit WholeFile(std::filesystem::path path);
+  ~WholeFile();
+  WholeFile(const WholeFile&) = delete;
+  WholeFile& operator=(const WholeFile&) = delete;
+  std::ostream& out() { return file_; }
+  void commit();
+
+ private:
+  std::filesystem::path path_, part_;
+  std::ofstream file_;
+  bool committed_ = false;
+};
 
 // The outcome as JSON and back (its keys declared once: RunOutcome::visit); reading is strict, an error
 // naming the key and `what`.

@@ -36,7 +36,10 @@ LoggerNode::LoggerNode(lcm::LCM& lcm, std::shared_ptr<spdlog::logger> log, const
 template <class Msg>
 void LoggerNode::record(const Channel<Msg>& channel) {
   takes(channel, std::string("every ") + channel.name + " of the run, in serial order, once: written as it came")
-      .then([this](const Msg&, const Envelope& e) { write(e); });
+      .then([this](const Msg& m, const Envelope& e) {
+        write(e);
+        handled(m.step);  // its STATUS says the last step it recorded: how far its log is
+      });
 }
 
 void LoggerNode::onConfigured(const RunConfig& config) {

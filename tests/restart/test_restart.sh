@@ -30,15 +30,8 @@ trap diagnose EXIT
 url="udpm://239.255.76.67:7993?ttl=0&recv_buf_size=2097152"
 steps=3000
 mapfile -t processes < <("$build/bin/afford" processes)  # the registry's
-command_of() {  # the command that starts process $1, the same before and after the kill
-  case $1 in
-    logger) echo "$build/bin/afford-logger --lcm-url $url --log-dir $out/logs --state-dir $out/logs" ;;
-    predictors) echo "$build/bin/afford-predictors --lcm-url $url --checkpoint-dir $out/logs --state-dir $out/logs" ;;
-    *) echo "$build/bin/afford-$1 --lcm-url $url --state-dir $out/logs" ;;
-  esac
-}
 declare -A pid
-start() { $(command_of "$1") >>"$out/$1.log" 2>&1 & pid[$1]=$!; }
+start() { $(process_command "$1" "$url" "$out/logs") >>"$out/$1.log" 2>&1 & pid[$1]=$!; }
 for p in "${processes[@]}"; do start "$p"; done
 "$build/bin/afford" status --lcm-url "$url" --wait-for "$(IFS=,; echo "${processes[*]}")" --state waiting \
   --seconds 30 >/dev/null || { echo "the processes did not all come up"; exit 1; }
@@ -66,7 +59,7 @@ if [[ $victim == planner ]]; then
   sleep "$(printf '%d.%03d' $((delay / 1000)) $((delay % 1000)))"
   moment="${delay} ms into its second test"
 else
-  # The run's step: the furthest process's (the logger counts no steps).
+  # The run's step: the furthest process's.
   target=${AFFORD_KILL_STEP:-$((200 + RANDOM % 1000))}  # of 3000: heartbeats come every 0.5 s, so it overshoots
   at=-1
   for _ in $(seq 200); do
@@ -93,6 +86,10 @@ grep -o "goes on from its snapshot of step [0-9]*" "$out/$victim.log" | tail -1 
 # another test case at the same time.
 "$build/bin/afford" "${experiment[@]}" "${extrinsic[@]}" --transport memq --keep-logs none --run-prefix restart \
   --out "$out/uninterrupted" --log-root "$out/uninterrupted-logs" >"$out/uninterrupted.txt" 2>&1
+
+# The runs over, no snapshot stays (each process removes its own on STOP; the runner what a process left).
+left=$(find "$out/logs" "$out/uninterrupted-logs" -name '*.snapshot*' | head -3)
+[[ -z $left ]] || { echo "snapshots left after the runs: $left"; exit 1; }
 
 # Summaries and CSV files equal, but for what the wall clock, the host or the paths decide.
 same_results "$out/uninterrupted" "$out/attached" || exit 1

@@ -17,6 +17,7 @@
 
 #include <chrono>
 #include <functional>
+#include <future>
 #include <memory>
 #include <optional>
 #include <stdexcept>
@@ -329,6 +330,9 @@ class NodeBase {
   std::vector<std::function<void()>> joins_;  // clearing each join (at each RUN_CONFIG)
   // Snapshots.
   void maybeSnapshot(bool now = false);  // now: whatever the step (leaving the run without its STOP)
+  // The snapshot being made durable (fsync, rename) on a thread of its own, once it is written: when it is,
+  // its positions become what STATUS says. wait: until it is (leaving the run).
+  void settleSnapshot(bool wait);
   void restoreSnapshot();
   void removeSnapshot();
   std::string snapshot_root_;
@@ -337,6 +341,9 @@ class NodeBase {
   std::int64_t restored_step_ = -1;
   std::int64_t snapshots_taken_ = 0;
   bool stop_received_ = false;
+  std::unique_ptr<SnapshotWriter> durable_writer_;  // declared before durable_: the task ends before it goes
+  std::vector<EdgeInbound::Position> durable_at_;
+  std::future<void> durable_;
 };
 
 }  // namespace afford

@@ -46,7 +46,10 @@ class SnapshotWriter {
     i64(static_cast<std::int64_t>(v.size()));
     bytes(v.data(), v.size() * sizeof(T));
   }
-  // Checksum, flush, fsync, rename over the path, fsync of the folder. Throws SnapshotError.
+  // The checksum written and everything handed to the kernel (fast: no wait for the disk). Throws SnapshotError.
+  void finish();
+  // fsync, rename over the path, fsync of the folder (finish() first if not done): the slow part, which may run
+  // on another thread while the process goes on. Throws SnapshotError.
   void commit();
   std::uint64_t size() const { return size_; }
 
@@ -56,7 +59,7 @@ class SnapshotWriter {
   std::FILE* file_ = nullptr;
   std::uint64_t hash_;
   std::uint64_t size_ = 0;
-  bool committed_ = false;
+  bool finished_ = false, committed_ = false;
 };
 
 class SnapshotReader {
