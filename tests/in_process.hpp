@@ -43,6 +43,7 @@ struct Restart {
   std::string process;  // empty: none
   std::int64_t at = 0;
   std::string snapshots;  // the nodes' snapshot folder (HostOptions::snapshot_root); "": none
+  bool graceful = false;  // it leaves the run first, as on SIGINT or SIGTERM (else: killed, as by SIGKILL)
 };
 
 struct InProcessRun {
@@ -106,6 +107,7 @@ struct InProcessRun {
       const NodeBase& v = host.node(restart.process);
       if (v.runId() != spec.run_id || v.lastStep() < restart.at) return;
       restarted_at = v.lastStep();
+      if (restart.graceful) host.node(restart.process).leaveRun();
       host.start(restart.process);  // the old node unsubscribes: what was queued for it is lost, as in a kill
       restarted = true;
     };

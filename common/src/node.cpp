@@ -130,7 +130,6 @@ void NodeBase::leaveRun() {
   if (!stop_received_ && state_ == process_status_t::RUNNING) maybeSnapshot(/*now=*/true);
   settleSnapshot(/*wait=*/true);
   if (stop_received_) removeSnapshot();
-  stop_received_ = false;
   try {
     onStop();
   } catch (const std::exception& e) {
@@ -139,8 +138,13 @@ void NodeBase::leaveRun() {
   }
   log_->info("left run '{}' at step {} (it waits {:.2f} ms for an input, usually)", run_id_, last_step_,
              std::chrono::duration<double, std::milli>(edge_.usualWait()).count());
+  // Left without the run's STOP (SIGINT, SIGTERM): the run goes on, and this process may be started again
+  // into it. Its counts are not said as final (its peers would drop what the restarted one publishes next).
+  const bool run_goes_on = !stop_received_;
+  stop_received_ = false;
   stop_pending_ = false;
   edge_.leave();
+  if (run_goes_on) edge_.forgetPublished();
   run_id_.clear();
   last_step_ = -1;
   setState(process_status_t::WAITING, detail_);

@@ -250,6 +250,20 @@ TEST(Choreography, AProcessRestartedMidRunGoesOnFromItsSnapshotAndTheRunIsUnchan
   }
 }
 
+// Ctrl-C in a run: the process takes a snapshot as it leaves, says no final counts (the run goes on), and
+// started again it goes on from exactly there; the run is unchanged.
+TEST(Choreography, AProcessStoppedBySigintMidRunGoesOnFromWhereItLeft) {
+  const std::string yaml = test::shippedConfigYaml("base", System::IMP, 3, 400, {"protocol.recovery.snapshot_steps=100"});
+  InProcessRun plain(baseYaml(System::IMP, 400), System::IMP, 3, 400);
+  ASSERT_TRUE(plain.outcome.ok) << plain.outcome.error;
+  InProcessRun run(yaml, System::IMP, 3, 400, {}, 50, false,
+                   Restart{"eye", 250, test::tempDir("choreography-sigint"), /*graceful=*/true});
+  ASSERT_TRUE(run.outcome.ok) << run.outcome.error;
+  EXPECT_EQ(run.restored_step, run.restarted_at) << "its snapshot is the one it took as it left";
+  EXPECT_EQ(run.log.str().find("at or beyond"), std::string::npos) << run.log.str().substr(0, 3000);
+  EXPECT_EQ(run.outcome.weights_checksum, plain.outcome.weights_checksum);
+}
+
 // The memory is part of the predictors' state: a restarted process rebuilds it from the run's messages, and the
 // run ends with the same weights, memory and decisions.
 TEST(Choreography, WithTheMemoryOptionsARestartedProcessCatchesUpAndTheRunIsUnchanged) {

@@ -124,6 +124,9 @@ class Edge {
   // Leave the run: its messages are dropped from now on; the history of what
   // was published stays, to answer late requests, until the next join().
   void leave();
+  // Forget what was published in the run left (a process leaving a run that goes on: its STATUS then
+  // claims no counts of it, so none becomes final).
+  void forgetPublished() { outbound_.join("", protocol_->recovery, {}); }
   const std::string& run() const { return run_; }
   const RunConfig* config() const { return config_; }
   const ProtocolConfig& protocol() const { return *protocol_; }
