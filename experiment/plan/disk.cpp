@@ -2,7 +2,6 @@
 
 #include <algorithm>
 #include <cstdio>
-#include <map>
 
 #include "afford/config.hpp"
 #include "afford/image.hpp"
