@@ -24,9 +24,10 @@
 #     a full machine: N runs at --jobs = cores over each transport, steps per second in all and per run, the
 #     ratio udpm / memq (floor 0.8; exit 1 below it), and wake-ups per step of each kind of process.
 #   bench/run.sh long [--lengths 10000,100000,1000000] [--seed S] [--kill PROCESS] [--kill-at STEP] [--no-replay]
-#                     [--out DIR]
+#                     [--speed-reps R] [--out DIR]
 #     runs of any length: steps per second and every process's peak memory at each length, the log's size
-#     beside what `afford experiment` said, the log replayed; with --kill, the longest run again with a process
+#     beside what `afford experiment` said, the log replayed (the shortest run R times: its median steps/s is
+#     the speed floor's base); with --kill, the longest run again with a process
 #     killed past --kill-at and restarted: its catch-up time and weights. PASS/FAIL against the floors (exit 1).
 #   bench/run.sh reproduction [--reps R] [--ext-reps K] [--jobs J] [--transport memq|udpm] [--out DIR] [WHAT ...]
 #     the whole reproduction (scripts/reproduce.sh WHAT, default all, its report in DIR): wall time beside its

@@ -44,6 +44,7 @@ struct Restart {
   std::int64_t at = 0;
   std::string snapshots;  // the nodes' snapshot folder (HostOptions::snapshot_root); "": none
   bool graceful = false;  // it leaves the run first, as on SIGINT or SIGTERM (else: killed, as by SIGKILL)
+  bool fork = false;      // snapshots written by a forked copy of this process (HostOptions::fork_snapshots)
 };
 
 struct InProcessRun {
@@ -67,7 +68,7 @@ struct InProcessRun {
     const ProtocolConfig protocol = shippedProtocol();
     // Both deciders: the run's configuration says which one decides.
     InProcessHost host(lcm, protocol, logger,
-                       HostOptions{/*single_thread=*/false, checkpointRoot(), nullptr, restart.snapshots});
+                       HostOptions{/*single_thread=*/false, checkpointRoot(), nullptr, restart.snapshots, restart.fork});
     host.start(runProcesses(/*extrinsic=*/false, /*recorded=*/false));
     host.start("planner");
     RunDriver driver(lcm, logger("runner"), protocol);

@@ -248,23 +248,49 @@ void NodeBase::restartPositions(process_status_t& st) const {
 }
 
 void NodeBase::settleSnapshot(bool wait) {
-  if (!durable_.valid()) return;
-  if (!wait && durable_.wait_for(std::chrono::seconds(0)) != std::future_status::ready) return;
-  try {
-    durable_.get();
-    snapshot_at_ = std::move(durable_at_);
-    ++snapshots_taken_;
-    if (!run_id_.empty()) publishStatus();  // its peers may let go of what came before it
-  } catch (const std::exception& e) {
-    // The run goes on: the earlier snapshot stays, and peers hold what followed it.
-    log_->error("{}: the earlier snapshot stays", e.what());
+  if (durable_child_) {
+    if (!durable_child_->ended(wait)) return;
+    const std::string error = durable_child_->error();
+    durable_child_.reset();
+    if (!error.empty()) {
+      // The run goes on: the earlier snapshot stays, and peers hold what followed it.
+      log_->error("{}: the earlier snapshot stays", error);
+      return;
+    }
+  } else if (durable_.valid()) {
+    if (!wait && durable_.wait_for(std::chrono::seconds(0)) != std::future_status::ready) return;
+    try {
+      durable_.get();
+      durable_writer_.reset();
+    } catch (const std::exception& e) {
+      durable_writer_.reset();
+      log_->error("{}: the earlier snapshot stays", e.what());
+      return;
+    }
+  } else {
+    return;
   }
-  durable_writer_.reset();
+  snapshot_at_ = std::move(durable_at_);
+  ++snapshots_taken_;
+  log_->debug("snapshot of step {} in place", durable_step_);
+  if (!run_id_.empty()) publishStatus();  // its peers may let go of what came before it
+}
+
+void NodeBase::writeSnapshot(SnapshotWriter& w) {
+  w.section("run");
+  w.str(run_id_);
+  w.str(process_);
+  w.i64(run_msg_.digest);
+  w.i64(last_step_);
+  edge_.save(w);
+  w.section(process_.c_str());
+  saveState(w);
+  w.finish();
 }
 
 void NodeBase::maybeSnapshot(bool now) {
   settleSnapshot(/*wait=*/now);
-  if (durable_.valid()) return;  // the last one is still being made durable
+  if (durable_child_ || durable_.valid()) return;  // the last one is not in place yet
   const int every = config_.protocol.recovery.snapshot_steps;
   if (snapshot_root_.empty() || run_id_.empty() || state_ != process_status_t::RUNNING ||
       config_.phase != Phase::Intrinsic || every <= 0 || !snapshots() || edge_.failed())
@@ -272,22 +298,26 @@ void NodeBase::maybeSnapshot(bool now) {
   if ((!now && last_step_ < next_snapshot_) || last_step_ < 0 || !atRest()) return;
   const std::string path = snapshotPath(run_id_);
   try {
-    auto w = std::make_unique<SnapshotWriter>(path);
-    w->section("run");
-    w->str(run_id_);
-    w->str(process_);
-    w->i64(run_msg_.digest);
-    w->i64(last_step_);
-    edge_.save(*w);
-    w->section(process_.c_str());
-    saveState(*w);
-    w->finish();
-    log_->debug("snapshot of step {} ({} bytes): {}", last_step_, w->size(), path);
-    // On the disk (fsync, rename) off the process's path: it goes on meanwhile, and says the snapshot's
-    // positions once it is there (settleSnapshot).
+    const auto began = Clock::now();
+    prepareSnapshot();
     durable_at_ = edge_.positions();
-    durable_writer_ = std::move(w);
-    durable_ = std::async(std::launch::async, [writer = durable_writer_.get()] { writer->commit(); });
+    durable_step_ = last_step_;
+    if (fork_snapshots_) {
+      // The copy writes, flushes and renames; this process goes on at once.
+      durable_child_ = std::make_unique<SnapshotChild>([this, &path] {
+        SnapshotWriter w(path);
+        writeSnapshot(w);
+        w.commit();
+      });
+    } else {
+      // Written here, flushed and renamed on a thread of its own.
+      auto w = std::make_unique<SnapshotWriter>(path);
+      writeSnapshot(*w);
+      durable_writer_ = std::move(w);
+      durable_ = std::async(std::launch::async, [writer = durable_writer_.get()] { writer->commit(); });
+    }
+    log_->debug("snapshot of step {} begun ({}) in {} ms: {}", last_step_, fork_snapshots_ ? "forked" : "written",
+                std::chrono::duration_cast<milliseconds>(Clock::now() - began).count(), path);
     if (now) settleSnapshot(/*wait=*/true);
   } catch (const std::exception& e) {
     // The run goes on: the earlier snapshot stays, and peers hold what followed it.

@@ -130,6 +130,7 @@ int processMain(int argc, char** argv, const ProcessSpec& spec, const std::funct
   }
   node->useBusKey(key);
   node->keepSnapshotsIn(state_dir);
+  node->forkSnapshots(spec.fork_snapshots);
   log->info("listening on {}{}", url, key ? " (keyed: messages without this key's tag are dropped)" : "");
   while (!stopRequested()) {
     // Everything pending (or what comes before the node's next business), then that business.

@@ -1,9 +1,13 @@
 #include "afford/snapshot.hpp"
 
 #include <fcntl.h>
+#include <sys/prctl.h>
+#include <sys/wait.h>
 #include <unistd.h>
 
+#include <algorithm>
 #include <cerrno>
+#include <csignal>
 #include <cstring>
 #include <filesystem>
 
@@ -87,6 +91,73 @@ void SnapshotWriter::commit() {
   if (ec) throw SnapshotError("snapshot " + path_ + ": cannot be put in place (" + ec.message() + ")");
   committed_ = true;
   syncFolder(fs::path(path_).parent_path());
+}
+
+SnapshotChild::SnapshotChild(const std::function<void()>& write) {
+  int ends[2];
+  if (::pipe2(ends, O_CLOEXEC) != 0)
+    throw SnapshotError(std::string("snapshot: no pipe for its writer (") + std::strerror(errno) + ")");
+  const pid_t parent = ::getpid();
+  pid_ = ::fork();
+  if (pid_ < 0) {
+    const int e = errno;
+    ::close(ends[0]);
+    ::close(ends[1]);
+    throw SnapshotError(std::string("snapshot: cannot fork its writer (") + std::strerror(e) + ")");
+  }
+  if (pid_ == 0) {
+    ::close(ends[0]);
+    // Dies with the process; if it is gone already, there is no one to write for.
+    if (::prctl(PR_SET_PDEATHSIG, SIGKILL) != 0 || ::getppid() != parent) ::_exit(3);
+    std::string why;
+    try {
+      write();
+    } catch (const std::exception& e) {
+      why = e.what();
+    } catch (...) {
+      why = "snapshot: its writer failed";
+    }
+    if (why.empty()) ::_exit(0);
+    const std::size_t n = std::min<std::size_t>(why.size(), 4000);  // within the pipe's atomic write
+    const ssize_t sent = ::write(ends[1], why.data(), n);
+    ::_exit(sent == static_cast<ssize_t>(n) ? 1 : 2);
+  }
+  ::close(ends[1]);
+  reply_ = ends[0];
+}
+
+SnapshotChild::~SnapshotChild() {
+  ended(/*wait=*/true);
+  if (reply_ >= 0) ::close(reply_);
+}
+
+bool SnapshotChild::ended(bool wait) {
+  if (ended_) return true;
+  int status = 0;
+  pid_t got;
+  do got = ::waitpid(pid_, &status, wait ? 0 : WNOHANG);
+  while (got < 0 && errno == EINTR);
+  if (got == 0) return false;
+  ended_ = true;
+  if (got < 0) {
+    error_ = std::string("snapshot: its writer was lost (") + std::strerror(errno) + ")";
+  } else if (WIFEXITED(status) && WEXITSTATUS(status) == 0) {
+    error_.clear();
+  } else {
+    char text[4096];
+    ssize_t n;
+    do n = ::read(reply_, text, sizeof text);
+    while (n < 0 && errno == EINTR);
+    if (n > 0)
+      error_.assign(text, static_cast<std::size_t>(n));
+    else if (WIFSIGNALED(status))
+      error_ = "snapshot: its writer was ended by signal " + std::to_string(WTERMSIG(status));
+    else
+      error_ = "snapshot: its writer failed (exit " + std::to_string(WEXITSTATUS(status)) + ")";
+  }
+  ::close(reply_);
+  reply_ = -1;
+  return true;
 }
 
 SnapshotReader::SnapshotReader(std::string path, std::uint64_t max_bytes) : path_(std::move(path)) {

@@ -138,6 +138,7 @@ RunOutcome runOverUdpm(const PlannedRun& run, const HostRequest& o, const std::s
   // the folder each writes in.
   std::vector<std::string> common;
   if (!o.bus_key.empty()) common = {"--bus-key", fs::absolute(o.bus_key).string()};
+  if (o.process_log_level != "info") common.insert(common.end(), {"--log-level", o.process_log_level});
   if (!attached && (!slot.group || !slot.group->health().empty() || slot.extrinsic != run.spec.extrinsic)) {
     slot.group.reset();
     slot.extrinsic = run.spec.extrinsic;

@@ -30,6 +30,8 @@ struct HostOptions {
   PlannerObserver* planner_observer = nullptr;
   // The folder of the nodes' snapshots (NodeBase::keepSnapshotsIn); "": none (replay, explain, the tables).
   std::string snapshot_root;
+  // Snapshots written by a forked copy of the process (NodeBase::forkSnapshots): only where no node runs Python.
+  bool fork_snapshots = false;
 };
 
 using LoggerFactory = std::function<std::shared_ptr<spdlog::logger>(const std::string& process)>;

@@ -312,9 +312,12 @@ void PredictorsNode::finish() {
 // pending are made first: nothing in the intrinsic phase reads those models,
 // and they get the same updates in the same order, so the run's results are
 // those of a run without snapshots.
-void PredictorsNode::saveState(SnapshotWriter& w) {
+void PredictorsNode::prepareSnapshot() {
   trainPendingEffects();
-  if (trainer_) trainer_->drain();
+  if (trainer_) trainer_->drain();  // the forward models as they stand after every effect so far
+}
+
+void PredictorsNode::saveState(SnapshotWriter& w) {
   w.i64(current_);
   w.i64(static_cast<std::int64_t>(outcome_));
   w.i64(action_);

@@ -48,6 +48,7 @@ class PredictorsNode : public NodeBase {
   void onConfigured(const RunConfig& config) override;
   void onStop() override;
   bool snapshots() const override { return true; }
+  void prepareSnapshot() override;
   void saveState(SnapshotWriter& w) override;
   void loadState(SnapshotReader& r) override;
   void decided(const decision_t& m);         // intrinsic: the decision of the current step

@@ -319,7 +319,7 @@ int serve(const std::string& name, const std::vector<std::string>& args) {
   const int argc = static_cast<int>(owned.size());
   py::gil_scoped_release free;
   if (name == "motivation")
-    return processMain(argc, argv.data(), {"motivation", "a motivation written in Python (afford.process)"},
+    return processMain(argc, argv.data(), {"motivation", "a motivation written in Python (afford.process)", /*fork_snapshots=*/false},
                        [](CLIHook&) {},
                        [](lcm::LCM& lcm, std::shared_ptr<spdlog::logger> log, const ProtocolConfig& protocol) {
                          return std::make_unique<MotivationNode>(lcm, std::move(log), protocol);
@@ -327,7 +327,8 @@ int serve(const std::string& name, const std::vector<std::string>& args) {
   if (name == "predictors") {
     std::string checkpoint_root = "logs";
     return processMain(
-        argc, argv.data(), {"predictors", "predictors with an affordance predictor written in Python (afford.process)"},
+        argc, argv.data(), {"predictors", "predictors with an affordance predictor written in Python (afford.process)",
+         /*fork_snapshots=*/false},
         [&](CLIHook& cli) {
           cli.option("--checkpoint-dir", checkpoint_root,
                      "the only folder checkpoints are written in (<dir>/<run-id>/) and read from");

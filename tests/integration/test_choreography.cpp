@@ -215,21 +215,24 @@ TEST(Choreography, ARejectedConfigFailsTheRunNamingTheKeyBeforeAnyProcessTakesIt
 // given the run again by the runner, goes on from its latest snapshot (taken
 // every 100 steps here), catches up from what its peers still hold (RESEND:
 // only what followed its snapshot), and the run ends as if nothing had
-// happened; the snapshots themselves change nothing of the run. (Restarts
-// from the run's start: the memory options' test below, tests/restart.)
+// happened; the snapshots themselves change nothing of the run. The eye and
+// the predictors write theirs in a forked copy of the process (as the
+// processes do), the others on their own path. (Restarts from the run's
+// start: the memory options' test below, tests/restart.)
 TEST(Choreography, AProcessRestartedMidRunGoesOnFromItsSnapshotAndTheRunIsUnchanged) {
   const std::string yaml = test::shippedConfigYaml("base", System::IMP, 3, 400, {"protocol.recovery.snapshot_steps=100"});
   InProcessRun plain(baseYaml(System::IMP, 400), System::IMP, 3, 400);
   ASSERT_TRUE(plain.outcome.ok) << plain.outcome.error;
   for (const std::string& p : runProcesses(/*extrinsic=*/false, /*recorded=*/false)) {
     const std::string snapshots = test::tempDir("choreography-snapshots-" + p);
-    InProcessRun run(yaml, System::IMP, 3, 400, {}, 50, false, Restart{p, 250, snapshots});
+    const bool fork = p == "eye" || p == "predictors";
+    InProcessRun run(yaml, System::IMP, 3, 400, {}, 50, false, Restart{p, 250, snapshots, false, fork});
     ASSERT_TRUE(run.outcome.ok) << p << ": " << run.outcome.error;
     ASSERT_TRUE(run.restarted) << p;
     EXPECT_GE(run.restarted_at, 250) << p;
     EXPECT_LT(run.restarted_at, 399) << p;
-    // Its latest durable one: the one of step 200 is flushed to the disk on a thread while the run goes on, and
-    // on a loaded machine it may not be there yet at step 250.
+    // Its latest durable one: the one of step 200 is made durable while the run goes on, and on a loaded
+    // machine it may not be there yet at step 250.
     EXPECT_GE(run.restored_step, 100) << p << " went on from no snapshot";
     EXPECT_LE(run.restored_step, run.restarted_at) << p;
     // What it asked for again came after its snapshot: it did not pull the run from its start.

@@ -1,18 +1,20 @@
 // Runs of any length (docs/processes-and-channels.md): a process's snapshot
 // file is read back as written, a damaged, cut or foreign one is refused
-// naming the field, and a writer killed while it writes leaves the earlier
-// snapshot whole; a publisher holds what it published only until every reader
+// naming the field, and a writer killed while it writes (itself or the forked
+// copy of its process) leaves the earlier snapshot whole; a publisher holds what it published only until every reader
 // of the run has a snapshot after it (and never more than history_mb), and a
 // receiver that needs what was let go fails naming the channel.
 #include <gtest/gtest.h>
 #include <signal.h>
 #include <spdlog/sinks/null_sink.h>
+#include <sys/prctl.h>
 #include <sys/wait.h>
 #include <unistd.h>
 
 #include <filesystem>
 #include <fstream>
 #include <string>
+#include <thread>
 #include <vector>
 
 #include "afford/decision_t.hpp"
@@ -138,6 +140,73 @@ TEST(Snapshot, AWriterKilledWhileItWritesLeavesTheEarlierSnapshotWhole) {
   EXPECT_EQ(readSample(path), 1);
   writeSample(path, 2);  // the next one replaces the temporary file and the earlier snapshot
   EXPECT_EQ(readSample(path), 2);
+  close(ready[0]);
+  close(ready[1]);
+}
+
+// A snapshot written by a forked copy of the process: the file is in place
+// once the copy has ended; a copy that fails says why, and the earlier
+// snapshot stays.
+TEST(Snapshot, AForkedCopyPutsItInPlaceOrSaysWhyItFailed) {
+  const std::string path = test::tempDir("snapshot-forked") + "/eye.snapshot";
+  writeSample(path, 1);
+  {
+    SnapshotChild copy([&] { writeSample(path, 2); });
+    EXPECT_GT(copy.pid(), 0);
+    EXPECT_TRUE(copy.ended(/*wait=*/true));
+    EXPECT_EQ(copy.error(), "");
+  }
+  EXPECT_EQ(readSample(path), 2);
+  SnapshotChild failed([&] {
+    SnapshotWriter w(path);
+    w.section("sample");
+    throw SnapshotError("snapshot " + path + ".tmp: write failed (No space left on device)");
+  });
+  ASSERT_TRUE(failed.ended(/*wait=*/true));
+  EXPECT_EQ(failed.error(), "snapshot " + path + ".tmp: write failed (No space left on device)");
+  EXPECT_FALSE(fs::exists(path + ".tmp"));  // the copy's writer removed what it had begun
+  EXPECT_EQ(readSample(path), 2);
+}
+
+// The process killed (SIGKILL) while its forked copy writes the next
+// snapshot: the copy dies with it, and the earlier snapshot is whole.
+TEST(Snapshot, AForkedCopyDiesWithItsProcessAndTheEarlierSnapshotStaysWhole) {
+  const std::string path = test::tempDir("snapshot-forked-killed") + "/predictors.snapshot";
+  writeSample(path, 1);
+  // Orphans come to this test, so it sees the copy end.
+  ASSERT_EQ(prctl(PR_SET_CHILD_SUBREAPER, 1), 0);
+  int ready[2];
+  ASSERT_EQ(pipe(ready), 0);
+  const pid_t process = fork();
+  ASSERT_GE(process, 0);
+  if (process == 0) {
+    SnapshotChild copy([&] {
+      SnapshotWriter w(path);
+      w.section("sample");
+      const std::vector<std::uint8_t> chunk(1 << 16, 0xab);
+      w.blob(chunk);
+      const pid_t me = getpid();
+      if (write(ready[1], &me, sizeof me) != sizeof me) _exit(2);
+      for (;;) w.blob(chunk);  // until it dies
+    });
+    copy.ended(/*wait=*/true);
+    _exit(0);
+  }
+  pid_t copy = 0;
+  ASSERT_EQ(read(ready[0], &copy, sizeof copy), static_cast<ssize_t>(sizeof copy));  // the copy is writing
+  kill(process, SIGKILL);
+  int status = 0;
+  ASSERT_EQ(waitpid(process, &status, 0), process);
+  // The copy, now this test's child, ends by SIGKILL (it would write forever otherwise).
+  const auto deadline = std::chrono::steady_clock::now() + std::chrono::seconds(20);
+  pid_t ended = 0;
+  while ((ended = waitpid(copy, &status, WNOHANG)) == 0 && std::chrono::steady_clock::now() < deadline)
+    std::this_thread::sleep_for(std::chrono::milliseconds(5));
+  if (ended != copy) kill(copy, SIGKILL);
+  ASSERT_EQ(ended, copy) << "the copy outlived its process";
+  EXPECT_TRUE(WIFSIGNALED(status) && WTERMSIG(status) == SIGKILL);
+  prctl(PR_SET_CHILD_SUBREAPER, 0);
+  EXPECT_EQ(readSample(path), 1);
   close(ready[0]);
   close(ready[1]);
 }

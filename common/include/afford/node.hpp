@@ -223,6 +223,10 @@ class NodeBase {
   // configuration), it loads it and takes each channel again from where the
   // snapshot was taken. The run's end (STOP) removes it. "" (the default): none.
   void keepSnapshotsIn(std::string folder) { snapshot_root_ = std::move(folder); }
+  // Written by a forked copy of the process (SnapshotChild), which goes on at once; off (the default): written
+  // on its own path and flushed on a thread. Only a process whose every component is C++ forks: a copy of a
+  // Python interpreter cannot run Python safely.
+  void forkSnapshots(bool on) { fork_snapshots_ = on; }
   std::string snapshotPath(const std::string& run_id) const;
   // The step of the snapshot this process went on from in its run (-1: none).
   std::int64_t restoredStep() const { return restored_step_; }
@@ -291,6 +295,9 @@ class NodeBase {
   // out of step, naming the field).
   virtual bool snapshots() const { return false; }
   virtual bool atRest() const { return true; }
+  // Before saveState, on the process's own path: whatever its state waits for on another thread done (saveState
+  // may run in a forked copy of the process, which holds only the calling thread).
+  virtual void prepareSnapshot() {}
   virtual void saveState(SnapshotWriter&) {}
   virtual void loadState(SnapshotReader&) {}
   // Where a restart would take each channel again, as STATUS says it (takes, takes_from): the latest
@@ -330,9 +337,10 @@ class NodeBase {
   std::vector<std::function<void()>> joins_;  // clearing each join (at each RUN_CONFIG)
   // Snapshots.
   void maybeSnapshot(bool now = false);  // now: whatever the step (leaving the run without its STOP)
-  // The snapshot being made durable (fsync, rename) on a thread of its own, once it is written: when it is,
-  // its positions become what STATUS says. wait: until it is (leaving the run).
+  // The snapshot being made durable (written by a forked copy, or flushed and renamed on a thread of its own):
+  // when it is, its positions become what STATUS says. wait: until it is (leaving the run).
   void settleSnapshot(bool wait);
+  void writeSnapshot(SnapshotWriter& w);  // everything but the flush
   void restoreSnapshot();
   void removeSnapshot();
   std::string snapshot_root_;
@@ -341,9 +349,12 @@ class NodeBase {
   std::int64_t restored_step_ = -1;
   std::int64_t snapshots_taken_ = 0;
   bool stop_received_ = false;
+  bool fork_snapshots_ = false;
   std::unique_ptr<SnapshotWriter> durable_writer_;  // declared before durable_: the task ends before it goes
   std::vector<EdgeInbound::Position> durable_at_;
+  std::int64_t durable_step_ = -1;
   std::future<void> durable_;
+  std::unique_ptr<SnapshotChild> durable_child_;
 };
 
 }  // namespace afford

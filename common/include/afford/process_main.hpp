@@ -22,6 +22,9 @@ namespace afford {
 struct ProcessSpec {
   std::string name;         // "eye"
   std::string description;  // one line for --help
+  // Snapshots written by a forked copy of the process (NodeBase::forkSnapshots); not in a process that runs
+  // Python code.
+  bool fork_snapshots = true;
 };
 class CLIHook;
 int processMain(int argc, char** argv, const ProcessSpec& spec, const std::function<void(CLIHook&)>& add_options,

@@ -14,8 +14,11 @@
 // refused (SnapshotError, naming the file and the field) and never allocates
 // more than the file holds.
 #pragma once
+#include <sys/types.h>
+
 #include <cstdint>
 #include <cstdio>
+#include <functional>
 #include <stdexcept>
 #include <string>
 #include <vector>
@@ -60,6 +63,32 @@ class SnapshotWriter {
   std::uint64_t hash_;
   std::uint64_t size_ = 0;
   bool finished_ = false, committed_ = false;
+};
+
+// A snapshot written by a forked copy of the process (copy-on-write, as
+// Redis writes its snapshots): the process goes on at once while the copy
+// runs `write` (which writes, flushes and renames the file) and ends. The copy
+// holds only the calling thread, so `write` must not wait on another one (a
+// node finishes its workers' business first), and it neither logs nor flushes
+// what the process buffered: it ends with _exit, its error (an exception's
+// text) sent back through a pipe. It dies with the process (PR_SET_PDEATHSIG):
+// a process killed while its snapshot is written leaves the earlier one whole.
+class SnapshotChild {
+ public:
+  explicit SnapshotChild(const std::function<void()>& write);  // throws SnapshotError if it cannot fork
+  ~SnapshotChild();                                             // waits for the copy to end
+  SnapshotChild(const SnapshotChild&) = delete;
+  SnapshotChild& operator=(const SnapshotChild&) = delete;
+  // Has the copy ended? wait: until it has. Once it has, error() says why it failed ("": it did not).
+  bool ended(bool wait);
+  const std::string& error() const { return error_; }
+  pid_t pid() const { return pid_; }
+
+ private:
+  pid_t pid_ = -1;
+  int reply_ = -1;  // the pipe's end the copy's error comes through
+  bool ended_ = false;
+  std::string error_;
 };
 
 class SnapshotReader {
