@@ -115,9 +115,9 @@ def main():
     lengths = [int(x) for x in a.lengths.split(",")]
     results = [run_length(n, a.seed, out, not a.no_replay, a.keep_logs) for n in lengths]
     # The shortest again after the longest (the speed floor's base: their median).
-    base = [results[0]] + [run_length(lengths[0], a.seed, out, False, a.keep_logs, rep)
-                           for rep in range(1, max(1, a.speed_reps))]
-    base_speed = statistics.median(r["steps_per_second"] for r in base)
+    base_runs = [results[0]] + [run_length(lengths[0], a.seed, out, False, a.keep_logs, rep)
+                                for rep in range(1, max(1, a.speed_reps))]
+    base_speed = statistics.median(r["steps_per_second"] for r in base_runs)
     for r in results:
         print(f"{r['steps']} steps: {r['steps_per_second']:.0f} steps/s, " +
               ", ".join(f"{p} {mb:.0f} MB" for p, mb in sorted(r["peak_rss_mb"].items())) +
@@ -132,7 +132,8 @@ def main():
             verdicts.append((f"{p}: peak {mb:.0f} MB at {last['steps']} steps, {base:.0f} MB at {first['steps']}",
                              mb - base <= FLOOR_MB))
     ratio = last["steps_per_second"] / base_speed
-    print(f"{first['steps']} steps, {len(base)} runs: " + ", ".join(f"{r['steps_per_second']:.0f}" for r in base) +
+    print(f"{first['steps']} steps, {len(base_runs)} runs: " +
+          ", ".join(f"{r['steps_per_second']:.0f}" for r in base_runs) +
           f" steps/s (median {base_speed:.0f})", flush=True)
     verdicts.append((f"steps/s at {last['steps']} / the median at {first['steps']}: {ratio:.3f}",
                      ratio >= FLOOR_SPEED))
@@ -154,7 +155,7 @@ def main():
                          kill["weights_checksum"] == last["weights_checksum"]))
     for text, ok in verdicts:
         print(f"{'PASS' if ok else 'FAIL'}  {text}")
-    (out / "long.json").write_text(json.dumps({"lengths": results, "base_runs": base, "base_steps_per_second": base_speed,
+    (out / "long.json").write_text(json.dumps({"lengths": results, "base_runs": base_runs, "base_steps_per_second": base_speed,
                                                "kills": kills,
                                                "verdicts": [{"what": t, "pass": ok} for t, ok in verdicts]}, indent=2))
     return 0 if all(ok for _, ok in verdicts) else 1

@@ -38,6 +38,7 @@ void EdgeOutbound::kept(const std::string& channel, std::int64_t digest, std::ve
   bytes_ += bytes.size();
   h.messages.push_back(std::move(bytes));
   h.republished.emplace_back();
+  if (hold_nothing_) popFront(h);
   letGo();
   bound();
 }

@@ -23,6 +23,7 @@
 #include "afford/logging.hpp"
 #include "afford/run_config_t.hpp"
 #include "afford/run_result_t.hpp"
+#include "afford/seal.hpp"
 #include "motivation/component.hpp"
 #include "predictors/affordance.hpp"
 #include "logger/logger.hpp"
@@ -59,73 +60,100 @@ LogLimits logLimits(const ProtocolConfig& protocol) {
   return l;
 }
 
-RecordedLog readRecordedLog(const fs::path& log_path, spdlog::logger& log, const BusKey* key) {
-  const LogLimits limits = logLimits(loadProtocol(defaultConfigDir()));
-  RecordedLog out;
-  for (const auto& f : logSegments(log_path)) {
-    LogFileContents part = readLogFile(f, limits);
-    if (key) {  // a recording of a keyed bus: only what carries the key's tag, without it
-      std::vector<LogEvent> tagged;
-      for (LogEvent& e : part.events) {
-        if (key->verify(e.channel, e.data.data(), e.data.size())) {
-          e.data.resize(e.data.size() - BusKey::kTrailerBytes);
-          tagged.push_back(std::move(e));
-        } else if (out.untagged++ < 10) {
-          log.warn("{}: offset {}: a {} event without a valid tag of the key: skipped", f.string(), e.offset,
-                   e.channel);
-        }
-      }
-      part.events = std::move(tagged);
+RecordedLogStream::RecordedLogStream(const fs::path& log_path, spdlog::logger& log, const BusKey* key)
+    : segments_(logSegments(log_path)), log_(log), key_(key), limits_(logLimits(loadProtocol(defaultConfigDir()))) {}
+
+RecordedLogStream::~RecordedLogStream() = default;
+
+void RecordedLogStream::endSegment() {
+  const LogReader& r = *reader_;
+  const std::string f = r.file().string();
+  for (const LogProblem& p : r.problems()) log_.warn("{}: offset {}: {}: skipped", f, p.offset, p.what);
+  if (r.problemCount() > static_cast<std::int64_t>(r.problems().size()))
+    log_.warn("{}: {} more malformed parts skipped", f, r.problemCount() - static_cast<std::int64_t>(r.problems().size()));
+  if (r.tornBytes() > 0)
+    log_.warn("{}: the last event is incomplete ({} bytes): reading up to the one before", f, r.tornBytes());
+  counts_.torn_bytes += r.tornBytes();
+  counts_.malformed += r.problemCount();
+  counts_.skipped_bytes += r.skippedBytes();
+  reader_.reset();
+}
+
+bool RecordedLogStream::next(LogEvent& e) {
+  for (;;) {
+    if (!reader_) {
+      if (at_ == segments_.size()) return false;
+      reader_ = std::make_unique<LogReader>(segments_[at_++], limits_);
     }
-    for (const LogProblem& p : part.problems) log.warn("{}: offset {}: {}: skipped", f.string(), p.offset, p.what);
-    if (part.problem_count > static_cast<std::int64_t>(part.problems.size()))
-      log.warn("{}: {} more malformed parts skipped", f.string(),
-               part.problem_count - static_cast<std::int64_t>(part.problems.size()));
-    if (part.torn_bytes > 0)
-      log.warn("{}: the last event is incomplete ({} bytes): reading up to the one before", f.string(), part.torn_bytes);
-    out.torn_bytes += part.torn_bytes;
-    out.malformed += part.problem_count;
-    out.skipped_bytes += part.skipped_bytes;
-    out.events.insert(out.events.end(), std::make_move_iterator(part.events.begin()),
-                      std::make_move_iterator(part.events.end()));
+    if (!reader_->next(e)) {
+      endSegment();
+      continue;
+    }
+    if (!key_) return true;
+    // A recording of a keyed bus: only what carries the key's tag, without it.
+    if (key_->verify(e.channel, e.data.data(), e.data.size())) {
+      e.data.resize(e.data.size() - BusKey::kTrailerBytes);
+      return true;
+    }
+    if (counts_.untagged++ < 10)
+      log_.warn("{}: offset {}: a {} event without a valid tag of the key: skipped", reader_->file().string(),
+                e.offset, e.channel);
   }
+}
+
+RecordedLog readRecordedLog(const fs::path& log_path, spdlog::logger& log, const BusKey* key) {
+  RecordedLogStream in(log_path, log, key);
+  std::vector<LogEvent> events;
+  LogEvent e;
+  while (in.next(e)) events.push_back(std::move(e));
+  RecordedLog out = in.counts();
+  out.events = std::move(events);
   return out;
+}
+
+RunSelector::RunSelector(std::string run_id, std::string where, spdlog::logger& log)
+    : run_id_(std::move(run_id)), where_(std::move(where)), log_(log), observer_(loadProtocol(defaultConfigDir())) {}
+
+bool RunSelector::take(const LogEvent& e) {
+  // Our logger's logs start with the RUN_CONFIG; a plain lcm-logger recording
+  // may hold heartbeats before it, other runs around it, and forged datagrams.
+  if (!found_) {
+    if (e.channel != ch::runConfig.name) return false;
+    run_config_t rc;
+    std::string why;
+    if (!decodeChecked(e.data.data(), e.data.size(), BoundsContext{&observer_, nullptr}, rc, why)) {
+      ++refused_configs_;
+      log_.warn("{}: the RUN_CONFIG event at offset {} is refused ({}): skipped", where_, e.offset, why);
+      return false;
+    }
+    if (!run_id_.empty() && rc.run_id != run_id_) return false;
+    found_ = true;
+    config_ = std::move(rc);
+    return true;
+  }
+  // The run's own events from there on: those whose run id is the run's.
+  std::string id;
+  if (!peekRunId(e.data.data(), e.data.size(), observer_.limits.name_bytes, id)) return false;
+  return id == config_.run_id || (id.empty() && e.channel == ch::status.name);
+}
+
+void RunSelector::check() const {
+  if (found_) return;
+  throw std::runtime_error(
+      where_ + (run_id_.empty() ? std::string(": no RUN_CONFIG that the edge accepts in the log, so nothing says how "
+                                              "the run was configured")
+                                : ": no RUN_CONFIG of run '" + run_id_ + "' that the edge accepts in the log"));
 }
 
 RunEvents runEventsOf(std::vector<LogEvent> events, const std::string& run_id, const std::string& where,
                       spdlog::logger& log) {
-  // Our logger's logs start with the RUN_CONFIG; a plain lcm-logger recording
-  // may hold heartbeats before it, other runs around it, and forged datagrams.
-  const ProtocolConfig observer = loadProtocol(defaultConfigDir());
+  RunSelector select(run_id, where, log);
   RunEvents out;
-  std::size_t begin = events.size();
-  for (std::size_t i = 0; i < events.size() && begin == events.size(); ++i) {
-    if (events[i].channel != ch::runConfig.name) continue;
-    run_config_t rc;
-    std::string why;
-    if (!decodeChecked(events[i].data.data(), events[i].data.size(), BoundsContext{&observer, nullptr}, rc, why)) {
-      ++out.refused_configs;
-      log.warn("{}: the RUN_CONFIG event at offset {} is refused ({}): skipped", where, events[i].offset, why);
-      continue;
-    }
-    if (!run_id.empty() && rc.run_id != run_id) continue;
-    begin = i;
-    out.config = rc;
-  }
-  if (begin == events.size())
-    throw std::runtime_error(
-        where + (run_id.empty() ? std::string(": no RUN_CONFIG that the edge accepts in the log, so nothing says how "
-                                              "the run was configured")
-                                : ": no RUN_CONFIG of run '" + run_id + "' that the edge accepts in the log"));
-  // The run's own events from there on: those whose run id is the run's.
-  const int name_bytes = observer.limits.name_bytes;
-  out.events.push_back(std::move(events[begin]));
-  for (std::size_t i = begin + 1; i < events.size(); ++i) {
-    std::string id;
-    if (!peekRunId(events[i].data.data(), events[i].data.size(), name_bytes, id)) continue;
-    if (id == out.config.run_id || (id.empty() && events[i].channel == ch::status.name))
-      out.events.push_back(std::move(events[i]));
-  }
+  for (LogEvent& e : events)
+    if (select.take(e)) out.events.push_back(std::move(e));
+  select.check();
+  out.config = select.config();
+  out.refused_configs = select.refusedConfigs();
   return out;
 }
 
@@ -144,6 +172,7 @@ ReplayedProcess::ReplayedProcess(const std::string& process, const ProtocolConfi
                                  const HostOptions& options)
     : name_(process), bus_(std::make_unique<lcm::LCM>("memq://")) {
   node_ = makeNode(process, *bus_, makeLogger("replay-" + process, "warn"), protocol, options);
+  node_->holdNothingPublished();  // its bus is its own: nobody asks it again (what it holds would grow with the log)
   for (const auto& ch : channelsOf(process, extrinsic)) {
     outputs_.insert(ch);
     bus_->subscribeFunction(ch, &keepPublished, &published_);
@@ -179,41 +208,81 @@ namespace {
 constexpr std::int64_t kMostSerials = std::int64_t{1} << 40;
 }  // namespace
 
-std::vector<LogGap> recordingGaps(const std::vector<LogEvent>& events, const std::string& run_id, bool extrinsic,
-                                  const BoundsContext& ctx) {
-  std::map<std::string, std::set<std::int64_t>> had;
-  std::map<std::string, std::int64_t> claimed;
-  for (const LogEvent& e : events) {
-    if (isSerialChannel(e.channel)) {
-      RunHeader h;
-      // (a serial no publisher reaches is a forgery's: counting up to it would overflow)
-      if (peekRunHeader(e.data.data(), static_cast<std::uint32_t>(e.data.size()), h) && h.run_id == run_id &&
-          h.serial >= 0 && h.serial < kMostSerials)
-        had[e.channel].insert(h.serial);
-    } else if (e.channel == ch::status.name) {
-      process_status_t st;
-      std::string why;
-      if (!decodeChecked(e.data.data(), e.data.size(), ctx, st, why) || st.counts_run != run_id) continue;
-      for (int i = 0; i < st.n_channels; ++i)
-        if (publisherOf(st.channels[i], extrinsic) == st.process)
-          claimed[st.channels[i]] = std::max(claimed[st.channels[i]], std::min(st.counts[i], kMostSerials));
+bool SerialRuns::insert(std::int64_t s) {
+  // Joined to the run it ends or begins, and those two joined.
+  auto after = runs_.upper_bound(s);  // the first run beginning beyond s
+  bool joined = false;
+  if (after != runs_.begin()) {
+    auto before = std::prev(after);
+    if (before->second >= s) return false;
+    if (before->second == s - 1) {
+      before->second = s;
+      if (after != runs_.end() && after->first == s + 1) {
+        before->second = after->second;
+        runs_.erase(after);
+      }
+      joined = true;
     }
   }
+  if (!joined) {
+    if (after != runs_.end() && after->first == s + 1) {
+      const std::int64_t last = after->second;
+      runs_.erase(after);
+      runs_.emplace(s, last);
+    } else {
+      runs_.emplace(s, s);
+    }
+  }
+  ++size_;
+  return true;
+}
+
+GapFinder::GapFinder(std::string run_id, bool extrinsic, const BoundsContext& ctx)
+    : run_id_(std::move(run_id)), extrinsic_(extrinsic), ctx_(ctx) {}
+
+void GapFinder::add(const LogEvent& e) {
+  if (isSerialChannel(e.channel)) {
+    RunHeader h;
+    // (a serial no publisher reaches is a forgery's: counting up to it would overflow)
+    if (peekRunHeader(e.data.data(), static_cast<std::uint32_t>(e.data.size()), h) && h.run_id == run_id_ &&
+        h.serial >= 0 && h.serial < kMostSerials)
+      had_[e.channel].insert(h.serial);
+  } else if (e.channel == ch::status.name) {
+    process_status_t st;
+    std::string why;
+    if (!decodeChecked(e.data.data(), e.data.size(), ctx_, st, why) || st.counts_run != run_id_) return;
+    for (int i = 0; i < st.n_channels; ++i)
+      if (publisherOf(st.channels[i], extrinsic_) == st.process)
+        claimed_[st.channels[i]] = std::max(claimed_[st.channels[i]], std::min(st.counts[i], kMostSerials));
+  }
+}
+
+std::vector<LogGap> GapFinder::gaps() const {
   std::vector<LogGap> gaps;
   std::set<std::string> channels;
-  for (const auto& [c, s] : had) channels.insert(c);
-  for (const auto& [c, n] : claimed) channels.insert(c);
+  for (const auto& [c, s] : had_) channels.insert(c);
+  for (const auto& [c, n] : claimed_) channels.insert(c);
+  static const std::map<std::int64_t, std::int64_t> kNone;
   for (const auto& c : channels) {
-    const std::set<std::int64_t>& s = had[c];
-    const std::int64_t end = std::max(s.empty() ? 0 : *s.rbegin() + 1, claimed.count(c) ? claimed[c] : 0);
+    const auto h = had_.find(c);
+    const auto& runs = h == had_.end() ? kNone : h->second.runs();
+    const auto k = claimed_.find(c);
+    const std::int64_t end = std::max(runs.empty() ? 0 : runs.rbegin()->second + 1, k == claimed_.end() ? 0 : k->second);
     std::int64_t next = 0;
-    for (std::int64_t serial : s) {
-      if (serial > next) gaps.push_back({c, next, serial - 1});
-      next = serial + 1;
+    for (const auto& [first, last] : runs) {
+      if (first > next) gaps.push_back({c, next, first - 1});
+      next = last + 1;
     }
     if (end > next) gaps.push_back({c, next, end - 1});
   }
   return gaps;
+}
+
+std::vector<LogGap> recordingGaps(const std::vector<LogEvent>& events, const std::string& run_id, bool extrinsic,
+                                  const BoundsContext& ctx) {
+  GapFinder finder(run_id, extrinsic, ctx);
+  for (const LogEvent& e : events) finder.add(e);
+  return finder.gaps();
 }
 
 std::string manifestIncomplete(const fs::path& log, std::vector<LogGap>& missing) {
@@ -267,95 +336,90 @@ std::vector<std::string> processesToReplay(const ReplayOptions& o, const RunConf
   return into;
 }
 
-// What the replayed processes published, against the recording: the
-// predictors' checksum, and the decisions of the process that decided in
-// this phase, serial by serial.
-void compareWithRecording(const std::vector<std::unique_ptr<ReplayedProcess>>& procs,
-                          const std::map<std::int64_t, const LogEvent*>& recorded_decisions, const BoundsContext& ctx,
-                          ReplayResult& result) {
-  for (auto& p : procs) {
-    if (p->name() == "predictors")
-      for (const LogEvent& e : p->published()) {
-        run_result_t m;
-        std::string why;
-        if (e.channel == ch::result.name && decodeChecked(e.data.data(), e.data.size(), ctx, m, why))
-          result.weights_checksum = m.weights_checksum;
-      }
-    if (p->name() == "motivation" || p->name() == "planner") {
-      // Only the process that decided in this phase is compared.
-      const bool decided_here = (p->name() == "planner") == result.extrinsic;
-      if (!decided_here) continue;
-      result.decisions_recorded = static_cast<std::int64_t>(recorded_decisions.size());
-      // Compared serial by serial: a recording may lack some (its gaps). Each
-      // serial once: a process publishes one again when a peer asks for it.
-      std::set<std::int64_t> seen;
-      for (const LogEvent& d : p->published()) {
-        RunHeader h;
-        if (d.channel != ch::decision.name ||
-            !peekRunHeader(d.data.data(), static_cast<std::uint32_t>(d.data.size()), h) || !seen.insert(h.serial).second)
-          continue;
-        ++result.decisions;
-        auto it = recorded_decisions.find(h.serial);
-        if (it != recorded_decisions.end()) result.decisions_differing += d.data != it->second->data;
-      }
-    }
+// The decisions of the process that decided in the run's phase against the
+// recorded ones, serial by serial, as each side comes: what waits is what the
+// other side has not reached yet. Each serial once (a process publishes one
+// again when a peer asks for it; a recording may hold repeats, the first
+// counts).
+class DecisionMatch {
+ public:
+  void recorded(std::int64_t serial, std::uint64_t digest) {
+    if (recorded_.insert(serial)) meet(serial, digest, waiting_replayed_, waiting_recorded_);
   }
-}
+  void replayed(std::int64_t serial, std::uint64_t digest) {
+    if (replayed_.insert(serial)) meet(serial, digest, waiting_recorded_, waiting_replayed_);
+  }
+  std::int64_t recordedCount() const { return recorded_.size(); }
+  std::int64_t replayedCount() const { return replayed_.size(); }
+  std::int64_t differing() const { return differing_; }
+
+ private:
+  void meet(std::int64_t serial, std::uint64_t digest, std::map<std::int64_t, std::uint64_t>& other,
+            std::map<std::int64_t, std::uint64_t>& mine) {
+    const auto it = other.find(serial);
+    if (it == other.end()) {
+      mine.emplace(serial, digest);
+      return;
+    }
+    differing_ += it->second != digest;
+    other.erase(it);
+  }
+  SerialRuns recorded_, replayed_;
+  std::map<std::int64_t, std::uint64_t> waiting_recorded_, waiting_replayed_;
+  std::int64_t differing_ = 0;
+};
+
+std::uint64_t digestOf(const LogEvent& e) { return fnv1a64(e.data.data(), e.data.size()); }
 
 }  // namespace
 
 ReplayResult replayRun(const ReplayOptions& o, spdlog::logger& log) {
   ReplayResult result;
   const std::shared_ptr<const BusKey> key = o.bus_key.empty() ? nullptr : busKeyFrom(o.bus_key);
-  RecordedLog recorded = readRecordedLog(o.log_dir, log, key.get());
-  result.torn_bytes = recorded.torn_bytes;
-  result.malformed = recorded.malformed;
-  result.untagged = recorded.untagged;
+  // Read as it is fed: nothing of the log is held but the event at hand.
+  RecordedLogStream in(o.log_dir, log, key.get());
   std::vector<LogGap> manifest_missing;
   result.incomplete = manifestIncomplete(o.log_dir, manifest_missing);
-  // The run: from its RUN_CONFIG (the first one, or the one of --run) to the next run's.
-  RunEvents run = runEventsOf(std::move(recorded.events), o.run_id, o.log_dir, log);
-  result.refused_configs = run.refused_configs;
-  std::vector<LogEvent> events = std::move(run.events);
-  run_config_t config_msg = std::move(run.config);
-  result.run_id = config_msg.run_id;
-  result.events = static_cast<std::int64_t>(events.size());
-  const RunConfig config = parseRunConfigText(config_msg.config_yaml);
-  result.extrinsic = config.phase == Phase::Extrinsic;
-  const BoundsContext ctx{&config.protocol, &config};
-
-  // The replayed processes write nothing: no checkpoint goes into the recorded run's folder.
-  {
-    YAML::Node node = YAML::Load(config_msg.config_yaml);
-    node["run"]["checkpoint"] = "";
-    node["run"]["checkpoint_after_actions"] = 0;
-    config_msg.config_yaml = emitYaml(node);
-    std::vector<std::uint8_t> bytes = sealed(config_msg);
-    events.front().data = std::move(bytes);
-  }
-  result.gaps = recordingGaps(events, result.run_id, result.extrinsic, ctx);
-  for (const auto& g : manifest_missing) {  // what the logger knew it never got, beyond the last recorded
-    const bool known = std::any_of(result.gaps.begin(), result.gaps.end(), [&](const ReplayResult::Gap& h) {
-      return h.channel == g.channel && h.first <= g.first && h.last >= g.last;
-    });
-    if (!known) result.gaps.push_back(g);
-  }
-
-  const fs::path log_folder = fs::is_directory(o.log_dir) ? fs::path(o.log_dir) : fs::path(o.log_dir).parent_path();
-  fs::path run_folder = fs::absolute(log_folder).lexically_normal();
-  if (!run_folder.has_filename()) run_folder = run_folder.parent_path();  // a trailing '/'
-  const std::string log_root = run_folder.parent_path().string();
+  // The run: from its RUN_CONFIG (the first one, or the one of --run) on, its own events.
+  RunSelector select(o.run_id, o.log_dir, log);
+  std::unique_ptr<RunConfig> config;
+  BoundsContext ctx{nullptr, nullptr};
+  std::unique_ptr<GapFinder> gaps;
   std::vector<std::unique_ptr<ReplayedProcess>> procs;
-  for (const auto& name : processesToReplay(o, config, result)) {
-    // The predictors load an extrinsic run's agent only from the log root the log is in.
-    HostOptions host;
-    host.single_thread = true;
-    host.log_root = log_root;
-    procs.push_back(std::make_unique<ReplayedProcess>(name, config.protocol, result.extrinsic, host));
-  }
-
-  std::map<std::int64_t, const LogEvent*> recorded_decisions;  // by serial: a recording may hold repeats
-  for (const LogEvent& e : events) {
+  DecisionMatch decisions;
+  bool decider_replayed = false;
+  LogEvent e;
+  while (in.next(e)) {
+    if (!select.take(e)) continue;
+    ++result.events;
+    if (!config) {
+      // The run's RUN_CONFIG: the processes are made for it.
+      run_config_t config_msg = select.config();
+      result.run_id = config_msg.run_id;
+      config = std::make_unique<RunConfig>(parseRunConfigText(config_msg.config_yaml));
+      result.extrinsic = config->phase == Phase::Extrinsic;
+      ctx = BoundsContext{&config->protocol, config.get()};
+      gaps = std::make_unique<GapFinder>(result.run_id, result.extrinsic, ctx);
+      // The replayed processes write nothing: no checkpoint goes into the recorded run's folder.
+      YAML::Node node = YAML::Load(config_msg.config_yaml);
+      node["run"]["checkpoint"] = "";
+      node["run"]["checkpoint_after_actions"] = 0;
+      config_msg.config_yaml = emitYaml(node);
+      e.data = sealed(config_msg);
+      const fs::path log_folder =
+          fs::is_directory(o.log_dir) ? fs::path(o.log_dir) : fs::path(o.log_dir).parent_path();
+      fs::path run_folder = fs::absolute(log_folder).lexically_normal();
+      if (!run_folder.has_filename()) run_folder = run_folder.parent_path();  // a trailing '/'
+      for (const auto& name : processesToReplay(o, *config, result)) {
+        // The predictors load an extrinsic run's agent only from the log root the log is in.
+        HostOptions host;
+        host.single_thread = true;
+        host.log_root = run_folder.parent_path().string();
+        procs.push_back(std::make_unique<ReplayedProcess>(name, config->protocol, result.extrinsic, host));
+        decider_replayed |= (name == "planner") == result.extrinsic && name != "predictors";
+      }
+    }
+    gaps->add(e);
     if (const std::string why = checkRecorded(e, ctx); !why.empty()) {
       ++result.dropped;
       log.warn("{}: a recorded message is refused: {}", e.channel, why);
@@ -363,16 +427,47 @@ ReplayResult replayRun(const ReplayOptions& o, spdlog::logger& log) {
     RunHeader h;
     if ((e.channel == ch::decision.name || e.channel == ch::result.name) &&
         peekRunHeader(e.data.data(), static_cast<std::uint32_t>(e.data.size()), h) && h.run_id == result.run_id) {
-      if (e.channel == ch::decision.name) recorded_decisions.emplace(h.serial, &e);
+      if (e.channel == ch::decision.name) decisions.recorded(h.serial, digestOf(e));
       run_result_t m;
       std::string why;
       if (e.channel == ch::result.name && decodeChecked(e.data.data(), e.data.size(), ctx, m, why))
         result.recorded_checksum = m.weights_checksum;
     }
-    for (auto& p : procs) p->feed(e);
+    for (auto& p : procs) {
+      p->feed(e);
+      // What it published, against the recording: the predictors' checksum, and the decisions of the
+      // process that decided in this phase.
+      const bool decider = p->name() != "predictors" && (p->name() == "planner") == result.extrinsic;
+      for (const LogEvent& out : p->takePublished()) {
+        RunHeader ph;
+        if (out.channel == ch::result.name && p->name() == "predictors") {
+          run_result_t m;
+          std::string why;
+          if (decodeChecked(out.data.data(), out.data.size(), ctx, m, why)) result.weights_checksum = m.weights_checksum;
+        } else if (decider && out.channel == ch::decision.name &&
+                   peekRunHeader(out.data.data(), static_cast<std::uint32_t>(out.data.size()), ph)) {
+          decisions.replayed(ph.serial, digestOf(out));
+        }
+      }
+    }
   }
-
-  compareWithRecording(procs, recorded_decisions, ctx, result);
+  result.torn_bytes = in.counts().torn_bytes;
+  result.malformed = in.counts().malformed;
+  result.untagged = in.counts().untagged;
+  result.refused_configs = select.refusedConfigs();
+  select.check();
+  result.gaps = gaps->gaps();
+  for (const auto& g : manifest_missing) {  // what the logger knew it never got, beyond the last recorded
+    const bool known = std::any_of(result.gaps.begin(), result.gaps.end(), [&](const ReplayResult::Gap& h) {
+      return h.channel == g.channel && h.first <= g.first && h.last >= g.last;
+    });
+    if (!known) result.gaps.push_back(g);
+  }
+  if (decider_replayed) {
+    result.decisions_recorded = decisions.recordedCount();
+    result.decisions = decisions.replayedCount();
+    result.decisions_differing = decisions.differing();
+  }
   return result;
 }
 

@@ -5,20 +5,26 @@
 // nothing: the replayed predictors save no checkpoint, so the recorded run's
 // folder is never touched. A recording with gaps (an lcm-logger capture that
 // lost datagrams) is replayed as far as it goes, and the gaps are named; a
-// log whose manifest says it is incomplete (a cut run) is said to be.
+// log whose manifest says it is incomplete (a cut run) is said to be. The log
+// is read as it is fed, and the replayed processes hold nothing of what they
+// publish: replay holds as little of a log of a million steps as of one of a
+// thousand.
 #pragma once
 #include <spdlog/spdlog.h>
 
 #include <cstdint>
 #include <filesystem>
+#include <map>
 #include <memory>
 #include <set>
 #include <string>
+#include <utility>
 #include <vector>
 
 #include "afford/auth.hpp"
 #include "afford/bounds.hpp"
 #include "experiment/run/host.hpp"
+#include "afford/config.hpp"
 #include "afford/logfile.hpp"
 #include "afford/run_config_t.hpp"
 
@@ -46,6 +52,28 @@ struct RecordedLog {
 // with its tag, which is taken off; one without a valid tag is skipped and counted.
 RecordedLog readRecordedLog(const std::filesystem::path& log_path, spdlog::logger& log,
                             const BusKey* key = nullptr);
+// The same events one at a time, nothing held but the event read (replay reads
+// a million-step log of gigabytes this way): counts() says what was skipped so
+// far.
+class RecordedLogStream {
+ public:
+  RecordedLogStream(const std::filesystem::path& log_path, spdlog::logger& log, const BusKey* key = nullptr);
+  ~RecordedLogStream();
+  RecordedLogStream(const RecordedLogStream&) = delete;
+  RecordedLogStream& operator=(const RecordedLogStream&) = delete;
+  bool next(LogEvent& e);  // false after the last segment's last event
+  const RecordedLog& counts() const { return counts_; }  // (events stays empty)
+
+ private:
+  void endSegment();
+  std::vector<std::filesystem::path> segments_;
+  std::size_t at_ = 0;
+  std::unique_ptr<LogReader> reader_;
+  spdlog::logger& log_;
+  const BusKey* key_;
+  LogLimits limits_;
+  RecordedLog counts_;
+};
 
 struct LogGap {
   std::string channel;
@@ -56,6 +84,34 @@ struct LogGap {
 // publisher's own count (STATUS, in lcm-logger recordings).
 std::vector<LogGap> recordingGaps(const std::vector<LogEvent>& events, const std::string& run_id, bool extrinsic,
                                   const BoundsContext& ctx);
+// A set of serials as runs of consecutive ones: a few numbers for a channel
+// recorded whole, whatever its length.
+class SerialRuns {
+ public:
+  bool insert(std::int64_t serial);  // false: it was there
+  const std::map<std::int64_t, std::int64_t>& runs() const { return runs_; }  // first -> last
+  std::int64_t size() const { return size_; }
+
+ private:
+  std::map<std::int64_t, std::int64_t> runs_;
+  std::int64_t size_ = 0;
+};
+
+// The same, event by event: what it holds is a few numbers per run of
+// consecutive serials, not the serials.
+class GapFinder {
+ public:
+  GapFinder(std::string run_id, bool extrinsic, const BoundsContext& ctx);
+  void add(const LogEvent& e);
+  std::vector<LogGap> gaps() const;
+
+ private:
+  std::string run_id_;
+  bool extrinsic_;
+  BoundsContext ctx_;
+  std::map<std::string, SerialRuns> had_;         // channel: the serials recorded
+  std::map<std::string, std::int64_t> claimed_;  // channel: its publisher's count
+};
 // The manifest beside a log folder's segments: its reason if it says the log
 // is incomplete ("" if it does not, or there is none), and into `missing` the
 // serials it says the logger never got.
@@ -74,6 +130,26 @@ struct RunEvents {
 // rebuilt: the log holds no (such) RUN_CONFIG that the edge accepts.
 RunEvents runEventsOf(std::vector<LogEvent> events, const std::string& run_id, const std::string& where,
                       spdlog::logger& log);
+// The same choice, event by event: take(e) says whether e is the run's (its
+// RUN_CONFIG, then its events); once every event has been offered, check()
+// throws as runEventsOf does if the run's RUN_CONFIG never came.
+class RunSelector {
+ public:
+  RunSelector(std::string run_id, std::string where, spdlog::logger& log);
+  bool take(const LogEvent& e);
+  bool found() const { return found_; }
+  const run_config_t& config() const { return config_; }
+  std::int64_t refusedConfigs() const { return refused_configs_; }
+  void check() const;
+
+ private:
+  std::string run_id_, where_;
+  spdlog::logger& log_;
+  ProtocolConfig observer_;
+  bool found_ = false;
+  run_config_t config_;
+  std::int64_t refused_configs_ = 0;
+};
 
 // One fresh process of a run, on an in-process bus of its own, fed a
 // recording's events one at a time, each handled before the next (those on
@@ -91,6 +167,8 @@ class ReplayedProcess {
   void feed(const LogEvent& e);
   const std::string& name() const { return name_; }
   const std::vector<LogEvent>& published() const { return published_; }
+  // What it published since the last call, handed over (a long replay keeps none of it).
+  std::vector<LogEvent> takePublished() { return std::exchange(published_, {}); }
 
  private:
   std::string name_;

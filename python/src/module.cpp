@@ -53,14 +53,21 @@ py::dict readLog(const std::string& path, const std::string& run_id, const std::
                  const std::vector<std::string>& channels) {
   auto log = std::make_shared<spdlog::logger>("read_log", std::make_shared<spdlog::sinks::null_sink_mt>());
   std::shared_ptr<const BusKey> key = bus_key.empty() ? nullptr : busKeyFrom(bus_key);
-  RecordedLog recorded = readRecordedLog(path, *log, key.get());
-  const RunEvents run = runEventsOf(std::move(recorded.events), run_id, path, *log);
-  const RunConfig config = parseRunConfigText(run.config.config_yaml);
-  const BoundsContext ctx{&config.protocol, &config};
+  // Streamed: what is held is what is kept (a log of gigabytes read for one channel holds that channel).
+  RecordedLogStream in(path, *log, key.get());
+  RunSelector select(run_id, path, *log);
+  std::unique_ptr<RunConfig> config;
+  BoundsContext ctx{nullptr, nullptr};
   py::list messages;
   std::int64_t refused = 0, unknown = 0;
   std::string first_refusal;
-  for (const LogEvent& e : run.events) {
+  LogEvent e;
+  while (in.next(e)) {
+    if (!select.take(e)) continue;
+    if (!config) {
+      config = std::make_unique<RunConfig>(parseRunConfigText(select.config().config_yaml));
+      ctx = BoundsContext{&config->protocol, config.get()};
+    }
     if (!channels.empty() && std::find(channels.begin(), channels.end(), e.channel) == channels.end()) continue;
     const bool known = withChannel(e.channel, [&](const auto& c) {
       typename std::decay_t<decltype(c)>::Message m;
@@ -76,14 +83,15 @@ py::dict readLog(const std::string& path, const std::string& run_id, const std::
     unknown += !known;
   }
   py::dict out;
-  out["run_id"] = run.config.run_id;
-  out["config_yaml"] = run.config.config_yaml;
+  select.check();
+  out["run_id"] = select.config().run_id;
+  out["config_yaml"] = select.config().config_yaml;
   out["messages"] = messages;
   out["refused"] = refused;
   out["first_refusal"] = first_refusal;
   out["unknown_channels"] = unknown;
-  out["malformed"] = recorded.malformed;
-  out["torn_bytes"] = recorded.torn_bytes;
+  out["malformed"] = in.counts().malformed;
+  out["torn_bytes"] = in.counts().torn_bytes;
   return out;
 }
 

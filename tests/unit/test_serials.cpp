@@ -1,12 +1,18 @@
 // SerialTracker: each channel in serial order, repeats and gaps told apart,
 // missing messages asked for in batches, a standing request not repeated
 // until its time is up (then backing off), a publisher's claim replacing
-// what was believed before, a refused message expected again.
+// what was believed before, a refused message expected again. Replay's
+// serials (SerialRuns, GapFinder): a set held as runs of consecutive serials,
+// and the holes of a recording found event by event.
 #include <gtest/gtest.h>
 
 #include <cstdint>
+#include <random>
+#include <set>
 
 #include "afford/serials.hpp"
+#include "experiment/replay/replay.hpp"
+#include "tests/samples.hpp"
 
 namespace afford {
 namespace {
@@ -164,6 +170,62 @@ TEST(Serials, TheLargestSerialClaimsNoMoreThanItself) {
   EXPECT_EQ(t.offer("FOCUS", INT64_MAX), V::Gap);
   t.claim("FOCUS", 1);  // the publisher's count replaces the forged evidence
   EXPECT_EQ(t.missing(), 1);
+}
+
+// Whatever the order serials come in, the runs hold exactly the serials given,
+// each run maximal (no two touch), and a repeat is told.
+TEST(ReplaySerials, RunsHoldTheSerialsGivenAndTellRepeats) {
+  std::mt19937 gen(7);
+  std::uniform_int_distribution<std::int64_t> pick(0, 300);
+  SerialRuns runs;
+  std::set<std::int64_t> plain;
+  for (int i = 0; i < 2000; ++i) {
+    const std::int64_t s = pick(gen);
+    EXPECT_EQ(runs.insert(s), plain.insert(s).second) << s;
+  }
+  EXPECT_EQ(runs.size(), static_cast<std::int64_t>(plain.size()));
+  std::set<std::int64_t> held;
+  std::int64_t end = -2;
+  for (const auto& [first, last] : runs.runs()) {
+    EXPECT_GT(first, end + 1) << "runs " << end << " and " << first << " touch";
+    for (std::int64_t s = first; s <= last; ++s) held.insert(s);
+    end = last;
+  }
+  EXPECT_EQ(held, plain);
+  for (std::int64_t s = 0; s <= 300; ++s) runs.insert(s);
+  EXPECT_EQ(runs.runs().size(), 1u);  // all of them: one run, two numbers
+}
+
+LogEvent focusEvent(const std::string& run, std::int64_t serial) {
+  focus_t m = test::sample(static_cast<const focus_t*>(nullptr));
+  m.run_id = run;
+  m.serial = serial;
+  return LogEvent{ch::focus.name, sealed(m)};
+}
+
+// The holes of a recording, in any order and with repeats, and beyond the last
+// recorded serial up to what its publisher said it published; other runs'
+// events are not counted.
+TEST(ReplaySerials, TheGapsOfARecordingAreFoundEventByEvent) {
+  const ProtocolConfig protocol = test::shippedProtocol();
+  GapFinder finder("r", /*extrinsic=*/false, BoundsContext{&protocol, nullptr});
+  for (std::int64_t s : {0, 1, 2, 5, 4, 9, 2, 10, 11})
+    finder.add(focusEvent("r", s));
+  finder.add(focusEvent("other", 3));
+  process_status_t st = test::sample(static_cast<const process_status_t*>(nullptr));
+  st.process = "eye";
+  st.counts_run = "r";
+  st.channels = {ch::focus.name};
+  st.counts = {14};
+  st.held_from = {0};
+  st.n_channels = 1;
+  finder.add(LogEvent{ch::status.name, sealed(st)});
+  const std::vector<LogGap> gaps = finder.gaps();
+  ASSERT_EQ(gaps.size(), 3u);
+  EXPECT_EQ(gaps[0].channel, ch::focus.name);
+  EXPECT_EQ(std::make_pair(gaps[0].first, gaps[0].last), std::make_pair(std::int64_t{3}, std::int64_t{3}));
+  EXPECT_EQ(std::make_pair(gaps[1].first, gaps[1].last), std::make_pair(std::int64_t{6}, std::int64_t{8}));
+  EXPECT_EQ(std::make_pair(gaps[2].first, gaps[2].last), std::make_pair(std::int64_t{12}, std::int64_t{13}));
 }
 
 }  // namespace

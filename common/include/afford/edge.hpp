@@ -114,6 +114,8 @@ class Edge {
   // On a keyed bus, every message sent is tagged and every message received
   // must be (nullptr: no key). Set before the first message is handled.
   void useKey(std::shared_ptr<const BusKey> key) { key_ = std::move(key); }
+  // What is published is not held for a RESEND or a restart (EdgeOutbound::holdNothing).
+  void holdNothingPublished() { outbound_.holdNothing(); }
   const std::shared_ptr<const BusKey>& key() const { return key_; }
   const EdgeDrops& drops() const { return drops_; }
 

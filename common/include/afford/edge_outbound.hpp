@@ -47,6 +47,8 @@ class EdgeOutbound {
   // `readers`: the processes of the run besides this one, whose restart positions decide what is let go.
   void join(const std::string& run_id, const RecoveryConfig& recovery, std::vector<std::string> readers);
   const std::string& run() const { return run_; }
+  // Nothing published is held (a process fed a recording: no peer of its can ask it for anything).
+  void holdNothing() { hold_nothing_ = true; }
 
   // A run message about to be sealed on `channel`: its serial and the digest it follows.
   std::int64_t nextSerial(const std::string& channel) const;
@@ -95,6 +97,7 @@ class EdgeOutbound {
   std::map<std::string, History> history_;  // by channel
   std::size_t bytes_ = 0;                   // held, over every channel
   std::int64_t over_bound_ = 0;
+  bool hold_nothing_ = false;
   std::set<std::string> readers_;                                    // the run's other processes
   std::map<std::string, std::map<std::string, std::int64_t>> from_;  // reader -> channel taken -> restart serial
 };

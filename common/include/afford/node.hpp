@@ -215,6 +215,8 @@ class NodeBase {
   const std::vector<InputRule>& rules() const { return rules_; }
   // A keyed bus (afford/auth.hpp): set before the first message is handled.
   void useBusKey(std::shared_ptr<const BusKey> key) { edge_.useKey(std::move(key)); }
+  // Fed a recording (replay, explain): nothing it publishes is held, as no peer can ask for it.
+  void holdNothingPublished() { edge_.holdNothingPublished(); }
   // Snapshots (docs/processes-and-channels.md, "Runs of any length"): a node
   // that says it takes them (snapshots()) saves its state, with the edge's
   // positions and what it published, every protocol.recovery.snapshot_steps
