@@ -81,7 +81,7 @@ class Hosted : public Executor {
       std::vector<PlannedRun> tests;
       try {
         for (PlannedRun& t : planExtrinsic(part.plan, trained, part.request, errors))
-          if (!keptOutcome(x_.out(), t.spec.run_id)) tests.push_back(std::move(t));
+          if (!keptOutcome(x_.out(), t.spec)) tests.push_back(std::move(t));
       } catch (const std::exception& e) {
         log_.warn("the tests of run '{}' wait for the extrinsic phase ({})", x_.runs[i].spec.run_id, e.what());
         return;

@@ -22,7 +22,7 @@ PhaseRuns gatherShards(const std::vector<Part>& parts, const std::vector<Planned
     std::vector<std::string> missing;
     for (std::size_t i = 0; i < list.size(); ++i) {
       for (const auto& dir : shards)
-        if (auto r = keptOutcome(dir, list[i].spec.run_id)) {
+        if (auto r = keptOutcome(dir, list[i].spec)) {
           phase.outcomes[i] = std::move(*r);
           phase.finished[i] = 1;
           break;

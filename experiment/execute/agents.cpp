@@ -80,14 +80,15 @@ struct StoredAgent {
 
 }  // namespace
 
-std::optional<RunOutcome> AgentStore::find(const std::string& key, std::int64_t after_actions) const {
+std::optional<RunOutcome> AgentStore::find(const std::string& key, std::int64_t after_actions,
+                                            std::uintmax_t max_bytes) const {
   const fs::path dir = fs::path(root_) / key;
   const fs::path file = dir / "outcome.json";
   std::error_code ec;
   if (!fs::exists(file, ec)) return std::nullopt;
   StoredAgent stored;
   try {
-    stored = fromJsonOf<StoredAgent>(readJsonFile(file, kMostOutcomeBytes), file.string());
+    stored = fromJsonOf<StoredAgent>(readJsonFile(file, max_bytes), file.string());
   } catch (const std::exception& e) {
     throw ConfigError("the stored agent " + file.string() + " cannot be read (" + e.what() +
                       "): remove its folder (afford clean) or run with --no-reuse-agents");
@@ -145,7 +146,7 @@ void takeStoredAgents(const std::vector<PlannedRun>& runs, int after_actions, Ph
   std::size_t taken = 0;
   for (const auto& p : runs) {
     if (phase.finished[p.index] || (!phase.elsewhere.empty() && phase.elsewhere[p.index])) continue;
-    auto r = agents.find(agentKey(p.spec.config_yaml), after_actions);
+    auto r = agents.find(agentKey(p.spec.config_yaml), after_actions, mostOutcomeBytes(p.spec));
     if (!r) continue;
     keepOutcome(out_dir, p.spec.run_id, *r);
     phase.outcomes[p.index] = std::move(*r);

@@ -44,7 +44,8 @@ class AgentStore {
   explicit AgentStore(std::string root);  // <log-root>/agents
   // The stored run of `key`, its checkpoint paths pointing into the store;
   // nullopt if there is none, or it lacks the checkpoint after `after_actions` (> 0).
-  std::optional<RunOutcome> find(const std::string& key, std::int64_t after_actions) const;
+  // max_bytes: what its outcome may take (mostOutcomeBytes of the run that would reuse it).
+  std::optional<RunOutcome> find(const std::string& key, std::int64_t after_actions, std::uintmax_t max_bytes) const;
   // Keeps a finished intrinsic run (ok, with its checkpoint): the outcome, and
   // the checkpoint files hard-linked (copied where a link cannot be made).
   // `run_id` is named by the runs that reuse it. Written aside, then renamed:

@@ -212,7 +212,7 @@ PhaseRuns keptRuns(const std::vector<PlannedRun>& runs, const fs::path& out) {
   phase.outcomes.resize(runs.size());
   phase.finished.assign(runs.size(), 0);
   for (std::size_t i = 0; i < runs.size(); ++i)
-    if (auto r = keptOutcome(out, runs[i].spec.run_id)) {
+    if (auto r = keptOutcome(out, runs[i].spec)) {
       phase.outcomes[i] = std::move(*r);
       phase.finished[i] = 1;
     }

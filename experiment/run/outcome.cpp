@@ -4,6 +4,10 @@
 
 #include <fstream>
 
+#include <yaml-cpp/yaml.h>
+
+#include <algorithm>
+
 #include "afford/config.hpp"
 #include "experiment/schema/codec.hpp"
 
@@ -57,12 +61,27 @@ void keepOutcome(const fs::path& out, const std::string& run_id, const RunOutcom
   writeJsonWhole(outcomePath(out, run_id), json{{"run_id", run_id}, {"outcome", outcomeToJson(r)}});
 }
 
-std::optional<RunOutcome> keptOutcome(const fs::path& out, const std::string& run_id) {
+std::uintmax_t mostOutcomeBytes(const RunSpec& spec) {
+  constexpr std::uintmax_t kRest = 4u << 20;         // everything but the curve
+  constexpr std::uintmax_t kTableBytes = 16u << 10;  // a curve point's table (about 750 bytes kept)
+  std::int64_t interval = 1;
+  try {
+    const YAML::Node run = YAML::Load(spec.config_yaml)["run"];
+    if (run && run["curve_interval"]) interval = std::max<std::int64_t>(1, run["curve_interval"].as<std::int64_t>());
+  } catch (const std::exception&) {
+    // unreadable: a table at every step
+  }
+  const std::int64_t points = spec.extrinsic ? 0 : std::max<std::int64_t>(0, spec.steps) / interval + 2;
+  return kRest + static_cast<std::uintmax_t>(points) * kTableBytes;
+}
+
+std::optional<RunOutcome> keptOutcome(const fs::path& out, const RunSpec& spec) {
+  const std::string& run_id = spec.run_id;
   const fs::path path = outcomePath(out, run_id);
   std::error_code ec;
   if (!fs::exists(path, ec)) return std::nullopt;
   try {
-    const json j = readJsonFile(path, kMostOutcomeBytes);
+    const json j = readJsonFile(path, mostOutcomeBytes(spec));
     if (!j.is_object() || !j.contains("run_id") || j["run_id"] != run_id)
       throw std::runtime_error("it is not the outcome of run '" + run_id + "'");
     if (j.size() != 2 || !j.contains("outcome")) throw std::runtime_error("expected the keys run_id and outcome");

@@ -44,10 +44,13 @@ RunOutcome outcomeFromJson(const nlohmann::json& j, const std::string& what = "o
 // A JSON file, read only if it is a regular file of at most max_bytes (a FIFO would wait for a writer, a huge
 // file hold the memory); throws std::runtime_error naming the file and what is wrong.
 nlohmann::json readJsonFile(const std::filesystem::path& file, std::uintmax_t max_bytes);
-inline constexpr std::uintmax_t kMostOutcomeBytes = 64u << 20;  // a kept outcome: its curve, at most 64 MB
+// The most a kept outcome of that run can take: its curve (a table every run.curve_interval steps of an
+// intrinsic run, as the configuration says; every step if it cannot be read), far more than a table takes
+// each, beside the rest. A larger file is no outcome of it (a million steps: 7.5 MB kept, 160 MiB allowed).
+std::uintmax_t mostOutcomeBytes(const RunSpec& spec);
 
 // A finished run's outcome, kept as it finishes: --resume does not run it again.
 void keepOutcome(const std::filesystem::path& out, const std::string& run_id, const RunOutcome& r);
-std::optional<RunOutcome> keptOutcome(const std::filesystem::path& out, const std::string& run_id);
+std::optional<RunOutcome> keptOutcome(const std::filesystem::path& out, const RunSpec& spec);
 
 }  // namespace afford

@@ -9,7 +9,9 @@
 #include <fstream>
 #include <string>
 
+#include "experiment/run/outcome.hpp"
 #include "experiment/schema/summary.hpp"
+#include "tests/support.hpp"
 
 namespace afford {
 namespace {
@@ -54,6 +56,43 @@ Summary fullSummary() {
   search.p_value = 1e-9;  // t and df stay null
   s.interrupted = Interruption{"SIGINT", "intrinsic", 1, 2, {{"r-IMP-s4", "step 9", {}}}, {}, true, "afford ...", "/w"};
   return s;
+}
+
+// A kept outcome is read back whatever the run's length: what it may take
+// grows with the curve the run's configuration makes (a table every
+// run.curve_interval steps); a file beyond what such a run keeps is refused,
+// naming it.
+TEST(KeptOutcome, WhatALongRunKeepsIsReadBackAndAFileBeyondItIsRefused) {
+  const std::string out = test::tempDir("kept-outcome");
+  RunSpec spec;
+  spec.run_id = "long-run";
+  spec.steps = 20000;
+  spec.config_yaml = "run:\n  curve_interval: 1\n";
+  RunOutcome r;
+  r.ok = true;
+  for (std::int64_t step = 0; step <= spec.steps; ++step)
+    r.curve.push_back({step, std::vector<std::vector<double>>(4, {0.123456789012345, 0.9876543210987654,
+                                                                   0.5555555555555556, 1e-17})});
+  keepOutcome(out, spec.run_id, r);
+  const auto back = keptOutcome(out, spec);
+  ASSERT_TRUE(back.has_value());
+  EXPECT_EQ(back->curve.size(), r.curve.size());
+  EXPECT_EQ(back->curve.back().affordance, r.curve.back().affordance);
+  // The same file, said to be the outcome of a run of 10 steps: more than such a run keeps.
+  RunSpec short_run = spec;
+  short_run.steps = 10;
+  ASSERT_GT(std::filesystem::file_size(out + "/runs/long-run.json"), mostOutcomeBytes(short_run));
+  try {
+    keptOutcome(out, short_run);
+    ADD_FAILURE() << "a file beyond what the run keeps was read";
+  } catch (const std::exception& e) {
+    EXPECT_NE(std::string(e.what()).find("long-run.json"), std::string::npos) << e.what();
+    EXPECT_NE(std::string(e.what()).find("more than such a file holds"), std::string::npos) << e.what();
+  }
+  // Ten times the interval, a tenth of the bound's curve.
+  RunSpec sparse = spec;
+  sparse.config_yaml = "run:\n  curve_interval: 10\n";
+  EXPECT_LT(mostOutcomeBytes(sparse), mostOutcomeBytes(spec) / 5);
 }
 
 TEST(SummarySchema, WhatItWritesReadsBackTheSame) {
