@@ -248,26 +248,25 @@ void NodeBase::restartPositions(process_status_t& st) const {
 }
 
 void NodeBase::settleSnapshot(bool wait) {
+  std::string error;  // why it is not in place ("": it is)
   if (durable_child_) {
     if (!durable_child_->ended(wait)) return;
-    const std::string error = durable_child_->error();
+    error = durable_child_->error();
     durable_child_.reset();
-    if (!error.empty()) {
-      // The run goes on: the earlier snapshot stays, and peers hold what followed it.
-      log_->error("{}: the earlier snapshot stays", error);
-      return;
-    }
   } else if (durable_.valid()) {
     if (!wait && durable_.wait_for(std::chrono::seconds(0)) != std::future_status::ready) return;
     try {
       durable_.get();
-      durable_writer_.reset();
     } catch (const std::exception& e) {
-      durable_writer_.reset();
-      log_->error("{}: the earlier snapshot stays", e.what());
-      return;
+      error = e.what();
     }
+    durable_writer_.reset();
   } else {
+    return;
+  }
+  if (!error.empty()) {
+    // The run goes on: the earlier snapshot stays, and peers hold what followed it.
+    log_->error("{}: the earlier snapshot stays", error);
     return;
   }
   snapshot_at_ = std::move(durable_at_);
