@@ -408,7 +408,8 @@ ReplayResult replayRun(const ReplayOptions& o, spdlog::logger& log) {
       e.data = sealed(config_msg);
       const fs::path log_folder =
           fs::is_directory(o.log_dir) ? fs::path(o.log_dir) : fs::path(o.log_dir).parent_path();
-      fs::path run_folder = fs::absolute(log_folder).lexically_normal();
+      // (a file named without a folder is in the current one)
+      fs::path run_folder = fs::absolute(log_folder.empty() ? fs::path(".") : log_folder).lexically_normal();
       if (!run_folder.has_filename()) run_folder = run_folder.parent_path();  // a trailing '/'
       for (const auto& name : processesToReplay(o, *config, result)) {
         // The predictors load an extrinsic run's agent only from the log root the log is in.

@@ -301,6 +301,9 @@ TEST(Processes, AReplayedLogReproducesTheLiveRun) {
   const auto cut = test::runCommand(test::afford("replay " + torn.string() + " --into predictors"));
   EXPECT_NE(cut.output.find("incomplete"), std::string::npos) << cut.output;
   EXPECT_NE(cut.output.find("weights_checksum: " + live), std::string::npos) << cut.output;  // the run was over by then
+  // The same file named without its folder, from within it.
+  const auto bare = test::runCommand("cd " + torn.string() + " && " + test::afford("replay log.00.lcm --into predictors"));
+  EXPECT_NE(bare.output.find("weights_checksum: " + live), std::string::npos) << bare.output;
 
   const auto missing = test::runCommand(test::afford("replay " + dir + "/nosuch"));
   EXPECT_NE(missing.exit_code, 0);
