@@ -69,7 +69,7 @@ struct InProcessRun {
     // Both deciders: the run's configuration says which one decides.
     InProcessHost host(lcm, protocol, logger,
                        HostOptions{/*single_thread=*/false, checkpointRoot(), nullptr, restart.snapshots, restart.fork});
-    host.start(runProcesses(/*extrinsic=*/false, /*recorded=*/false));
+    host.start(runProcesses(Phase::Intrinsic, /*recorded=*/false));
     host.start("planner");
     RunDriver driver(lcm, logger("runner"), protocol);
     struct Tap {
@@ -100,8 +100,11 @@ struct InProcessRun {
     spec.seed = seed;
     spec.steps = steps;
     spec.config_yaml = yaml;
-    spec.extrinsic = YAML::Load(yaml)["phase"].as<std::string>() == "extrinsic";
-    spec.processes = runProcesses(spec.extrinsic, /*recorded=*/false);
+    spec.phase = Phase::Intrinsic;  // read as it is written: a test may give a configuration the runner refuses
+    for (const auto& [name, phase] : kPhaseNames)
+      if (YAML::Load(yaml)["phase"].as<std::string>() == name) spec.phase = phase;
+    spec.extrinsic = spec.phase == Phase::Extrinsic;
+    spec.processes = runProcesses(spec.phase, /*recorded=*/false);
     spec.stall_seconds = 20;
     auto maybeRestart = [&] {
       if (restart.process.empty() || restarted) return;

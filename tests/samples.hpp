@@ -77,6 +77,7 @@ inline decision_t sample(const decision_t*) {
   m.motivation = 0.8;
   m.threshold = 0.7;
   m.revisit = false;
+  m.seq = 0;
   m.digest = 0x1234;
   return m;
 }
@@ -180,6 +181,47 @@ inline forward_query_t sample(const forward_query_t*) {
   m.n_actions = static_cast<int32_t>(m.actions.size());
   m.prefix = {kTurnGreen};  // the object of `image` is imagined after turning it green
   m.n_prefix = static_cast<int8_t>(m.prefix.size());
+  m.digest = 0x1234;
+  return m;
+}
+
+inline goal_t sample(const goal_t*) {
+  goal_t m;
+  m.run_id = kSampleRunId;
+  m.step = 12;
+  m.serial = 3;
+  m.prev_digest = 0x5eed0000 + 3;
+  m.id = 3;
+  m.module = goal_t::COLOUR;
+  m.object_x = 0.25;
+  m.object_y = 0.75;
+  m.x = 0.25;
+  m.y = 0.75;
+  m.size = 21 * 21 * 3;
+  m.image.assign(static_cast<std::size_t>(m.size), 0);
+  for (std::size_t i = 0; i < m.image.size(); i += 3) m.image[i] = 200;
+  m.action = -1;
+  m.budget = 4;
+  m.digest = 0x1234;
+  return m;
+}
+
+inline goal_result_t sample(const goal_result_t*) {
+  goal_result_t m;
+  m.run_id = kSampleRunId;
+  m.step = 14;
+  m.serial = 3;
+  m.prev_digest = 0x5eed0000 + 3;
+  m.id = 3;
+  m.module = goal_t::COLOUR;
+  m.reached = true;
+  m.distance = 0.004;
+  m.actions = 2;
+  m.planned = true;
+  m.effects = 9;
+  m.focus_serial = 40;
+  m.forward_serial = 11;
+  m.seq = 52;
   m.digest = 0x1234;
   return m;
 }

@@ -88,6 +88,12 @@ wire::forward_query_t_bounds boundsOf(const BoundsContext& c, const forward_quer
   return {nameBytes(c), /*size*/ focusImageBytes(c), /*n_actions*/ actions(), /*n_prefix*/ imagined(c)};
 }
 
+wire::goal_t_bounds boundsOf(const BoundsContext& c, const goal_t*) {
+  return {nameBytes(c), /*size*/ focusImageBytes(c)};
+}
+
+wire::goal_result_t_bounds boundsOf(const BoundsContext& c, const goal_result_t*) { return {nameBytes(c)}; }
+
 wire::look_t_bounds boundsOf(const BoundsContext& c, const look_t*) { return {nameBytes(c)}; }
 
 wire::object_probe_t_bounds boundsOf(const BoundsContext& c, const object_probe_t*) {

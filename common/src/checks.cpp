@@ -158,7 +158,7 @@ std::string checkMessage(const decision_t& m, const BoundsContext& c) {
                 m.acted || m.action == decision_t::NONE ? "" : "field action must be -1 when acted is false",
                 checkRange("x", m.x, 0.0, 1.0), checkRange("y", m.y, 0.0, 1.0), checkTarget("target_x", m.target_x),
                 checkTarget("target_y", m.target_y), checkFinite("motivation", m.motivation),
-                checkFinite("threshold", m.threshold),
+                checkFinite("threshold", m.threshold), checkInt("seq", m.seq, 0, INT32_MAX),
                 m.revisit == 0 || (m.revisit == 1 && m.acted) ? ""
                 : m.revisit == 1 ? "field revisit must be false when acted is false"
                                  : "field revisit = " + std::to_string(m.revisit) + " is not a boolean"});
@@ -223,6 +223,30 @@ std::string checkMessage(const forward_prediction_t& m, const BoundsContext& c) 
       if (!(v >= 0.0f && v <= 1.0f)) return "field what holds a value outside [0, 1]";
   }
   return "";
+}
+
+std::string checkMessage(const goal_t& m, const BoundsContext& c) {
+  const bool explore = m.module == goal_t::EXPLORE;
+  return first({checkStep(m.step, c), checkSerial(m.serial), checkInt("id", m.id, 0, INT32_MAX),
+                checkInt("module", m.module, goal_t::EXPLORE, goal_t::COLOUR_PLACE),
+                explore ? checkTarget("object_x", m.object_x) : checkRange("object_x", m.object_x, 0.0, 1.0),
+                explore ? checkTarget("object_y", m.object_y) : checkRange("object_y", m.object_y, 0.0, 1.0),
+                explore ? checkTarget("x", m.x) : checkRange("x", m.x, 0.0, 1.0),
+                explore ? checkTarget("y", m.y) : checkRange("y", m.y, 0.0, 1.0),
+                explore && m.size == 0 ? "" : checkFocusSize("size", m.size, c),
+                checkAction("action", m.action, explore),
+                explore || m.action == -1 ? "" : "field action must be -1 unless module is EXPLORE",
+                checkInt("budget", m.budget, 1, c.run ? c.run->steps : INT32_MAX)});
+}
+
+std::string checkMessage(const goal_result_t& m, const BoundsContext& c) {
+  return first({checkStep(m.step, c), checkSerial(m.serial), checkInt("id", m.id, 0, INT32_MAX),
+                checkInt("module", m.module, goal_t::EXPLORE, goal_t::COLOUR_PLACE),
+                m.distance == -1.0 ? "" : checkRange("distance", m.distance, 0.0, 1.0),
+                checkInt("actions", m.actions, 0, c.run ? c.run->steps : INT32_MAX),
+                checkInt("effects", m.effects, 0, c.run ? c.run->steps : INT64_MAX),
+                checkInt("focus_serial", m.focus_serial, -1, INT64_MAX),
+                checkInt("forward_serial", m.forward_serial, -1, INT64_MAX), checkInt("seq", m.seq, 0, INT32_MAX)});
 }
 
 std::string checkMessage(const affordance_table_t& m, const BoundsContext& c) {

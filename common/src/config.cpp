@@ -135,6 +135,9 @@ void checkRunConfig(const RunConfig& c) {
          "never, but " +
              std::string(c.predictors.replay.enabled ? "predictors.replay.enabled" : "motivation.revisit.enabled") +
              " is true, which needs the memory");
+  if ((c.phase == Phase::Goals) != (c.system == System::GOALS) && c.phase != Phase::Extrinsic)
+    failKey("phase", std::string("the goals phase is system GOALS's, and GOALS learns in it (here phase ") +
+                         nameOf(kPhaseNames, c.phase) + ", system " + toString(c.system) + ")");
   if (c.phase == Phase::Extrinsic && !c.scenario)
     failKey("extrinsic", "missing (an extrinsic run needs a checkpoint and a scenario)");
   checkProtocol(c.protocol, "protocol");
@@ -292,7 +295,7 @@ const char* toString(System s) { return nameOf(kSystemNames, s); }
 System parseSystem(const std::string& s) {
   for (const auto& n : kSystemNames)
     if (s == n.name) return n.value;
-  throw ConfigError("unknown system \"" + s + "\" (expected FIX, IGN or IMP)");
+  throw ConfigError("unknown system \"" + s + "\" (expected FIX, IGN, IMP or GOALS)");
 }
 int colourChannel(Colour c) { return c == Colour::Red ? 0 : c == Colour::Green ? 1 : 2; }
 

@@ -247,6 +247,24 @@ void declareMotivation(V& v, RunConfig& c) {
 }
 
 template <class V>
+void declareGoals(V& v, RunConfig& c) {
+  v.section("goals", [&] {
+    GoalsConfig& g = c.goals;
+    v.kind("kind", g.kind,
+           "the goal chooser of the goals phase: `imgep` (goals from what the agent saw, chosen by competence "
+           "progress: docs/model.md#goals-of-its-own), or one a process of one's own registers");
+    v.integer("budget", g.budget, 1, 1'000'000, "actions the planner may spend on one goal");
+    v.integer("window", g.window, 1, 1'000'000, "attempts per module in each half of its competence window");
+    v.number("random_share", g.random_share, 0.0, 1.0,
+             "share of module choices drawn uniformly; the others follow |competence progress|");
+    v.number("explore_share", g.explore_share, 0.0, 1.0,
+             "share of goals that try a random action on the object a saliency scan picks");
+    v.integer("bootstrap", g.bootstrap, 0, 100'000'000, "goals at the start of a run that are explorations");
+    v.integer("memory", g.memory, 1, 100'000, "outcomes, places and objects the chooser keeps (the oldest go first)");
+  });
+}
+
+template <class V>
 void declarePlanner(V& v, RunConfig& c) {
   v.section("planner", [&] {
     PlannerConfig& p = c.planner;
@@ -284,12 +302,15 @@ template <class V>
 void declareRunConfig(V& v, RunConfig& c) {
   v.from(KeyInfo::Origin::Runner);
   v.text("experiment", c.experiment, "the experiment's name (or file) the run belongs to");
-  v.choice("system", c.system, kSystemNames, "FIX, IGN or IMP: the motivation of the paper's three systems");
+  v.choice("system", c.system, kSystemNames,
+           "FIX, IGN or IMP: the motivation of the paper's three systems; GOALS: the agent that sets its own goals "
+           "(it learns in the goals phase)");
   v.integer("seed", c.seed, 0, INT64_MAX, "the run's seed: every draw is keyed by (seed, step, purpose)");
   v.from(KeyInfo::Origin::Defaults);
   v.choice("phase", c.phase, kPhaseNames,
-           "`intrinsic` (learning, Algorithm 1) or `extrinsic` (a test, Algorithm 2 or 3); set by the runner, with "
-           "`extrinsic.checkpoint` and `extrinsic.scenario`");
+           "`intrinsic` (learning, Algorithm 1), `goals` (learning, the agent setting its own goals: system GOALS) "
+           "or `extrinsic` (a test, Algorithm 2 or 3); set by the runner, with `extrinsic.checkpoint` and "
+           "`extrinsic.scenario`");
   v.section("run", [&] {
     v.integer("steps", c.steps, 1, 100'000'000, "intrinsic steps");
     v.integer("curve_interval", c.curve_interval, 1, 100'000'000, "steps between affordance tables (learning curves)");
@@ -307,6 +328,7 @@ void declareRunConfig(V& v, RunConfig& c) {
   declareEye(v, c);
   declarePredictors(v, c);
   declareMotivation(v, c);
+  declareGoals(v, c);
   v.from(KeyInfo::Origin::Runner);
   v.given("extrinsic", [&] {
     v.section("extrinsic", [&] {

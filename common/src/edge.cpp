@@ -59,7 +59,7 @@ void Edge::join(const std::string& run_id, const RunConfig* config) {
   inbound_.join(run_id, config, *protocol_);
   std::vector<std::string> readers;
   if (config)
-    for (const std::string& p : runProcesses(config->phase == Phase::Extrinsic, config->record))
+    for (const std::string& p : runProcesses(config->phase, config->record))
       if (p != owner_) readers.push_back(p);
   outbound_.join(run_id, protocol_->recovery, std::move(readers));
   for (const auto& s : subs_) s->sub->setQueueCapacity(protocol_->queue_capacity);

@@ -241,12 +241,12 @@ void EdgeInbound::fail(const std::string& channel, const std::string& why) {
 
 void EdgeInbound::claim(const process_status_t& st) {
   if (run_.empty() || st.counts_run != run_) return;
-  const bool extrinsic = config_ && config_->phase == Phase::Extrinsic;
+  const Phase phase = config_ ? config_->phase : Phase::Intrinsic;
   bool any = false;
   for (int i = 0; i < st.n_channels; ++i) {
     const std::string& ch = st.channels[i];
     if (std::find(tracked_.begin(), tracked_.end(), ch) == tracked_.end()) continue;
-    if (publisherOf(ch, extrinsic) != st.process) continue;  // only a channel's publisher speaks for it
+    if (publisherOf(ch, phase) != st.process) continue;  // only a channel's publisher speaks for it
     serials_.claim(ch, st.counts[i], /*final=*/st.run_id != st.counts_run);  // it has left the run
     any = true;
     const std::int64_t expected = serials_.expected(ch);

@@ -279,6 +279,23 @@ double imageDistance(const std::vector<std::uint8_t>& a, const std::vector<std::
   return std::sqrt(sum) / static_cast<double>(a.size());
 }
 
+std::vector<std::uint8_t> quantiseImage(const std::vector<double>& what) {
+  std::vector<std::uint8_t> out(what.size());
+  for (std::size_t i = 0; i < what.size(); ++i)
+    out[i] = static_cast<std::uint8_t>(std::lround(std::clamp(what[i], 0.0, 1.0) * 255.0));
+  return out;
+}
+
+double silhouetteDistance(const std::vector<std::uint8_t>& a, const std::vector<std::uint8_t>& b) {
+  if (a.size() != b.size() || a.size() < 3) return 1.0;
+  std::size_t differ = 0;
+  for (std::size_t i = 0; i + 2 < a.size(); i += 3) {
+    const bool in_a = a[i] || a[i + 1] || a[i + 2], in_b = b[i] || b[i + 1] || b[i + 2];
+    differ += in_a != in_b;
+  }
+  return static_cast<double>(differ) / static_cast<double>(a.size() / 3);
+}
+
 double imageChange(const std::vector<std::uint8_t>& a, const std::vector<std::uint8_t>& b) {
   if (a.size() != b.size() || a.empty()) return 1.0;
   long sum = 0;

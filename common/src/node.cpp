@@ -292,7 +292,7 @@ void NodeBase::maybeSnapshot(bool now) {
   if (durable_child_ || durable_.valid()) return;  // the last one is not in place yet
   const int every = config_.protocol.recovery.snapshot_steps;
   if (snapshot_root_.empty() || run_id_.empty() || state_ != process_status_t::RUNNING ||
-      config_.phase != Phase::Intrinsic || every <= 0 || !snapshots() || edge_.failed())
+      !learning(config_.phase) || every <= 0 || !snapshots() || edge_.failed())
     return;
   if ((!now && last_step_ < next_snapshot_) || last_step_ < 0 || !atRest()) return;
   const std::string path = snapshotPath(run_id_);
@@ -333,7 +333,7 @@ void NodeBase::restoreSnapshot() {
   next_snapshot_ = every;
   const std::string path = snapshotPath(run_id_);
   std::error_code ec;
-  if (path.empty() || config_.phase != Phase::Intrinsic || every <= 0 || !snapshots() ||
+  if (path.empty() || !learning(config_.phase) || every <= 0 || !snapshots() ||
       !std::filesystem::exists(path, ec))
     return;
   try {

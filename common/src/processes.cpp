@@ -7,18 +7,20 @@ namespace afford {
 const std::vector<ProcessInfo>& processRegistry() {
   static const std::vector<ProcessInfo> registry = [] {
     std::vector<ProcessInfo> r = {
-        {"environment", true, true, false, {}, "the world: scene, objects, actions"},
-        {"eye", true, true, false, {}, "attention and perception: focus, effects"},
-        {"predictors", true, true, false, {}, "affordance and forward models"},
-        {"motivation", true, false, false, {}, "intrinsic motivations: chooses the action (intrinsic phase)"},
-        {"planner", false, true, false, {}, "attention to the goal and planning (extrinsic phase)"},
-        {"logger", true, true, true, {}, "records a run into an LCM log"},
+        {"environment", {true, true, true}, false, {}, "the world: scene, objects, actions"},
+        {"eye", {true, true, true}, false, {}, "attention and perception: focus, effects"},
+        {"predictors", {true, true, true}, false, {}, "affordance and forward models"},
+        {"motivation", {true, false, true}, false, {},
+         "intrinsic motivations: chooses the action (intrinsic phase) or the goal (goals phase)"},
+        {"planner", {false, true, true}, false, {},
+         "attention to the goal and planning (extrinsic phase; goals phase: the agent's own goals)"},
+        {"logger", {true, true, true}, true, {}, "records a run into an LCM log"},
     };
     // What each publishes: the run channels (afford/protocol.hpp) whose publisher it is in a phase it is in.
     for (ProcessInfo& p : r)
       forEachChannel([&](const ChannelInfo& c) {
-        const bool mine = (p.intrinsic && std::string(c.intrinsic_publisher) == p.name) ||
-                          (p.extrinsic && std::string(c.extrinsic_publisher) == p.name);
+        bool mine = false;
+        for (std::size_t i = 0; i < kPhases; ++i) mine = mine || (p.phases[i] && std::string(c.publishers[i]) == p.name);
         if (c.serial && mine) p.publishes.push_back(c.name);
       });
     return r;
@@ -26,17 +28,17 @@ const std::vector<ProcessInfo>& processRegistry() {
   return registry;
 }
 
-std::vector<std::string> runProcesses(bool extrinsic, bool recorded) {
+std::vector<std::string> runProcesses(Phase phase, bool recorded) {
   std::vector<std::string> out;
   for (const ProcessInfo& p : processRegistry())
-    if ((extrinsic ? p.extrinsic : p.intrinsic) && (!p.recorder || recorded)) out.emplace_back(p.name);
+    if (p.in(phase) && (!p.recorder || recorded)) out.emplace_back(p.name);
   return out;
 }
 
-std::string publisherOf(const std::string& channel, bool extrinsic) {
+std::string publisherOf(const std::string& channel, Phase phase) {
   const ChannelInfo* c = channelNamed(channel);
   if (!c || !c->serial) return "";
-  const std::string p = c->publisher(extrinsic);
+  const std::string p = c->publisher(phase);
   return isProcessName(p) ? p : "";
 }
 
@@ -46,11 +48,13 @@ bool isProcessName(const std::string& name) {
   return false;
 }
 
-std::vector<std::string> channelsOf(const std::string& process, bool extrinsic) {
+std::vector<std::string> channelsOf(const std::string& process, Phase phase) {
   std::vector<std::string> out;
   for (const ProcessInfo& p : processRegistry())
-    if (process == p.name && (extrinsic ? p.extrinsic : p.intrinsic)) {
-      out.assign(p.publishes.begin(), p.publishes.end());
+    if (process == p.name && p.in(phase)) {
+      forEachChannel([&](const ChannelInfo& c) {
+        if (c.serial && process == c.publisher(phase)) out.emplace_back(c.name);
+      });
       out.emplace_back(ch::status.name);
     }
   return out;

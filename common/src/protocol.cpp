@@ -1,5 +1,9 @@
 #include "afford/protocol.hpp"
 
+#include <algorithm>
+
+#include "afford/config.hpp"
+
 namespace afford {
 
 const ChannelInfo* channelNamed(const std::string& name) {
@@ -35,10 +39,23 @@ std::string who(const char* s) {
 std::string protocolTable() {
   std::string out = "| channel | type | published by | read by | recorded | when |\n|---|---|---|---|---|---|\n";
   forEachChannel([&](const ChannelInfo& c) {
-    std::string by = who(c.intrinsic_publisher);
-    if (std::string(c.intrinsic_publisher) != c.extrinsic_publisher) {
-      by = (*c.intrinsic_publisher ? who(c.intrinsic_publisher) + " (intrinsic)" : std::string());
-      if (*c.extrinsic_publisher) by += (by.empty() ? "" : ", ") + who(c.extrinsic_publisher) + " (extrinsic)";
+    // One publisher in every phase: its name; otherwise each publisher with the phases it publishes in.
+    std::string by;
+    bool same = true;
+    for (const char* p : c.publishers) same = same && std::string(p) == c.publishers[0];
+    if (same) {
+      by = who(c.publishers[0]);
+    } else {
+      std::vector<std::string> seen;
+      for (std::size_t i = 0; i < kPhases; ++i) {
+        const std::string p = c.publishers[i];
+        if (p.empty() || std::find(seen.begin(), seen.end(), p) != seen.end()) continue;
+        seen.push_back(p);
+        std::string phases;
+        for (std::size_t j = i; j < kPhases; ++j)
+          if (p == c.publishers[j]) phases += (phases.empty() ? "" : ", ") + std::string(kPhaseNames[j].name);
+        by += (by.empty() ? "" : "; ") + who(p.c_str()) + " (" + phases + ")";
+      }
     }
     std::string readers;
     for (const char* r : c.readers)

@@ -35,13 +35,13 @@ std::vector<std::string> parseSystems(const std::vector<std::string>& given, con
       } catch (const ConfigError&) {
         std::string upper = item;
         for (char& c : upper) c = static_cast<char>(std::toupper(static_cast<unsigned char>(c)));
-        const bool cased = upper == "FIX" || upper == "IGN" || upper == "IMP";
+        const bool cased = upper == "FIX" || upper == "IGN" || upper == "IMP" || upper == "GOALS";
         throw ConfigError(option + ": unknown system \"" + item + "\" in \"" + g + "\"" +
                           (cased ? "; did you mean " + upper + "? (systems are written in capitals)" : "") +
-                          " (FIX, IGN, IMP, all, or a list: FIX,IMP)");
+                          " (FIX, IGN, IMP, GOALS, all (the paper's three), or a list: FIX,IMP)");
       }
     }
-    if (!any) throw ConfigError(option + ": empty (FIX, IGN, IMP, all, or a list: FIX,IMP)");
+    if (!any) throw ConfigError(option + ": empty (FIX, IGN, IMP, GOALS, all (the paper's three), or a list: FIX,IMP)");
   }
   return out;
 }
@@ -282,7 +282,8 @@ ExperimentFile loadExperimentChain(const std::string& config_dir, const std::str
       ConfigReader r(root, "");
       e.repetitions = static_cast<int>(r.integer("repetitions", 1, 100000));
     } else if (key == "default_systems") {
-      if (!kv.second.IsSequence()) failKey("default_systems", "expected a list of systems (FIX, IGN, IMP)");
+      if (!kv.second.IsSequence()) failKey("default_systems", "expected a list of systems (FIX, IGN, IMP, GOALS)");
+      e.default_systems.clear();  // a file's list replaces the one of the file it extends
       for (const auto& s : kv.second) e.default_systems.push_back(toString(parseSystem(s.Scalar())));
     } else if (key == "extrinsic") {
       if (isNone(kv.second)) {  // `extrinsic: none`: no design, whatever the extended experiment had
@@ -359,6 +360,7 @@ YAML::Node effectiveConfig(const std::string& config_dir, const RunRequest& requ
   }
   root["experiment"] = e.name;
   root["system"] = sys;
+  if (request.system == System::GOALS) root["phase"] = "goals";  // the agent that sets its own goals learns there
   root["seed"] = request.seed;
   if (request.steps) root["run"]["steps"] = *request.steps;
   for (const auto& setting : request.settings) {

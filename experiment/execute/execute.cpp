@@ -34,7 +34,7 @@ struct Slot {
   // As many slots as cores, or more: no core is free for the eye to scan ahead with (its `--speculate`).
   bool machine_full = false;
   std::unique_ptr<ProcessGroup> group;   // environment, eye, predictors, and motivation or planner
-  bool extrinsic = false;                // which of the two the group (or the host) has
+  Phase phase = Phase::Intrinsic;        // the phase whose processes the group (or the host) has
   std::unique_ptr<ProcessGroup> logger;  // started with the slot's first recorded run, kept for the others
   // One bus connection and driver for all the slot's runs: the driver keeps
   // what each process last said, so a run starts as soon as they are free.
@@ -58,7 +58,7 @@ using OnStep = std::function<void(std::int64_t)>;
 // another folder, log root, transport or process options: the driver's memory of the processes is of theirs.
 void serve(Slot& slot, const PlannedRun& run, const HostRequest& o, const std::string& log_root,
            const std::string& out_dir) {
-  std::string key = std::string(run.spec.extrinsic ? "extrinsic" : "intrinsic") + '\n' + o.transport + '\n' + out_dir + '\n' + log_root + '\n' + o.bus_key + '\n' + o.process_log_level;
+  std::string key = std::string(nameOf(kPhaseNames, run.spec.phase)) + '\n' + o.transport + '\n' + out_dir + '\n' + log_root + '\n' + o.bus_key + '\n' + o.process_log_level;
   for (const auto& [name, cmd] : o.processes) key += '\n' + name + '=' + cmd;
   if (key == slot.serving) return;
   slot.host.reset();  // its nodes are on the slot's bus: gone first
@@ -88,10 +88,10 @@ RunOutcome runInProcess(const PlannedRun& run, const HostRequest& o, const std::
     slot.lcm = std::make_unique<lcm::LCM>("memq://");
     slot.driver = std::make_unique<RunDriver>(*slot.lcm, makeLogger("runner" + tag, level), protocol);
   }
-  // The motivation decides in the intrinsic phase, the planner in the extrinsic one: the other phase, a new host.
-  if (!slot.host || slot.extrinsic != run.spec.extrinsic) {
+  // Each phase has its own processes (and deciders): another phase, a new host.
+  if (!slot.host || slot.phase != run.spec.phase) {
     slot.host.reset();
-    slot.extrinsic = run.spec.extrinsic;
+    slot.phase = run.spec.phase;
     slot.host = std::make_unique<InProcessHost>(
         *slot.lcm, protocol, [tag, level](const std::string& p) { return makeLogger(p + tag, level); },
         HostOptions{/*single_thread=*/true, log_root, nullptr, /*snapshot_root=*/log_root});
@@ -139,14 +139,14 @@ RunOutcome runOverUdpm(const PlannedRun& run, const HostRequest& o, const std::s
   std::vector<std::string> common;
   if (!o.bus_key.empty()) common = {"--bus-key", fs::absolute(o.bus_key).string()};
   if (o.process_log_level != "info") common.insert(common.end(), {"--log-level", o.process_log_level});
-  if (!attached && (!slot.group || !slot.group->health().empty() || slot.extrinsic != run.spec.extrinsic)) {
+  if (!attached && (!slot.group || !slot.group->health().empty() || slot.phase != run.spec.phase)) {
     slot.group.reset();
-    slot.extrinsic = run.spec.extrinsic;
+    slot.phase = run.spec.phase;
     std::map<std::string, std::vector<std::string>> own{{"predictors", {"--checkpoint-dir", log_root}}};
     if (!o.processes.count("eye")) own["eye"] = {"--speculate", slot.machine_full ? "off" : "on"};  // ours only
-    for (const std::string& p : runProcesses(run.spec.extrinsic, /*recorded=*/false))
+    for (const std::string& p : runProcesses(run.spec.phase, /*recorded=*/false))
       if (!o.processes.count(p)) own[p].insert(own[p].end(), {"--state-dir", log_root});
-    slot.group = std::make_unique<ProcessGroup>(bin, runProcesses(run.spec.extrinsic, /*recorded=*/false), slot.url,
+    slot.group = std::make_unique<ProcessGroup>(bin, runProcesses(run.spec.phase, /*recorded=*/false), slot.url,
                                                 out, common, own, o.processes);
   }
   // The logger serves the slot's runs one after another; those not to be kept

@@ -175,7 +175,8 @@ PlannedRun planRun(const Plan& plan, const PlanRequest& o, const std::string& pr
   p.spec.seed = o.seed + at.rep;
   p.spec.steps = cfg.steps;
   p.spec.config_yaml = emitYaml(node);
-  p.spec.processes = runProcesses(/*extrinsic=*/false, p.keep_log);
+  p.spec.phase = cfg.phase;  // intrinsic, or goals (a learning run either way)
+  p.spec.processes = runProcesses(p.spec.phase, p.keep_log);
   p.spec.log_root = o.log_root;
   return p;
 }
@@ -290,7 +291,8 @@ std::vector<PlannedRun> planExtrinsic(const Plan& plan, const std::vector<RunOut
           t.spec.steps = node["run"]["steps"].as<std::int64_t>();
           t.spec.config_yaml = emitYaml(node);
           t.spec.extrinsic = true;
-          t.spec.processes = runProcesses(/*extrinsic=*/true, t.keep_log);
+          t.spec.phase = Phase::Extrinsic;
+          t.spec.processes = runProcesses(Phase::Extrinsic, t.keep_log);
           t.spec.log_root = o.log_root;
           t.index = tests.size();
           tests.push_back(std::move(t));

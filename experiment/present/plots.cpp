@@ -31,7 +31,7 @@ Box box(std::vector<double> v) {
 }
 
 const char* kSystemColour(const std::string& s) {
-  return s == "FIX" ? "#e69f00" : s == "IGN" ? "#56b4e9" : "#009e73";
+  return s == "FIX" ? "#e69f00" : s == "IGN" ? "#56b4e9" : s == "GOALS" ? "#cc79a7" : "#009e73";
 }
 
 // gnuplot colour and point type for an object name like "green circle".
@@ -431,7 +431,7 @@ std::vector<std::string> plotExperiment(const std::string& dir_name) {
     return f.written;
   }
   for (auto plot : {plotAffordances, plotCurves, plotCompletion, plotStochastic, plotUtility, plotForwardModels,
-                    plotSearch, plotGenerated})
+                    plotSearch, plotGenerated, plotGoals})
     plot(f);
   return f.written;
 }

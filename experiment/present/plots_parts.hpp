@@ -58,6 +58,7 @@ struct Figures {
 
 // The figures of plots_planner.cpp, each drawn only when the summary has what it shows.
 void plotStochastic(Figures& f);     // stochastic affordances (paper Figure 11)
+void plotGoals(Figures& f);          // GOALS agents: competence, modules chosen, goals reached (plots_goals.cpp)
 void plotUtility(Figures& f);        // the utility tests (paper Figure 12)
 void plotForwardModels(Figures& f);  // the forward models' tests (paper Figure 13)
 void plotSearch(Figures& f);         // the search reduction (paper Figure 14)

@@ -459,6 +459,7 @@ Rendered render(const std::vector<Folder>& folders, const Reference& reference, 
   md << memorySections(folders, where.docs);
   md << authorsEyeSections(folders, where.docs);
   md << generatedSections(folders, reference, where.docs);
+  md << goalsSections(folders, where.docs);
   figuresSection(md, folders, where, out);
   out.markdown = md.str();
   return out;

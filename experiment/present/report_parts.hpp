@@ -69,5 +69,7 @@ std::string authorsEyeSections(const std::vector<Folder>& folders, const Docs& d
 std::string memorySections(const std::vector<Folder>& folders, const Docs& docs);
 // Designs of generated scenarios, per condition and point, with the floors of reference.yaml.
 std::string generatedSections(const std::vector<Folder>& folders, const Reference& reference, const Docs& docs);
+// GOALS agents beside IMP: affordance error, actions, extrinsic success, competence per module (report_goals.cpp).
+std::string goalsSections(const std::vector<Folder>& folders, const Docs& docs);
 
 }  // namespace afford::report

@@ -138,7 +138,7 @@ void compareWithRecord(const ReplayedProcess& planner, const std::vector<LogEven
     if (peekRunHeader(e.data.data(), static_cast<std::uint32_t>(e.data.size()), h)) mine[e.channel].emplace(h.serial, &e);
   }
   for (const LogEvent& e : recorded) {
-    if (!isSerialChannel(e.channel) || publisherOf(e.channel, true) != std::string("planner")) continue;
+    if (!isSerialChannel(e.channel) || publisherOf(e.channel, Phase::Extrinsic) != std::string("planner")) continue;
     RunHeader h;
     if (peekRunHeader(e.data.data(), static_cast<std::uint32_t>(e.data.size()), h) && h.run_id == run_id)
       theirs[e.channel].emplace(h.serial, &e);
@@ -212,7 +212,7 @@ void warnOfTheLog(const RunEvents& run, std::size_t results, std::int64_t torn_b
     warn.push_back(sprintf("the log ends with an incomplete event (%lld bytes), after the EXTRINSIC_RESULT",
                           static_cast<long long>(torn_bytes)));
   if (!incomplete.empty()) warn.push_back("the log's manifest says it is incomplete: " + incomplete);
-  std::vector<LogGap> gaps = recordingGaps(run.events, run_id, true, ctx);
+  std::vector<LogGap> gaps = recordingGaps(run.events, run_id, Phase::Extrinsic, ctx);
   for (const LogGap& g : manifest_missing) {  // what the logger knew it never got, beyond the last recorded
     const bool known = std::any_of(gaps.begin(), gaps.end(), [&](const LogGap& h) {
       return h.channel == g.channel && h.first <= g.first && h.last >= g.last;
@@ -409,7 +409,7 @@ Explanation explainRunEvents(const RunEvents& run, const std::string& where, std
   host.single_thread = true;
   host.log_root = "";  // the planner reads no file
   host.planner_observer = &rec;
-  ReplayedProcess planner("planner", config.protocol, /*extrinsic=*/true, host);
+  ReplayedProcess planner("planner", config.protocol, Phase::Extrinsic, host);
   for (const LogEvent& e : run.events) planner.feed(e);
   compareWithRecord(planner, run.events, ex.run_id, ctx, warn);
   goalDistances(ex, rec, run, ctx);

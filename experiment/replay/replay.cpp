@@ -25,6 +25,7 @@
 #include "afford/run_result_t.hpp"
 #include "afford/seal.hpp"
 #include "motivation/component.hpp"
+#include "motivation/goals.hpp"
 #include "predictors/affordance.hpp"
 #include "logger/logger.hpp"
 #include "afford/process_main.hpp"
@@ -34,12 +35,13 @@ namespace fs = std::filesystem;
 
 bool ReplayResult::consistent() const {
   const bool weights = recorded_checksum.empty() || weights_checksum.empty() || weights_checksum == recorded_checksum;
-  return weights && decisions_differing == 0 && dropped == 0;
+  return weights && decisions_differing == 0 && goals_differing == 0 && dropped == 0;
 }
 
 bool ReplayResult::ok() const {
   return consistent() && gaps.empty() && incomplete.empty() &&
          (!decider_skipped.empty() || decisions == decisions_recorded) &&
+         (phase != Phase::Goals || !goals_skipped.empty() || goals == goals_recorded) &&
          (recorded_checksum.empty() || !weights_checksum.empty());
 }
 
@@ -168,12 +170,12 @@ void keepPublished(const lcm::ReceiveBuffer* rbuf, const std::string& channel, s
 }
 }  // namespace
 
-ReplayedProcess::ReplayedProcess(const std::string& process, const ProtocolConfig& protocol, bool extrinsic,
+ReplayedProcess::ReplayedProcess(const std::string& process, const ProtocolConfig& protocol, Phase phase,
                                  const HostOptions& options)
     : name_(process), bus_(std::make_unique<lcm::LCM>("memq://")) {
   node_ = makeNode(process, *bus_, makeLogger("replay-" + process, "warn"), protocol, options);
   node_->holdNothingPublished();  // its bus is its own: nobody asks it again (what it holds would grow with the log)
-  for (const auto& ch : channelsOf(process, extrinsic)) {
+  for (const auto& ch : channelsOf(process, phase)) {
     outputs_.insert(ch);
     bus_->subscribeFunction(ch, &keepPublished, &published_);
   }
@@ -237,8 +239,8 @@ bool SerialRuns::insert(std::int64_t s) {
   return true;
 }
 
-GapFinder::GapFinder(std::string run_id, bool extrinsic, const BoundsContext& ctx)
-    : run_id_(std::move(run_id)), extrinsic_(extrinsic), ctx_(ctx) {}
+GapFinder::GapFinder(std::string run_id, Phase phase, const BoundsContext& ctx)
+    : run_id_(std::move(run_id)), phase_(phase), ctx_(ctx) {}
 
 void GapFinder::add(const LogEvent& e) {
   if (isSerialChannel(e.channel)) {
@@ -252,7 +254,7 @@ void GapFinder::add(const LogEvent& e) {
     std::string why;
     if (!decodeChecked(e.data.data(), e.data.size(), ctx_, st, why) || st.counts_run != run_id_) return;
     for (int i = 0; i < st.n_channels; ++i)
-      if (publisherOf(st.channels[i], extrinsic_) == st.process)
+      if (publisherOf(st.channels[i], phase_) == st.process)
         claimed_[st.channels[i]] = std::max(claimed_[st.channels[i]], std::min(st.counts[i], kMostSerials));
   }
 }
@@ -278,9 +280,9 @@ std::vector<LogGap> GapFinder::gaps() const {
   return gaps;
 }
 
-std::vector<LogGap> recordingGaps(const std::vector<LogEvent>& events, const std::string& run_id, bool extrinsic,
+std::vector<LogGap> recordingGaps(const std::vector<LogEvent>& events, const std::string& run_id, Phase phase,
                                   const BoundsContext& ctx) {
-  GapFinder finder(run_id, extrinsic, ctx);
+  GapFinder finder(run_id, phase, ctx);
   for (const LogEvent& e : events) finder.add(e);
   return finder.gaps();
 }
@@ -309,7 +311,16 @@ std::vector<std::string> processesToReplay(const ReplayOptions& o, const RunConf
   const bool own_motivation = std::find(kinds.begin(), kinds.end(), config.motivation.kind) == kinds.end();
   if (into.empty()) {
     into = {"predictors"};
-    if (result.extrinsic)
+    if (result.phase == Phase::Goals) {
+      into.push_back("planner");
+      const auto goal_kinds = goalChooserKinds();
+      if (std::find(goal_kinds.begin(), goal_kinds.end(), config.goals.kind) == goal_kinds.end())
+        result.goals_skipped = "goals.kind '" + config.goals.kind +
+                               "' is not one of afford's own (a class in Python or a program of one's own chose "
+                               "the goals): its recorded goals are fed to the planner";
+      else
+        into.push_back("motivation");
+    } else if (result.extrinsic)
       into.push_back("planner");
     else if (own_motivation)
       result.decider_skipped = "motivation.kind '" + config.motivation.kind +
@@ -371,6 +382,25 @@ class DecisionMatch {
 
 std::uint64_t digestOf(const LogEvent& e) { return fnv1a64(e.data.data(), e.data.size()); }
 
+// What a replayed process published, against the recording: the predictors' checksum, the decisions of the
+// process that decided in the run's phase, and the goals of the goal chooser (the goals phase).
+void compareReplayed(ReplayedProcess& p, const BoundsContext& ctx, ReplayResult& result, DecisionMatch& decisions,
+                     DecisionMatch& goals) {
+  const bool decider = p.name() == publisherOf(ch::decision.name, result.phase);
+  const bool chooser = p.name() == publisherOf(ch::goal.name, result.phase);
+  for (const LogEvent& out : p.takePublished()) {
+    RunHeader ph;
+    if (out.channel == ch::result.name && p.name() == "predictors") {
+      run_result_t m;
+      std::string why;
+      if (decodeChecked(out.data.data(), out.data.size(), ctx, m, why)) result.weights_checksum = m.weights_checksum;
+    } else if ((decider && out.channel == ch::decision.name) || (chooser && out.channel == ch::goal.name)) {
+      if (peekRunHeader(out.data.data(), static_cast<std::uint32_t>(out.data.size()), ph))
+        (out.channel == ch::goal.name ? goals : decisions).replayed(ph.serial, digestOf(out));
+    }
+  }
+}
+
 }  // namespace
 
 ReplayResult replayRun(const ReplayOptions& o, spdlog::logger& log) {
@@ -386,8 +416,8 @@ ReplayResult replayRun(const ReplayOptions& o, spdlog::logger& log) {
   BoundsContext ctx{nullptr, nullptr};
   std::unique_ptr<GapFinder> gaps;
   std::vector<std::unique_ptr<ReplayedProcess>> procs;
-  DecisionMatch decisions;
-  bool decider_replayed = false;
+  DecisionMatch decisions, goals;
+  bool decider_replayed = false, chooser_replayed = false;
   LogEvent e;
   while (in.next(e)) {
     if (!select.take(e)) continue;
@@ -397,9 +427,10 @@ ReplayResult replayRun(const ReplayOptions& o, spdlog::logger& log) {
       run_config_t config_msg = select.config();
       result.run_id = config_msg.run_id;
       config = std::make_unique<RunConfig>(parseRunConfigText(config_msg.config_yaml));
+      result.phase = config->phase;
       result.extrinsic = config->phase == Phase::Extrinsic;
       ctx = BoundsContext{&config->protocol, config.get()};
-      gaps = std::make_unique<GapFinder>(result.run_id, result.extrinsic, ctx);
+      gaps = std::make_unique<GapFinder>(result.run_id, result.phase, ctx);
       // The replayed processes write nothing: no checkpoint goes into the recorded run's folder.
       YAML::Node node = YAML::Load(config_msg.config_yaml);
       node["run"]["checkpoint"] = "";
@@ -416,8 +447,9 @@ ReplayResult replayRun(const ReplayOptions& o, spdlog::logger& log) {
         HostOptions host;
         host.single_thread = true;
         host.log_root = run_folder.parent_path().string();
-        procs.push_back(std::make_unique<ReplayedProcess>(name, config->protocol, result.extrinsic, host));
-        decider_replayed |= (name == "planner") == result.extrinsic && name != "predictors";
+        procs.push_back(std::make_unique<ReplayedProcess>(name, config->protocol, result.phase, host));
+        decider_replayed |= name == publisherOf(ch::decision.name, result.phase);
+        chooser_replayed |= name == publisherOf(ch::goal.name, result.phase);
       }
     }
     gaps->add(e);
@@ -426,9 +458,10 @@ ReplayResult replayRun(const ReplayOptions& o, spdlog::logger& log) {
       log.warn("{}: a recorded message is refused: {}", e.channel, why);
     }
     RunHeader h;
-    if ((e.channel == ch::decision.name || e.channel == ch::result.name) &&
+    if ((e.channel == ch::decision.name || e.channel == ch::goal.name || e.channel == ch::result.name) &&
         peekRunHeader(e.data.data(), static_cast<std::uint32_t>(e.data.size()), h) && h.run_id == result.run_id) {
       if (e.channel == ch::decision.name) decisions.recorded(h.serial, digestOf(e));
+      if (e.channel == ch::goal.name) goals.recorded(h.serial, digestOf(e));
       run_result_t m;
       std::string why;
       if (e.channel == ch::result.name && decodeChecked(e.data.data(), e.data.size(), ctx, m, why))
@@ -436,20 +469,7 @@ ReplayResult replayRun(const ReplayOptions& o, spdlog::logger& log) {
     }
     for (auto& p : procs) {
       p->feed(e);
-      // What it published, against the recording: the predictors' checksum, and the decisions of the
-      // process that decided in this phase.
-      const bool decider = p->name() != "predictors" && (p->name() == "planner") == result.extrinsic;
-      for (const LogEvent& out : p->takePublished()) {
-        RunHeader ph;
-        if (out.channel == ch::result.name && p->name() == "predictors") {
-          run_result_t m;
-          std::string why;
-          if (decodeChecked(out.data.data(), out.data.size(), ctx, m, why)) result.weights_checksum = m.weights_checksum;
-        } else if (decider && out.channel == ch::decision.name &&
-                   peekRunHeader(out.data.data(), static_cast<std::uint32_t>(out.data.size()), ph)) {
-          decisions.replayed(ph.serial, digestOf(out));
-        }
-      }
+      compareReplayed(*p, ctx, result, decisions, goals);
     }
   }
   result.torn_bytes = in.counts().torn_bytes;
@@ -468,6 +488,11 @@ ReplayResult replayRun(const ReplayOptions& o, spdlog::logger& log) {
     result.decisions_recorded = decisions.recordedCount();
     result.decisions = decisions.replayedCount();
     result.decisions_differing = decisions.differing();
+  }
+  if (chooser_replayed) {
+    result.goals_recorded = goals.recordedCount();
+    result.goals = goals.replayedCount();
+    result.goals_differing = goals.differing();
   }
   return result;
 }

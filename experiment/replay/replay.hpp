@@ -82,7 +82,7 @@ struct LogGap {
 // The serials each channel's publisher published in run `run_id` that `events`
 // lack: holes below the highest recorded serial, and beyond it up to the
 // publisher's own count (STATUS, in lcm-logger recordings).
-std::vector<LogGap> recordingGaps(const std::vector<LogEvent>& events, const std::string& run_id, bool extrinsic,
+std::vector<LogGap> recordingGaps(const std::vector<LogEvent>& events, const std::string& run_id, Phase phase,
                                   const BoundsContext& ctx);
 // A set of serials as runs of consecutive ones: a few numbers for a channel
 // recorded whole, whatever its length.
@@ -101,13 +101,13 @@ class SerialRuns {
 // consecutive serials, not the serials.
 class GapFinder {
  public:
-  GapFinder(std::string run_id, bool extrinsic, const BoundsContext& ctx);
+  GapFinder(std::string run_id, Phase phase, const BoundsContext& ctx);
   void add(const LogEvent& e);
   std::vector<LogGap> gaps() const;
 
  private:
   std::string run_id_;
-  bool extrinsic_;
+  Phase phase_;
   BoundsContext ctx_;
   std::map<std::string, SerialRuns> had_;         // channel: the serials recorded
   std::map<std::string, std::int64_t> claimed_;  // channel: its publisher's count
@@ -159,7 +159,7 @@ class RunSelector {
 // observes the planner.
 class ReplayedProcess {
  public:
-  ReplayedProcess(const std::string& process, const ProtocolConfig& protocol, bool extrinsic,
+  ReplayedProcess(const std::string& process, const ProtocolConfig& protocol, Phase phase,
                   const HostOptions& options);
   ~ReplayedProcess();
   ReplayedProcess(const ReplayedProcess&) = delete;
@@ -181,7 +181,7 @@ class ReplayedProcess {
 struct ReplayOptions {
   std::string log_dir;                    // a run's folder: log.NN.lcm segments (or one .lcm file)
   // predictors, motivation, planner; empty: the predictors and the run's decider
-  // (the motivation in the intrinsic phase, the planner in the extrinsic one)
+  // (the motivation in the intrinsic phase, the planner in the extrinsic one, both in the goals phase)
   std::vector<std::string> into;
   std::string run_id;                     // the run to replay in a log of several (default: the first)
   std::string bus_key;                    // key file: the recording is of a keyed bus (tags checked and taken off)
@@ -195,10 +195,15 @@ struct ReplayResult {
   std::int64_t untagged = 0;          // with --bus-key: events without a valid tag, skipped
   std::string run_id;
   bool extrinsic = false;
+  Phase phase = Phase::Intrinsic;
   std::string weights_checksum;       // the replayed predictors' final weights ("" without them)
   std::string recorded_checksum;      // the live run's RESULT ("" if the log has none)
   // Per replayed decider (motivation or planner): its decisions against the recorded ones.
   std::int64_t decisions = 0, decisions_recorded = 0, decisions_differing = 0;
+  // The goals phase: the replayed goal chooser's GOALs against the recorded ones; or why it was not
+  // replayed (a goals.kind not built in: its recorded goals are fed to the planner).
+  std::int64_t goals = 0, goals_recorded = 0, goals_differing = 0;
+  std::string goals_skipped;
   // Why the run's decider was not replayed ("" when it was): a motivation of
   // one's own (motivation.kind not built in) ran as its own process, which
   // replay cannot start; its decisions are taken from the record.

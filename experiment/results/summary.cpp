@@ -13,6 +13,7 @@
 #include "experiment/design/reference.hpp"
 #include "experiment/run/outcome.hpp"
 #include "experiment/design/tables.hpp"
+#include "experiment/results/goals.hpp"
 
 namespace afford {
 namespace fs = std::filesystem;
@@ -313,6 +314,13 @@ SystemSummary summariseSystem(const Plan& plan, const std::string& sys, const Ph
     }
   }
   if (curves_file) curves_file->commit();
+  if (cfg.phase == Phase::Goals) {
+    std::vector<std::pair<std::string, const RunOutcome*>> goal_runs;
+    for (const auto& p : plan.runs)
+      if (p.system == sys && phase.finished[p.index] && phase.outcomes[p.index].ok)
+        goal_runs.emplace_back(p.spec.run_id, &phase.outcomes[p.index]);
+    js.goals = summariseGoals(sys, goal_runs, cfg.steps, cfg.curve_interval, out_dir);
+  }
   return js;
 }
 

@@ -47,6 +47,21 @@ void takeCounts(RunOutcome& o, const run_result_t& m) {
   o.revisits = m.revisits;
 }
 
+// A goal's end into the bins of its curve interval.
+void takeGoal(std::vector<GoalBin>& bins, const goal_result_t& m, std::int64_t interval) {
+  const std::int64_t step = m.step / interval * interval;
+  if (bins.empty() || bins.back().step != step) {
+    GoalBin b;
+    b.step = step;
+    b.set = b.reached = b.actions = std::vector<std::int64_t>(4, 0);
+    bins.push_back(std::move(b));
+  }
+  const auto module = static_cast<std::size_t>(m.module);  // checked on the edge: 0 to 3
+  ++bins.back().set[module];
+  bins.back().reached[module] += m.reached ? 1 : 0;
+  bins.back().actions[module] += m.actions;
+}
+
 }  // namespace
 
 RunDriver::RunDriver(lcm::LCM& lcm, std::shared_ptr<spdlog::logger> log, const ProtocolConfig& protocol)
@@ -64,6 +79,14 @@ RunDriver::RunDriver(lcm::LCM& lcm, std::shared_ptr<spdlog::logger> log, const P
         if (!outcome_) return Turn::take();
         outcome_->extrinsic = extrinsicOutcomeOf(m);
         have_result_ = true;
+        return Turn::take();
+      },
+      Scope::Run, Order::Serial);
+  edge_.subscribe(ch::goalResult,
+      [this](const goal_result_t& m) {
+        if (!outcome_) return Turn::take();
+        takeGoal(outcome_->goals, m, config_.curve_interval);
+        goals_ended_ = goals_ended_ || m.step >= config_.steps;
         return Turn::take();
       },
       Scope::Run, Order::Serial);
@@ -317,7 +340,9 @@ RunDriver::Ending RunDriver::runSteps(const Waiting& w) {
                                                                        (config_.steps % config_.curve_interval != 0));
   // The logger must be in the run to close its log: one restarted after the
   // last step still catches up first.
-  while (!have_result_ || out.curve.size() < tables || (logged() && !loggerJoined())) {
+  // A goals run ends with its last GOAL_RESULT too: the goals' figures are whole.
+  const bool goals = config_.phase == afford::Phase::Goals;
+  while (!have_result_ || out.curve.size() < tables || (goals && !goals_ended_) || (logged() && !loggerJoined())) {
     if (auto h = w.health(); !h.empty()) return {false, h};
     if (auto f = failedProcess(); !f.empty()) return {false, f};
     if (stopRequested()) return {true, ""};
@@ -367,6 +392,7 @@ RunOutcome RunDriver::run(const RunSpec& spec, const std::function<void()>& pump
   spec_ = &spec;
   outcome_ = &out;
   have_result_ = false;
+  goals_ended_ = false;
   logger_done_ = false;
   nudged_.clear();
   edge_.join(spec.run_id, &config_);

@@ -37,6 +37,7 @@ struct RunSpec {
   std::int64_t steps = 0;
   std::string config_yaml;
   std::vector<std::string> processes;  // names expected to take part
+  Phase phase = Phase::Intrinsic;      // which processes take part (afford/processes.hpp)
   bool extrinsic = false;              // ends with EXTRINSIC_RESULT instead of RESULT
   double stall_seconds = 30;           // no progress for this long fails the run
   // Where the run's log and checkpoint go (<log_root>/<run_id>/): a folder or
@@ -89,6 +90,21 @@ struct ExtrinsicOutcome {
   }
 };
 
+// The goals phase: what became of the goals that ended in one curve interval
+// of steps ([step, step + run.curve_interval)), per module (goal_t's order:
+// explore, colour, move, colour_place).
+struct GoalBin {
+  std::int64_t step = 0;
+  std::vector<std::int64_t> set, reached, actions;  // goals ended, those reached, actions spent on them
+  template <class V>
+  void visit(V& v) {
+    v("step", step);
+    v("set", set);
+    v("reached", reached);
+    v("actions", actions);
+  }
+};
+
 struct RunOutcome {
   bool ok = false;
   bool interrupted = false;                   // SIGINT/SIGTERM cut it (error says at which step)
@@ -106,6 +122,7 @@ struct RunOutcome {
   std::map<std::string, long> peak_rss_kb;    // per process (VmHWM), filled by the runner
   std::uintmax_t log_bytes = 0;               // size of the run's log, if any
   ExtrinsicOutcome extrinsic;                 // extrinsic runs
+  std::vector<GoalBin> goals;                 // goals-phase runs: per curve interval, in step order
   // Kept (DIR/runs/<run-id>.json) but for `interrupted`: a cut run is not kept.
   template <class V>
   void visit(V& v) {
@@ -127,6 +144,7 @@ struct RunOutcome {
     v("peak_rss_kb", peak_rss_kb);
     v("log_bytes", log_bytes);
     v("extrinsic", extrinsic);
+    v.since("goals", goals);  // (nor this before issue 41)
   }
 };
 
@@ -199,6 +217,7 @@ class RunDriver {
   RunOutcome* outcome_ = nullptr;
   Clock::time_point started_at_{};  // when run() was called
   bool have_result_ = false;
+  bool goals_ended_ = false;  // goals phase: the last GOAL_RESULT (step run.steps) is in
   bool logger_done_ = false;
   std::function<void(std::int64_t)> on_step_;
 };

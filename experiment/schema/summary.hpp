@@ -18,6 +18,7 @@
 #include <vector>
 
 #include "experiment/schema/codec.hpp"
+#include "experiment/schema/goals.hpp"
 
 namespace afford {
 
@@ -248,6 +249,7 @@ struct SystemSummary {
   std::optional<std::map<std::string, double>> reference_table_metric;
   std::optional<SystemExtrinsic> extrinsic;
   std::optional<std::vector<double>> utility_mean, utility_sd;  // analysis forward-models, per budget
+  std::optional<GoalsSummary> goals;                             // GOALS: its goals
   template <class V>
   void visit(V& v) {
     v("target", target);
@@ -265,6 +267,7 @@ struct SystemSummary {
     v("extrinsic", extrinsic);
     v("utility_mean", utility_mean);
     v("utility_sd", utility_sd);
+    v("goals", goals);
   }
 };
 

@@ -12,8 +12,9 @@ EnvironmentNode::EnvironmentNode(lcm::LCM& lcm, std::shared_ptr<spdlog::logger> 
   takes(ch::decision,
         "intrinsic phase: the DECISION of each step, in step order: an action is executed (its SCENE, and one "
         "more when objects appear at the next step), a pass changes nothing but the objects that appear; "
-        "extrinsic phase: each DECISION of the planner from the current iteration on, its actions executed")
-      .in(Phase::Intrinsic)
+        "extrinsic phase: each DECISION of the planner from the current iteration on, its actions executed; goals "
+        "phase: as in the intrinsic phase, the planner deciding")
+      .in({Phase::Intrinsic, Phase::Goals})
       .inOrder([](const decision_t& d) { return d.step; }, [this] { return next_decision_; }, "the decision of step")
       .then([this](const decision_t& d) { decide(d); })
       .in(Phase::Extrinsic)

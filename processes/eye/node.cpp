@@ -1,5 +1,7 @@
 #include "eye/node.hpp"
 
+#include <algorithm>
+
 #include "eye/messages.hpp"
 
 #include "afford/actions.hpp"
@@ -14,26 +16,36 @@ EyeNode::EyeNode(lcm::LCM& lcm, std::shared_ptr<spdlog::logger> log, const Proto
   takes(ch::scene,
         "intrinsic phase: the SCENE of each step after the FOCUS of the step before, once: a scene an action "
         "caused gives that action's EFFECT (once per step), a scene that says scan starts its step; extrinsic "
-        "phase: the goal scene (memorised) and each scene after it, in step order")
+        "phase: the goal scene (memorised) and each scene after it, in step order; goals phase: each SCENE once "
+        "the object of the step before is looked at: an action's gives its EFFECT, and LOOKs look on the last")
+      .in({Phase::Goals, Phase::Extrinsic})
+      .refuse([this](const scene_t& s) {
+        return s.step < last_scene_ ? "step " + std::to_string(s.step) + " is in the past (now at " +
+                                          std::to_string(last_scene_) + ")"
+                                    : std::string();
+      })
       .in(Phase::Intrinsic)
       .refuse([this](const scene_t& s) {
         return s.step <= last_scanned_ ? "step " + std::to_string(s.step) + " is in the past (already scanned step " +
                                              std::to_string(last_scanned_) + ")"
                                        : std::string();
       })
+      .in({Phase::Intrinsic, Phase::Goals})
       .refuse([this](const scene_t& s) {
         return s.cause == scene_t::CAUSE_ACTION && s.step - 1 <= last_effect_
                    ? "the effect of step " + std::to_string(s.step - 1) + " was seen already"
                    : std::string();
       })
       .waitFor([this](const scene_t& s) { return s.step - 1 <= last_scanned_; })
+      .in(Phase::Goals)
+      .then([this](const scene_t& s) {
+        see(s);
+        outer_scene_ = s.serial;
+        last_scene_ = s.step;
+      })
+      .in(Phase::Intrinsic)
       .then([this](const scene_t& s) { see(s); })
       .in(Phase::Extrinsic)
-      .refuse([this](const scene_t& s) {
-        return s.step < last_scene_ ? "step " + std::to_string(s.step) + " is in the past (now at " +
-                                          std::to_string(last_scene_) + ")"
-                                    : std::string();
-      })
       .then([this](const scene_t& s) { keep(s); });
   takes(ch::decision,
         "intrinsic phase: each DECISION once the FOCUS of its step is out; a pass that no scene follows (no "
@@ -47,6 +59,10 @@ EyeNode::EyeNode(lcm::LCM& lcm, std::shared_ptr<spdlog::logger> log, const Proto
                                       : std::string();
       })
       .then([this](const decision_t& d) { next_step_ = d.step + 1; });
+  takeLooks();
+}
+
+void EyeNode::takeLooks() {
   takes(ch::look,
         "extrinsic phase: each LOOK once, in request order, answered with one FOCUS on the scene it names (the "
         "serial of the last SCENE the planner took): a LOOK that overtakes its scene, or the goal, waits for it; "
@@ -54,6 +70,21 @@ EyeNode::EyeNode(lcm::LCM& lcm, std::shared_ptr<spdlog::logger> log, const Proto
         "planning)")
       .in(Phase::Intrinsic)
       .refuse([](const look_t&) { return "no LOOK requests in the intrinsic phase"; })
+      .in(Phase::Goals)
+      .refuse([this](const look_t& l) {
+        return l.seq <= last_look_ ? "request " + std::to_string(l.seq) + " was answered already" : std::string();
+      })
+      .refuse([this](const look_t& l) {
+        return l.scene < outer_scene_ ? "it names scene " + std::to_string(l.scene) + ", before the one looked at (" +
+                                            std::to_string(outer_scene_) + ")"
+                                      : std::string();
+      })
+      .waitFor([this](const look_t& l) { return l.scene == outer_scene_; })
+      .refuse([](const look_t& l) {
+        return l.kind == focus_t::GOAL_SCAN || l.kind == focus_t::GOAL_DIFF ? "the goals phase has no goal image"
+                                                                            : "";
+      })
+      .then([this](const look_t& l) { lookHere(l); })
       .in(Phase::Extrinsic)
       .refuse([this](const look_t& l) {
         return l.seq <= last_look_ ? "request " + std::to_string(l.seq) + " was answered already" : std::string();
@@ -169,6 +200,21 @@ void EyeNode::answer(const look_t& l) {
   }
 }
 
+void EyeNode::lookHere(const look_t& l) {
+  last_look_ = l.seq;
+  handled(l.step);
+  switch (l.kind) {
+    case focus_t::SCENE_OBJECT:
+      publishFocus(l.step, eye_->attend(l.x, l.y), l.kind, l.seq);
+      break;
+    case focus_t::SCENE_AT:
+      return publishFocus(l.step, eye_->lookAt(l.x, l.y), l.kind, l.seq);
+    default:
+      publishFocus(l.step, eye_->scan(l.step), l.kind, l.seq);
+  }
+  last_scanned_ = std::max(last_scanned_, l.step);  // the step's object: its action's scene may come
+}
+
 void EyeNode::see(const scene_t& s) {
   const bool is_action = s.cause == scene_t::CAUSE_ACTION;
   cv::Mat image;
@@ -205,7 +251,7 @@ void EyeNode::see(const scene_t& s) {
   if (s.changes_next != objectsAppearAt(s.step + 1))
     log_->warn("SCENE of step {} says objects appear at the next step: {}, the run's world.objects: {}", s.step,
                s.changes_next, objectsAppearAt(s.step + 1));
-  if (s.scan) next_step_ = s.step;
+  if (s.scan && config().phase == Phase::Intrinsic) next_step_ = s.step;  // the goals phase looks where the planner asks
 }
 
 void EyeNode::afterInput() {
@@ -244,6 +290,9 @@ void EyeNode::scanStep(std::int64_t step) {
 void EyeNode::saveState(SnapshotWriter& w) {
   w.i64(last_scanned_);
   w.i64(last_effect_);
+  w.i64(last_look_);  // goals phase: the LOOKs answered, and the scene they look on
+  w.i64(last_scene_);
+  w.i64(outer_scene_);
   w.blob(seen_data_);
   eye_->save(w);
 }
@@ -251,6 +300,9 @@ void EyeNode::saveState(SnapshotWriter& w) {
 void EyeNode::loadState(SnapshotReader& r) {
   last_scanned_ = r.within("last step scanned", -1, config().steps);
   last_effect_ = r.within("last step whose effect was seen", -1, config().steps);
+  last_look_ = static_cast<std::int32_t>(r.within("last LOOK answered", -1, INT32_MAX));
+  last_scene_ = r.within("step of the last scene", -1, config().steps);
+  outer_scene_ = r.within("serial of the last scene", -1, INT64_MAX);
   seen_data_ = r.blob("scene bytes", static_cast<std::size_t>(config().protocol.bus.max_message_bytes));
   eye_->load(r);
   guess_.reset();

@@ -34,6 +34,7 @@ class EyeNode : public NodeBase {
 
  private:
   void onConfigured(const RunConfig& config) override;
+  void takeLooks();  // the LOOK input of each phase (the constructor states the others)
   void onStop() override;
   bool snapshots() const override { return true; }
   void saveState(SnapshotWriter& w) override;
@@ -41,6 +42,7 @@ class EyeNode : public NodeBase {
   void see(const scene_t& s);      // intrinsic: a scene (an action's effect, a scene to scan)
   void keep(const scene_t& s);     // extrinsic: the goal, or a scene for a LOOK to name
   void answer(const look_t& l);    // extrinsic: a LOOK's FOCUS
+  void lookHere(const look_t& l);  // goals phase: a LOOK's FOCUS, on the scene held
   void afterInput() override;      // starts the step named by the last input, if any
   void scanStep(std::int64_t step);
   // Late objects appear at `step`: the environment publishes a scene for it

@@ -105,7 +105,7 @@ void LoggerNode::onPeerStatus(const process_status_t& st) {
     // Its final counts matter if it publishes a channel of the run.
     bool publisher = false;
     for (const std::string& ch : channelNames(/*serial_only=*/true))
-      publisher = publisher || publisherOf(ch, config().phase == Phase::Extrinsic) == st.process;
+      publisher = publisher || publisherOf(ch, config().phase) == st.process;
     if (publisher) left_.emplace(st.process, false);
   } else if (st.counts_run == runId() && left_.count(st.process)) {
     left_[st.process] = true;  // it left the run: its counts are final

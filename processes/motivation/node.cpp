@@ -1,6 +1,9 @@
 #include "motivation/node.hpp"
 
+#include <algorithm>
+
 #include "afford/protocol.hpp"
+#include "afford/rng.hpp"
 #include "motivation/messages.hpp"
 
 namespace afford {
@@ -28,14 +31,132 @@ MotivationNode::MotivationNode(lcm::LCM& lcm, std::shared_ptr<spdlog::logger> lo
                    : "";
       })
       .then([this](const prediction_t& m) { decide(m); });
+  // Taken as they come (a process catching up gets them ahead of the results), given to the chooser at the end
+  // of the goal they came before (motivation/goal_inputs.hpp).
+  const auto room = [this](const auto&) { return inputs_.held() < kMostHeld; };
+  takes(ch::focus,
+        "goals phase: every FOCUS, in order: an object's (a scan, an attended object) is what the agent saw of it, "
+        "for the goal chooser at the end of the goal it came in")
+      .in(Phase::Goals)
+      .waitFor(room)
+      .then([this](const focus_t& m) { sawFocus(m); });
+  takes(ch::effect,
+        "goals phase: every EFFECT: what the action did to the object, for the goal chooser at the end of the goal it "
+        "came in")
+      .in(Phase::Goals)
+      .waitFor(room)
+      .then([this](const effect_t& m) { sawEffect(m); });
+  takes(ch::forwardPrediction,
+        "goals phase: every FORWARD_PREDICTION: what the forward models predict for the object of its step, for the "
+        "goal chooser at the end of the goal it came in")
+      .in(Phase::Goals)
+      .waitFor(room)
+      .then([this](const forward_prediction_t& m) { sawForward(m); });
+  takes(ch::goalResult,
+        "goals phase: each GOAL_RESULT once, in order, when every EFFECT, FOCUS and FORWARD_PREDICTION out before "
+        "it has been taken (its counts say which): the chooser is given them, then the goal's end; then the next "
+        "GOAL")
+      .in(Phase::Goals)
+      .refuse([this](const goal_result_t& m) {
+        return m.id != next_goal_ - 1 ? "goal " + std::to_string(m.id) + " is not the goal under way (" +
+                                            std::to_string(next_goal_ - 1) + ")"
+                                      : std::string();
+      })
+      .waitFor([this](const goal_result_t& m) {
+        return effects_ >= m.effects && focus_serial_ >= m.focus_serial && forward_serial_ >= m.forward_serial;
+      })
+      .then([this](const goal_result_t& m) { ended(m); });
 }
 
 void MotivationNode::onConfigured(const RunConfig& config) {
-  core_ = makeMotivation(config);
+  core_.reset();
+  goals_.reset();
+  if (config.phase == Phase::Goals)
+    goals_ = makeGoalChooser(config);
+  else
+    core_ = makeMotivation(config);
   last_ = -1;
+  next_goal_ = 0;
+  effects_ = 0;
+  focus_serial_ = forward_serial_ = -1;
+  inputs_.clear();
+  last_result_step_ = -1;
+  unmoved_ = 0;
 }
 
-void MotivationNode::onStop() { core_.reset(); }
+void MotivationNode::onStart() {
+  if (goals_) setGoal(0);
+}
+
+void MotivationNode::onStop() {
+  core_.reset();
+  goals_.reset();
+  inputs_.clear();
+}
+
+void MotivationNode::saveState(SnapshotWriter& w) {
+  w.i64(last_);
+  if (!goals_) return core_->save(w);
+  w.i64(next_goal_);
+  w.i64(effects_);
+  w.i64(focus_serial_);
+  w.i64(forward_serial_);
+  w.i64(last_result_step_);
+  w.i64(unmoved_);
+  inputs_.save(w);
+  goals_->save(w);
+}
+
+void MotivationNode::loadState(SnapshotReader& r) {
+  last_ = r.within("last step decided", -1, config().steps);
+  if (!goals_) return core_->load(r);
+  next_goal_ = static_cast<std::int32_t>(r.within("next goal", 0, INT32_MAX));
+  effects_ = r.within("effects taken", 0, config().steps);
+  focus_serial_ = r.within("last focus serial", -1, INT64_MAX);
+  forward_serial_ = r.within("last forward prediction serial", -1, INT64_MAX);
+  last_result_step_ = r.within("last goal result step", -1, config().steps);
+  unmoved_ = static_cast<int>(r.within("goals ended without an action", 0, INT32_MAX));
+  inputs_.load(r, config().steps, 3 * static_cast<std::size_t>(config().eye.focus_side * config().eye.focus_side),
+               kMostHeld);
+  goals_->load(r);
+}
+
+void MotivationNode::sawFocus(const focus_t& m) {
+  focus_serial_ = m.serial;
+  if (m.kind == focus_t::SCENE_SCAN || m.kind == focus_t::SCENE_OBJECT) inputs_.object(m.step, m.seq, seenOf(m));
+}
+
+void MotivationNode::sawEffect(const effect_t& m) {
+  ++effects_;
+  inputs_.effect(seenEffectOf(m, Seen{}));
+}
+
+void MotivationNode::sawForward(const forward_prediction_t& m) {
+  forward_serial_ = m.serial;
+  if (m.n_input == 0) inputs_.forward(m.step, m.seq, imaginedOf(m, Seen{}));  // about an object seen, not imagined
+}
+
+void MotivationNode::ended(const goal_result_t& m) {
+  inputs_.feed(*goals_, m.step, m.seq);
+  goals_->attempted(attemptOf(m));
+  handled(m.step);
+  unmoved_ = m.actions == 0 && m.step == last_result_step_ ? unmoved_ + 1 : (m.actions == 0 ? 1 : 0);
+  last_result_step_ = m.step;
+  if (m.step >= config().steps) return setState(process_status_t::DONE);
+  setGoal(m.step);
+}
+
+void MotivationNode::setGoal(std::int64_t step) {
+  Goal g = goals_->next(step, next_goal_);
+  // Goals found reached as they are set take no step: after two at one step, an exploration (every step acts).
+  if (unmoved_ >= 2 && g.module != GoalModule::Explore) {
+    const KeyedRng rng(config().seed, step, Purpose::GoalChoice, static_cast<std::uint64_t>(next_goal_));
+    g = Goal{};
+    g.action = std::min(kNumActions - 1, static_cast<int>(rng.uniform(kNumActions) * kNumActions));
+  }
+  publish(ch::goal, goalMessage(runId(), step, next_goal_, g, config().goals.budget));
+  ++next_goal_;
+}
 
 void MotivationNode::decide(const prediction_t& m) {
   publish(ch::decision, decisionMessage(runId(), m, core_->decide(perceptOf(m))));

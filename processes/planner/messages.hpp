@@ -65,10 +65,11 @@ inline forward_query_t forwardQueryMessage(const std::string& run_id, std::int64
   return q;
 }
 
-inline decision_t actionMessage(const std::string& run_id, std::int64_t step, const PlannerRequest& r) {
+inline decision_t actionMessage(const std::string& run_id, std::int64_t step, std::int32_t seq, const PlannerRequest& r) {
   decision_t d;
   d.run_id = run_id;
   d.step = step;
+  d.seq = seq;
   d.acted = true;
   d.action = static_cast<int8_t>(r.action);
   d.x = r.object_x;

@@ -16,23 +16,6 @@ double imageDistance(const std::vector<double>& predicted, const std::vector<std
   return std::sqrt(sum) / static_cast<double>(b.size());
 }
 
-std::vector<std::uint8_t> quantiseImage(const std::vector<double>& what) {
-  std::vector<std::uint8_t> out(what.size());
-  for (std::size_t i = 0; i < what.size(); ++i)
-    out[i] = static_cast<std::uint8_t>(std::lround(std::clamp(what[i], 0.0, 1.0) * 255.0));
-  return out;
-}
-
-double silhouetteDistance(const std::vector<std::uint8_t>& a, const std::vector<std::uint8_t>& b) {
-  if (a.size() != b.size() || a.size() < 3) return 1.0;
-  std::size_t differ = 0;
-  for (std::size_t i = 0; i + 2 < a.size(); i += 3) {
-    const bool in_a = a[i] || a[i + 1] || a[i + 2], in_b = b[i] || b[i + 1] || b[i + 2];
-    differ += in_a != in_b;
-  }
-  return static_cast<double>(differ) / static_cast<double>(a.size() / 3);
-}
-
 double positionDistance(double px, double py, double qx, double qy, PositionMetric metric) {
   const double d = std::hypot(px - qx, py - qy);
   return metric == PositionMetric::HalfEuclidean ? d / 2.0 : d;
@@ -105,10 +88,39 @@ PlannerRequest Planner::onForward(const std::vector<ForwardPrediction>& predicti
 }
 PlannerRequest Planner::onActed() { return told(acted()); }
 
+PlannerRequest Planner::pursue(const View& goal, double object_x, double object_y) {
+  if (wait_ != Wait::Nothing) throw std::logic_error("Planner: an iteration is already under way");
+  ++iterations_;
+  queries_ = 0;
+  pursuing_ = true;
+  sub_goal_ = goal;
+  goal_object_ = View{{}, object_x, object_y};
+  continue_at_.reset();
+  iterations_on_sub_goal_ = 0;
+  active_ = true;
+  reach_distance_ = -1;
+  records_.assign(1, SubGoalRecord{goal.x, goal.y, 0, 0, 0, false});
+  if (observer_) observer_->subGoalPicked(iteration(), sub_goal_);
+  wait_ = Wait::SceneAtSubGoal;
+  return told(request(PlannerRequest::LookAtSceneAt, goal.x, goal.y));
+}
+
+PlannerRequest Planner::attendGoalObject() {
+  const View at = continue_at_ ? *continue_at_ : goal_object_;
+  continue_at_.reset();
+  best_guess_.reset();
+  wait_ = Wait::Object;
+  return request(PlannerRequest::AttendObject, at.x, at.y);
+}
+
 PlannerRequest Planner::begin() {
   if (wait_ != Wait::Nothing) throw std::logic_error("Planner: an iteration is already under way");
   ++iterations_;
   queries_ = 0;
+  if (pursuing_) {
+    if (!active_) throw std::logic_error("Planner: the goal is reached; pursue() another");
+    return attendGoalObject();
+  }
   const bool timed_out = iterations_on_sub_goal_ >= config_.subgoal_timeout;
   if (active_ && !timed_out && continue_at_) {  // a plan under way: the same object, where it should be now
     const View at = *continue_at_;
@@ -210,6 +222,7 @@ PlannerRequest Planner::viewed(const View& v) {
   // GoalNotAchievedCheck: the scene at the sub-goal's place against the sub-goal.
   const auto reach = [&](bool after_action) {
     const double distance = imageDistance(sub_goal_.image, v.image);
+    reach_distance_ = distance;
     active_ = distance >= config_.subgoal_match;
     if (observer_) observer_->reachChecked(iteration(), after_action, distance, !active_);
   };
@@ -228,11 +241,16 @@ PlannerRequest Planner::viewed(const View& v) {
         if (target_ >= 0) targets_[static_cast<std::size_t>(target_)].status = Status::Done;
         return done();
       }
+      if (pursuing_) return attendGoalObject();
       if (config_.attention == Attention::TopDown) return attendCandidate();
       wait_ = Wait::Object;
       return request(PlannerRequest::ScanScene);
     case Wait::SceneAfterAction:
       reach(true);
+      // Goals phase: a move that was carried out left the object at the goal place (its silhouette is there).
+      if (pursuing_ && active_ && last_action_ == kMove && !continue_at_ &&
+          silhouetteDistance(v.image, object_.image) == 0)
+        goal_object_ = View{{}, sub_goal_.x, sub_goal_.y};
       if (!active_) {
         records_.back().reached = true;
         continue_at_.reset();
@@ -301,6 +319,13 @@ PlannerRequest Planner::predicted(const std::vector<ForwardPrediction>& predicti
     PlannerCheck c = check(p);
     c.checked = true;
     if (observer_) checks.push_back(c);
+    if (pursuing_ && !imagined) {  // the best guess: nearest the goal, each distance in units of its threshold
+      const double score = c.what_distance / config_.image_match + c.where_distance / std::max(config_.position_match, 1e-9);
+      if (!best_guess_ || score < best_score_) {
+        best_guess_ = p;
+        best_score_ = score;
+      }
+    }
     if (c.passes()) {
       plan = &p;
       continue;
@@ -320,10 +345,18 @@ PlannerRequest Planner::predicted(const std::vector<ForwardPrediction>& predicti
     for (int a = 0; a < kNumActions; ++a) all[static_cast<std::size_t>(a)] = a;
     return forward(querying_.image, querying_.x, querying_.y, std::move(all), querying_.actions);
   }
+  if (pursuing_ && best_guess_) {  // goals phase: no plan; the forward models' best guess is tried
+    const ForwardPrediction guess = *best_guess_;
+    best_guess_.reset();
+    PlannerRequest r = act(guess);
+    planned_ = false;
+    return r;
+  }
   return done();
 }
 
 PlannerRequest Planner::actOnPlan(const ForwardPrediction& first, std::size_t length) {
+  planned_ = true;
   // More to do after this action: next iteration, the object where the first action should leave it.
   if (length > 1) continue_at_ = View{{}, std::clamp(first.where_x, 0.0, 1.0), std::clamp(first.where_y, 0.0, 1.0)};
   return config_.kind == PlannerKind::Utility ? weighUtility(first) : act(first);
@@ -335,6 +368,7 @@ PlannerRequest Planner::act(const ForwardPrediction& p) {
   r.action = p.action;
   r.object_x = object_.x;
   r.object_y = object_.y;
+  last_action_ = p.action;
   ++attempts_;
   ++records_.back().actions_taken;
   wait_ = Wait::Acted;

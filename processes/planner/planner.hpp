@@ -34,12 +34,6 @@ struct ForwardPrediction {
   double where_x = 0, where_y = 0;  // predicted position after the action
 };
 
-// The byte image a what-effect stands for when the search imagines the next
-// step from it: round(clamp(v, 0, 1) * 255), as the node and the reference loop send it.
-std::vector<std::uint8_t> quantiseImage(const std::vector<double>& what);
-// The share of pixels on which two focus images disagree about an object
-// being there (any channel above 0): 0 for the same silhouette.
-double silhouetteDistance(const std::vector<std::uint8_t>& a, const std::vector<std::uint8_t>& b);
 
 struct PlannerRequest {
   enum Kind {
@@ -127,6 +121,13 @@ class Planner {
   explicit Planner(const PlannerConfig& config, std::vector<GoalValue> values = {});
 
   PlannerRequest startIteration();
+  // Goals phase (docs/model.md#goals-of-its-own): pursue `goal` (an image at a
+  // place) with the object at (object_x, object_y), from a look at the goal
+  // place. Each iteration after it attends that object (where the plan under
+  // way expects it), plans, and acts on the plan, or on the best guess of the
+  // forward models when they find none; an iteration that ends without an
+  // action found nothing to try.
+  PlannerRequest pursue(const View& goal, double object_x, double object_y);
   PlannerRequest onView(const View& v);
   PlannerRequest onObject(const View& object, const std::array<double, kNumActions>& affordance);
   // `input_affordance`: for an imagined object (a request with a prefix), what it affords.
@@ -142,6 +143,10 @@ class Planner {
   bool evaluating() const { return iterations_ <= config_.evaluation_iterations; }
   double subGoalValue(double x, double y) const;
   bool subGoalActive() const { return active_; }
+  // The image distance of the last look at the sub-goal's place (-1: none yet).
+  double lastReachDistance() const { return reach_distance_; }
+  // The last action came from a plan (not from a best guess).
+  bool lastActionPlanned() const { return planned_; }
   const std::vector<SubGoalRecord>& subGoals() const { return records_; }
   // Tell `observer` (not owned; nullptr: none) what the core checks and decides from here on.
   void observe(PlannerObserver* observer) { observer_ = observer; }
@@ -174,6 +179,9 @@ class Planner {
   PlannerRequest leaveSubGoal(SubGoalExit why);
   void left(SubGoalExit why) const;
 
+  // Goals phase: attend the goal's object, where it should be now.
+  PlannerRequest attendGoalObject();
+
   // Every request leaves through here, told to the observer.
   PlannerRequest told(PlannerRequest r) const;
   int iteration() const { return iterations_ - 1; }
@@ -204,6 +212,17 @@ class Planner {
   SearchNode querying_;                // the node whose query is under way
   int queries_ = 0;                    // forward queries this iteration
   std::optional<View> continue_at_;    // a longer plan's first action was taken: the object is expected here
+
+  // Goals phase: the goal's object, and the best guess of this iteration's
+  // first forward query (the prediction nearest the goal, in units of the
+  // match thresholds) for when no plan is found.
+  bool pursuing_ = false;
+  View goal_object_;
+  std::optional<ForwardPrediction> best_guess_;
+  double best_score_ = 0;
+  int last_action_ = -1;
+  bool planned_ = false;
+  double reach_distance_ = -1;
 
   // Top-down attention (docs/model.md#top-down-attention): the memory of
   // what the look at the differences showed, and what became of it.

@@ -39,7 +39,8 @@ class PaperAffordance : public AffordanceComponent {
     r.before = affordance_[a].train(focus.input, succeeded ? 1.0 : 0.0, config_.affordance_learning_rate);
     r.after = affordance_[a].output(focus.input);
     r.learning_progress = learning_progress_[a].output(focus.input);
-    if (system_ == System::IMP)  // Algorithm 1 line 9: only IMP
+    // Algorithm 1 line 9: only IMP (and GOALS, whose learning is Algorithm 1's with IMP's predictors)
+    if (system_ == System::IMP || system_ == System::GOALS)
       learning_progress_[a].train(focus.input, r.after - r.before, config_.learning_progress_learning_rate);
     return r;
   }

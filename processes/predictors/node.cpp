@@ -9,9 +9,28 @@
 #include "afford/decode.hpp"
 #include "afford/run_result_t.hpp"
 
+#include <climits>
 #include <limits>
 
 namespace afford {
+
+namespace {
+// A FOCUS of an object the predictors predict for: a scene scan or an attended object.
+bool isObject(const focus_t& m) { return m.kind == focus_t::SCENE_SCAN || m.kind == focus_t::SCENE_OBJECT; }
+}  // namespace
+
+void PredictorsNode::Requests::save(SnapshotWriter& w) const {
+  w.i64(done_);
+  w.i64(static_cast<std::int64_t>(ahead_.size()));
+  for (std::int32_t s : ahead_) w.i64(s);
+}
+
+void PredictorsNode::Requests::load(SnapshotReader& r) {
+  done_ = static_cast<std::int32_t>(r.within("requests answered", 0, INT32_MAX));
+  ahead_.clear();
+  const std::int64_t n = r.within("requests answered ahead", 0, static_cast<std::int64_t>(kMostAhead));
+  for (std::int64_t i = 0; i < n; ++i) ahead_.insert(static_cast<std::int32_t>(r.within("request", done_ + 1, INT32_MAX)));
+}
 
 PredictorsNode::PredictorsNode(lcm::LCM& lcm, std::shared_ptr<spdlog::logger> log, const ProtocolConfig& protocol,
                                bool async_effects, std::string checkpoint_root)
@@ -24,8 +43,26 @@ PredictorsNode::PredictorsNode(lcm::LCM& lcm, std::shared_ptr<spdlog::logger> lo
   takes(ch::focus,
         "the FOCUS of a scene scan or an attended object (not a look at the goal or at a place); intrinsic "
         "phase: of each step in step order, once the step before is decided and, if it acted, learned from, "
-        "and the probe is in (paper Algorithm 1); extrinsic phase: each, from the current iteration on")
-      .ignoreIf([](const focus_t& m) { return m.kind != focus_t::SCENE_SCAN && m.kind != focus_t::SCENE_OBJECT; })
+        "and the probe is in (paper Algorithm 1); extrinsic phase: each, from the current iteration on; goals "
+        "phase: every FOCUS in order (each answers a request of the planner, which it counts), an object's as in "
+        "the intrinsic phase once every request before it is answered")
+      .in(Phase::Goals)
+      .refuse([this](const focus_t& m) {
+        return isObject(m) && m.step >= config().steps ? "step " + std::to_string(m.step) + " is beyond the run's last step"
+               : isObject(m) && m.step <= current_
+                   ? "step " + std::to_string(m.step) + " is in the past (the next is " + std::to_string(current_ + 1) + ")"
+                   : std::string();
+      })
+      .waitFor([this](const focus_t& m) {
+        return !isObject(m) || (m.step == current_ + 1 && !probes_.empty() && requests_.before(m.seq) &&
+                                (current_ < 0 || outcome_ == Outcome::Passed || outcome_ == Outcome::Learned));
+      })
+      .then([this](const focus_t& m) {
+        requests_.answered(m.seq);
+        if (isObject(m)) handleFocus(m);
+      })
+      .in({Phase::Intrinsic, Phase::Extrinsic})
+      .ignoreIf([](const focus_t& m) { return !isObject(m); })
       .in(Phase::Intrinsic)
       .withinRun([this] { return config().steps; })
       .stepInOrder([this] { return current_ + 1; })
@@ -44,8 +81,11 @@ PredictorsNode::PredictorsNode(lcm::LCM& lcm, std::shared_ptr<spdlog::logger> lo
       });
   takes(ch::decision,
         "intrinsic phase: the DECISION of the step whose FOCUS was taken last, once: an action awaits its "
-        "EFFECT, a pass ends the step")
-      .in(Phase::Intrinsic)
+        "EFFECT, a pass ends the step; goals phase: as in the intrinsic phase, once every request of the planner "
+        "before it is answered")
+      .in(Phase::Goals)
+      .waitFor([this](const decision_t& m) { return requests_.before(m.seq + 1); })
+      .in({Phase::Intrinsic, Phase::Goals})
       .refuse([this](const decision_t& m) {
         return m.step < current_ || (m.step == current_ && outcome_ != Outcome::Unknown)
                    ? "step " + std::to_string(m.step) + " is already decided (now at " + std::to_string(current_) + ")"
@@ -56,7 +96,7 @@ PredictorsNode::PredictorsNode(lcm::LCM& lcm, std::shared_ptr<spdlog::logger> lo
   takes(ch::effect,
         "intrinsic phase: the EFFECT of the step whose action was decided last, once, of that action: the "
         "predictors learn from it (paper 2.3.3)")
-      .in(Phase::Intrinsic)
+      .in({Phase::Intrinsic, Phase::Goals})
       .refuse([this](const effect_t& m) {
         return m.step < current_ || (m.step == current_ && outcome_ == Outcome::Learned)
                    ? "step " + std::to_string(m.step) + " is in the past (already learned)"
@@ -76,11 +116,30 @@ PredictorsNode::PredictorsNode(lcm::LCM& lcm, std::shared_ptr<spdlog::logger> lo
       .then([this](const effect_t& m) { learn(m); })
       .in(Phase::Extrinsic)
       .refuse([](const effect_t&) { return "no learning in the extrinsic phase"; });
+  takeQueries();
+}
+
+void PredictorsNode::takeQueries() {
   takes(ch::forwardQuery,
         "extrinsic phase: each FORWARD_QUERY once, in request order, with an agent loaded: what each action "
-        "would do to the object")
+        "would do to the object; goals phase: each of the current step, before its DECISION, with the forward "
+        "models as they have learned so far")
       .in(Phase::Intrinsic)
       .refuse([](const forward_query_t&) { return "no forward queries in the intrinsic phase"; })
+      .in(Phase::Goals)
+      .refuse([this](const forward_query_t& q) {
+        return q.seq <= last_query_ ? "query " + std::to_string(q.seq) + " was answered already" : std::string();
+      })
+      .refuse([this](const forward_query_t& q) {
+        return q.step < current_ ? "step " + std::to_string(q.step) + " is in the past" : std::string();
+      })
+      .waitFor([this](const forward_query_t& q) {
+        return q.step == current_ && outcome_ == Outcome::Unknown && requests_.before(q.seq);
+      })
+      .then([this](const forward_query_t& q) {
+        answer(q);
+        requests_.answered(q.seq);
+      })
       .in(Phase::Extrinsic)
       .refuse([this](const forward_query_t& q) {
         return q.seq <= last_query_ ? "query " + std::to_string(q.seq) + " was answered already" : std::string();
@@ -149,8 +208,9 @@ void PredictorsNode::onConfigured(const RunConfig& config) {
                           "' has been run before, and its weights are not overwritten");
     core_ = std::make_shared<Predictors>(config);
   }
-  if (async_effects_ && config.phase == Phase::Intrinsic) trainer_ = std::make_unique<EffectTrainer>(*core_);
+  if (async_effects_ && learning(config.phase)) trainer_ = std::make_unique<EffectTrainer>(*core_);
   last_query_ = -1;
+  requests_.clear();
   probes_.clear();
   pending_trained_.reset();
   pending_effects_.clear();
@@ -194,7 +254,19 @@ void PredictorsNode::answer(const forward_query_t& q) {
   out.n_actions = q.n_actions;
   out.actions = q.actions;
   out.size = q.size;
+  if (!loaded_) {  // goals phase: the forward models as they stand, every update before this step applied
+    trainPendingEffects();
+    if (trainer_) trainer_->drain();
+  }
   for (int a : q.actions) {
+    if (!loaded_) {
+      const std::vector<double> what = core_->whatEffect(a, q.image);
+      out.what.emplace_back(what.begin(), what.end());
+      const auto where = core_->whereEffect(a, q.x, q.y, q.target_x, q.target_y);
+      out.where_x.push_back(where[0]);
+      out.where_y.push_back(where[1]);
+      continue;
+    }
     // Extrinsic: core_ is loaded_->core, whose weights stay as loaded.
     auto key = std::make_pair(a, q.image);
     auto it = loaded_->what.find(key);
@@ -340,6 +412,7 @@ void PredictorsNode::saveState(SnapshotWriter& w) {
     w.f64(t.learning_progress);
     w.i64(t.effect_trained ? 1 : 0);
   }
+  requests_.save(w);
   core_->save(w);
 }
 
@@ -372,6 +445,7 @@ void PredictorsNode::loadState(SnapshotReader& r) {
     pending_trained_ = t;
   }
   pending_effects_.clear();
+  requests_.load(r);
   core_->load(r);
 }
 

@@ -18,6 +18,7 @@
 #include <map>
 #include <memory>
 #include <optional>
+#include <set>
 
 #include "afford/decision_t.hpp"
 #include "afford/effect_t.hpp"
@@ -53,6 +54,7 @@ class PredictorsNode : public NodeBase {
   void loadState(SnapshotReader& r) override;
   void decided(const decision_t& m);         // intrinsic: the decision of the current step
   void learn(const effect_t& m);             // intrinsic: its effect, learned from
+  void takeQueries();  // the FORWARD_QUERY input of each phase (the constructor states the others)
   void answer(const forward_query_t& q);     // extrinsic: what actions would do
   void publishPrediction(const focus_t& m);
   bool extrinsic() const { return config().phase == Phase::Extrinsic; }
@@ -95,6 +97,28 @@ class PredictorsNode : public NodeBase {
   std::int64_t revisits_ = 0;          // executed actions the motivation's revisit rule chose
   bool finished_ = false;
   std::int32_t last_query_ = -1;  // extrinsic: last FORWARD_QUERY answered
+  // Goals phase: the planner's requests (LOOK and FORWARD_QUERY share one seq, from 1) seen answered (a
+  // FOCUS, or an answer of ours). A process catching up takes a message only after every request before it,
+  // in the order the run had: a query of step t before the decision of step t.
+  class Requests {
+   public:
+    void answered(std::int32_t seq) {
+      if (seq > done_ && ahead_.size() < kMostAhead) ahead_.insert(seq);
+      while (ahead_.erase(done_ + 1)) ++done_;
+    }
+    bool before(std::int64_t seq) const { return done_ >= seq - 1; }  // every request below seq answered
+    void clear() {
+      done_ = 0;
+      ahead_.clear();
+    }
+    void save(SnapshotWriter& w) const;
+    void load(SnapshotReader& r);
+
+   private:
+    static constexpr std::size_t kMostAhead = 4096;  // (requests come one at a time: a few at most)
+    std::int32_t done_ = 0;
+    std::set<std::int32_t> ahead_;
+  } requests_;
 };
 
 }  // namespace afford

@@ -49,7 +49,7 @@ struct Listener {
     edge.join(m.run_id, &config);
     if (m.run_id == shown) return afford::Turn::take();  // the runner says a run's configuration more than once
     shown = m.run_id;
-    viewer.onRun(m.run_id, std::string(config.phase == afford::Phase::Extrinsic ? "extrinsic " : "intrinsic ") +
+    viewer.onRun(m.run_id, std::string(afford::nameOf(afford::kPhaseNames, config.phase)) + " " +
                                m.experiment + " " + m.system);
     log.info("showing run '{}'", m.run_id);
     return afford::Turn::take();

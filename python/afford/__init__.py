@@ -6,8 +6,8 @@
     e = afford.run("base", system="IMP", reps=2, set={"motivation.leak": 0.3})  # in this process
 """
 from . import _afford
-from .components import (ACTIONS, AffordancePredictor, Decision, KeyedRng, Motivation, register_affordance,
-                         register_motivation)
+from .components import (ACTIONS, GOAL_MODULES, AffordancePredictor, Decision, Goal, GoalChooser, KeyedRng,
+                         Motivation, register_affordance, register_goals, register_motivation)
 from .experiments import ExperimentError, run
 from .logs import Message, RunLog, read_log
 from .results import Experiment, load
@@ -17,4 +17,5 @@ ConfigError = _afford.ConfigError
 channels = _afford.channels
 
 __all__ = ["Motivation", "Decision", "KeyedRng", "ACTIONS", "register_motivation", "AffordancePredictor",
+           "GoalChooser", "Goal", "GOAL_MODULES", "register_goals",
            "register_affordance", "run", "ExperimentError", "load", "Experiment", "read_log", "RunLog", "Message", "ConfigError", "channels"]

@@ -97,6 +97,44 @@ class AffordancePredictor:
         raise NotImplementedError
 
 
+GOAL_MODULES = ("explore", "colour", "move", "colour_place")  # goal_t's module ids 0..3
+
+
+@dataclass
+class Goal:
+    module: str                   # one of GOAL_MODULES
+    object_x: float = -1.0        # the object to act on, where it was seen (not for explore)
+    object_y: float = -1.0
+    x: float = -1.0               # the goal place
+    y: float = -1.0
+    image: Any = None             # the focus image wanted at (x, y): side x side x 3 uint8
+    action: int = -1              # explore: the action to try (0..3)
+
+
+class GoalChooser:
+    """A base for a goal chooser in Python (goals.kind; the goals phase, system GOALS).
+
+    next(step, id) returns the goal the planner pursues next (an afford.Goal,
+    or a dict or an object with its fields). The others, called before it with
+    everything published before the last goal ended, are optional:
+    saw_object(step, image, x, y): an object the eye showed;
+    saw_effect(effect): a dict with step, action, before_image, before (x, y),
+    after_image, after (x, y), target (x, y) and affordance (the effect held);
+    imagined(outcome): a dict with step, action, object_image, image and place:
+    what the forward models predict the action does to that object;
+    attempted(attempt): a dict with id, module, reached, distance, actions.
+    Images are side x side x 3 uint8 (config["eye"]["focus_side"]).
+    """
+
+    kind: str = ""                # goals.kind naming it (default: the class name in lower case)
+
+    def __init__(self, config: dict[str, Any]):
+        self.config = config
+
+    def next(self, step: int, id: int) -> Goal:
+        raise NotImplementedError
+
+
 class KeyedRng:
     """The run's keyed generator for a component: the draws of (seed, step, sub), whenever made.
 
@@ -155,8 +193,21 @@ def register_affordance(cls: Any, kind: str | None = None) -> str:
     return kind
 
 
+def register_goals(cls: Any, kind: str | None = None) -> str:
+    """Make `cls` the goal chooser of goals.kind `kind` (default: kind_of(cls)) in this process."""
+    kind = kind or kind_of(cls)
+    if not _NAME.match(kind):
+        raise ValueError(f"goal chooser kind {kind!r}: use lower-case letters, digits, '_' or '-'")
+    if not callable(getattr(cls, "next", None)):
+        raise TypeError(f"{cls!r} has no next(step, id)")
+    _afford.register_goals(kind, cls)
+    return kind
+
+
 # What a process written in Python can stand in for, with the config key of its kind and how to register it.
+# (A goal chooser is the motivation process's in the goals phase: `afford.process goals` is that process.)
 ROLES = {
     "motivation": ("motivation.kind", register_motivation),
     "predictors": ("predictors.affordance.kind", register_affordance),
+    "goals": ("goals.kind", register_goals),
 }

@@ -43,7 +43,7 @@ def run(experiment: str, system: str | Iterable[str] | None = None, reps: int | 
         out: str | Path | None = None, log_root: str | Path | None = None, seed: int = 1, jobs: int = 1,
         extrinsic_reps: int = 0, scenarios: Iterable[str] = (), keep_logs: str = "all",
         run_prefix: str = "", reuse_agents: bool = True, progress: str = "none",
-        log_level: str = "warn", motivation: Any = None, affordance: Any = None,
+        log_level: str = "warn", motivation: Any = None, affordance: Any = None, goals: Any = None,
         processes: dict[str, str] | None = None,
         tables: int | None = None, table_seed: int | None = None, replace: bool = False) -> Experiment:
     """Run an experiment as `afford experiment` does and return what afford.load returns.
@@ -65,6 +65,8 @@ def run(experiment: str, system: str | Iterable[str] | None = None, reps: int | 
     its kind and motivation.kind is set to it. `processes`: commands in the
     place of shipped processes, as `afford experiment --process NAME=CMD`
     (udpm), e.g. {"motivation": "python3 -m afford.process motivation mine.py:Mine"}.
+    `goals`: a class written in Python (afford.GoalChooser) in the place of
+    the shipped goal chooser of GOALS agents (goals.kind), in this process.
     `affordance`: a class written in Python (afford.AffordancePredictor) in
     the place of the paper's affordance and learning-progress predictors, in
     this process (memq); predictors.affordance.kind is set to its kind.
@@ -82,13 +84,15 @@ def run(experiment: str, system: str | Iterable[str] | None = None, reps: int | 
     if experiment.endswith((".yaml", ".yml")) or "/" in experiment:
         experiment = str(Path(experiment).resolve())
     settings = dict(set or {})
-    for argument, cls, role in (("motivation", motivation, "motivation"), ("affordance", affordance, "predictors")):
+    for argument, cls, role in (("motivation", motivation, "motivation"), ("affordance", affordance, "predictors"),
+                                ("goals", goals, "goals")):
         if cls is None:
             continue
         key, register = ROLES[role]
         if transport != "memq":
             raise ValueError(f"afford.run({argument}=...) runs the class in this process: transport='memq'; over "
-                             f"udpm, give processes={{'{role}': 'python3 -m afford.process {role} MODULE:CLASS'}} "
+                             f"udpm, give processes={{'{'motivation' if role == 'goals' else role}': "
+                             f"'python3 -m afford.process {role} MODULE:CLASS'}} "
                              f"and set={{'{key}': KIND}}")
         settings.setdefault(key, register(cls))
     out = Path(out) if out else Path(tempfile.mkdtemp(prefix=f"afford-{experiment}-"))

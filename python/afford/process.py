@@ -24,7 +24,7 @@ from pathlib import Path
 from . import _afford
 from .components import ROLES
 
-USAGE = "usage: python3 -m afford.process motivation|predictors MODULE:CLASS [--lcm-url URL] [--bus-key FILE] [...]"
+USAGE = "usage: python3 -m afford.process motivation|goals|predictors MODULE:CLASS [--lcm-url URL] [--bus-key FILE] [...]"
 
 
 def load_class(target: str):
@@ -55,8 +55,8 @@ def main(argv: list[str] | None = None) -> int:
         print(USAGE, file=sys.stderr)
         return 2
     if argv[0] not in ROLES:
-        print(f"afford.process: '{argv[0]}': a component in Python stands in for the motivation or the "
-              f"predictors\n{USAGE}", file=sys.stderr)
+        print(f"afford.process: '{argv[0]}': a component in Python stands in for the motivation, the goal "
+              f"chooser (goals: the motivation process of the goals phase) or the predictors\n{USAGE}", file=sys.stderr)
         return 2
     ROLES[argv[0]][1](load_class(argv[1]))
     return _afford.serve(argv[0], [f"afford-{argv[0]} ({argv[1]})", *argv[2:]])

@@ -13,6 +13,7 @@
 #include "afford/node.hpp"
 #include "afford/process_main.hpp"
 #include "afford/rng.hpp"
+#include "goals.hpp"
 #include "motivation/component.hpp"
 #include "motivation/node.hpp"
 #include "predictors/affordance.hpp"
@@ -318,8 +319,12 @@ int serve(const std::string& name, const std::vector<std::string>& args) {
   argv.push_back(nullptr);
   const int argc = static_cast<int>(owned.size());
   py::gil_scoped_release free;
-  if (name == "motivation")
-    return processMain(argc, argv.data(), {"motivation", "a motivation written in Python (afford.process)", /*fork_snapshots=*/false},
+  if (name == "motivation" || name == "goals")  // a goal chooser is the motivation process's, in the goals phase
+    return processMain(argc, argv.data(),
+                       {"motivation",
+                        name == "goals" ? "a goal chooser written in Python (afford.process)"
+                                        : "a motivation written in Python (afford.process)",
+                        /*fork_snapshots=*/false},
                        [](CLIHook&) {},
                        [](lcm::LCM& lcm, std::shared_ptr<spdlog::logger> log, const ProtocolConfig& protocol) {
                          return std::make_unique<MotivationNode>(lcm, std::move(log), protocol);
@@ -338,7 +343,9 @@ int serve(const std::string& name, const std::vector<std::string>& args) {
                                                   checkpoint_root);
         });
   }
-  throw std::invalid_argument("'" + name + "': a component in Python stands in for the motivation or the predictors");
+  throw std::invalid_argument("'" + name +
+                              "': a component in Python stands in for the motivation, the goal chooser (goals) or the "
+                              "predictors");
 }
 
 Purpose purposeNamed(const std::string& name) {
@@ -346,8 +353,9 @@ Purpose purposeNamed(const std::string& name) {
   if (name == "learning_progress_init") return Purpose::LearningProgressInit;
   if (name == "replay") return Purpose::Replay;
   if (name == "revisit") return Purpose::Revisit;
+  if (name == "goal_choice") return Purpose::GoalChoice;
   throw std::invalid_argument("purpose '" + name + "': component, or to port a shipped component, "
-                              "learning_progress_init, replay or revisit");
+                              "learning_progress_init, replay, revisit or goal_choice");
 }
 
 }  // namespace
@@ -373,6 +381,16 @@ void defineComponents(py::module_& m) {
       },
       py::arg("kind"), py::arg("cls"),
       "Make cls (with predict, learn, relearn and state) the affordance predictor of that kind.");
+  m.def(
+      "register_goals",
+      [](const std::string& kind, py::object cls) {
+        registerPythonGoals(kind, std::move(cls), [kind](const GoalParams& p) {
+          return configDict(Configured{p.config_text, p.experiment, p.system, p.seed, p.steps, kind});
+        });
+      },
+      py::arg("kind"), py::arg("cls"),
+      "Make cls (constructed with the run's configuration, with next(step, id)) the goal chooser of that kind.");
+  m.def("goal_chooser_kinds", &goalChooserKinds, "The goal chooser kinds of this process.");
   m.def("motivation_kinds", &motivationKinds, "The motivation kinds of this process.");
   m.def("affordance_kinds", &affordanceKinds, "The affordance predictor kinds of this process.");
   m.def("serve", &serve, py::arg("name"), py::arg("argv"),

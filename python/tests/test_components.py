@@ -174,3 +174,29 @@ def test_a_class_that_is_not_an_affordance_predictor_is_named():
         afford.register_affordance(type("predictonly", (), {"predict": lambda self, image: None}))
     with pytest.raises(ValueError, match="transport='memq'"):
         afford.run("base", affordance=PyPerceptrons, transport="udpm")
+
+
+def test_a_python_goal_chooser_in_process_and_as_a_process_on_the_bus_is_one_run(tmp_path, monkeypatch):
+    from goals import PyColours
+    inproc = afford.run("base", system="GOALS", reps=1, steps=600, out=tmp_path / "in", goals=PyColours)
+    monkeypatch.setenv("PYTHONPATH", f"{HERE}:{Path(afford.__file__).parent.parent}")
+    command = f"{sys.executable} -m afford.process goals {HERE / 'goals.py'}:PyColours"
+    bus = afford.run("base", system="GOALS", reps=1, steps=600, out=tmp_path / "bus", transport="udpm",
+                     set={"goals.kind": "py-colours"}, processes={"motivation": command})
+    assert checksum(bus) == checksum(inproc)
+    imgep = afford.run("base", system="GOALS", reps=1, steps=600, out=tmp_path / "imgep")
+    assert checksum(imgep) != checksum(inproc)  # the chooser made a difference
+    # its goals were colour goals after the explorations, and some were reached
+    results = afford.read_log(inproc.runs["log_dir"].iloc[0], channels=["GOAL_RESULT"]).frame("GOAL_RESULT")
+    assert set(results.module) == {0, 1} and results[results.module == 1].reached.sum() > 0
+    # replayed: the predictors and the planner; the chooser is said not to be, and why
+    said = subprocess.run([BIN / "afford", "replay", inproc.runs["log_dir"].iloc[0]], capture_output=True, text=True)
+    assert said.returncode == 0, said.stdout + said.stderr
+    assert "goals.kind 'py-colours' is not one of afford's own" in said.stdout
+
+
+def test_a_goal_out_of_the_scene_fails_the_run_naming_the_field(tmp_path):
+    from goals import OutOfPlace
+    with pytest.raises(afford.ExperimentError, match=r"goal chooser 'out-of-place' \(Python\): next\(\) at step 0 "
+                                                     r"\(goal 0\) returned x = 1\.5"):
+        afford.run("base", system="GOALS", reps=1, steps=20, out=tmp_path / "oop", goals=OutOfPlace, log_level="off")

@@ -223,7 +223,7 @@ TEST(Choreography, AProcessRestartedMidRunGoesOnFromItsSnapshotAndTheRunIsUnchan
   const std::string yaml = test::shippedConfigYaml("base", System::IMP, 3, 400, {"protocol.recovery.snapshot_steps=100"});
   InProcessRun plain(baseYaml(System::IMP, 400), System::IMP, 3, 400);
   ASSERT_TRUE(plain.outcome.ok) << plain.outcome.error;
-  for (const std::string& p : runProcesses(/*extrinsic=*/false, /*recorded=*/false)) {
+  for (const std::string& p : runProcesses(Phase::Intrinsic, /*recorded=*/false)) {
     const std::string snapshots = test::tempDir("choreography-snapshots-" + p);
     const bool fork = p == "eye" || p == "predictors";
     InProcessRun run(yaml, System::IMP, 3, 400, {}, 50, false, Restart{p, 250, snapshots, false, fork});
@@ -550,6 +550,7 @@ decision_t validDecision(const std::string& run, std::int64_t step) {
   d.target_x = d.target_y = -1;
   d.motivation = d.threshold = 0;
   d.revisit = false;
+  d.seq = 0;
   return d;
 }
 template <class Msg>

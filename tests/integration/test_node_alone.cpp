@@ -63,7 +63,7 @@ std::int64_t serialOf(const Event& e) {
 
 struct Recording {
   std::vector<Event> events;  // every message of the run but STATUS, in the order it went out
-  bool extrinsic = false;
+  Phase phase = Phase::Intrinsic;
   std::string run_id;
 };
 
@@ -102,7 +102,7 @@ Split split(const Recording& rec, const std::string& process, const std::vector<
       continue;
     }
     if (!isSerialChannel(e.channel)) continue;
-    if (publisherOf(e.channel, rec.extrinsic) == process) {
+    if (publisherOf(e.channel, rec.phase) == process) {
       s.outputs[e.channel].push_back(e.data);
       if (s.stop.empty()) s.before_stop[e.channel] = s.outputs[e.channel].size();
     } else if (std::find(takes.begin(), takes.end(), e.channel) != takes.end()) {
@@ -199,7 +199,7 @@ AloneOutcome feedAlone(const Recording& rec, const std::string& process, Feed fe
   };
   // The peers' heartbeats: each publisher's STATUS with the counts of all it published.
   std::map<std::string, std::map<std::string, std::int64_t>> counts;
-  for (const Event& e : s.inputs) ++counts[publisherOf(e.channel, rec.extrinsic)][e.channel];
+  for (const Event& e : s.inputs) ++counts[publisherOf(e.channel, rec.phase)][e.channel];
   std::int64_t beat = 0;
   auto heartbeats = [&] {
     int pid = 1000;
@@ -268,18 +268,23 @@ AloneOutcome feedAlone(const Recording& rec, const std::string& process, Feed fe
 }
 
 // The recorded runs, made once.
-Recording recordIntrinsic(const std::vector<std::string>& settings) {
+Recording recordIntrinsic(const std::vector<std::string>& settings, System system = System::IMP) {
   // late1 with its newcomers brought forward into a short run: scenes of every cause.
-  YAML::Node c = YAML::Load(test::shippedConfigYaml("late1", System::IMP, 7, 260, settings));
+  YAML::Node c = YAML::Load(test::shippedConfigYaml("late1", system, 7, 260, settings));
   for (YAML::Node o : c["world"]["objects"])
     if (o["appears_at"].as<int>() > 0) o["appears_at"] = 200;
   const std::string yaml = YAML::Dump(c);
-  test::InProcessRun run(yaml, System::IMP, 7, 260);
+  test::InProcessRun run(yaml, system, 7, 260);
   EXPECT_TRUE(run.outcome.ok) << run.outcome.error;
-  return Recording{run.events, false, "test-run"};
+  return Recording{run.events, system == System::GOALS ? Phase::Goals : Phase::Intrinsic, "test-run"};
 }
 const Recording& intrinsicRecording() {
   static const Recording rec = recordIntrinsic({});
+  return rec;
+}
+// The goals phase (issue 41): GOALS on the same world, the planner deciding for the motivation's goals.
+const Recording& goalsRecording() {
+  static const Recording rec = recordIntrinsic({}, System::GOALS);
   return rec;
 }
 // With the memory options of issue 11: the predictors' looks, tried_ago and replay, the motivation's revisits.
@@ -300,14 +305,14 @@ const Recording& extrinsicRecording() {
     // A test of more than one action, each with its scene and its looks.
     EXPECT_GE(run.count(ch::decision.name), 2);
     EXPECT_GE(run.count(ch::look.name), 3 * run.count(ch::decision.name));
-    return Recording{run.events, true, "test-run"};
+    return Recording{run.events, Phase::Extrinsic, "test-run"};
   }();
   return rec;
 }
 
 struct Case {
   std::string process;
-  bool extrinsic;
+  Phase phase;
   Feed feed;
   bool memory = false;  // the intrinsic run with the memory options
 };
@@ -316,7 +321,10 @@ class NodeAlone : public ::testing::TestWithParam<Case> {};
 
 TEST_P(NodeAlone, PublishesTheBytesItPublishedInTheWholeRun) {
   const Case& c = GetParam();
-  const Recording& rec = c.extrinsic ? extrinsicRecording() : c.memory ? memoryRecording() : intrinsicRecording();
+  const Recording& rec = c.phase == Phase::Extrinsic ? extrinsicRecording()
+                         : c.phase == Phase::Goals   ? goalsRecording()
+                         : c.memory                  ? memoryRecording()
+                                                     : intrinsicRecording();
   const Split s = split(rec, c.process, takes(c.process));
   ASSERT_FALSE(s.inputs.empty() && c.process != "environment");
   ASSERT_FALSE(s.outputs.empty());
@@ -346,16 +354,21 @@ TEST_P(NodeAlone, PublishesTheBytesItPublishedInTheWholeRun) {
 std::vector<Case> cases() {
   std::vector<Case> out;
   for (Feed f : {Feed::InOrder, Feed::OutOfOrder, Feed::Duplicated, Feed::MissingThenResent}) {
-    for (bool extrinsic : {false, true})
-      for (const std::string& p : runProcesses(extrinsic, /*recorded=*/false)) out.push_back({p, extrinsic, f});
-    for (const char* p : {"predictors", "motivation"}) out.push_back({p, false, f, true});
+    for (Phase phase : {Phase::Intrinsic, Phase::Extrinsic, Phase::Goals})
+      for (const std::string& p : runProcesses(phase, /*recorded=*/false)) out.push_back({p, phase, f});
+    for (const char* p : {"predictors", "motivation"}) out.push_back({p, Phase::Intrinsic, f, true});
   }
   return out;
 }
 
 INSTANTIATE_TEST_SUITE_P(Each, NodeAlone, ::testing::ValuesIn(cases()), [](const auto& info) {
   const Case& c = info.param;
-  return c.process + (c.extrinsic ? "Extrinsic" : c.memory ? "IntrinsicWithMemory" : "Intrinsic") + name(c.feed);
+  return c.process +
+         (c.phase == Phase::Extrinsic ? "Extrinsic"
+          : c.phase == Phase::Goals   ? "Goals"
+          : c.memory                  ? "IntrinsicWithMemory"
+                                      : "Intrinsic") +
+         name(c.feed);
 });
 
 }  // namespace

@@ -115,6 +115,43 @@ TEST(Processes, UdpmAndMemqRunsGiveByteIdenticalLogsAndWeights) {
   }
 }
 
+// The goals phase (issue 41): a GOALS run over udpm and over memq is one run, channel by channel, and
+// replayed from its log into the planner, the goal chooser and the predictors it is the same again.
+TEST(Processes, AGoalsRunIsOneRunOverUdpmAndMemqAndReplayedFromItsLog) {
+  const std::string logs = test::tempDir("goals-logs");
+  const auto run = [&](const std::string& name, const std::string& transport, int port) {
+    const std::string dir = test::tempDir(name);
+    const auto r = test::runCommand(test::afford("experiment base --system GOALS --reps 1 --steps 300 --seed 11 --quiet"
+                                                 " --run-prefix it --no-reuse-agents --transport " + transport +
+                                                 " --out " + dir + " --log-root " + logs + " --base-port " +
+                                                 std::to_string(port)));
+    EXPECT_EQ(r.exit_code, 0) << r.output;
+    return readJson(fs::path(dir) / "summary.json");
+  };
+  const json sa = run("goals-udpm", "udpm", 7850);
+  fs::rename(logs + "/it-base-GOALS-s11", logs + "/udpm");
+  const json sb = run("goals-memq", "memq", 7860);
+  const json& ra = sa["systems"]["GOALS"]["runs"][0];
+  EXPECT_EQ(ra["weights_checksum"], sb["systems"]["GOALS"]["runs"][0]["weights_checksum"]);
+  EXPECT_EQ(sa["systems"]["GOALS"]["goals"], sb["systems"]["GOALS"]["goals"]);
+  const auto ca = byChannel(test::readLog(logs + "/udpm/log.00.lcm"));
+  const auto cb = byChannel(test::readLog(logs + "/it-base-GOALS-s11/log.00.lcm"));
+  ASSERT_TRUE(ca.count(ch::goal.name) && ca.count(ch::goalResult.name));
+  ASSERT_EQ(ca.size(), cb.size());
+  for (const auto& [channel, messages] : ca) {
+    ASSERT_TRUE(cb.count(channel)) << channel;
+    ASSERT_EQ(messages, cb.at(channel)) << channel;
+  }
+  const auto replayed = test::runAfford("replay " + logs + "/udpm");
+  EXPECT_EQ(replayed.exit_code, 0) << replayed.output;
+  EXPECT_NE(replayed.output.find("weights_checksum: " + ra["weights_checksum"].get<std::string>()), std::string::npos)
+      << replayed.output;
+  const std::string goals = std::to_string(ca.at(ch::goal.name).size());
+  EXPECT_NE(replayed.output.find("goals: " + goals + " replayed, " + goals + " recorded, 0 differing"), std::string::npos)
+      << replayed.output;
+  EXPECT_NE(replayed.output.find("replay equals the record"), std::string::npos) << replayed.output;
+}
+
 // A CSV's lines without their last column (wall_seconds).
 std::vector<std::string> withoutLastColumn(const fs::path& csv) {
   std::vector<std::string> out;

@@ -171,42 +171,49 @@ TEST(Protocol, TheDocsRulesTableIsTheProcesses) {
 // Each channel's registry entry agrees with the protocol: its publisher in a phase publishes it then.
 TEST(Protocol, TheRegistryPublishesWhatTheProtocolSays) {
   forEachChannel([](const ChannelInfo& c) {
-    for (bool extrinsic : {false, true}) {
-      const std::string p = c.publisher(extrinsic);
+    for (const auto& [phase_name, phase] : kPhaseNames) {
+      const std::string p = c.publisher(phase);
       if (!c.serial || !isProcessName(p)) continue;
-      EXPECT_EQ(publisherOf(c.name, extrinsic), p) << c.name;
-      const auto mine = channelsOf(p, extrinsic);
+      EXPECT_EQ(publisherOf(c.name, phase), p) << c.name << " in " << phase_name;
+      const auto mine = channelsOf(p, phase);
       EXPECT_NE(std::find(mine.begin(), mine.end(), c.name), mine.end()) << c.name << " of " << p;
     }
   });
 }
 
 TEST(Registry, EachRunChannelHasOnePublisherPerPhase) {
-  for (bool extrinsic : {false, true}) {
+  for (const auto& [phase_name, phase] : kPhaseNames) {
     std::set<std::string> published;
-    for (const std::string& p : runProcesses(extrinsic, true))
-      for (const std::string& ch : channelsOf(p, extrinsic)) {
+    for (const std::string& p : runProcesses(phase, true))
+      for (const std::string& ch : channelsOf(p, phase)) {
         if (ch == ch::status.name) continue;
-        EXPECT_TRUE(published.insert(ch).second) << ch << " published twice";
-        EXPECT_EQ(publisherOf(ch, extrinsic), p) << ch;
+        EXPECT_TRUE(published.insert(ch).second) << ch << " published twice in " << phase_name;
+        EXPECT_EQ(publisherOf(ch, phase), p) << ch;
       }
-    // Every channel with a serial is published by someone of the phase, or belongs to the other phase.
+    // Every channel with a serial is published by someone of the phase, or belongs to another phase.
     for (const std::string& ch : channelNames(/*serial_only=*/true))
       if (!published.count(ch)) {
-        EXPECT_EQ(publisherOf(ch, extrinsic), "") << ch;
+        EXPECT_EQ(publisherOf(ch, phase), "") << ch << " in " << phase_name;
       }
   }
-  EXPECT_EQ(publisherOf(ch::decision.name, false), "motivation");
-  EXPECT_EQ(publisherOf(ch::decision.name, true), "planner");
-  EXPECT_EQ(publisherOf(ch::runConfig.name, false), "");  // the runner's
+  EXPECT_EQ(publisherOf(ch::decision.name, Phase::Intrinsic), "motivation");
+  EXPECT_EQ(publisherOf(ch::decision.name, Phase::Extrinsic), "planner");
+  EXPECT_EQ(publisherOf(ch::decision.name, Phase::Goals), "planner");
+  EXPECT_EQ(publisherOf(ch::goal.name, Phase::Goals), "motivation");
+  EXPECT_EQ(publisherOf(ch::goal.name, Phase::Intrinsic), "");
+  EXPECT_EQ(publisherOf(ch::runConfig.name, Phase::Intrinsic), "");  // the runner's
 }
 
 TEST(Registry, ThePhasesTakeTheirDeciderAndTheLoggerOnlyWhenRecorded) {
-  EXPECT_EQ(runProcesses(false, false), (std::vector<std::string>{"environment", "eye", "predictors", "motivation"}));
-  EXPECT_EQ(runProcesses(true, true), (std::vector<std::string>{"environment", "eye", "predictors", "planner", "logger"}));
+  EXPECT_EQ(runProcesses(Phase::Intrinsic, false),
+            (std::vector<std::string>{"environment", "eye", "predictors", "motivation"}));
+  EXPECT_EQ(runProcesses(Phase::Extrinsic, true),
+            (std::vector<std::string>{"environment", "eye", "predictors", "planner", "logger"}));
+  EXPECT_EQ(runProcesses(Phase::Goals, false),
+            (std::vector<std::string>{"environment", "eye", "predictors", "motivation", "planner"}));
   EXPECT_TRUE(isProcessName("logger"));
   EXPECT_FALSE(isProcessName("runner"));
-  EXPECT_TRUE(channelsOf("runner", false).empty());
+  EXPECT_TRUE(channelsOf("runner", Phase::Intrinsic).empty());
 }
 
 TEST(Host, HostsEveryRegisteredProcessAndRefusesOthersByName) {

@@ -208,7 +208,7 @@ LogEvent focusEvent(const std::string& run, std::int64_t serial) {
 // events are not counted.
 TEST(ReplaySerials, TheGapsOfARecordingAreFoundEventByEvent) {
   const ProtocolConfig protocol = test::shippedProtocol();
-  GapFinder finder("r", /*extrinsic=*/false, BoundsContext{&protocol, nullptr});
+  GapFinder finder("r", Phase::Intrinsic, BoundsContext{&protocol, nullptr});
   for (std::int64_t s : {0, 1, 2, 5, 4, 9, 2, 10, 11})
     finder.add(focusEvent("r", s));
   finder.add(focusEvent("other", 3));

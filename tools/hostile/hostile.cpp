@@ -125,6 +125,8 @@ class Hostile {
     channels_[ch::forwardQuery.name] = channelOf<forward_query_t>();
     channels_[ch::forwardPrediction.name] = channelOf<forward_prediction_t>();
     channels_[ch::extrinsicResult.name] = channelOf<extrinsic_result_t>();
+    channels_[ch::goal.name] = channelOf<goal_t>();
+    channels_[ch::goalResult.name] = channelOf<goal_result_t>();
     channels_[ch::status.name] = channelOf<process_status_t>();
     channels_[ch::resend.name] = channelOf<resend_t>();
     channels_[ch::runConfig.name] = channelOf<run_config_t>();
@@ -327,6 +329,8 @@ class Hostile {
       if (ch == ch::forwardQuery.name) { auto* m = static_cast<forward_query_t*>(p); next(m); }
       if (ch == ch::forwardPrediction.name) { auto* m = static_cast<forward_prediction_t*>(p); next(m); }
       if (ch == ch::extrinsicResult.name) { auto* m = static_cast<extrinsic_result_t*>(p); next(m); m->success = !m->success; }
+      if (ch == ch::goal.name) { auto* m = static_cast<goal_t*>(p); next(m); m->id += 1; }
+      if (ch == ch::goalResult.name) { auto* m = static_cast<goal_result_t*>(p); next(m); m->reached = !m->reached; }
     });
     if (!ok) return;
     afford::sealBuffer(b.data(), b.size());
@@ -401,6 +405,8 @@ class Hostile {
       if (ch == ch::forwardQuery.name) { auto* m = static_cast<forward_query_t*>(p); common(m); if (kind == "nan") m->x = nan; }
       if (ch == ch::forwardPrediction.name) { auto* m = static_cast<forward_prediction_t*>(p); common(m); if (kind == "nan" && !m->where_x.empty()) m->where_x[0] = nan; }
       if (ch == ch::extrinsicResult.name) { auto* m = static_cast<extrinsic_result_t*>(p); common(m); if (kind == "nan") m->utility = nan; }
+      if (ch == ch::goal.name) { auto* m = static_cast<goal_t*>(p); common(m); if (kind == "nan") m->x = nan; }
+      if (ch == ch::goalResult.name) { auto* m = static_cast<goal_result_t*>(p); common(m); if (kind == "nan") m->distance = nan; }
       if (ch == ch::status.name) {
         auto* m = static_cast<process_status_t*>(p);
         if (coin(0.2)) m->process = "ghost" + std::to_string(pick(0, 9));

@@ -79,7 +79,7 @@ void flatten(const YAML::Node& node, const std::string& path, const std::set<std
 // where it is set ("base: IGN" for one system; an experiment alone for all).
 std::string overridesMarkdown(const std::string& config_dir, const std::map<std::string, DefaultLine>& lines) {
   // The runner's keys and the world's objects differ by their nature.
-  const std::set<std::string> skip{"experiment", "system", "seed", "run", "world.objects"};
+  const std::set<std::string> skip{"experiment", "system", "seed", "phase", "run", "world.objects"};
   std::map<std::string, std::map<std::string, std::map<std::string, std::vector<std::string>>>> by_key;  // key, value, experiment, systems
   for (const std::string& name : listExperiments(config_dir))
     for (const auto& sys : kSystemNames) {

@@ -18,8 +18,8 @@ Command processesCommand(CLI::App& app, const FrontDoor& door) {
   auto a = std::make_shared<Args>();
   auto* cmd = app.add_subcommand("processes", "list the processes of a run, one per line (for scripts), or with "
                                               "the channels each publishes");
-  cmd->add_option("--phase", a->phase, "intrinsic, extrinsic or all")
-      ->check(CLI::IsMember({"intrinsic", "extrinsic", "all"}))
+  cmd->add_option("--phase", a->phase, "intrinsic, extrinsic, goals or all")
+      ->check(CLI::IsMember({"intrinsic", "extrinsic", "goals", "all"}))
       ->capture_default_str();
   cmd->add_flag("!--no-logger", a->recorded, "leave the logger out (a run that is not recorded)");
   cmd->add_flag("--channels", a->channels, "each process with what it does and the channels it publishes");
@@ -36,7 +36,8 @@ Command processesCommand(CLI::App& app, const FrontDoor& door) {
               return 0;
             }
             for (const ProcessInfo& p : processRegistry()) {
-              const bool in = a->phase == "all" || (a->phase == "intrinsic" ? p.intrinsic : p.extrinsic);
+              bool in = a->phase == "all";
+              for (const auto& [name, phase] : kPhaseNames) in = in || (a->phase == name && p.in(phase));
               if (!in || (p.recorder && !a->recorded)) continue;
               if (!a->channels) {
                 std::printf("%s\n", p.name);

@@ -55,6 +55,13 @@ Command replayCommand(CLI::App& app, const FrontDoor& door) {
             else
               std::printf("decisions: %lld replayed, %lld recorded, %lld differing\n", static_cast<long long>(r.decisions),
                         static_cast<long long>(r.decisions_recorded), static_cast<long long>(r.decisions_differing));
+            if (r.phase == Phase::Goals) {
+              if (!r.goals_skipped.empty())
+                std::printf("goal chooser not replayed: %s\n", r.goals_skipped.c_str());
+              else
+                std::printf("goals: %lld replayed, %lld recorded, %lld differing\n", static_cast<long long>(r.goals),
+                            static_cast<long long>(r.goals_recorded), static_cast<long long>(r.goals_differing));
+            }
             if (r.ok())
               std::printf("replay equals the record\n");
             else if (!r.consistent())

@@ -21,6 +21,8 @@ wire::extrinsic_result_t_bounds boundsOf(const BoundsContext&, const extrinsic_r
 wire::focus_t_bounds boundsOf(const BoundsContext&, const focus_t*);
 wire::forward_prediction_t_bounds boundsOf(const BoundsContext&, const forward_prediction_t*);
 wire::forward_query_t_bounds boundsOf(const BoundsContext&, const forward_query_t*);
+wire::goal_t_bounds boundsOf(const BoundsContext&, const goal_t*);
+wire::goal_result_t_bounds boundsOf(const BoundsContext&, const goal_result_t*);
 wire::look_t_bounds boundsOf(const BoundsContext&, const look_t*);
 wire::object_probe_t_bounds boundsOf(const BoundsContext&, const object_probe_t*);
 wire::prediction_t_bounds boundsOf(const BoundsContext&, const prediction_t*);

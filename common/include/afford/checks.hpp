@@ -16,6 +16,8 @@
 #include "afford/focus_t.hpp"
 #include "afford/forward_prediction_t.hpp"
 #include "afford/forward_query_t.hpp"
+#include "afford/goal_result_t.hpp"
+#include "afford/goal_t.hpp"
 #include "afford/look_t.hpp"
 #include "afford/object_probe_t.hpp"
 #include "afford/prediction_t.hpp"
@@ -45,6 +47,8 @@ std::string checkMessage(const object_probe_t& m, const BoundsContext& c);
 std::string checkMessage(const look_t& m, const BoundsContext& c);
 std::string checkMessage(const forward_query_t& m, const BoundsContext& c);
 std::string checkMessage(const forward_prediction_t& m, const BoundsContext& c);
+std::string checkMessage(const goal_t& m, const BoundsContext& c);
+std::string checkMessage(const goal_result_t& m, const BoundsContext& c);
 std::string checkMessage(const affordance_table_t& m, const BoundsContext& c);
 std::string checkMessage(const run_result_t& m, const BoundsContext& c);
 std::string checkMessage(const extrinsic_result_t& m, const BoundsContext& c);

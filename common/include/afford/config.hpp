@@ -14,6 +14,7 @@
 #include <vector>
 
 #include "afford/actions.hpp"
+#include "afford/phase.hpp"
 
 namespace afford {
 
@@ -29,7 +30,9 @@ class ConfigError : public std::runtime_error {
 
 enum class Shape { Square, Circle, Rectangle };
 enum class Colour { Red, Green, Blue };
-enum class System { FIX, IGN, IMP };
+// The paper's three systems (paper 2.4.1), and GOALS: the agent that sets its
+// own goals (the goals phase, docs/model.md#goals-of-its-own).
+enum class System { FIX, IGN, IMP, GOALS };
 enum class SaliencyOrder { SmoothThenNoise, NoiseThenSmooth };
 enum class ImpThresholdInput { Signal, ObservedChange };
 // How object centres become pixels (world.positions, docs/parameters.md).
@@ -151,6 +154,18 @@ struct MotivationConfig {
   RevisitConfig revisit;
 };
 
+// The goals phase (docs/model.md#goals-of-its-own): how the agent sets,
+// chooses and pursues its own goals.
+struct GoalsConfig {
+  std::string kind = "imgep";  // the goal chooser (motivation/goals.hpp): imgep, or one a process registers
+  int budget = 0;              // actions the planner may spend on one goal
+  int window = 0;              // attempts per module in each half of its competence window
+  double random_share = 0;     // share of module choices drawn uniformly, the rest by |competence progress|
+  double explore_share = 0;    // share of goals that try a random action on a scanned object (motor babbling)
+  int bootstrap = 0;           // goals at the start of a run that are explorations
+  int memory = 0;              // outcomes, places and objects the chooser keeps (the oldest go first)
+};
+
 // An extrinsic-phase scenario (paper 3.1, Figure 4): objects with the state
 // they start in and the state the goal image shows.
 struct ObjectState {
@@ -196,8 +211,6 @@ struct PlannerConfig {
   double lower_leak = 0;             // nu of the leaky average lowering it (towards 0) per chosen action
 };
 
-enum class Phase { Intrinsic, Extrinsic };
-
 // The names of an enum's values as the configuration spells them, declared
 // once: the parser reads them, nameOf (and toString) print them.
 template <class E>
@@ -209,10 +222,10 @@ inline constexpr std::array<Named<Shape>, 3> kShapeNames{
     {{"square", Shape::Square}, {"circle", Shape::Circle}, {"rectangle", Shape::Rectangle}}};
 inline constexpr std::array<Named<Colour>, 3> kColourNames{
     {{"red", Colour::Red}, {"green", Colour::Green}, {"blue", Colour::Blue}}};
-inline constexpr std::array<Named<System>, 3> kSystemNames{
-    {{"FIX", System::FIX}, {"IGN", System::IGN}, {"IMP", System::IMP}}};
-inline constexpr std::array<Named<Phase>, 2> kPhaseNames{
-    {{"intrinsic", Phase::Intrinsic}, {"extrinsic", Phase::Extrinsic}}};
+inline constexpr std::array<Named<System>, 4> kSystemNames{
+    {{"FIX", System::FIX}, {"IGN", System::IGN}, {"IMP", System::IMP}, {"GOALS", System::GOALS}}};
+inline constexpr std::array<Named<Phase>, kPhases> kPhaseNames{
+    {{"intrinsic", Phase::Intrinsic}, {"extrinsic", Phase::Extrinsic}, {"goals", Phase::Goals}}};
 inline constexpr std::array<Named<Positions>, 2> kPositionsNames{
     {{"continuous", Positions::Continuous}, {"pixel", Positions::Pixel}}};
 inline constexpr std::array<Named<SaliencyOrder>, 2> kSaliencyOrderNames{
@@ -312,6 +325,7 @@ struct RunConfig {
   EyeConfig eye;
   PredictorsConfig predictors;
   MotivationConfig motivation;
+  GoalsConfig goals;
   PlannerConfig planner;
   ProtocolConfig protocol;
 

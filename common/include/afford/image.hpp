@@ -83,5 +83,10 @@ struct Difference {
 // ||a - b||_2 / n for images in [0, 1] (bytes are value / 255): the planner's
 // image distance (paper 2.4.3); 1 for images of different sizes.
 double imageDistance(const std::vector<std::uint8_t>& a, const std::vector<std::uint8_t>& b);
+// The share of pixels on which two focus images disagree about an object
+// being there (any channel above 0): 0 for the same silhouette.
+// The byte image a predicted focus image (values in [0, 1]) stands for: round(clamp(v, 0, 1) * 255).
+std::vector<std::uint8_t> quantiseImage(const std::vector<double>& what);
+double silhouetteDistance(const std::vector<std::uint8_t>& a, const std::vector<std::uint8_t>& b);
 
 }  // namespace afford

@@ -59,9 +59,12 @@ class Input {
 
   explicit Input(std::string rule) : rule_(std::move(rule)) {}
   // What follows applies in this phase only (until the next in()).
-  Input& in(Phase phase) {
-    phase_ = static_cast<int>(phase);
-    for (int p : phases()) sections_[p].defined = true;
+  Input& in(Phase phase) { return in({phase}); }
+  // ... in these phases (the same clauses for each).
+  Input& in(std::initializer_list<Phase> phases) {
+    phases_.clear();
+    for (Phase p : phases) phases_.push_back(static_cast<int>(p));
+    for (int p : this->phases()) sections_[p].defined = true;
     return *this;
   }
   Input& ignoreIf(Test test) { return add({Clause::Ignore, std::move(test), {}}); }
@@ -137,7 +140,12 @@ class Input {
     Handler handler;
     bool defined = false;
   };
-  std::vector<int> phases() const { return phase_ < 0 ? std::vector<int>{0, 1} : std::vector<int>{phase_}; }
+  std::vector<int> phases() const {
+    if (!phases_.empty()) return phases_;
+    std::vector<int> all;
+    for (std::size_t p = 0; p < kPhases; ++p) all.push_back(static_cast<int>(p));
+    return all;
+  }
   Input& add(Clause c) {
     for (int p : phases()) {
       sections_[p].clauses.push_back(c);
@@ -147,8 +155,8 @@ class Input {
   }
 
   std::string rule_;
-  Section sections_[2];  // by Phase
-  int phase_ = -1;       // the phase of what is being added (-1: both)
+  Section sections_[kPhases];  // by Phase
+  std::vector<int> phases_;    // the phases of what is being added (empty: every phase)
 };
 
 // Two inputs that make one thing together, whichever comes first (the

@@ -22,6 +22,8 @@
 #include "afford/focus_t.hpp"
 #include "afford/forward_prediction_t.hpp"
 #include "afford/forward_query_t.hpp"
+#include "afford/goal_result_t.hpp"
+#include "afford/goal_t.hpp"
 #include "afford/look_t.hpp"
 #include "afford/object_probe_t.hpp"
 #include "afford/prediction_t.hpp"
@@ -32,6 +34,7 @@
 #include "afford/run_result_t.hpp"
 #include "afford/scene_t.hpp"
 #include "afford/wire_bounds.hpp"
+#include "afford/phase.hpp"
 
 namespace afford {
 
@@ -40,77 +43,91 @@ inline constexpr const char* kRunner = "runner";          // afford experiment (
 inline constexpr const char* kEveryProcess = "every process";
 inline constexpr const char* kAnyReceiver = "any receiver";  // RESEND: whoever misses a message
 
+// Who publishes a channel in each phase (afford/phase.hpp, in its
+// order): a process, kRunner, kEveryProcess, ... ("": not in that phase).
+using Publishers = std::array<const char*, kPhases>;
+
 // What a channel is, whatever its type.
 struct ChannelInfo {
   const char* name;                    // on the bus
-  const char* intrinsic_publisher;     // in the intrinsic phase: a process, kRunner, kEveryProcess, ... ("": none)
-  const char* extrinsic_publisher;     // ... in the extrinsic phase
+  Publishers publishers;               // by phase
   std::array<const char*, 4> readers;  // who takes it (the logger and the viewer aside), then nullptr
   bool recorded;                       // in the run's log
   const char* when;                    // when it goes out, in words (docs/processes-and-channels.md)
   const char* type;                    // its message type ("scene_t")
   bool serial;                         // a run message: in serial order, once, missing ones asked for
 
-  bool in(bool extrinsic) const { return *(extrinsic ? extrinsic_publisher : intrinsic_publisher) != '\0'; }
-  const char* publisher(bool extrinsic) const { return extrinsic ? extrinsic_publisher : intrinsic_publisher; }
+  const char* publisher(Phase phase) const { return publishers[static_cast<std::size_t>(phase)]; }
+  bool in(Phase phase) const { return *publisher(phase) != '\0'; }
 };
 
 // A channel and its message type.
 template <class T>
 struct Channel : ChannelInfo {
   using Message = T;
-  constexpr Channel(const char* name, const char* intrinsic_publisher, const char* extrinsic_publisher,
-                    std::array<const char*, 4> readers, bool recorded, const char* when)
-      : ChannelInfo{name,     intrinsic_publisher,     extrinsic_publisher,    readers,
-                    recorded, when, wire::Bounds<T>::kName, wire::Bounds<T>::kSerial} {}
+  // `publishers`: intrinsic, extrinsic, goals.
+  constexpr Channel(const char* name, Publishers publishers, std::array<const char*, 4> readers, bool recorded,
+                    const char* when)
+      : ChannelInfo{name, publishers, readers, recorded, when, wire::Bounds<T>::kName, wire::Bounds<T>::kSerial} {}
 };
 
 namespace ch {
 inline constexpr Channel<run_config_t> runConfig{
-    "RUN_CONFIG", kRunner, kRunner, {kEveryProcess}, true,
+    "RUN_CONFIG", {kRunner, kRunner, kRunner}, {kEveryProcess}, true,
     "once per run (again, backing off from 10 ms, while a process has not taken it)"};
 inline constexpr Channel<run_control_t> runControl{
-    "RUN_CONTROL", kRunner, kRunner, {kEveryProcess}, true, "`START`, then `STOP` after the result"};
+    "RUN_CONTROL", {kRunner, kRunner, kRunner}, {kEveryProcess}, true, "`START`, then `STOP` after the result"};
 inline constexpr Channel<process_status_t> status{
-    "STATUS", kEveryProcess, kEveryProcess, {kRunner, kEveryProcess}, false,
+    "STATUS", {kEveryProcess, kEveryProcess, kEveryProcess}, {kRunner, kEveryProcess}, false,
     "on every state change, twice a second, and when idle in a run (its counts tell a receiver what it missed)"};
 inline constexpr Channel<object_probe_t> probe{
-    "PROBE", "environment", "environment", {"predictors"}, true,
+    "PROBE", {"environment", "environment", "environment"}, {"predictors"}, true,
     "once, at `START`: each object's focus image alone and centred"};
 inline constexpr Channel<scene_t> scene{
-    "SCENE", "environment", "environment", {"eye", "planner"}, true,
+    "SCENE", {"environment", "environment", "environment"}, {"eye", "planner"}, true,
     "at the start, after every executed action, when late objects appear; extrinsic: also the goal scene"};
 inline constexpr Channel<focus_t> focus{
-    "FOCUS", "eye", "eye", {"predictors", "planner"}, true,
-    "every step: the focus image and gaze after the saliency scan; extrinsic: the answer to a `LOOK`"};
+    "FOCUS", {"eye", "eye", "eye"}, {"predictors", "planner", "motivation"}, true,
+    "every step: the focus image and gaze after the saliency scan; extrinsic and goals: the answer to a `LOOK`"};
 inline constexpr Channel<prediction_t> prediction{
-    "PREDICTION", "predictors", "predictors", {"motivation", "planner"}, true,
+    "PREDICTION", {"predictors", "predictors", "predictors"}, {"motivation", "planner"}, true,
     "every scene scan: the 4 affordances and 4 learning-progress values, what a memory knows of the look, "
     "and the report of the update made since the previous prediction"};
 inline constexpr Channel<decision_t> decision{
-    "DECISION", "motivation", "planner", {"environment", "eye", "predictors"}, true,
-    "intrinsic: every step, act with an action or pass; extrinsic: the planner's action"};
+    "DECISION", {"motivation", "planner", "planner"}, {"environment", "eye", "predictors"}, true,
+    "intrinsic: every step, act with an action or pass; extrinsic: the planner's action; goals: every step, the "
+    "planner's action for its goal, or a pass"};
 inline constexpr Channel<effect_t> effect{
-    "EFFECT", "eye", "eye", {"predictors"}, true,
+    "EFFECT", {"eye", "eye", "eye"}, {"predictors", "motivation"}, true,
     "after an executed action: the change-driven scan and whether the affordance held"};
 inline constexpr Channel<affordance_table_t> affordanceTable{
-    "AFFORDANCE_TABLE", "predictors", "predictors", {kRunner}, true, "every `run.curve_interval` steps (from step 0) and at the end"};
+    "AFFORDANCE_TABLE", {"predictors", "predictors", "predictors"}, {kRunner}, true,
+    "every `run.curve_interval` steps (from step 0) and at the end"};
 inline constexpr Channel<run_result_t> result{
-    "RESULT", "predictors", "predictors", {kRunner}, true,
+    "RESULT", {"predictors", "predictors", "predictors"}, {kRunner}, true,
     "once, after the last step: weights checksum, checkpoint file, action counts, the memory's figures, the last "
     "update report"};
 inline constexpr Channel<look_t> look{
-    "LOOK", "", "planner", {"eye"}, true, "extrinsic: scan the goal image, look at a place of the scene, or scan the scene"};
+    "LOOK", {"", "planner", "planner"}, {"eye"}, true,
+    "extrinsic: scan the goal image, look at a place of the scene, or scan the scene; goals: look at the goal "
+    "place, at the goal's object, or scan the scene"};
 inline constexpr Channel<forward_query_t> forwardQuery{
-    "FORWARD_QUERY", "", "planner", {"predictors"}, true, "extrinsic: what would these actions do to this object?"};
+    "FORWARD_QUERY", {"", "planner", "planner"}, {"predictors"}, true,
+    "extrinsic and goals: what would these actions do to this object?"};
 inline constexpr Channel<forward_prediction_t> forwardPrediction{
-    "FORWARD_PREDICTION", "predictors", "predictors", {"planner"}, true,
-    "extrinsic: predicted focus image (float32) and position per action"};
+    "FORWARD_PREDICTION", {"", "predictors", "predictors"}, {"planner", "motivation"}, true,
+    "extrinsic and goals: predicted focus image (float32) and position per action"};
 inline constexpr Channel<extrinsic_result_t> extrinsicResult{
-    "EXTRINSIC_RESULT", "", "planner", {kRunner}, true,
+    "EXTRINSIC_RESULT", {"", "planner", ""}, {kRunner}, true,
     "extrinsic: solved or not, completion step, actions, utility gained, per sub-goal records"};
+inline constexpr Channel<goal_t> goal{
+    "GOAL", {"", "", "motivation"}, {"planner"}, true,
+    "goals: at the start and after each `GOAL_RESULT`, the goal the agent sets itself next"};
+inline constexpr Channel<goal_result_t> goalResult{
+    "GOAL_RESULT", {"", "", "planner"}, {"motivation", kRunner}, true,
+    "goals: when a goal is reached, its action budget spent, or nothing to do for it: reached or not, actions"};
 inline constexpr Channel<resend_t> resend{
-    "RESEND", kAnyReceiver, kAnyReceiver, {"the channel's publisher"}, false,
+    "RESEND", {kAnyReceiver, kAnyReceiver, kAnyReceiver}, {"the channel's publisher"}, false,
     "when messages are missing: a lost datagram, or a restarted process catching up"};
 }  // namespace ch
 
@@ -118,7 +135,7 @@ inline constexpr Channel<resend_t> resend{
 inline constexpr auto kChannels =
     std::make_tuple(ch::runConfig, ch::runControl, ch::status, ch::probe, ch::scene, ch::focus, ch::prediction,
                     ch::decision, ch::effect, ch::affordanceTable, ch::result, ch::look, ch::forwardQuery,
-                    ch::forwardPrediction, ch::extrinsicResult, ch::resend);
+                    ch::forwardPrediction, ch::extrinsicResult, ch::goal, ch::goalResult, ch::resend);
 
 // Calls f(channel) for every channel, each with its own type (Channel<T>).
 template <class F>

@@ -1,0 +1,264 @@
+#include "motivation/goals.hpp"
+
+#include <algorithm>
+#include <cmath>
+
+#include "afford/components.hpp"
+#include "afford/image.hpp"
+#include "afford/rng.hpp"
+
+namespace afford {
+
+namespace {
+
+ComponentRegistry<GoalChooser, GoalParams>& registry() {
+  static ComponentRegistry<GoalChooser, GoalParams> r(
+      "goals.kind", "motivation",
+      {{"imgep", [](const GoalParams& p) { return std::make_unique<ImgepChooser>(p); }}});
+  return r;
+}
+
+// Sub-draws of one goal's key (Purpose::GoalChoice, sub-key = goal id).
+enum Draw : std::uint64_t { ExploreOrNot = 0, ModuleRandom = 1, ModulePick = 2, Candidate = 3, ExploreAction = 4 };
+
+double mean(const std::deque<double>& h, std::size_t from, std::size_t to) {
+  double sum = 0;
+  for (std::size_t i = from; i < to; ++i) sum += h[i];
+  return to > from ? sum / static_cast<double>(to - from) : 0.0;
+}
+
+}  // namespace
+
+void registerGoalChooser(const std::string& kind, GoalChooserFactory factory) {
+  registry().add(kind, std::move(factory));
+}
+std::vector<std::string> goalChooserKinds() { return registry().kinds(); }
+std::unique_ptr<GoalChooser> makeGoalChooser(const GoalParams& params) {
+  return registry().make(params, params.goals.kind);
+}
+
+// ---- competence ---------------------------------------------------------------
+
+void Competence::attempted(GoalModule m, double competence) {
+  auto& h = history_[static_cast<std::size_t>(m)];
+  h.push_back(competence);
+  while (h.size() > 2 * static_cast<std::size_t>(window_)) h.pop_front();
+}
+
+double Competence::progress(GoalModule m) const {
+  const auto& h = history_[static_cast<std::size_t>(m)];
+  if (h.size() < 2) return 0;
+  const std::size_t half = h.size() / 2;
+  return std::abs(mean(h, h.size() - half, h.size()) - mean(h, 0, half));
+}
+
+double Competence::recent(GoalModule m) const {
+  const auto& h = history_[static_cast<std::size_t>(m)];
+  const std::size_t n = std::min(h.size(), static_cast<std::size_t>(window_));
+  return mean(h, h.size() - n, h.size());
+}
+
+GoalModule Competence::choose(const std::array<bool, kGoalModules>& available, double random_share, double u,
+                              double v) const {
+  std::vector<GoalModule> open;
+  double total = 0;
+  for (int m = 0; m < kGoalModules; ++m)
+    if (available[static_cast<std::size_t>(m)]) {
+      open.push_back(static_cast<GoalModule>(m));
+      total += progress(static_cast<GoalModule>(m));
+    }
+  if (open.empty()) return GoalModule::Explore;
+  if (u < random_share || total <= 0) {
+    const auto i = std::min(open.size() - 1, static_cast<std::size_t>(v * static_cast<double>(open.size())));
+    return open[i];
+  }
+  double acc = 0;
+  for (GoalModule m : open) {
+    acc += progress(m) / total;
+    if (v < acc) return m;
+  }
+  return open.back();
+}
+
+void Competence::save(SnapshotWriter& w) const {
+  for (const auto& h : history_) w.doubles(std::vector<double>(h.begin(), h.end()));
+}
+
+void Competence::load(SnapshotReader& r) {
+  for (auto& h : history_) {
+    const std::int64_t n = r.within("competence attempts", 0, 2 * static_cast<std::int64_t>(window_));
+    std::vector<double> v(static_cast<std::size_t>(n));
+    r.bytes("competence", v.data(), v.size() * sizeof(double));
+    h.assign(v.begin(), v.end());
+  }
+}
+
+// ---- imgep --------------------------------------------------------------------
+
+ImgepChooser::ImgepChooser(const GoalParams& params)
+    : params_(params),
+      clear_(params.world.object_size / 2 + static_cast<double>(params.focus_side) / std::max(1, params.world.size_px) / 2),
+      competence_(params.goals.window) {}
+
+bool ImgepChooser::samePlace(double ax, double ay, double bx, double by) const {
+  return std::hypot(ax - bx, ay - by) <= params_.planner.position_match;
+}
+
+std::deque<Seen>::iterator ImgepChooser::objectAt(double x, double y) {
+  return std::find_if(objects_.begin(), objects_.end(), [&](const Seen& o) { return samePlace(o.x, o.y, x, y); });
+}
+
+void ImgepChooser::remember(std::deque<Seen>& where, Seen s) {
+  where.push_back(std::move(s));
+  while (where.size() > static_cast<std::size_t>(params_.goals.memory)) where.pop_front();
+}
+
+bool ImgepChooser::freeAt(double x, double y, const Seen* except) const {
+  return std::none_of(objects_.begin(), objects_.end(), [&](const Seen& o) {
+    return &o != except && std::max(std::abs(o.x - x), std::abs(o.y - y)) < clear_;
+  });
+}
+
+void ImgepChooser::sawObject(std::int64_t, const Seen& object) {
+  if (auto it = objectAt(object.x, object.y); it != objects_.end()) objects_.erase(it);
+  remember(objects_, object);
+}
+
+void ImgepChooser::sawEffect(const SeenEffect& e) {
+  if (!e.affordance) return;  // nothing changed: the object is as it was seen
+  if (auto it = objectAt(e.before.x, e.before.y); it != objects_.end()) objects_.erase(it);
+  sawObject(e.step, e.after);
+  if (e.action == kMove) {  // where it went, and where it stood: places an object can be moved to
+    const double x = e.target_x >= 0 ? e.target_x : e.after.x, y = e.target_y >= 0 ? e.target_y : e.after.y;
+    for (const auto& [px, py] : {std::make_pair(x, y), std::make_pair(e.before.x, e.before.y)}) {
+      const bool known =
+          std::any_of(places_.begin(), places_.end(), [&](const Seen& p) { return samePlace(p.x, p.y, px, py); });
+      if (!known) remember(places_, Seen{{}, px, py});
+    }
+    return;
+  }
+  imagined(Imagined{e.step, e.action, e.before.image, e.after.image, e.after.x, e.after.y});
+}
+
+void ImgepChooser::imagined(const Imagined& o) {
+  // A colour outcome: the object's silhouette in another colour (a prediction that is not one is left out).
+  if (o.action == kMove || o.image.empty() || silhouetteDistance(o.object, o.image) != 0 ||
+      imageDistance(o.object, o.image) < params_.planner.subgoal_match)
+    return;
+  const bool known = std::any_of(colours_.begin(), colours_.end(), [&](const Seen& c) {
+    return imageDistance(c.image, o.image) < params_.planner.subgoal_match;
+  });
+  if (!known) remember(colours_, Seen{o.image, o.x, o.y});
+}
+
+void ImgepChooser::attempted(const GoalAttempt& a) {
+  if (a.module != GoalModule::Explore) competence_.attempted(a.module, a.reached ? 1.0 : 0.0);
+}
+
+Goal ImgepChooser::next(std::int64_t step, int id) {
+  const KeyedRng rng(params_.seed, step, Purpose::GoalChoice, static_cast<std::uint64_t>(id));
+  const auto explore = [&] {
+    Goal g;
+    g.module = GoalModule::Explore;
+    g.action = std::min(kNumActions - 1, static_cast<int>(rng.uniform(ExploreAction) * kNumActions));
+    return g;
+  };
+  if (id < params_.goals.bootstrap || rng.uniform(ExploreOrNot) < params_.goals.explore_share) return explore();
+
+  // The candidates of each module, on the objects as last seen: a colour the
+  // object's silhouette took after a change (not the one it has), a free place
+  // it is not at, or both.
+  std::vector<std::pair<const Seen*, const Seen*>> colour;  // object, colour outcome
+  for (const Seen& o : objects_)
+    for (const Seen& c : colours_)
+      if (silhouetteDistance(o.image, c.image) == 0 && imageDistance(o.image, c.image) >= params_.planner.subgoal_match)
+        colour.emplace_back(&o, &c);
+  std::vector<std::pair<const Seen*, const Seen*>> move;  // object, place
+  for (const Seen& o : objects_)
+    for (const Seen& p : places_)
+      if (std::max(std::abs(o.x - p.x), std::abs(o.y - p.y)) >= clear_ && freeAt(p.x, p.y, &o)) move.emplace_back(&o, &p);
+  std::size_t both = 0;  // colour x places of the same object
+  for (const auto& [o, c] : colour)
+    for (const auto& [mo, p] : move) both += mo == o;
+  const std::array<bool, kGoalModules> available = {false, !colour.empty(), !move.empty(), both > 0};
+  const GoalModule m = competence_.choose(available, params_.goals.random_share, rng.uniform(ModuleRandom),
+                                          rng.uniform(ModulePick));
+  const double pick = rng.uniform(Candidate);
+  const auto index = [&](std::size_t n) { return std::min(n - 1, static_cast<std::size_t>(pick * static_cast<double>(n))); };
+  Goal g;
+  g.module = m;
+  switch (m) {
+    case GoalModule::Explore:
+      return explore();
+    case GoalModule::Colour: {
+      const auto& [o, c] = colour[index(colour.size())];
+      g.object_x = g.x = o->x;
+      g.object_y = g.y = o->y;
+      g.image = c->image;
+      return g;
+    }
+    case GoalModule::Move: {
+      const auto& [o, p] = move[index(move.size())];
+      g.object_x = o->x;
+      g.object_y = o->y;
+      g.x = p->x;
+      g.y = p->y;
+      g.image = o->image;
+      return g;
+    }
+    case GoalModule::ColourPlace: {
+      std::size_t k = index(both);
+      for (const auto& [o, c] : colour)
+        for (const auto& [mo, p] : move)
+          if (mo == o && k-- == 0) {
+            g.object_x = o->x;
+            g.object_y = o->y;
+            g.x = p->x;
+            g.y = p->y;
+            g.image = c->image;
+            return g;
+          }
+      break;
+    }
+  }
+  return explore();
+}
+
+namespace {
+void saveSeen(SnapshotWriter& w, const std::deque<Seen>& seen) {
+  w.i64(static_cast<std::int64_t>(seen.size()));
+  for (const Seen& s : seen) {
+    w.blob(s.image);
+    w.f64(s.x);
+    w.f64(s.y);
+  }
+}
+void loadSeen(SnapshotReader& r, std::deque<Seen>& seen, std::int64_t most, std::size_t image_bytes) {
+  seen.clear();
+  const std::int64_t n = r.within("seen", 0, most);
+  for (std::int64_t i = 0; i < n; ++i) {
+    Seen s;
+    s.image = r.blob("seen image", image_bytes);
+    s.x = r.f64("seen x");
+    s.y = r.f64("seen y");
+    seen.push_back(std::move(s));
+  }
+}
+}  // namespace
+
+void ImgepChooser::save(SnapshotWriter& w) const {
+  competence_.save(w);
+  saveSeen(w, objects_);
+  saveSeen(w, colours_);
+  saveSeen(w, places_);
+}
+
+void ImgepChooser::load(SnapshotReader& r) {
+  competence_.load(r);
+  const std::size_t bytes = 3 * static_cast<std::size_t>(params_.focus_side) * static_cast<std::size_t>(params_.focus_side);
+  loadSeen(r, objects_, params_.goals.memory, bytes);
+  loadSeen(r, colours_, params_.goals.memory, bytes);
+  loadSeen(r, places_, params_.goals.memory, bytes);
+}
+
+}  // namespace afford
