@@ -49,14 +49,15 @@ std::string goalsSections(const std::vector<Folder>& folders, const Docs& docs) 
        << (imp ? num(meanActions(*imp), 0) : "-") << " | " << num(meanActions(g->second), 0) << " | "
        << (imp ? cell(meanSuccess(*imp), 2) : "-") << " | " << cell(meanSuccess(g->second), 2) << " |\n";
   }
-  md << "\nWhat became of its goals, per module, over all runs: goals set and reached, competence (reached / ended) in "
-     << "the first and last tenth of the steps, and actions spent per goal.\n\n| experiment | module | set | reached | "
-     << "first tenth | last tenth | actions per goal |\n|---|---|---|---|---|---|---|\n";
+  md << "\nWhat became of its goals, per module, over all runs: goals set, reached, and found reached when set (no "
+     << "action taken: left out of the competence), competence (reached / ended, of those pursued) in the first and "
+     << "last tenth of the steps, and actions spent per goal.\n\n| experiment | module | set | reached | found reached | "
+     << "first tenth | last tenth | actions per goal |\n|---|---|---|---|---|---|---|---|\n";
   for (const auto& f : folders) {
     const auto g = f.summary.systems.find("GOALS");
     if (g == f.summary.systems.end() || !g->second.goals) continue;
     for (const auto& [module, m] : g->second.goals->modules)
-      md << "| " << f.label << " | " << module << " | " << m.set << " | " << m.reached << " | "
+      md << "| " << f.label << " | " << module << " | " << m.set << " | " << m.reached << " | " << m.found << " | "
          << (m.first_tenth ? num(*m.first_tenth) : "-") << " | " << (m.last_tenth ? num(*m.last_tenth) : "-") << " | "
          << (m.set > 0 ? num(static_cast<double>(m.actions) / static_cast<double>(m.set)) : "-") << " |\n";
   }

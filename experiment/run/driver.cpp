@@ -53,13 +53,14 @@ void takeGoal(std::vector<GoalBin>& bins, const goal_result_t& m, std::int64_t i
   if (bins.empty() || bins.back().step != step) {
     GoalBin b;
     b.step = step;
-    b.set = b.reached = b.actions = std::vector<std::int64_t>(4, 0);
+    b.set = b.reached = b.actions = b.found = std::vector<std::int64_t>(4, 0);
     bins.push_back(std::move(b));
   }
   const auto module = static_cast<std::size_t>(m.module);  // checked on the edge: 0 to 3
   ++bins.back().set[module];
   bins.back().reached[module] += m.reached ? 1 : 0;
   bins.back().actions[module] += m.actions;
+  bins.back().found[module] += m.reached && m.actions == 0 ? 1 : 0;
 }
 
 }  // namespace

@@ -95,13 +95,16 @@ struct ExtrinsicOutcome {
 // explore, colour, move, colour_place).
 struct GoalBin {
   std::int64_t step = 0;
-  std::vector<std::int64_t> set, reached, actions;  // goals ended, those reached, actions spent on them
+  // Goals ended, those reached, actions spent on them; those found reached when set (no action: they measure no
+  // competence).
+  std::vector<std::int64_t> set, reached, actions, found;
   template <class V>
   void visit(V& v) {
     v("step", step);
     v("set", set);
     v("reached", reached);
     v("actions", actions);
+    v("found", found);
   }
 };
 

@@ -14,8 +14,10 @@ namespace afford {
 // module (explore, colour, move, colour_place), over the runs of a system.
 struct GoalModuleSummary {
   std::int64_t set = 0, reached = 0, actions = 0;  // goals ended, reached, actions spent on them
-  // Competence (goals reached / goals ended) in the first and the last tenth of the runs' steps, and in
-  // each curve interval (null where none ended); the share of the goals set that are this module's.
+  std::int64_t found = 0;  // ... found reached when set (no action taken): left out of the competence
+  // Competence (goals reached / goals ended, of those pursued: found reached when set left out) in the first
+  // and the last tenth of the runs' steps, and in each curve interval (null where none ended); the share of
+  // the goals pursued that are this module's.
   Nullable<double> first_tenth, last_tenth;
   // Per curve interval: goals reached per run (the mean over runs).
   std::vector<Nullable<double>> competence;
@@ -26,6 +28,7 @@ struct GoalModuleSummary {
     v("set", set);
     v("reached", reached);
     v("actions", actions);
+    v("found", found);
     v("first_tenth", first_tenth);
     v("last_tenth", last_tenth);
     v("competence", competence);

@@ -97,7 +97,10 @@ void Competence::load(SnapshotReader& r) {
 
 ImgepChooser::ImgepChooser(const GoalParams& params)
     : params_(params),
-      clear_(params.world.object_size / 2 + static_cast<double>(params.focus_side) / std::max(1, params.world.size_px) / 2),
+      // The longest shape reaches 0.75 object sizes from its centre (a rectangle is 1.5 sizes long: afford/image.hpp),
+      // a focus window half its side; and one pixel more, as the environment's windows are whole pixels.
+      clear_(0.75 * params.world.object_size +
+             (static_cast<double>(params.focus_side) / 2 + 1) / std::max(1, params.world.size_px)),
       competence_(params.goals.window) {}
 
 bool ImgepChooser::samePlace(double ax, double ay, double bx, double by) const {
@@ -121,13 +124,18 @@ bool ImgepChooser::freeAt(double x, double y, const Seen* except) const {
 
 void ImgepChooser::sawObject(std::int64_t, const Seen& object) {
   if (auto it = objectAt(object.x, object.y); it != objects_.end()) objects_.erase(it);
+  // A look that shows no object (a scan or an attention on the table alone) says only that the place is empty.
+  if (std::none_of(object.image.begin(), object.image.end(), [](std::uint8_t v) { return v != 0; })) return;
   remember(objects_, object);
 }
 
 void ImgepChooser::sawEffect(const SeenEffect& e) {
   if (!e.affordance) return;  // nothing changed: the object is as it was seen
   if (auto it = objectAt(e.before.x, e.before.y); it != objects_.end()) objects_.erase(it);
-  sawObject(e.step, e.after);
+  // A move takes the object, as it looked, to its target; a colour change leaves it in place in its new colour.
+  // (The change-driven scan's gaze may rest where the change was largest, the place a moved object left.)
+  const bool moved = e.action == kMove && e.target_x >= 0 && e.target_y >= 0;
+  sawObject(e.step, moved ? Seen{e.before.image, e.target_x, e.target_y} : Seen{e.after.image, e.before.x, e.before.y});
   if (e.action == kMove) {  // where it went, and where it stood: places an object can be moved to
     const double x = e.target_x >= 0 ? e.target_x : e.after.x, y = e.target_y >= 0 ? e.target_y : e.after.y;
     for (const auto& [px, py] : {std::make_pair(x, y), std::make_pair(e.before.x, e.before.y)}) {
@@ -152,7 +160,9 @@ void ImgepChooser::imagined(const Imagined& o) {
 }
 
 void ImgepChooser::attempted(const GoalAttempt& a) {
-  if (a.module != GoalModule::Explore) competence_.attempted(a.module, a.reached ? 1.0 : 0.0);
+  // A goal found reached when set took no action: it says nothing of the agent's competence.
+  if (a.module != GoalModule::Explore && !(a.reached && a.actions == 0))
+    competence_.attempted(a.module, a.reached ? 1.0 : 0.0);
 }
 
 Goal ImgepChooser::next(std::int64_t step, int id) {

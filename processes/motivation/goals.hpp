@@ -166,7 +166,8 @@ class ImgepChooser : public GoalChooser {
   bool freeAt(double x, double y, const Seen* except) const;
 
   GoalParams params_;
-  // Centres at least this far apart on either axis: an object's focus window does not show the other.
+  // Centres at least this far apart on either axis: an object's focus window does not show the other, and a move
+  // there is carried out (the environment moves an object only to a place whose window is free).
   double clear_;
   Competence competence_;
   std::deque<Seen> objects_;  // the objects as last seen (one per place)

@@ -140,7 +140,9 @@ void PlannerNode::onConfigured(const RunConfig& config) {
     core_ = std::make_unique<Planner>(config.planner, goalValues(*config.scenario));
     core_->observe(observer_);
   } else if (config.phase == Phase::Goals) {
-    core_ = std::make_unique<Planner>(config.planner);
+    PlannerConfig goal_planner = config.planner;
+    goal_planner.kind = PlannerKind::Goal;  // its own goals are pursued by Algorithm 2; planner.kind is the tests'
+    core_ = std::make_unique<Planner>(goal_planner);
     core_->observe(observer_);
   }
   goal_.reset();

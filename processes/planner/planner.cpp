@@ -319,7 +319,12 @@ PlannerRequest Planner::predicted(const std::vector<ForwardPrediction>& predicti
     PlannerCheck c = check(p);
     c.checked = true;
     if (observer_) checks.push_back(c);
-    if (pursuing_ && !imagined) {  // the best guess: nearest the goal, each distance in units of its threshold
+    // Goals phase, the best guess: nearest the goal, each distance in units of its threshold; not a move onto
+    // the place the object stands on (it changes nothing).
+    const bool stays = p.action == kMove &&
+                       positionDistance(object_.x, object_.y, sub_goal_.x, sub_goal_.y, config_.position_metric) <=
+                           config_.position_match;
+    if (pursuing_ && !imagined && !stays) {
       const double score = c.what_distance / config_.image_match + c.where_distance / std::max(config_.position_match, 1e-9);
       if (!best_guess_ || score < best_score_) {
         best_guess_ = p;

@@ -74,6 +74,18 @@ struct Listener {
     viewer.onFocus(m.step, m.image, m.side, m.after_x, m.after_y, false);
     return afford::Turn::take();
   }
+  afford::Turn onGoal(const afford::goal_t& m) {
+    viewer.onGoal(m.step, m.id, goalModule(m.module), m.image, config.eye.focus_side, m.x, m.y);
+    return afford::Turn::take();
+  }
+  afford::Turn onGoalResult(const afford::goal_result_t& m) {
+    viewer.onGoalResult(m.step, m.id, goalModule(m.module), m.reached);
+    return afford::Turn::take();
+  }
+  static std::string goalModule(int module) {
+    static const char* names[] = {"explore", "colour", "move", "colour and place"};
+    return module >= 0 && module < 4 ? names[module] : "?";
+  }
   afford::Turn onDecision(const afford::decision_t& m) {
     viewer.onDecision(m.step, m.acted, m.action, m.motivation, m.threshold);
     return afford::Turn::take();
@@ -136,6 +148,10 @@ int main(int argc, char** argv) {
       Order::Follow);
   edge.subscribe(afford::ch::effect, [&](const afford::effect_t& m) { return listener.onEffect(m); }, Scope::RunOrAny,
       Order::Follow);
+  edge.subscribe(afford::ch::goal, [&](const afford::goal_t& m) { return listener.onGoal(m); }, Scope::RunOrAny,
+      Order::Follow);
+  edge.subscribe(afford::ch::goalResult, [&](const afford::goal_result_t& m) { return listener.onGoalResult(m); },
+      Scope::RunOrAny, Order::Follow);
   log->info("watching {}{}", url, png_dir.empty() ? "" : ", frames to " + png_dir);
 
   std::int64_t written = 0, last_frame_step = -1;

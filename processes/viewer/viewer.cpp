@@ -82,21 +82,43 @@ void Viewer::onDecision(std::int64_t step, bool acted, int action, double motiva
   step_ = std::max(step_, step);
 }
 
+void Viewer::onGoal(std::int64_t step, int id, const std::string& module, const std::vector<std::uint8_t>& image,
+                    int side, double x, double y) {
+  goal_text_ = "goal " + std::to_string(id) + ": " + module;
+  own_goal_x_ = x, own_goal_y_ = y;
+  sub_goal_ = cv::Mat();
+  if (side > 0 && image.size() == static_cast<std::size_t>(side * side * 3))
+    sub_goal_ = cv::Mat(side, side, CV_8UC3, const_cast<std::uint8_t*>(image.data())).clone();
+  step_ = std::max(step_, step);
+}
+
+void Viewer::onGoalResult(std::int64_t step, int id, const std::string& module, bool reached) {
+  goal_text_ = "goal " + std::to_string(id) + ": " + module + (reached ? " reached" : " not reached");
+  auto it = std::find_if(reached_.begin(), reached_.end(), [&](const auto& r) { return r.first == module; });
+  if (it == reached_.end()) it = reached_.insert(reached_.end(), {module, {0, 0}});
+  it->second.first += reached ? 1 : 0;
+  ++it->second.second;
+  step_ = std::max(step_, step);
+}
+
 cv::Mat Viewer::render() const {
   const int w = 2 * kPanel + 3 * 10 + 320, h = kPanel + 2 * 180 + 60;
   cv::Mat out(h, w, CV_8UC3, kBackground);
   char head[256];
-  std::snprintf(head, sizeof head, "%s  %s  step %lld  %s", run_id_.empty() ? "(no run yet)" : run_id_.c_str(),
-                phase_.c_str(), static_cast<long long>(step_), last_decision_.c_str());
+  std::snprintf(head, sizeof head, "%s  %s  step %lld  %s  %s", run_id_.empty() ? "(no run yet)" : run_id_.c_str(),
+                phase_.c_str(), static_cast<long long>(step_), last_decision_.c_str(), goal_text_.c_str());
   label(out, head, cv::Point(10, 22), 0.55);
   const double focus_units = static_cast<double>(side_) / std::max(1, scene_.empty() ? 150 : scene_.cols);
 
   // Scene with the gaze box; goal image with the inner eye's focus.
   cv::Mat scene = panel(scene_, kPanel, "no scene yet");
   box(scene, gaze_x_, gaze_y_, focus_units, kGaze);
+  if (own_goal_x_ >= 0) box(scene, own_goal_x_, own_goal_y_, focus_units, kInner);
   scene.copyTo(out(cv::Rect(10, 40, kPanel, kPanel)));
-  label(out, "scene (yellow: gaze)", cv::Point(10, 40 + kPanel + 18));
-  cv::Mat goal = panel(goal_, kPanel, phase_ == "extrinsic" ? "no goal yet" : "no goal (intrinsic phase)");
+  label(out, own_goal_x_ >= 0 ? "scene (yellow: gaze, magenta: goal)" : "scene (yellow: gaze)",
+        cv::Point(10, 40 + kPanel + 18));
+  const bool extrinsic = phase_.rfind("extrinsic", 0) == 0, goals = phase_.rfind("goals", 0) == 0;
+  cv::Mat goal = panel(goal_, kPanel, extrinsic ? "no goal yet" : goals ? "its own goals: on the scene" : "no goal (intrinsic phase)");
   box(goal, goal_x_, goal_y_, focus_units, kInner);
   goal.copyTo(out(cv::Rect(20 + kPanel, 40, kPanel, kPanel)));
   label(out, "goal (magenta: inner eye)", cv::Point(20 + kPanel, 40 + kPanel + 18));
@@ -126,7 +148,8 @@ cv::Mat Viewer::render() const {
   // Motivation and threshold traces.
   const int tx = bx, ty = 40 + bh + 40, tw = bw, th = 160;
   cv::rectangle(out, cv::Rect(tx, ty, tw, th), cv::Scalar(70, 70, 70), cv::FILLED);
-  label(out, "motivation (white) and threshold (orange)", cv::Point(tx, ty + th + 18), 0.45);
+  label(out, goals ? "its goals, per module" : "motivation (white) and threshold (orange)", cv::Point(tx, ty + th + 18),
+        0.45);
   double top = 1e-9;
   for (std::size_t i = 0; i < motivation_.size(); ++i) top = std::max({top, motivation_[i], threshold_[i]});
   auto trace = [&](const std::deque<double>& v, const cv::Scalar& colour) {
@@ -140,9 +163,15 @@ cv::Mat Viewer::render() const {
   };
   trace(motivation_, cv::Scalar(255, 255, 255));
   trace(threshold_, cv::Scalar(0, 140, 255));
+  int line = 0;
+  for (const auto& [module, counts] : reached_) {  // goals phase: its goals, reached of ended, per module
+    char text[96];
+    std::snprintf(text, sizeof text, "%s: %d of %d goals reached", module.c_str(), counts.first, counts.second);
+    label(out, text, cv::Point(tx + 10, ty + 40 + 20 * line++), 0.45);
+  }
   char scale[64];
   std::snprintf(scale, sizeof scale, "max %.3g", top);
-  label(out, scale, cv::Point(tx + 5, ty + 15), 0.4);
+  if (!goals) label(out, scale, cv::Point(tx + 5, ty + 15), 0.4);
   return out;
 }
 

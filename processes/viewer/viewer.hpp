@@ -4,7 +4,9 @@
 //               the inner eye's focus (extrinsic phase)
 //   bottom row: the focus image and the current sub-goal, enlarged; bars of the
 //               affordance predictions for the focused object; traces of the
-//               motivation signal and its threshold (intrinsic phase)
+//               motivation signal and its threshold (intrinsic phase); in the
+//               goals phase, the agent's own goal (its image as the sub-goal,
+//               its place boxed on the scene) and the goals reached per module
 #pragma once
 #include <opencv2/core.hpp>
 
@@ -12,6 +14,7 @@
 #include <cstdint>
 #include <deque>
 #include <string>
+#include <utility>
 #include <vector>
 
 namespace afford {
@@ -27,6 +30,10 @@ class Viewer {
   void onFocus(std::int64_t step, const std::vector<std::uint8_t>& image, int side, double x, double y, bool goal);
   void onPrediction(std::int64_t step, const std::array<double, 4>& affordance);
   void onDecision(std::int64_t step, bool acted, int action, double motivation, double threshold);
+  // Goals phase: a goal the agent set itself (`module`: its name; image empty for an exploration), and its end.
+  void onGoal(std::int64_t step, int id, const std::string& module, const std::vector<std::uint8_t>& image, int side,
+              double x, double y);
+  void onGoalResult(std::int64_t step, int id, const std::string& module, bool reached);
 
   // The whole picture, BGR, for cv::imshow or cv::imwrite.
   cv::Mat render() const;
@@ -44,6 +51,10 @@ class Viewer {
   std::string last_decision_;
   std::size_t trace_length_;
   std::deque<double> motivation_, threshold_;
+  // Goals phase.
+  std::string goal_text_;
+  double own_goal_x_ = -1, own_goal_y_ = -1;
+  std::vector<std::pair<std::string, std::pair<int, int>>> reached_;  // module -> (reached, ended), in order met
 };
 
 }  // namespace afford

@@ -30,7 +30,7 @@ export AFFORD_BUS_KEY=$out/bus.key  # the runner, the processes it starts, affor
 "$root/scripts/spy.sh" "$url" >"$out/spy.log" 2>&1 &
 java -cp "$build/share/afford-lcmtypes.jar:$build/share/afford-spycheck.jar:/usr/share/java/lcm.jar" \
   SpyCheck "$url" 20 \
-  RUN_CONFIG,RUN_CONTROL,STATUS,SCENE,FOCUS,PREDICTION,DECISION,EFFECT,AFFORDANCE_TABLE,RESULT,LOOK,FORWARD_QUERY,FORWARD_PREDICTION,EXTRINSIC_RESULT \
+  RUN_CONFIG,RUN_CONTROL,STATUS,SCENE,FOCUS,PREDICTION,DECISION,EFFECT,AFFORDANCE_TABLE,RESULT,LOOK,FORWARD_QUERY,FORWARD_PREDICTION,EXTRINSIC_RESULT,GOAL,GOAL_RESULT \
   >"$out/decoded.txt" 2>&1 &
 check=$!
 # The listeners are up before the run's first message: SpyCheck says so, and lcm-spy's window is mapped.
@@ -46,6 +46,10 @@ run=$!
   { cat "$out/run.log"; echo "the run never started"; exit 1; }
 import -window root "$out/spy-during-run.png"
 wait "$run" || { echo "the run failed:"; cat "$out/run.log"; exit 1; }
+# A short run of the agent that sets its own goals: GOAL and GOAL_RESULT on the bus too.
+"$build/bin/afford" experiment base --system GOALS --reps 1 --steps 300 --netns off --base-port "$port" \
+  --keep-logs none --quiet --out "$out/goals" --log-root "$out/logs" --run-prefix spy >"$out/goals.log" 2>&1 ||
+  { echo "the goals run failed:"; cat "$out/goals.log"; exit 1; }
 status=0
 wait "$check" || status=$?
 import -window root "$out/spy.png"

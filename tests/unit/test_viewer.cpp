@@ -40,6 +40,28 @@ TEST(Viewer, DrawsWhatItIsFed) {
   EXPECT_GT(cv::countNonZero(diff.reshape(1)), 1000);
 }
 
+// The goals phase: the agent's own goal boxed on the scene, its image as the sub-goal, its goals counted.
+TEST(Viewer, ShowsTheAgentsOwnGoalAndTheGoalsReached) {
+  const RunConfig c = test::shippedConfig();
+  cv::Mat scene = blankScene(150);
+  paintObject(scene, Shape::Square, Colour::Red, 0.2, 0.2, c.world);
+  cv::Mat green = blankScene(150);
+  paintObject(green, Shape::Square, Colour::Green, 0.2, 0.2, c.world);
+  Viewer plain(50), goals(50);
+  for (Viewer* v : {&plain, &goals}) {
+    v->onRun("r1", "goals base GOALS");
+    v->onScene(3, scene, false);
+  }
+  goals.onGoal(3, 7, "colour", cropFocus(green, {30, 30}, 21), 21, 0.2, 0.2);
+  goals.onGoalResult(4, 7, "colour", true);
+  goals.onGoalResult(6, 8, "move", false);
+  const cv::Mat a = plain.render(), b = goals.render();
+  cv::Mat diff;
+  cv::absdiff(a, b, diff);
+  EXPECT_GT(cv::countNonZero(diff.reshape(1)), 1500);  // the box, the sub-goal panel, the header and the counts
+  EXPECT_EQ(goals.step(), 6);
+}
+
 TEST(Viewer, IgnoresAFocusOfTheWrongSize) {
   Viewer v;
   const cv::Mat before = v.render();
