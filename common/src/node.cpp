@@ -295,6 +295,9 @@ void NodeBase::maybeSnapshot(bool now) {
       !learning(config_.phase) || every <= 0 || !snapshots() || edge_.failed())
     return;
   if ((!now && last_step_ < next_snapshot_) || last_step_ < 0 || !atRest()) return;
+  // The run's last steps are handled (the goals phase looks once more at step run.steps): nothing is left to go on
+  // from, and the run's STOP removes its snapshots.
+  if (!now && last_step_ >= config_.steps) return;
   const std::string path = snapshotPath(run_id_);
   try {
     const auto began = Clock::now();

@@ -36,7 +36,7 @@ void plotGoals(Figures& f) {
     }
   }
   std::ofstream g(gp);
-  g << "set terminal pngcairo size 1500,520 font 'DejaVu Sans,10'\nset output " << quoted(png.string()) << "\n"
+  g << "set terminal pngcairo noenhanced size 1500,520 font 'DejaVu Sans,10'\nset output " << quoted(png.string()) << "\n"
     << "set datafile separator ','\nset datafile missing ''\nset multiplot layout 1,3 title "
     << quoted("Goals of its own: competence, the modules chosen, the goals reached (" + f.title + ")") << "\n"
     << "set grid\nset key top left\nset xlabel 'step'\n";

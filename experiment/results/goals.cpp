@@ -22,7 +22,7 @@ GoalsSummary summariseGoals(const std::string& system, const std::vector<std::pa
   std::map<std::int64_t, std::vector<std::int64_t>> set, reached;
   std::vector<std::int64_t> first_set(kModules.size()), first_reached(kModules.size()), last_set(kModules.size()),
       last_reached(kModules.size());
-  for (std::int64_t s = 0; s <= steps; s += curve_interval) {
+  for (std::int64_t s = 0; s < steps; s += curve_interval) {
     set[s].assign(kModules.size(), 0);
     reached[s].assign(kModules.size(), 0);
   }

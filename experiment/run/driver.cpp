@@ -47,9 +47,9 @@ void takeCounts(RunOutcome& o, const run_result_t& m) {
   o.revisits = m.revisits;
 }
 
-// A goal's end into the bins of its curve interval.
-void takeGoal(std::vector<GoalBin>& bins, const goal_result_t& m, std::int64_t interval) {
-  const std::int64_t step = m.step / interval * interval;
+// A goal's end into the bins of its curve interval (the goals the run's end cut short: the last one's).
+void takeGoal(std::vector<GoalBin>& bins, const goal_result_t& m, std::int64_t interval, std::int64_t steps) {
+  const std::int64_t step = std::min(m.step, std::max<std::int64_t>(0, steps - 1)) / interval * interval;
   if (bins.empty() || bins.back().step != step) {
     GoalBin b;
     b.step = step;
@@ -86,7 +86,7 @@ RunDriver::RunDriver(lcm::LCM& lcm, std::shared_ptr<spdlog::logger> log, const P
   edge_.subscribe(ch::goalResult,
       [this](const goal_result_t& m) {
         if (!outcome_) return Turn::take();
-        takeGoal(outcome_->goals, m, config_.curve_interval);
+        takeGoal(outcome_->goals, m, config_.curve_interval, config_.steps);
         goals_ended_ = goals_ended_ || m.step >= config_.steps;
         return Turn::take();
       },

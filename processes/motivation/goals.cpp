@@ -160,6 +160,13 @@ void ImgepChooser::imagined(const Imagined& o) {
 }
 
 void ImgepChooser::attempted(const GoalAttempt& a) {
+  // A goal of a place not reached after acting: the place may not be free (an object the agent has not seen
+  // yet stands there, and the environment does not carry the move out): no more goals there until a move
+  // reaches it.
+  if ((a.module == GoalModule::Move || a.module == GoalModule::ColourPlace) && !a.reached && a.actions > 0)
+    places_.erase(std::remove_if(places_.begin(), places_.end(),
+                                 [&](const Seen& p) { return samePlace(p.x, p.y, last_x_, last_y_); }),
+                  places_.end());
   // A goal found reached when set took no action: it says nothing of the agent's competence.
   if (a.module != GoalModule::Explore && !(a.reached && a.actions == 0))
     competence_.attempted(a.module, a.reached ? 1.0 : 0.0);
@@ -197,6 +204,11 @@ Goal ImgepChooser::next(std::int64_t step, int id) {
   const auto index = [&](std::size_t n) { return std::min(n - 1, static_cast<std::size_t>(pick * static_cast<double>(n))); };
   Goal g;
   g.module = m;
+  const auto placed = [&](Goal goal) {
+    last_x_ = goal.x;
+    last_y_ = goal.y;
+    return goal;
+  };
   switch (m) {
     case GoalModule::Explore:
       return explore();
@@ -205,7 +217,7 @@ Goal ImgepChooser::next(std::int64_t step, int id) {
       g.object_x = g.x = o->x;
       g.object_y = g.y = o->y;
       g.image = c->image;
-      return g;
+      return placed(g);
     }
     case GoalModule::Move: {
       const auto& [o, p] = move[index(move.size())];
@@ -214,7 +226,7 @@ Goal ImgepChooser::next(std::int64_t step, int id) {
       g.x = p->x;
       g.y = p->y;
       g.image = o->image;
-      return g;
+      return placed(g);
     }
     case GoalModule::ColourPlace: {
       std::size_t k = index(both);
@@ -226,7 +238,7 @@ Goal ImgepChooser::next(std::int64_t step, int id) {
             g.x = p->x;
             g.y = p->y;
             g.image = c->image;
-            return g;
+            return placed(g);
           }
       break;
     }
@@ -257,6 +269,8 @@ void loadSeen(SnapshotReader& r, std::deque<Seen>& seen, std::int64_t most, std:
 }  // namespace
 
 void ImgepChooser::save(SnapshotWriter& w) const {
+  w.f64(last_x_);
+  w.f64(last_y_);
   competence_.save(w);
   saveSeen(w, objects_);
   saveSeen(w, colours_);
@@ -264,6 +278,8 @@ void ImgepChooser::save(SnapshotWriter& w) const {
 }
 
 void ImgepChooser::load(SnapshotReader& r) {
+  last_x_ = r.f64("last goal x");
+  last_y_ = r.f64("last goal y");
   competence_.load(r);
   const std::size_t bytes = 3 * static_cast<std::size_t>(params_.focus_side) * static_cast<std::size_t>(params_.focus_side);
   loadSeen(r, objects_, params_.goals.memory, bytes);

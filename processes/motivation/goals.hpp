@@ -172,7 +172,8 @@ class ImgepChooser : public GoalChooser {
   Competence competence_;
   std::deque<Seen> objects_;  // the objects as last seen (one per place)
   std::deque<Seen> colours_;  // colour outcomes: images objects took after a colour change (seen or imagined)
-  std::deque<Seen> places_;   // places objects were moved to
+  std::deque<Seen> places_;   // places objects were moved to, or left
+  double last_x_ = -1, last_y_ = -1;  // the place of the last goal set
 };
 
 }  // namespace afford
