@@ -52,12 +52,6 @@ double Competence::progress(GoalModule m) const {
   return std::abs(mean(h, h.size() - half, h.size()) - mean(h, 0, half));
 }
 
-double Competence::recent(GoalModule m) const {
-  const auto& h = history_[static_cast<std::size_t>(m)];
-  const std::size_t n = std::min(h.size(), static_cast<std::size_t>(window_));
-  return mean(h, h.size() - n, h.size());
-}
-
 GoalModule Competence::choose(const std::array<bool, kGoalModules>& available, double random_share, double u,
                               double v) const {
   std::vector<GoalModule> open;

@@ -122,8 +122,6 @@ class Competence {
   explicit Competence(int window) : window_(window) {}
   void attempted(GoalModule m, double competence);
   double progress(GoalModule m) const;
-  // The mean of the newest `window` attempts (0 without any).
-  double recent(GoalModule m) const;
   std::size_t attempts(GoalModule m) const { return history_[static_cast<std::size_t>(m)].size(); }
   // A module among those `available`: uniformly with probability random_share
   // (or when no module shows progress), else in proportion to progress.

@@ -59,11 +59,11 @@ inline decision_t decisionMessage(const std::string& run_id, const prediction_t&
 
 inline Seen seenOf(const focus_t& f) { return {f.image, f.x, f.y}; }
 
-inline SeenEffect seenEffectOf(const effect_t& m, const Seen& before) {
+// The object before is the step's object FOCUS: GoalInputs fills it in when it gives the effect to the chooser.
+inline SeenEffect seenEffectOf(const effect_t& m) {
   SeenEffect e;
   e.step = m.step;
   e.action = m.action;
-  e.before = before;
   e.after = {m.image, m.after_x, m.after_y};
   e.target_x = m.target_x;
   e.target_y = m.target_y;
@@ -71,12 +71,13 @@ inline SeenEffect seenEffectOf(const effect_t& m, const Seen& before) {
   return e;
 }
 
-// The outcomes a FORWARD_PREDICTION about a seen object (not an imagined one) predicts for it.
-inline std::vector<Imagined> imaginedOf(const forward_prediction_t& m, const Seen& object) {
+// The outcomes a FORWARD_PREDICTION about a seen object (not an imagined one) predicts for it (the object's image:
+// GoalInputs fills it in from the step's object FOCUS).
+inline std::vector<Imagined> imaginedOf(const forward_prediction_t& m) {
   std::vector<Imagined> out;
   if (m.n_input != 0) return out;  // a multi-step search's imagined object
   for (int i = 0; i < m.n_actions; ++i)
-    out.push_back({m.step, m.actions[i], object.image,
+    out.push_back({m.step, m.actions[i], {},
                    quantiseImage(std::vector<double>(m.what[i].begin(), m.what[i].end())), m.where_x[i], m.where_y[i]});
   return out;
 }

@@ -128,12 +128,12 @@ void MotivationNode::sawFocus(const focus_t& m) {
 
 void MotivationNode::sawEffect(const effect_t& m) {
   ++effects_;
-  inputs_.effect(seenEffectOf(m, Seen{}));
+  inputs_.effect(seenEffectOf(m));
 }
 
 void MotivationNode::sawForward(const forward_prediction_t& m) {
   forward_serial_ = m.serial;
-  if (m.n_input == 0) inputs_.forward(m.step, m.seq, imaginedOf(m, Seen{}));  // about an object seen, not imagined
+  if (m.n_input == 0) inputs_.forward(m.step, m.seq, imaginedOf(m));  // about an object seen, not imagined
 }
 
 void MotivationNode::ended(const goal_result_t& m) {
