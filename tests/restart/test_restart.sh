@@ -8,6 +8,9 @@
 # planner AFFORD_KILL_DELAY_MS=N kills at N ms into its second test.
 # PROCESS: environment, eye, predictors, motivation, logger (killed during the
 # intrinsic run) or planner (killed during the extrinsic tests).
+# AFFORD_RESTART_SYSTEM=GOALS runs the goals agent instead of IMP: every process,
+# the planner too, is killed during its intrinsic run, in the middle of a goal
+# (the step is random; a goal lasts up to goals.budget steps).
 set -euo pipefail
 root=$(cd "$(dirname "$0")/../.." && pwd)
 source "$root/tests/netns.sh"
@@ -28,7 +31,11 @@ diagnose() {
 trap diagnose EXIT
 
 url="udpm://239.255.76.67:7993?ttl=0&recv_buf_size=2097152"
+system=${AFFORD_RESTART_SYSTEM:-IMP}
 steps=3000
+snapshot=500
+# The goals agent steps four to five times slower: a shorter run, snapshots as often in steps.
+[[ $system == GOALS ]] && { steps=1500; snapshot=300; }
 mapfile -t processes < <("$build/bin/afford" processes)  # the registry's
 declare -A pid
 start() { $(process_command "$1" "$url" "$out/logs") >>"$out/$1.log" 2>&1 & pid[$1]=$!; }
@@ -36,14 +43,15 @@ for p in "${processes[@]}"; do start "$p"; done
 "$build/bin/afford" status --lcm-url "$url" --wait-for "$(IFS=,; echo "${processes[*]}")" --state waiting \
   --seconds 30 >/dev/null || { echo "the processes did not all come up"; exit 1; }
 
-# A snapshot every 500 steps: a kill before step 500 restarts from the run's start, a later one from a snapshot.
-experiment=(experiment base --system IMP --reps 1 --steps "$steps" --seed "$seed" --quiet --scenarios scenario1 --scenarios scenario2
-  --set protocol.recovery.snapshot_steps=500)
+# A snapshot every $snapshot steps: a kill before the first restarts from the run's start, a later one from a snapshot.
+experiment=(experiment base --system "$system" --reps 1 --steps "$steps" --seed "$seed" --quiet --scenarios scenario1
+  --scenarios scenario2 --set protocol.recovery.snapshot_steps="$snapshot")
 extrinsic=(--extrinsic-reps 3)
 # The planner's tests run their whole budget (no scene is close enough to end
 # one early), so there is time to kill it in the middle of one.
-[[ $victim == planner ]] && extrinsic+=(--set planner.success_distance=0 --set planner.budget=1500 --set planner.max_attempts=1500)
-echo "seed $seed, killing $victim"
+[[ $victim == planner && $system == IMP ]] &&
+  extrinsic+=(--set planner.success_distance=0 --set planner.budget=1500 --set planner.max_attempts=1500)
+echo "seed $seed, $system, killing $victim"
 "$build/bin/afford" "${experiment[@]}" "${extrinsic[@]}" --attach "$url" --run-prefix restart \
   --out "$out/attached" --log-root "$out/logs" >"$out/attached.txt" 2>&1 &
 runner=$!
@@ -52,7 +60,7 @@ runner=$!
 # into the second test. The others: a random step of the intrinsic run, read
 # from the STATUS heartbeats (a time would land after the run on a fast
 # machine, or between runs on a slow one).
-if [[ $victim == planner ]]; then
+if [[ $victim == planner && $system == IMP ]]; then
   wait_until 60 grep -q "configured for run '.*-e1'" "$out/planner.log" ||
     { cat "$out/attached.txt"; echo "the planner never took the second test"; exit 1; }
   delay=${AFFORD_KILL_DELAY_MS:-$((20 + RANDOM % 200))}
@@ -60,11 +68,11 @@ if [[ $victim == planner ]]; then
   moment="${delay} ms into its second test"
 else
   # The run's step: the furthest process's.
-  target=${AFFORD_KILL_STEP:-$((200 + RANDOM % 1000))}  # of 3000: heartbeats come every 0.5 s, so it overshoots
+  target=${AFFORD_KILL_STEP:-$((200 + RANDOM % (steps / 3)))}  # heartbeats come every 0.5 s, so it overshoots
   at=-1
   for _ in $(seq 200); do
     at=$("$build/bin/afford" status --lcm-url "$url" --seconds 0.55 |
-      awk -v p="$victim" -v r="restart-base-IMP-s$seed" '$5 == r && $4 > max {max = $4}
+      awk -v p="$victim" -v r="restart-base-$system-s$seed" '$5 == r && $4 > max {max = $4}
         $1 == p && ($3 == "running" || $3 == "done") && $5 == r {in_run = 1} END {if (in_run) print max + 0}')
     [[ -n $at ]] && ((at >= target)) && break
     kill -0 "$runner" 2>/dev/null || break
@@ -97,7 +105,7 @@ sum=$(grep -o '"weights_checksum": "[0-9a-f]*"' "$out/attached/summary.json" | h
 echo "weights_checksum $sum, equal to the uninterrupted run's; summary and CSV files equal"
 
 # The intrinsic run's log, all its segments, replays to the same weights.
-log=$(ls -d "$out"/logs/restart-base-IMP-s"$seed")
+log=$(ls -d "$out"/logs/restart-base-"$system"-s"$seed")
 "$build/bin/afford" replay "$log" | tee "$out/replay.txt"
 grep -q "weights_checksum: $sum" "$out/replay.txt" || { echo "the log replays differently"; exit 1; }
 if [[ $victim == logger ]]; then
