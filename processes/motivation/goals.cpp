@@ -27,6 +27,27 @@ double mean(const std::deque<double>& h, std::size_t from, std::size_t to) {
   return to > from ? sum / static_cast<double>(to - from) : 0.0;
 }
 
+// Whether a look shows an object under its gaze: the pixels that are not the
+// black table centre within a quarter of the look's side of its middle. A look
+// at an object, from a scan or top-down attention, is centred on it; a look at
+// a place where no object stands (the remembered object has gone) shows at most
+// the edge of a neighbour, far from the middle, and that is no object there.
+bool centredObject(const std::vector<std::uint8_t>& image, int side) {
+  if (side <= 0 || image.size() != 3 * static_cast<std::size_t>(side) * static_cast<std::size_t>(side)) return false;
+  double sum_col = 0, sum_row = 0, n = 0;
+  for (int row = 0; row < side; ++row)
+    for (int col = 0; col < side; ++col) {
+      const std::size_t i = 3 * (static_cast<std::size_t>(row) * static_cast<std::size_t>(side) + static_cast<std::size_t>(col));
+      if (image[i] == 0 && image[i + 1] == 0 && image[i + 2] == 0) continue;
+      sum_col += col;
+      sum_row += row;
+      n += 1;
+    }
+  if (n == 0) return false;
+  const double middle = (side - 1) / 2.0;
+  return std::max(std::abs(sum_col / n - middle), std::abs(sum_row / n - middle)) <= side / 4.0;
+}
+
 }  // namespace
 
 void registerGoalChooser(const std::string& kind, GoalChooserFactory factory) {
@@ -118,8 +139,9 @@ bool ImgepChooser::freeAt(double x, double y, const Seen* except) const {
 
 void ImgepChooser::sawObject(std::int64_t, const Seen& object) {
   if (auto it = objectAt(object.x, object.y); it != objects_.end()) objects_.erase(it);
-  // A look that shows no object (a scan or an attention on the table alone) says only that the place is empty.
-  if (std::none_of(object.image.begin(), object.image.end(), [](std::uint8_t v) { return v != 0; })) return;
+  // A look that shows no object under its gaze (the table alone, or a neighbour's edge) says only that the
+  // place is empty.
+  if (!centredObject(object.image, params_.focus_side)) return;
   remember(objects_, object);
 }
 

@@ -2,8 +2,11 @@
 
 #include <cmath>
 #include <map>
+#include <set>
 
+#include "afford/snapshot.hpp"
 #include "motivation/component.hpp"
+#include "motivation/goals.hpp"
 #include "motivation/motivation.hpp"
 #include "tests/support.hpp"
 
@@ -227,6 +230,158 @@ TEST(MotivationKind, AKindNotBuiltInIsRefusedNamingTheKeyAndTheWayToRunOnesOwn) 
   const auto kinds = motivationKinds();
   EXPECT_EQ(kinds.front(), "paper");
   EXPECT_EQ(kinds.back(), "mine");
+}
+
+// ---- the goal chooser (goals.kind: imgep) -------------------------------------
+
+// A chooser of the goals experiment that sets goals from the first: no
+// explorations first or after.
+GoalParams goalParams() {
+  GoalParams p(test::shippedConfig("goals", System::GOALS));
+  p.goals.bootstrap = 0;
+  p.goals.explore_share = 0;
+  return p;
+}
+
+// A focus image: a square of `colour`, `half` pixels from its middle to its
+// sides, centred `dc`, `dr` pixels off the look's middle, on the black table.
+std::vector<std::uint8_t> look(int side, std::array<std::uint8_t, 3> colour, int half = 6, int dc = 0, int dr = 0) {
+  std::vector<std::uint8_t> image(3 * static_cast<std::size_t>(side * side), 0);
+  const int middle = side / 2;
+  for (int row = 0; row < side; ++row)
+    for (int col = 0; col < side; ++col)
+      if (std::abs(col - middle - dc) <= half && std::abs(row - middle - dr) <= half)
+        for (int k = 0; k < 3; ++k) image[3 * static_cast<std::size_t>(row * side + col) + k] = colour[k];
+  return image;
+}
+
+// A move the agent saw: the object at (x, y) taken to (tx, ty).
+SeenEffect moved(const std::vector<std::uint8_t>& object, double x, double y, double tx, double ty) {
+  SeenEffect e;
+  e.step = 1;
+  e.action = kMove;
+  e.before = Seen{object, x, y};
+  e.after = Seen{object, tx, ty};
+  e.target_x = tx;
+  e.target_y = ty;
+  e.affordance = true;
+  return e;
+}
+
+TEST(GoalChooser, AMoveGoalTakesAnObjectAsLastSeenToAPlaceAMoveReachedOrLeft) {
+  const GoalParams p = goalParams();
+  ImgepChooser chooser(p);
+  EXPECT_EQ(chooser.next(10, 0).module, GoalModule::Explore);  // nothing seen: nothing to aim at
+  const auto red = look(p.focus_side, {255, 0, 0});
+  chooser.sawEffect(moved(red, 0.2, 0.2, 0.7, 0.7));
+  EXPECT_EQ(chooser.objects(), 1U);
+  EXPECT_EQ(chooser.places(), 2U);
+  const Goal g = chooser.next(11, 1);  // the only goal there is: back to where it stood
+  EXPECT_EQ(g.module, GoalModule::Move);
+  EXPECT_DOUBLE_EQ(g.object_x, 0.7);
+  EXPECT_DOUBLE_EQ(g.object_y, 0.7);
+  EXPECT_DOUBLE_EQ(g.x, 0.2);
+  EXPECT_DOUBLE_EQ(g.y, 0.2);
+  EXPECT_EQ(g.image, red);
+}
+
+TEST(GoalChooser, ALookShowingOnlyANeighboursEdgeSaysThePlaceIsEmpty) {
+  const GoalParams p = goalParams();
+  const int side = p.focus_side;
+  ImgepChooser chooser(p);
+  chooser.sawEffect(moved(look(side, {255, 0, 0}), 0.2, 0.2, 0.7, 0.7));
+  ASSERT_EQ(chooser.objects(), 1U);
+  // The object at (0.7, 0.7) has gone; a look there shows the edge of another object, three columns wide.
+  const auto edge = look(side, {0, 0, 255}, side / 2, side - 2, 0);
+  chooser.sawObject(12, Seen{edge, 0.7, 0.7});
+  EXPECT_EQ(chooser.objects(), 0U);
+  EXPECT_EQ(chooser.next(13, 2).module, GoalModule::Explore);  // no object to move: no goal of that edge
+  // A look centred on an object, even one at the table's edge a little off the look's middle, is an object there.
+  chooser.sawObject(14, Seen{look(side, {0, 0, 255}, 6, 2, -2), 0.7, 0.7});
+  EXPECT_EQ(chooser.objects(), 1U);
+  chooser.sawObject(15, Seen{std::vector<std::uint8_t>(3 * static_cast<std::size_t>(side * side), 0), 0.7, 0.7});
+  EXPECT_EQ(chooser.objects(), 0U);  // the table alone
+}
+
+TEST(GoalChooser, AGoalFoundReachedWhenSetSaysNothingOfCompetence) {
+  ImgepChooser chooser(goalParams());
+  chooser.attempted(GoalAttempt{1, GoalModule::Move, true, 0.0, 0});
+  EXPECT_EQ(chooser.competence().attempts(GoalModule::Move), 0U);
+  chooser.attempted(GoalAttempt{2, GoalModule::Move, true, 0.0, 1});
+  chooser.attempted(GoalAttempt{3, GoalModule::Colour, false, 0.2, 4});
+  EXPECT_EQ(chooser.competence().attempts(GoalModule::Move), 1U);
+  EXPECT_EQ(chooser.competence().attempts(GoalModule::Colour), 1U);
+  chooser.attempted(GoalAttempt{4, GoalModule::Explore, false, -1, 1});
+  EXPECT_EQ(chooser.competence().attempts(GoalModule::Explore), 0U);  // an exploration is no goal
+}
+
+TEST(GoalChooser, AModuleIsChosenByItsAbsoluteCompetenceProgressOrAtRandom) {
+  Competence c(2);  // compares the last two attempts with the two before
+  for (double v : {0.0, 0.0, 1.0, 1.0}) c.attempted(GoalModule::Colour, v);  // rising: progress 1
+  for (double v : {1.0, 1.0, 1.0, 1.0}) c.attempted(GoalModule::Move, v);    // mastered: progress 0
+  for (double v : {1.0, 1.0, 0.5, 0.5}) c.attempted(GoalModule::ColourPlace, v);  // falling: progress 0.5
+  EXPECT_DOUBLE_EQ(c.progress(GoalModule::Colour), 1.0);
+  EXPECT_DOUBLE_EQ(c.progress(GoalModule::Move), 0.0);
+  EXPECT_DOUBLE_EQ(c.progress(GoalModule::ColourPlace), 0.5);
+  const std::array<bool, kGoalModules> all = {false, true, true, true};
+  // Not a random choice (u >= random_share): in proportion to progress, 1 : 0 : 0.5.
+  EXPECT_EQ(c.choose(all, 0.2, 0.5, 0.0), GoalModule::Colour);
+  EXPECT_EQ(c.choose(all, 0.2, 0.5, 0.66), GoalModule::Colour);
+  EXPECT_EQ(c.choose(all, 0.2, 0.5, 0.67), GoalModule::ColourPlace);
+  EXPECT_EQ(c.choose(all, 0.2, 0.5, 0.99), GoalModule::ColourPlace);
+  // A random choice (u < random_share): uniform over the modules available, the mastered one too.
+  EXPECT_EQ(c.choose(all, 0.2, 0.1, 0.5), GoalModule::Move);
+  // Only the modules available, and an exploration when there is none.
+  EXPECT_EQ(c.choose({false, false, true, true}, 0.2, 0.5, 0.1), GoalModule::ColourPlace);
+  EXPECT_EQ(c.choose({false, false, true, false}, 0.2, 0.5, 0.1), GoalModule::Move);
+  EXPECT_EQ(c.choose({false, false, false, false}, 0.2, 0.5, 0.1), GoalModule::Explore);
+  // The window keeps 2 x window attempts: older ones no longer count.
+  for (double v : {1.0, 1.0}) c.attempted(GoalModule::Colour, v);
+  EXPECT_DOUBLE_EQ(c.progress(GoalModule::Colour), 0.0);
+}
+
+TEST(GoalChooser, GoalsAreKeyedDrawsAndASnapshotRestoresThem) {
+  const GoalParams p = goalParams();
+  const int side = p.focus_side;
+  const auto fill = [&](ImgepChooser& c) {
+    c.sawEffect(moved(look(side, {255, 0, 0}), 0.2, 0.2, 0.7, 0.7));
+    c.sawEffect(moved(look(side, {0, 255, 0}), 0.5, 0.2, 0.2, 0.7));
+    c.sawObject(3, Seen{look(side, {0, 0, 255}), 0.5, 0.8});
+    SeenEffect turned;  // the blue square turned red: a colour outcome
+    turned.step = 4;
+    turned.action = kTurnRed;
+    turned.before = Seen{look(side, {0, 0, 255}), 0.5, 0.8};
+    turned.after = Seen{look(side, {255, 0, 0}), 0.5, 0.8};
+    turned.affordance = true;
+    c.sawEffect(turned);
+    c.attempted(GoalAttempt{1, GoalModule::Move, true, 0.0, 1});
+    c.attempted(GoalAttempt{2, GoalModule::Colour, false, 0.1, 4});
+  };
+  ImgepChooser a(p), b(p);
+  fill(a);
+  fill(b);
+  const std::string path = test::tempDir("goal-chooser") + "/chooser.snapshot";
+  {
+    SnapshotWriter w(path);
+    a.save(w);
+    w.commit();
+  }
+  ImgepChooser restored(p);
+  SnapshotReader r(path, 1 << 20);
+  restored.load(r);
+  std::set<std::pair<int, double>> distinct;
+  for (int id = 3; id < 40; ++id) {
+    const Goal g = a.next(100 + id, id);
+    for (const ImgepChooser* other : {&b, &restored}) {  // the same state and key: the same goal
+      const Goal h = const_cast<ImgepChooser*>(other)->next(100 + id, id);
+      EXPECT_EQ(g.module, h.module) << id;
+      EXPECT_EQ(g.image, h.image) << id;
+      EXPECT_DOUBLE_EQ(g.x, h.x) << id;
+      EXPECT_DOUBLE_EQ(g.object_x, h.object_x) << id;
+    }
+    distinct.emplace(static_cast<int>(g.module), g.x + 10 * g.object_x);
+  }
+  EXPECT_GT(distinct.size(), 3U);  // the draws differ from goal to goal
 }
 
 }  // namespace
