@@ -14,7 +14,10 @@
 #                                        generated scenarios; (issue 28) base, late1 and
 #                                        forward-models with the authors' eye (eye.fovea:
 #                                        true_centre); about 12 min on 2 cores
-#   scripts/reproduce.sh all             all three
+#   scripts/reproduce.sh goals           the agent that sets its own goals (issue 41) beside IMP:
+#                                        goals, goals-late1, goals-multi-step, goals-stochastic,
+#                                        goals-forward-models, goals-random-tables; about 10 min
+#   scripts/reproduce.sh all             all four
 #   scripts/reproduce.sh NAME...         only these experiments (e.g. late3 utility)
 # Environment: JOBS (runs at a time, default: cores), REPS and EXT_REPS (default: the
 # paper's counts), OUT (default out/reproduce), KEEP_LOGS (all, first or none; default
@@ -34,6 +37,7 @@ deterministic=(base late1 late2 late3)
 stochastic=(stochastic utility forward-models search-reduction)
 beyond=(late1-memory late2-memory late3-memory random-tables attention multi-step world-size
         base-true-centre late1-true-centre forward-models-true-centre)
+goals=(goals goals-late1 goals-multi-step goals-stochastic goals-forward-models goals-random-tables)
 [[ $# -eq 0 ]] && set -- deterministic
 experiments=()
 for what in "$@"; do
@@ -41,21 +45,22 @@ for what in "$@"; do
     deterministic) experiments+=("${deterministic[@]}") ;;
     stochastic) experiments+=("${stochastic[@]}") ;;
     beyond) experiments+=("${beyond[@]}") ;;
-    all) experiments+=("${deterministic[@]}" "${stochastic[@]}" "${beyond[@]}") ;;
+    goals) experiments+=("${goals[@]}") ;;
+    all) experiments+=("${deterministic[@]}" "${stochastic[@]}" "${beyond[@]}" "${goals[@]}") ;;
     *)
-      case " ${deterministic[*]} ${stochastic[*]} ${beyond[*]} " in
+      case " ${deterministic[*]} ${stochastic[*]} ${beyond[*]} ${goals[*]} " in
         *" $what "*) experiments+=("$what") ;;
-        *) echo "usage: scripts/reproduce.sh deterministic|stochastic|beyond|all|EXPERIMENT... (unknown: $what)" >&2; exit 2 ;;
+        *) echo "usage: scripts/reproduce.sh deterministic|stochastic|beyond|goals|all|EXPERIMENT... (unknown: $what)" >&2; exit 2 ;;
       esac ;;
   esac
 done
 # Experiments that share their intrinsic runs train each agent once (the store in
 # $out/logs/agents): forward-models keeps the checkpoint after 4000 actions that the
 # others do not, so it goes first in the queue and stochastic, utility and search-reduction
-# take its agents.
+# take its agents (goals-forward-models likewise for goals-stochastic).
 ordered=()
-for exp in "${experiments[@]}"; do [[ $exp == forward-models ]] && ordered+=("$exp"); done
-for exp in "${experiments[@]}"; do [[ $exp != forward-models ]] && ordered+=("$exp"); done
+for exp in "${experiments[@]}"; do [[ $exp == *forward-models ]] && ordered+=("$exp"); done
+for exp in "${experiments[@]}"; do [[ $exp != *forward-models ]] && ordered+=("$exp"); done
 experiments=("${ordered[@]}")
 scripts/setup.sh
 out=${OUT:-out/reproduce}
@@ -87,7 +92,7 @@ for exp in "${experiments[@]}"; do
   if [[ -f $out/$exp/summary.json ]]; then build/bin/afford plot "$out/$exp"; fi
 done
 dirs=()
-for exp in "${deterministic[@]}" "${stochastic[@]}" "${beyond[@]}"; do
+for exp in "${deterministic[@]}" "${stochastic[@]}" "${beyond[@]}" "${goals[@]}"; do
   [[ -f $out/$exp/summary.json ]] && dirs+=("$out/$exp")
 done
 # The report states what each folder ran (read from its summary.json); the note says how they were made.
