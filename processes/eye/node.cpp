@@ -264,10 +264,7 @@ void EyeNode::afterInput() {
 }
 
 bool EyeNode::objectsAppearAt(std::int64_t step) const {
-  if (step <= 0 || step >= config().steps) return false;
-  for (const auto& o : config().world.objects)
-    if (o.appears_at == step) return true;
-  return false;
+  return step < config().steps && config().world.lateObjectsAt(step);
 }
 
 void EyeNode::scanStep(std::int64_t step) {

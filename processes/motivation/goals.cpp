@@ -50,6 +50,14 @@ bool centredObject(const std::vector<std::uint8_t>& image, int side) {
 
 }  // namespace
 
+Goal explorationGoal(std::int64_t seed, std::int64_t step, int id) {
+  const KeyedRng rng(seed, step, Purpose::GoalChoice, static_cast<std::uint64_t>(id));
+  Goal g;
+  g.module = GoalModule::Explore;
+  g.action = std::min(kNumActions - 1, static_cast<int>(rng.uniform(ExploreAction) * kNumActions));
+  return g;
+}
+
 void registerGoalChooser(const std::string& kind, GoalChooserFactory factory) {
   registry().add(kind, std::move(factory));
 }
@@ -190,12 +198,7 @@ void ImgepChooser::attempted(const GoalAttempt& a) {
 
 Goal ImgepChooser::next(std::int64_t step, int id) {
   const KeyedRng rng(params_.seed, step, Purpose::GoalChoice, static_cast<std::uint64_t>(id));
-  const auto explore = [&] {
-    Goal g;
-    g.module = GoalModule::Explore;
-    g.action = std::min(kNumActions - 1, static_cast<int>(rng.uniform(ExploreAction) * kNumActions));
-    return g;
-  };
+  const auto explore = [&] { return explorationGoal(params_.seed, step, id); };
   if (id < params_.goals.bootstrap || rng.uniform(ExploreOrNot) < params_.goals.explore_share) return explore();
 
   // The candidates of each module, on the objects as last seen: a colour the
@@ -220,42 +223,31 @@ Goal ImgepChooser::next(std::int64_t step, int id) {
   const auto index = [&](std::size_t n) { return std::min(n - 1, static_cast<std::size_t>(pick * static_cast<double>(n))); };
   Goal g;
   g.module = m;
-  const auto placed = [&](Goal goal) {
-    last_x_ = goal.x;
-    last_y_ = goal.y;
-    return goal;
+  // The goal: `image` at `place`, acting on `object`.
+  const auto aim = [&](const Seen& object, const Seen& place, const std::vector<std::uint8_t>& image) {
+    g.object_x = object.x;
+    g.object_y = object.y;
+    g.x = last_x_ = place.x;
+    g.y = last_y_ = place.y;
+    g.image = image;
+    return g;
   };
   switch (m) {
     case GoalModule::Explore:
       return explore();
     case GoalModule::Colour: {
       const auto& [o, c] = colour[index(colour.size())];
-      g.object_x = g.x = o->x;
-      g.object_y = g.y = o->y;
-      g.image = c->image;
-      return placed(g);
+      return aim(*o, *o, c->image);
     }
     case GoalModule::Move: {
       const auto& [o, p] = move[index(move.size())];
-      g.object_x = o->x;
-      g.object_y = o->y;
-      g.x = p->x;
-      g.y = p->y;
-      g.image = o->image;
-      return placed(g);
+      return aim(*o, *p, o->image);
     }
     case GoalModule::ColourPlace: {
       std::size_t k = index(both);
       for (const auto& [o, c] : colour)
         for (const auto& [mo, p] : move)
-          if (mo == o && k-- == 0) {
-            g.object_x = o->x;
-            g.object_y = o->y;
-            g.x = p->x;
-            g.y = p->y;
-            g.image = c->image;
-            return placed(g);
-          }
+          if (mo == o && k-- == 0) return aim(*o, *p, c->image);
       break;
     }
   }

@@ -108,6 +108,11 @@ class GoalChooser {
   virtual void load(SnapshotReader&) {}
 };
 
+// An exploration: goal number `id` (set at `step`) tries an action drawn by its key (seed, step,
+// Purpose::GoalChoice, id), whatever the object in view. A chooser's way to start, and the motivation's
+// when goals are found reached one after another without a step taken.
+Goal explorationGoal(std::int64_t seed, std::int64_t step, int id);
+
 using GoalChooserFactory = std::function<std::unique_ptr<GoalChooser>(const GoalParams&)>;
 void registerGoalChooser(const std::string& kind, GoalChooserFactory factory);
 std::vector<std::string> goalChooserKinds();

@@ -83,7 +83,7 @@ inline std::vector<Imagined> imaginedOf(const forward_prediction_t& m) {
 }
 
 inline GoalAttempt attemptOf(const goal_result_t& m) {
-  return {m.id, static_cast<GoalModule>(m.module), m.reached, m.distance, m.actions};
+  return {m.id, static_cast<GoalModule>(m.module), m.reached != 0, m.distance, m.actions};
 }
 
 inline goal_t goalMessage(const std::string& run_id, std::int64_t step, std::int32_t id, const Goal& g, int budget) {

@@ -3,7 +3,6 @@
 #include <algorithm>
 
 #include "afford/protocol.hpp"
-#include "afford/rng.hpp"
 #include "motivation/messages.hpp"
 
 namespace afford {
@@ -149,11 +148,7 @@ void MotivationNode::ended(const goal_result_t& m) {
 void MotivationNode::setGoal(std::int64_t step) {
   Goal g = goals_->next(step, next_goal_);
   // Goals found reached as they are set take no step: after two at one step, an exploration (every step acts).
-  if (unmoved_ >= 2 && g.module != GoalModule::Explore) {
-    const KeyedRng rng(config().seed, step, Purpose::GoalChoice, static_cast<std::uint64_t>(next_goal_));
-    g = Goal{};
-    g.action = std::min(kNumActions - 1, static_cast<int>(rng.uniform(kNumActions) * kNumActions));
-  }
+  if (unmoved_ >= 2 && g.module != GoalModule::Explore) g = explorationGoal(config().seed, step, next_goal_);
   publish(ch::goal, goalMessage(runId(), step, next_goal_, g, config().goals.budget));
   ++next_goal_;
 }

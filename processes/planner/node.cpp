@@ -301,9 +301,7 @@ void PlannerNode::loadState(SnapshotReader& r) {
 
 int PlannerNode::scenesAfter(bool acted) const {
   const std::int64_t next = step_ + 1;
-  bool appear = false;
-  if (next < config().steps)
-    for (const auto& o : config().world.objects) appear = appear || o.appears_at == next;
+  const bool appear = next < config().steps && config().world.lateObjectsAt(next);
   return (acted ? 1 : 0) + (appear ? 1 : 0);
 }
 

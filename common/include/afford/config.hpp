@@ -6,6 +6,7 @@
 #pragma once
 #include <yaml-cpp/yaml.h>
 
+#include <algorithm>
 #include <array>
 #include <cstdint>
 #include <optional>
@@ -69,6 +70,11 @@ struct WorldConfig {
   // before its step only, so late objects of one step may overlap (authors' code).
   bool late_overlap = true;
   std::vector<ObjectSpec> objects;         // in the order of the paper's tables
+
+  // Whether late objects enter the scene at `step` (those present from the start have appears_at 0).
+  bool lateObjectsAt(std::int64_t step) const {
+    return step > 0 && std::any_of(objects.begin(), objects.end(), [&](const ObjectSpec& o) { return o.appears_at == step; });
+  }
 };
 
 // How the extrinsic phase finds sub-goals and objects (issue 12): the paper's
