@@ -150,6 +150,13 @@ void ImgepChooser::sawObject(std::int64_t, const Seen& object) {
   // A look that shows no object under its gaze (the table alone, or a neighbour's edge) says only that the
   // place is empty.
   if (!centredObject(object.image, params_.focus_side)) return;
+  // An object here: one remembered closer than half an object's size has left unseen (every shape holds a disc
+  // of a third of the size round its centre, so two objects never stand that close; late objects placed over
+  // one another, world.late_overlap, the eye sees as one).
+  const double apart = 0.5 * params_.world.object_size;
+  objects_.erase(std::remove_if(objects_.begin(), objects_.end(),
+                                [&](const Seen& o) { return std::hypot(o.x - object.x, o.y - object.y) < apart; }),
+                 objects_.end());
   remember(objects_, object);
 }
 

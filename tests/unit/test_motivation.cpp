@@ -303,6 +303,22 @@ TEST(GoalChooser, ALookShowingOnlyANeighboursEdgeSaysThePlaceIsEmpty) {
   EXPECT_EQ(chooser.objects(), 0U);  // the table alone
 }
 
+TEST(GoalChooser, AnObjectSeenNearWhereAnotherWasRememberedTakesItsPlace) {
+  const GoalParams p = goalParams();
+  const int side = p.focus_side;
+  ImgepChooser chooser(p);
+  chooser.sawObject(1, Seen{look(side, {255, 0, 0}), 0.50, 0.50});
+  chooser.sawObject(2, Seen{look(side, {0, 255, 0}), 0.70, 0.50});
+  ASSERT_EQ(chooser.objects(), 2U);
+  // An object a fifth of its size from the red one: the red one has left, unseen (two objects never stand so close).
+  const double near = 0.2 * p.world.object_size;
+  chooser.sawObject(3, Seen{look(side, {0, 0, 255}), 0.50 + near, 0.50 - near / 2});
+  EXPECT_EQ(chooser.objects(), 2U);
+  // Farther than an object's size: both stand.
+  chooser.sawObject(4, Seen{look(side, {255, 0, 0}), 0.50, 0.50 + 1.1 * p.world.object_size});
+  EXPECT_EQ(chooser.objects(), 3U);
+}
+
 TEST(GoalChooser, AGoalFoundReachedWhenSetSaysNothingOfCompetence) {
   ImgepChooser chooser(goalParams());
   chooser.attempted(GoalAttempt{1, GoalModule::Move, true, 0.0, 0});
