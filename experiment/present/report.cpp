@@ -270,6 +270,16 @@ struct Where {
 
 const std::vector<std::string> kSystems{"FIX", "IGN", "IMP"};
 
+// The systems a folder ran: the paper's in their order, then any other (GOALS, novelty) by name.
+std::vector<std::string> systemsOf(const Summary& s) {
+  std::vector<std::string> out;
+  for (const auto& sys : kSystems)
+    if (s.systems.count(sys)) out.push_back(sys);
+  for (const auto& [sys, js] : s.systems)
+    if (std::find(kSystems.begin(), kSystems.end(), sys) == kSystems.end()) out.push_back(sys);
+  return out;
+}
+
 // What was run, read from the folders: a row per folder, and what was set.
 void whatWasRun(std::ostringstream& md, const std::vector<Folder>& folders, const Where& where) {
   const std::time_t now = std::time(nullptr);
@@ -361,12 +371,12 @@ void intrinsicSection(std::ostringstream& md, const std::vector<Folder>& folders
 
 // The extrinsic phase: the table metric and the share of tests solved (paper Tables 2, 4, 5, 6).
 void extrinsicSection(std::ostringstream& md, const std::vector<Folder>& folders) {
-  const std::vector<std::string>& systems = kSystems;
   md << "\n## Extrinsic phase: goal-based planner (paper Tables 2, 4, 5, 6)\n\n"
      << "Table metric: the share of trained agents that solved more than 90% of their tests of the scenario. "
         "Below it, the share of all tests solved.\n";
   for (const auto& f : folders) {
     const Summary& s = f.summary;
+    const std::vector<std::string> systems = systemsOf(s);
     const auto measured = [&](const std::string& sys) -> const SystemExtrinsic* {
       const auto js = s.systems.find(sys);
       if (js == s.systems.end() || !js->second.extrinsic || !js->second.extrinsic->table_metric ||

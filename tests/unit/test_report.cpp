@@ -282,6 +282,28 @@ TEST(Report, TheAuthorsEyeIsShownBesideOursAndThePapers) {
   EXPECT_NE(md.find("results-discussion.md#authors-eye"), std::string::npos);
 }
 
+// Systems beyond the paper's (GOALS, novelty) have their extrinsic rows too, after the paper's.
+TEST(Report, EverySystemAFolderRanHasItsExtrinsicRows) {
+  const fs::path root = test::tempDir("report-systems");
+  Made m = made("0.1.0+aaaaaaa", {"IMP", "GOALS"}, 2, 1, 300, 1);
+  m.experiment = "goals";
+  m.table_metric = 0.5;
+  ReportRequest r;
+  r.dirs = {makeFolder(root / "goals", m)};
+  r.out = (root / "r.md").string();
+  r.config_dir = kConfigDir;
+  writeReport(r);
+  const std::string md = slurp(root / "r.md");
+  const auto section = md.find("## Extrinsic phase");
+  ASSERT_NE(section, std::string::npos) << md;
+  const std::string rows = md.substr(section, md.find("\n## ", section + 1) - section);
+  const auto imp = rows.find("| IMP | 0.50"), goals = rows.find("| GOALS | 0.50");
+  ASSERT_NE(imp, std::string::npos) << rows;
+  ASSERT_NE(goals, std::string::npos) << rows;
+  EXPECT_LT(imp, goals);  // the paper's systems first
+  EXPECT_NE(rows.find("| GOALS tests solved | 1.00 |"), std::string::npos) << rows;
+}
+
 TEST(Report, AnInterruptedFolderIsMarkedIncomplete) {
   const fs::path root = test::tempDir("report-interrupted");
   Made m = made("0.1.0+ccccccc", {"IMP"}, 3, 1, 300, 1);
