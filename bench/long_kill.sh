@@ -1,7 +1,8 @@
 #!/usr/bin/env bash
 # A long run on hand-started processes, one of them killed with SIGKILL past a
 # step and started again with the same command (bench/long_run.py --kill).
-#   bench/long_kill.sh BUILD_DIR WORK_DIR PROCESS SEED STEPS AT
+#   bench/long_kill.sh BUILD_DIR WORK_DIR PROCESS SEED STEPS AT [SYSTEM]
+# SYSTEM: IMP (the default) or GOALS (the goals agent, issue 41).
 # Prints one JSON line: the step the run was at when the process was killed,
 # the snapshot's step it went on from, how long it took to catch up (until
 # its STATUS says a step within one of the others'), and the run's weights
@@ -10,7 +11,7 @@ set -euo pipefail
 root=$(cd "$(dirname "$0")/.." && pwd)
 source "$root/tests/netns.sh"
 enter_test "$0" "$@"
-victim=$3 seed=$4 steps=$5 target=$6
+victim=$3 seed=$4 steps=$5 target=$6 system=${7:-IMP}
 url="udpm://239.255.76.67:7994?ttl=0&recv_buf_size=2097152"
 mapfile -t processes < <("$build/bin/afford" processes)
 declare -A pid
@@ -18,11 +19,11 @@ start() { $(process_command "$1" "$url" "$out/logs") >>"$out/$1.log" 2>&1 & pid[
 for p in "${processes[@]}"; do start "$p"; done
 "$build/bin/afford" status --lcm-url "$url" --wait-for "$(IFS=,; echo "${processes[*]}")" --state waiting \
   --seconds 30 >/dev/null || { echo "the processes did not all come up"; exit 1; }
-"$build/bin/afford" experiment base --system IMP --reps 1 --steps "$steps" --seed "$seed" --quiet \
+"$build/bin/afford" experiment base --system "$system" --reps 1 --steps "$steps" --seed "$seed" --quiet \
   --extrinsic-reps 1 --scenarios scenario1 --attach "$url" --run-prefix long --stall-seconds 120 \
   --out "$out/attached" --log-root "$out/logs" >"$out/attached.txt" 2>&1 &
 runner=$!
-run="long-base-IMP-s$seed"
+run="long-base-$system-s$seed"
 # From the STATUS heartbeats: the victim's step and the furthest step of the others ("VICTIM OTHERS").
 steps() {
   "$build/bin/afford" status --lcm-url "$url" --seconds 0.55 |

@@ -2,9 +2,11 @@
 """Runs of any length (docs/performance.md, "Runs of any length").
 
 bench/run.sh long [--lengths 10000,100000,1000000] [--seed S] [--kill PROCESS] [--kill-at STEP] [--no-replay]
-                  [--speed-reps R] [--out DIR]
+                  [--speed-reps R] [--system IMP|GOALS] [--out DIR]
 
-For each length: one IMP run of the base experiment over udpm with its log
+For each length: one IMP run (or, with --system GOALS, one of the goals
+agent: its motivation keeps the chooser's memory, its planner pursues goals)
+of the base experiment over udpm with its log
 kept (`afford experiment`, its processes in a private network namespace):
 steps per second, every process's peak memory (the runner and the logger
 too), the log's size beside what `afford experiment` said it would take, and
@@ -38,10 +40,10 @@ FLOOR_SPEED = 0.9
 FLOOR_CATCH_UP = 30.0
 
 
-def run_length(steps, seed, out, replay, keep_logs, rep=0):
+def run_length(steps, seed, out, replay, keep_logs, system, rep=0):
     name = f"{steps}" + (f"-rep{rep}" if rep else "")
     folder, logs = out / f"run-{name}", out / f"logs-{name}"
-    cmd = [str(AFFORD), "experiment", "base", "--system", "IMP", "--reps", "1", "--steps", str(steps),
+    cmd = [str(AFFORD), "experiment", "base", "--system", system, "--reps", "1", "--steps", str(steps),
            "--seed", str(seed), "--extrinsic-reps", "1", "--scenarios", "scenario1", "--keep-logs", keep_logs,
            "--transport", "udpm", "--run-prefix", "long", "--out", str(folder), "--log-root", str(logs)]
     began = time.monotonic()
@@ -50,7 +52,7 @@ def run_length(steps, seed, out, replay, keep_logs, rep=0):
         sys.exit(f"{' '.join(cmd)} failed:\n{done.stderr[-3000:]}")
     disk = next((line.split("disk: ", 1)[1] for line in done.stderr.splitlines() if "disk: " in line), "")
     summary = json.loads((folder / "summary.json").read_text())
-    run = summary["systems"]["IMP"]["runs"][0]
+    run = summary["systems"][system]["runs"][0]
     # The extrinsic test after the run: the planner's peak, and the runner's over the whole experiment so far
     # (it has kept the run's outcome and summarised it by then: its curve grows with the run).
     for kept in sorted((folder / "runs").glob("*-e0.json")):
@@ -84,10 +86,10 @@ def run_length(steps, seed, out, replay, keep_logs, rep=0):
     return result
 
 
-def run_kill(steps, seed, victim, at, out):
+def run_kill(steps, seed, victim, at, out, system):
     work = out / f"kill-{victim}"
     done = subprocess.run(["bash", str(ROOT / "bench" / "long_kill.sh"), str(ROOT / "build"), str(work), victim,
-                           str(seed), str(steps), str(at)], capture_output=True, text=True)
+                           str(seed), str(steps), str(at), system], capture_output=True, text=True)
     sys.stderr.write(done.stderr[-4000:])
     line = next((l for l in done.stdout.splitlines() if l.startswith("{")), None)
     if done.returncode != 0 or line is None:
@@ -108,14 +110,16 @@ def main():
     ap.add_argument("--speed-reps", type=int, default=3,
                     help="runs of the shortest length, their median steps/s the speed floor's base (one before the "
                          "longer runs, the rest after them): runs of one length vary by 10 to 20%% here")
+    ap.add_argument("--system", default="IMP", choices=["IMP", "GOALS"],
+                    help="GOALS: the goals agent of the goals phase (slower: bench its lengths apart from IMP's)")
     ap.add_argument("--out", default="bench-out/long")
     a = ap.parse_args()
     out = Path(a.out).resolve()
     out.mkdir(parents=True, exist_ok=True)
     lengths = [int(x) for x in a.lengths.split(",")]
-    results = [run_length(n, a.seed, out, not a.no_replay, a.keep_logs) for n in lengths]
+    results = [run_length(n, a.seed, out, not a.no_replay, a.keep_logs, a.system) for n in lengths]
     # The shortest again after the longest (the speed floor's base: their median).
-    base_runs = [results[0]] + [run_length(lengths[0], a.seed, out, False, a.keep_logs, rep)
+    base_runs = [results[0]] + [run_length(lengths[0], a.seed, out, False, a.keep_logs, a.system, rep)
                                 for rep in range(1, max(1, a.speed_reps))]
     base_speed = statistics.median(r["steps_per_second"] for r in base_runs)
     for r in results:
@@ -143,7 +147,7 @@ def main():
                              r["replay_checksum"] == r["weights_checksum"]))
     kills = []
     for victim in filter(None, a.kill.split(",")):
-        kill = run_kill(last["steps"], a.seed, victim, a.kill_at or last["steps"] // 2, out)
+        kill = run_kill(last["steps"], a.seed, victim, a.kill_at or last["steps"] // 2, out, a.system)
         kill["process"] = victim
         kills.append(kill)
         print(f"{victim} killed at step {kill['killed_at']} of {last['steps']}: went on from its snapshot of step "
@@ -155,7 +159,7 @@ def main():
                          kill["weights_checksum"] == last["weights_checksum"]))
     for text, ok in verdicts:
         print(f"{'PASS' if ok else 'FAIL'}  {text}")
-    (out / "long.json").write_text(json.dumps({"lengths": results, "base_runs": base_runs, "base_steps_per_second": base_speed,
+    (out / "long.json").write_text(json.dumps({"system": a.system, "lengths": results, "base_runs": base_runs, "base_steps_per_second": base_speed,
                                                "kills": kills,
                                                "verdicts": [{"what": t, "pass": ok} for t, ok in verdicts]}, indent=2))
     return 0 if all(ok for _, ok in verdicts) else 1

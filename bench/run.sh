@@ -24,8 +24,8 @@
 #     a full machine: N runs at --jobs = cores over each transport, steps per second in all and per run, the
 #     ratio udpm / memq (floor 0.8; exit 1 below it), and wake-ups per step of each kind of process.
 #   bench/run.sh long [--lengths 10000,100000,1000000] [--seed S] [--kill PROCESS] [--kill-at STEP] [--no-replay]
-#                     [--speed-reps R] [--out DIR]
-#     runs of any length: steps per second and every process's peak memory at each length, the log's size
+#                     [--speed-reps R] [--system IMP|GOALS] [--out DIR]
+#     runs of any length (IMP's, or the goals agent's): steps per second and every process's peak memory at each length, the log's size
 #     beside what `afford experiment` said, the log replayed (the shortest run R times: its median steps/s is
 #     the speed floor's base); with --kill, the longest run again with a process
 #     killed past --kill-at and restarted: its catch-up time and weights. PASS/FAIL against the floors (exit 1).
