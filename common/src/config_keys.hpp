@@ -261,6 +261,9 @@ void declareGoals(V& v, RunConfig& c) {
              "share of goals that try a random action on the object a saliency scan picks");
     v.integer("bootstrap", g.bootstrap, 0, 100'000'000, "goals at the start of a run that are explorations");
     v.integer("memory", g.memory, 1, 100'000, "outcomes, places and objects the chooser keeps (the oldest go first)");
+    v.integer("held", g.held, 32, 10'000'000,
+              "object looks, forward predictions and effects (each kind apart) the motivation holds ahead of the goal "
+              "results they come before (a process catching up gets them early); more than one goal brings");
   });
 }
 

@@ -4,7 +4,11 @@
 #include <cstdio>
 
 #include "afford/config.hpp"
+#include "afford/forward_prediction_t.hpp"
+#include "afford/forward_query_t.hpp"
+#include "afford/goal_result_t.hpp"
 #include "afford/image.hpp"
+#include "afford/look_t.hpp"
 #include "afford/protocol.hpp"
 #include "environment/environment.hpp"
 #include "eye/messages.hpp"
@@ -54,6 +58,55 @@ std::uint64_t stepBytes(const RunConfig& c, const std::string& run_id) {
              static_cast<std::uint64_t>(std::max<std::int64_t>(1, c.curve_interval));
 }
 
+// Bytes a step of the goals phase adds to those, at most. Up to three goals end at a step (two found reached
+// as they are set, then one pursued), each with its GOAL, GOAL_RESULT and a look at its place; the pursued
+// one's object attended and its place looked at again after the action: five LOOKs and FOCUSes, one of them
+// the step's object focus counted above. The planner's search: 1 + A + ... + A^(depth-1) forward queries
+// (at most planner.search.max_queries), each answered with a predicted image of floats per action.
+std::uint64_t goalsStepBytes(const RunConfig& c, const std::string& run_id) {
+  const int side = c.eye.focus_side;
+  const std::size_t image = 3u * static_cast<std::size_t>(side) * static_cast<std::size_t>(side);
+  Focus f;
+  f.image.assign(image, 0);
+  const focus_t focus = focusMessage(run_id, c.steps, f, focus_t::SCENE_AT, 0, side);
+  look_t look;
+  look.run_id = run_id;
+  Goal g;
+  g.image.assign(image, 0);
+  const goal_t goal = goalMessage(run_id, c.steps, 0, g, c.goals.budget);
+  goal_result_t result;
+  result.run_id = run_id;
+  const int depth = std::max(1, c.planner.max_depth);
+  forward_query_t query;
+  query.run_id = run_id;
+  query.image.assign(image, 0);
+  query.size = static_cast<int32_t>(image);
+  query.actions.assign(kNumActions, 0);
+  query.n_actions = kNumActions;
+  query.prefix.assign(static_cast<std::size_t>(depth - 1), 0);
+  query.n_prefix = static_cast<int8_t>(depth - 1);
+  forward_prediction_t answer;
+  answer.run_id = run_id;
+  answer.n_actions = kNumActions;
+  answer.actions.assign(kNumActions, 0);
+  answer.size = static_cast<int32_t>(image);
+  answer.what.assign(kNumActions, std::vector<float>(image, 0.0f));
+  answer.where_x.assign(kNumActions, 0.0);
+  answer.where_y.assign(kNumActions, 0.0);
+  answer.n_input = kNumActions;
+  answer.input_affordance.assign(kNumActions, 0.0);
+  std::uint64_t queries = 0, level = 1;
+  for (int d = 0; d < depth; ++d, level *= kNumActions) queries += level;
+  if (c.planner.max_queries > 0) queries = std::min<std::uint64_t>(queries, static_cast<std::uint64_t>(c.planner.max_queries));
+  constexpr std::uint64_t kGoals = 3, kLooks = 5;
+  return kLooks * eventBytes(ch::look.name, static_cast<std::uint64_t>(look.getEncodedSize())) +
+         (kLooks - 1) * eventBytes(ch::focus.name, static_cast<std::uint64_t>(focus.getEncodedSize())) +
+         kGoals * (eventBytes(ch::goal.name, static_cast<std::uint64_t>(goal.getEncodedSize())) +
+                   eventBytes(ch::goalResult.name, static_cast<std::uint64_t>(result.getEncodedSize()))) +
+         queries * (eventBytes(ch::forwardQuery.name, static_cast<std::uint64_t>(query.getEncodedSize())) +
+                    eventBytes(ch::forwardPrediction.name, static_cast<std::uint64_t>(answer.getEncodedSize())));
+}
+
 }  // namespace
 
 DiskNeed diskNeed(const std::vector<PlannedRun>& runs, int jobs) {
@@ -62,7 +115,8 @@ DiskNeed diskNeed(const std::vector<PlannedRun>& runs, int jobs) {
   for (const PlannedRun& r : runs) {
     if (r.spec.extrinsic) continue;
     const RunConfig c = parseRunConfigText(r.spec.config_yaml);
-    const std::uint64_t step = stepBytes(c, r.spec.run_id);
+    const std::uint64_t step =
+        stepBytes(c, r.spec.run_id) + (c.phase == Phase::Goals ? goalsStepBytes(c, r.spec.run_id) : 0);
     need.log_step = std::max(need.log_step, step);
     need.longest = std::max(need.longest, c.steps);
     if (r.keep_log) {

@@ -12,7 +12,7 @@ void GoalInputs::object(std::int64_t step, std::int32_t seq, Seen seen) {
   e.kind = Object;
   e.seq = seq;
   e.seen = std::move(seen);
-  pending_.push_back(std::move(e));
+  add(std::move(e));
 }
 
 void GoalInputs::effect(SeenEffect effect) {
@@ -20,7 +20,7 @@ void GoalInputs::effect(SeenEffect effect) {
   e.step = effect.step;
   e.kind = Effect;
   e.effect = std::move(effect);
-  pending_.push_back(std::move(e));
+  add(std::move(e));
 }
 
 void GoalInputs::forward(std::int64_t step, std::int32_t seq, std::vector<Imagined> outcomes) {
@@ -29,6 +29,11 @@ void GoalInputs::forward(std::int64_t step, std::int32_t seq, std::vector<Imagin
   e.kind = Forward;
   e.seq = seq;
   e.imagined = std::move(outcomes);
+  add(std::move(e));
+}
+
+void GoalInputs::add(Entry e) {
+  ++held_[static_cast<std::size_t>(e.kind)];
   pending_.push_back(std::move(e));
 }
 
@@ -39,6 +44,7 @@ void GoalInputs::feed(GoalChooser& chooser, std::int64_t step, std::int32_t seq)
   auto split = std::stable_partition(pending_.begin(), pending_.end(), [&](const Entry& e) { return !before(e); });
   std::move(split, pending_.end(), std::back_inserter(now));
   pending_.erase(split, pending_.end());
+  for (const Entry& e : now) --held_[static_cast<std::size_t>(e.kind)];
   std::sort(now.begin(), now.end(), [](const Entry& a, const Entry& b) {
     const auto key = [](const Entry& e) { return std::make_tuple(e.step, e.kind == Effect ? 1 : 0, e.seq); };
     return key(a) < key(b);
@@ -73,6 +79,7 @@ void GoalInputs::feed(GoalChooser& chooser, std::int64_t step, std::int32_t seq)
 
 void GoalInputs::clear() {
   pending_.clear();
+  held_ = {};
   objects_.clear();
 }
 
@@ -159,7 +166,7 @@ void GoalInputs::load(SnapshotReader& r, std::int64_t steps, std::size_t image_b
         e.effect.affordance = r.within("effect held", 0, 1) == 1;
         break;
     }
-    pending_.push_back(std::move(e));
+    add(std::move(e));
   }
   const std::int64_t objects = r.within("objects held", 0, static_cast<std::int64_t>(most));
   for (std::int64_t i = 0; i < objects; ++i) {

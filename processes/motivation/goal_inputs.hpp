@@ -7,6 +7,7 @@
 // after them), the chooser's state is a function of the run whatever the
 // order of arrival.
 #pragma once
+#include <array>
 #include <cstdint>
 #include <map>
 #include <vector>
@@ -18,6 +19,9 @@ namespace afford {
 
 class GoalInputs {
  public:
+  // What is held: an object look, what the forward models imagined of it, an effect.
+  enum Kind : int { Object = 0, Forward = 1, Effect = 2 };
+  static constexpr int kKinds = 3;
   // An object FOCUS of `step`, answering request `seq`.
   void object(std::int64_t step, std::int32_t seq, Seen seen);
   // The EFFECT of the action of `step` (its object before is the step's object FOCUS).
@@ -27,12 +31,14 @@ class GoalInputs {
   // Everything before the end of a goal whose GOAL_RESULT has `step` and `seq`, to the chooser, in order.
   void feed(GoalChooser& chooser, std::int64_t step, std::int32_t seq);
   std::size_t held() const { return pending_.size(); }
+  // Held of one kind. A node caps each kind apart: one channel far ahead (a process catching up) must not take
+  // the room another needs before the next goal can end.
+  std::size_t held(Kind k) const { return held_[static_cast<std::size_t>(k)]; }
   void clear();
   void save(SnapshotWriter& w) const;
   void load(SnapshotReader& r, std::int64_t steps, std::size_t image_bytes, std::size_t most);
 
  private:
-  enum Kind : int { Object = 0, Forward = 1, Effect = 2 };
   struct Entry {
     std::int64_t step = 0;
     Kind kind = Object;
@@ -41,7 +47,9 @@ class GoalInputs {
     SeenEffect effect;           // Effect
     std::vector<Imagined> imagined;  // Forward
   };
+  void add(Entry e);
   std::vector<Entry> pending_;
+  std::array<std::size_t, kKinds> held_{};  // pending_ by kind
   std::map<std::int64_t, Seen> objects_;  // each step's object as given, for the effects and predictions of that step
 };
 

@@ -32,24 +32,28 @@ MotivationNode::MotivationNode(lcm::LCM& lcm, std::shared_ptr<spdlog::logger> lo
       .then([this](const prediction_t& m) { decide(m); });
   // Taken as they come (a process catching up gets them ahead of the results), given to the chooser at the end
   // of the goal they came before (motivation/goal_inputs.hpp).
-  const auto room = [this](const auto&) { return inputs_.held() < kMostHeld; };
+  // Each kind held is capped apart: a channel far ahead (catching up, the FOCUS of thousands of steps) waits,
+  // and the others still bring what the next GOAL_RESULT waits for.
+  const auto room = [this](GoalInputs::Kind k) {
+    return [this, k](const auto&) { return inputs_.held(k) < static_cast<std::size_t>(config().goals.held); };
+  };
   takes(ch::focus,
         "goals phase: every FOCUS, in order: an object's (a scan, an attended object) is what the agent saw of it, "
         "for the goal chooser at the end of the goal it came in")
       .in(Phase::Goals)
-      .waitFor(room)
+      .waitFor(room(GoalInputs::Object))
       .then([this](const focus_t& m) { sawFocus(m); });
   takes(ch::effect,
         "goals phase: every EFFECT: what the action did to the object, for the goal chooser at the end of the goal it "
         "came in")
       .in(Phase::Goals)
-      .waitFor(room)
+      .waitFor(room(GoalInputs::Effect))
       .then([this](const effect_t& m) { sawEffect(m); });
   takes(ch::forwardPrediction,
         "goals phase: every FORWARD_PREDICTION: what the forward models predict for the object of its step, for the "
         "goal chooser at the end of the goal it came in")
       .in(Phase::Goals)
-      .waitFor(room)
+      .waitFor(room(GoalInputs::Forward))
       .then([this](const forward_prediction_t& m) { sawForward(m); });
   takes(ch::goalResult,
         "goals phase: each GOAL_RESULT once, in order, when every EFFECT, FOCUS and FORWARD_PREDICTION out before "
@@ -116,7 +120,7 @@ void MotivationNode::loadState(SnapshotReader& r) {
   last_result_step_ = r.within("last goal result step", -1, config().steps);
   unmoved_ = static_cast<int>(r.within("goals ended without an action", 0, INT32_MAX));
   inputs_.load(r, config().steps, 3 * static_cast<std::size_t>(config().eye.focus_side * config().eye.focus_side),
-               kMostHeld);
+               GoalInputs::kKinds * static_cast<std::size_t>(config().goals.held));
   goals_->load(r);
 }
 

@@ -52,7 +52,7 @@ class MotivationNode : public NodeBase {
   std::int64_t effects_ = 0;               // EFFECTs taken
   std::int64_t focus_serial_ = -1, forward_serial_ = -1;  // the last taken
   GoalInputs inputs_;                      // taken, for the chooser at the end of the goal they came before
-  static constexpr std::size_t kMostHeld = 4096;  // ... at most (a goal's pursuit brings a few)
+                                           // (goals.held of each kind at most)
   std::int64_t last_result_step_ = -1;     // the step of the last GOAL_RESULT
   int unmoved_ = 0;                        // goals ended in a row at that step without an action
 };

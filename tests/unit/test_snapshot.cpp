@@ -5,6 +5,8 @@
 // of the run has a snapshot after it (and never more than history_mb), and a
 // receiver that needs what was let go fails naming the channel.
 #include <gtest/gtest.h>
+
+#include <algorithm>
 #include <signal.h>
 #include <spdlog/sinks/null_sink.h>
 #include <sys/prctl.h>
@@ -343,28 +345,46 @@ TEST(Snapshot, AReceiverNeedingWhatWasLetGoFailsTheRunNamingTheChannel) {
 }
 
 // What `afford experiment` says a run will write: at least what the run's
-// messages take in its log, and not wildly more (an action at every step).
-TEST(Disk, TheEstimateBoundsWhatARunWritesToItsLog) {
+// messages take in its log, and not wildly more (an action at every step; for
+// the goals agent, its planner's most looks, goals and forward queries a step).
+struct DiskCase {
+  const char* experiment;
+  System system;
+  int most_times;  // the estimate at most this many times what the run wrote
+};
+class Disk : public ::testing::TestWithParam<DiskCase> {};
+
+TEST_P(Disk, TheEstimateBoundsWhatARunWritesToItsLog) {
+  const DiskCase& c = GetParam();
   const std::int64_t steps = 300;
   PlannedRun run;
   run.spec.run_id = "test-run";
   run.spec.steps = steps;
-  run.spec.config_yaml = test::shippedConfigYaml("base", System::IMP, 3, steps);
+  run.spec.config_yaml = test::shippedConfigYaml(c.experiment, c.system, 3, steps);
   run.keep_log = true;
   const DiskNeed need = diskNeed({run}, 1);
   EXPECT_EQ(need.kept_logs, 1u);
   EXPECT_EQ(need.snapshots, 0u) << "a run shorter than snapshot_steps takes none";
-  test::InProcessRun live(run.spec.config_yaml, System::IMP, 3, steps);
+  test::InProcessRun live(run.spec.config_yaml, c.system, 3, steps);
   ASSERT_TRUE(live.outcome.ok) << live.outcome.error;
   std::uint64_t logged = 0;  // the run channels' events, as the logger writes them
   for (const auto& e : live.events)
     if (isSerialChannel(e.channel)) logged += 4 + 8 + 8 + 4 + 4 + e.channel.size() + e.data.size();
   EXPECT_GE(need.logs, logged);
-  EXPECT_LE(need.logs, 3 * logged);
+  EXPECT_LE(need.logs, static_cast<std::uint64_t>(c.most_times) * logged);
   EXPECT_NE(diskLine(need).find("of logs (1 kept"), std::string::npos) << diskLine(need);
   EXPECT_NE(diskWarning(need, need.total() / 2, "logs").find("has "), std::string::npos);
   EXPECT_EQ(diskWarning(need, need.total(), "logs"), "");
 }
+
+INSTANTIATE_TEST_SUITE_P(Systems, Disk,
+                         ::testing::Values(DiskCase{"base", System::IMP, 3}, DiskCase{"goals", System::GOALS, 3},
+                                           DiskCase{"goals-multi-step", System::GOALS, 5}),
+                         [](const ::testing::TestParamInfo<DiskCase>& i) {
+                           std::string name = std::string(i.param.experiment) + "_" + (i.param.system == System::GOALS ? "GOALS" : "IMP");
+                           std::replace(name.begin(), name.end(), '-', '_');
+                           return name;
+                         });
 
 }  // namespace
 }  // namespace afford

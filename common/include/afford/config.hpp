@@ -170,6 +170,7 @@ struct GoalsConfig {
   double explore_share = 0;    // share of goals that try a random action on a scanned object (motor babbling)
   int bootstrap = 0;           // goals at the start of a run that are explorations
   int memory = 0;              // outcomes, places and objects the chooser keeps (the oldest go first)
+  int held = 0;                // inputs of each kind the motivation holds ahead of the goal results they come before
 };
 
 // An extrinsic-phase scenario (paper 3.1, Figure 4): objects with the state
