@@ -10,6 +10,19 @@ set(AFFORD_LCM_VERSION 1.3.1)
 set(AFFORD_LCM_TARBALL_NAME lcm_1.3.1+repack1.orig.tar.gz)
 set(AFFORD_LCM_TARBALL_SHA256 abf293e54aff3d073cb4f9d4d5a261eab0e5ffea02e13fd601715c11612b85e8)
 
+# afford_apply_patches(SRC WHAT PATCH...): each patch applied in SRC in order (patch -p1); a patch that does not
+# apply stops the configure, naming WHAT (also used by cmake/BundledHttplib.cmake).
+function(afford_apply_patches src what)
+  find_program(PATCH_EXECUTABLE patch REQUIRED)
+  foreach(p ${ARGN})
+    execute_process(COMMAND ${PATCH_EXECUTABLE} -p1 --forward --batch --silent -i ${p}
+                    WORKING_DIRECTORY ${src} RESULT_VARIABLE rc OUTPUT_VARIABLE out ERROR_VARIABLE out)
+    if(NOT rc EQUAL 0)
+      message(FATAL_ERROR "patch ${p} does not apply to ${what}:\n${out}")
+    endif()
+  endforeach()
+endfunction()
+
 function(afford_bundled_lcm target)
   get_filename_component(root ${CMAKE_CURRENT_FUNCTION_LIST_DIR}/.. ABSOLUTE)
   set(tarball ${root}/third_party/lcm/dist/${AFFORD_LCM_TARBALL_NAME})
@@ -45,14 +58,7 @@ function(afford_bundled_lcm target)
     # built again (with the archive's dates, a file a removed patch had changed, or a header, kept its old
     # object: code built against another layout of LCM's structures, which crashed).
     file(ARCHIVE_EXTRACT INPUT ${tarball} DESTINATION ${deps} TOUCH)
-    find_program(PATCH_EXECUTABLE patch REQUIRED)
-    foreach(p ${patches})
-      execute_process(COMMAND ${PATCH_EXECUTABLE} -p1 --forward --batch --silent -i ${p}
-                      WORKING_DIRECTORY ${src} RESULT_VARIABLE rc OUTPUT_VARIABLE out ERROR_VARIABLE out)
-      if(NOT rc EQUAL 0)
-        message(FATAL_ERROR "patch ${p} does not apply to LCM ${AFFORD_LCM_VERSION}:\n${out}")
-      endif()
-    endforeach()
+    afford_apply_patches(${src} "LCM ${AFFORD_LCM_VERSION}" ${patches})
     file(WRITE ${stamp} "${stamp_text}")
     list(LENGTH patches n)
     message(STATUS "LCM ${AFFORD_LCM_VERSION}: extracted into ${src} and patched (${n} patches)")

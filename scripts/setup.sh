@@ -1,8 +1,8 @@
 #!/usr/bin/env bash
-# Install every Debian package afford needs (idempotent), fetch LCM's source
-# (scripts/fetch-lcm.sh), then configure and build a Release build into build/
-# (executables in build/bin/, the Python package in build/python/, put on
-# /usr/bin/python3's path).
+# Install every Debian package afford needs (idempotent), fetch LCM's and
+# cpp-httplib's source (scripts/fetch-lcm.sh, scripts/fetch-httplib.sh), then
+# configure and build a Release build into build/ (executables in build/bin/,
+# the Python package in build/python/, put on /usr/bin/python3's path).
 # Usage: scripts/setup.sh [--main] [--no-build] [--dry-run]
 #   --main      only what the main job needs (scripts/main.sh): the packages to
 #               build and run the processes and the `afford` command, and those
@@ -31,6 +31,7 @@ packages=(
   libeigen3-dev libopencv-dev libspdlog-dev libfmt-dev
   libcli11-dev libyaml-cpp-dev nlohmann-json3-dev zlib1g-dev libgsl-dev libsodium-dev
   iproute2 util-linux procps
+  ffmpeg              # afford render: video and GIF
 )
 # ... and what the tests, the figures, lcm-spy, the cluster scripts and the Python package need.
 ((main)) || packages+=(
@@ -44,7 +45,11 @@ packages=(
   # the Python package (python/, docs/python.md), for Debian's /usr/bin/python3
   python3-dev pybind11-dev python3-numpy python3-pandas python3-matplotlib python3-pytest
   python3-nbclient python3-nbformat python3-ipykernel python3-venv python3-pip python3-setuptools python3-wheel
+  chromium chromium-driver python3-selenium  # tests/watch: the live page in a real browser
 )
+# Node.js and npm, for the MCAP checker (tools/mcapcheck: Foxglove's @mcap/core): Debian's, unless a Node.js
+# with its own npm is installed already (NodeSource's package, which Debian's npm conflicts with).
+((main)) || command -v npm >/dev/null || packages+=(nodejs npm)
 
 missing=()
 for p in "${packages[@]}"; do
@@ -60,8 +65,19 @@ elif ((${#missing[@]})); then
   $sudo apt-get install -y -qq --no-install-recommends "${missing[@]}" >/dev/null
 fi
 
-# LCM's source, which the build patches (third_party/lcm/README.md).
+# LCM's and cpp-httplib's source, which the build patches (third_party/lcm/README.md, third_party/httplib/README.md).
 run scripts/fetch-lcm.sh
+run scripts/fetch-httplib.sh
+
+# The MCAP checker's reader (tools/mcapcheck: @mcap/core, pinned by its package-lock.json) from npm's
+# registry, unless the pinned version is installed already (so an offline machine keeps its copy).
+if ((!main)); then
+  pinned=$(sed -n 's/.*"@mcap\/core": "\(.*\)".*/\1/p' tools/mcapcheck/package.json)
+  have=$(sed -n 's/^  "version": "\(.*\)",$/\1/p' tools/mcapcheck/node_modules/@mcap/core/package.json 2>/dev/null || true)
+  if [[ $have != "$pinned" ]]; then
+    run npm ci --prefix tools/mcapcheck --no-audit --no-fund --loglevel=error
+  fi
+fi
 
 ((build)) || exit 0
 configure() { if ((dry)); then echo "would run: cmake $*"; else cmake "$@" >/dev/null; fi; }

@@ -24,6 +24,10 @@ struct Command {
   std::function<int()> run;  // the exit status
 };
 
+// The lines a command reading a log prints of what it skipped (nothing for a count of 0): malformed parts of
+// the file, RUN_CONFIG events the edge refuses, events without a valid tag of the bus key.
+void printLogSkips(long long malformed, long long refused_configs, long long untagged);
+
 Command experimentCommand(CLI::App& app, const FrontDoor& door);
 Command experimentsCommand(CLI::App& app, const FrontDoor& door);
 Command configCommand(CLI::App& app, const FrontDoor& door);
@@ -37,5 +41,8 @@ Command processesCommand(CLI::App& app, const FrontDoor& door);
 Command cleanCommand(CLI::App& app, const FrontDoor& door);
 Command mergeCommand(CLI::App& app, const FrontDoor& door);
 Command busKeyCommand(CLI::App& app, const FrontDoor& door);
+Command exportCommand(CLI::App& app, const FrontDoor& door);
+Command renderCommand(CLI::App& app, const FrontDoor& door);
+Command watchCommand(CLI::App& app, const FrontDoor& door);
 
 }  // namespace afford

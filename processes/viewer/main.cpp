@@ -14,85 +14,13 @@
 #include <filesystem>
 
 #include "afford/protocol.hpp"
-#include "afford/decision_t.hpp"
-#include "afford/effect_t.hpp"
-#include "afford/focus_t.hpp"
-#include "afford/image.hpp"
 #include "afford/logging.hpp"
 #include "afford/bus.hpp"
 #include "afford/edge.hpp"
 #include "afford/node.hpp"
 #include "afford/process_main.hpp"
-#include "afford/prediction_t.hpp"
-#include "afford/run_config_t.hpp"
-#include "afford/scene_t.hpp"
+#include "viewer/feed.hpp"
 #include "viewer/viewer.hpp"
-
-namespace {
-
-// What the viewer hears, through the edge (afford/edge.hpp): decoded, checked,
-// of the run shown (the last RUN_CONFIG's; any run until one is heard), each
-// channel in serial order (a gap is skipped: the viewer asks for nothing).
-struct Listener {
-  afford::Viewer& viewer;
-  spdlog::logger& log;
-  afford::Edge& edge;
-  afford::RunConfig config;  // of the run shown
-  std::string shown;         // its id
-
-  afford::Turn onConfig(const afford::run_config_t& m) {
-    try {
-      config = afford::parseRunConfigText(m.config_yaml);
-    } catch (const std::exception& e) {
-      return afford::Turn::refuse(std::string("its configuration is refused: ") + e.what());
-    }
-    edge.join(m.run_id, &config);
-    if (m.run_id == shown) return afford::Turn::take();  // the runner says a run's configuration more than once
-    shown = m.run_id;
-    viewer.onRun(m.run_id, std::string(afford::nameOf(afford::kPhaseNames, config.phase)) + " " +
-                               m.experiment + " " + m.system);
-    log.info("showing run '{}'", m.run_id);
-    return afford::Turn::take();
-  }
-  afford::Turn onScene(const afford::scene_t& m) {
-    try {
-      viewer.onScene(m.step, afford::decodeScene(m.data, m.width, m.height), m.cause == afford::scene_t::CAUSE_GOAL);
-    } catch (const std::exception& e) {
-      return afford::Turn::refuse(e.what());
-    }
-    return afford::Turn::take();
-  }
-  afford::Turn onFocus(const afford::focus_t& m) {
-    viewer.onFocus(m.step, m.image, m.side, m.x, m.y, m.kind == afford::focus_t::GOAL_SCAN);
-    return afford::Turn::take();
-  }
-  afford::Turn onPrediction(const afford::prediction_t& m) {
-    viewer.onPrediction(m.step, {m.affordance[0], m.affordance[1], m.affordance[2], m.affordance[3]});
-    return afford::Turn::take();
-  }
-  afford::Turn onEffect(const afford::effect_t& m) {  // the gaze after the change-driven scan
-    viewer.onFocus(m.step, m.image, m.side, m.after_x, m.after_y, false);
-    return afford::Turn::take();
-  }
-  afford::Turn onGoal(const afford::goal_t& m) {
-    viewer.onGoal(m.step, m.id, goalModule(m.module), m.image, config.eye.focus_side, m.x, m.y);
-    return afford::Turn::take();
-  }
-  afford::Turn onGoalResult(const afford::goal_result_t& m) {
-    viewer.onGoalResult(m.step, m.id, goalModule(m.module), m.reached);
-    return afford::Turn::take();
-  }
-  static std::string goalModule(int module) {
-    static const char* names[] = {"explore", "colour", "move", "colour and place"};
-    return module >= 0 && module < 4 ? names[module] : "?";
-  }
-  afford::Turn onDecision(const afford::decision_t& m) {
-    viewer.onDecision(m.step, m.acted, m.action, m.motivation, m.threshold);
-    return afford::Turn::take();
-  }
-};
-
-}  // namespace
 
 int main(int argc, char** argv) {
   CLI::App app{"afford viewer: watch a run (scene, gaze, goal, focus, affordances, motivation)", "afford-viewer"};
@@ -132,26 +60,8 @@ int main(int argc, char** argv) {
   afford::Viewer viewer;
   afford::Edge edge(lcm, log, "viewer", protocol);
   edge.useKey(key);
-  edge.warnOtherRuns(false);
-  Listener listener{viewer, *log, edge, {}, {}};
-  using afford::Order;
-  using afford::Scope;
-  edge.subscribe(afford::ch::runConfig, [&](const afford::run_config_t& m) { return listener.onConfig(m); }, Scope::Any,
-      Order::None);
-  edge.subscribe(afford::ch::scene, [&](const afford::scene_t& m) { return listener.onScene(m); }, Scope::RunOrAny,
-      Order::Follow);
-  edge.subscribe(afford::ch::focus, [&](const afford::focus_t& m) { return listener.onFocus(m); }, Scope::RunOrAny,
-      Order::Follow);
-  edge.subscribe(afford::ch::prediction, [&](const afford::prediction_t& m) { return listener.onPrediction(m); },
-      Scope::RunOrAny, Order::Follow);
-  edge.subscribe(afford::ch::decision, [&](const afford::decision_t& m) { return listener.onDecision(m); }, Scope::RunOrAny,
-      Order::Follow);
-  edge.subscribe(afford::ch::effect, [&](const afford::effect_t& m) { return listener.onEffect(m); }, Scope::RunOrAny,
-      Order::Follow);
-  edge.subscribe(afford::ch::goal, [&](const afford::goal_t& m) { return listener.onGoal(m); }, Scope::RunOrAny,
-      Order::Follow);
-  edge.subscribe(afford::ch::goalResult, [&](const afford::goal_result_t& m) { return listener.onGoalResult(m); },
-      Scope::RunOrAny, Order::Follow);
+  afford::ViewFeed feed(viewer, protocol, "", log.get());  // what the viewer hears, through the edge: decoded, checked
+  feed.subscribe(edge);
   log->info("watching {}{}", url, png_dir.empty() ? "" : ", frames to " + png_dir);
 
   std::int64_t written = 0, last_frame_step = -1;

@@ -17,23 +17,25 @@
 #include <utility>
 #include <vector>
 
+#include "viewer/feed.hpp"
+
 namespace afford {
 
-class Viewer {
+class Viewer : public RunView {
  public:
   explicit Viewer(std::size_t trace_length = 400);
 
-  void onRun(const std::string& run_id, const std::string& phase);
+  void onRun(const std::string& run_id, const std::string& phase) override;
   // A scene (RGB, any size); `goal`: the goal configuration of an extrinsic test.
-  void onScene(std::int64_t step, const cv::Mat& rgb, bool goal);
+  void onScene(std::int64_t step, const cv::Mat& rgb, bool goal) override;
   // A focus image (side x side RGB bytes) at (x, y) in scene units; `goal`: the inner eye's.
-  void onFocus(std::int64_t step, const std::vector<std::uint8_t>& image, int side, double x, double y, bool goal);
-  void onPrediction(std::int64_t step, const std::array<double, 4>& affordance);
-  void onDecision(std::int64_t step, bool acted, int action, double motivation, double threshold);
+  void onFocus(std::int64_t step, const std::vector<std::uint8_t>& image, int side, double x, double y, bool goal) override;
+  void onPrediction(std::int64_t step, const std::array<double, 4>& affordance) override;
+  void onDecision(std::int64_t step, bool acted, int action, double motivation, double threshold) override;
   // Goals phase: a goal the agent set itself (`module`: its name; image empty for an exploration), and its end.
   void onGoal(std::int64_t step, int id, const std::string& module, const std::vector<std::uint8_t>& image, int side,
-              double x, double y);
-  void onGoalResult(std::int64_t step, int id, const std::string& module, bool reached);
+              double x, double y) override;
+  void onGoalResult(std::int64_t step, int id, const std::string& module, bool reached) override;
 
   // The whole picture, BGR, for cv::imshow or cv::imwrite.
   cv::Mat render() const;

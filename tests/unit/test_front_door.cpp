@@ -316,6 +316,7 @@ TEST(Layers, NoFileIncludesAHeaderOfAHigherLayerOrASiblingAndThereIsNoCycle) {
   const std::map<std::string, int> rank = {
       {"common", 0},           {"experiment/schema", 2},  {"experiment/design", 3},  {"experiment/run", 3},
       {"experiment/plan", 4},  {"experiment/execute", 5}, {"experiment/replay", 5},  {"experiment/results", 6},
+      {"experiment/export", 6}, {"experiment/watch", 6},
       {"experiment/stored", 7}, {"experiment/present", 8}, {"experiment", 9},       {"apps/afford", 10},
       {"python/src", 11}};
   const auto rankOf = [&](const std::string& folder) {

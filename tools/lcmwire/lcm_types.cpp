@@ -337,6 +337,18 @@ const Field* findField(const Struct& s, const std::string& name) {
   return nullptr;
 }
 
+std::string cppType(const Struct& s) {
+  std::string t = "::";
+  for (char c : s.package) t += c == '.' ? std::string("::") : std::string(1, c);
+  return (s.package.empty() ? t : t + "::") + s.name;
+}
+
+std::string lcmHeader(const Struct& s) {
+  std::string h = s.package;
+  std::replace(h.begin(), h.end(), '.', '/');
+  return (h.empty() ? "" : h + "/") + s.name + ".hpp";
+}
+
 // Carries run_id, step, serial, prev_digest first.
 bool carriesSerial(const Struct& s) {
   return s.fields.size() >= 4 && is(s.fields[0], "string", "run_id") && is(s.fields[1], "int64_t", "step") &&

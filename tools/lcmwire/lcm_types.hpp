@@ -59,6 +59,10 @@ const Field* findField(const Struct& s, const std::string& name);
 // Carries run_id, step, serial, prev_digest first.
 bool carriesSerial(const Struct& s);
 
+// The C++ type lcm-gen makes of it ("::afford::scene_t"), and its header ("afford/scene_t.hpp").
+std::string cppType(const Struct& s);
+std::string lcmHeader(const Struct& s);
+
 // The types of the files, parsed, resolved and checked (the message rules); throws Error "file:line: what".
 std::vector<Struct> readTypes(const std::vector<std::string>& files);
 

@@ -5,7 +5,9 @@
 //   afford-lcmwire --out build/lcmgen/cpp/afford/wire_bounds.hpp lcmtypes/*.lcm
 //
 // With --python-out FILE it also writes each type's conversion to a Python
-// dict (pybind11), for the Python package.
+// dict (pybind11), for the Python package; with --json-out FILE, each type's
+// JSON Schema and its conversion to JSON (nlohmann::json), for `afford export`'s
+// MCAP files (json_out.cpp).
 //
 // It fails with "file:line: what" on anything it does not understand and on
 // the project's message rules: a message type (one that is
@@ -30,6 +32,7 @@
 #include <vector>
 
 
+#include "json_out.hpp"
 #include "lcm_types.hpp"
 
 namespace {
@@ -37,18 +40,6 @@ namespace {
 using namespace lcmwire;
 
 // ---- the header -------------------------------------------------------------------------
-
-std::string cppType(const Struct& s) {
-  std::string t = "::";
-  for (char c : s.package) t += c == '.' ? std::string("::") : std::string(1, c);
-  return (s.package.empty() ? t : t + "::") + s.name;
-}
-
-std::string lcmHeader(const Struct& s) {
-  std::string h = s.package;
-  std::replace(h.begin(), h.end(), '.', '/');
-  return (h.empty() ? "" : h + "/") + s.name + ".hpp";
-}
 
 std::string quoted(const std::string& s) { return "\"" + s + "\""; }
 
@@ -299,9 +290,15 @@ std::vector<const Struct*> emitOrder(const std::vector<Struct>& all) {
   return out;
 }
 
-// Written whole or not at all (a temporary file, then renamed).
+// Written whole or not at all (a temporary file, then renamed); a file that
+// already holds the text is left as it is (what includes it is not rebuilt).
 void writeFile(const std::string& path, const std::string& text) {
   const std::filesystem::path out(path);
+  {
+    std::ifstream had(out, std::ios::binary);
+    std::stringstream old;
+    if (had && (old << had.rdbuf()) && old.str() == text) return;
+  }
   if (out.has_parent_path()) std::filesystem::create_directories(out.parent_path());
   const std::filesystem::path tmp = out.string() + ".tmp";
   {
@@ -313,14 +310,15 @@ void writeFile(const std::string& path, const std::string& text) {
 }
 
 int usage(const char* what) {
-  std::cerr << "afford-lcmwire: " << what << "\nusage: afford-lcmwire --out wire_bounds.hpp [--python-out to_python.hpp] FILE.lcm...\n";
+  std::cerr << "afford-lcmwire: " << what << "\nusage: afford-lcmwire --out wire_bounds.hpp [--python-out to_python.hpp] "
+               "[--json-out json_messages.hpp] FILE.lcm...\n";
   return 2;
 }
 
 }  // namespace
 
 int main(int argc, char** argv) {
-  std::string out_path, python_path;
+  std::string out_path, python_path, json_path;
   std::vector<std::string> files;
   for (int i = 1; i < argc; ++i) {
     const std::string a = argv[i];
@@ -330,6 +328,9 @@ int main(int argc, char** argv) {
     } else if (a == "--python-out") {
       if (++i == argc) return usage("--python-out needs a path");
       python_path = argv[i];
+    } else if (a == "--json-out") {
+      if (++i == argc) return usage("--json-out needs a path");
+      json_path = argv[i];
     } else if (a == "--help" || a == "-h") {
       return usage("writes the wire bounds of the given .lcm types");
     } else if (!a.empty() && a[0] == '-') {
@@ -349,6 +350,11 @@ int main(int argc, char** argv) {
       std::stringstream python;
       writePython(python, emitOrder(all), files);
       writeFile(python_path, python.str());
+    }
+    if (!json_path.empty()) {
+      std::stringstream json;
+      writeJsonMessages(json, emitOrder(all), files);
+      writeFile(json_path, json.str());
     }
   } catch (const Error& e) {
     std::cerr << e.what() << "\n";

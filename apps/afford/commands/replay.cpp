@@ -8,6 +8,13 @@
 
 namespace afford {
 
+void printLogSkips(long long malformed, long long refused_configs, long long untagged) {
+  if (malformed)
+    std::printf("skipped: %lld malformed part(s) of the log file (named with their offsets in the warnings)\n", malformed);
+  if (refused_configs) std::printf("skipped: %lld RUN_CONFIG event(s) the edge refuses\n", refused_configs);
+  if (untagged) std::printf("skipped: %lld event(s) without a valid tag of the bus key\n", untagged);
+}
+
 Command replayCommand(CLI::App& app, const FrontDoor& door) {
   struct Args {
     ReplayOptions options;
@@ -31,13 +38,7 @@ Command replayCommand(CLI::App& app, const FrontDoor& door) {
             std::printf("run: %s (%s)\nevents: %lld%s\n", r.run_id.c_str(), r.extrinsic ? "extrinsic" : "intrinsic",
                         static_cast<long long>(r.events), r.torn_bytes ? " (then an incomplete event, skipped)" : "");
             if (!r.incomplete.empty()) std::printf("the log is incomplete: %s\n", r.incomplete.c_str());
-            if (r.malformed)
-              std::printf("skipped: %lld malformed part(s) of the log file (named with their offsets in the warnings)\n",
-                          static_cast<long long>(r.malformed));
-            if (r.refused_configs)
-              std::printf("skipped: %lld RUN_CONFIG event(s) the edge refuses\n", static_cast<long long>(r.refused_configs));
-            if (r.untagged)
-              std::printf("skipped: %lld event(s) without a valid tag of the bus key\n", static_cast<long long>(r.untagged));
+            printLogSkips(r.malformed, r.refused_configs, r.untagged);
             for (const auto& g : r.gaps)
               std::printf("missing from the recording: %s serial%s %lld%s\n", g.channel.c_str(),
                           g.first == g.last ? "" : "s", static_cast<long long>(g.first),

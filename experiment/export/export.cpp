@@ -1,0 +1,214 @@
+#include "experiment/export/export.hpp"
+
+#include <opencv2/core.hpp>
+
+#include <algorithm>
+#include <limits>
+#include <map>
+#include <memory>
+#include <stdexcept>
+#include <string_view>
+#include <type_traits>
+#include <utility>
+
+#include "afford/auth.hpp"
+#include "afford/bounds.hpp"
+#include "afford/config.hpp"
+#include "afford/decode.hpp"
+#include "afford/image.hpp"
+#include "afford/json_messages.hpp"
+#include "afford/protocol.hpp"
+#include "afford/version.hpp"
+#include "experiment/export/foxglove.hpp"
+#include "experiment/export/mcap.hpp"
+#include "experiment/replay/replay.hpp"
+
+namespace afford {
+
+namespace {
+
+// The most skipped events warned of one by one (all are counted).
+constexpr std::int64_t kMostWarnings = 10;
+
+// The gaze's colours.
+const foxglove::Colour kFocusGaze{1, 1, 0, 1};   // yellow: a FOCUS
+const foxglove::Colour kEffectGaze{0, 1, 1, 1};  // cyan: an EFFECT's gaze after the action
+
+// Writes the run's messages into the MCAP file, one event at a time.
+class Exporter {
+ public:
+  Exporter(McapWriter& mcap, ExportResult& result, std::string source, spdlog::logger& log)
+      : mcap_(mcap), result_(result), source_(std::move(source)), log_(log) {}
+
+  // The run's configuration: the Metadata record, and the scene's size until a SCENE says it.
+  void start(const run_config_t& rc, const RunConfig& config) {
+    scene_width_ = scene_height_ = config.world.size_px;
+    mcap_.addMetadata("afford", {{"afford_version", affordVersion()},
+                                 {"run_id", rc.run_id},
+                                 {"experiment", rc.experiment},
+                                 {"system", rc.system},
+                                 {"seed", std::to_string(rc.seed)},
+                                 {"config_yaml", rc.config_yaml},
+                                 {"log", source_}});
+  }
+
+  void event(const LogEvent& e, const BoundsContext& ctx) {
+    ++result_.events;
+    if (e.utime < 0 || static_cast<std::uint64_t>(e.utime) > std::numeric_limits<std::uint64_t>::max() / 1000) {
+      skip(topic(e.channel, ""), e, "its time " + std::to_string(e.utime) + " us is out of MCAP's range");
+      return;
+    }
+    const std::uint64_t time = static_cast<std::uint64_t>(e.utime) * 1000;
+    const bool known = withChannel(e.channel, [&](const auto& c) {
+      using Msg = typename std::decay_t<decltype(c)>::Message;
+      ExportedTopic& t = topic(e.channel, json_messages::Schema<Msg>::kName);
+      Msg m;
+      std::string why;
+      if (!decodeChecked(e.data.data(), e.data.size(), ctx, m, why)) {
+        skip(t, e, why);
+        return;
+      }
+      const std::uint16_t id = channel(e.channel, json_messages::Schema<Msg>::kName, json_messages::Schema<Msg>::kText);
+      put(t, id, time, json_messages::jsonText(m));
+      images(m, time, e);
+    });
+    if (!known) skip(topic(e.channel, ""), e, "not a channel of afford's protocol (afford/protocol.hpp)");
+  }
+
+ private:
+  // A topic's figures (its schema "" until it is known).
+  ExportedTopic& topic(const std::string& name, const std::string& schema) {
+    const auto [it, fresh] = topic_index_.emplace(name, result_.topics.size());
+    if (fresh) result_.topics.push_back({name, schema, 0, 0, ""});
+    ExportedTopic& t = result_.topics[it->second];
+    if (t.schema.empty()) t.schema = schema;
+    return t;
+  }
+
+  // The MCAP channel of a topic, made with its schema at its first message.
+  std::uint16_t channel(const std::string& name, std::string_view schema, std::string_view text) {
+    if (const auto it = channels_.find(name); it != channels_.end()) return it->second;
+    auto s = schemas_.find(std::string(schema));
+    if (s == schemas_.end())
+      s = schemas_.emplace(schema, mcap_.addSchema(std::string(schema), "jsonschema", std::string(text))).first;
+    return channels_[name] = mcap_.addChannel(s->second, name, "json");
+  }
+
+  void put(ExportedTopic& t, std::uint16_t id, std::uint64_t time, const std::string& json) {
+    mcap_.write(id, time, time, json.data(), json.size());
+    ++t.messages;
+    ++result_.messages;
+  }
+
+  void skip(ExportedTopic& t, const LogEvent& e, const std::string& why) {
+    if (t.skipped++ == 0) t.first_skipped = why;
+    if (result_.skipped++ < kMostWarnings)
+      log_.warn("{}: the {} event at offset {} is skipped: {}", source_, e.channel, e.offset, why);
+  }
+
+  template <class Msg>
+  void images(const Msg&, std::uint64_t, const LogEvent&) {}  // no image in it
+
+  void images(const scene_t& m, std::uint64_t time, const LogEvent& e) {
+    ExportedTopic& t = topic(kSceneImageTopic, foxglove::kRawImage);
+    if (m.encoding != scene_t::ENCODING_ZLIB_RGB8) {
+      skip(t, e, "the scene's encoding " + std::to_string(m.encoding) + " is not ENCODING_ZLIB_RGB8");
+      return;
+    }
+    cv::Mat rgb;
+    try {
+      rgb = decodeScene(m.data, m.width, m.height);
+    } catch (const std::exception& ex) {
+      skip(t, e, ex.what());
+      return;
+    }
+    scene_width_ = m.width;
+    scene_height_ = m.height;
+    const std::size_t bytes = static_cast<std::size_t>(m.width) * m.height * 3;
+    put(t, channel(kSceneImageTopic, foxglove::kRawImage, foxglove::rawImageSchema()), time,
+        foxglove::rawImage(time, "scene", m.width, m.height, rgb.data, bytes));
+  }
+
+  void images(const focus_t& m, std::uint64_t time, const LogEvent& e) {
+    ExportedTopic& t = topic(kFocusImageTopic, foxglove::kRawImage);
+    if (static_cast<std::int64_t>(m.side) * m.side * 3 == m.size)
+      put(t, channel(kFocusImageTopic, foxglove::kRawImage, foxglove::rawImageSchema()), time,
+          foxglove::rawImage(time, "focus", m.side, m.side, m.image.data(), m.image.size()));
+    else
+      skip(t, e, "its image of " + std::to_string(m.size) + " bytes is not " + std::to_string(m.side) + " x " +
+                     std::to_string(m.side) + " RGB");
+    gaze(m.x, m.y, m.side, time, kFocusGaze);
+  }
+
+  void images(const effect_t& m, std::uint64_t time, const LogEvent&) {
+    gaze(m.after_x, m.after_y, m.side, time, kEffectGaze);
+  }
+
+  // The gaze's square: the eye's focus window around (x, y), scene units, in the
+  // scene's pixels (as afford/image.hpp's windowCorner places it, per axis).
+  void gaze(double x, double y, int side, std::uint64_t time, const foxglove::Colour& colour) {
+    ExportedTopic& t = topic(kGazeTopic, foxglove::kImageAnnotations);
+    const double left = roundHalfAway(x * scene_width_ - side / 2.0);
+    const double top = roundHalfAway(y * scene_height_ - side / 2.0);
+    put(t, channel(kGazeTopic, foxglove::kImageAnnotations, foxglove::imageAnnotationsSchema()), time,
+        foxglove::box(time, left, top, side, colour));
+  }
+
+  McapWriter& mcap_;
+  ExportResult& result_;
+  std::string source_;  // the log, as given
+  spdlog::logger& log_;
+  std::map<std::string, std::size_t> topic_index_;
+  std::map<std::string, std::uint16_t> channels_, schemas_;
+  int scene_width_ = 0, scene_height_ = 0;
+};
+
+// The run's channels in the order they came, then the image topics.
+void orderTopics(ExportResult& r) {
+  std::stable_partition(r.topics.begin(), r.topics.end(), [](const ExportedTopic& t) { return t.topic[0] != '/'; });
+}
+
+}  // namespace
+
+ExportResult exportMcap(const ExportOptions& o, spdlog::logger& log) {
+  ExportResult result;
+  result.file = o.mcap;
+  if (o.mcap.empty()) throw std::runtime_error("no MCAP file to write (--mcap FILE)");
+  const std::shared_ptr<const BusKey> key = o.bus_key.empty() ? nullptr : busKeyFrom(o.bus_key);
+  RecordedLogStream in(o.log, log, key.get());  // throws when there is no log
+  std::vector<LogGap> manifest_missing;
+  result.incomplete = manifestIncomplete(o.log, manifest_missing);
+  McapWriter mcap(o.mcap, McapOptions{"", std::string("afford ") + affordVersion(), o.chunk_bytes});
+  Exporter exporter(mcap, result, o.log, log);
+  RunSelector select(o.run_id, o.log, log);
+  std::unique_ptr<RunConfig> config;
+  BoundsContext ctx{nullptr, nullptr};
+  LogEvent e;
+  while (in.next(e)) {
+    if (!select.take(e)) {
+      ++result.left_out;
+      continue;
+    }
+    if (!config) {
+      config = std::make_unique<RunConfig>(parseRunConfigText(select.config().config_yaml));
+      ctx = BoundsContext{&config->protocol, config.get()};
+      result.run_id = select.config().run_id;
+      result.phase = config->phase;
+      exporter.start(select.config(), *config);
+    }
+    exporter.event(e, ctx);
+  }
+  result.torn_bytes = in.counts().torn_bytes;
+  result.malformed = in.counts().malformed;
+  result.untagged = in.counts().untagged;
+  result.refused_configs = select.refusedConfigs();
+  result.left_out -= result.refused_configs;  // (counted apart)
+  select.check();  // (the partial file goes with the writer)
+  mcap.close();
+  result.bytes = mcap.bytes();
+  result.chunks = mcap.chunks();
+  orderTopics(result);
+  return result;
+}
+
+}  // namespace afford

@@ -1,0 +1,35 @@
+// Foxglove's own message schemas for images (https://docs.foxglove.dev/docs/visualization/message-schemas),
+// written here as JSON Schemas from their documented definitions, and the
+// messages `afford export` writes with them (export.hpp): a scene or a focus
+// image as foxglove.RawImage ("rgb8"), the eye's gaze as foxglove.ImageAnnotations
+// (a LINE_LOOP box over the scene image, in its pixels). Foxglove recognises
+// a schema by its name (kRawImage, kImageAnnotations) and message encoding "json".
+#pragma once
+#include <cstddef>
+#include <cstdint>
+#include <string>
+
+namespace afford::foxglove {
+
+inline constexpr const char* kRawImage = "foxglove.RawImage";
+inline constexpr const char* kImageAnnotations = "foxglove.ImageAnnotations";
+
+// The JSON Schema texts (draft 2020-12), made once.
+const std::string& rawImageSchema();
+const std::string& imageAnnotationsSchema();
+
+struct Colour {
+  double r = 0, g = 0, b = 0, a = 1;  // each in [0, 1]
+};
+
+// An RGB image of width x height pixels (rows of width * 3 bytes) as foxglove.RawImage
+// JSON, encoding "rgb8", stamped time_ns (nanoseconds).
+std::string rawImage(std::uint64_t time_ns, const std::string& frame_id, int width, int height,
+                     const std::uint8_t* rgb, std::size_t bytes);
+
+// A square of `side` pixels with its top-left corner at (left, top), in image
+// pixels (the origin the top-left corner of the top-left pixel), as
+// foxglove.ImageAnnotations JSON: one LINE_LOOP of four points, stamped time_ns.
+std::string box(std::uint64_t time_ns, double left, double top, double side, const Colour& colour);
+
+}  // namespace afford::foxglove

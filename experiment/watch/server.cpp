@@ -1,0 +1,146 @@
+#include "experiment/watch/server.hpp"
+
+#include <arpa/inet.h>
+#include <httplib.h>
+#include <sodium.h>
+
+#include <chrono>
+#include <stdexcept>
+
+namespace afford {
+
+using Clock = std::chrono::steady_clock;
+
+bool isLoopback(const std::string& address) {
+  if (address == "localhost" || address == "::1") return true;
+  in_addr a{};
+  return inet_pton(AF_INET, address.c_str(), &a) == 1 && (ntohl(a.s_addr) >> 24) == 127;
+}
+
+std::string newToken() {
+  if (sodium_init() < 0) throw std::runtime_error("libsodium cannot start");
+  unsigned char bytes[16];
+  randombytes_buf(bytes, sizeof bytes);
+  char hex[2 * sizeof bytes + 1];
+  sodium_bin2hex(hex, sizeof hex, bytes, sizeof bytes);
+  return hex;
+}
+
+WatchServer::WatchServer(WatchState& state, WatchServerOptions options, PlaybackControls* controls)
+    : state_(state), options_(std::move(options)), controls_(controls), server_(std::make_unique<httplib::Server>()) {
+  if (!isLoopback(options_.bind) && options_.token.empty())
+    throw std::runtime_error("--bind " + options_.bind + ": not loopback, so a token is required");
+}
+
+WatchServer::~WatchServer() { stop(); }
+
+bool WatchServer::authorised(const std::string& query_token, const std::string& header) const {
+  if (options_.token.empty()) return true;
+  const std::string& t = options_.token;
+  auto same = [&](const std::string& given) {
+    return given.size() == t.size() && sodium_memcmp(given.data(), t.data(), t.size()) == 0;
+  };
+  const std::string bearer = "Bearer ";
+  return same(query_token) || (header.rfind(bearer, 0) == 0 && same(header.substr(bearer.size())));
+}
+
+namespace {
+void error(httplib::Response& res, int status, const std::string& why) {
+  res.status = status;
+  res.set_content(why + "\n", "text/plain; charset=utf-8");
+}
+}  // namespace
+
+void WatchServer::routes() {
+  httplib::Server& s = *server_;
+  s.set_pre_routing_handler([this](const httplib::Request& req, httplib::Response& res) {
+    if (authorised(req.get_param_value("token"), req.get_header_value("Authorization")))
+      return httplib::Server::HandlerResponse::Unhandled;
+    error(res, 401, "a token is required: the address afford watch printed at its start has it");
+    return httplib::Server::HandlerResponse::Handled;
+  });
+  s.Get("/", [](const httplib::Request&, httplib::Response& res) {
+    res.set_header("Cache-Control", "no-store");
+    res.set_content(watchPage(), "text/html; charset=utf-8");
+  });
+  s.Get("/state", [this](const httplib::Request&, httplib::Response& res) {
+    res.set_header("Cache-Control", "no-store");
+    res.set_content(state_.snapshot(true), "application/json");
+  });
+  s.Post("/control", [this](const httplib::Request& req, httplib::Response& res) {
+    if (!controls_) return error(res, 404, "a live run has no playback controls (afford watch --log LOG has)");
+    const std::string why = controls_->control(req.get_param_value("command"), req.get_param_value("value"));
+    if (!why.empty()) return error(res, 400, why);
+    res.set_content("{\"ok\":true}", "application/json");
+  });
+  s.Get("/events", [this](const httplib::Request&, httplib::Response& res) {
+    if (streams_.fetch_add(1) >= options_.most_streams) {
+      streams_.fetch_sub(1);
+      return error(res, 503, "too many pages follow this run already (" + std::to_string(options_.most_streams) + ")");
+    }
+    res.set_header("Cache-Control", "no-store");
+    struct Stream {
+      std::uint64_t seen = ~std::uint64_t{0}, curves = ~std::uint64_t{0};
+      Clock::time_point next = Clock::now(), next_curves = Clock::now();
+    };
+    auto stream = std::make_shared<Stream>();
+    const auto gap = std::chrono::duration_cast<Clock::duration>(std::chrono::duration<double>(1.0 / options_.most_per_second));
+    res.set_chunked_content_provider(
+        "text/event-stream",
+        [this, stream, gap](std::size_t, httplib::DataSink& sink) {
+          if (stopping_) return false;
+          std::this_thread::sleep_until(stream->next);  // pacing the page, not the run
+          const std::uint64_t v = state_.wait(stream->seen, Clock::now() + std::chrono::seconds(15));
+          if (stopping_) return false;
+          if (v == stream->seen) return sink.write(": still here\n\n", 14);  // a dead socket shows on writing
+          stream->seen = v;
+          stream->next = Clock::now() + gap;
+          // The curves (the largest part, and the page's costliest to draw) at most once a second.
+          const std::uint64_t curves = state_.curvesVersion();
+          const bool with_curves = curves != stream->curves && Clock::now() >= stream->next_curves;
+          if (with_curves) stream->curves = curves, stream->next_curves = Clock::now() + std::chrono::seconds(1);
+          const std::string event = "event: state\ndata: " + state_.snapshot(with_curves) + "\n\n";
+          return sink.write(event.data(), event.size());
+        },
+        [this](bool) { streams_.fetch_sub(1); });
+  });
+  s.set_exception_handler([](const httplib::Request&, httplib::Response& res, std::exception_ptr ep) {
+    try {
+      std::rethrow_exception(ep);
+    } catch (const std::exception& e) {
+      error(res, 500, e.what());
+    } catch (...) {
+      error(res, 500, "an unknown error");
+    }
+  });
+}
+
+void WatchServer::start() {
+  httplib::Server& s = *server_;
+  const int threads = options_.most_streams + 4;  // every stream a thread, and a few for the rest
+  s.new_task_queue = [threads] { return new httplib::ThreadPool(static_cast<std::size_t>(threads)); };
+  s.set_read_timeout(options_.timeout_s, 0);
+  s.set_write_timeout(options_.timeout_s, 0);
+  s.set_keep_alive_timeout(options_.timeout_s);
+  s.set_payload_max_length(64 * 1024);  // a control request is a few bytes
+  routes();
+  port_ = options_.port == 0 ? s.bind_to_any_port(options_.bind) : (s.bind_to_port(options_.bind, options_.port) ? options_.port : -1);
+  if (port_ < 0)
+    throw std::runtime_error("cannot serve on " + options_.bind + ":" + std::to_string(options_.port) +
+                             " (the port in use, or no such address here)");
+  thread_ = std::thread([this] { server_->listen_after_bind(); });
+}
+
+void WatchServer::stop() {
+  if (stopping_.exchange(true)) return;
+  state_.wakeAll();
+  server_->stop();
+  if (thread_.joinable()) thread_.join();
+}
+
+std::string WatchServer::url() const {
+  const std::string host = options_.bind.find(':') != std::string::npos ? "[" + options_.bind + "]" : options_.bind;
+  return "http://" + host + ":" + std::to_string(port_) + "/" + (options_.token.empty() ? "" : "?token=" + options_.token);
+}
+
+}  // namespace afford

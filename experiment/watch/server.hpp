@@ -1,0 +1,80 @@
+// The page of `afford watch`: an HTTP server (cpp-httplib, from Debian) that
+// serves one page and streams the WatchState to it as server-sent events. It
+// never slows the run: the feed only changes the state and wakes the streams;
+// each stream sends the latest snapshot when it can (at most `most_per_second`
+// a second), so a slow or paused browser misses snapshots and holds nothing
+// but its socket, and one that stops reading is dropped after the write
+// timeout.
+//
+// Exposure is explicit: loopback unless another address is given; then a
+// token is required on every request (?token=... or "Authorization: Bearer
+// ..."), and a request without it is refused with 401.
+#pragma once
+#include <atomic>
+#include <memory>
+#include <mutex>
+#include <string>
+#include <thread>
+
+#include "experiment/watch/state.hpp"
+
+namespace httplib {
+class Server;
+}
+
+namespace afford {
+
+// What the page's controls ask of a log's playback; "" or why not.
+class PlaybackControls {
+ public:
+  virtual ~PlaybackControls() = default;
+  virtual std::string control(const std::string& command, const std::string& value) = 0;
+};
+
+struct WatchServerOptions {
+  std::string bind = "127.0.0.1";
+  int port = 8077;              // 0: any free port (port() says which)
+  std::string token;            // required on every request when not empty
+  int most_streams = 16;        // pages following at once; more are refused (503)
+  double most_per_second = 5;   // snapshots a stream sends at most
+  int timeout_s = 5;            // a request not read, or a stream not taken, within this is dropped
+};
+
+// True for 127.0.0.0/8, ::1 and "localhost".
+bool isLoopback(const std::string& address);
+// A new random token (32 hex digits, libsodium).
+std::string newToken();
+
+class WatchServer {
+ public:
+  WatchServer(WatchState& state, WatchServerOptions options, PlaybackControls* controls = nullptr);
+  ~WatchServer();
+  WatchServer(const WatchServer&) = delete;
+  WatchServer& operator=(const WatchServer&) = delete;
+
+  // Binds and serves on a thread of its own; throws std::runtime_error naming the address if it cannot bind.
+  void start();
+  void stop();
+  int port() const { return port_; }
+  // The page's address (with its token when one is required).
+  std::string url() const;
+  int streams() const { return streams_.load(); }
+
+ private:
+  void routes();
+  bool authorised(const std::string& query_token, const std::string& header) const;
+
+  WatchState& state_;
+  WatchServerOptions options_;
+  PlaybackControls* controls_;
+  std::unique_ptr<httplib::Server> server_;
+  std::thread thread_;
+  int port_ = -1;
+  std::atomic<int> streams_{0};
+  std::atomic<bool> stopping_{false};
+};
+
+// The page (experiment/watch/page.html, built in).
+const char* watchPage();
+
+}  // namespace afford

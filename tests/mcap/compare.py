@@ -1,0 +1,157 @@
+"""The messages of an exported MCAP file, as tools/mcapcheck/check.mjs printed them (JSON lines),
+against the run's log read by the Python package (afford.read_log), which decodes each message
+on its own (python/afford/logs.py): the same messages per channel, in order, at the log's times,
+with the same field values; the scene and focus images byte for byte; a gaze box per FOCUS and
+EFFECT where the focus window is.
+
+    compare.py LOG CHECKER_OUTPUT.jsonl AFFORD_BINARY
+"""
+import base64
+import json
+import math
+import subprocess
+import sys
+
+import numpy as np
+
+import afford
+
+
+def fail(what):
+    sys.exit(f"compare.py: {what}")
+
+
+def flat(v):
+    """A nested JSON list as one flat list."""
+    return [x for e in v for x in flat(e)] if isinstance(v, list) else [v]
+
+
+def same(want, got, path):
+    """A field as the Python package has it (want) against its JSON (got)."""
+    if isinstance(want, dict):
+        if not isinstance(got, dict) or set(want) != set(got):
+            fail(f"{path}: fields {sorted(want)} against {sorted(got) if isinstance(got, dict) else got!r}")
+        for k in want:
+            same(want[k], got[k], f"{path}.{k}")
+    elif isinstance(want, np.ndarray) and want.dtype == np.uint8:
+        # Bytes: a base64 string, or a list of them (one per entry of the first dimension).
+        rows = [got] if isinstance(got, str) else got
+        parts = [want] if isinstance(got, str) else list(want)
+        if len(rows) != len(parts) or any(base64.b64decode(r, validate=True) != p.tobytes() for r, p in zip(rows, parts)):
+            fail(f"{path}: bytes differ")
+    elif isinstance(want, np.ndarray):
+        values = flat(got)
+        kind = np.float64 if want.dtype.kind == "f" else want.dtype
+        if len(values) != want.size or not np.array_equal(np.asarray(values, dtype=kind), want.reshape(-1).astype(kind)):
+            fail(f"{path}: {want.dtype} array of {want.shape} differs")
+        if want.ndim > 1 and len(got) != want.shape[0]:
+            fail(f"{path}: {len(got)} rows, not {want.shape[0]}")
+    elif isinstance(want, list):
+        if not isinstance(got, list) or len(want) != len(got):
+            fail(f"{path}: a list of {len(want)} against {got!r:.60}")
+        for i, (w, g) in enumerate(zip(want, got)):
+            same(w, g, f"{path}[{i}]")
+    elif isinstance(want, bool) or isinstance(got, bool):
+        if want is not got:
+            fail(f"{path}: {want!r} against {got!r}")
+    elif isinstance(want, float):
+        if not isinstance(got, (int, float)) or float(got) != want:
+            fail(f"{path}: {want!r} against {got!r}")
+    elif type(want) is not type(got) or want != got:
+        fail(f"{path}: {want!r} against {got!r}")
+
+
+def round_half_away(v):
+    """afford's roundHalfAway (common/src/image.cpp): C's round of v cleared of noise below 1e-9."""
+    def c_round(x):
+        f = math.floor(abs(x))
+        return math.copysign(f + 1 if abs(x) - f >= 0.5 else f, x)
+    return c_round(c_round(v * 1e9) / 1e9)
+
+
+def stamp(m):
+    return m["timestamp"]["sec"] * 1_000_000_000 + m["timestamp"]["nsec"]
+
+
+def main(log_path, lines_path, afford_bin):
+    types = channel_types(afford_bin)
+    with open(lines_path) as f:
+        lines = [json.loads(line) for line in f]
+    totals = lines.pop()["totals"]
+    if not totals["ok"] or totals["messages"] != len(lines):
+        fail(f"the checker's totals: {totals}")
+    topics = {}
+    for line in lines:
+        topics.setdefault(line["topic"], []).append(line)
+    log = afford.read_log(log_path)
+    if log.refused or log.unknown_channels or log.malformed:
+        fail(f"the log has refused, unknown or malformed events: {log!r}")
+    by_channel = {}
+    for m in log:
+        by_channel.setdefault(m.channel, []).append(m)
+    channels = {t for t in topics if not t.startswith("/")}
+    if channels != set(by_channel):
+        fail(f"channels {sorted(channels)} against the log's {sorted(by_channel)}")
+    for channel, messages in by_channel.items():
+        exported = topics[channel]
+        if len(exported) != len(messages):
+            fail(f"{channel}: {len(exported)} messages exported, {len(messages)} in the log")
+        for i, (m, e) in enumerate(zip(messages, exported)):
+            if e["log_time"] != m.utime * 1000 or e["publish_time"] != e["log_time"] or e["sequence"] != i:
+                fail(f"{channel}[{i}]: times {e['log_time']}, {e['publish_time']} against utime {m.utime}")
+            if e["schema"] != f"afford.{types[channel]}":
+                fail(f"{channel}: schema {e['schema']}")
+            fields = dict(m.fields)
+            if channel == "SCENE":
+                del fields["image"]  # the scene decoded: its RawImage, below
+            same(fields, e["message"], f"{channel}[{i}]")
+    check_images(log, topics)
+    counts = ", ".join(f"{c} {len(by_channel[c])}" for c in sorted(by_channel))
+    print(f"{log_path}: every message of the log is in the MCAP file as the Python package decodes it ({counts}), "
+          f"with {len(topics.get('/SCENE/image', []))} scene images, {len(topics.get('/FOCUS/image', []))} focus "
+          f"images and {len(topics.get('/SCENE/gaze', []))} gaze boxes")
+
+
+def channel_types(afford_bin):
+    """Each channel's message type, from the protocol's table (`afford processes --protocol`)."""
+    out = subprocess.run([afford_bin, "processes", "--protocol"], check=True, capture_output=True, text=True).stdout
+    types = {}
+    for row in out.splitlines():
+        cells = [c.strip().strip("`") for c in row.split("|")]
+        if len(cells) > 3 and cells[2].endswith("_t"):
+            types[cells[1]] = cells[2]
+    return types
+
+
+def check_images(log, topics):
+    """Each SCENE's and FOCUS's image byte for byte; a gaze box per FOCUS and EFFECT, in log order."""
+    scenes, focus, gaze = (topics.get(t, []) for t in ("/SCENE/image", "/FOCUS/image", "/SCENE/gaze"))
+    size = None
+    n = {"SCENE": 0, "FOCUS": 0, "EFFECT": 0}
+    for m in log:
+        if m.channel not in n or (m.channel != "SCENE" and size is None):
+            continue  # (a gaze before any scene: none in a run's log)
+        if m.channel == "SCENE":
+            image = scenes[n["SCENE"]]["message"]
+            size = (m["width"], m["height"])
+            if (image["width"], image["height"], image["encoding"], image["step"]) != (m["width"], m["height"], "rgb8", 3 * m["width"]) \
+                    or base64.b64decode(image["data"]) != m["image"].tobytes() or stamp(image) != m.utime * 1000:
+                fail(f"/SCENE/image[{n['SCENE']}] is not SCENE[{n['SCENE']}]'s image")
+        if m.channel == "FOCUS":
+            image = focus[n["FOCUS"]]["message"]
+            if base64.b64decode(image["data"]) != m["image"].tobytes() or image["width"] != m["side"]:
+                fail(f"/FOCUS/image[{n['FOCUS']}] is not FOCUS[{n['FOCUS']}]'s image")
+        if m.channel in ("FOCUS", "EFFECT"):
+            box = gaze[n["FOCUS"] + n["EFFECT"]]["message"]["points"][0]
+            x, y = (m["x"], m["y"]) if m.channel == "FOCUS" else (m["after_x"], m["after_y"])
+            left, top = round_half_away(x * size[0] - m["side"] / 2), round_half_away(y * size[1] - m["side"] / 2)
+            if box["type"] != 2 or box["points"][0] != {"x": left, "y": top} or \
+                    box["points"][2] != {"x": left + m["side"], "y": top + m["side"]} or stamp(box) != m.utime * 1000:
+                fail(f"the gaze box of {m.channel} at utime {m.utime}: {box['points']}, not at ({left}, {top})")
+        n[m.channel] += 1
+    if (len(scenes), len(focus), len(gaze)) != (n["SCENE"], n["FOCUS"], n["FOCUS"] + n["EFFECT"]):
+        fail(f"{len(scenes)} scene images, {len(focus)} focus images, {len(gaze)} gaze boxes for {n}")
+
+
+if __name__ == "__main__":
+    main(*sys.argv[1:])

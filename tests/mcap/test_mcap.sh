@@ -1,0 +1,48 @@
+#!/usr/bin/env bash
+# afford export, read by others: two stored extrinsic tests (tests/data/explain) and a short
+# intrinsic run of IMP (memq, recorded here) exported as MCAP files, each read with Foxglove's
+# own reader by tools/mcapcheck/check.mjs (every record, the index, the summary, the CRCs, each
+# message against its JSON Schema), then every message compared with the run's log as the Python
+# package decodes it (tests/mcap/compare.py): the same messages per channel at the same times with
+# the same values, the images byte for byte. And an existing file is refused, untouched.
+#   tests/mcap/test_mcap.sh BUILD_DIR WORK_DIR PYTHON_DIR
+set -euo pipefail
+root=$(cd "$(dirname "$0")/../.." && pwd)
+build=$(cd "$1" && pwd)
+rm -rf "$2" && mkdir -p "$2"
+out=$(cd "$2" && pwd)
+python_dir=${3:-}
+[[ -d $root/tools/mcapcheck/node_modules/@mcap/core ]] ||
+  { echo "no @mcap/core in tools/mcapcheck: run npm ci --prefix tools/mcapcheck (scripts/setup.sh does)"; exit 1; }
+[[ -n $python_dir && -f $python_dir/afford/__init__.py ]] ||
+  { echo "no Python package in '$python_dir': configure with -DAFFORD_EXTRAS=ON and build afford_python"; exit 1; }
+
+logs=()
+for name in base-scenario3 multi-step-top-down-budget; do
+  gzip -dc "$root/tests/data/explain/$name.lcm.gz" >"$out/$name.lcm"
+  logs+=("$out/$name.lcm")
+done
+"$build/bin/afford" experiment base --system IMP --reps 1 --steps 150 --transport memq --quiet --keep-logs all \
+  --run-prefix mcap --out "$out/intrinsic" --log-root "$out/logs" >"$out/intrinsic.txt" 2>&1 ||
+  { cat "$out/intrinsic.txt"; echo "the intrinsic run failed"; exit 1; }
+logs+=("$out/logs/mcap-base-IMP-s1")
+
+for log in "${logs[@]}"; do
+  name=$(basename "$log" .lcm)
+  "$build/bin/afford" export "$log" --mcap "$out/$name.mcap" >"$out/$name.export.txt" 2>&1 ||
+    { cat "$out/$name.export.txt"; echo "afford export $log failed"; exit 1; }
+  ! grep -q "^skipped" "$out/$name.export.txt" || { cat "$out/$name.export.txt"; echo "$name: messages skipped"; exit 1; }
+  node "$root/tools/mcapcheck/check.mjs" "$out/$name.mcap" >"$out/$name.jsonl"
+  tail -1 "$out/$name.jsonl"
+  PYTHONPATH=$python_dir /usr/bin/python3 "$root/tests/mcap/compare.py" "$log" "$out/$name.jsonl" "$build/bin/afford"
+done
+
+# The same file again: refused, and the file as it was.
+before=$(sha256sum <"$out/base-scenario3.mcap")
+if "$build/bin/afford" export "${logs[0]}" --mcap "$out/base-scenario3.mcap" >"$out/again.txt" 2>&1; then
+  echo "an existing file was not refused"; exit 1
+fi
+grep -q "base-scenario3.mcap exists" "$out/again.txt" || { cat "$out/again.txt"; echo "the refusal does not say why"; exit 1; }
+[[ $(sha256sum <"$out/base-scenario3.mcap") == "$before" && ! -e $out/base-scenario3.mcap.partial ]] ||
+  { echo "the existing file was changed"; exit 1; }
+echo "an existing file is refused and left as it was"

@@ -1,0 +1,117 @@
+"""afford render on stored run logs, its files read by ffprobe.
+
+  /usr/bin/python3 tests/render/test_render.py BUILD_DIR ARTEFACT_DIR
+
+A video and a GIF of a run have one frame per step drawn (counted from the
+log by the Python package: the steps of the messages the viewer draws), of
+the size the command says; an existing file is refused and left as it was; a
+failing encoder leaves nothing; a log cut mid-event still renders what it holds.
+"""
+import gzip
+import json
+import os
+import shutil
+import subprocess
+import sys
+from pathlib import Path
+
+ROOT = Path(__file__).resolve().parents[2]
+BUILD, OUT = Path(sys.argv[1]), Path(sys.argv[2])
+AFFORD = BUILD / "bin" / "afford"
+sys.path.insert(0, str(BUILD / "python"))
+import afford  # noqa: E402
+
+# The channels whose messages move the viewer's step (processes/viewer/feed.hpp).
+DRAWN = {"SCENE", "FOCUS", "PREDICTION", "DECISION", "EFFECT", "GOAL", "GOAL_RESULT"}
+
+
+def render(log, out, *args, check=True):
+    r = subprocess.run([str(AFFORD), "render", str(log), "--out", str(out), *args], capture_output=True, text=True)
+    if check and r.returncode != 0:
+        sys.exit(f"afford render {log} failed:\n{r.stdout}{r.stderr}")
+    return r
+
+
+def probe(video):
+    r = subprocess.run(["ffprobe", "-v", "error", "-count_frames", "-select_streams", "v:0", "-show_entries",
+                        "stream=nb_read_frames,width,height", "-of", "json", str(video)],
+                       capture_output=True, text=True, check=True)
+    s = json.loads(r.stdout)["streams"][0]
+    return int(s["nb_read_frames"]), int(s["width"]), int(s["height"])
+
+
+def expected_frames(log, every):
+    """The steps drawn: each new highest step of the first run, one at least `every` after the last drawn."""
+    run, top, steps = None, -1, []
+    for m in afford.read_log(log):
+        if m.channel == "RUN_CONFIG" and run is None:
+            run = m["run_id"]
+        if run is None or m.channel not in DRAWN or m["run_id"] != run:
+            continue
+        if m["step"] > top:
+            top = m["step"]
+            steps.append(top)
+    drawn = []
+    for s in steps:
+        if not drawn or s - drawn[-1] >= every:
+            drawn.append(s)
+    return drawn
+
+
+def said(stdout):
+    """(frames, width, height) as the command printed them."""
+    line = next(l for l in stdout.splitlines() if l.startswith("wrote "))
+    frames = int(line.split(": ")[1].split(" frames")[0])
+    w, h = line.split(" frames of ")[1].split(",")[0].split("x")
+    return frames, int(w), int(h)
+
+
+def main():
+    shutil.rmtree(OUT, ignore_errors=True)
+    OUT.mkdir(parents=True)
+    checked = 0
+    for name, every in (("base-scenario3", 1), ("multi-step-top-down-budget", 3)):
+        log = OUT / f"{name}.lcm"
+        log.write_bytes(gzip.decompress((ROOT / "tests/data/explain" / f"{name}.lcm.gz").read_bytes()))
+        want = expected_frames(log, every)
+        assert len(want) >= 3, f"{name}: too few steps to test with ({want})"
+        for ext in ("mp4", "gif"):
+            video = OUT / f"{name}.{ext}"
+            r = render(log, video, "--every", str(every))
+            frames, w, h = said(r.stdout)
+            got = probe(video)
+            print(f"{video.name}: {got[0]} frames of {got[1]}x{got[2]} (the log's steps drawn: {len(want)})")
+            assert frames == len(want), f"{video.name}: the command says {frames} frames, the log has {len(want)} steps to draw"
+            assert got == (frames, w, h), f"{video.name}: ffprobe reads {got}, the command says {(frames, w, h)}"
+            assert w >= 600 and h >= 400, f"{video.name}: {w}x{h} is smaller than the viewer's picture"
+            checked += 1
+
+    # An existing file is refused, its bytes untouched.
+    video = OUT / "base-scenario3.mp4"
+    before = video.read_bytes()
+    r = render(OUT / "base-scenario3.lcm", video, check=False)
+    assert r.returncode != 0 and "never overwrites" in r.stderr, r.stderr
+    assert video.read_bytes() == before, "an existing video was changed"
+
+    # An encoder that fails leaves neither the file nor its partial one.
+    failed = OUT / "failed.mp4"
+    r = render(OUT / "base-scenario3.lcm", failed, "--ffmpeg", "/bin/false", check=False)
+    assert r.returncode != 0, "a failing ffmpeg went unnoticed"
+    assert not failed.exists() and not Path(str(failed) + ".partial").exists(), "a failed render left a file"
+
+    # A log cut in the middle of an event: what it holds is drawn.
+    log = OUT / "multi-step-top-down-budget.lcm"
+    cut = OUT / "cut.lcm"
+    data = log.read_bytes()
+    cut.write_bytes(data[: len(data) * 2 // 3 + 7])
+    r = render(cut, OUT / "cut.mp4", "--every", "3")
+    frames, _, _ = said(r.stdout)
+    full, _, _ = said(render(log, OUT / "full-again.mp4", "--every", "3").stdout)
+    assert 0 < frames < full, f"a cut log gave {frames} frames, the whole {full}"
+    assert probe(OUT / "cut.mp4")[0] == frames
+    print(f"render: {checked} files checked; an existing file refused; a failed encoder left nothing; a cut log: "
+          f"{frames} of {full} frames")
+
+
+if __name__ == "__main__":
+    main()

@@ -1,0 +1,392 @@
+// afford export (experiment/export): a stored run log written as an MCAP file
+// holds one JSON message per log message that the edge takes, beside the
+// images and the gaze; a corrupted or forged event is skipped and counted; an
+// existing output file is refused and left as it was; a truncated log exports
+// what it holds; a keyed recording exports with its key; and the writer leaves
+// nothing behind when it fails. The file is read back here by a small reader
+// of the spec's records that checks the CRCs and the indexes (the independent
+// check with Foxglove's reader is tests/mcap/test_mcap.sh).
+#include <gtest/gtest.h>
+#include <spdlog/sinks/null_sink.h>
+#include <zlib.h>
+
+#include <cstdint>
+#include <filesystem>
+#include <fstream>
+#include <limits>
+#include <map>
+#include <string>
+#include <vector>
+
+#include <nlohmann/json.hpp>
+
+#include "afford/auth.hpp"
+#include "afford/decode.hpp"
+#include "afford/json_messages.hpp"
+#include "afford/logfile.hpp"
+#include "afford/protocol.hpp"
+#include "experiment/export/export.hpp"
+#include "experiment/export/mcap.hpp"
+#include "experiment/replay/replay.hpp"
+#include "tests/support.hpp"
+
+namespace afford {
+namespace {
+
+namespace fs = std::filesystem;
+
+spdlog::logger& quiet() {
+  static auto log = std::make_shared<spdlog::logger>("mcap-test", std::make_shared<spdlog::sinks::null_sink_mt>());
+  return *log;
+}
+
+std::string fileText(const fs::path& f) {
+  std::ifstream in(f, std::ios::binary);
+  return std::string(std::istreambuf_iterator<char>(in), {});
+}
+
+// ---- a small reader of the spec's records --------------------------------------------------
+
+struct ReadMessage {
+  std::string topic;
+  std::uint64_t log_time = 0, publish_time = 0;
+  std::string data;
+};
+struct ReadMcap {
+  std::vector<ReadMessage> messages;  // in file order
+  std::map<std::string, std::int64_t> per_topic;
+  std::map<std::string, std::string> schema_of;  // topic: schema name
+  std::string library, metadata_yaml;
+  std::int64_t chunks = 0, indexed = 0, statistics_messages = -1;
+};
+
+std::uint64_t le(const std::string& b, std::size_t at, int n) {
+  std::uint64_t v = 0;
+  for (int i = n - 1; i >= 0; --i) v = (v << 8) | static_cast<std::uint8_t>(b.at(at + i));
+  return v;
+}
+std::string str(const std::string& b, std::size_t& at) {
+  const std::size_t n = le(b, at, 4);
+  std::string s = b.substr(at + 4, n);
+  at += 4 + n;
+  return s;
+}
+std::uint32_t crcOf(const std::string& b, std::size_t from, std::size_t to) {
+  return static_cast<std::uint32_t>(crc32(0, reinterpret_cast<const Bytef*>(b.data() + from), static_cast<uInt>(to - from)));
+}
+
+// The records of b[from, to): schemas, channels and messages (a chunk's too, its CRC checked).
+void readRecords(const std::string& b, std::size_t from, std::size_t to, ReadMcap& out,
+                 std::map<std::uint64_t, std::string>& schemas, std::map<std::uint64_t, std::string>& topics) {
+  for (std::size_t at = from; at < to;) {
+    const int op = static_cast<std::uint8_t>(b.at(at));
+    const std::size_t len = le(b, at + 1, 8), c = at + 9;
+    std::size_t p = c;
+    if (op == 0x03) {
+      const std::uint64_t id = le(b, p, 2);
+      p += 2;
+      schemas[id] = str(b, p);
+    } else if (op == 0x04) {
+      const std::uint64_t id = le(b, p, 2), schema = le(b, p + 2, 2);
+      p += 4;
+      topics[id] = str(b, p);
+      out.schema_of[topics[id]] = schemas.at(schema);
+    } else if (op == 0x05) {
+      ReadMessage m{topics.at(le(b, c, 2)), le(b, c + 6, 8), le(b, c + 14, 8), b.substr(c + 22, len - 22)};
+      ++out.per_topic[m.topic];
+      out.messages.push_back(std::move(m));
+    } else if (op == 0x06) {
+      p += 8 + 8;
+      const std::size_t size = le(b, p, 8);
+      const std::uint32_t crc = le(b, p + 8, 4);
+      p += 12;
+      EXPECT_EQ(str(b, p), "");  // no compression
+      EXPECT_EQ(le(b, p, 8), size);
+      EXPECT_EQ(crcOf(b, p + 8, p + 8 + size), crc) << "chunk CRC";
+      readRecords(b, p + 8, p + 8 + size, out, schemas, topics);
+      ++out.chunks;
+    } else if (op == 0x07) {
+      out.indexed += le(b, c + 2, 4) / 16;
+    } else if (op == 0x0C) {
+      EXPECT_EQ(str(b, p), "afford");
+      const std::size_t end = p + 4 + le(b, p, 4);
+      for (p += 4; p < end;) {
+        const std::string k = str(b, p), v = str(b, p);
+        if (k == "config_yaml") out.metadata_yaml = v;
+      }
+    } else if (op == 0x0B) {
+      out.statistics_messages = static_cast<std::int64_t>(le(b, c, 8));
+    } else if (op == 0x01) {
+      str(b, p);
+      out.library = str(b, p);
+    }
+    at = c + len;
+  }
+}
+
+ReadMcap readMcap(const fs::path& f) {
+  const std::string b = fileText(f);
+  const std::string magic("\x89MCAP0\r\n", 8);
+  EXPECT_EQ(b.substr(0, 8), magic);
+  EXPECT_EQ(b.substr(b.size() - 8), magic);
+  const std::size_t footer = b.size() - 8 - 29;
+  EXPECT_EQ(b.at(footer), '\x02');
+  const std::size_t summary = le(b, footer + 9, 8), data_end = summary - 13;
+  EXPECT_EQ(b.at(data_end), '\x0f');
+  EXPECT_EQ(crcOf(b, 0, data_end), le(b, data_end + 9, 4)) << "data section CRC";
+  EXPECT_EQ(crcOf(b, summary, footer + 25), le(b, footer + 25, 4)) << "summary CRC";
+  ReadMcap out;
+  std::map<std::uint64_t, std::string> schemas, topics;
+  readRecords(b, 8, data_end, out, schemas, topics);
+  std::map<std::uint64_t, std::string> summary_schemas, summary_topics;
+  ReadMcap summary_part;
+  readRecords(b, summary, footer, summary_part, summary_schemas, summary_topics);
+  out.statistics_messages = summary_part.statistics_messages;
+  EXPECT_EQ(summary_topics, topics);
+  return out;
+}
+
+// ---- the stored logs -------------------------------------------------------------------------
+
+class Export : public ::testing::Test {
+ protected:
+  fs::path dir_ = test::tempDir("mcap");
+
+  // A stored extrinsic test's log (tests/data/explain), unzipped.
+  fs::path storedLog(const std::string& name = "base-scenario3") {
+    const fs::path log = dir_ / (name + ".lcm");
+    const fs::path gz = fs::path(AFFORD_SOURCE_DIR) / "tests" / "data" / "explain" / (name + ".lcm.gz");
+    const auto unzip = test::runCommand("gzip -dc '" + gz.string() + "' > '" + log.string() + "'");
+    EXPECT_EQ(unzip.exit_code, 0) << unzip.output;
+    return log;
+  }
+
+  ExportResult exportLog(const fs::path& log, const std::string& name, const std::string& key = "") {
+    ExportOptions o;
+    o.log = log.string();
+    o.mcap = (dir_ / name).string();
+    o.bus_key = key;
+    o.chunk_bytes = 64 << 10;  // several chunks of a small log
+    return exportMcap(o, quiet());
+  }
+
+  // The messages of the log's run that the edge takes, decoded here, per channel: their JSON.
+  static std::map<std::string, std::vector<std::string>> takenMessages(const fs::path& log) {
+    RecordedLogStream in(log, quiet());
+    RunSelector select("", log.string(), quiet());
+    std::unique_ptr<RunConfig> config;
+    std::map<std::string, std::vector<std::string>> out;
+    for (LogEvent e; in.next(e);) {
+      if (!select.take(e)) continue;
+      if (!config) config = std::make_unique<RunConfig>(parseRunConfigText(select.config().config_yaml));
+      withChannel(e.channel, [&](const auto& c) {
+        typename std::decay_t<decltype(c)>::Message m;
+        std::string why;
+        if (decodeChecked(e.data.data(), e.data.size(), BoundsContext{&config->protocol, config.get()}, m, why))
+          out[e.channel].push_back(json_messages::jsonText(m));
+      });
+    }
+    return out;
+  }
+};
+
+TEST_F(Export, AStoredLogHasOneMessagePerLogMessageTheEdgeTakesWithItsImagesAndGaze) {
+  const fs::path log = storedLog();
+  const ExportResult r = exportLog(log, "run.mcap");
+  EXPECT_EQ(r.skipped, 0);
+  EXPECT_EQ(r.malformed, 0);
+  const ReadMcap m = readMcap(dir_ / "run.mcap");
+  EXPECT_GT(m.chunks, 1);
+  EXPECT_EQ(m.indexed, static_cast<std::int64_t>(m.messages.size()));
+  EXPECT_EQ(m.statistics_messages, static_cast<std::int64_t>(m.messages.size()));
+  EXPECT_EQ(r.messages, static_cast<std::int64_t>(m.messages.size()));
+  EXPECT_EQ(m.library.rfind("afford ", 0), 0u) << m.library;
+  EXPECT_NE(m.metadata_yaml.find("planner:"), std::string::npos);
+
+  // Each channel's messages, in order, as the edge decodes them; their times the log's.
+  const auto taken = takenMessages(log);
+  std::map<std::string, std::vector<std::string>> got;
+  for (const ReadMessage& msg : m.messages) {
+    EXPECT_EQ(msg.log_time, msg.publish_time);
+    if (msg.topic[0] != '/') got[msg.topic].push_back(msg.data);
+  }
+  EXPECT_EQ(got, taken);
+  for (const auto& [channel, messages] : taken) {
+    SCOPED_TRACE(channel);
+    const auto* info = channelNamed(channel);
+    ASSERT_NE(info, nullptr);
+    EXPECT_EQ(m.schema_of.at(channel), std::string("afford.") + info->type);
+    // Every message is JSON of the fields of its type's schema.
+    withChannel(channel, [&](const auto& c) {
+      using Msg = typename std::decay_t<decltype(c)>::Message;
+      const auto schema = nlohmann::json::parse(json_messages::Schema<Msg>::kText);
+      const auto first = nlohmann::json::parse(messages.front());
+      for (const auto& [field, s] : schema["properties"].items()) EXPECT_TRUE(first.contains(field)) << field;
+      EXPECT_EQ(first.size(), schema["properties"].size());
+    });
+  }
+  // A SCENE image per SCENE, a FOCUS image per FOCUS, a gaze per FOCUS and EFFECT (an extrinsic test has none).
+  auto count = [&](const std::string& channel) {
+    const auto it = taken.find(channel);
+    return it == taken.end() ? std::int64_t{0} : static_cast<std::int64_t>(it->second.size());
+  };
+  EXPECT_EQ(m.per_topic.at(kSceneImageTopic), count("SCENE"));
+  EXPECT_EQ(m.per_topic.at(kFocusImageTopic), count("FOCUS"));
+  EXPECT_EQ(m.per_topic.at(kGazeTopic), count("FOCUS") + count("EFFECT"));
+  EXPECT_EQ(m.schema_of.at(kSceneImageTopic), "foxglove.RawImage");
+  EXPECT_EQ(m.schema_of.at(kGazeTopic), "foxglove.ImageAnnotations");
+  for (const ReadMessage& msg : m.messages)
+    if (msg.topic == kSceneImageTopic) {
+      const auto image = nlohmann::json::parse(msg.data);
+      EXPECT_EQ(image["encoding"], "rgb8");
+      EXPECT_EQ(image["step"], image["width"].get<int>() * 3);
+      EXPECT_EQ(image["data"].get<std::string>().size(), (image["width"].get<std::size_t>() * image["height"].get<std::size_t>() * 3 + 2) / 3 * 4);
+      EXPECT_EQ(image["timestamp"]["sec"].get<std::uint64_t>() * 1000000000 + image["timestamp"]["nsec"].get<std::uint64_t>(),
+                msg.log_time);
+      break;
+    }
+}
+
+// Events of the run changed or made up in the log: each is skipped and counted, the rest exported.
+TEST_F(Export, ACorruptedOrForgedEventIsSkippedAndCounted) {
+  const fs::path log = storedLog();
+  const LogFileContents c = readLogFile(log, LogLimits{});
+  const fs::path bad = dir_ / "bad.lcm";
+  int focus = 0;
+  bool forged = false;
+  {
+    LogWriter w(bad);
+    for (const LogEvent& e : c.events) {
+      std::vector<std::uint8_t> data = e.data;
+      if (e.channel == "FOCUS" && ++focus == 3) data[data.size() / 2] ^= 0x40;  // a changed byte: its digest fails
+      w.write(e.channel, data.data(), data.size(), e.utime);
+      if (e.channel == "DECISION" && focus >= 3 && !forged) {  // a run message on a channel of no one's
+        w.write("NOT_A_CHANNEL", e.data.data(), e.data.size(), e.utime);
+        forged = true;
+      }
+    }
+    w.close();
+  }
+  const ExportResult r = exportLog(bad, "bad.mcap");
+  std::map<std::string, ExportedTopic> t;
+  for (const ExportedTopic& x : r.topics) t[x.topic] = x;
+  EXPECT_EQ(t.at("FOCUS").skipped, 1);
+  EXPECT_NE(t.at("FOCUS").first_skipped.find("digest"), std::string::npos) << t.at("FOCUS").first_skipped;
+  EXPECT_EQ(t.at("NOT_A_CHANNEL").skipped, 1);
+  EXPECT_EQ(t.at("NOT_A_CHANNEL").messages, 0);
+  EXPECT_EQ(r.skipped, 2);
+  const ReadMcap m = readMcap(dir_ / "bad.mcap");
+  const auto taken = takenMessages(log);
+  EXPECT_EQ(m.per_topic.at("FOCUS"), static_cast<std::int64_t>(taken.at("FOCUS").size()) - 1);
+  EXPECT_EQ(m.per_topic.at(kFocusImageTopic), static_cast<std::int64_t>(taken.at("FOCUS").size()) - 1);
+  EXPECT_EQ(m.per_topic.count("NOT_A_CHANNEL"), 0u);
+}
+
+TEST_F(Export, AnExistingFileIsRefusedAndLeftAsItWas) {
+  const fs::path log = storedLog();
+  std::ofstream(dir_ / "taken.mcap") << "someone's file";
+  try {
+    exportLog(log, "taken.mcap");
+    FAIL() << "an existing file was not refused";
+  } catch (const std::runtime_error& e) {
+    EXPECT_NE(std::string(e.what()).find("exists"), std::string::npos) << e.what();
+  }
+  EXPECT_EQ(fileText(dir_ / "taken.mcap"), "someone's file");
+  EXPECT_FALSE(fs::exists(dir_ / "taken.mcap.partial"));
+  // A log with no run in it: nothing is left, neither the file nor its partial one.
+  std::ofstream(dir_ / "empty.lcm") << "not a log";
+  EXPECT_THROW(exportLog(dir_ / "empty.lcm", "none.mcap"), std::runtime_error);
+  EXPECT_FALSE(fs::exists(dir_ / "none.mcap"));
+  EXPECT_FALSE(fs::exists(dir_ / "none.mcap.partial"));
+}
+
+TEST_F(Export, ATruncatedLogExportsWhatItHolds) {
+  const fs::path log = storedLog("utility-goal-attempts");
+  const auto size = fs::file_size(log);
+  fs::resize_file(log, size * 2 / 3 + 7);  // in the middle of an event
+  const ExportResult r = exportLog(log, "cut.mcap");
+  EXPECT_GT(r.torn_bytes, 0);
+  const ReadMcap m = readMcap(dir_ / "cut.mcap");
+  std::int64_t taken = 0;
+  for (const auto& [channel, messages] : takenMessages(log)) {
+    taken += static_cast<std::int64_t>(messages.size());
+    EXPECT_EQ(m.per_topic.at(channel), static_cast<std::int64_t>(messages.size())) << channel;
+  }
+  EXPECT_EQ(r.events, taken);
+}
+
+// An lcm-logger recording of a keyed bus: with its key, every tagged event; with another, none of them.
+TEST_F(Export, AKeyedRecordingExportsWithItsKey) {
+  const LogFileContents c = readLogFile(storedLog("utility-goal-attempts"), LogLimits{});
+  BusKey::writeNew(dir_ / "bus.key");
+  BusKey::writeNew(dir_ / "other.key");
+  const BusKey key = BusKey::fromFile(dir_ / "bus.key");
+  {
+    LogWriter w(dir_ / "keyed.lcm");
+    std::uint64_t n = 0;
+    for (const LogEvent& e : c.events) {
+      const auto tagged = key.tagged(e.channel, e.data.data(), e.data.size(), Stamp{7, n++, 0});
+      w.write(e.channel, tagged.data(), tagged.size(), e.utime);
+    }
+    w.close();
+  }
+  const ExportResult r = exportLog(dir_ / "keyed.lcm", "keyed.mcap", (dir_ / "bus.key").string());
+  EXPECT_EQ(r.events, static_cast<std::int64_t>(c.events.size()));
+  EXPECT_EQ(r.skipped, 0);
+  EXPECT_EQ(r.untagged, 0);
+  EXPECT_THROW(exportLog(dir_ / "keyed.lcm", "other.mcap", (dir_ / "other.key").string()), std::runtime_error);
+  EXPECT_FALSE(fs::exists(dir_ / "other.mcap"));
+}
+
+// The writer alone: an empty file is valid; one destroyed unclosed leaves nothing.
+TEST_F(Export, TheWriterLeavesNothingUnlessClosed) {
+  {
+    McapWriter w(dir_ / "empty.mcap", McapOptions{"", "afford test"});
+    w.close();
+  }
+  const ReadMcap m = readMcap(dir_ / "empty.mcap");
+  EXPECT_TRUE(m.messages.empty());
+  EXPECT_EQ(m.statistics_messages, 0);
+  {
+    McapWriter w(dir_ / "unclosed.mcap", McapOptions{"", "afford test"});
+    const auto ch = w.addChannel(w.addSchema("s", "jsonschema", "{}"), "t", "json");
+    w.write(ch, 1, 1, "{}", 2);
+    EXPECT_TRUE(fs::exists(dir_ / "unclosed.mcap.partial"));
+  }
+  EXPECT_FALSE(fs::exists(dir_ / "unclosed.mcap.partial"));
+  EXPECT_FALSE(fs::exists(dir_ / "unclosed.mcap"));
+  EXPECT_THROW(McapWriter(dir_ / "no-such-folder" / "x.mcap", McapOptions{}), std::runtime_error);
+}
+
+// The generated conversion: int64_t exact at its extremes, bytes as base64, a value that is not finite as null.
+TEST(JsonMessages, IntegersAreExactBytesBase64AndNoInvalidJson) {
+  scene_t s{};
+  s.digest = INT64_MIN;
+  s.serial = INT64_MAX;
+  s.size = 4;
+  s.data = {0xff, 0x00, 0x10, 0x80};
+  s.goal_distance = std::numeric_limits<double>::infinity();
+  s.run_id = "r\xff";
+  const std::string text = json_messages::jsonText(s);
+  EXPECT_NE(text.find("\"digest\":-9223372036854775808"), std::string::npos) << text;
+  EXPECT_NE(text.find("\"serial\":9223372036854775807"), std::string::npos) << text;
+  EXPECT_NE(text.find("\"data\":\"/wAQgA==\""), std::string::npos) << text;
+  EXPECT_NE(text.find("\"goal_distance\":null"), std::string::npos) << text;
+  EXPECT_NE(text.find("\"run_id\":\"r\xef\xbf\xbd\""), std::string::npos) << text;  // U+FFFD
+  EXPECT_NO_THROW(nlohmann::json::parse(text));
+  const std::vector<std::uint8_t> abcd = {'a', 'b', 'c', 'd'};
+  const char* want[] = {"\"\"", "\"YQ==\"", "\"YWI=\"", "\"YWJj\"", "\"YWJjZA==\"", "\"YWJjZA==\""};
+  for (int n = 0; n < 6; ++n) {  // (no more than it holds)
+    std::string o;
+    json_messages::base64(o, abcd, n);
+    EXPECT_EQ(o, want[n]) << n;
+  }
+  const auto schema = nlohmann::json::parse(json_messages::Schema<scene_t>::kText);
+  EXPECT_EQ(schema["properties"]["data"]["contentEncoding"], "base64");
+  EXPECT_EQ(schema["properties"]["digest"]["type"], "integer");
+  EXPECT_EQ(schema["properties"]["object_x"]["type"], "array");
+  EXPECT_EQ(schema["required"].size(), schema["properties"].size());
+}
+
+}  // namespace
+}  // namespace afford

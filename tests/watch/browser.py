@@ -1,0 +1,216 @@
+"""afford watch's page in headless Chromium (Selenium and chromedriver, from Debian).
+
+  browser.py live URL OUT        open the page (then touch OUT/page-ready), follow a live run until
+                                 OUT/run/summary.json exists, then check the
+                                 page against the run's log (OUT/logs): its step advanced, each scene it
+                                 showed is the log's scene of that step, it was never more than a second
+                                 behind the run, its curves grew; screenshots OUT/watch-live.png
+  browser.py playback URL OUT    the controls of a log's playback: step, seek, play, pause, speed
+  browser.py hold URL FILE READY once the page follows, touch READY; keep it open until FILE exists
+                                 (bench/watch.sh); print the states it took
+  browser.py token URL           a server bound off loopback: without the token, or with another, every
+                                 request is refused (401); with it, served
+"""
+import base64
+import io
+import json
+import os
+import shutil
+import signal
+import tempfile
+import sys
+import time
+import urllib.error
+import urllib.request
+from pathlib import Path
+
+import matplotlib.image
+import numpy as np
+
+HERE = Path(__file__).resolve()
+
+
+class Browser:
+    """Headless Chromium driven by chromedriver, its profile in a folder of its own; on leaving, every process
+    started with that profile is ended (quitting the driver leaves some of Chromium's running)."""
+
+    def __enter__(self):
+        from selenium import webdriver
+        from selenium.webdriver.chrome.service import Service
+        self.profile = tempfile.mkdtemp(prefix="afford-chromium-")
+        o = webdriver.ChromeOptions()
+        o.binary_location = "/usr/bin/chromium"
+        # As root in a closed network: no sandbox, nothing fetched in the background.
+        for a in ("--headless=new", "--no-sandbox", "--disable-gpu", "--disable-quic", "--no-first-run",
+                  "--disable-background-networking", "--disable-component-update", "--disable-sync",
+                  "--disable-dev-shm-usage", "--window-size=1300,1000", f"--user-data-dir={self.profile}",
+                  *os.environ.get("AFFORD_CHROMIUM_ARGS", "").split()):
+            o.add_argument(a)
+        self.driver = webdriver.Chrome(service=Service("/usr/bin/chromedriver"), options=o)
+        return self.driver
+
+    def __exit__(self, *exc):
+        try:
+            self.driver.quit()
+        finally:
+            for pid in filter(str.isdigit, os.listdir("/proc")):
+                try:
+                    if self.profile.encode() in Path(f"/proc/{pid}/cmdline").read_bytes():
+                        os.kill(int(pid), signal.SIGKILL)
+                except (OSError, ProcessLookupError):
+                    pass
+            shutil.rmtree(self.profile, ignore_errors=True)
+
+
+def wait(what, cond, seconds=30.0):
+    deadline = time.time() + seconds
+    while time.time() < deadline:
+        v = cond()
+        if v:
+            return v
+        time.sleep(0.05)
+    sys.exit(f"timed out waiting for {what}")
+
+
+def shown(d):
+    """What the page shows now: its step, its scene's step and pixels, its curves' points."""
+    return d.execute_script("""
+      const img = document.getElementById('scene');
+      return {step: Number(document.body.dataset.step ?? -1), scene_step: img.dataset.step,
+              scene: img.getAttribute('src'), points: window.afford.curvePoints,
+              run: window.afford.state ? window.afford.state.run.id : '', states: window.afford.states};""")
+
+
+def pixels(data_url):
+    png = base64.b64decode(data_url.split(",", 1)[1])
+    img = matplotlib.image.imread(io.BytesIO(png), format="png")
+    return np.rint(img[:, :, :3] * 255).astype(np.uint8)
+
+
+def scenes_of(log):
+    """The run's scenes by step (the last one of a step), and (utime, step) of every message of the run."""
+    import afford
+    scenes, times = {}, []
+    for m in afford.read_log(log):
+        if "step" not in m.fields or m.channel in ("RUN_CONFIG", "RUN_CONTROL"):
+            continue
+        times.append((m.utime, m["step"]))
+        if m.channel == "SCENE" and m["cause"] != 4:  # not an extrinsic test's goal
+            scenes[m["step"]] = m["image"]
+    return scenes, times
+
+
+def live(url, out):
+    out = Path(out)
+    samples, shot = [], False
+    with Browser() as d:
+        d.get(url)
+        wait("the page's first state", lambda: shown(d)["states"] > 0)
+        (out / "page-ready").touch()  # the run may start
+        wait("the page to show a run", lambda: shown(d)["step"] > 0, 60)
+        while not (out / "run" / "summary.json").exists():
+            s = shown(d)
+            s["time"] = time.time()
+            samples.append(s)
+            if not shot and s["step"] >= 1500:
+                d.save_screenshot(str(out / "watch-live.png"))
+                shot = True
+            time.sleep(0.1)
+    run = samples[0]["run"]
+    samples = [s for s in samples if s["run"] == run and s["scene"]]
+    assert len({s["step"] for s in samples}) >= 5, f"the page's step hardly moved: {[s['step'] for s in samples]}"
+    assert shot, "no screenshot: the page never showed step 1500"
+    scenes, times = scenes_of(out / "logs" / run)
+    checked = 0
+    for s in samples:
+        step = int(s["scene_step"])
+        want = scenes.get(step)
+        assert want is not None, f"the page shows a scene of step {step}, which the log does not have"
+        got = pixels(s["scene"])
+        assert got.shape == want.shape and (got == want).all(), f"the page's scene of step {step} is not the log's"
+        checked += 1
+    # Behind the run: the run had gone past the step shown at most a second before.
+    worst = 0.0
+    for s in samples:
+        later = [t for t, st in times if st > s["step"]]
+        if later:
+            worst = max(worst, s["time"] - min(later) / 1e6)
+    assert worst <= 1.0, f"the page was {worst:.2f} s behind the run"
+    points = [s["points"] for s in samples]
+    assert points[-1] > points[0] >= 0 and points[-1] >= 5, f"the curves did not grow: {points[0]} -> {points[-1]}"
+    print(f"live: {len(samples)} looks at run {run}, steps {samples[0]['step']} to {samples[-1]['step']}; "
+          f"{checked} scenes equal the log's; at most {max(worst, 0):.2f} s behind; curves {points[0]} -> {points[-1]} "
+          "points")
+
+
+def playback(url, out):
+    with Browser() as d:
+        d.get(url)
+        wait("the first step", lambda: shown(d)["scene"] and shown(d)["step"] >= 0)
+        s0 = shown(d)["step"]
+        d.find_element("id", "step-once").click()
+        wait("a step", lambda: shown(d)["step"] > s0)
+        s1 = shown(d)["step"]
+        assert s1 == s0 + 1, f"step moved from {s0} to {s1}"
+        d.execute_script("const s = document.getElementById('seek'); s.value = 1500;"
+                         "s.dispatchEvent(new Event('change'));")
+        wait("the seek", lambda: shown(d)["step"] == 1500)
+        back = int(shown(d)["scene_step"])
+        d.execute_script("const s = document.getElementById('seek'); s.value = 200;"
+                         "s.dispatchEvent(new Event('change'));")
+        wait("the seek back", lambda: shown(d)["step"] == 200)
+        d.execute_script("const s = document.getElementById('speed'); s.value = '500';"
+                         "s.dispatchEvent(new Event('change'));")
+        wait("the speed", lambda: d.execute_script("return window.afford.state.playback.speed") == 500)
+        d.find_element("id", "play").click()
+        wait("playing", lambda: shown(d)["step"] > 400, 20)
+        d.find_element("id", "pause").click()
+        wait("paused", lambda: not d.execute_script("return window.afford.state.playback.playing"))
+        time.sleep(0.3)
+        held = shown(d)["step"]
+        time.sleep(0.5)
+        assert shown(d)["step"] == held, "the playback went on after pause"
+        d.save_screenshot(str(Path(out) / "watch-playback.png"))
+        print(f"playback: step {s0} -> {s1}; seek 1500 (scene of step {back}), back to 200; played to {held} at "
+              f"500 steps/s; paused")
+
+
+def hold(url, until, ready):
+    with Browser() as d:
+        d.get(url)
+        wait("the page's first state", lambda: d.execute_script("return window.afford.states") > 0)
+        Path(ready).touch()
+        while not Path(until).exists():
+            time.sleep(0.2)
+        print(f"the page took {d.execute_script('return window.afford.states')} states")
+
+
+def token(url):
+    base = url.split("?")[0]
+    good = url.split("token=")[1]
+    def status(u):
+        try:
+            with urllib.request.urlopen(u, timeout=10) as r:
+                return r.status
+        except urllib.error.HTTPError as e:
+            return e.code
+    for path in ("", "state", "events?x=1"):
+        assert status(base + path) == 401, f"/{path} without the token was not refused"
+        assert status(base + path + ("&" if "?" in path else "?") + "token=" + "0" * len(good)) == 401
+    req = urllib.request.Request(base + "state", headers={"Authorization": "Bearer " + good})
+    with urllib.request.urlopen(req, timeout=10) as r:
+        assert r.status == 200 and "step" in json.loads(r.read())
+    assert status(base + "state?token=" + good) == 200
+    print("token: every request without it or with another refused (401); with it served")
+
+
+if __name__ == "__main__":
+    mode = sys.argv[1]
+    if mode == "live":
+        live(sys.argv[2], sys.argv[3])
+    elif mode == "playback":
+        playback(sys.argv[2], sys.argv[3])
+    elif mode == "hold":
+        hold(sys.argv[2], sys.argv[3], sys.argv[4])
+    else:
+        token(sys.argv[2])

@@ -1,0 +1,47 @@
+#!/usr/bin/env bash
+# afford watch in headless Chromium, during a real run over udpm and on its log
+# afterwards (tests/watch/browser.py says what is checked); a server bound off
+# loopback refuses every request without its token. The run watched gives the
+# results of the same run unwatched (in one process). Screenshots stay as
+# artefacts: watch-live.png, watch-playback.png.
+#   tests/watch/test_watch.sh BUILD_DIR ARTEFACT_DIR
+set -euo pipefail
+root=$(cd "$(dirname "$0")/../.." && pwd)
+source "$root/tests/netns.sh"
+enter_test "$0" "$@"
+export PYTHONPATH=$build/python
+
+port=7995
+url="udpm://239.255.76.67:$port?ttl=0"
+experiment=(base --system IMP --reps 1 --steps 3000 --extrinsic-reps 1 --scenarios scenario3 --quiet
+            --run-prefix watch)
+
+"$build/bin/afford" watch --lcm-url "$url" --port 8090 >"$out/watch-live.log" 2>&1 &
+wait_until 30 grep -qs "the page:" "$out/watch-live.log" || { cat "$out/watch-live.log"; echo "afford watch never served"; exit 1; }
+/usr/bin/python3 "$root/tests/watch/browser.py" live http://127.0.0.1:8090/ "$out" >"$out/browser-live.log" 2>&1 &
+browser=$!
+wait_until 60 test -e "$out/page-ready" || { cat "$out/browser-live.log"; echo "the page never opened"; exit 1; }
+"$build/bin/afford" experiment "${experiment[@]}" --netns off --base-port "$port" --keep-logs all \
+  --out "$out/run" --log-root "$out/logs" >"$out/run.log" 2>&1 || { echo "the run failed:"; cat "$out/run.log"; exit 1; }
+wait "$browser" || { cat "$out/browser-live.log"; tail -20 "$out/watch-live.log"; exit 1; }
+cat "$out/browser-live.log"
+
+# Watched over udpm, unwatched in one process: the same results.
+"$build/bin/afford" experiment "${experiment[@]}" --transport memq --keep-logs none --out "$out/unwatched" \
+  --log-root "$out/logs-unwatched" >"$out/unwatched.log" 2>&1
+same_results "$out/unwatched" "$out/run"
+echo "watched: the results of the run unwatched"
+
+# The log played: the controls.
+log=$(ls -d "$out"/logs/watch-base-IMP-s1)
+"$build/bin/afford" watch --log "$log" --port 8091 --paused >"$out/watch-log.log" 2>&1 &
+wait_until 30 grep -qs "the page:" "$out/watch-log.log" || { cat "$out/watch-log.log"; echo "afford watch --log never served"; exit 1; }
+/usr/bin/python3 "$root/tests/watch/browser.py" playback http://127.0.0.1:8091/ "$out"
+
+# Off loopback: the token.
+"$build/bin/afford" watch --lcm-url "$url" --bind 0.0.0.0 --port 8092 >"$out/watch-bound.log" 2>&1 &
+wait_until 30 grep -qs "the page:" "$out/watch-bound.log" || { cat "$out/watch-bound.log"; echo "afford watch --bind never served"; exit 1; }
+page=$(sed -n 's/^the page: //p' "$out/watch-bound.log")
+[[ $page == *"?token="* ]] || { echo "no token in the address printed: $page"; exit 1; }
+/usr/bin/python3 "$root/tests/watch/browser.py" token "${page/0.0.0.0/127.0.0.1}"
+echo "screenshots: $out/watch-live.png $out/watch-playback.png"
