@@ -29,9 +29,10 @@
 #     beside what `afford experiment` said, the log replayed (the shortest run R times: its median steps/s is
 #     the speed floor's base); with --kill, the longest run again with a process
 #     killed past --kill-at and restarted: its catch-up time and weights. PASS/FAIL against the floors (exit 1).
-#   bench/run.sh watch [--steps N] [--reps R] [--floor F] [--out DIR]
-#     a run watched by afford watch's page in headless Chromium against it unwatched, over udpm: the same
-#     weights checksum, and steps per second at least F (0.95) of unwatched (median of R pairs; exit 1 below).
+#   bench/run.sh watch [--steps N] [--reps R] [--floor F] [--page local|remote] [--out DIR]
+#     a run watched by afford watch's page (in headless Chromium here, or elsewhere: a client of its stream)
+#     against it unwatched, over udpm: the same weights checksum, and steps per second at least F (0.95) of
+#     unwatched (median of R pairs; exit 1 below).
 #   bench/run.sh reproduction [--reps R] [--ext-reps K] [--jobs J] [--transport memq|udpm] [--out DIR] [WHAT ...]
 #     the whole reproduction (scripts/reproduce.sh WHAT, default all, its report in DIR): wall time beside its
 #     critical path and the share of the time the cores were busy.

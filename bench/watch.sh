@@ -4,21 +4,26 @@
 # each pair (must be equal) and their steps per second (floor: watched at least
 # 0.95 of unwatched, median over the pairs; exit 1 below it). The pairs run in
 # alternating order. docs/performance.md reports it.
-#   bench/run.sh watch [--steps N] [--reps R] [--floor F] [--out DIR]
+# --page remote: the page is elsewhere (a browser on another machine, as for a
+# cluster node reached over ssh): only a client reading its event stream runs
+# here. --page local (the default): headless Chromium on the run's machine.
+#   bench/run.sh watch [--steps N] [--reps R] [--floor F] [--page local|remote] [--out DIR]
 set -euo pipefail
 root=$(cd "$(dirname "$0")/.." && pwd)
-steps=6000 reps=5 floor=0.95 out=$root/out/bench-watch
+steps=6000 reps=5 floor=0.95 page=local out=$root/out/bench-watch
 while (($#)); do
   case $1 in
     --steps) steps=$2; shift 2 ;;
     --reps) reps=$2; shift 2 ;;
     --floor) floor=$2; shift 2 ;;
+    --page) page=$2; shift 2 ;;
     --out) out=$2; shift 2 ;;
-    *) echo "bench/watch.sh: unknown option '$1' (--steps, --reps, --floor, --out)" >&2; exit 2 ;;
+    *) echo "bench/watch.sh: unknown option '$1' (--steps, --reps, --floor, --page, --out)" >&2; exit 2 ;;
   esac
 done
 source "$root/tests/netns.sh"
-enter_private_netns "$0" --steps "$steps" --reps "$reps" --floor "$floor" --out "$out"
+[[ $page == local || $page == remote ]] || { echo "bench/watch.sh: --page is local or remote, not '$page'" >&2; exit 2; }
+enter_private_netns "$0" --steps "$steps" --reps "$reps" --floor "$floor" --page "$page" --out "$out"
 build=$root/build
 [[ -x $build/bin/afford ]] || "$root/scripts/setup.sh"
 rm -rf "$out" && mkdir -p "$out"
@@ -35,7 +40,7 @@ watched() {  # NAME: the same, with the page open on it throughout
   "$build/bin/afford" watch --lcm-url "$url" --port 8093 ${AFFORD_WATCH_ARGS:-} >"$out/$1-watch.log" 2>&1 &
   local watch=$!
   wait_until 30 grep -qs "the page:" "$out/$1-watch.log" || { cat "$out/$1-watch.log"; exit 1; }
-  /usr/bin/python3 "$root/tests/watch/browser.py" hold http://127.0.0.1:8093/ "$out/$1/summary.json" \
+  /usr/bin/python3 "$root/tests/watch/browser.py" "$([[ $page == local ]] && echo hold || echo stream)" http://127.0.0.1:8093/ "$out/$1/summary.json" \
     "$out/$1-page.ready" >"$out/$1-page.log" 2>&1 &
   local page=$!
   wait_until 60 test -e "$out/$1-page.ready" || { cat "$out/$1-page.log"; exit 1; }  # the page follows the bus

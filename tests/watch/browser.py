@@ -8,6 +8,7 @@
   browser.py playback URL OUT    the controls of a log's playback: step, seek, play, pause, speed
   browser.py hold URL FILE READY once the page follows, touch READY; keep it open until FILE exists
                                  (bench/watch.sh); print the states it took
+  browser.py stream URL FILE READY  the same without a browser: a client reading the page's event stream
   browser.py token URL           a server bound off loopback: without the token, or with another, every
                                  request is refused (401); with it, served
 """
@@ -185,6 +186,19 @@ def hold(url, until, ready):
         print(f"the page took {d.execute_script('return window.afford.states')} states")
 
 
+def stream(url, until, ready):
+    """A page elsewhere, as the run's machine sees it: a client reading the event stream (no browser here)."""
+    states = 0
+    with urllib.request.urlopen(url.rstrip("/") + "/events", timeout=30) as r:
+        Path(ready).touch()
+        while not Path(until).exists():
+            line = r.readline()
+            if not line:
+                break
+            states += line.startswith(b"event: state")
+    print(f"the stream took {states} states")
+
+
 def token(url):
     base = url.split("?")[0]
     good = url.split("token=")[1]
@@ -210,6 +224,8 @@ if __name__ == "__main__":
         live(sys.argv[2], sys.argv[3])
     elif mode == "playback":
         playback(sys.argv[2], sys.argv[3])
+    elif mode == "stream":
+        stream(sys.argv[2], sys.argv[3], sys.argv[4])
     elif mode == "hold":
         hold(sys.argv[2], sys.argv[3], sys.argv[4])
     else:
