@@ -95,6 +95,17 @@ Json rawImageSchemaJson() {
   return withDraft(std::move(schema));
 }
 
+Json compressedImageSchemaJson() {
+  Json data = typed("string", "Compressed image data");
+  data["contentEncoding"] = "base64";
+  Json schema = object(kCompressedImage, "A compressed image",
+                       Json{{"timestamp", timeSchema("Timestamp of image")},
+                            {"frame_id", typed("string", "Frame of reference for the image")},
+                            {"data", data},
+                            {"format", typed("string", "Image format: webp, jpeg or png")}});
+  return withDraft(std::move(schema));
+}
+
 Json imageAnnotationsSchemaJson() {
   Json type = typed("integer", "1 POINTS, 2 LINE_LOOP, 3 LINE_STRIP, 4 LINE_LIST (0 UNKNOWN)");
   type["minimum"] = 0;
@@ -137,6 +148,11 @@ const std::string& rawImageSchema() {
   return kText;
 }
 
+const std::string& compressedImageSchema() {
+  static const std::string kText = text(compressedImageSchemaJson());
+  return kText;
+}
+
 const std::string& imageAnnotationsSchema() {
   static const std::string kText = text(imageAnnotationsSchemaJson());
   return kText;
@@ -159,6 +175,22 @@ std::string rawImage(std::uint64_t time_ns, const std::string& frame_id, int wid
   json_messages::integer(o, std::int64_t{width} * 3);
   o += R"(,"data":)";
   json_messages::base64(o, ByteView{rgb, bytes}, static_cast<std::int64_t>(bytes));
+  o += '}';
+  return o;
+}
+
+std::string compressedImage(std::uint64_t time_ns, const std::string& frame_id, const std::string& format,
+                            const std::vector<std::uint8_t>& bytes) {
+  std::string o = R"({"timestamp":{"sec":)";
+  json_messages::integer(o, static_cast<std::int64_t>(time_ns / kNanoseconds));
+  o += R"(,"nsec":)";
+  json_messages::integer(o, static_cast<std::int64_t>(time_ns % kNanoseconds));
+  o += R"(},"frame_id":)";
+  json_messages::text(o, frame_id);
+  o += R"(,"data":)";
+  json_messages::base64(o, ByteView{bytes.data(), bytes.size()}, static_cast<std::int64_t>(bytes.size()));
+  o += R"(,"format":)";
+  json_messages::text(o, format);
   o += '}';
   return o;
 }

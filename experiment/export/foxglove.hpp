@@ -1,21 +1,24 @@
 // Foxglove's own message schemas for images (https://docs.foxglove.dev/docs/visualization/message-schemas),
 // written here as JSON Schemas from their documented definitions, and the
-// messages `afford export` writes with them (export.hpp): a scene or a focus
-// image as foxglove.RawImage ("rgb8"), the eye's gaze as foxglove.ImageAnnotations
+// messages `afford export` writes with them (export.hpp): a scene as
+// foxglove.CompressedImage (PNG), a focus image as foxglove.RawImage ("rgb8"), the eye's gaze as foxglove.ImageAnnotations
 // (a LINE_LOOP box over the scene image, in its pixels). Foxglove recognises
-// a schema by its name (kRawImage, kImageAnnotations) and message encoding "json".
+// a schema by its name (kRawImage, kCompressedImage, kImageAnnotations) and message encoding "json".
 #pragma once
 #include <cstddef>
 #include <cstdint>
 #include <string>
+#include <vector>
 
 namespace afford::foxglove {
 
 inline constexpr const char* kRawImage = "foxglove.RawImage";
+inline constexpr const char* kCompressedImage = "foxglove.CompressedImage";
 inline constexpr const char* kImageAnnotations = "foxglove.ImageAnnotations";
 
 // The JSON Schema texts (draft 2020-12), made once.
 const std::string& rawImageSchema();
+const std::string& compressedImageSchema();
 const std::string& imageAnnotationsSchema();
 
 struct Colour {
@@ -26,6 +29,10 @@ struct Colour {
 // JSON, encoding "rgb8", stamped time_ns (nanoseconds).
 std::string rawImage(std::uint64_t time_ns, const std::string& frame_id, int width, int height,
                      const std::uint8_t* rgb, std::size_t bytes);
+
+// An encoded image (`format`: "png", "jpeg", ...) as foxglove.CompressedImage JSON, stamped time_ns.
+std::string compressedImage(std::uint64_t time_ns, const std::string& frame_id, const std::string& format,
+                            const std::vector<std::uint8_t>& bytes);
 
 // A square of `side` pixels with its top-left corner at (left, top), in image
 // pixels (the origin the top-left corner of the top-left pixel), as

@@ -7,6 +7,8 @@
 // of the spec's records that checks the CRCs and the indexes (the independent
 // check with Foxglove's reader is tests/mcap/test_mcap.sh).
 #include <gtest/gtest.h>
+#include <opencv2/imgcodecs.hpp>
+#include <sodium.h>
 #include <spdlog/sinks/null_sink.h>
 #include <zlib.h>
 
@@ -233,14 +235,21 @@ TEST_F(Export, AStoredLogHasOneMessagePerLogMessageTheEdgeTakesWithItsImagesAndG
   EXPECT_EQ(m.per_topic.at(kSceneImageTopic), count("SCENE"));
   EXPECT_EQ(m.per_topic.at(kFocusImageTopic), count("FOCUS"));
   EXPECT_EQ(m.per_topic.at(kGazeTopic), count("FOCUS") + count("EFFECT"));
-  EXPECT_EQ(m.schema_of.at(kSceneImageTopic), "foxglove.RawImage");
+  EXPECT_EQ(m.schema_of.at(kSceneImageTopic), "foxglove.CompressedImage");
   EXPECT_EQ(m.schema_of.at(kGazeTopic), "foxglove.ImageAnnotations");
   for (const ReadMessage& msg : m.messages)
     if (msg.topic == kSceneImageTopic) {
       const auto image = nlohmann::json::parse(msg.data);
-      EXPECT_EQ(image["encoding"], "rgb8");
-      EXPECT_EQ(image["step"], image["width"].get<int>() * 3);
-      EXPECT_EQ(image["data"].get<std::string>().size(), (image["width"].get<std::size_t>() * image["height"].get<std::size_t>() * 3 + 2) / 3 * 4);
+      EXPECT_EQ(image["format"], "png");
+      const std::string b64 = image["data"].get<std::string>();
+      std::vector<std::uint8_t> png(b64.size());
+      std::size_t n = 0;
+      ASSERT_EQ(sodium_base642bin(png.data(), png.size(), b64.data(), b64.size(), nullptr, &n, nullptr,
+                                  sodium_base64_VARIANT_ORIGINAL), 0);
+      png.resize(n);
+      const cv::Mat decoded = cv::imdecode(png, cv::IMREAD_COLOR);
+      EXPECT_EQ(decoded.cols, 150);  // the scene's pixels (tests/mcap compares them with the log's)
+      EXPECT_EQ(decoded.rows, 150);
       EXPECT_EQ(image["timestamp"]["sec"].get<std::uint64_t>() * 1000000000 + image["timestamp"]["nsec"].get<std::uint64_t>(),
                 msg.log_time);
       break;
