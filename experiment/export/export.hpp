@@ -13,7 +13,7 @@
 // (afford/json_messages.hpp). A message's log_time and publish_time are both the
 // event's time in the log (its microseconds x 1000: an LCM log holds one time).
 // Beside them, in Foxglove's own schemas (foxglove.hpp): each SCENE's image on
-// /SCENE/image and each FOCUS image on /FOCUS/image (foxglove.RawImage, rgb8),
+// /SCENE/image (foxglove.CompressedImage, PNG) and each FOCUS image on /FOCUS/image (foxglove.RawImage, rgb8),
 // and the eye's gaze on /SCENE/gaze (foxglove.ImageAnnotations: the focus
 // window's square over the scene, from each FOCUS, and from each EFFECT's gaze
 // after the action). A Metadata record "afford" holds the run's configuration
