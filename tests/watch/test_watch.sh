@@ -44,4 +44,21 @@ wait_until 30 grep -qs "the page:" "$out/watch-bound.log" || { cat "$out/watch-b
 page=$(sed -n 's/^the page: //p' "$out/watch-bound.log")
 [[ $page == *"?token="* ]] || { echo "no token in the address printed: $page"; exit 1; }
 /usr/bin/python3 "$root/tests/watch/browser.py" token "${page/0.0.0.0/127.0.0.1}"
+# A keyed bus: the watcher with the key follows the run, one without it shows nothing of it.
+"$build/bin/afford" bus-key "$out/bus.key" >/dev/null
+"$build/bin/afford" watch --lcm-url "$url" --bus-key "$out/bus.key" --port 8093 >"$out/watch-keyed.log" 2>&1 &
+"$build/bin/afford" watch --lcm-url "$url" --port 8094 >"$out/watch-keyless.log" 2>&1 &
+wait_until 30 grep -qs "the page:" "$out/watch-keyed.log" || { cat "$out/watch-keyed.log"; exit 1; }
+wait_until 30 grep -qs "the page:" "$out/watch-keyless.log" || { cat "$out/watch-keyless.log"; exit 1; }
+"$build/bin/afford" experiment base --system IMP --reps 1 --steps 300 --quiet --run-prefix keyed --netns off \
+  --base-port "$port" --bus-key "$out/bus.key" --keep-logs none --out "$out/keyed" --log-root "$out/logs-keyed" \
+  >"$out/keyed.log" 2>&1 || { cat "$out/keyed.log"; exit 1; }
+shown() { /usr/bin/python3 -c "import json, sys, urllib.request
+s = json.load(urllib.request.urlopen(sys.argv[1] + '/state'))
+print(s['run']['id'], s['step'])" "$1"; }
+# (the keyed watcher has the result once the run's RESULT came: the run's last step)
+wait_until 30 test "$(shown http://127.0.0.1:8093)" = "keyed-base-IMP-s1 300" ||
+  { echo "the keyed watcher shows '$(shown http://127.0.0.1:8093)'"; exit 1; }
+[[ $(shown http://127.0.0.1:8094) == " -1" ]] || { echo "a watcher without the key shows '$(shown http://127.0.0.1:8094)'"; exit 1; }
+echo "keyed: the watcher with the key followed the run to step 300, the one without it showed nothing"
 echo "screenshots: $out/watch-live.png $out/watch-playback.png"
