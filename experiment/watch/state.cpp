@@ -80,7 +80,7 @@ void WatchState::onConfig(const run_config_t& m, const RunConfig& config) {
 
 void WatchState::onScene(std::int64_t step, const cv::Mat& rgb, bool goal) {
   std::lock_guard<std::mutex> lock(mutex_);
-  (goal ? goal_scene_ : scene_) = Image{rgb.clone(), step};
+  (goal ? goal_scene_ : scene_) = pixels(rgb.clone(), step);
   stepTo(step);
   changed();
 }
@@ -103,7 +103,7 @@ void WatchState::onFocus(std::int64_t step, const std::vector<std::uint8_t>& ima
   std::lock_guard<std::mutex> lock(mutex_);
   side_ = side;
   cv::Mat m = cv::Mat(side, side, CV_8UC3, const_cast<std::uint8_t*>(image.data())).clone();
-  (goal ? sub_goal_ : focus_) = Image{m, step, x, y};
+  (goal ? sub_goal_ : focus_) = pixels(m, step, x, y);
   stepTo(step);
   changed();
 }
@@ -133,7 +133,7 @@ void WatchState::onGoal(std::int64_t step, int id, const std::string& module, co
   own_goal_x_ = x, own_goal_y_ = y;
   sub_goal_ = Image{};
   if (side > 0 && image.size() == static_cast<std::size_t>(side) * side * 3)
-    sub_goal_ = Image{cv::Mat(side, side, CV_8UC3, const_cast<std::uint8_t*>(image.data())).clone(), step, x, y};
+    sub_goal_ = pixels(cv::Mat(side, side, CV_8UC3, const_cast<std::uint8_t*>(image.data())).clone(), step, x, y);
   stepTo(step);
   changed();
 }

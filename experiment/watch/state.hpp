@@ -77,6 +77,12 @@ class WatchState : public RunView {
     std::shared_ptr<const std::vector<std::uint8_t>> encoded;
     int width = 0, height = 0;
   };
+  // A decoded image at a step (and place, for a focus image).
+  static Image pixels(cv::Mat rgb, std::int64_t step, double x = -1, double y = -1) {
+    Image i;
+    i.rgb = std::move(rgb), i.step = step, i.x = x, i.y = y;
+    return i;
+  }
   struct RunSeen {
     std::string id, experiment, system, phase;
     std::int64_t steps = 0, step = -1;
