@@ -143,6 +143,20 @@ Json imageAnnotationsSchemaJson() {
 
 }  // namespace
 
+namespace {
+// An image message's opening, as text (an image's base64 is most of a file, and needs no escaping):
+// {"timestamp":{...},"frame_id":"..."
+std::string imageHead(std::uint64_t time_ns, const std::string& frame_id) {
+  std::string o = R"({"timestamp":{"sec":)";
+  json_messages::integer(o, static_cast<std::int64_t>(time_ns / kNanoseconds));
+  o += R"(,"nsec":)";
+  json_messages::integer(o, static_cast<std::int64_t>(time_ns % kNanoseconds));
+  o += R"(},"frame_id":)";
+  json_messages::text(o, frame_id);
+  return o;
+}
+}  // namespace
+
 const std::string& rawImageSchema() {
   static const std::string kText = text(rawImageSchemaJson());
   return kText;
@@ -160,13 +174,7 @@ const std::string& imageAnnotationsSchema() {
 
 std::string rawImage(std::uint64_t time_ns, const std::string& frame_id, int width, int height,
                      const std::uint8_t* rgb, std::size_t bytes) {
-  // As text: an image's base64 is most of a file, and needs no escaping.
-  std::string o = R"({"timestamp":{"sec":)";
-  json_messages::integer(o, static_cast<std::int64_t>(time_ns / kNanoseconds));
-  o += R"(,"nsec":)";
-  json_messages::integer(o, static_cast<std::int64_t>(time_ns % kNanoseconds));
-  o += R"(},"frame_id":)";
-  json_messages::text(o, frame_id);
+  std::string o = imageHead(time_ns, frame_id);
   o += R"(,"width":)";
   json_messages::integer(o, width);
   o += R"(,"height":)";
@@ -181,12 +189,7 @@ std::string rawImage(std::uint64_t time_ns, const std::string& frame_id, int wid
 
 std::string compressedImage(std::uint64_t time_ns, const std::string& frame_id, const std::string& format,
                             const std::vector<std::uint8_t>& bytes) {
-  std::string o = R"({"timestamp":{"sec":)";
-  json_messages::integer(o, static_cast<std::int64_t>(time_ns / kNanoseconds));
-  o += R"(,"nsec":)";
-  json_messages::integer(o, static_cast<std::int64_t>(time_ns % kNanoseconds));
-  o += R"(},"frame_id":)";
-  json_messages::text(o, frame_id);
+  std::string o = imageHead(time_ns, frame_id);
   o += R"(,"data":)";
   json_messages::base64(o, ByteView{bytes.data(), bytes.size()}, static_cast<std::int64_t>(bytes.size()));
   o += R"(,"format":)";
