@@ -12,22 +12,13 @@ set(AFFORD_HTTPLIB_ORIG_SHA256 8b1a5df569003b6a4f24c68489bbda5c64aec94697bdc9ebb
 set(AFFORD_HTTPLIB_DEBIAN cpp-httplib_0.11.4+ds-1+deb12u1.debian.tar.xz)
 set(AFFORD_HTTPLIB_DEBIAN_SHA256 a0adf8a38610806f6d94ba69839438635e5e6580775e28ff31d6a081e34f1484)
 
-function(afford_checked_tarball file sha256)
-  if(NOT EXISTS ${file})
-    message(FATAL_ERROR "${file} is missing: run scripts/fetch-httplib.sh (scripts/setup.sh does) to fetch "
-                        "cpp-httplib ${AFFORD_HTTPLIB_VERSION}'s source, which afford builds with its own patch")
-  endif()
-  file(SHA256 ${file} got)
-  if(NOT got STREQUAL sha256)
-    message(FATAL_ERROR "${file} has SHA-256 ${got}, not ${sha256}: remove it and run scripts/fetch-httplib.sh again")
-  endif()
-endfunction()
-
 function(afford_bundled_httplib target)
   get_filename_component(root ${CMAKE_CURRENT_FUNCTION_LIST_DIR}/.. ABSOLUTE)
   set(dist ${root}/third_party/httplib/dist)
-  afford_checked_tarball(${dist}/${AFFORD_HTTPLIB_ORIG} ${AFFORD_HTTPLIB_ORIG_SHA256})
-  afford_checked_tarball(${dist}/${AFFORD_HTTPLIB_DEBIAN} ${AFFORD_HTTPLIB_DEBIAN_SHA256})
+  foreach(part ORIG DEBIAN)
+    afford_checked_source(${dist}/${AFFORD_HTTPLIB_${part}} ${AFFORD_HTTPLIB_${part}_SHA256} scripts/fetch-httplib.sh
+                          "cpp-httplib ${AFFORD_HTTPLIB_VERSION}")
+  endforeach()
   file(GLOB patches ${root}/third_party/httplib/patches/*.patch)
   list(SORT patches)
   set_property(DIRECTORY APPEND PROPERTY CMAKE_CONFIGURE_DEPENDS ${patches})

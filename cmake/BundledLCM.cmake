@@ -23,18 +23,24 @@ function(afford_apply_patches src what)
   endforeach()
 endfunction()
 
+# afford_checked_source(FILE SHA256 FETCH WHAT): stops the configure unless FILE (a source tarball that the
+# script FETCH keeps) is there with that SHA-256, saying how to get it (also used by cmake/BundledHttplib.cmake).
+function(afford_checked_source file sha256 fetch what)
+  if(NOT EXISTS ${file})
+    message(FATAL_ERROR "${file} is missing: run ${fetch} (scripts/setup.sh does) to fetch ${what}'s source, "
+                        "which afford builds with its own patches")
+  endif()
+  file(SHA256 ${file} got)
+  if(NOT got STREQUAL sha256)
+    message(FATAL_ERROR "${file} has SHA-256 ${got}, not ${sha256}: remove it and run ${fetch} again")
+  endif()
+endfunction()
+
 function(afford_bundled_lcm target)
   get_filename_component(root ${CMAKE_CURRENT_FUNCTION_LIST_DIR}/.. ABSOLUTE)
   set(tarball ${root}/third_party/lcm/dist/${AFFORD_LCM_TARBALL_NAME})
-  if(NOT EXISTS ${tarball})
-    message(FATAL_ERROR "${tarball} is missing: run scripts/fetch-lcm.sh (scripts/setup.sh does) to fetch "
-                        "LCM ${AFFORD_LCM_VERSION}'s source, which afford builds with its own patches")
-  endif()
-  file(SHA256 ${tarball} got)
-  if(NOT got STREQUAL AFFORD_LCM_TARBALL_SHA256)
-    message(FATAL_ERROR "${tarball} has SHA-256 ${got}, not ${AFFORD_LCM_TARBALL_SHA256}: remove it and run "
-                        "scripts/fetch-lcm.sh again")
-  endif()
+  afford_checked_source(${tarball} ${AFFORD_LCM_TARBALL_SHA256} scripts/fetch-lcm.sh "LCM ${AFFORD_LCM_VERSION}")
+  set(got ${AFFORD_LCM_TARBALL_SHA256})
   file(GLOB patches ${root}/third_party/lcm/patches/*.patch)
   list(SORT patches)
   set_property(DIRECTORY APPEND PROPERTY CMAKE_CONFIGURE_DEPENDS ${tarball} ${patches})

@@ -21,6 +21,7 @@
 #include "afford/image.hpp"
 #include "afford/json_messages.hpp"
 #include "afford/protocol.hpp"
+#include "afford/process_main.hpp"
 #include "afford/version.hpp"
 #include "experiment/export/foxglove.hpp"
 #include "experiment/export/mcap.hpp"
@@ -192,6 +193,8 @@ ExportResult exportMcap(const ExportOptions& o, spdlog::logger& log) {
   BoundsContext ctx{nullptr, nullptr};
   LogEvent e;
   while (in.next(e)) {
+    // Ctrl-C (when the command installed the stop handlers): the partial file goes with the writer.
+    if (stopRequested()) throw std::runtime_error("interrupted: " + o.mcap + " not written");
     if (!select.take(e)) {
       ++result.left_out;
       continue;

@@ -145,6 +145,8 @@ VideoResult renderVideo(const VideoOptions& o, spdlog::logger& log) {
     LogEvent e;
     std::string why;
     while (in.next(e) && (o.max_frames <= 0 || r.frames < o.max_frames)) {
+      // Ctrl-C (when the command installed the stop handlers): the partial file is removed below.
+      if (stopRequested()) throw std::runtime_error("interrupted: " + o.out.string() + " not written");
       ++r.events;
       RunHeader h;
       // An event of a later step: the step shown is complete.

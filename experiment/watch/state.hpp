@@ -124,6 +124,9 @@ class WatchState : public RunView {
   std::int64_t last_ = -1;
   // Runs heard, by id.
   std::map<std::string, RunSeen> runs_;
+  // The last snapshot made, for the other pages sent the same state (with and without the curves).
+  mutable std::uint64_t cached_version_[2] = {~std::uint64_t{0}, ~std::uint64_t{0}};
+  mutable std::shared_ptr<const std::string> cached_[2];
 };
 
 }  // namespace afford

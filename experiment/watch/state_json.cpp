@@ -40,8 +40,12 @@ struct WatchState::Copy {
 
 std::string WatchState::snapshot(bool with_curves) const {
   Copy c;
+  std::uint64_t version = 0;
   {
     std::lock_guard<std::mutex> lock(mutex_);
+    version = version_;
+    if (cached_version_[with_curves] == version_) return *cached_[with_curves];  // made for another page
+
     double pace = 0;
     if (pace_.size() >= 2) {
       const double secs = std::chrono::duration<double>(pace_.back().first - pace_.front().first).count();
@@ -109,7 +113,10 @@ std::string WatchState::snapshot(bool with_curves) const {
     names.resize(objects);
     j["curves"] = {{"objects", names}, {"truth", c.truth}, {"steps", c.steps}, {"values", c.values}};
   }
-  return j.dump(-1, ' ', false, json::error_handler_t::replace);
+  auto text = std::make_shared<const std::string>(j.dump(-1, ' ', false, json::error_handler_t::replace));
+  std::lock_guard<std::mutex> lock(mutex_);
+  cached_version_[with_curves] = version, cached_[with_curves] = text;
+  return *text;
 }
 
 }  // namespace afford

@@ -3,6 +3,7 @@
 #include <memory>
 #include <string>
 
+#include "afford/process_main.hpp"
 #include "apps/afford/commands.hpp"
 #include "experiment/export/export.hpp"
 
@@ -47,6 +48,7 @@ Command exportCommand(CLI::App& app, const FrontDoor& door) {
                   "the key of the bus the log was recorded on (an lcm-logger recording of a keyed bus): "
                   "only events with its tag are exported");
   return {cmd, [o, &door] {
+            installStopHandlers();  // Ctrl-C: nothing half-written left
             printExport(exportMcap(*o, *door.log));
             return 0;
           }};

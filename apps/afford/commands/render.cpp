@@ -2,6 +2,7 @@
 #include <cstdio>
 #include <memory>
 
+#include "afford/process_main.hpp"
 #include "apps/afford/commands.hpp"
 #include "experiment/present/video.hpp"
 
@@ -22,6 +23,7 @@ Command renderCommand(CLI::App& app, const FrontDoor& door) {
   render->add_option("--ffmpeg", o->ffmpeg, "the ffmpeg to run")->capture_default_str();
   return {render, [o, &door] {
             o->config_dir = door.config_dir;
+            installStopHandlers();  // Ctrl-C: nothing half-written left
             const VideoResult r = renderVideo(*o, *door.log);
             std::printf("run: %s\nwrote %s: %lld frames of %dx%d, steps %lld to %lld every %lld, %d per second\n",
                         r.run_id.c_str(), o->out.string().c_str(), static_cast<long long>(r.frames), r.width, r.height,
