@@ -17,22 +17,20 @@ bool hasOption(const std::string& query, const std::string& key) {
 }
 }  // namespace
 
-std::string busUrl(const std::string& url, const BusConfig& bus) {
+std::string withBusOption(const std::string& url, const std::string& key, long long value) {
   if (url.rfind("udpm://", 0) != 0) return url;
   const std::size_t q = url.find('?');
-  const std::string query = q == std::string::npos ? "" : url.substr(q + 1);
+  if (q != std::string::npos && hasOption(url.substr(q + 1), key)) return url;
+  const char* sep = q == std::string::npos ? "?" : (q + 1 == url.size() ? "" : "&");
+  return url + sep + key + "=" + std::to_string(value);
+}
+
+std::string busUrl(const std::string& url, const BusConfig& bus) {
   std::string out = url;
-  char sep = q == std::string::npos ? '?' : (query.empty() ? '\0' : '&');
-  auto add = [&](const std::string& key, int value) {
-    if (hasOption(query, key)) return;
-    if (sep) out += sep;
-    out += key + "=" + std::to_string(value);
-    sep = '&';
-  };
-  add("max_message_size", bus.max_message_bytes);
-  add("fragment_buffer_size", bus.fragment_bytes);
-  add("fragment_timeout_ms", bus.fragment_timeout_ms);
-  add("receive_queue_size", bus.queue_bytes);
+  out = withBusOption(out, "max_message_size", bus.max_message_bytes);
+  out = withBusOption(out, "fragment_buffer_size", bus.fragment_bytes);
+  out = withBusOption(out, "fragment_timeout_ms", bus.fragment_timeout_ms);
+  out = withBusOption(out, "receive_queue_size", bus.queue_bytes);
   return out;
 }
 

@@ -16,11 +16,14 @@
 #include <sys/socket.h>
 #include <unistd.h>
 
+#include <algorithm>
 #include <chrono>
 #include <cstdint>
 #include <cstdlib>
 #include <cstring>
+#include <filesystem>
 #include <fstream>
+#include <iterator>
 #include <map>
 #include <sstream>
 #include <string>
@@ -486,6 +489,56 @@ TEST_F(LcmPatches, ASubscriptionByPatternTakesEveryChannelUntilItIsGone) {
   s.sendShort("OTHER", pattern(20, 1));
   sync(s);
   EXPECT_EQ(socketDrops() - before, 1);
+}
+
+// The threads of this process, by id.
+std::vector<std::string> threadsNow() {
+  std::vector<std::string> ids;
+  for (const auto& e : std::filesystem::directory_iterator("/proc/self/task")) ids.push_back(e.path().filename());
+  std::sort(ids.begin(), ids.end());
+  return ids;
+}
+// How often thread `id` of this process has gone to sleep (its voluntary context switches).
+long sleepsOf(const std::string& id) {
+  std::ifstream in("/proc/self/task/" + id + "/status");
+  for (std::string line; std::getline(in, line);)
+    if (line.rfind("voluntary_ctxt_switches:", 0) == 0) return std::stol(line.substr(24));
+  return -1;
+}
+
+// 0011: a receiver's receive thread was woken for every datagram of a stream. With receive_batch_ms it
+// empties the socket, then waits the period before waiting again: a stream wakes it once per period, and
+// every message still arrives.
+TEST_F(LcmPatches, AReceiverWithReceiveBatchMsTakesAStreamInBatches) {
+  constexpr int kMessages = 200;
+  // A receiver without the option paces the stream: each message is sent once it has taken the one before.
+  lcm::LCM pace("udpm://239.255.76.67:" + std::to_string(kPort) + "?ttl=0");
+  ASSERT_TRUE(pace.good());
+  Taken paced;
+  pace.subscribe("PACE", &Taken::on, &paced);
+  const std::vector<std::string> before = threadsNow();
+  listen("&receive_batch_ms=100");
+  Taken taken;
+  lcm_->subscribe("PACE", &Taken::on, &taken)->setQueueCapacity(kMessages);  // a batch is queued at once
+  std::vector<std::string> started;
+  const std::vector<std::string> after = threadsNow();
+  std::set_difference(after.begin(), after.end(), before.begin(), before.end(), std::back_inserter(started));
+  ASSERT_EQ(started.size(), 1u) << "the receiver's receive thread";
+  Sender s;
+  sync(s);
+  const long sleeps = sleepsOf(started[0]);
+  for (int i = 0; i < kMessages; ++i) {
+    s.sendShort("PACE", pattern(30, static_cast<std::uint8_t>(i)));
+    while (paced.by_channel["PACE"] == i && pace.handleTimeout(10000) > 0) {
+    }
+    ASSERT_EQ(paced.by_channel["PACE"], i + 1) << "the pacing receiver did not hear message " << i;
+  }
+  sync(s);
+  const long woken = sleepsOf(started[0]) - sleeps;
+  EXPECT_EQ(taken.by_channel["PACE"], kMessages);
+  // The stream lasts a few tens of milliseconds: one or two periods, and the waits of sync().
+  EXPECT_LT(woken, kMessages / 10) << "the receive thread slept " << woken << " times for " << kMessages
+                                   << " datagrams";
 }
 
 // 0007: a data length of 0x7FFFFFFF overflowed 'datalen + 1' and the reader wrote through a null pointer.

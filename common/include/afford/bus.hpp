@@ -15,6 +15,8 @@ namespace afford {
 
 // `url` with protocol.bus's options added (a udpm URL), else `url`.
 std::string busUrl(const std::string& url, const BusConfig& bus);
+// A udpm `url` with the provider option `key`=`value` added unless it sets `key` itself; other URLs as given.
+std::string withBusOption(const std::string& url, const std::string& key, long long value);
 // The bus at busUrl(url, bus); throws std::runtime_error naming the URL if it is neither udpm://
 // nor memq://, or if LCM cannot open it.
 std::unique_ptr<lcm::LCM> openBus(const std::string& url, const BusConfig& bus);
