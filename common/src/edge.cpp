@@ -49,7 +49,24 @@ Edge::Edge(lcm::LCM& lcm, std::shared_ptr<spdlog::logger> log, std::string owner
       }) {}
 
 Edge::~Edge() {
-  for (const auto& s : subs_) lcm_.unsubscribe(s->sub);
+  for (const auto& s : subs_)
+    if (s->sub) lcm_.unsubscribe(s->sub);
+}
+
+void Edge::take(const std::string& channel, bool on) {
+  bool found = false;
+  for (const auto& s : subs_) {
+    if (s->channel != channel) continue;
+    found = true;
+    if (on && !s->sub) {
+      s->sub = lcm_.subscribe(channel, &Subscription::on, s.get());
+      s->sub->setQueueCapacity(protocol_->queue_capacity);
+    } else if (!on && s->sub) {
+      lcm_.unsubscribe(s->sub);
+      s->sub = nullptr;
+    }
+  }
+  if (!found) throw std::logic_error("Edge::take: " + channel + " is not subscribed");
 }
 
 void Edge::join(const std::string& run_id, const RunConfig* config) {
@@ -62,7 +79,8 @@ void Edge::join(const std::string& run_id, const RunConfig* config) {
     for (const std::string& p : runProcesses(config->phase, config->record))
       if (p != owner_) readers.push_back(p);
   outbound_.join(run_id, protocol_->recovery, std::move(readers));
-  for (const auto& s : subs_) s->sub->setQueueCapacity(protocol_->queue_capacity);
+  for (const auto& s : subs_)
+    if (s->sub) s->sub->setQueueCapacity(protocol_->queue_capacity);
 }
 
 void Edge::leave() {

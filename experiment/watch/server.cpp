@@ -49,6 +49,20 @@ void error(httplib::Response& res, int status, const std::string& why) {
   res.status = status;
   res.set_content(why + "\n", "text/plain; charset=utf-8");
 }
+
+// Why cpp-httplib itself refused a request (it answers with a status and no body).
+std::string refusal(int status) {
+  switch (status) {
+    case 400:
+      return "a malformed request: its request line or header fields (at most 100 fields of 16 KB), or a body "
+             "without a Content-Length (POST /control needs one, even of 0)";
+    case 404:
+      return "no such page: afford watch serves /, /state, /events and, playing a log, POST /control";
+    case 413: return "the request's body is larger than afford watch takes (64 KB)";
+    case 414: return "the request's address is too long";
+    default: return std::string("refused: ") + httplib::detail::status_message(status);
+  }
+}
 }  // namespace
 
 void WatchServer::routes() {
@@ -104,6 +118,11 @@ void WatchServer::routes() {
         },
         [this](bool) { streams_.fetch_sub(1); });
   });
+  s.set_error_handler(httplib::Server::HandlerWithResponse([](const httplib::Request&, httplib::Response& res) {
+    if (!res.body.empty()) return httplib::Server::HandlerResponse::Unhandled;  // ours, saying why already
+    error(res, res.status, refusal(res.status));
+    return httplib::Server::HandlerResponse::Handled;
+  }));
   s.set_exception_handler([](const httplib::Request&, httplib::Response& res, std::exception_ptr ep) {
     try {
       std::rethrow_exception(ep);

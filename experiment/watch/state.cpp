@@ -50,8 +50,10 @@ void WatchState::onRun(const std::string& run_id, const std::string& title) {
   title_ = title;
   steps_ = 0, step_ = -1;
   object_names_.clear(), true_affordance_.clear();
-  scene_ = goal_scene_ = focus_ = sub_goal_ = Image{};
+  scene_ = goal_scene_ = focus_ = sub_goal_ = seen_scene_ = Image{};
+  seen_decision_.clear(), seen_decision_step_ = -1;
   have_affordance_ = false;
+  prediction_step_ = -1;
   decision_.clear(), goal_text_.clear();
   own_goal_x_ = own_goal_y_ = -1;
   motivation_.clear(), threshold_.clear(), goals_.clear();
@@ -104,6 +106,7 @@ void WatchState::onFocus(std::int64_t step, const std::vector<std::uint8_t>& ima
   side_ = side;
   cv::Mat m = cv::Mat(side, side, CV_8UC3, const_cast<std::uint8_t*>(image.data())).clone();
   (goal ? sub_goal_ : focus_) = pixels(m, step, x, y);
+  if (!goal) seen_scene_ = scene_;  // (shares its pixels)
   stepTo(step);
   changed();
 }
@@ -112,6 +115,7 @@ void WatchState::onPrediction(std::int64_t step, const std::array<double, 4>& af
   std::lock_guard<std::mutex> lock(mutex_);
   affordance_ = affordance;
   have_affordance_ = true;
+  prediction_step_ = step;
   stepTo(step);
   changed();
 }
@@ -122,6 +126,7 @@ void WatchState::onDecision(std::int64_t step, bool acted, int action, double mo
   threshold_.push_back(threshold);
   while (motivation_.size() > limits_.trace_length) motivation_.pop_front(), threshold_.pop_front();
   decision_ = acted && action >= 0 && action < kNumActions ? "act: " + std::string(kActionNames[action]) : "pass";
+  if (step == focus_.step) seen_decision_ = decision_, seen_decision_step_ = step;
   stepTo(step);
   changed();
 }
@@ -215,6 +220,11 @@ std::uint64_t WatchState::curvesVersion() const {
 std::int64_t WatchState::step() const {
   std::lock_guard<std::mutex> lock(mutex_);
   return step_;
+}
+
+WatchState::Progress WatchState::progress() const {
+  std::lock_guard<std::mutex> lock(mutex_);
+  return {phase_, step_, std::min(focus_.step, prediction_step_)};
 }
 
 std::uint64_t WatchState::wait(std::uint64_t seen, Clock::time_point until) const {

@@ -67,6 +67,13 @@ class WatchState : public RunView {
   std::string snapshot(bool with_curves) const;
   std::uint64_t curvesVersion() const;
   std::int64_t step() const;
+  // For sampling the channels said every step (afford watch): the shown run's phase, its step, and the
+  // older of the steps of the latest focus and prediction taken (-1: none yet).
+  struct Progress {
+    std::string phase;
+    std::int64_t step = -1, focus_and_prediction = -1;
+  };
+  Progress progress() const;
 
  private:
   struct Image {
@@ -104,9 +111,17 @@ class WatchState : public RunView {
   std::vector<std::string> object_names_;
   std::vector<std::array<double, 4>> true_affordance_;
   Image scene_, goal_scene_, focus_, sub_goal_;
+  // The picture of one step (what the eye saw, what it was predicted, what was decided): the scene when
+  // the latest focus came, and the decision of the focus's step. afford watch takes the focus only a few
+  // times a second (sampler.hpp) while scenes and decisions come on: shown with the latest scene, its gaze
+  // box would stand on a scene of later steps.
+  Image seen_scene_;
+  std::string seen_decision_;
+  std::int64_t seen_decision_step_ = -1;
   int side_ = 21;
   std::array<double, 4> affordance_{};
   bool have_affordance_ = false;
+  std::int64_t prediction_step_ = -1;
   std::string decision_, goal_text_;
   double own_goal_x_ = -1, own_goal_y_ = -1;
   std::deque<double> motivation_, threshold_;

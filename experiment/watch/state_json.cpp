@@ -71,7 +71,7 @@ std::string WatchState::snapshot(bool with_curves) const {
               {"run", {{"id", run_id_}, {"title", title_}, {"phase", phase_}, {"steps", steps_}}},
               {"steps_per_second", playback_ ? speed_ : pace},
               {"side", side_},
-              {"decision", decision_},
+              {"decision", focus_.step >= 0 && seen_decision_step_ == focus_.step ? seen_decision_ : decision_},
               {"goal_text", goal_text_},
               {"own_goal", {{"x", own_goal_x_}, {"y", own_goal_y_}}},
               {"affordance", have_affordance_ ? json(affordance_) : json(nullptr)},
@@ -80,7 +80,8 @@ std::string WatchState::snapshot(bool with_curves) const {
               {"goals", goals},
               {"runs", runs}};
     if (playback_) c.head["playback"] = {{"playing", playing_}, {"speed", speed_}, {"last", last_}};
-    c.scene = scene_, c.goal_scene = goal_scene_, c.focus = focus_, c.sub_goal = sub_goal_;
+    c.scene = focus_.step >= 0 && seen_scene_.step >= 0 ? seen_scene_ : scene_;  // the picture of one step
+    c.goal_scene = goal_scene_, c.focus = focus_, c.sub_goal = sub_goal_;
     if (with_curves) {
       c.curves = true;
       c.names = object_names_, c.truth = true_affordance_;

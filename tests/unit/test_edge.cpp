@@ -171,6 +171,24 @@ TEST_F(EdgeOnTheBus, OnAKeyedBusOnlyMessagesWithTheKeysTagAreTaken) {
   EXPECT_EQ(taken, (std::vector<std::int64_t>{0, 1}));
 }
 
+// A passive listener samples a channel: while it does not take it, its messages are not handed to it (over
+// udpm the kernel drops them); taken again, the next ones are. A channel not subscribed cannot be taken.
+TEST_F(EdgeOnTheBus, AChannelNotTakenIsNotHandedOnAndIsTakenAgainWhenAskedFor) {
+  scene_t s0 = sceneOf("run-1", 0), s1 = sceneOf("run-1", 1), s2 = sceneOf("run-1", 2);
+  sender.publish(ch::scene, s0);
+  pump();
+  receiver.take(ch::scene.name, false);
+  receiver.take(ch::scene.name, false);  // twice is once
+  sender.publish(ch::scene, s1);
+  pump();
+  EXPECT_EQ(taken, std::vector<std::int64_t>{0});
+  receiver.take(ch::scene.name, true);
+  sender.publish(ch::scene, s2);
+  pump();
+  EXPECT_EQ(taken, (std::vector<std::int64_t>{0, 2}));
+  EXPECT_THROW(receiver.take(ch::focus.name, true), std::logic_error);
+}
+
 // Freshness: a tagged message said again (the same bytes, a recording played back) is dropped and counted,
 // before anything else of it is looked at; the sender's next message is taken.
 TEST_F(EdgeOnTheBus, OnAKeyedBusAMessageSaidAgainIsDroppedAndCounted) {

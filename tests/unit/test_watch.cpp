@@ -16,6 +16,7 @@
 #include <vector>
 
 #include "afford/image.hpp"
+#include "experiment/watch/sampler.hpp"
 #include "experiment/watch/server.hpp"
 #include "experiment/watch/state.hpp"
 #include "tests/support.hpp"
@@ -73,6 +74,63 @@ TEST(WatchState, HoldsWhatARunOfAnyLengthShowsWithinItsBounds) {
   EXPECT_EQ(s["curves"]["objects"].size(), c.world.objects.size());
   EXPECT_EQ(s["runs"].size(), limits.most_runs);
   EXPECT_EQ(s["runs"][0]["id"], "long");  // the latest first
+}
+
+// FOCUS and PREDICTION, said every step, are taken one step at a time, once per gap; let go in between; the
+// page's picture is that step's. In another phase than the intrinsic one (whose FOCUS carries a goal's
+// scan) they are taken throughout.
+TEST(WatchSampler, TakesAStepOfFocusAndPredictionOncePerGapAndShowsThatStep) {
+  RunConfig c = test::shippedConfig();
+  WatchState state;
+  bool taking = true;
+  int turns = 0;
+  const auto gap = std::chrono::milliseconds(200);
+  StepSampler sampler(state, [&](bool on) { taking = on, ++turns; }, gap);
+  run_config_t m;
+  m.run_id = "r";
+  state.onRun("r", "intrinsic base IMP");
+  state.onConfig(m, c);
+  const cv::Mat scene = blankScene(150);
+  // One step of the run, with or without the sampled channels (what the bus hands on while they are let go):
+  // a scene, the focus on it and its prediction, the decision (to act on every other step).
+  auto step = [&](std::int64_t t) {
+    state.onScene(t, scene, false);
+    if (taking) {
+      state.onFocus(t, cropFocus(scene, {30, 30}, 21), 21, 0.2, 0.2, false);
+      state.onPrediction(t, {0.9, 0.1, 0.5, 0.7});
+    }
+    state.onDecision(t, t % 2 == 0, 1, 0.1, 0.2);
+  };
+  const auto t0 = Clock::now();
+  sampler.tick(t0);
+  EXPECT_TRUE(taking) << "nothing taken yet";
+  step(0);
+  sampler.tick(t0);
+  EXPECT_FALSE(taking) << "a step's focus and prediction are in";
+  for (std::int64_t t = 1; t < 50; ++t) step(t), sampler.tick(t0 + gap / 2);
+  EXPECT_FALSE(taking) << "taken again before the gap";
+  sampler.tick(t0 + gap);
+  EXPECT_TRUE(taking);
+  step(50);
+  sampler.tick(t0 + gap);
+  EXPECT_FALSE(taking);
+  step(51);
+  const json s = json::parse(state.snapshot(false));
+  EXPECT_EQ(s["step"], 51) << "the run's step: the latest";
+  // The picture is of one step, the latest sampled: its scene, its focus, its decision.
+  EXPECT_EQ(s["focus"]["step"], 50);
+  EXPECT_EQ(s["scene"]["step"], 50);
+  EXPECT_EQ(s["decision"], "act: " + std::string(kActionNames[1]));
+  EXPECT_EQ(s["motivation"].size(), 52u) << "the trace: every step";
+  EXPECT_EQ(turns, 3);  // let go, taken, let go
+  // The extrinsic phase: taken throughout.
+  c.phase = Phase::Extrinsic;
+  state.onRun("x", "extrinsic base IMP");
+  state.onConfig(m, c);
+  sampler.tick(t0 + gap);
+  EXPECT_TRUE(taking);
+  for (std::int64_t t = 0; t < 5; ++t) step(t), sampler.tick(t0 + gap * (t + 2));
+  EXPECT_TRUE(taking);
 }
 
 // A raw client socket on the server's port.
@@ -254,6 +312,17 @@ TEST(WatchServer, BadRequestsAreRefusedAndHoldNoMemory) {
   const auto res = client.Get("/state");
   ASSERT_TRUE(res) << httplib::to_string(res.error());
   EXPECT_EQ(res->status, 200);
+  // What the server's library refuses is said why, as the server's own refusals are.
+  const auto nowhere = client.Get("/nowhere");
+  ASSERT_TRUE(nowhere);
+  EXPECT_EQ(nowhere->status, 404);
+  EXPECT_NE(nowhere->body.find("no such page"), std::string::npos) << nowhere->body;
+  fd = connectTo(server.port());
+  sendAll(fd, "POST /control?command=play HTTP/1.1\r\nHost: x\r\n\r\n");  // no Content-Length
+  const std::string bodiless = answer(fd, 4096);
+  close(fd);
+  EXPECT_EQ(bodiless.rfind("HTTP/1.1 400", 0), 0u) << bodiless;
+  EXPECT_NE(bodiless.find("Content-Length"), std::string::npos) << bodiless;
   const long grown = statusKb("VmHWM:") - before;
   EXPECT_LT(grown, 48 * 1024) << "kB held by bad requests";
   server.stop();

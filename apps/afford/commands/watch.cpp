@@ -15,8 +15,10 @@
 #include "afford/edge.hpp"
 #include "afford/logging.hpp"
 #include "afford/process_main.hpp"
+#include "afford/protocol.hpp"
 #include "apps/afford/commands.hpp"
 #include "experiment/watch/player.hpp"
+#include "experiment/watch/sampler.hpp"
 #include "experiment/watch/server.hpp"
 #include "experiment/watch/state.hpp"
 #include "viewer/feed.hpp"
@@ -31,6 +33,7 @@ struct WatchArgs {
   PlayerOptions player;
   bool paused = false;
   int nice = 10;
+  int batch_ms = 20;
 };
 
 // The watcher gives way to the run: its threads (made after this) take the CPU a run leaves.
@@ -52,7 +55,10 @@ int watchLive(WatchArgs& a, const FrontDoor& door) {
   giveWay(a.nice);
   const ProtocolConfig protocol = loadProtocol(door.config_dir);
   const std::shared_ptr<const BusKey> key = busKeyFrom(a.bus_key);
-  std::unique_ptr<lcm::LCM> bus = openBus(a.url, protocol.bus);
+  // The bus's datagrams taken every batch_ms, not one at a time: a watcher woken for each would take the
+  // run's CPU (third_party/lcm patch 0011); what a page is sent (5 states a second) does not change.
+  const std::string url = a.batch_ms > 0 ? withBusOption(a.url, "receive_batch_ms", a.batch_ms) : a.url;
+  std::unique_ptr<lcm::LCM> bus = openBus(url, protocol.bus);
   WatchState state;
   auto log = makeLogger("watch", "info");
   Edge edge(*bus, log, "watch", protocol);
@@ -64,7 +70,19 @@ int watchLive(WatchArgs& a, const FrontDoor& door) {
   std::printf("watching %s%s\nthe page: %s\n", a.url.c_str(), key ? " (keyed)" : "", server.url().c_str());
   std::fflush(stdout);
   installStopHandlers();
-  while (!stopRequested()) pumpBus(*bus, 50);
+  const auto gap = std::chrono::duration_cast<StepSampler::Clock::duration>(
+      std::chrono::duration<double>(1.0 / a.server.most_per_second));
+  StepSampler sampler(
+      state,
+      [&edge](bool on) {
+        edge.take(ch::focus.name, on);
+        edge.take(ch::prediction.name, on);
+      },
+      gap);
+  while (!stopRequested()) {
+    pumpBus(*bus, 50);
+    sampler.tick(StepSampler::Clock::now());
+  }
   server.stop();
   return 0;
 }
@@ -112,6 +130,9 @@ Command watchCommand(CLI::App& app, const FrontDoor& door) {
                                                    "when --bind is not loopback)");
   watch->add_option("--nice", a->nice, "lower its own priority by this much (0..19), so that on a busy machine the "
                                        "run goes first and the page lags instead")->capture_default_str()->check(CLI::Range(0, 19));
+  watch->add_option("--batch-ms", a->batch_ms, "take the bus's messages every this many milliseconds, in one go, "
+                                               "rather than each as it comes (0: each as it comes)")
+      ->capture_default_str()->check(CLI::Range(0, 1000));
   watch->add_option("--updates", a->server.most_per_second, "states a page is sent a second, at most")
       ->capture_default_str()->check(CLI::Range(0.5, 30.0));
   watch->add_option("--most-pages", a->server.most_streams, "pages following at once; more are refused")

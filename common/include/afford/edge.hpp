@@ -152,6 +152,11 @@ class Edge {
   // channel's type (afford/protocol.hpp): a handler of another type does not compile.
   template <class Msg, class F>
   void subscribe(const Channel<Msg>& channel, F handler, Scope scope, Order order);
+  // Take a subscribed channel from the bus (on), or stop taking it: while off, this process is not
+  // subscribed to it and LCM's socket filter drops its datagrams in the kernel. For a passive listener
+  // that samples a busy channel (afford watch); a process in a run never turns a channel off. Throws
+  // std::logic_error if `channel` was not subscribed. Not from a handler.
+  void take(const std::string& channel, bool on);
   // Take a publisher's counts (its STATUS) as claims on the channels it publishes, and a reader's
   // restart positions as what it may still ask of what this process published.
   void claim(const process_status_t& status) {
@@ -207,8 +212,9 @@ class Edge {
 
  private:
   struct Subscription {
+    std::string channel;
     std::function<void(const lcm::ReceiveBuffer*)> fn;
-    lcm::Subscription* sub = nullptr;
+    lcm::Subscription* sub = nullptr;  // null while the channel is not taken (take())
     void on(const lcm::ReceiveBuffer* b, const std::string&) { fn(b); }
   };
   using Pending = EdgeInbound::Pending;
@@ -271,6 +277,7 @@ void Edge::subscribe(const Channel<Msg>& typed, F handler, Scope scope, Order or
     throw std::logic_error(channel + ": afford." + wire::Bounds<Msg>::kName + " has no serial to order by");
   auto shared = std::make_shared<const F>(std::move(handler));
   auto s = std::make_unique<Subscription>();
+  s->channel = channel;
   s->fn = [this, channel, shared, scope, order](const lcm::ReceiveBuffer* rb) {
     ++receiving_;
     try {
