@@ -33,6 +33,9 @@
 #     a run watched by afford watch's page (in headless Chromium here, or elsewhere: a client of its stream)
 #     against it unwatched, over udpm: the same weights checksum, and steps per second at least F (0.95) of
 #     unwatched (median of R pairs; exit 1 below).
+#   bench/run.sh env [--worlds N] [--steps S] [--reps R] [--threads 1,2] [--grid G] [--out DIR]
+#     afford.env's batched form (AffordVectorEnv: N worlds in one call of the C++ core) against N single
+#     environments in a Python loop: environment steps per second, and the same rewards.
 #   bench/run.sh reproduction [--reps R] [--ext-reps K] [--jobs J] [--transport memq|udpm] [--out DIR] [WHAT ...]
 #     the whole reproduction (scripts/reproduce.sh WHAT, default all, its report in DIR): wall time beside its
 #     critical path and the share of the time the cores were busy.
@@ -42,6 +45,8 @@ cd "$(dirname "$0")/.."
 [[ ${1:-} == watch ]] && { shift; exec bench/watch.sh "$@"; }
 [[ ${1:-} == python ]] && { shift; [[ -x build/bin/afford ]] || scripts/setup.sh;
   PYTHONPATH=build/python exec /usr/bin/python3 bench/python_bench.py "$@"; }
+[[ ${1:-} == env ]] && { shift; [[ -x build/bin/afford ]] || scripts/setup.sh;
+  PYTHONPATH=build/python exec /usr/bin/python3 bench/env_bench.py "$@"; }
 [[ ${1:-} == reproduction ]] && { shift; exec /usr/bin/python3 bench/reproduction.py "$@"; }
 [[ ${1:-} == long ]] && { shift; [[ -x build/bin/afford ]] || scripts/setup.sh; exec /usr/bin/python3 bench/long_run.py "$@"; }
 [[ ${1:-} == full ]] && { shift; [[ -x build/bin/afford ]] || scripts/setup.sh;

@@ -46,6 +46,7 @@ packages=(
   python3-dev pybind11-dev python3-numpy python3-pandas python3-matplotlib python3-pytest
   python3-nbclient python3-nbformat python3-ipykernel python3-venv python3-pip python3-setuptools python3-wheel
   chromium chromium-driver python3-selenium  # tests/watch: the live page in a real browser
+  python3-torch  # examples/torch-predictor: an affordance predictor written with PyTorch
 )
 # Node.js and npm, for the MCAP checker (tools/mcapcheck: Foxglove's @mcap/core): Debian's, unless a Node.js
 # with its own npm is installed already (NodeSource's package, which Debian's npm conflicts with).

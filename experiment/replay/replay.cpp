@@ -339,7 +339,8 @@ std::vector<std::string> processesToReplay(const ReplayOptions& o, const RunConf
           affordance_kinds.end())
     throw std::runtime_error("the run's predictors.affordance.kind '" + config.predictors.affordance_kind +
                              "' is not one of afford's own (a program of one's own, or Python, registered it), so "
-                             "its predictors cannot be replayed here" +
+                             "its predictors cannot be replayed here (a class in Python replays in Python: "
+                             "afford.replay(LOG, affordance=TheClass))" +
                              (result.extrinsic || own_motivation ? std::string() : "; replay --into motivation"));
   for (const auto& name : into)
     if (name != "predictors" && name != "motivation" && name != "planner")

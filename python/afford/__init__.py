@@ -8,7 +8,7 @@
 from . import _afford
 from .components import (ACTIONS, GOAL_MODULES, AffordancePredictor, Decision, Goal, GoalChooser, KeyedRng,
                          Motivation, register_affordance, register_goals, register_motivation)
-from .experiments import ExperimentError, run
+from .experiments import ExperimentError, replay, run
 from .logs import Message, RunLog, read_log
 from .results import Experiment, load
 
@@ -18,4 +18,4 @@ channels = _afford.channels
 
 __all__ = ["Motivation", "Decision", "KeyedRng", "ACTIONS", "register_motivation", "AffordancePredictor",
            "GoalChooser", "Goal", "GOAL_MODULES", "register_goals",
-           "register_affordance", "run", "ExperimentError", "load", "Experiment", "read_log", "RunLog", "Message", "ConfigError", "channels"]
+           "register_affordance", "run", "replay", "ExperimentError", "load", "Experiment", "read_log", "RunLog", "Message", "ConfigError", "channels"]

@@ -12,11 +12,27 @@ is executed on the object in focus; the eye sees its effect; then the next
 step's scan. The interface is Gymnasium's (reset(seed=), step, spaces,
 render); Gymnasium itself is not needed (not packaged in Debian): without
 it, the spaces are small classes of this module with the same methods, and
-with it they are gymnasium.spaces and the environment is registered as
-"afford/Affordances-v0".
+with it they are gymnasium.spaces and the environments are registered as
+"afford/Affordances-v0" and "afford/AffordancesFlat-v0".
+
+For learners that take one discrete action and an image (PPO, DQN as
+CleanRL or Stable-Baselines3 write them):
+
+    from afford.env import FlatAffordEnv, AffordVectorEnv
+    env = FlatAffordEnv(world="base", scenario="scenario1", reward="goal", grid=5)
+    envs = AffordVectorEnv(16, world="base", scenario="scenario1", reward="goal", seed=1)
+
+FlatAffordEnv's action is one integer: 0-4 act on what the eye's scan found
+(4 passes), or look at the centre of a cell of a grid over the scene, then
+act; its observation is one image: the scene, the eye's window as a mask
+channel, and the goal when there is one. AffordVectorEnv steps many of them
+(one world per seed) in one call of the C++ core, with the GIL released.
+Every episode's return, length and time are in the info of its last step
+(`info["episode"]`, as Gymnasium's RecordEpisodeStatistics reports them).
 """
 from __future__ import annotations
 
+import time
 from typing import Any, Callable
 
 import numpy as np
@@ -98,6 +114,28 @@ class Dict:
         return f"Dict({self.spaces})"
 
 
+class MultiDiscrete:
+    """gymnasium.spaces.MultiDiscrete's interface (one Discrete(n) per entry), for when Gymnasium is absent."""
+
+    def __init__(self, nvec):
+        self.nvec = np.asarray(nvec, dtype=np.int64)
+        self.shape, self.dtype = self.nvec.shape, np.dtype(np.int64)
+        self._rng = np.random.default_rng()
+
+    def seed(self, seed=None):
+        self._rng = np.random.default_rng(seed)
+
+    def sample(self):
+        return self._rng.integers(0, self.nvec, dtype=np.int64)
+
+    def contains(self, x) -> bool:
+        x = np.asarray(x)
+        return x.shape == self.shape and np.issubdtype(x.dtype, np.integer) and bool(np.all((x >= 0) & (x < self.nvec)))
+
+    def __repr__(self):
+        return f"MultiDiscrete({self.nvec})"
+
+
 def _box(low, high, shape, dtype):
     return _spaces.Box(low, high, shape, dtype) if _spaces else Box(low, high, shape, dtype)
 
@@ -108,6 +146,10 @@ def _discrete(n):
 
 def _dict(d):
     return _spaces.Dict(d) if _spaces else Dict(d)
+
+
+def _multi_discrete(nvec):
+    return _spaces.MultiDiscrete(nvec) if _spaces else MultiDiscrete(nvec)
 
 
 PASS = 4  # the action that does nothing
@@ -150,7 +192,9 @@ class AffordEnv(gymnasium.Env if gymnasium else object):
     "gaze": (x, y) in [0, 1]}. Action: {"act": 0-3 (move, turn green, turn
     red, turn blue) or 4 (pass), "look": (x, y) in [0, 1] to look there
     first, or negative to act on what the scan found}. An episode is
-    truncated after the experiment's run.steps steps.
+    truncated after the experiment's run.steps steps. Its last step's info
+    has "episode": {"r": its return, "l": its length, "t": seconds since its
+    reset}, as Gymnasium's RecordEpisodeStatistics (1.0) reports them.
     """
 
     metadata = {"render_modes": ["rgb_array"]}
@@ -187,6 +231,7 @@ class AffordEnv(gymnasium.Env if gymnasium else object):
         if gymnasium:
             super().reset(seed=seed)
         self.action_space.seed(self._seed)
+        self._episode_return, self._episode_length, self._episode_start = 0.0, 0, time.perf_counter()
         info = {"step": 0}
         if self._args[3]:
             info["goal"] = self._world.goal()
@@ -196,6 +241,9 @@ class AffordEnv(gymnasium.Env if gymnasium else object):
         act = int(action["act"])
         look = action.get("look")
         x, y = (-1.0, -1.0) if look is None else (float(look[0]), float(look[1]))
+        return self._step(act, x, y)
+
+    def _step(self, act: int, x: float, y: float):
         info = self._world.step(act, x, y)
         if callable(self._reward):
             reward = float(self._reward(info))
@@ -205,7 +253,15 @@ class AffordEnv(gymnasium.Env if gymnasium else object):
             reward = 1.0 if info["succeeded"] else 0.0
         terminated = self._reward == "goal" and info["goal_distance"] < self._world.success_distance
         truncated = self._world.step_count >= self._world.steps
-        return self._world.observation(), reward, terminated, truncated, info
+        self._episode_return += reward
+        self._episode_length += 1
+        if terminated or truncated:
+            info["episode"] = {"r": self._episode_return, "l": self._episode_length,
+                               "t": round(time.perf_counter() - self._episode_start, 6)}
+        return self._observe(), reward, terminated, truncated, info
+
+    def _observe(self):
+        return self._world.observation()
 
     def render(self):
         """With render_mode "rgb_array": the scene with the gaze box (yellow, as afford-viewer draws it),
@@ -219,5 +275,137 @@ class AffordEnv(gymnasium.Env if gymnasium else object):
         pass
 
 
+def flat_action(action: int, grid: int) -> tuple[int, float, float]:
+    """FlatAffordEnv's action `action` as (act, x, y): 0-4 act on what the scan found (x = y = -1); then, for
+    each place of a grid x grid grid over the scene (row by row) and each act 0-3, look at the place's centre
+    and act. An action out of range raises ValueError naming the range."""
+    return _afford.flat_action(int(action), int(grid))
+
+
+def flat_observation(scene: np.ndarray, gaze, side: int, goal: np.ndarray | None) -> np.ndarray:
+    """One image (H x W x C, uint8): the scene's RGB, the eye's side x side window around the gaze as a mask
+    channel (255 inside, clipped at the edges), and the goal's RGB when there is one (C = 7, else 4)."""
+    return _afford.flat_observation(scene, (float(gaze[0]), float(gaze[1])), int(side), goal)
+
+
+class FlatAffordEnv(AffordEnv):
+    """AffordEnv with one discrete action and one image, for learners that take those (CleanRL's and
+    Stable-Baselines3's PPO and DQN; Stable-Baselines3 refuses Dict actions).
+
+    Action: Discrete(5 + 4 * grid^2), see flat_action. Observation: Box (H, W, 4) uint8 (the scene and the
+    eye's window as a mask), or (H, W, 7) with a scenario (and its goal image). The rest is AffordEnv's.
+    """
+
+    def __init__(self, world: str = "base", seed: int = 0, system: str = "IMP", set: dict[str, Any] | None = None,
+                 scenario: str | None = None, reward: str | Callable[[dict[str, Any]], float] = "success",
+                 render_mode: str | None = None, grid: int = 5):
+        if not isinstance(grid, (int, np.integer)) or not 1 <= grid <= 64:
+            raise ValueError(f"grid {grid!r}: places per side, 1 to 64")
+        super().__init__(world=world, seed=seed, system=system, set=set, scenario=scenario, reward=reward,
+                         render_mode=render_mode)
+        self.grid = int(grid)
+        size = self._world.scene_size
+        self.observation_space = _box(0, 255, (size, size, 7 if scenario else 4), np.uint8)
+        self.action_space = _discrete(PASS + 1 + 4 * self.grid * self.grid)
+
+    def reset(self, *, seed: int | None = None, options: dict[str, Any] | None = None):
+        _, info = super().reset(seed=seed, options=options)
+        return self._observe(), info
+
+    def step(self, action: int):
+        return self._step(*flat_action(action, self.grid))
+
+    def _observe(self):
+        return self._world.flat_observation()
+
+
+class AffordVectorEnv:
+    """num_envs FlatAffordEnv worlds of one experiment stepped together by the C++ core (afford._afford.Worlds),
+    with the GIL released, on `threads` threads: world i has seed seed + i, and goes exactly as
+    FlatAffordEnv(seed=seed + i) does.
+
+    Gymnasium's vector interface (0.29's autoreset): step(actions) returns arrays over the worlds; a world
+    whose episode ended is reset in the same call, its next observation is its first, and its last
+    observation and info are in info["final_observation"] and info["final_info"] (at its index; the mask
+    info["_final_observation"]). info["episode"] = {"r", "l", "t"} arrays with the mask info["_episode"], as
+    Gymnasium's RecordEpisodeStatistics writes them for a vector environment. reward: "success" or "goal".
+    copy=False (as Gymnasium's SyncVectorEnv(copy=False)): the observations returned are an array the next
+    step writes again, not a copy.
+    """
+
+    metadata = {"render_modes": []}
+
+    def __init__(self, num_envs: int = 8, world: str = "base", seed: int = 0, system: str = "IMP",
+                 set: dict[str, Any] | None = None, scenario: str | None = None, reward: str = "success",
+                 grid: int = 5, threads: int = 1, copy: bool = True):
+        if reward not in ("success", "goal"):
+            raise ValueError(f"reward {reward!r}: 'success' or 'goal'")
+        if reward == "goal" and not scenario:
+            raise ValueError("reward 'goal' needs a scenario")
+        if not isinstance(num_envs, (int, np.integer)) or num_envs < 1:
+            raise ValueError(f"num_envs {num_envs!r}: at least 1")
+        if not isinstance(grid, (int, np.integer)) or not 1 <= grid <= 64:
+            raise ValueError(f"grid {grid!r}: places per side, 1 to 64")
+        self.num_envs, self.grid, self._reward = int(num_envs), int(grid), reward
+        self._args = (world, system, [f"{k}={v}" for k, v in (set or {}).items()], scenario or "")
+        self._threads, self._copy = int(threads), bool(copy)
+        self._seed = seed
+        self._make(seed)
+        size = self._worlds.scene_size
+        self.single_observation_space = _box(0, 255, (size, size, 7 if scenario else 4), np.uint8)
+        self.single_action_space = _discrete(PASS + 1 + 4 * self.grid * self.grid)
+        self.observation_space = _box(0, 255, (self.num_envs,) + self.single_observation_space.shape, np.uint8)
+        self.action_space = _multi_discrete([self.single_action_space.n] * self.num_envs)
+
+    def _make(self, seed: int):
+        world, system, settings, scenario = self._args
+        self._worlds = _afford.Worlds(world, system, [seed + i for i in range(self.num_envs)], settings, scenario,
+                                      self._threads)
+
+    def reset(self, *, seed: int | None = None, options: dict[str, Any] | None = None):
+        if seed is not None and seed != self._seed:
+            self._seed = seed
+            self._make(seed)
+        else:
+            for i in range(self.num_envs):
+                self._worlds.reset(i)
+        self.action_space.seed(self._seed)
+        self._returns = np.zeros(self.num_envs)
+        self._lengths = np.zeros(self.num_envs, np.int64)
+        self._starts = np.full(self.num_envs, time.perf_counter())
+        return self._worlds.flat_observation(), {"step": np.zeros(self.num_envs, np.int64)}
+
+    def step(self, actions):
+        actions = np.asarray(actions).reshape(-1)
+        if actions.shape != (self.num_envs,) or not np.issubdtype(actions.dtype, np.integer):
+            raise ValueError(f"actions: {self.num_envs} integers 0 to {self.single_action_space.n - 1}, "
+                             f"not {actions!r}")
+        obs, reward, terminated, truncated, info, final = self._worlds.step_flat(actions, self.grid,
+                                                                                 self._reward == "goal")
+        obs = obs.copy() if self._copy else obs
+        self._returns += reward
+        self._lengths += 1
+        done = terminated | truncated
+        if final is not None:
+            now = time.perf_counter()
+            info["episode"] = {"r": np.where(done, self._returns, 0.0), "l": np.where(done, self._lengths, 0),
+                               "t": np.where(done, np.round(now - self._starts, 6), 0.0)}
+            info["_episode"] = done.copy()
+            info["final_observation"] = np.array(final + [None], dtype=object)[:-1]  # (an array of objects)
+            info["_final_observation"] = done.copy()
+            info["final_info"] = np.array(
+                [{"episode": {"r": float(self._returns[i]), "l": int(self._lengths[i]),
+                              "t": float(info["episode"]["t"][i])},
+                  **{k: v[i] for k, v in info.items() if isinstance(v, np.ndarray) and v.shape == (self.num_envs,)
+                     and not k.startswith("_")}} if done[i] else None for i in range(self.num_envs)], dtype=object)
+            info["_final_info"] = done.copy()
+            self._returns[done], self._lengths[done], self._starts[done] = 0.0, 0, now
+        return obs, reward, terminated, truncated, info
+
+    def close(self):
+        pass
+
+
 if gymnasium:  # pragma: no cover
     gymnasium.register(id="afford/Affordances-v0", entry_point="afford.env:AffordEnv")
+    gymnasium.register(id="afford/AffordancesFlat-v0", entry_point="afford.env:FlatAffordEnv")

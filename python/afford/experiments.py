@@ -116,3 +116,24 @@ def run(experiment: str, system: str | Iterable[str] | None = None, reps: int | 
         raise ExperimentError(f"afford.run({experiment!r}) failed (exit {code}) in {out}{more}:\n  {said}",
                               list(errors), out, code)
     return load(out)
+
+
+def replay(log: str | Path, affordance: Any = None, motivation: Any = None, goals: Any = None,
+           into: Iterable[str] = (), run: str = "", bus_key: str | Path | None = None,
+           log_level: str = "warning") -> dict[str, Any]:
+    """Replay a recorded run into fresh learning processes in this process, as `afford replay LOG` does.
+
+    `affordance`, `motivation`, `goals`: the classes written in Python the run used (registered here
+    first), so that a run with a Python affordance predictor, which `afford replay` cannot rebuild, replays
+    too. `into`: predictors, motivation, planner (default: the predictors and the run's decider). Returns
+    {"weights_checksum": the replayed predictors', "recorded_checksum": the run's, "ok": everything the
+    record holds was replayed and equals it, "consistent", "decisions", "decisions_differing",
+    "decider_skipped", "events", "gaps", "dropped", "incomplete", "run_id"}. A log it cannot read raises
+    RuntimeError naming the file.
+    """
+    from .components import register_affordance, register_goals, register_motivation
+    for cls, register in ((affordance, register_affordance), (motivation, register_motivation),
+                          (goals, register_goals)):
+        if cls is not None:
+            register(cls)
+    return _afford.replay(str(log), list(into), run, str(bus_key) if bus_key else "", log_level)

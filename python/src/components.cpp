@@ -4,6 +4,7 @@
 #include <pybind11/stl.h>
 #include <yaml-cpp/yaml.h>
 
+#include <cmath>
 #include <cstring>
 #include <memory>
 #include <string>
@@ -203,6 +204,8 @@ PerAction perAction(const py::handle& v, const std::string& what) {
   if (xs.size() != kNumActions)
     throw std::runtime_error(what + " has " + std::to_string(xs.size()) + " numbers, not one per action (" +
                              std::to_string(kNumActions) + ")");
+  for (std::size_t a = 0; a < xs.size(); ++a)
+    if (!std::isfinite(xs[a])) throw std::runtime_error(what + "[" + std::to_string(a) + "] is not finite");
   PerAction out{};
   std::copy(xs.begin(), xs.end(), out.begin());
   return out;
@@ -247,6 +250,10 @@ class PythonAffordance : public AffordanceComponent {
         l.after = field(r, "after").cast<double>();
         l.learning_progress = field(r, "learning_progress").cast<double>();
       }
+      if (!std::isfinite(l.before) || !std::isfinite(l.after) || !std::isfinite(l.learning_progress))
+        throw std::runtime_error(at + " returned a number that is not finite (before " + std::to_string(l.before) +
+                                 ", after " + std::to_string(l.after) + ", learning progress " +
+                                 std::to_string(l.learning_progress) + ")");
       return l;
     } catch (py::error_already_set& e) {
       throw std::runtime_error(at + " raised " + e.what());

@@ -27,6 +27,7 @@
 #include "environment/environment.hpp"
 #include "eye/eye.hpp"
 #include "components.hpp"
+#include "worlds.hpp"
 #include "afford/to_python.hpp"
 #include "experiment/design/experiment_file.hpp"
 #include "afford/process_main.hpp"
@@ -149,105 +150,36 @@ py::tuple runExperimentFrom(const py::dict& request) {
   return py::make_tuple(code, signal, errors->last_formatted());
 }
 
-
-
-// ---- the environment and the eye in process, step by step (afford.env) ------------------
-
-py::array_t<std::uint8_t> bytesImage(const std::uint8_t* data, int height, int width) {
-  py::array_t<std::uint8_t> out({static_cast<py::ssize_t>(height), static_cast<py::ssize_t>(width),
-                                 static_cast<py::ssize_t>(3)});
-  std::memcpy(out.mutable_data(), data, static_cast<std::size_t>(height) * width * 3);
-  return out;
+// afford replay in this process, where components registered from Python are known (a run with a Python
+// affordance predictor replays here, and not with the command). The GIL is released while it runs.
+py::dict replayFrom(const std::string& log_dir, const std::vector<std::string>& into, const std::string& run_id,
+                    const std::string& bus_key, const std::string& log_level) {
+  ReplayOptions o;
+  o.log_dir = log_dir, o.into = into, o.run_id = run_id, o.bus_key = bus_key;
+  auto console = std::make_shared<spdlog::sinks::stderr_color_sink_mt>();
+  auto log = std::make_shared<spdlog::logger>("replay", console);
+  log->set_level(parseLevel(log_level));
+  log->set_pattern("[%H:%M:%S.%e] [%n] [%^%l%$] %v");
+  ReplayResult r;
+  {
+    py::gil_scoped_release free;
+    r = replayRun(o, *log);
+  }
+  py::dict d;
+  d["run_id"] = r.run_id;
+  d["events"] = r.events;
+  d["weights_checksum"] = r.weights_checksum;
+  d["recorded_checksum"] = r.recorded_checksum;
+  d["decisions"] = r.decisions, d["decisions_recorded"] = r.decisions_recorded;
+  d["decisions_differing"] = r.decisions_differing;
+  d["decider_skipped"] = r.decider_skipped;
+  d["dropped"] = r.dropped;
+  d["incomplete"] = r.incomplete;
+  d["gaps"] = static_cast<py::ssize_t>(r.gaps.size());
+  d["ok"] = r.ok();
+  d["consistent"] = r.consistent();
+  return d;
 }
-
-// The environment core and the eye core of one run, driven a step at a time:
-// the eye's bottom-up scan (or a look where the caller says) picks the object,
-// the action is executed on it, the eye sees its effect, and the next step's
-// scan follows, as in the agent's loop (paper Algorithm 1) without predictors.
-class World {
- public:
-  World(const std::string& experiment, const std::string& system, std::int64_t seed,
-        const std::vector<std::string>& settings, const std::string& scenario)
-      : config_(parseRunConfig(effectiveConfig(defaultConfigDir(),
-                                               RunRequest{experiment, parseSystem(system), seed, std::nullopt,
-                                                          settings}))) {
-    if (!scenario.empty()) scenario_ = loadScenario(defaultConfigDir(), scenario, config_.world);
-    reset();
-  }
-
-  void reset() {
-    env_ = scenario_ ? std::make_unique<Environment>(config_, *scenario_) : std::make_unique<Environment>(config_);
-    eye_ = std::make_unique<Eye>(config_);
-    step_ = 0;
-    eye_->setScene(env_->render(), env_->centres());
-    if (scenario_) eye_->setGoal(env_->goalScene(), env_->goalCentres());
-    eye_->scan(step_);
-  }
-
-  py::dict observation() const {
-    py::dict o;
-    const cv::Mat& scene = eye_->scene();
-    o["scene"] = bytesImage(scene.data, scene.rows, scene.cols);
-    const Focus& f = eye_->focus();
-    const int side = focusSide(f);
-    o["focus"] = bytesImage(f.image.data(), side, side);
-    o["gaze"] = py::array_t<double>(2, std::array<double, 2>{f.x, f.y}.data());
-    return o;
-  }
-
-  // Look at (x, y) first when x >= 0 (else at what the scan found), then do `act` (0-3; 4 passes).
-  py::dict step(int act, double x, double y) {
-    if (act < 0 || act > kNumActions)
-      throw std::invalid_argument("action " + std::to_string(act) + ": 0-3 (move, turn green, turn red, turn blue) "
-                                  "or 4 (pass)");
-    if (x >= 0 && y >= 0) eye_->lookAt(std::min(x, 1.0), std::min(y, 1.0));
-    const Focus f = eye_->focus();
-    py::dict info;
-    info["step"] = step_;
-    info["acted"] = act < kNumActions;
-    info["on_object"] = false;
-    info["succeeded"] = false;
-    info["image_changed"] = false;
-    info["position_changed"] = false;
-    if (act < kNumActions) {
-      const ActionOutcome out = env_->execute(step_, act, f.x, f.y);
-      info["on_object"] = out.on_object;
-      info["succeeded"] = out.succeeded;
-      const Effect e = eye_->scanEffect(step_, env_->render(), act, env_->centres());
-      info["image_changed"] = e.image_changed;
-      info["position_changed"] = e.position_changed;
-    }
-    ++step_;
-    if (env_->introduceObjectsAt(step_)) eye_->setScene(env_->render(), env_->centres());
-    eye_->scan(step_);
-    info["goal_distance"] = scenario_ ? env_->goalDistance() : -1.0;
-    return info;
-  }
-
-  std::int64_t stepCount() const { return step_; }
-  std::int64_t steps() const { return config_.steps; }
-  int sceneSize() const { return config_.world.size_px; }
-  int focusSide() const { return focusSide(eye_->focus()); }
-  double successDistance() const { return config_.planner.success_distance; }
-  py::array_t<std::uint8_t> goal() const {
-    if (!scenario_) throw std::runtime_error("this world has no scenario: no goal image");
-    const cv::Mat& g = env_->goalScene();
-    return bytesImage(g.data, g.rows, g.cols);
-  }
-
- private:
-  static int focusSide(const Focus& f) {
-    int side = 0;
-    while ((side + 1) * (side + 1) * 3 <= static_cast<int>(f.image.size())) ++side;
-    return side;
-  }
-
-  RunConfig config_;
-  std::optional<Scenario> scenario_;
-  std::unique_ptr<Environment> env_;
-  std::unique_ptr<Eye> eye_;
-  std::int64_t step_ = 0;
-};
 
 }  // namespace
 }  // namespace afford
@@ -263,20 +195,11 @@ PYBIND11_MODULE(_afford, m) {
         "The messages of one run of a log folder (or .lcm file), read and checked by the project's reader.");
   m.def("run_experiment", &afford::runExperimentFrom, py::arg("request"),
         "Run an experiment in this process (afford experiment); returns (exit code, signal or 0, the last errors).");
+  m.def("replay", &afford::replayFrom, py::arg("log_dir"), py::arg("into") = std::vector<std::string>{},
+        py::arg("run_id") = "", py::arg("bus_key") = "", py::arg("log_level") = "warning",
+        "Replay a recorded run into fresh learning processes in this process (afford replay); a dict of results.");
   m.def("channels", [] { return afford::channelNames(); }, "Every channel of the protocol, in the protocol's order.");
   afford::defineComponents(m);
-  py::class_<afford::World>(m, "World", "The environment and the eye of one run, a step at a time (afford.env).")
-      .def(py::init<const std::string&, const std::string&, std::int64_t, const std::vector<std::string>&,
-                    const std::string&>(),
-           py::arg("experiment"), py::arg("system"), py::arg("seed"), py::arg("settings"), py::arg("scenario"))
-      .def("reset", &afford::World::reset)
-      .def("observation", &afford::World::observation)
-      .def("step", &afford::World::step, py::arg("act"), py::arg("x") = -1.0, py::arg("y") = -1.0)
-      .def_property_readonly("step_count", &afford::World::stepCount)
-      .def_property_readonly("steps", &afford::World::steps)
-      .def_property_readonly("scene_size", &afford::World::sceneSize)
-      .def_property_readonly("focus_side", py::overload_cast<>(&afford::World::focusSide, py::const_))
-      .def_property_readonly("success_distance", &afford::World::successDistance)
-      .def("goal", &afford::World::goal);
+  afford::defineWorlds(m);
   m.attr("version") = afford::affordVersion();
 }

@@ -157,10 +157,19 @@ class ThreeActions(PyPerceptrons):
         return affordance[:3], lp
 
 
+class NotFinite(PyPerceptrons):
+    kind = "not-finite"
+
+    def predict(self, image):
+        affordance, lp = super().predict(image)
+        return affordance, lp[:2] + [float("nan")] + lp[3:]
+
+
 @pytest.mark.parametrize("cls, message", [
     (RaisingLearner, "affordance predictor 'raising' (Python): learn() raised ArithmeticError: cannot learn this"),
     (SinglePrecision, "affordance predictor 'single' (Python): state(0)[0] is an array of float32, not float64"),
     (ThreeActions, "affordance predictor 'three' (Python): predict()'s affordance has 3 numbers, not one per action"),
+    (NotFinite, "affordance predictor 'not-finite' (Python): predict()'s learning progress[2] is not finite"),
 ])
 def test_a_python_affordance_predictor_that_misbehaves_fails_its_run_naming_what(tmp_path, cls, message):
     with pytest.raises(RuntimeError, match="failed"):

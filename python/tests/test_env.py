@@ -98,3 +98,104 @@ def test_bad_arguments_are_named():
         env.step({"act": 7, "look": None})
     with pytest.raises(ValueError):
         AffordEnv(world="no-such-world")
+
+
+# ---- the forms learners take: one discrete action, one image, batched; the contract as Gymnasium checks it ----
+
+from afford.env import AffordVectorEnv, FlatAffordEnv, flat_action, flat_observation  # noqa: E402
+from afford.env_check import check_env  # noqa: E402
+
+
+@pytest.mark.parametrize("make", [
+    lambda: AffordEnv(world="base", seed=1, set={"run.steps": 30}),
+    lambda: AffordEnv(world="base", seed=1, set={"run.steps": 30}, render_mode="rgb_array"),
+    lambda: FlatAffordEnv(world="base", seed=1, set={"run.steps": 30}),
+    lambda: FlatAffordEnv(world="base", seed=1, set={"run.steps": 30}, scenario="scenario1", reward="goal", grid=3),
+], ids=["dict", "dict-rendered", "flat", "flat-goal"])
+def test_every_form_keeps_the_contract_gymnasiums_checker_checks(make):
+    check_env(make())
+
+
+class _Broken(FlatAffordEnv):
+    def __init__(self, fault):
+        super().__init__(world="base", seed=1, set={"run.steps": 10})
+        self.fault = fault
+
+    def step(self, action):
+        obs, reward, terminated, truncated, info = super().step(action)
+        if self.fault == "four":
+            return obs, reward, terminated, info
+        if self.fault == "episode":
+            info.pop("episode", None)
+        if self.fault == "reward":
+            reward = float("nan")
+        if self.fault == "observation":
+            obs = obs[:, :, :3]
+        return obs, reward, terminated, truncated, info
+
+
+@pytest.mark.parametrize("fault, says", [("four", "does not return"), ("episode", "'episode'"),
+                                         ("reward", "finite real"), ("observation", "not in the observation space")])
+def test_the_checker_names_what_breaks_the_contract(fault, says):
+    with pytest.raises(AssertionError, match=says):
+        check_env(_Broken(fault))
+
+
+def test_a_flat_action_is_an_act_on_what_the_scan_found_or_a_look_at_a_place_then_an_act():
+    assert [flat_action(a, 3) for a in range(5)] == [(a, -1.0, -1.0) for a in range(5)]
+    assert flat_action(5, 3) == (0, 1 / 6, 1 / 6)           # the first place, move
+    assert flat_action(5 + 4 * 4 + 2, 3) == (2, 0.5, 0.5)   # the centre place (cell 4: row 1, column 1), turn red
+    assert flat_action(5 + 4 * 9 - 1, 3) == (3, 5 / 6, 5 / 6)
+    with pytest.raises(ValueError, match="action 41: 0 to 40"):
+        flat_action(41, 3)
+    env = FlatAffordEnv(world="base", seed=2, grid=3)
+    obs, _ = env.reset(seed=2)
+    assert env.action_space.n == 41 and obs.shape == (150, 150, 4)
+    obs, *_ = env.step(5 + 4 * 8 + 3)  # look at the last place, turn blue
+    plain = AffordEnv(world="base", seed=2)
+    plain.reset(seed=2)
+    expected, *_ = plain.step({"act": 3, "look": [5 / 6, 5 / 6]})
+    assert np.array_equal(obs[:, :, :3], expected["scene"])
+    assert np.array_equal(obs, flat_observation(expected["scene"], expected["gaze"], 21, None))
+
+
+def test_the_mask_channel_is_the_eyes_window():
+    scene = np.zeros((150, 150, 3), np.uint8)
+    obs = flat_observation(scene, (0.5, 0.2), 21, np.full((150, 150, 3), 9, np.uint8))
+    rows, cols = np.nonzero(obs[:, :, 3])
+    assert obs.shape == (150, 150, 7) and np.all(obs[:, :, 4:] == 9)
+    assert (rows.min(), rows.max(), cols.min(), cols.max()) == (20, 40, 65, 85)
+    corner = flat_observation(scene, (0.0, 1.0), 21, None)[:, :, 3]
+    assert corner.sum() == 255 * 11 * 10  # clipped at the scene's edges
+
+
+@pytest.mark.parametrize("threads", [1, 2])
+def test_the_batched_env_goes_as_single_envs_of_the_same_seeds(threads):
+    """16 worlds in one call against 16 FlatAffordEnv of the same seeds, over episodes that end and restart."""
+    n, seed, steps = 16, 40, 25
+    settings = {"run.steps": steps}
+    vec = AffordVectorEnv(n, world="base", seed=seed, set=settings, grid=4, threads=threads)
+    singles = [FlatAffordEnv(world="base", seed=seed + i, set=settings, grid=4) for i in range(n)]
+    obs, _ = vec.reset(seed=seed)
+    single_obs = [e.reset(seed=seed + i)[0] for i, e in enumerate(singles)]
+    assert all(np.array_equal(obs[i], single_obs[i]) for i in range(n))
+    rng = np.random.default_rng(3)
+    returns, ended, changed = np.zeros(n), 0, 0
+    for t in range(2 * steps + 5):
+        actions = rng.integers(0, vec.single_action_space.n, n)
+        obs, reward, terminated, truncated, info = vec.step(actions)
+        for i, e in enumerate(singles):
+            o, r, te, tr, inf = e.step(int(actions[i]))
+            assert r == reward[i] and te == terminated[i] and tr == truncated[i], (t, i)
+            returns[i] += r
+            if te or tr:
+                assert np.array_equal(info["final_observation"][i], o), (t, i)
+                assert info["final_info"][i]["episode"]["r"] == inf["episode"]["r"] == returns[i]
+                assert info["episode"]["l"][i] == inf["episode"]["l"] == steps and info["_episode"][i]
+                o, _ = e.reset()
+                returns[i], ended = 0.0, ended + 1
+            changed += int(inf["image_changed"]) if "image_changed" in inf else 0
+            assert np.array_equal(obs[i], o), (t, i)
+    assert ended == 2 * n and changed > 0
+    with pytest.raises(ValueError, match="16 integers 0 to 68"):
+        vec.step(np.zeros(3, np.int64))

@@ -11,6 +11,10 @@
 # AFFORD_RESTART_SYSTEM=GOALS runs the goals agent instead of IMP: every process,
 # the planner too, is killed during its intrinsic run, in the middle of a goal
 # (the step is random; a goal lasts up to goals.budget steps).
+# AFFORD_RESTART_PREDICTORS="python3 -m afford.process predictors FILE:CLASS" with
+# AFFORD_RESTART_KIND=KIND: the predictors are that affordance predictor written in
+# Python (intrinsic run only); the uninterrupted run starts the same command over
+# udpm, and the log is replayed in Python (afford.replay with the class).
 set -euo pipefail
 root=$(cd "$(dirname "$0")/../.." && pwd)
 source "$root/tests/netns.sh"
@@ -38,7 +42,12 @@ snapshot=500
 [[ $system == GOALS ]] && { steps=1500; snapshot=300; }
 mapfile -t processes < <("$build/bin/afford" processes)  # the registry's
 declare -A pid
-start() { $(process_command "$1" "$url" "$out/logs") >>"$out/$1.log" 2>&1 & pid[$1]=$!; }
+own=${AFFORD_RESTART_PREDICTORS:-}
+command_of() {  # PROCESS URL ROOT
+  if [[ $1 == predictors && -n $own ]]; then echo "$own --lcm-url $2 --checkpoint-dir $3 --state-dir $3"
+  else process_command "$@"; fi
+}
+start() { $(command_of "$1" "$url" "$out/logs") >>"$out/$1.log" 2>&1 & pid[$1]=$!; }
 for p in "${processes[@]}"; do start "$p"; done
 "$build/bin/afford" status --lcm-url "$url" --wait-for "$(IFS=,; echo "${processes[*]}")" --state waiting \
   --seconds 30 >/dev/null || { echo "the processes did not all come up"; exit 1; }
@@ -47,6 +56,7 @@ for p in "${processes[@]}"; do start "$p"; done
 experiment=(experiment base --system "$system" --reps 1 --steps "$steps" --seed "$seed" --quiet --scenarios scenario1
   --scenarios scenario2 --set protocol.recovery.snapshot_steps="$snapshot")
 extrinsic=(--extrinsic-reps 3)
+[[ -n $own ]] && { experiment+=(--set "predictors.affordance.kind=$AFFORD_RESTART_KIND"); extrinsic=(--extrinsic-reps 0); }
 # The planner's tests run their whole budget (no scene is close enough to end
 # one early), so there is time to kill it in the middle of one.
 [[ $victim == planner && $system == IMP ]] &&
@@ -92,8 +102,14 @@ grep -o "goes on from its snapshot of step [0-9]*" "$out/$victim.log" | tail -1 
 # The same experiment uninterrupted, hosted by the runner in one process.
 # Its own log root: the checkpoint goes there, and the same seed may be run by
 # another test case at the same time.
-"$build/bin/afford" "${experiment[@]}" "${extrinsic[@]}" --transport memq --keep-logs none --run-prefix restart \
-  --out "$out/uninterrupted" --log-root "$out/uninterrupted-logs" >"$out/uninterrupted.txt" 2>&1
+if [[ -n $own ]]; then  # a component in Python: its own process over udpm (the runner starts them all)
+  "$build/bin/afford" "${experiment[@]}" "${extrinsic[@]}" --netns off --base-port 7300 --process "predictors=$own" \
+    --keep-logs none --run-prefix restart --out "$out/uninterrupted" --log-root "$out/uninterrupted-logs" \
+    >"$out/uninterrupted.txt" 2>&1
+else
+  "$build/bin/afford" "${experiment[@]}" "${extrinsic[@]}" --transport memq --keep-logs none --run-prefix restart \
+    --out "$out/uninterrupted" --log-root "$out/uninterrupted-logs" >"$out/uninterrupted.txt" 2>&1
+fi
 
 # The runs over, no snapshot stays (each process removes its own on STOP; the runner what a process left).
 left=$(find "$out/logs" "$out/uninterrupted-logs" -name '*.snapshot*' | head -3)
@@ -106,7 +122,14 @@ echo "weights_checksum $sum, equal to the uninterrupted run's; summary and CSV f
 
 # The intrinsic run's log, all its segments, replays to the same weights.
 log=$(ls -d "$out"/logs/restart-base-"$system"-s"$seed")
-"$build/bin/afford" replay "$log" | tee "$out/replay.txt"
+if [[ -n $own ]]; then  # replayed in Python, with the class (afford replay cannot rebuild it)
+  target=${own##* }
+  /usr/bin/python3 -c "import sys, afford; from afford.process import load_class
+r = afford.replay(sys.argv[1], affordance=load_class(sys.argv[2]))
+print('weights_checksum:', r['weights_checksum']); sys.exit(0 if r['ok'] else 1)" "$log" "$target" | tee "$out/replay.txt"
+else
+  "$build/bin/afford" replay "$log" | tee "$out/replay.txt"
+fi
 grep -q "weights_checksum: $sum" "$out/replay.txt" || { echo "the log replays differently"; exit 1; }
 if [[ $victim == logger ]]; then
   [[ -f $log/log.01.lcm ]] || { echo "the restarted logger wrote no second segment"; exit 1; }
