@@ -288,6 +288,11 @@ def flat_observation(scene: np.ndarray, gaze, side: int, goal: np.ndarray | None
     return _afford.flat_observation(scene, (float(gaze[0]), float(gaze[1])), int(side), goal)
 
 
+def _check_grid(grid) -> None:
+    if not isinstance(grid, (int, np.integer)) or not 1 <= grid <= 64:
+        raise ValueError(f"grid {grid!r}: places per side, 1 to 64")
+
+
 class FlatAffordEnv(AffordEnv):
     """AffordEnv with one discrete action and one image, for learners that take those (CleanRL's and
     Stable-Baselines3's PPO and DQN; Stable-Baselines3 refuses Dict actions).
@@ -299,8 +304,7 @@ class FlatAffordEnv(AffordEnv):
     def __init__(self, world: str = "base", seed: int = 0, system: str = "IMP", set: dict[str, Any] | None = None,
                  scenario: str | None = None, reward: str | Callable[[dict[str, Any]], float] = "success",
                  render_mode: str | None = None, grid: int = 5):
-        if not isinstance(grid, (int, np.integer)) or not 1 <= grid <= 64:
-            raise ValueError(f"grid {grid!r}: places per side, 1 to 64")
+        _check_grid(grid)
         super().__init__(world=world, seed=seed, system=system, set=set, scenario=scenario, reward=reward,
                          render_mode=render_mode)
         self.grid = int(grid)
@@ -344,8 +348,7 @@ class AffordVectorEnv:
             raise ValueError("reward 'goal' needs a scenario")
         if not isinstance(num_envs, (int, np.integer)) or num_envs < 1:
             raise ValueError(f"num_envs {num_envs!r}: at least 1")
-        if not isinstance(grid, (int, np.integer)) or not 1 <= grid <= 64:
-            raise ValueError(f"grid {grid!r}: places per side, 1 to 64")
+        _check_grid(grid)
         self.num_envs, self.grid, self._reward = int(num_envs), int(grid), reward
         self._args = (world, system, [f"{k}={v}" for k, v in (set or {}).items()], scenario or "")
         self._threads, self._copy = int(threads), bool(copy)

@@ -141,9 +141,6 @@ class WorldCore {
   int flatChannels() const { return scenario_ ? 7 : 4; }
   bool goalReached() const { return scenario_ && env_->goalDistance() < successDistance(); }
 
-  bool done(bool goal_reward) const {
-    return step_ >= config_.steps || (goal_reward && scenario_ && env_->goalDistance() < successDistance());
-  }
   std::int64_t stepCount() const { return step_; }
   std::int64_t steps() const { return config_.steps; }
   int sceneSize() const { return config_.world.size_px; }
@@ -211,9 +208,9 @@ class World {
   WorldCore core_;
 };
 
-// Many worlds of one experiment, each with its seed, stepped together: step() takes an action for each and
-// steps them with the GIL released (on `threads` threads), writing their observations into arrays of
-// (worlds, ...). Each world goes exactly as a World of its seed.
+// Many worlds of one experiment, each with its seed, stepped together: stepFlat() takes a FlatAffordEnv
+// action for each and steps them with the GIL released (on `threads` threads), writing their observations
+// into one array of (worlds, H, W, C). Each world goes exactly as a World of its seed.
 class Worlds {
  public:
   Worlds(const std::string& experiment, const std::string& system, const std::vector<std::int64_t>& seeds,
@@ -227,47 +224,8 @@ class Worlds {
   const WorldCore& front() const { return worlds_.front(); }
   const WorldCore& world(std::size_t i) const { return const_cast<Worlds*>(this)->at(i); }
 
-  // Every world's observation, (worlds, ...).
-  py::dict observation() const {
-    Buffers b = buffers();
-    for (std::size_t i = 0; i < worlds_.size(); ++i) observeInto(b, i);
-    return b.dict();
-  }
-
   // World `i` back at its start.
   void reset(std::size_t i) { at(i).reset(); }
-
-  // One step of every world: acts (worlds), looks (worlds x 2; negative: act on what the scan found).
-  // Returns (observation, info), each a dict of arrays over the worlds.
-  py::tuple step(py::array_t<std::int64_t, py::array::c_style | py::array::forcecast> acts,
-                 py::array_t<double, py::array::c_style | py::array::forcecast> looks) {
-    const auto n = static_cast<py::ssize_t>(worlds_.size());
-    if (acts.ndim() != 1 || acts.shape(0) != n)
-      throw std::invalid_argument("acts: one action per world (" + std::to_string(n) + "), not shape " +
-                                  shapeText(acts));
-    if (looks.ndim() != 2 || looks.shape(0) != n || looks.shape(1) != 2)
-      throw std::invalid_argument("looks: (worlds, 2) = (" + std::to_string(n) + ", 2), not shape " + shapeText(looks));
-    for (py::ssize_t i = 0; i < n; ++i) checkAction(static_cast<int>(acts.at(i)));
-    std::vector<StepOutcome> out(worlds_.size());
-    Buffers b = buffers();
-    const std::int64_t* a = acts.data();
-    const double* l = looks.data();
-    std::vector<std::string> errors(worlds_.size());
-    {
-      py::gil_scoped_release free;
-      parallel([&](std::size_t i) {
-        try {
-          out[i] = worlds_[i].step(static_cast<int>(a[i]), l[2 * i], l[2 * i + 1]);
-          observeInto(b, i);
-        } catch (const std::exception& e) {
-          errors[i] = e.what();
-        }
-      });
-    }
-    for (std::size_t i = 0; i < errors.size(); ++i)
-      if (!errors[i].empty()) throw std::runtime_error("world " + std::to_string(i) + ": " + errors[i]);
-    return py::make_tuple(b.dict(), infoArrays(out));
-  }
 
   // Every world's FlatAffordEnv observation, (worlds, H, W, C).
   py::array_t<std::uint8_t> flatObservation() const {
@@ -337,39 +295,7 @@ class Worlds {
     return py::make_tuple(flat_, reward, term, trunc, infoArrays(out), any ? py::object(finals) : py::none());
   }
 
-  // Which worlds have ended: the run's steps done, or (goal_reward) the goal reached.
-  py::array_t<bool> done(bool goal_reward) const {
-    py::array_t<bool> out(static_cast<py::ssize_t>(worlds_.size()));
-    for (std::size_t i = 0; i < worlds_.size(); ++i) out.mutable_at(static_cast<py::ssize_t>(i)) = worlds_[i].done(goal_reward);
-    return out;
-  }
-
  private:
-  struct Buffers {
-    py::array_t<std::uint8_t> scene, focus;
-    py::array_t<double> gaze;
-    std::uint8_t *s, *f;
-    double* g;
-    std::size_t scene_bytes, focus_bytes;
-    py::dict dict() const {
-      py::dict o;
-      o["scene"] = scene, o["focus"] = focus, o["gaze"] = gaze;
-      return o;
-    }
-  };
-  Buffers buffers() const {
-    const auto n = static_cast<py::ssize_t>(worlds_.size());
-    const int size = front().sceneSize(), side = front().focusSide();
-    Buffers b;
-    b.scene = py::array_t<std::uint8_t>({n, static_cast<py::ssize_t>(size), static_cast<py::ssize_t>(size),
-                                         static_cast<py::ssize_t>(3)});
-    b.focus = py::array_t<std::uint8_t>({n, static_cast<py::ssize_t>(side), static_cast<py::ssize_t>(side),
-                                         static_cast<py::ssize_t>(3)});
-    b.gaze = py::array_t<double>({n, static_cast<py::ssize_t>(2)});
-    b.s = b.scene.mutable_data(), b.f = b.focus.mutable_data(), b.g = b.gaze.mutable_data();
-    b.scene_bytes = static_cast<std::size_t>(size) * size * 3, b.focus_bytes = static_cast<std::size_t>(side) * side * 3;
-    return b;
-  }
   // f(i) for every world, on up to `threads_` threads (the caller has released the GIL).
   template <class F>
   void parallel(F f) {
@@ -410,9 +336,6 @@ class Worlds {
   }
   static std::uint8_t* flatAt(py::array_t<std::uint8_t>& a, std::size_t i) {
     return a.mutable_data() + i * static_cast<std::size_t>(a.shape(1) * a.shape(2) * a.shape(3));
-  }
-  void observeInto(Buffers& b, std::size_t i) const {
-    worlds_[i].observe(b.s + i * b.scene_bytes, b.f + i * b.focus_bytes, b.g + 2 * i);
   }
   WorldCore& at(std::size_t i) {
     if (i >= worlds_.size())
@@ -476,12 +399,9 @@ void defineWorlds(py::module_& m) {
            py::arg("experiment"), py::arg("system"), py::arg("seeds"), py::arg("settings"), py::arg("scenario"),
            py::arg("threads") = 1)
       .def("__len__", &Worlds::size)
-      .def("observation", &Worlds::observation)
       .def("reset", &Worlds::reset, py::arg("index"))
-      .def("step", &Worlds::step, py::arg("acts"), py::arg("looks"))
       .def("flat_observation", &Worlds::flatObservation)
       .def("step_flat", &Worlds::stepFlat, py::arg("actions"), py::arg("grid"), py::arg("goal_reward"))
-      .def("done", &Worlds::done, py::arg("goal_reward"))
       .def_property_readonly("steps", [](const Worlds& w) { return w.front().steps(); })
       .def_property_readonly("scene_size", [](const Worlds& w) { return w.front().sceneSize(); })
       .def_property_readonly("focus_side", [](const Worlds& w) { return w.front().focusSide(); })
