@@ -36,6 +36,9 @@
 #   bench/run.sh env [--worlds N] [--steps S] [--reps R] [--threads 1,2] [--grid G] [--out DIR]
 #     afford.env's batched form (AffordVectorEnv: N worlds in one call of the C++ core) against N single
 #     environments in a Python loop: environment steps per second, and the same rewards.
+#   bench/run.sh tune [--trials 24] [--workers 2] [--steps 6000] [--param KEY=SPEC ...] [--seed S] [--out DIR]
+#     afford tune: a study by W workers sharing a journal file, with pruning and without: every trial finished,
+#     none twice, the intrinsic steps pruning saves (floor 30%), the best trial replayed (exit 1 below a floor).
 #   bench/run.sh reproduction [--reps R] [--ext-reps K] [--jobs J] [--transport memq|udpm] [--out DIR] [WHAT ...]
 #     the whole reproduction (scripts/reproduce.sh WHAT, default all, its report in DIR): wall time beside its
 #     critical path and the share of the time the cores were busy.
@@ -47,6 +50,8 @@ cd "$(dirname "$0")/.."
   PYTHONPATH=build/python exec /usr/bin/python3 bench/python_bench.py "$@"; }
 [[ ${1:-} == env ]] && { shift; [[ -x build/bin/afford ]] || scripts/setup.sh;
   PYTHONPATH=build/python exec /usr/bin/python3 bench/env_bench.py "$@"; }
+[[ ${1:-} == tune ]] && { shift; [[ -x build/bin/afford ]] || scripts/setup.sh;
+  PYTHONPATH=build/python exec /usr/bin/python3 bench/tune_bench.py "$@"; }
 [[ ${1:-} == reproduction ]] && { shift; exec /usr/bin/python3 bench/reproduction.py "$@"; }
 [[ ${1:-} == long ]] && { shift; [[ -x build/bin/afford ]] || scripts/setup.sh; exec /usr/bin/python3 bench/long_run.py "$@"; }
 [[ ${1:-} == full ]] && { shift; [[ -x build/bin/afford ]] || scripts/setup.sh;

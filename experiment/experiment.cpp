@@ -381,6 +381,15 @@ int runPrepared(Experiment& x, const std::chrono::steady_clock::time_point began
   return finish(x, s, intrinsic, tests, log);
 }
 
+std::vector<CheckedRun> checkExperiment(const ExperimentRequest& request) {
+  if (request.plan.run_prefix.empty() && !request.resume)
+    throw ConfigError("checking an experiment needs a run prefix: none is reserved by a check");
+  const Experiment x = prepare(request);
+  std::vector<CheckedRun> runs;
+  for (const PlannedRun& r : x.runs) runs.push_back({r.spec.run_id, r.system, r.spec.steps});
+  return runs;
+}
+
 int runExperiment(const ExperimentRequest& request, spdlog::logger& log) {
   const auto began = std::chrono::steady_clock::now();
   Experiment x = prepare(request);  // everything is checked before anything is written or started

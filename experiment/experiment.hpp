@@ -24,6 +24,16 @@ namespace afford {
 // each NAME once.
 std::map<std::string, std::string> parseProcessSwaps(const std::vector<std::string>& given, const std::string& option);
 
+// Every check runExperiment makes before anything runs (options, config keys and values, the plan, the
+// folders), with nothing written nor started: throws ConfigError naming what is wrong, or returns the
+// intrinsic runs it would run (run id, system, steps), in plan order. Give a run prefix (without one, a
+// fresh experiment's prefix would be reserved in the log root).
+struct CheckedRun {
+  std::string run_id, system;
+  std::int64_t steps = 0;
+};
+std::vector<CheckedRun> checkExperiment(const ExperimentRequest& request);
+
 // Returns the process exit code (0 when every run succeeded).
 int runExperiment(const ExperimentRequest& request, spdlog::logger& log);
 
@@ -39,6 +49,12 @@ int runQueue(const std::vector<ExperimentRequest>& requests, const std::string& 
 // SIGINT and SIGTERM handlers in place at its construction are put back at its
 // destruction, and the signal runExperiment received is forgotten, so that the
 // next experiment starts afresh.
+// Stops the experiment under way in this process as a SIGINT does (the runs
+// under way are cut, what finished is written, the folder resumes), asked by
+// the program: `why` (e.g. "pruned") stands for the signal's name in its
+// summary and state. Callable from any thread, before or during the run.
+void stopExperiment(const std::string& why);
+
 class InterruptScope {
  public:
   InterruptScope();
@@ -47,6 +63,8 @@ class InterruptScope {
   InterruptScope& operator=(const InterruptScope&) = delete;
   // SIGINT or SIGTERM if one stopped the experiment; 0 if none did.
   int signal() const;
+  // The reason given to stopExperiment, if the program stopped it ("" if not).
+  std::string stoppedFor() const;
 
  private:
   struct sigaction int_{}, term_{};

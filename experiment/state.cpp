@@ -160,7 +160,7 @@ ExperimentRequest resumedRequest(const ExperimentRequest& given, const Experimen
   const std::string& cwd = state.cwd;
   if (fs::current_path() != fs::path(cwd))
     for (const auto& [option, path] : {std::pair{"--log-root", o.plan.log_root}, {"--config-dir", o.plan.config_dir}})
-      if (fs::path(path).is_relative())
+      if (!path.empty() && fs::path(path).is_relative())  // (an empty --config-dir: the default, not a path)
         throw ConfigError("--resume: the experiment in " + given.write.out_dir + " was started in " + cwd + ", and its " +
                           option + " '" + path + "' is relative to that folder: resume it from there");
   return o;
@@ -188,7 +188,8 @@ void refuseChangedPlan(const ExperimentRequest& given, const ExperimentRequest& 
                       "': a resumed experiment keeps its plan (leave " + name +
                       " out, or start a new experiment with another --out)");
   };
-  const auto path = [](const std::string& p) { return fs::absolute(p).lexically_normal().string(); };
+  // (An option not given is empty: no path, and nothing to compare; fs::absolute("") throws.)
+  const auto path = [](const std::string& p) { return p.empty() ? p : fs::absolute(p).lexically_normal().string(); };
   check("name", given.plan.experiment, stored.plan.experiment);
   check("--system", joined(given.plan.systems), joined(plan.systems));
   // 0 (or none) stands for the experiment's own count: nothing to compare

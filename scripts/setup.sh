@@ -47,6 +47,7 @@ packages=(
   python3-nbclient python3-nbformat python3-ipykernel python3-venv python3-pip python3-setuptools python3-wheel
   chromium chromium-driver python3-selenium  # tests/watch: the live page in a real browser
   python3-torch  # examples/torch-predictor: an affordance predictor written with PyTorch
+  python3-optuna  # afford tune (python/afford/study.py): studies with samplers, pruning and a shared journal
 )
 # Node.js and npm, for the MCAP checker (tools/mcapcheck: Foxglove's @mcap/core): Debian's, unless a Node.js
 # with its own npm is installed already (NodeSource's package, which Debian's npm conflicts with).

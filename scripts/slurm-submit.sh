@@ -4,22 +4,27 @@
 # Slurm gives it), then a job that runs once they have all ended (afterany) and merges
 # their folders into the whole experiment's (`afford merge`). docs/cluster.md.
 #
+# With --tune, a study instead (`afford tune`): N array tasks, each a worker of the one study in --out (they
+# share its journal file, so the file system must be one every node sees), then a job that writes its report.
+#
 # Usage: scripts/slurm-submit.sh [options] -- EXPERIMENT-ARGUMENTS...
-#   --shards N        how many shards (array tasks); default 4
+#        scripts/slurm-submit.sh --tune --out DIR [options] -- TUNE-ARGUMENTS...
+#   --shards N        how many shards (array tasks; with --tune, workers); default 4
 #   --out DIR         the merged experiment's folder; shards go to DIR/shard-<i>,
 #                     the jobs' scripts and output to DIR/slurm; default out/<experiment>-<stamp>
 #   --log-root DIR    the runs' logs and stored agents, on a file system every node sees; default logs
 #   --run-prefix P    the run ids' first part; default the date-time
 #   --afford PATH     the afford executable; default build/bin/afford of this tree
 #   --sbatch ARGS     more sbatch options for every job (quoted), e.g. "--partition=cpu --cpus-per-task=8 --time=2:00:00"
-#   --wait            wait until the merge job has ended, and exit with its status
+#   --wait            wait until the merge (report) job has ended, and exit with its status
+#   --tune            the arguments are `afford tune`'s (an experiment, --param ..., --trials ...; not --out)
 # EXPERIMENT-ARGUMENTS are what `afford experiment` takes (a name or --config FILE,
 # --system, --reps, --set, ...), but not --out, --log-root, --run-prefix or --shard.
 # Without --jobs, each shard runs ${SLURM_CPUS_PER_TASK:-1} runs at a time.
 set -euo pipefail
 here="$(cd "$(dirname "$0")/.." && pwd)"
 
-shards=4 out="" log_root=logs prefix="" afford="$here/build/bin/afford" wait=0
+shards=4 out="" log_root=logs prefix="" afford="$here/build/bin/afford" wait=0 tune=0
 sbatch_args=()
 die() { echo "slurm-submit: $*" >&2; exit 2; }
 while (($#)); do
@@ -31,8 +36,9 @@ while (($#)); do
     --afford) afford="${2:?--afford needs a path}"; shift 2 ;;
     --sbatch) read -r -a more <<<"${2:?--sbatch needs options}"; sbatch_args+=("${more[@]}"); shift 2 ;;
     --wait) wait=1; shift ;;
+    --tune) tune=1; shift ;;
     --) shift; break ;;
-    -h|--help) sed -n '2,20p' "$0" | sed 's/^# \{0,1\}//'; exit 0 ;;
+    -h|--help) awk 'NR > 1 && /^#/ { sub(/^# ?/, ""); print; next } NR > 1 { exit }' "$0"; exit 0 ;;
     *) die "unknown option '$1' (the experiment's arguments come after --)" ;;
   esac
 done
@@ -40,6 +46,43 @@ done
 [[ "$shards" =~ ^[1-9][0-9]*$ ]] || die "--shards must be a positive number, not '$shards'"
 [[ -x "$afford" ]] || die "no afford executable at $afford (build it: scripts/setup.sh, or give --afford)"
 command -v sbatch >/dev/null || die "no sbatch on PATH: is this a Slurm login node?"
+wait_arg=(); ((wait)) && wait_arg=(--wait)
+if ((tune)); then
+  [[ -n "$out" ]] || die "--tune needs --out: the study's folder, on a file system every node sees"
+  for a in "$@"; do
+    case "$a" in --out|--out=*) die "give the study's folder as slurm-submit.sh's --out, not after --" ;; esac
+  done
+  mkdir -p "$out/slurm"
+  out="$(cd "$out" && pwd)" afford="$(cd "$(dirname "$afford")" && pwd)/$(basename "$afford")"
+  args="$(printf ' %q' "$@")"
+  cat >"$out/slurm/worker.sbatch" <<SCRIPT
+#!/usr/bin/env bash
+#SBATCH --job-name=afford-tune
+#SBATCH --output=$out/slurm/worker-%a.out
+# Worker \$SLURM_ARRAY_TASK_ID of $shards of the study \`afford tune$args\` in $out (scripts/slurm-submit.sh).
+set -euo pipefail
+exec $(printf '%q' "$afford") tune$args --out $(printf '%q' "$out")
+SCRIPT
+  cat >"$out/slurm/report.sbatch" <<SCRIPT
+#!/usr/bin/env bash
+#SBATCH --job-name=afford-tune-report
+#SBATCH --output=$out/slurm/report.out
+# The report of the study in $out, once its workers have ended (scripts/slurm-submit.sh).
+set -euo pipefail
+exec $(printf '%q' "$afford") tune --out $(printf '%q' "$out") --report
+SCRIPT
+  array=$(sbatch --parsable --chdir="$PWD" --array="0-$((shards - 1))" "${sbatch_args[@]}" "$out/slurm/worker.sbatch")
+  array="${array%%;*}"
+  echo "slurm-submit: workers: job array $array (${shards} tasks), output in $out/slurm/worker-<i>.out"
+  set +e
+  report=$(sbatch --parsable --chdir="$PWD" --dependency="afterany:$array" "${wait_arg[@]}" \
+    "${sbatch_args[@]}" "$out/slurm/report.sbatch")
+  status=$?
+  set -e
+  echo "slurm-submit: report job ${report%%;*}: $out/report.md; watch with: squeue -j $array,${report%%;*}"
+  exit $status
+fi
+
 jobs_given=0
 for a in "$@"; do
   case "$a" in
@@ -83,7 +126,6 @@ SCRIPT
 array=$(sbatch --parsable --chdir="$PWD" --array="0-$((shards - 1))" "${sbatch_args[@]}" "$out/slurm/shard.sbatch")
 array="${array%%;*}"
 echo "slurm-submit: shards: job array $array (${shards} tasks), output in $out/slurm/shard-<i>.out"
-wait_arg=(); ((wait)) && wait_arg=(--wait)
 echo "slurm-submit: merge: a job after them all; the experiment's summary will be $out/summary.json"
 set +e
 merge=$(sbatch --parsable --chdir="$PWD" --dependency="afterany:$array" "${wait_arg[@]}" \

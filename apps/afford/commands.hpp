@@ -44,5 +44,6 @@ Command busKeyCommand(CLI::App& app, const FrontDoor& door);
 Command exportCommand(CLI::App& app, const FrontDoor& door);
 Command renderCommand(CLI::App& app, const FrontDoor& door);
 Command watchCommand(CLI::App& app, const FrontDoor& door);
+Command tuneCommand(CLI::App& app, const FrontDoor& door);
 
 }  // namespace afford

@@ -22,6 +22,7 @@ void onSignal(int) { g_stop = 1; }
 
 bool stopRequested() { return g_stop != 0; }
 void clearStopRequest() { g_stop = 0; }
+void requestStop() { g_stop = 1; }
 void installStopHandlers() {
   struct sigaction sa {};
   sa.sa_handler = onSignal;

@@ -18,6 +18,7 @@
 #include "afford/processes.hpp"
 #include "experiment/execute/progress.hpp"
 #include "experiment/run/outcome.hpp"
+#include "experiment/results/summary.hpp"
 #include "afford/config.hpp"
 #include "afford/process_main.hpp"
 
@@ -50,7 +51,11 @@ namespace {
 // Handle what is pending (up to a batch), or wait briefly for something.
 void pumpLcm(lcm::LCM& lcm) { pumpBus(lcm, 5, 512); }
 
-using OnStep = std::function<void(std::int64_t)>;
+// What the runner is told while a run goes: each process's step (the progress display), each table of its curve.
+struct RunHooks {
+  std::function<void(std::int64_t)> step;
+  std::function<void(const TableSnapshot&)> table;
+};
 
 
 
@@ -81,7 +86,7 @@ void removeSnapshots(const fs::path& run_dir) {
 }
 
 RunOutcome runInProcess(const PlannedRun& run, const HostRequest& o, const std::string& log_root,
-                        const ProtocolConfig& protocol, Slot& slot, const OnStep& on_step) {
+                        const ProtocolConfig& protocol, Slot& slot, const RunHooks& hooks) {
   const std::string tag = o.jobs > 1 ? "#" + std::to_string(slot.index) : "";
   const std::string level = o.process_log_level == "info" ? "warn" : o.process_log_level;
   if (!slot.lcm) {
@@ -101,7 +106,8 @@ RunOutcome runInProcess(const PlannedRun& run, const HostRequest& o, const std::
     if (!slot.host->hosts(p)) slot.host->start(p);
   InProcessHost& host = *slot.host;
   lcm::LCM& lcm = *slot.lcm;
-  slot.driver->onStep(on_step);
+  slot.driver->onStep(hooks.step);
+  slot.driver->onTable(hooks.table);
   RunOutcome r = slot.driver->run(
       run.spec,
       [&] {
@@ -116,7 +122,7 @@ RunOutcome runInProcess(const PlannedRun& run, const HostRequest& o, const std::
 
 RunOutcome runOverUdpm(const PlannedRun& run, const HostRequest& o, const std::string& log_root,
                        const std::string& out_dir, const ProtocolConfig& protocol, Slot& slot, const std::string& bin,
-                       const OnStep& on_step) {
+                       const RunHooks& hooks) {
   const std::string out = (fs::path(out_dir) / "processes" / ("slot" + std::to_string(slot.index))).string();
   const bool attached = !o.attach.empty();  // the user started the processes; none are ours to start
   // The runner listens before it starts any process: it hears each one's first STATUS.
@@ -157,7 +163,8 @@ RunOutcome runOverUdpm(const PlannedRun& run, const HostRequest& o, const std::s
         std::map<std::string, std::vector<std::string>>{{"logger", {"--log-dir", log_root}}}, o.processes);
   lcm::LCM& lcm = *slot.lcm;
   RunDriver& driver = *slot.driver;
-  driver.onStep(on_step);
+  driver.onStep(hooks.step);
+  driver.onTable(hooks.table);
   auto health = [&]() {
     std::string h = slot.group ? slot.group->health() : std::string();
     if (h.empty() && slot.logger && run.keep_log) h = slot.logger->health();
@@ -352,13 +359,18 @@ void runOne(PhaseState& st, std::size_t i, Slot& slot, Progress& progress) {
   const std::string& id = runs[i].spec.run_id;
   RunOutcome r;
   progress.started(slot_index, id, runs[i].spec.steps);
-  const OnStep on_step = [&progress, slot_index](std::int64_t step) { progress.step(slot_index, step); };
+  RunHooks hooks;
+  hooks.step = [&progress, slot_index](std::int64_t step) { progress.step(slot_index, step); };
+  if (o.on_curve && !runs[i].spec.extrinsic && !runs[i].target.empty())
+    hooks.table = [&o, &run = runs[i]](const TableSnapshot& t) {
+      o.on_curve({run.spec.run_id, run.system, run.index, t.step, meanAbsError(t.affordance, run.target)});
+    };
   PlannedRun run = runs[i];
   run.spec.stall_seconds = o.stall_seconds;
   try {
     serve(slot, run, o, c.log_root, c.out_dir);
-    r = o.transport == "memq" ? runInProcess(run, o, c.log_root, c.protocol, slot, on_step)
-                              : runOverUdpm(run, o, c.log_root, c.out_dir, c.protocol, slot, c.bin, on_step);
+    r = o.transport == "memq" ? runInProcess(run, o, c.log_root, c.protocol, slot, hooks)
+                              : runOverUdpm(run, o, c.log_root, c.out_dir, c.protocol, slot, c.bin, hooks);
   } catch (const std::exception& e) {
     slot.host.reset();  // (memq) nodes left mid-run are not reused
     r.ok = false;

@@ -4,6 +4,8 @@
 #pragma once
 #include <map>
 #include <cstddef>
+#include <cstdint>
+#include <functional>
 #include <string>
 #include <vector>
 
@@ -11,6 +13,14 @@
 #include "experiment/schema/codec.hpp"
 
 namespace afford {
+
+// Where an intrinsic run's learning curve stands: its affordance table at `step`, `mae` from the run's target.
+struct CurvePoint {
+  std::string run_id, system;
+  std::size_t run = 0;  // its index in the plan's runs
+  std::int64_t step = 0;
+  double mae = 0;
+};
 
 struct HostRequest {
   int jobs = 1;
@@ -28,6 +38,9 @@ struct HostRequest {
   std::map<std::string, std::string> processes;
   std::string bus_key;                     // key file of a keyed bus (afford/auth.hpp; "": $AFFORD_BUS_KEY, or none)
   int shard_index = 0, shard_count = 0;    // --shard i/n: run intrinsic run k (and its tests) iff k mod n == i
+  // Told each point of every intrinsic run's curve as it comes, from the slot's thread (the Python package's
+  // afford.run(on_curve=...), which afford.tune prunes with); not kept. It must not throw.
+  std::function<void(const CurvePoint&)> on_curve;
 
   // A shard as an experiment keeps it: {"index": i, "count": n}, or null without shards.
   struct Shard {

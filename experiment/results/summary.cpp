@@ -19,6 +19,17 @@ namespace afford {
 namespace fs = std::filesystem;
 using nlohmann::json;
 
+double meanAbsError(const SummaryTable& a, const SummaryTable& b) {
+  double sum = 0;
+  int n = 0;
+  if (a.size() != b.size()) return std::nan("");
+  for (std::size_t i = 0; i < a.size(); ++i) {
+    if (a[i].size() != b[i].size()) return std::nan("");
+    for (std::size_t j = 0; j < a[i].size(); ++j, ++n) sum += std::abs(a[i][j] - b[i][j]);
+  }
+  return n ? sum / n : 0.0;
+}
+
 namespace {
 
 using Table = SummaryTable;
@@ -27,14 +38,6 @@ Table asTable(const AffordanceTable& t) {
   Table out;
   for (const auto& row : t) out.emplace_back(row.begin(), row.end());
   return out;
-}
-
-double meanAbsError(const Table& a, const Table& b) {
-  double sum = 0;
-  int n = 0;
-  for (std::size_t i = 0; i < a.size(); ++i)
-    for (std::size_t j = 0; j < a[i].size(); ++j, ++n) sum += std::abs(a[i][j] - b[i][j]);
-  return n ? sum / n : 0.0;
 }
 
 // Random tables (issue 11): per condition and system, each table's mean

@@ -71,7 +71,9 @@ RunDriver::RunDriver(lcm::LCM& lcm, std::shared_ptr<spdlog::logger> log, const P
   edge_.subscribe(ch::status, [this](const process_status_t& m) { return onStatus(m); }, Scope::Any, Order::None);
   edge_.subscribe(ch::affordanceTable,
       [this](const affordance_table_t& m) {
-        if (outcome_) outcome_->curve.push_back(snapshotOf(m));
+        if (!outcome_) return Turn::take();
+        outcome_->curve.push_back(snapshotOf(m));
+        if (on_table_) on_table_(outcome_->curve.back());
         return Turn::take();
       },
       Scope::Run, Order::Serial);

@@ -161,6 +161,8 @@ class RunDriver {
   RunOutcome run(const RunSpec& spec, const std::function<void()>& pump, const std::function<std::string()>& health);
   // Told the step each process of the run reports in its heartbeat, as it comes (progress display).
   void onStep(std::function<void(std::int64_t)> f) { on_step_ = std::move(f); }
+  // Told each affordance table of the run as the driver takes it into the run's curve (afford.tune's pruning).
+  void onTable(std::function<void(const TableSnapshot&)> f) { on_table_ = std::move(f); }
   // A keyed bus (afford/auth.hpp): set before the first run.
   void useBusKey(std::shared_ptr<const BusKey> key) { edge_.useKey(std::move(key)); }
 
@@ -223,6 +225,7 @@ class RunDriver {
   bool goals_ended_ = false;  // goals phase: the last GOAL_RESULT (step run.steps) is in
   bool logger_done_ = false;
   std::function<void(std::int64_t)> on_step_;
+  std::function<void(const TableSnapshot&)> on_table_;
 };
 
 }  // namespace afford

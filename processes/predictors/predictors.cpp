@@ -49,6 +49,14 @@ Prediction Predictors::predict(const std::vector<std::uint8_t>& focus_image) con
   const SparseInput x = focusInput(focus_image);
   Prediction p;
   affordance_->predict(FocusView{focus_image, x}, p.affordance, p.learning_progress);
+  // A predictor that diverged (a learning rate too large for it) fails the run here, saying so, rather than
+  // publishing numbers every reader drops (the run would stall until its processes' silence fails it).
+  for (int a = 0; a < kNumActions; ++a)
+    for (const auto& [name, v] : {std::pair{"affordance", p.affordance[a]}, {"learning progress", p.learning_progress[a]}})
+      if (!std::isfinite(v))
+        throw std::runtime_error(std::string("the ") + name + " prediction of " + std::string(kActionNames[a]) +
+                                 " is not finite (" + std::to_string(v) + "): its predictor diverged; is its "
+                                 "learning rate (predictors.*.learning_rate) too large?");
   return p;
 }
 

@@ -3,7 +3,7 @@ from __future__ import annotations
 
 import tempfile
 from pathlib import Path
-from typing import Any, Iterable
+from typing import Any, Callable, Iterable, NamedTuple
 
 from . import _afford
 from .components import ROLES
@@ -32,10 +32,74 @@ class ExperimentError(RuntimeError):
         self.errors, self.out, self.exit_code = errors, out, exit_code
 
 
+class ExperimentStopped(RuntimeError):
+    """An experiment that `on_curve` stopped (afford.run(on_curve=...) returned a reason).
+
+    It stopped as Ctrl-C stops one: the runs under way were cut, what
+    finished is written in `out`, and `afford experiment --resume --out OUT`
+    would complete it. `reason` is what on_curve returned.
+    """
+
+    def __init__(self, message: str, reason: str, out: Path):
+        super().__init__(message)
+        self.reason, self.out = reason, out
+
+
+class CurvePoint(NamedTuple):
+    """Where an intrinsic run's learning curve stands, as afford.run tells `on_curve` while the run goes.
+
+    `run`: the run's index in the experiment's plan (0, 1, ... in the order
+    they are planned); `step`: the curve's step; `mae`: the mean absolute
+    error of the run's affordance table at that step from the world's.
+    """
+    run_id: str
+    system: str
+    run: int
+    step: int
+    mae: float
+
+
 def _count(name: str, value: Any) -> None:
     if value is not None and (isinstance(value, bool) or not isinstance(value, int) or value < 1):
         raise ValueError(f"afford.run({name}={value!r}): {name} is a whole number, at least 1 (or None: the "
                          f"experiment's own)")
+
+
+def _request(experiment: str, system: Any, reps: int | None, steps: int | None, set: dict[str, Any] | None,
+             transport: str, out: str | Path | None, log_root: str | Path | None, seed: int, jobs: int,
+             extrinsic_reps: int, scenarios: Iterable[str], keep_logs: str, run_prefix: str, reuse_agents: bool,
+             progress: str, log_level: str, motivation: Any, affordance: Any, goals: Any,
+             processes: dict[str, str] | None, tables: int | None, table_seed: int | None,
+             replace: bool) -> tuple[dict[str, Any], Path]:
+    """afford.run's request to the C++ runner, checked as far as Python checks it, and its folder."""
+    _count("reps", reps)
+    _count("steps", steps)
+    if experiment.endswith((".yaml", ".yml")) or "/" in experiment:
+        experiment = str(Path(experiment).resolve())
+    settings = dict(set or {})
+    for argument, cls, role in (("motivation", motivation, "motivation"), ("affordance", affordance, "predictors"),
+                                ("goals", goals, "goals")):
+        if cls is None:
+            continue
+        key, register = ROLES[role]
+        if transport != "memq":
+            raise ValueError(f"afford.run({argument}=...) runs the class in this process: transport='memq'; over "
+                             f"udpm, give processes={{'{'motivation' if role == 'goals' else role}': "
+                             f"'python3 -m afford.process {role} MODULE:CLASS'}} "
+                             f"and set={{'{key}': KIND}}")
+        settings.setdefault(key, register(cls))
+    out = Path(out) if out else Path(tempfile.mkdtemp(prefix=f"afford-{experiment}-"))
+    systems = [system] if isinstance(system, str) else list(system or [])
+    request = {
+        "experiment": experiment, "systems": systems, "reps": reps, "steps": steps, "seed": seed, "jobs": jobs,
+        "out": str(out), "log_root": str(log_root or out / "logs"), "transport": transport,
+        "keep_logs": keep_logs, "settings": [_setting(k, v) for k, v in settings.items()],
+        "processes": dict(processes or {}),
+        "extrinsic_reps": extrinsic_reps, "scenarios": list(scenarios), "run_prefix": run_prefix,
+        "progress": progress, "reuse_agents": reuse_agents, "log_level": log_level,
+        "tables": tables, "table_seed": table_seed, "replace": bool(replace),
+    }
+    return request, out
 
 
 def run(experiment: str, system: str | Iterable[str] | None = None, reps: int | None = None,
@@ -45,7 +109,8 @@ def run(experiment: str, system: str | Iterable[str] | None = None, reps: int | 
         run_prefix: str = "", reuse_agents: bool = True, progress: str = "none",
         log_level: str = "warn", motivation: Any = None, affordance: Any = None, goals: Any = None,
         processes: dict[str, str] | None = None,
-        tables: int | None = None, table_seed: int | None = None, replace: bool = False) -> Experiment:
+        tables: int | None = None, table_seed: int | None = None, replace: bool = False,
+        on_curve: Callable[[CurvePoint], str | None] | None = None) -> Experiment:
     """Run an experiment as `afford experiment` does and return what afford.load returns.
 
     `experiment`: a name of config/experiments/ (base, late1, ...) or an
@@ -74,39 +139,28 @@ def run(experiment: str, system: str | Iterable[str] | None = None, reps: int | 
     `replace`: `out` holds a finished experiment: remove its files and
     write this one in their place (without it, such a folder raises
     ConfigError; an experiment never mixes with another's files).
+    `on_curve`: called with a CurvePoint at each point of each intrinsic
+    run's learning curve (every run.curve_interval steps) as the run goes,
+    from the thread that drives the run. A non-empty string it returns stops
+    the experiment as Ctrl-C does, for that reason (afford.ExperimentStopped
+    is raised; afford.tune prunes this way); an exception it raises stops it
+    too and is raised once the runs have stopped.
 
     Run ids start with the date and time, made unique in `log_root`: calls
     in a loop, or from several processes, never collide. A run or test
     that fails raises afford.ExperimentError (a RuntimeError) saying why.
     """
-    _count("reps", reps)
-    _count("steps", steps)
-    if experiment.endswith((".yaml", ".yml")) or "/" in experiment:
-        experiment = str(Path(experiment).resolve())
-    settings = dict(set or {})
-    for argument, cls, role in (("motivation", motivation, "motivation"), ("affordance", affordance, "predictors"),
-                                ("goals", goals, "goals")):
-        if cls is None:
-            continue
-        key, register = ROLES[role]
-        if transport != "memq":
-            raise ValueError(f"afford.run({argument}=...) runs the class in this process: transport='memq'; over "
-                             f"udpm, give processes={{'{'motivation' if role == 'goals' else role}': "
-                             f"'python3 -m afford.process {role} MODULE:CLASS'}} "
-                             f"and set={{'{key}': KIND}}")
-        settings.setdefault(key, register(cls))
-    out = Path(out) if out else Path(tempfile.mkdtemp(prefix=f"afford-{experiment}-"))
-    systems = [system] if isinstance(system, str) else list(system or [])
-    request = {
-        "experiment": experiment, "systems": systems, "reps": reps, "steps": steps, "seed": seed, "jobs": jobs,
-        "out": str(out), "log_root": str(log_root or out / "logs"), "transport": transport,
-        "keep_logs": keep_logs, "settings": [_setting(k, v) for k, v in settings.items()],
-        "processes": dict(processes or {}),
-        "extrinsic_reps": extrinsic_reps, "scenarios": list(scenarios), "run_prefix": run_prefix,
-        "progress": progress, "reuse_agents": reuse_agents, "log_level": log_level,
-        "tables": tables, "table_seed": table_seed, "replace": bool(replace),
-    }
-    code, signal, errors = _afford.run_experiment(request)
+    request, out = _request(experiment, system, reps, steps, set, transport, out, log_root, seed, jobs,
+                            extrinsic_reps, scenarios, keep_logs, run_prefix, reuse_agents, progress, log_level,
+                            motivation, affordance, goals, processes, tables, table_seed, replace)
+    if on_curve is not None:
+        if not callable(on_curve):
+            raise TypeError(f"afford.run(on_curve={on_curve!r}): a function of a CurvePoint")
+        request["on_curve"] = lambda *point: on_curve(CurvePoint(*point))
+    code, signal, errors, stopped_for = _afford.run_experiment(request)
+    if stopped_for and not signal:
+        raise ExperimentStopped(f"afford.run({experiment!r}) was stopped by on_curve ({stopped_for}): what "
+                                f"finished is in {out}", stopped_for, out)
     if signal:
         raise KeyboardInterrupt(f"afford.run({experiment!r}) was interrupted: what finished is in {out}; "
                                 f"`afford experiment --resume --out {out}` completes it")
@@ -116,6 +170,23 @@ def run(experiment: str, system: str | Iterable[str] | None = None, reps: int | 
         raise ExperimentError(f"afford.run({experiment!r}) failed (exit {code}) in {out}{more}:\n  {said}",
                               list(errors), out, code)
     return load(out)
+
+
+def check(experiment: str, system: str | Iterable[str] | None = None, reps: int | None = None,
+          steps: int | None = None, set: dict[str, Any] | None = None, seed: int = 1, extrinsic_reps: int = 0,
+          scenarios: Iterable[str] = (), tables: int | None = None,
+          table_seed: int | None = None) -> list[tuple[str, str, int]]:
+    """Check an experiment as afford.run would before it runs, and run nothing.
+
+    Raises afford.ConfigError naming a bad option, config key or value;
+    returns the intrinsic runs it would run as (run id, system, steps), in
+    the plan's order. Nothing is written.
+    """
+    with tempfile.TemporaryDirectory(prefix="afford-check-") as scratch:
+        request, _ = _request(experiment, system, reps, steps, set, "memq", Path(scratch) / "out", None, seed, 1,
+                              extrinsic_reps, scenarios, "all", "check", True, "none", "error", None, None, None,
+                              None, tables, table_seed, False)
+        return [tuple(r) for r in _afford.check_experiment(request)]
 
 
 def replay(log: str | Path, affordance: Any = None, motivation: Any = None, goals: Any = None,

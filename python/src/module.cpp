@@ -12,6 +12,8 @@
 
 #include <cstring>
 #include <memory>
+#include <mutex>
+#include <optional>
 #include <string>
 
 #include "afford/version.hpp"
@@ -96,10 +98,11 @@ py::dict readLog(const std::string& path, const std::string& run_id, const std::
   return out;
 }
 
-// `afford experiment` in this process: (exit code, the signal that stopped it or 0, the last errors said).
+// `afford experiment` in this process: (exit code, the signal that stopped it or 0, the last errors said, the
+// reason the program stopped it or "").
 // The GIL is released while it runs; SIGINT (a notebook's interrupt) stops
 // it as it stops the command, and Python's own handlers are put back after.
-py::tuple runExperimentFrom(const py::dict& request) {
+ExperimentRequest requestFrom(const py::dict& request) {
   ExperimentRequest o;
   o.plan.experiment = request["experiment"].cast<std::string>();
   o.plan.systems = parseSystems(request["systems"].cast<std::vector<std::string>>(), "system");
@@ -130,6 +133,20 @@ py::tuple runExperimentFrom(const py::dict& request) {
   o.write.quiet = true;
   o.write.replace = request["replace"].cast<bool>();
   o.write.program = "python3 -c 'import afford; afford.run(...)'; or: build/bin/afford";
+  return o;
+}
+
+// The checks `afford experiment` makes before anything runs (its options, config keys and values, the plan),
+// with nothing written: a ConfigError names what is wrong. The request must give a run prefix. Returns the
+// intrinsic runs planned: [(run id, system, steps)].
+py::list checkExperimentFrom(const py::dict& request) {
+  py::list out;
+  for (const CheckedRun& r : checkExperiment(requestFrom(request))) out.append(py::make_tuple(r.run_id, r.system, r.steps));
+  return out;
+}
+
+py::tuple runExperimentFrom(const py::dict& request) {
+  ExperimentRequest o = requestFrom(request);
   // Said on stderr at the level asked; the errors also kept (the last 20), for the exception that says why.
   const spdlog::level::level_enum level = parseLevel(request["log_level"].cast<std::string>());
   auto console = std::make_shared<spdlog::sinks::stderr_color_sink_mt>();
@@ -140,14 +157,39 @@ py::tuple runExperimentFrom(const py::dict& request) {
   log->set_level(std::min(level, spdlog::level::err));
   log->set_pattern("[%H:%M:%S.%e] [%n] [%^%l%$] %v");
   errors->set_pattern("%v");
+  // on_curve(run_id, system, run, step, mae), told each point of each intrinsic run's curve from the slot's
+  // thread: a string it returns stops the experiment for that reason; an exception it raises stops it too,
+  // and is raised here once the runs have stopped. (`hook` keeps the callable alive until then.)
+  const py::object hook = request.contains("on_curve") ? py::object(request["on_curve"]) : py::object(py::none());
+  std::optional<py::error_already_set> raised;
+  std::mutex raised_mutex;
+  if (!hook.is_none()) {
+    PyObject* fn = hook.ptr();
+    o.host.on_curve = [fn, &raised, &raised_mutex](const CurvePoint& p) {
+      py::gil_scoped_acquire gil;
+      try {
+        const py::object said = py::reinterpret_borrow<py::object>(fn)(p.run_id, p.system, p.run, p.step, p.mae);
+        if (py::isinstance<py::str>(said) && !said.cast<std::string>().empty()) stopExperiment(said.cast<std::string>());
+      } catch (py::error_already_set& e) {
+        std::lock_guard<std::mutex> lock(raised_mutex);
+        if (!raised) raised.emplace(std::move(e));
+        stopExperiment("on_curve raised an exception");
+      } catch (const std::exception& e) {  // (a result it returned that is not a string)
+        stopExperiment(std::string("on_curve: ") + e.what());
+      }
+    };
+  }
   int code = 0, signal = 0;
+  std::string stopped_for;
   {
     py::gil_scoped_release free;
     InterruptScope scope;
     code = runExperiment(o, *log);
     signal = scope.signal();
+    stopped_for = scope.stoppedFor();
   }
-  return py::make_tuple(code, signal, errors->last_formatted());
+  if (raised) throw std::move(*raised);
+  return py::make_tuple(code, signal, errors->last_formatted(), stopped_for);
 }
 
 // afford replay in this process, where components registered from Python are known (a run with a Python
@@ -193,6 +235,8 @@ PYBIND11_MODULE(_afford, m) {
   m.def("read_log", &afford::readLog, py::arg("path"), py::arg("run_id") = "", py::arg("bus_key") = "",
         py::arg("channels") = std::vector<std::string>{},
         "The messages of one run of a log folder (or .lcm file), read and checked by the project's reader.");
+  m.def("check_experiment", &afford::checkExperimentFrom, py::arg("request"),
+        "Check an experiment request as afford experiment does before it runs (nothing is written).");
   m.def("run_experiment", &afford::runExperimentFrom, py::arg("request"),
         "Run an experiment in this process (afford experiment); returns (exit code, signal or 0, the last errors).");
   m.def("replay", &afford::replayFrom, py::arg("log_dir"), py::arg("into") = std::vector<std::string>{},

@@ -3,13 +3,15 @@
 // folder), the experiment submitted by scripts/slurm-submit.sh as a job array
 // of 4 shards over udpm (each job in a network namespace of its own, two at a
 // time on this node's 2 CPUs, all on the same UDP ports) and a merge job
-// after them; the merged summary must equal the same experiment run here.
+// after them; the merged summary must equal the same experiment run here. Then a study
+// (afford tune) by two array tasks sharing its journal file.
 #include <gtest/gtest.h>
 
 #include <filesystem>
 #include <fstream>
 #include <nlohmann/json.hpp>
 #include <regex>
+#include <set>
 
 #include "tests/support.hpp"
 
@@ -88,6 +90,33 @@ TEST(Cluster, SlurmArrayOfShardsMergesIntoTheLocalRunsSummary) {
   EXPECT_EQ(merged["merged_from"].size(), 4u);
   EXPECT_EQ(merged["systems"]["IMP"]["runs"].size(), 4u);
   EXPECT_EQ(test::withoutTimingsAndPaths(merged), test::withoutTimingsAndPaths(whole));
+
+  // A study (afford tune) on the same cluster: two array tasks, each a worker of the one study in --out, and a
+  // report job after them. Together they run the study's trials, each once.
+  const test::CommandResult tuned = test::runCommand(cluster.with(
+      std::string(AFFORD_SOURCE_DIR) + "/scripts/slurm-submit.sh --tune --shards 2 --afford " + AFFORD_BIN_DIR +
+      "/afford --out " + dir + "/study -- base --param motivation.leak=log:0.01:0.9 --trials 4 --steps 3000 "
+      "--keep-logs none"));
+  ASSERT_EQ(tuned.exit_code, 0) << tuned.output;
+  ASSERT_TRUE(std::regex_search(tuned.output, m, std::regex("report job ([0-9]+)"))) << tuned.output;
+  const std::string report_job = m[1];
+  const test::CommandResult reported =
+      test::runCommand(cluster.with("timeout 300 salloc --quiet --dependency=afterany:" + report_job + " true"));
+  ASSERT_EQ(reported.exit_code, 0) << "waiting for the report job " << report_job << ": " << reported.output;
+  std::ifstream trials_csv(dir + "/study/trials.csv");
+  std::string header, line;
+  ASSERT_TRUE(std::getline(trials_csv, header)) << "no trials.csv in " << dir << "/study";
+  std::set<std::string> numbers, workers;
+  int finished = 0;
+  while (std::getline(trials_csv, line)) {
+    numbers.insert(line.substr(0, line.find(',')));
+    finished += line.find(",COMPLETE,") != std::string::npos || line.find(",PRUNED,") != std::string::npos;
+    if (std::regex_search(line, m, std::regex(",([^,]+:[0-9]+),"))) workers.insert(m[1]);
+  }
+  EXPECT_EQ(finished, 4) << header;
+  EXPECT_EQ(numbers, (std::set<std::string>{"0", "1", "2", "3"}));
+  EXPECT_EQ(workers.size(), 2u) << "both workers took trials";
+  EXPECT_TRUE(fs::exists(dir + "/study/report.md"));
 }
 
 }  // namespace

@@ -63,5 +63,7 @@ bool stopRequested();
 void installStopHandlers();
 // Forget a stop request (a host that goes on after an interrupted run: the Python package).
 void clearStopRequest();
+// Stop as a SIGINT or SIGTERM would (stopRequested() becomes true), asked by the program itself.
+void requestStop();
 
 }  // namespace afford

@@ -1,0 +1,765 @@
+"""Studies over config keys with Optuna: afford.tune(...) and `afford tune` (python3 -m afford tune).
+
+    import afford
+    s = afford.tune("studies/leak", "base", params={"motivation.leak": afford.Float(0.01, 0.9, log=True)},
+                    objective="affordance_mae", trials=24, steps=3000)
+    s.trials            # one row per trial: its state, value, parameters, folder, intrinsic steps
+    afford.load(s.best_folder)
+
+A study is a folder: study.json (what it searches and how), study.journal
+(Optuna's journal file storage, which every worker shares through the file
+system), trials/NNNN (each trial an ordinary experiment folder: it loads,
+plots and replays as any other), and, as trials end, trials.csv,
+fig_tune_history.png, fig_tune_params.png and report.md. Several workers
+(processes, or Slurm array tasks of scripts/slurm-submit.sh --tune) given
+the same folder share the study: together they run `trials` trials, each
+once. Pruning stops a trial whose learning curve's error, at a curve step,
+falls behind the other trials' at that step (successive halving, or the
+median pruner). Ctrl-C (or SIGTERM) stops the trial under way as it stops an
+experiment; running the same command again continues the study, the stopped
+trial's parameters first. docs/python.md#studies.
+"""
+from __future__ import annotations
+
+import argparse
+import contextlib
+import fcntl
+import importlib.util
+import json
+import math
+import os
+import signal
+import socket
+import sys
+import threading
+import time
+from dataclasses import dataclass
+from pathlib import Path
+from typing import Any, Callable, Iterable, Sequence
+
+from . import _afford
+from .experiments import CurvePoint, ExperimentError, ExperimentStopped, check, run
+from .results import Experiment, load
+
+STUDY_NAME = "afford"
+KEPT = ("experiment", "system", "reps", "steps", "set", "params", "objective", "direction", "seed", "prune",
+        "pruner", "prune_startup", "prune_warmup", "extrinsic_reps", "scenarios", "keep_logs")  # study.json's fields a later command must match
+RETRIED = ("interrupted", "worker lost")  # trials stopped by these run again (their parameters first)
+
+
+def _stopped(t) -> str | None:
+    """Why a trial stopped short: "interrupted" (Ctrl-C), "worker lost" (it failed with nothing said: its
+    worker was found gone), or None (it finished, was pruned, or failed saying why)."""
+    from optuna.trial import TrialState
+    a = t.user_attrs
+    if a.get("stopped"):
+        return a["stopped"]
+    return "worker lost" if t.state == TrialState.FAIL and not a.get("error") else None
+
+
+# ---- the search space -----------------------------------------------------------------------------------------
+
+@dataclass(frozen=True)
+class Float:
+    """A config key's real values in [low, high] (log: sampled on a log scale)."""
+    low: float
+    high: float
+    log: bool = False
+
+    def spec(self) -> str:
+        return f"{'log' if self.log else 'float'}:{self.low!r}:{self.high!r}"
+
+
+@dataclass(frozen=True)
+class Int:
+    """A config key's whole values in [low, high] (log: sampled on a log scale)."""
+    low: int
+    high: int
+    log: bool = False
+
+    def spec(self) -> str:
+        return f"{'intlog' if self.log else 'int'}:{self.low}:{self.high}"
+
+
+@dataclass(frozen=True)
+class Choice:
+    """One of the given values of a config key."""
+    choices: tuple
+
+    def __init__(self, choices: Iterable[Any]):
+        object.__setattr__(self, "choices", tuple(choices))
+
+    def spec(self) -> str:
+        return "choice:" + ",".join(str(c) for c in self.choices)
+
+
+def _scalar(text: str) -> Any:
+    for kind in (int, float):
+        try:
+            return kind(text)
+        except ValueError:
+            pass
+    return {"true": True, "false": False}.get(text.lower(), text)
+
+
+def parse_param(key: str, spec: Any) -> Float | Int | Choice:
+    """A parameter from its spec: Float/Int/Choice, or the text `afford tune --param KEY=SPEC` takes:
+    float:LOW:HIGH, log:LOW:HIGH (a log scale), int:LOW:HIGH, intlog:LOW:HIGH, choice:A,B,C."""
+    if isinstance(spec, (Float, Int, Choice)):
+        p = spec
+    elif isinstance(spec, str):
+        kind, _, rest = spec.partition(":")
+        bounds = rest.split(":")
+        try:
+            if kind in ("float", "log") and len(bounds) == 2:
+                p = Float(float(bounds[0]), float(bounds[1]), log=kind == "log")
+            elif kind in ("int", "intlog") and len(bounds) == 2:
+                p = Int(int(bounds[0]), int(bounds[1]), log=kind == "intlog")
+            elif kind == "choice" and rest:
+                p = Choice(_scalar(c) for c in rest.split(","))
+            else:
+                raise ValueError("not a spec")
+        except ValueError:
+            raise ValueError(f"parameter '{key}': '{spec}' is not float:LOW:HIGH, log:LOW:HIGH, int:LOW:HIGH, "
+                             f"intlog:LOW:HIGH or choice:A,B,...") from None
+    else:
+        raise ValueError(f"parameter '{key}': {spec!r} is not afford.Float, afford.Int, afford.Choice or a spec "
+                         f"such as 'log:0.001:0.1'")
+    if isinstance(p, (Float, Int)):
+        if not (math.isfinite(p.low) and math.isfinite(p.high)) or p.low >= p.high:
+            raise ValueError(f"parameter '{key}': its range [{p.low}, {p.high}] is empty (low must be below high)")
+        if p.log and p.low <= 0:
+            raise ValueError(f"parameter '{key}': a log scale needs a low above 0, not {p.low}")
+    elif not p.choices:
+        raise ValueError(f"parameter '{key}': no choices")
+    return p
+
+
+def _distribution(p: Float | Int | Choice):
+    import optuna
+    if isinstance(p, Float):
+        return optuna.distributions.FloatDistribution(p.low, p.high, log=p.log)
+    if isinstance(p, Int):
+        return optuna.distributions.IntDistribution(p.low, p.high, log=p.log)
+    return optuna.distributions.CategoricalDistribution(list(p.choices))
+
+
+# ---- objectives ----------------------------------------------------------------------------------------------
+
+def _affordance_mae(e: Experiment) -> float:
+    return float(e.runs["affordance_mae"].mean())
+
+
+def _curve_mae(e: Experiment) -> float:
+    if e.curves.empty:
+        raise ValueError("curve_mae: the experiment wrote no curves (random tables have none)")
+    target = e.tables[["system", "object", "action", "target"]]
+    c = e.curves.merge(target, on=["system", "object", "action"])
+    return float((c["prediction"] - c["target"]).abs().mean())
+
+
+def _success(e: Experiment) -> float:
+    if e.extrinsic.empty:
+        raise ValueError("success: the experiment ran no extrinsic tests (give extrinsic_reps and scenarios)")
+    return float(e.extrinsic["success"].mean())
+
+
+# name -> (the function of the loaded experiment, its direction, what pruning reports at each curve point)
+OBJECTIVES: dict[str, tuple[Callable[[Experiment], float], str]] = {
+    "affordance_mae": (_affordance_mae, "minimize"),  # the final tables' error from the world's, mean over runs
+    "curve_mae": (_curve_mae, "minimize"),            # the error over the whole learning curves (how fast)
+    "success": (_success, "maximize"),                # the extrinsic tests' share of successes
+}
+
+
+def _objective(objective: str | Callable[[Experiment], float]) -> Callable[[Experiment], float]:
+    if callable(objective):
+        return objective
+    if objective in OBJECTIVES:
+        return OBJECTIVES[objective][0]
+    file, sep, name = objective.rpartition(":")
+    if not sep or not file.endswith(".py"):
+        raise ValueError(f"objective '{objective}': one of {', '.join(OBJECTIVES)}, or FILE.py:FUNCTION (a function "
+                         f"of the afford.load result)")
+    path = Path(file)
+    if not path.is_file():
+        raise ValueError(f"objective '{objective}': no file {path}")
+    spec = importlib.util.spec_from_file_location(f"afford_objective_{path.stem}", path)
+    module = importlib.util.module_from_spec(spec)
+    spec.loader.exec_module(module)
+    if not callable(getattr(module, name, None)):
+        raise ValueError(f"objective '{objective}': {path} has no function {name}")
+    return getattr(module, name)
+
+
+# ---- the study folder ----------------------------------------------------------------------------------------
+
+@contextlib.contextmanager
+def _claim(folder: Path):
+    """The study's own lock (a file lock the kernel queues waiters on): asking for a trial and counting them."""
+    with open(folder / "study.lock", "a") as f:
+        fcntl.flock(f, fcntl.LOCK_EX)
+        try:
+            yield
+        finally:
+            fcntl.flock(f, fcntl.LOCK_UN)
+
+
+def _write_whole(path: Path, text: str) -> None:
+    tmp = path.with_name(f".{path.name}.{os.getpid()}.tmp")
+    tmp.write_text(text)
+    os.replace(tmp, path)
+
+
+def _start_time(pid: int) -> str | None:
+    try:
+        return Path(f"/proc/{pid}/stat").read_text().rsplit(")", 1)[1].split()[19]
+    except (OSError, IndexError):
+        return None
+
+
+def _worker() -> dict[str, Any]:
+    return {"host": socket.gethostname(), "pid": os.getpid(), "started": _start_time(os.getpid())}
+
+
+def _gone(worker: dict[str, Any] | None) -> bool:
+    """A worker of this host that is no longer running (another host's cannot be told from here)."""
+    return (isinstance(worker, dict) and worker.get("host") == socket.gethostname() and
+            _start_time(int(worker.get("pid", 0))) != worker.get("started"))
+
+
+def _storage(folder: Path):
+    import warnings
+    import optuna
+    from optuna.storages import JournalFileStorage, JournalStorage
+    with warnings.catch_warnings():  # (Optuna 3.1 calls its journal storage experimental; it is what shares a study)
+        warnings.simplefilter("ignore", optuna.exceptions.ExperimentalWarning)
+        return JournalStorage(JournalFileStorage(str(folder / "study.journal")))
+
+
+def _sampler(seed: int, number: int):
+    """TPE, its randomness keyed by (seed, trial number): a worker's draws do not depend on which worker it is."""
+    import numpy as np
+    import optuna
+    key = int(np.random.SeedSequence([seed, number, 0x7475]).generate_state(1)[0])
+    return optuna.samplers.TPESampler(seed=key)
+
+
+PRUNERS = ("halving", "median")
+
+
+def _pruner(d: dict[str, Any], first_run_steps: int):
+    """halving (default): Optuna's successive halving (asynchronous, as Ray Tune's ASHA): at steps
+    warmup x 3^k a trial goes on only if its curve's error is among the best third of the trials that got
+    there. median: Optuna's median pruner: from the `prune_startup`-th finished trial on, a trial past the
+    warmup whose curve's error at a step is above the finished trials' median there stops. The warmup is
+    `prune_warmup` of the first run's steps."""
+    import optuna
+    if not d["prune"]:
+        return optuna.pruners.NopPruner()
+    warmup = max(1, int(d["prune_warmup"] * first_run_steps))
+    if d["pruner"] == "halving":
+        return optuna.pruners.SuccessiveHalvingPruner(min_resource=warmup, reduction_factor=3)
+    return optuna.pruners.MedianPruner(n_startup_trials=d["prune_startup"], n_warmup_steps=warmup)
+
+
+# ---- results ----------------------------------------------------------------------------------------------------
+
+@dataclass
+class Study:
+    """A study folder as data: `trials` one row per trial; `definition` what study.json says."""
+    folder: Path
+    definition: dict[str, Any]
+    trials: Any  # pandas.DataFrame
+
+    @property
+    def best(self):
+        done = self.trials[self.trials["state"] == "COMPLETE"]
+        if done.empty:
+            return None
+        values = done["value"]
+        return done.loc[values.idxmin() if self.definition["direction"] == "minimize" else values.idxmax()]
+
+    @property
+    def best_folder(self) -> Path | None:
+        b = self.best
+        return None if b is None else self.folder / b["folder"]
+
+    def __repr__(self) -> str:
+        counts = self.trials["state"].value_counts().to_dict() if len(self.trials) else {}
+        return f"Study({str(self.folder)!r}: {self.definition.get('objective')}, {counts})"
+
+
+def _frame(folder: Path, definition: dict[str, Any], trials: Sequence[Any]):
+    import pandas as pd
+    rows = []
+    for t in trials:
+        a = t.user_attrs
+        row = {"number": t.number, "state": t.state.name,
+               "value": t.value if t.state.name == "COMPLETE" else None,  # (a pruned trial's: its last_intermediate)
+               "stopped": _stopped(t), "retry_of": a.get("retry_of"),
+               "intrinsic_steps": a.get("intrinsic_steps"), "planned_steps": a.get("planned_steps"),
+               "pruned_at": a.get("pruned_at"),
+               "last_intermediate": t.intermediate_values[max(t.intermediate_values)] if t.intermediate_values else None,
+               "seconds": t.duration.total_seconds() if t.duration else None,
+               "folder": a.get("folder"), "worker": "{host}:{pid}".format(**a["worker"]) if a.get("worker") else None,
+               "error": a.get("error")}
+        for key in definition["params"]:
+            row[f"param {key}"] = t.params.get(key)
+        rows.append(row)
+    columns = ["number", "state", "value", *[f"param {k}" for k in definition["params"]], "stopped", "retry_of",
+               "intrinsic_steps", "planned_steps", "pruned_at", "last_intermediate", "seconds", "folder", "worker",
+               "error"]
+    df = pd.DataFrame(rows, columns=columns)
+    for c in ("retry_of", "intrinsic_steps", "planned_steps", "pruned_at"):
+        df[c] = df[c].astype("Int64")
+    df["value"] = df["value"].astype(float)
+    return df
+
+
+def load_study(folder: str | Path) -> Study:
+    """A study folder (afford.tune, `afford tune --out DIR`) as a Study: its trials as a data frame."""
+    folder = Path(folder)
+    if not (folder / "study.json").is_file():
+        raise FileNotFoundError(f"{folder} holds no study.json: not a study's folder")
+    definition = json.loads((folder / "study.json").read_text())
+    import optuna
+    optuna.logging.set_verbosity(optuna.logging.WARNING)
+    trials = optuna.load_study(study_name=STUDY_NAME, storage=_storage(folder)).get_trials(deepcopy=False)
+    return Study(folder, definition, _frame(folder, definition, trials))
+
+
+def _scale(ax, values) -> None:
+    """A log scale for values that span more than two decades (an error going from 0.05 to 1e-8)."""
+    v = [x for x in values if x is not None and x == x]
+    if v and min(v) > 0 and max(v) / min(v) > 100:
+        ax.set_yscale("log")
+
+
+def _save(fig, path: Path) -> None:
+    import matplotlib.pyplot as plt
+    tmp = path.with_name(f".{path.stem}.{os.getpid()}.tmp.png")
+    fig.savefig(tmp)
+    plt.close(fig)
+    os.replace(tmp, path)
+
+
+def write_report(study: Study) -> Path:
+    """trials.csv, fig_tune_history.png, fig_tune_params.png and report.md in the study's folder."""
+    import matplotlib
+    matplotlib.use("Agg")
+    import matplotlib.pyplot as plt
+
+    folder, d, df = study.folder, study.definition, study.trials
+    _write_whole(folder / "trials.csv", df.to_csv(index=False))
+    minimize = d["direction"] == "minimize"
+    done = df[df["state"] == "COMPLETE"].sort_values("number")
+    pruned = df[df["state"] == "PRUNED"]
+
+    fig, ax = plt.subplots(figsize=(7, 4), dpi=110)
+    ax.scatter(done["number"], done["value"], color="tab:blue", label="finished", zorder=3)
+    if len(pruned):
+        ax.scatter(pruned["number"], pruned["last_intermediate"], marker="x", color="tab:gray",
+                   label="pruned (its curve's error when pruned)", zorder=2)
+    if len(done):
+        best = done["value"].cummin() if minimize else done["value"].cummax()
+        ax.step(done["number"], best, where="post", color="tab:red", label="best so far")
+    ax.set_xlabel("trial")
+    ax.set_ylabel(d["objective"])
+    _scale(ax, list(done["value"]) + list(pruned["last_intermediate"]))
+    ax.set_title(f"{d['experiment']}: {d['objective']} ({d['direction']}), {len(done)} finished, {len(pruned)} pruned")
+    ax.legend(fontsize=8)
+    fig.tight_layout()
+    _save(fig, folder / "fig_tune_history.png")
+
+    keys = list(d["params"])
+    fig, axes = plt.subplots(1, len(keys), figsize=(4 * len(keys), 3.6), dpi=110, squeeze=False)
+    for ax, key in zip(axes[0], keys):
+        p = parse_param(key, d["params"][key])
+        column = f"param {key}"
+        if isinstance(p, Choice):
+            names = [str(c) for c in p.choices]
+            where = {n: i for i, n in enumerate(names)}
+            ax.scatter([where.get(str(v), -1) for v in done[column]], done["value"], color="tab:blue")
+            ax.set_xticks(range(len(names)), names)
+        else:
+            ax.scatter(done[column], done["value"], color="tab:blue", label="finished")
+            if len(pruned):
+                ax.scatter(pruned[column], pruned["last_intermediate"], marker="x", color="tab:gray", label="pruned")
+            if p.log:
+                ax.set_xscale("log")
+        ax.set_xlabel(key)
+        ax.set_ylabel(d["objective"])
+        _scale(ax, list(done["value"]) + list(pruned["last_intermediate"]))
+    if len(pruned) and axes[0][0].get_legend_handles_labels()[0]:
+        axes[0][0].legend(fontsize=8)
+    fig.suptitle("parameters against the objective")
+    fig.tight_layout()
+    _save(fig, folder / "fig_tune_params.png")
+
+    counts = df["state"].value_counts().to_dict()
+    lines = [f"# Study of {d['experiment']} ({d['system']}): {d['objective']}, {d['direction']}d", "",
+             f"Folder `{folder}`; {len(df)} trials: " + ", ".join(f"{n} {s.lower()}" for s, n in sorted(counts.items())) +
+             f". Intrinsic steps run: {int(df['intrinsic_steps'].fillna(0).sum())} of "
+             f"{int(df['planned_steps'].fillna(0).sum())} planned.", "",
+             "Searched: " + ", ".join(f"`{k}` {v}" for k, v in d["params"].items()) +
+             (f"; fixed: " + ", ".join(f"`{k}={v}`" for k, v in d["set"].items()) if d["set"] else "") + ".", ""]
+    if len(done):
+        top = done.sort_values("value", ascending=minimize).head(10)
+        lines += ["| trial | value | " + " | ".join(keys) + " | folder |",
+                  "|---|---|" + "---|" * len(keys) + "---|"]
+        for _, r in top.iterrows():
+            lines.append(f"| {r['number']} | {r['value']:.4g} | " +
+                         " | ".join(f"{r[f'param {k}']:.4g}" if isinstance(r[f"param {k}"], float) else
+                                    str(r[f"param {k}"]) for k in keys) + f" | `{r['folder']}` |")
+        lines.append("")
+    lines += ["![history](fig_tune_history.png)", "", "![parameters](fig_tune_params.png)", "",
+              "The trials, one row each: `trials.csv` (or `afford.load_study(folder).trials`)."]
+    _write_whole(folder / "report.md", "\n".join(lines) + "\n")
+    return folder / "report.md"
+
+
+# ---- running a study --------------------------------------------------------------------------------------------
+
+class _Stop:
+    """SIGINT/SIGTERM between trials: remembered and taken at the next trial's start (a second one quits)."""
+
+    def __init__(self):
+        self.signal = 0
+        self._old = {}
+
+    def __enter__(self):
+        if threading.current_thread() is not threading.main_thread():
+            return self  # (signal handlers are the main thread's; afford.run still stops on Ctrl-C)
+        for s in (signal.SIGINT, signal.SIGTERM):
+            self._old[s] = signal.signal(s, self._on)
+        return self
+
+    def _on(self, sig, frame):
+        if self.signal:
+            raise KeyboardInterrupt
+        self.signal = sig
+        print("\nafford tune: stopping once this trial's bookkeeping is done (a second signal quits at once)",
+              file=sys.stderr)
+
+    def __exit__(self, *exc):
+        for s, h in self._old.items():
+            signal.signal(s, h)
+
+
+def _definition(experiment, system, reps, steps, set, params, objective, direction, seed, prune, pruner, prune_startup,
+                prune_warmup, extrinsic_reps, scenarios, keep_logs, trials) -> dict[str, Any]:
+    if not params:
+        raise ValueError("a study searches at least one config key: give params ({'key': afford.Float(...)}, "
+                         "or --param KEY=SPEC)")
+    parsed = {k: parse_param(k, v) for k, v in params.items()}
+    if not callable(objective) and objective not in OBJECTIVES:
+        _objective(objective)  # a FILE.py:FUNCTION: found and loadable now, not after the first trial
+    if direction is None:
+        direction = OBJECTIVES[objective][1] if isinstance(objective, str) and objective in OBJECTIVES else "minimize"
+    if direction not in ("minimize", "maximize"):
+        raise ValueError(f"direction '{direction}': minimize or maximize")
+    if prune is None:
+        prune = direction == "minimize" and isinstance(objective, str) and objective in ("affordance_mae", "curve_mae")
+    if prune and direction != "minimize":
+        raise ValueError("pruning compares the learning curves' affordance error, which is better lower: a study "
+                         "that maximizes cannot prune on it (prune=False, --no-prune)")
+    if isinstance(trials, bool) or not isinstance(trials, int) or trials < 1:
+        raise ValueError(f"trials={trials!r}: a whole number, at least 1")
+    if isinstance(prune_startup, bool) or not isinstance(prune_startup, int) or prune_startup < 1:
+        raise ValueError(f"prune_startup={prune_startup!r}: a whole number of trials, at least 1")
+    if pruner not in PRUNERS:
+        raise ValueError(f"pruner {pruner!r}: {' or '.join(PRUNERS)}")
+    if not 0 <= prune_warmup < 1:
+        raise ValueError(f"prune_warmup={prune_warmup!r}: a share of the first run's steps, in [0, 1)")
+    return {"experiment": experiment, "system": system, "reps": reps, "steps": steps, "set": dict(set or {}),
+            "params": {k: p.spec() for k, p in parsed.items()}, "seed": seed, "prune": bool(prune),
+            "pruner": pruner, "prune_startup": prune_startup, "prune_warmup": float(prune_warmup),
+            "objective": objective if isinstance(objective, str) else
+            f"{getattr(objective, '__module__', '?')}.{getattr(objective, '__qualname__', '?')}",
+            "direction": direction, "extrinsic_reps": extrinsic_reps, "scenarios": list(scenarios),
+            "keep_logs": keep_logs, "trials": trials, "afford_version": _afford.version}
+
+
+def _check_keys(d: dict[str, Any]) -> list[tuple[str, str, int]]:
+    """Every searched key at its ends (each choice), checked as afford.run checks: a bad key fails now."""
+    def plan(values: dict[str, Any]):
+        return check(d["experiment"], system=d["system"], reps=d["reps"], steps=d["steps"], set={**d["set"], **values},
+                     seed=d["seed"], extrinsic_reps=d["extrinsic_reps"], scenarios=d["scenarios"])
+    for key, spec in d["params"].items():
+        p = parse_param(key, spec)
+        for v in (p.choices if isinstance(p, Choice) else (p.low, p.high)):
+            try:
+                plan({key: v})
+            except ValueError as e:
+                raise type(e)(f"parameter '{key}' at {v!r}: {e}") from None
+    return plan({})
+
+
+def _open(folder: Path, d: dict[str, Any]):
+    """The study in `folder`, made if new; a folder holding another study (or anything else) is refused."""
+    import optuna
+    optuna.logging.set_verbosity(optuna.logging.WARNING)
+    folder.mkdir(parents=True, exist_ok=True)
+    with _claim(folder):
+        stored = folder / "study.json"
+        if stored.is_file():
+            old = json.loads(stored.read_text())
+            differ = [k for k in KEPT if old.get(k) != d.get(k)]
+            if differ:
+                said = "; ".join(f"{k}: {old.get(k)!r} there, {d.get(k)!r} here" for k in differ)
+                raise ValueError(f"{folder} holds another study ({said}): give another folder, or the same "
+                                 f"definition to continue it")
+            if d["trials"] != old.get("trials"):
+                _write_whole(stored, json.dumps({**old, "trials": d["trials"]}, indent=2) + "\n")
+        else:
+            if any(folder.iterdir()) and not (set(p.name for p in folder.iterdir()) <= {"study.lock"}):
+                raise ValueError(f"{folder} is not empty and holds no study: give a new folder for a study")
+            _write_whole(stored, json.dumps(d, indent=2) + "\n")
+        return optuna.create_study(study_name=STUDY_NAME, storage=_storage(folder), direction=d["direction"],
+                                   load_if_exists=True)
+
+
+def _retry_stopped(study, say) -> None:
+    """Under the claim: this host's trials whose worker is gone fail as lost; each interrupted or lost trial
+    not yet retried is queued again with its parameters (the retry says which it retries)."""
+    import optuna
+    from optuna.trial import TrialState
+    trials = study.get_trials(deepcopy=False)
+    for t in trials:
+        if t.state == TrialState.RUNNING and _gone(t.user_attrs.get("worker")):
+            study.tell(t.number, state=TrialState.FAIL)  # with no error said: lost (_stopped)
+            say(f"trial {t.number}: its worker ({t.user_attrs['worker']['pid']}) is gone: it runs again")
+    retried = {t.user_attrs.get("retry_of") for t in study.get_trials(deepcopy=False)}
+    for t in study.get_trials(deepcopy=False, states=(TrialState.FAIL,)):
+        if _stopped(t) in RETRIED and t.number not in retried:
+            study.enqueue_trial(t.params, user_attrs={"retry_of": t.number})
+
+
+def _counts(study) -> tuple[int, int]:
+    """(trials finished: done, pruned or failed saying why; trials running)."""
+    from optuna.trial import TrialState
+    finished = running = 0
+    for t in study.get_trials(deepcopy=False):
+        if t.state == TrialState.RUNNING:
+            running += 1
+        elif t.state in (TrialState.COMPLETE, TrialState.PRUNED) or (
+                t.state == TrialState.FAIL and _stopped(t) not in RETRIED):
+            finished += 1
+    return finished, running
+
+
+def tune(out: str | Path, experiment: str = "base", params: dict[str, Any] | None = None,
+         objective: str | Callable[[Experiment], float] = "affordance_mae", direction: str | None = None,
+         trials: int = 24, system: str = "IMP", reps: int | None = 1, steps: int | None = None,
+         set: dict[str, Any] | None = None, seed: int = 1, extrinsic_reps: int = 0, scenarios: Iterable[str] = (),
+         prune: bool | None = None, pruner: str = "halving", prune_startup: int = 5, prune_warmup: float = 0.1,
+         keep_logs: str = "all",
+         log_level: str = "error", say: Callable[[str], None] | None = print) -> Study:
+    """Run (or continue, or join) a study in the folder `out`; returns it once `trials` trials have finished.
+
+    `params`: config key -> afford.Float(low, high, log=), afford.Int(...), afford.Choice([...]) or a spec
+    string ("log:0.001:0.1"). `objective`: affordance_mae (default), curve_mae, success, "FILE.py:FUNCTION" or a
+    function of the afford.load result; `direction` defaults to the named objective's. Every trial runs
+    `experiment` for `system` with the same `seed` (its runs differ only in the parameters), `reps` runs of
+    `steps` steps, `set` fixed, in this process (memq), into out/trials/NNNN. `prune` (default: for the error
+    objectives) stops a trial whose curve's error falls behind the other trials': `pruner` "halving" (successive
+    halving, from `prune_warmup` of the first run's steps on) or "median" (Optuna's median pruner, once
+    `prune_startup` trials have finished); see _pruner.
+
+    Another process given the same folder and definition joins the study (the trials are shared, none runs
+    twice); a folder holding a different study raises ValueError saying what differs. Ctrl-C stops the trial
+    under way and raises KeyboardInterrupt; calling again continues. A bad key or value raises ConfigError
+    before any trial runs.
+    """
+    import optuna
+    from optuna.trial import TrialState
+    say = say or (lambda _: None)
+    folder = Path(out)
+    d = _definition(experiment, system, reps, steps, set, params, objective, direction, seed, prune, pruner,
+                    prune_startup, prune_warmup, extrinsic_reps, scenarios, keep_logs, trials)
+    planned = _check_keys(d)
+    value_of = _objective(objective)
+    study = _open(folder, d)
+    offsets, total = [], 0  # each planned run's first step in the trial's count of intrinsic steps
+    for _, _, n in planned:
+        offsets.append(total)
+        total += n
+    study.pruner = _pruner(d, planned[0][2] if planned else 0)
+    distributions = {k: _distribution(parse_param(k, v)) for k, v in d["params"].items()}
+    (folder / "trials").mkdir(exist_ok=True)
+    try:
+        _work(study, d, folder, offsets, total, distributions, value_of, log_level, say)
+    finally:
+        result = load_study(folder)
+        if len(result.trials):
+            write_report(result)
+    finished, running = _counts(study)
+    if running:
+        say(f"{running} trial(s) still run in other workers; this worker is done")
+    return result
+
+
+def _work(study, d, folder: Path, offsets, total: int, distributions, value_of, log_level: str, say) -> None:
+    """This worker's trials, one after another, until the study has its trials finished or under way."""
+    with _Stop() as stop:
+        while True:
+            if stop.signal:
+                raise KeyboardInterrupt("afford tune: stopped between trials; the same command continues the study")
+            with _claim(folder):
+                _retry_stopped(study, say)
+                finished, running = _counts(study)
+                if finished + running >= json.loads((folder / "study.json").read_text())["trials"]:
+                    break
+                study.sampler = _sampler(d["seed"], len(study.get_trials(deepcopy=False)))
+                trial = study.ask(distributions)
+                trial.set_user_attr("worker", _worker())
+                trial.set_user_attr("folder", f"trials/{trial.number:04d}")
+                trial.set_user_attr("planned_steps", total)
+            _run_trial(study, trial, d, folder, offsets, total, value_of, log_level, say)
+
+
+def _run_trial(study, trial, d, folder: Path, offsets: list[int], total: int, value_of, log_level: str, say) -> None:
+    from optuna.trial import TrialState
+    where = folder / trial.user_attrs["folder"]
+    params = ", ".join(f"{k}={v:.4g}" if isinstance(v, float) else f"{k}={v}" for k, v in trial.params.items())
+    progress = {"steps": 0}
+
+    def on_curve(p: CurvePoint) -> str | None:
+        at = offsets[p.run] + p.step
+        progress["steps"] = at
+        if not d["prune"] or p.step == 0:
+            return None
+        trial.report(p.mae, at)
+        if at >= total:  # the last run's final table: the trial has run to its end, nothing left to save
+            return None
+        return "pruned" if trial.should_prune() else None
+
+    began = time.monotonic()
+    try:
+        e = run(d["experiment"], system=d["system"], reps=d["reps"], steps=d["steps"], set={**d["set"], **trial.params},
+                seed=d["seed"], extrinsic_reps=d["extrinsic_reps"], scenarios=d["scenarios"],
+                keep_logs=d["keep_logs"], out=where, run_prefix=f"trial{trial.number:04d}", log_level=log_level,
+                on_curve=on_curve)
+    except ExperimentStopped:
+        trial.set_user_attr("intrinsic_steps", progress["steps"])
+        trial.set_user_attr("pruned_at", progress["steps"])
+        study.tell(trial, state=TrialState.PRUNED)
+        say(f"trial {trial.number}: {params}: pruned at step {progress['steps']} "
+            f"({time.monotonic() - began:.1f} s)")
+        return
+    except KeyboardInterrupt:
+        trial.set_user_attr("intrinsic_steps", progress["steps"])
+        trial.set_user_attr("stopped", "interrupted")
+        study.tell(trial, state=TrialState.FAIL)
+        say(f"trial {trial.number}: interrupted; its folder {where} is kept; the same command continues the study")
+        raise
+    except (ExperimentError, ValueError, OSError) as x:  # (afford.ConfigError is a ValueError)
+        why = (x.errors[0] if isinstance(x, ExperimentError) and x.errors else str(x)).strip()
+        trial.set_user_attr("intrinsic_steps", progress["steps"])
+        trial.set_user_attr("error", why[:1000])
+        study.tell(trial, state=TrialState.FAIL)
+        say(f"trial {trial.number}: {params}: failed: {why}")
+        return
+    trial.set_user_attr("intrinsic_steps", total)
+    try:
+        value = float(value_of(e))
+    except Exception as x:  # the researcher's objective: whatever it raises fails this trial, saying why
+        trial.set_user_attr("error", f"objective: {type(x).__name__}: {x}"[:500])
+        study.tell(trial, state=TrialState.FAIL)
+        say(f"trial {trial.number}: {params}: the objective failed: {type(x).__name__}: {x}")
+        return
+    if not math.isfinite(value):
+        trial.set_user_attr("error", f"objective: {value} is not a finite number")
+        study.tell(trial, state=TrialState.FAIL)
+        say(f"trial {trial.number}: {params}: the objective gave {value}, not a finite number")
+        return
+    study.tell(trial, value)
+    say(f"trial {trial.number}: {params}: {d['objective']} {value:.4g} ({time.monotonic() - began:.1f} s)")
+
+
+# ---- afford tune ------------------------------------------------------------------------------------------------
+
+def main(argv: list[str] | None = None) -> int:
+    ap = argparse.ArgumentParser(
+        prog="afford tune",
+        description="A study over config keys with Optuna (TPE, median pruning on the learning curves, a journal "
+                    "file every worker shares): each trial an experiment folder OUT/trials/NNNN. Run the same "
+                    "command again to continue it, or in several processes (or Slurm array tasks) to share it.")
+    ap.add_argument("experiment", nargs="?", help="a name of config/experiments/ or an experiment file (default: "
+                    "the study's, when --out holds one; else base)")
+    ap.add_argument("--out", required=True, help="the study's folder")
+    ap.add_argument("--param", action="append", default=[], metavar="KEY=SPEC",
+                    help="a config key searched: float:LOW:HIGH, log:LOW:HIGH, int:LOW:HIGH, intlog:LOW:HIGH, "
+                         "choice:A,B,...")
+    ap.add_argument("--objective", help="affordance_mae (default), curve_mae, success, or FILE.py:FUNCTION (a "
+                    "function of the afford.load result)")
+    ap.add_argument("--direction", choices=["minimize", "maximize"], help="default: the named objective's")
+    ap.add_argument("--trials", type=int, help="trials in all, over every worker (default 24)")
+    ap.add_argument("--system", help="FIX, IGN or IMP (default IMP)")
+    ap.add_argument("--reps", type=int, help="runs per trial (default 1)")
+    ap.add_argument("--steps", type=int, help="intrinsic steps per run (default: the experiment's)")
+    ap.add_argument("--set", action="append", default=[], metavar="KEY=VALUE", help="a config key fixed in every trial")
+    ap.add_argument("--seed", type=int, help="the runs' seed, the same in every trial; and the sampler's (default 1)")
+    ap.add_argument("--extrinsic-reps", type=int, help="extrinsic tests per scenario (for objective success)")
+    ap.add_argument("--scenarios", action="append", help="extrinsic scenarios (for objective success)")
+    ap.add_argument("--prune", action=argparse.BooleanOptionalAction, default=None,
+                    help="stop a trial whose curve is worse than the median (default: on for the error objectives)")
+    ap.add_argument("--pruner", choices=PRUNERS, help="halving (default: successive halving, a third goes on at "
+                    "each rung) or median (the median pruner)")
+    ap.add_argument("--prune-startup", type=int, help="median: trials finished before any is pruned (default 5)")
+    ap.add_argument("--prune-warmup", type=float, help="the share of its first run a trial runs before it may be "
+                    "pruned (default 0.1)")
+    ap.add_argument("--keep-logs", help="the trials' run logs: all (default: each trial replays), first, none")
+    ap.add_argument("--report", action="store_true", help="write the report of the study in --out and run nothing")
+    a = ap.parse_args(argv)
+    out = Path(a.out)
+    stored = json.loads((out / "study.json").read_text()) if (out / "study.json").is_file() else {}
+    if a.report:
+        if not stored:
+            print(f"afford tune: {out} holds no study.json: no study to report", file=sys.stderr)
+            return 2
+        print(write_report(load_study(out)))
+        return 0
+
+    def given(value, key, default):
+        return value if value is not None else stored.get(key, default)
+    try:
+        params = dict(p.split("=", 1) for p in a.param) if a.param else stored.get("params")
+        for p in a.param:
+            if "=" not in p:
+                raise ValueError(f"--param {p}: KEY=SPEC")
+        fixed = {}
+        for s in a.set:
+            key, sep, value = s.partition("=")
+            if not sep:
+                raise ValueError(f"--set {s}: KEY=VALUE")
+            fixed[key] = _scalar(value)
+        s = tune(out, experiment=given(a.experiment, "experiment", "base"), params=params,
+                 objective=given(a.objective, "objective", "affordance_mae"), direction=given(a.direction, "direction", None),
+                 trials=given(a.trials, "trials", 24), system=given(a.system, "system", "IMP"),
+                 reps=given(a.reps, "reps", 1), steps=given(a.steps, "steps", None),
+                 set=fixed if a.set else stored.get("set", {}), seed=given(a.seed, "seed", 1),
+                 extrinsic_reps=given(a.extrinsic_reps, "extrinsic_reps", 0),
+                 scenarios=given(a.scenarios, "scenarios", []), prune=given(a.prune, "prune", None),
+                 pruner=given(a.pruner, "pruner", "halving"),
+                 prune_startup=given(a.prune_startup, "prune_startup", 5),
+                 prune_warmup=given(a.prune_warmup, "prune_warmup", 0.1),
+                 keep_logs=given(a.keep_logs, "keep_logs", "all"),
+                 say=lambda line: print(line, flush=True))
+    except KeyboardInterrupt:
+        print(f"afford tune: stopped; the finished trials are kept in {out}; the same command continues the study",
+              file=sys.stderr)
+        return 130
+    except (ValueError, FileNotFoundError) as e:
+        print(f"afford tune: {e}", file=sys.stderr)
+        return 2
+    best = s.best
+    if best is not None:
+        print(f"best: trial {best['number']}, {s.definition['objective']} {best['value']:.4g}, in {s.best_folder}")
+    print(out / "report.md")
+    return 0
+
+
+if __name__ == "__main__":
+    sys.exit(main())

@@ -1,0 +1,202 @@
+"""afford.tune / `afford tune`: studies with Optuna, shared by workers, pruned on the curves, stopped and continued."""
+import json
+import os
+import signal
+import subprocess
+import sys
+import time
+from pathlib import Path
+
+import pytest
+
+import afford
+
+pytest.importorskip("optuna")
+
+PYTHON = sys.executable
+BIN = Path(os.environ.get("AFFORD_BIN", Path(__file__).resolve().parents[2] / "build" / "bin")).resolve()
+LEAK = "motivation.leak=log:0.01:0.9"
+RATE = "predictors.affordance.learning_rate=log:0.005:1"
+
+
+def tune_command(out: Path, trials: int, steps: int, *more: str) -> list[str]:
+    return [PYTHON, "-m", "afford", "tune", "base", "--out", str(out), "--param", LEAK, "--param", RATE,
+            "--trials", str(trials), "--steps", str(steps), *more]
+
+
+def run_tune(*command: str, **kw) -> subprocess.CompletedProcess:
+    return subprocess.run(list(command), capture_output=True, text=True, env={**os.environ}, **kw)
+
+
+def wait_for(condition, what: str, seconds: float = 60):
+    end = time.monotonic() + seconds
+    while not condition():
+        assert time.monotonic() < end, f"waited {seconds} s for {what}"
+        time.sleep(0.02)
+
+
+def test_two_workers_share_one_study_and_run_each_trial_once(tmp_path):
+    out = tmp_path / "study"
+    command = tune_command(out, 6, 600)
+    workers = [subprocess.Popen(command, stdout=subprocess.PIPE, stderr=subprocess.STDOUT, text=True)
+               for _ in range(2)]
+    said = [w.communicate(timeout=300)[0] for w in workers]
+    assert [w.returncode for w in workers] == [0, 0], said
+    s = afford.load_study(out)
+    df = s.trials
+    assert sorted(df["number"]) == list(range(6))  # six trials in all, none asked twice
+    assert set(df["state"]) <= {"COMPLETE", "PRUNED"}
+    assert df["worker"].nunique() == 2  # both took trials
+    for f in df["folder"]:
+        runs = list((out / f / "runs").glob("*.json"))
+        assert len(runs) <= 1, f"{f} ran more than one experiment"
+    # Every finished trial is an experiment folder: it loads, with the trial's parameters as its settings.
+    best = s.best
+    e = afford.load(s.best_folder)
+    assert e.runs["affordance_mae"].iloc[0] == pytest.approx(best["value"])
+    settings = json.loads((s.best_folder / "experiment.json").read_text())["options"]["settings"]
+    assert f"motivation.leak={best['param motivation.leak']!r}" in settings
+    r = afford.replay(e.runs["log_dir"].iloc[0], log_level="error")
+    assert r["ok"] and r["weights_checksum"] == e.runs["weights_checksum"].iloc[0]
+    # The report: the trials as CSV, the figures, the markdown naming the best trial's folder.
+    for name in ("trials.csv", "fig_tune_history.png", "fig_tune_params.png", "report.md"):
+        assert (out / name).stat().st_size > 0, name
+    assert f"`{best['folder']}`" in (out / "report.md").read_text()
+
+
+def test_successive_halving_stops_trials_at_its_rungs(tmp_path):
+    s = afford.tune(tmp_path / "study", "base", params={"predictors.affordance.learning_rate": afford.Float(0.001, 1, log=True)},
+                    trials=6, steps=1000, keep_logs="none", say=None)
+    df = s.trials
+    pruned = df[df["state"] == "PRUNED"]
+    assert len(pruned), df
+    # the rungs: 10% of the run (prune_warmup), then x3: 100, 300, 900 steps
+    assert set(pruned["pruned_at"]) <= {100, 300, 900} and (pruned["intrinsic_steps"] < pruned["planned_steps"]).all()
+    assert len(df[df["state"] == "COMPLETE"]) >= 1
+
+
+def test_the_median_pruner_stops_a_trial_whose_curve_is_worse_than_the_median(tmp_path):
+    s = afford.tune(tmp_path / "study", "base", params={"predictors.affordance.learning_rate": afford.Float(0.001, 1, log=True)},
+                    trials=8, steps=1000, keep_logs="none", pruner="median", say=None)
+    df = s.trials
+    pruned = df[df["state"] == "PRUNED"]
+    assert len(pruned), df
+    for _, t in pruned.iterrows():
+        assert 0 < t["intrinsic_steps"] < t["planned_steps"]
+        folder = tmp_path / "study" / t["folder"]
+        assert json.loads((folder / "experiment.json").read_text())["state"] == "interrupted"
+        # ... worse, at the step it was pruned, than the median of the trials finished before it
+        import optuna
+        study = optuna.load_study(study_name="afford", storage=afford.study._storage(tmp_path / "study"))
+        trial = study.trials[t["number"]]
+        step = max(trial.intermediate_values)
+        earlier = [u.intermediate_values[step] for u in study.trials
+                   if u.number < t["number"] and u.state.name == "COMPLETE" and step in u.intermediate_values]
+        assert len(earlier) >= 4 and trial.intermediate_values[step] > sorted(earlier)[(len(earlier) - 1) // 2]
+    done = df[df["state"] == "COMPLETE"]
+    assert (done["intrinsic_steps"] == done["planned_steps"]).all()
+
+
+def test_ctrl_c_stops_a_study_and_the_same_command_continues_it(tmp_path):
+    out = tmp_path / "study"
+    command = tune_command(out, 2, 5000, "--no-prune", "--keep-logs", "none")
+    worker = subprocess.Popen(command, stdout=subprocess.PIPE, stderr=subprocess.STDOUT, text=True)
+    # once the second trial has begun (its folder holds its experiment), Ctrl-C
+    wait_for(lambda: (out / "trials" / "0001" / "experiment.json").exists(), "the second trial")
+    worker.send_signal(signal.SIGINT)
+    said = worker.communicate(timeout=120)[0]
+    assert worker.returncode == 130, said
+    assert "the same command continues the study" in said
+    before = afford.load_study(out).trials
+    assert list(before["state"]) == ["COMPLETE", "FAIL"] and before["stopped"].iloc[1] == "interrupted"
+    again = run_tune(*command, timeout=300)
+    assert again.returncode == 0, again.stdout + again.stderr
+    df = afford.load_study(out).trials
+    assert df["state"].iloc[0] == "COMPLETE" and df["value"].iloc[0] == before["value"].iloc[0]  # kept
+    done = df[df["state"] == "COMPLETE"]
+    assert len(done) == 2
+    retry = df[df["retry_of"] == 1]
+    assert len(retry) == 1 and retry["param motivation.leak"].iloc[0] == before["param motivation.leak"].iloc[1]
+
+
+def test_a_trial_whose_worker_was_killed_runs_again(tmp_path):
+    out = tmp_path / "study"
+    command = tune_command(out, 1, 5000, "--no-prune", "--keep-logs", "none")
+    worker = subprocess.Popen(command, stdout=subprocess.DEVNULL, stderr=subprocess.DEVNULL)
+    wait_for(lambda: (out / "trials" / "0000" / "experiment.json").exists(), "the first trial")
+    worker.kill()
+    worker.wait()
+    assert afford.load_study(out).trials["state"].tolist() == ["RUNNING"]
+    again = run_tune(*command, timeout=300)
+    assert again.returncode == 0, again.stdout + again.stderr
+    assert "its worker" in again.stdout and "is gone" in again.stdout
+    df = afford.load_study(out).trials
+    assert df["stopped"].iloc[0] == "worker lost"
+    assert (df["state"] == "COMPLETE").sum() == 1 and (df["retry_of"] == 0).sum() == 1
+
+
+def test_a_bad_study_is_refused_before_anything_runs(tmp_path):
+    with pytest.raises(afford.ConfigError, match="parameter 'motivation.leek' at .*unknown key"):
+        afford.tune(tmp_path / "a", params={"motivation.leek": "float:0.1:0.5"}, say=None)
+    with pytest.raises(afford.ConfigError, match="parameter 'motivation.leak' at 2.0: .*out of range"):
+        afford.tune(tmp_path / "a", params={"motivation.leak": afford.Float(0.1, 2.0)}, say=None)
+    assert not (tmp_path / "a").exists()
+    with pytest.raises(ValueError, match="'log:0:1'.*|a log scale needs a low above 0"):
+        afford.tune(tmp_path / "a", params={"motivation.leak": "log:0:1"}, say=None)
+    with pytest.raises(ValueError, match="is not float:LOW:HIGH"):
+        afford.tune(tmp_path / "a", params={"motivation.leak": "between 0 and 1"}, say=None)
+    with pytest.raises(ValueError, match="cannot prune"):
+        afford.tune(tmp_path / "a", params={"motivation.leak": "float:0.1:0.5"}, objective="success",
+                    prune=True, say=None)
+    with pytest.raises(ValueError, match="objective 'nope.py:f': no file"):
+        afford.tune(tmp_path / "a", params={"motivation.leak": "float:0.1:0.5"}, objective="nope.py:f", say=None)
+    # A folder holding another study, or anything else, is not written into.
+    afford.tune(tmp_path / "b", params={"motivation.leak": "float:0.1:0.5"}, trials=1, steps=200,
+                keep_logs="none", say=None)
+    with pytest.raises(ValueError, match=r"holds another study \(steps: 200 there, 300 here\)"):
+        afford.tune(tmp_path / "b", params={"motivation.leak": "float:0.1:0.5"}, trials=1, steps=300,
+                    keep_logs="none", say=None)
+    (tmp_path / "c").mkdir()
+    (tmp_path / "c" / "notes.txt").write_text("mine")
+    with pytest.raises(ValueError, match="is not empty and holds no study"):
+        afford.tune(tmp_path / "c", params={"motivation.leak": "float:0.1:0.5"}, say=None)
+    assert (tmp_path / "c" / "notes.txt").read_text() == "mine"
+
+
+def test_an_objective_of_ones_own_and_a_trial_it_fails(tmp_path):
+    calls = []
+
+    def objective(e):  # a function of the afford.load result; what it raises fails that trial, saying why
+        calls.append(e)
+        if len(calls) == 2:
+            raise RuntimeError("no value for this one")
+        return float(e.runs["looks"].iloc[0])
+
+    s = afford.tune(tmp_path / "s", params={"motivation.leak": "float:0.1:0.5"}, objective=objective,
+                    direction="maximize", trials=3, steps=300, keep_logs="none", say=None)
+    df = s.trials
+    assert df["state"].tolist() == ["COMPLETE", "FAIL", "COMPLETE"]
+    assert "no value for this one" in df["error"].iloc[1]
+    assert s.best["value"] == max(df["value"].dropna())
+
+
+def test_on_curve_sees_each_point_and_can_stop_the_experiment(tmp_path):
+    points = []
+
+    def on_curve(p):
+        points.append(p)
+        return "enough" if p.step >= 300 else None
+
+    with pytest.raises(afford.ExperimentStopped, match="enough") as stopped:
+        afford.run("base", system="IMP", reps=2, steps=1000, out=tmp_path / "e", keep_logs="none", on_curve=on_curve)
+    assert stopped.value.reason == "enough"
+    assert [p.step for p in points] == [0, 100, 200, 300] and {p.run for p in points} == {0}
+    assert points[0].mae == pytest.approx(0.5) and points[-1].mae < points[0].mae
+    state = json.loads((tmp_path / "e" / "experiment.json").read_text())
+    assert state["state"] == "interrupted" and state["interruptions"][0]["signal"] == "enough"
+    # the folder resumes as an interrupted experiment's does
+    r = subprocess.run([str(BIN / "afford"), "experiment", "--resume",
+                        "--out", str(tmp_path / "e"), "--transport", "memq", "--quiet", "--progress", "none"],
+                       capture_output=True, text=True)
+    assert r.returncode == 0, r.stdout + r.stderr
+    assert len(afford.load(tmp_path / "e").runs) == 2
