@@ -47,6 +47,20 @@ done
 [[ -x "$afford" ]] || die "no afford executable at $afford (build it: scripts/setup.sh, or give --afford)"
 command -v sbatch >/dev/null || die "no sbatch on PATH: is this a Slurm login node?"
 wait_arg=(); ((wait)) && wait_arg=(--wait)
+# Submit the job array of script $1 (its tasks: $2, their output: $3), then script $4 once they have all ended
+# (afterany; it makes $5); exit with the second sbatch's status (with --wait, the job's).
+submit_array_then() {
+  local array after status
+  array=$(sbatch --parsable --chdir="$PWD" --array="0-$((shards - 1))" "${sbatch_args[@]}" "$1")
+  array="${array%%;*}"
+  echo "slurm-submit: $2: job array $array (${shards} tasks), output in $3"
+  set +e
+  after=$(sbatch --parsable --chdir="$PWD" --dependency="afterany:$array" "${wait_arg[@]}" "${sbatch_args[@]}" "$4")
+  status=$?
+  set -e
+  echo "slurm-submit: $5 job ${after%%;*}; watch with: squeue -j $array,${after%%;*}"
+  exit $status
+}
 if ((tune)); then
   [[ -n "$out" ]] || die "--tune needs --out: the study's folder, on a file system every node sees"
   for a in "$@"; do
@@ -71,16 +85,8 @@ SCRIPT
 set -euo pipefail
 exec $(printf '%q' "$afford") tune --out $(printf '%q' "$out") --report
 SCRIPT
-  array=$(sbatch --parsable --chdir="$PWD" --array="0-$((shards - 1))" "${sbatch_args[@]}" "$out/slurm/worker.sbatch")
-  array="${array%%;*}"
-  echo "slurm-submit: workers: job array $array (${shards} tasks), output in $out/slurm/worker-<i>.out"
-  set +e
-  report=$(sbatch --parsable --chdir="$PWD" --dependency="afterany:$array" "${wait_arg[@]}" \
-    "${sbatch_args[@]}" "$out/slurm/report.sbatch")
-  status=$?
-  set -e
-  echo "slurm-submit: report job ${report%%;*}: $out/report.md; watch with: squeue -j $array,${report%%;*}"
-  exit $status
+  echo "slurm-submit: report: a job after the workers; the study's report will be $out/report.md"
+  submit_array_then "$out/slurm/worker.sbatch" workers "$out/slurm/worker-<i>.out" "$out/slurm/report.sbatch" report
 fi
 
 jobs_given=0
@@ -123,14 +129,5 @@ set -euo pipefail
 exec $(printf '%q' "$afford") merge$shard_dirs --out $(printf '%q' "$out")
 SCRIPT
 
-array=$(sbatch --parsable --chdir="$PWD" --array="0-$((shards - 1))" "${sbatch_args[@]}" "$out/slurm/shard.sbatch")
-array="${array%%;*}"
-echo "slurm-submit: shards: job array $array (${shards} tasks), output in $out/slurm/shard-<i>.out"
 echo "slurm-submit: merge: a job after them all; the experiment's summary will be $out/summary.json"
-set +e
-merge=$(sbatch --parsable --chdir="$PWD" --dependency="afterany:$array" "${wait_arg[@]}" \
-  "${sbatch_args[@]}" "$out/slurm/merge.sbatch")
-status=$?
-set -e
-echo "slurm-submit: merge job ${merge%%;*}; watch with: squeue -j $array,${merge%%;*}"
-exit $status
+submit_array_then "$out/slurm/shard.sbatch" shards "$out/slurm/shard-<i>.out" "$out/slurm/merge.sbatch" merge

@@ -70,12 +70,8 @@ class Float:
         return f"{'log' if self.log else 'float'}:{self.low!r}:{self.high!r}"
 
 
-@dataclass(frozen=True)
-class Int:
+class Int(Float):
     """A config key's whole values in [low, high] (log: sampled on a log scale)."""
-    low: int
-    high: int
-    log: bool = False
 
     def spec(self) -> str:
         return f"{'intlog' if self.log else 'int'}:{self.low}:{self.high}"
@@ -137,10 +133,10 @@ def parse_param(key: str, spec: Any) -> Float | Int | Choice:
 
 def _distribution(p: Float | Int | Choice):
     import optuna
+    if isinstance(p, Int):  # (an Int is a Float whose values are whole)
+        return optuna.distributions.IntDistribution(int(p.low), int(p.high), log=p.log)
     if isinstance(p, Float):
         return optuna.distributions.FloatDistribution(p.low, p.high, log=p.log)
-    if isinstance(p, Int):
-        return optuna.distributions.IntDistribution(p.low, p.high, log=p.log)
     return optuna.distributions.CategoricalDistribution(list(p.choices))
 
 
@@ -164,11 +160,20 @@ def _success(e: Experiment) -> float:
     return float(e.extrinsic["success"].mean())
 
 
-# name -> (the function of the loaded experiment, its direction, what pruning reports at each curve point)
+def _table2(e: Experiment) -> float:
+    metrics = [v for system in e.summary.get("systems", {}).values()
+               for v in system.get("extrinsic", {}).get("table_metric", {}).values()]
+    if not metrics:
+        raise ValueError("table2: the experiment ran no extrinsic tests (give extrinsic_reps and scenarios)")
+    return float(sum(metrics) / len(metrics))
+
+
+# name -> (the function of the loaded experiment, its direction)
 OBJECTIVES: dict[str, tuple[Callable[[Experiment], float], str]] = {
     "affordance_mae": (_affordance_mae, "minimize"),  # the final tables' error from the world's, mean over runs
     "curve_mae": (_curve_mae, "minimize"),            # the error over the whole learning curves (how fast)
     "success": (_success, "maximize"),                # the extrinsic tests' share of successes
+    "table2": (_table2, "maximize"),                  # the paper's Table 2 measure, mean over the scenarios
 }
 
 
@@ -513,7 +518,8 @@ def _open(folder: Path, d: dict[str, Any]):
             if d["trials"] != old.get("trials"):
                 _write_whole(stored, json.dumps({**old, "trials": d["trials"]}, indent=2) + "\n")
         else:
-            if any(folder.iterdir()) and not (set(p.name for p in folder.iterdir()) <= {"study.lock"}):
+            # (slurm/: scripts/slurm-submit.sh --tune's job scripts and output, written before any worker runs)
+            if not {p.name for p in folder.iterdir()} <= {"study.lock", "slurm"}:
                 raise ValueError(f"{folder} is not empty and holds no study: give a new folder for a study")
             _write_whole(stored, json.dumps(d, indent=2) + "\n")
         return optuna.create_study(study_name=STUDY_NAME, storage=_storage(folder), direction=d["direction"],
@@ -692,7 +698,7 @@ def main(argv: list[str] | None = None) -> int:
     ap.add_argument("--param", action="append", default=[], metavar="KEY=SPEC",
                     help="a config key searched: float:LOW:HIGH, log:LOW:HIGH, int:LOW:HIGH, intlog:LOW:HIGH, "
                          "choice:A,B,...")
-    ap.add_argument("--objective", help="affordance_mae (default), curve_mae, success, or FILE.py:FUNCTION (a "
+    ap.add_argument("--objective", help="affordance_mae (default), curve_mae, success, table2, or FILE.py:FUNCTION (a "
                     "function of the afford.load result)")
     ap.add_argument("--direction", choices=["minimize", "maximize"], help="default: the named objective's")
     ap.add_argument("--trials", type=int, help="trials in all, over every worker (default 24)")

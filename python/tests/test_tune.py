@@ -178,6 +178,13 @@ def test_an_objective_of_ones_own_and_a_trial_it_fails(tmp_path):
     assert df["state"].tolist() == ["COMPLETE", "FAIL", "COMPLETE"]
     assert "no value for this one" in df["error"].iloc[1]
     assert s.best["value"] == max(df["value"].dropna())
+    # a named objective of the extrinsic tests: maximised, and no pruning (the curves' error is not its measure)
+    t = afford.tune(tmp_path / "t", params={"motivation.leak": "float:0.1:0.5"}, objective="table2", trials=2,
+                    steps=300, extrinsic_reps=2, scenarios=["scenario1"], keep_logs="none", say=None)
+    assert t.definition["direction"] == "maximize" and t.definition["prune"] is False
+    for _, row in t.trials.iterrows():
+        e = afford.load(tmp_path / "t" / row["folder"])
+        assert row["value"] == e.summary["systems"]["IMP"]["extrinsic"]["table_metric"]["scenario1"]
 
 
 def test_on_curve_sees_each_point_and_can_stop_the_experiment(tmp_path):
