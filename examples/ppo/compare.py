@@ -11,7 +11,6 @@ planner.budget steps each). Writes OUT/compare.csv, OUT/compare.md and OUT/fig_p
 from __future__ import annotations
 
 import argparse
-import json
 import math
 from pathlib import Path
 
@@ -22,18 +21,46 @@ import afford
 import ppo
 
 
+def plot(out: Path, scenarios: list[str]) -> None:
+    """fig_ppo_vs_planner.png from compare.csv and each scenario's ppo_eval.csv."""
+    import matplotlib
+    matplotlib.use("Agg")
+    import matplotlib.pyplot as plt
+    table = pd.read_csv(out / "compare.csv")
+    fig, axes = plt.subplots(1, len(scenarios), figsize=(4.6 * len(scenarios), 3.8), dpi=110, squeeze=False)
+    for ax, scenario in zip(axes[0], scenarios):
+        c = pd.read_csv(out / f"ppo-{scenario}" / "ppo_eval.csv")
+        ax.plot(c["env_steps"], c["success"], marker="o", label="PPO, goal reward\n(greedy, worlds not trained on)")
+        p = table[(table["scenario"] == scenario) & (table["task reward used"] == "no")].iloc[0]
+        ax.scatter([p["training env steps"]], [p["success"]], color="tab:red", marker="s", s=60, zorder=3,
+                   label=f"IMP agent + goal planner\n({p['training env steps']} intrinsic steps, no reward)")
+        ax.set_ylim(-0.05, 1.05)
+        ax.set_xlabel("environment steps trained")
+        ax.set_ylabel("success")
+        ax.set_title(scenario)
+        ax.legend(fontsize=7, loc="best")
+    fig.tight_layout()
+    fig.savefig(out / "fig_ppo_vs_planner.png")
+    plt.close(fig)
+
+
 def main() -> int:
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
-    ap.add_argument("--scenarios", nargs="+", default=["scenario1", "scenario2"])
-    ap.add_argument("--ppo-steps", type=int, nargs="+", default=[8192, 40960],
+    ap.add_argument("--scenarios", nargs="+", default=["scenario1", "scenario2", "scenario3"])
+    ap.add_argument("--ppo-steps", type=int, nargs="+", default=[8192, 16384, 32768],
                     help="PPO's environment steps, one per scenario (or one for all)")
     ap.add_argument("--seed", type=int, default=1)
+    ap.add_argument("--eval-every", type=int, default=2, help="PPO's updates between evaluations")
     ap.add_argument("--agents", type=int, default=4, help="IMP agents trained for the planner")
     ap.add_argument("--intrinsic-steps", type=int, default=6000)
     ap.add_argument("--tests", type=int, default=8, help="extrinsic tests per agent and scenario")
     ap.add_argument("--out", default="out/ppo-compare")
+    ap.add_argument("--plot", action="store_true", help="only draw the figure again from OUT's files")
     a = ap.parse_args()
     out = Path(a.out)
+    if a.plot:
+        plot(out, a.scenarios)
+        return 0
     out.mkdir(parents=True, exist_ok=True)
     budgets = a.ppo_steps * len(a.scenarios) if len(a.ppo_steps) == 1 else a.ppo_steps
     if len(budgets) != len(a.scenarios):
@@ -51,7 +78,7 @@ def main() -> int:
                      "success": float(tests["success"].mean()), "episodes": len(tests),
                      "median steps to success": float(solved["completion"].median()) if len(solved) else math.nan})
         args = ppo.parse_args(["--scenario", scenario, "--total-steps", str(steps), "--seed", str(a.seed),
-                               "--out", str(out / f"ppo-{scenario}")])
+                               "--eval-every", str(a.eval_every), "--out", str(out / f"ppo-{scenario}")])
         result = ppo.train(args)
         curve = pd.read_csv(out / f"ppo-{scenario}" / "ppo_eval.csv")
         curves[scenario] = curve
@@ -68,23 +95,7 @@ def main() -> int:
                                                "|" + "---|" * len(cells.columns)] +
                                               ["| " + " | ".join(r) + " |" for r in cells.values.tolist()]) + "\n")
 
-    import matplotlib
-    matplotlib.use("Agg")
-    import matplotlib.pyplot as plt
-    fig, axes = plt.subplots(1, len(a.scenarios), figsize=(5 * len(a.scenarios), 3.8), dpi=110, squeeze=False)
-    for ax, scenario in zip(axes[0], a.scenarios):
-        c = curves[scenario]
-        ax.plot(c["env_steps"], c["success"], marker="o", label="PPO, goal reward (greedy, unseen worlds)")
-        p = table[(table["scenario"] == scenario) & (table["learner"] != "PPO (goal reward)")].iloc[0]
-        ax.scatter([p["training env steps"]], [p["success"]], color="tab:red", zorder=3,
-                   label=f"IMP agent + planner ({a.intrinsic_steps} intrinsic steps, no reward)")
-        ax.set_ylim(-0.05, 1.05)
-        ax.set_xlabel("environment steps trained")
-        ax.set_ylabel("success")
-        ax.set_title(scenario)
-        ax.legend(fontsize=7, loc="lower right")
-    fig.tight_layout()
-    fig.savefig(out / "fig_ppo_vs_planner.png")
+    plot(out, a.scenarios)
     print(table.to_string(index=False))
     print(out / "compare.csv")
     return 0

@@ -18,7 +18,7 @@
 #include "afford/processes.hpp"
 #include "experiment/execute/progress.hpp"
 #include "experiment/run/outcome.hpp"
-#include "experiment/results/summary.hpp"
+#include "experiment/schema/summary.hpp"
 #include "afford/config.hpp"
 #include "afford/process_main.hpp"
 

@@ -19,17 +19,6 @@ namespace afford {
 namespace fs = std::filesystem;
 using nlohmann::json;
 
-double meanAbsError(const SummaryTable& a, const SummaryTable& b) {
-  double sum = 0;
-  int n = 0;
-  if (a.size() != b.size()) return std::nan("");
-  for (std::size_t i = 0; i < a.size(); ++i) {
-    if (a[i].size() != b[i].size()) return std::nan("");
-    for (std::size_t j = 0; j < a[i].size(); ++j, ++n) sum += std::abs(a[i][j] - b[i][j]);
-  }
-  return n ? sum / n : 0.0;
-}
-
 namespace {
 
 using Table = SummaryTable;

@@ -21,9 +21,6 @@ struct Hosting {
   std::map<std::string, std::string> processes;  // --process: the commands run in place of the shipped processes
 };
 
-// The mean absolute difference of two tables (objects x actions); NaN if their shapes differ.
-double meanAbsError(const SummaryTable& a, const SummaryTable& b);
-
 // The summary of the finished intrinsic runs; also writes the CSV files into out_dir.
 Summary summarise(const Plan& plan, const Hosting& hosting, const PhaseRuns& phase, const std::string& out_dir);
 

@@ -1,12 +1,24 @@
 #include "experiment/schema/summary.hpp"
 
 #include <algorithm>
+#include <cmath>
 #include <filesystem>
 #include <fstream>
 #include <set>
 #include <type_traits>
 
 namespace afford {
+
+double meanAbsError(const SummaryTable& a, const SummaryTable& b) {
+  double sum = 0;
+  int n = 0;
+  if (a.size() != b.size()) return std::nan("");
+  for (std::size_t i = 0; i < a.size(); ++i) {
+    if (a[i].size() != b[i].size()) return std::nan("");
+    for (std::size_t j = 0; j < a[i].size(); ++j, ++n) sum += std::abs(a[i][j] - b[i][j]);
+  }
+  return n ? sum / n : 0.0;
+}
 using nlohmann::json;
 
 // The two types summary.json spells its own way (found by argument-dependent lookup from the codec).

@@ -23,6 +23,8 @@
 namespace afford {
 
 using SummaryTable = std::vector<std::vector<double>>;  // objects x actions
+// The mean absolute difference of two tables; NaN if their shapes differ.
+double meanAbsError(const SummaryTable& a, const SummaryTable& b);
 using Settings = std::map<std::string, std::string>;     // key path -> value
 
 struct Fit {  // y = a x^2 + b x
