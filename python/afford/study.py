@@ -596,10 +596,12 @@ def tune(out: str | Path, experiment: str = "base", params: dict[str, Any] | Non
     (folder / "trials").mkdir(exist_ok=True)
     try:
         _work(study, d, folder, offsets, total, distributions, value_of, log_level, say)
-    finally:
-        result = load_study(folder)
-        if len(result.trials):
-            write_report(result)
+    finally:  # the report, from the study as it is now: under the claim, so that a worker's report of an
+        # older state never lands after a later one's (the last worker to end writes the whole study)
+        with _claim(folder):
+            result = load_study(folder)
+            if len(result.trials):
+                write_report(result)
     finished, running = _counts(study)
     if running:
         say(f"{running} trial(s) still run in other workers; this worker is done")
@@ -689,7 +691,7 @@ def _run_trial(study, trial, d, folder: Path, offsets: list[int], total: int, va
 def main(argv: list[str] | None = None) -> int:
     ap = argparse.ArgumentParser(
         prog="afford tune",
-        description="A study over config keys with Optuna (TPE, median pruning on the learning curves, a journal "
+        description="A study over config keys with Optuna (TPE, pruning on the learning curves, a journal "
                     "file every worker shares): each trial an experiment folder OUT/trials/NNNN. Run the same "
                     "command again to continue it, or in several processes (or Slurm array tasks) to share it.")
     ap.add_argument("experiment", nargs="?", help="a name of config/experiments/ or an experiment file (default: "
@@ -725,7 +727,8 @@ def main(argv: list[str] | None = None) -> int:
         if not stored:
             print(f"afford tune: {out} holds no study.json: no study to report", file=sys.stderr)
             return 2
-        print(write_report(load_study(out)))
+        with _claim(out):
+            print(write_report(load_study(out)))
         return 0
 
     def given(value, key, default):
