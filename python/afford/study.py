@@ -734,10 +734,10 @@ def main(argv: list[str] | None = None) -> int:
     def given(value, key, default):
         return value if value is not None else stored.get(key, default)
     try:
-        params = dict(p.split("=", 1) for p in a.param) if a.param else stored.get("params")
         for p in a.param:
             if "=" not in p:
-                raise ValueError(f"--param {p}: KEY=SPEC")
+                raise ValueError(f"--param {p}: KEY=SPEC, e.g. motivation.leak=log:0.01:0.9")
+        params = dict(p.split("=", 1) for p in a.param) if a.param else stored.get("params")
         fixed = {}
         for s in a.set:
             key, sep, value = s.partition("=")

@@ -161,6 +161,10 @@ def test_a_bad_study_is_refused_before_anything_runs(tmp_path):
     with pytest.raises(ValueError, match="is not empty and holds no study"):
         afford.tune(tmp_path / "c", params={"motivation.leak": "float:0.1:0.5"}, say=None)
     assert (tmp_path / "c" / "notes.txt").read_text() == "mine"
+    # ... and from the command line: exit 2, saying what is wrong
+    said = run_tune(PYTHON, "-m", "afford", "tune", "base", "--out", str(tmp_path / "d"), "--param", "motivation.leak")
+    assert said.returncode == 2 and "--param motivation.leak: KEY=SPEC" in said.stderr
+    assert not (tmp_path / "d").exists()
 
 
 def test_an_objective_of_ones_own_and_a_trial_it_fails(tmp_path):
