@@ -610,11 +610,14 @@ def tune(out: str | Path, experiment: str = "base", params: dict[str, Any] | Non
 
 def _work(study, d, folder: Path, offsets, total: int, distributions, value_of, log_level: str, say) -> None:
     """This worker's trials, one after another, until the study has its trials finished or under way."""
+    import optuna
     with _Stop() as stop:
         while True:
             if stop.signal:
                 raise KeyboardInterrupt("afford tune: stopped between trials; the same command continues the study")
             with _claim(folder):
+                if stop.signal:  # (one that came while this worker waited for the claim)
+                    raise KeyboardInterrupt("afford tune: stopped between trials; the same command continues the study")
                 _retry_stopped(study, say)
                 finished, running = _counts(study)
                 if finished + running >= json.loads((folder / "study.json").read_text())["trials"]:
@@ -624,6 +627,10 @@ def _work(study, d, folder: Path, offsets, total: int, distributions, value_of, 
                 trial.set_user_attr("worker", _worker())
                 trial.set_user_attr("folder", f"trials/{trial.number:04d}")
                 trial.set_user_attr("planned_steps", total)
+                if stop.signal:  # (one that came while the trial was asked for: it runs again, when continued)
+                    trial.set_user_attr("stopped", "interrupted")
+                    study.tell(trial, state=optuna.trial.TrialState.FAIL)
+                    raise KeyboardInterrupt("afford tune: stopped before a trial began; the same command continues")
             _run_trial(study, trial, d, folder, offsets, total, value_of, log_level, say)
 
 
