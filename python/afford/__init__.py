@@ -12,7 +12,8 @@ from .components import (ACTIONS, GOAL_MODULES, AffordancePredictor, Decision, G
 from .experiments import CurvePoint, ExperimentError, ExperimentStopped, check, replay, run
 from .logs import Message, RunLog, read_log
 from .results import Experiment, load
-from .study import Choice, Float, Int, Study, load_study, tune
+from .search import Choice, Float, Int
+from .study import Study, load_study, tune
 
 __version__ = _afford.version
 ConfigError = _afford.ConfigError
