@@ -56,7 +56,8 @@ struct InProcessRun {
   std::int64_t restored_step = -1; // the step of the snapshot the restarted node went on from (-1: none)
 
   InProcessRun(const std::string& yaml, System system, std::int64_t seed, std::int64_t steps, const Injector& inject = {},
-               std::int64_t inject_at = 50, bool leave_stale_run = false, const Restart& restart = {}) {
+               std::int64_t inject_at = 50, bool leave_stale_run = false, const Restart& restart = {},
+               double stall_seconds = 20) {
     lcm::LCM lcm("memq://");
     auto sink = std::make_shared<spdlog::sinks::ostream_sink_mt>(log);
     auto logger = [&](const std::string& name) {
@@ -105,7 +106,7 @@ struct InProcessRun {
       if (YAML::Load(yaml)["phase"].as<std::string>() == name) spec.phase = phase;
     spec.extrinsic = spec.phase == Phase::Extrinsic;
     spec.processes = runProcesses(spec.phase, /*recorded=*/false);
-    spec.stall_seconds = 20;
+    spec.stall_seconds = stall_seconds;
     auto maybeRestart = [&] {
       if (restart.process.empty() || restarted) return;
       const NodeBase& v = host.node(restart.process);
@@ -125,6 +126,7 @@ struct InProcessRun {
       run_config_t stale;
       stale.run_id = "stale-run";
       stale.step = 0;
+      stale.request = 1;
       stale.seed = seed;
       stale.experiment = spec.experiment;
       stale.system = spec.system;

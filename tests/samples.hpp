@@ -287,7 +287,9 @@ inline process_status_t sample(const process_status_t*) {
   m.state = process_status_t::RUNNING;
   m.config_digest = 0x0c0ffee;
   m.detail = "logs/" + kSampleRunId;
+  m.stuck = "DECISION serial 44 (published by motivation): field prev_digest does not follow, 3 times";
   m.counts_run = kSampleRunId;
+  m.counts_config = 0x0c0ffee;
   m.channels = {ch::scene.name, ch::focus.name, ch::prediction.name};
   m.counts = {12, 43, 43};
   m.held_from = {0, 0, 0};
@@ -307,6 +309,7 @@ inline resend_t sample(const resend_t*) {
   m.first = 40;
   m.last = 43;
   m.requester = "motivation";
+  m.config_digest = 0x0c0ffee;
   m.digest = 0x1234;
   return m;
 }
@@ -315,6 +318,7 @@ inline run_config_t sample(const run_config_t*) {
   run_config_t m;
   m.run_id = kSampleRunId;
   m.step = 0;
+  m.request = 0x7e9;
   m.seed = 1;
   m.experiment = "base";
   m.system = "IMP";
@@ -328,6 +332,7 @@ inline run_control_t sample(const run_control_t*) {
   m.run_id = kSampleRunId;
   m.step = 0;
   m.command = run_control_t::START;
+  m.config_digest = 0x0c0ffee;
   m.digest = 0x1234;
   return m;
 }

@@ -104,6 +104,27 @@ inline std::vector<Event> readLog(const std::string& path) {
   return out;
 }
 
+// A recorded message without what names its request (run_config_t.request): two requests of one run, with
+// the same configuration and seed, record the same messages but for these bytes. RUN_CONFIG: its `request`;
+// RUN_CONTROL: its `config_digest`; a run message (a serial): its `prev_digest`, which chains from the request;
+// and every message's digest, which covers them. Each is set to zero.
+inline std::vector<std::uint8_t> withoutRequest(const std::string& channel, std::vector<std::uint8_t> b) {
+  if (b.size() < 12 + 8) return b;
+  const std::size_t id = (std::size_t{b[8]} << 24) | (std::size_t{b[9]} << 16) | (std::size_t{b[10]} << 8) | b[11];
+  const std::size_t after_id = 12 + id;  // the run id's bytes, NUL included; then step (8)
+  const auto zero = [&](std::size_t at) {
+    if (at + 8 <= b.size()) std::fill(b.begin() + static_cast<std::ptrdiff_t>(at), b.begin() + static_cast<std::ptrdiff_t>(at + 8), 0);
+  };
+  if (channel == "RUN_CONFIG")
+    zero(after_id + 8);  // request
+  else if (channel == "RUN_CONTROL")
+    zero(after_id + 8 + 1);  // config_digest, after the command
+  else if (channel != "STATUS" && channel != "RESEND")
+    zero(after_id + 8 + 8);  // prev_digest, after the serial
+  zero(b.size() - 8);
+  return b;
+}
+
 // Training reports carried by the PREDICTION and RESULT events of a run.
 inline int trainingReports(const std::vector<Event>& events) {
   int n = 0;

@@ -109,6 +109,7 @@ wire::process_status_t_bounds boundsOf(const BoundsContext& c, const process_sta
   return {nameBytes(c),
           /*process*/ nameBytes(c),
           /*detail*/ textBytes(c),
+          /*stuck*/ textBytes(c),
           /*counts_run*/ nameBytes(c),
           /*n_channels*/ channels(),
           /*channels*/ nameBytes(c),

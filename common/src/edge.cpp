@@ -38,6 +38,7 @@ Edge::Edge(lcm::LCM& lcm, std::shared_ptr<spdlog::logger> log, std::string owner
       owner_(std::move(owner)),
       protocol_(&own_protocol_),
       own_protocol_(protocol),
+      drop_log_(log_),
       inbound_(log_, own_protocol_,
                {[this](const std::string& channel, const std::string& why) { drop(channel, why); },
                 [this](resend_t& m) {
@@ -49,6 +50,7 @@ Edge::Edge(lcm::LCM& lcm, std::shared_ptr<spdlog::logger> log, std::string owner
       }) {}
 
 Edge::~Edge() {
+  drop_log_.flush();
   for (const auto& s : subs_)
     if (s->sub) lcm_.unsubscribe(s->sub);
 }
@@ -69,22 +71,25 @@ void Edge::take(const std::string& channel, bool on) {
   if (!found) throw std::logic_error("Edge::take: " + channel + " is not subscribed");
 }
 
-void Edge::join(const std::string& run_id, const RunConfig* config) {
+void Edge::join(const std::string& run_id, const RunConfig* config, RequestId request) {
   run_ = run_id;
+  request_ = request;
   config_ = config;
   protocol_ = config ? &config->protocol : &own_protocol_;
-  inbound_.join(run_id, config, *protocol_);
+  inbound_.join(run_id, request, config, *protocol_);
   std::vector<std::string> readers;
   if (config)
     for (const std::string& p : runProcesses(config->phase, config->record))
       if (p != owner_) readers.push_back(p);
-  outbound_.join(run_id, protocol_->recovery, std::move(readers));
+  outbound_.join(run_id, request, protocol_->recovery, std::move(readers));
   for (const auto& s : subs_)
     if (s->sub) s->sub->setQueueCapacity(protocol_->queue_capacity);
 }
 
 void Edge::leave() {
+  drop_log_.flush();
   run_.clear();
+  request_ = {};
   config_ = nullptr;
   protocol_ = &own_protocol_;
   inbound_.leave(own_protocol_);
@@ -109,7 +114,7 @@ bool Edge::inScope(const std::string& channel, const std::string& run_id, Scope 
 
 void Edge::drop(const std::string& channel, const std::string& why) {
   ++drops_.refused;
-  log_->warn("{}: dropped message: {}", channel, why);
+  drop_log_.drop(channel, why);
 }
 
 namespace {
@@ -126,14 +131,14 @@ bool Edge::untag(const std::string& channel, const lcm::ReceiveBuffer* rb, std::
   Stamp stamp;
   if (!key_->verify(channel, rb->data, rb->data_size, &stamp)) {
     ++drops_.untagged;
-    log_->warn("{}: dropped message: no valid tag of this bus's key ({} bytes)", channel, rb->data_size);
+    drop_log_.drop(channel, "no valid tag of this bus's key (" + std::to_string(rb->data_size) + " bytes)");
     return false;
   }
   if (const std::string why =
           peers_.fresh(stamp, nowMs(), protocol_->freshness_ms, protocol_->limits.peers, drops_.peers_forgotten);
       !why.empty()) {
     ++drops_.replayed;
-    log_->warn("{}: dropped message: {}", channel, why);
+    drop_log_.drop(channel, why);
     return false;
   }
   size = rb->data_size - BusKey::kTrailerBytes;

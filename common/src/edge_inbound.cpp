@@ -14,8 +14,11 @@ EdgeInbound::EdgeInbound(std::shared_ptr<spdlog::logger> log, const ProtocolConf
       serials_(protocol.resend_batch, std::chrono::milliseconds(protocol.retry_ms),
                std::chrono::milliseconds(protocol.heartbeat_ms)) {}
 
-void EdgeInbound::join(const std::string& run_id, const RunConfig* config, const ProtocolConfig& protocol) {
+void EdgeInbound::join(const std::string& run_id, RequestId request, const RunConfig* config,
+                       const ProtocolConfig& protocol) {
   run_ = run_id;
+  request_ = request;
+  stuck_ = {};
   config_ = config;
   protocol_ = &protocol;
   serials_ = SerialTracker(protocol.resend_batch, std::chrono::milliseconds(protocol.retry_ms),
@@ -30,6 +33,8 @@ void EdgeInbound::join(const std::string& run_id, const RunConfig* config, const
 
 void EdgeInbound::leave(const ProtocolConfig& protocol) {
   run_.clear();
+  request_ = {};
+  stuck_ = {};
   config_ = nullptr;
   protocol_ = &protocol;
   deferred_.clear();
@@ -43,9 +48,14 @@ void EdgeInbound::leave(const ProtocolConfig& protocol) {
 std::string EdgeInbound::order(const std::string& channel, std::int64_t serial, std::int64_t prev_digest,
                                std::int64_t digest, Order order, bool& skip) {
   skip = false;
-  if (serial == serials_.expected(channel) && !follows(channel, serial, prev_digest, order))
-    return "field prev_digest does not follow the channel's message " + std::to_string(serial - 1) +
-           " (a copy given another serial, or another run's)";
+  if (serial == serials_.expected(channel) && !follows(channel, serial, prev_digest, order)) {
+    const std::string why = "field prev_digest does not follow " +
+                            (serial == 0 ? std::string("the start of the request's chain")
+                                         : "the channel's message " + std::to_string(serial - 1)) +
+                            " (a copy given another serial, or another request's)";
+    stuckOn(channel, serial, why);
+    return why;
+  }
   switch (serials_.offer(channel, serial)) {
     case SerialTracker::Verdict::Repeat:
       log_->trace("{}: serial {} already had (a repeat)", channel, serial);
@@ -94,6 +104,7 @@ Turn::Kind EdgeInbound::attempt(Pending& p) {
   }
   if (t.kind() == Turn::Kind::Take) {
     if (p.serial >= 0) handled(p);
+    if (p.serial >= 0) stuck_ = {};
     last_activity_ = Clock::now();
     if (answered) {
       usual_wait_ += (came - published - usual_wait_) / 8;
@@ -127,7 +138,7 @@ std::vector<EdgeInbound::Position> EdgeInbound::positions() const {
   for (const std::string& ch : tracked_) {
     const auto it = handled_.find(ch);
     if (it == handled_.end())
-      out.push_back({ch, 0, chainSeed(run_, ch)});
+      out.push_back({ch, 0, chainSeed(run_, ch, request_.number)});
     else
       out.push_back({ch, it->second.first, it->second.second});
   }
@@ -140,7 +151,7 @@ void EdgeInbound::restore(const std::vector<Position>& at) {
 }
 
 bool EdgeInbound::follows(const std::string& channel, std::int64_t serial, std::int64_t prev_digest, Order order) {
-  if (serial == 0) return prev_digest == chainSeed(run_, channel);
+  if (serial == 0) return prev_digest == chainSeed(run_, channel, request_.number);
   const Chain& c = chains_[channel];
   if (!c.knows(serial - 1)) return order == Order::Follow;  // an observer that came in later takes what it gets
   return prev_digest == c.digests[static_cast<std::size_t>(serial - 1 - c.first)];
@@ -166,6 +177,7 @@ void EdgeInbound::refused(const Pending& p, const std::string& why) {
                                "), asked for again, and refused again: its handler refuses the channel's next "
                                "message itself, so the run cannot go on");
   refused_[p.channel] = {p.serial, p.digest};
+  stuckOn(p.channel, p.serial, why);
   hooks_.drop(p.channel, why);
   deferred_.erase(std::remove_if(deferred_.begin(), deferred_.end(),
                                  [&](const Pending& d) { return d.channel == p.channel && d.serial > p.serial; }),
@@ -231,6 +243,23 @@ void EdgeInbound::retryDeferred() {
   retrying_ = false;
 }
 
+void EdgeInbound::stuckOn(const std::string& channel, std::int64_t serial, const std::string& why) {
+  if (stuck_.channel == channel && stuck_.serial == serial && stuck_.why == why) {
+    ++stuck_.times;
+    return;
+  }
+  stuck_ = {channel, why, serial, 1};
+}
+
+std::string EdgeInbound::stuck() const {
+  if (stuck_.channel.empty()) return "";
+  const Phase phase = config_ ? config_->phase : Phase::Intrinsic;
+  const std::string publisher = publisherOf(stuck_.channel, phase);
+  return stuck_.channel + " serial " + std::to_string(stuck_.serial) +
+         (publisher.empty() ? "" : " (published by " + publisher + ")") + ": " + stuck_.why + ", " +
+         std::to_string(stuck_.times) + (stuck_.times == 1 ? " time" : " times");
+}
+
 void EdgeInbound::fail(const std::string& channel, const std::string& why) {
   if (failed_) return log_->debug("{}: {} (after the failure)", channel, why);
   failed_ = true;
@@ -240,14 +269,16 @@ void EdgeInbound::fail(const std::string& channel, const std::string& why) {
 }
 
 void EdgeInbound::claim(const process_status_t& st) {
-  if (run_.empty() || st.counts_run != run_) return;
+  if (run_.empty() || st.counts_run != run_ || st.counts_config != request_.config_digest) return;  // another request's counts
+  // It has left the request: its counts are final.
+  const bool left = st.run_id != st.counts_run || st.config_digest != st.counts_config;
   const Phase phase = config_ ? config_->phase : Phase::Intrinsic;
   bool any = false;
   for (int i = 0; i < st.n_channels; ++i) {
     const std::string& ch = st.channels[i];
     if (std::find(tracked_.begin(), tracked_.end(), ch) == tracked_.end()) continue;
     if (publisherOf(ch, phase) != st.process) continue;  // only a channel's publisher speaks for it
-    serials_.claim(ch, st.counts[i], /*final=*/st.run_id != st.counts_run);  // it has left the run
+    serials_.claim(ch, st.counts[i], /*final=*/left);
     any = true;
     const std::int64_t expected = serials_.expected(ch);
     if (i < static_cast<int>(st.held_from.size()) && st.held_from[i] > expected && st.held_from[i] <= st.counts[i])
@@ -272,6 +303,7 @@ void EdgeInbound::askMissing() {
     resend_t m;
     m.run_id = run_;
     m.step = 0;
+    m.config_digest = request_.config_digest;
     m.channel = r.channel;
     m.first = r.first;
     m.last = r.last;

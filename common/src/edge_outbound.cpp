@@ -11,8 +11,10 @@ namespace afford {
 EdgeOutbound::EdgeOutbound(std::shared_ptr<spdlog::logger> log, Transmit transmit)
     : log_(std::move(log)), transmit_(std::move(transmit)) {}
 
-void EdgeOutbound::join(const std::string& run_id, const RecoveryConfig& recovery, std::vector<std::string> readers) {
+void EdgeOutbound::join(const std::string& run_id, RequestId request, const RecoveryConfig& recovery,
+                        std::vector<std::string> readers) {
   run_ = run_id;
+  request_ = request;
   recovery_ = recovery;
   history_.clear();
   bytes_ = 0;
@@ -28,7 +30,7 @@ std::int64_t EdgeOutbound::nextSerial(const std::string& channel) const {
 
 std::int64_t EdgeOutbound::lastDigest(const std::string& channel) const {
   const auto it = history_.find(channel);
-  return it == history_.end() || it->second.count() == 0 ? chainSeed(run_, channel) : it->second.last_digest;
+  return it == history_.end() || it->second.count() == 0 ? chainSeed(run_, channel, request_.number) : it->second.last_digest;
 }
 
 void EdgeOutbound::kept(const std::string& channel, std::int64_t digest, std::vector<std::uint8_t> bytes) {
@@ -52,7 +54,7 @@ void EdgeOutbound::popFront(History& h) {
 }
 
 void EdgeOutbound::readerSaid(const process_status_t& st) {
-  if (run_.empty() || st.run_id != run_ || !readers_.count(st.process)) return;
+  if (run_.empty() || st.run_id != run_ || st.config_digest != request_.config_digest || !readers_.count(st.process)) return;
   auto& at = from_[st.process];
   at.clear();
   for (int i = 0; i < st.n_takes; ++i) at[st.takes[i]] = st.takes_from[i];
@@ -89,7 +91,7 @@ void EdgeOutbound::bound() {
 }
 
 void EdgeOutbound::answer(const resend_t& r, const ProtocolConfig& protocol) {
-  if (r.run_id.empty() || r.run_id != run_) return;
+  if (r.run_id.empty() || r.run_id != run_ || r.config_digest != request_.config_digest) return;
   auto it = history_.find(r.channel);
   if (it == history_.end()) return;  // another publisher's channel
   History& h = it->second;

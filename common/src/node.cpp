@@ -58,7 +58,7 @@ Turn NodeBase::onRunConfig(const run_config_t& msg, const Envelope& envelope) {
     run_id_ = msg.run_id;
     last_step_ = -1;
     detail_.clear();
-    edge_.join(run_id_, &config_);
+    edge_.join(run_id_, &config_, requestOf(run_msg_));
     for (const auto& clear : joins_) clear();
     onConfigured(config_);
     restoreSnapshot();
@@ -77,6 +77,7 @@ Turn NodeBase::onRunConfig(const run_config_t& msg, const Envelope& envelope) {
     st.beat = beat_++;
     st.state = process_status_t::FAILED;
     st.config_digest = msg.digest;  // the configuration refused
+    st.counts_config = 0;
     st.detail = detail_.substr(0, static_cast<std::size_t>(protocol().limits.text_bytes));
     st.n_channels = 0;  // nothing published in that run
     st.n_takes = 0;
@@ -94,6 +95,8 @@ Turn NodeBase::onRunControl(const run_control_t& msg, const Envelope& envelope) 
     log_->debug("RUN_CONTROL: for run '{}', not this process's", msg.run_id);
     return Turn::take();
   }
+  if (msg.config_digest != run_msg_.digest)  // said for another request of this run id (a recording's, an old one's)
+    return Turn::refuse("a command for another request of run '" + msg.run_id + "' than the one this process took");
   onControl(envelope);
   if (msg.command == run_control_t::START) {
     if (state_ != process_status_t::READY) return Turn::take();  // already started: idempotent
@@ -117,7 +120,7 @@ Turn NodeBase::onStatus(const process_status_t& st) {
   edge_.claim(st);
   onPeerStatus(st);
   // A process that has just (re)joined our run catches up from what we say we published.
-  const bool joined = !run_id_.empty() && st.run_id == run_id_ && st.step == -1 &&
+  const bool joined = !run_id_.empty() && st.run_id == run_id_ && st.config_digest == run_msg_.digest && st.step == -1 &&
                       (st.state == process_status_t::READY || st.state == process_status_t::RUNNING);
   if (joined && edge_.publishedAny() && Clock::now() - announced_at_ >= milliseconds(protocol().idle_announce_ms))
     publishStatus();
@@ -173,7 +176,9 @@ void NodeBase::publishStatus() {
   st.state = state_;
   st.config_digest = run_id_.empty() ? 0 : run_msg_.digest;
   st.detail = detail_.substr(0, static_cast<std::size_t>(protocol().limits.text_bytes));
+  if (state_ == process_status_t::RUNNING) st.stuck = edge_.stuck().substr(0, static_cast<std::size_t>(protocol().limits.text_bytes));
   st.counts_run = edge_.historyRun();
+  st.counts_config = edge_.historyConfig();
   for (const EdgeOutbound::Count& c : edge_.counts()) {
     st.channels.push_back(c.channel);
     st.counts.push_back(c.published);
@@ -359,7 +364,7 @@ void NodeBase::restoreSnapshot() {
     // A state read in part is no state: the run is taken from its start (its peers may no longer hold it: then
     // the edge says so, naming the channel).
     log_->error("{}: the run is taken from its start", e.what());
-    edge_.join(run_id_, &config_);
+    edge_.join(run_id_, &config_, requestOf(run_msg_));
     for (const auto& clear : joins_) clear();
     onConfigured(config_);
     last_step_ = -1;
@@ -368,7 +373,9 @@ void NodeBase::restoreSnapshot() {
 
 void NodeBase::removeSnapshot() {
   const std::string path = snapshotPath(run_id_);
-  if (path.empty()) return;
+  // Only a snapshot of this request: one this process took or went on from (another request of the run id, a
+  // recording's taken by mistake, leaves the file of the request that wrote it).
+  if (path.empty() || (snapshots_taken_ == 0 && restored_step_ < 0)) return;
   std::error_code ec;
   std::filesystem::remove(path, ec);
   std::filesystem::remove(path + ".tmp", ec);

@@ -44,9 +44,11 @@ bool sealIntact(const void* data, std::size_t n) {
   return stored == fnv1a64(p, n - 8);
 }
 
-std::int64_t chainSeed(const std::string& run_id, const std::string& channel) {
-  const std::string key = run_id + "\n" + channel;
-  return static_cast<std::int64_t>(fnv1a64(key.data(), key.size()));
+std::int64_t chainSeed(const std::string& run_id, const std::string& channel, std::int64_t request) {
+  const std::string key = run_id + "\n" + channel + "\n";
+  std::uint8_t r[8];
+  for (int i = 0; i < 8; ++i) r[i] = static_cast<std::uint8_t>(static_cast<std::uint64_t>(request) >> (56 - 8 * i));
+  return static_cast<std::int64_t>(fnv1a64(fnv1a64(key.data(), key.size()), r, sizeof r));
 }
 
 std::int64_t sealBuffer(std::uint8_t* buf, std::size_t n) {

@@ -410,7 +410,10 @@ Explanation explainRunEvents(const RunEvents& run, const std::string& where, std
   host.log_root = "";  // the planner reads no file
   host.planner_observer = &rec;
   ReplayedProcess planner("planner", config.protocol, Phase::Extrinsic, host);
-  for (const LogEvent& e : run.events) planner.feed(e);
+  for (const LogEvent& e : run.events)
+    if (!isStop(e, ctx)) planner.feed(e);
+  for (const LogEvent& e : run.events)  // the STOP last: the logger takes late messages after it too
+    if (isStop(e, ctx)) planner.feed(e);
   compareWithRecord(planner, run.events, ex.run_id, ctx, warn);
   goalDistances(ex, rec, run, ctx);
   const int executed = explainSubGoals(ex, rec, p);

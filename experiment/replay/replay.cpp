@@ -22,6 +22,7 @@
 #include "afford/extrinsic_result_t.hpp"
 #include "afford/logging.hpp"
 #include "afford/run_config_t.hpp"
+#include "afford/run_control_t.hpp"
 #include "afford/run_result_t.hpp"
 #include "afford/seal.hpp"
 #include "motivation/component.hpp"
@@ -191,7 +192,26 @@ void ReplayedProcess::feed(const LogEvent& e) {
   pumpBus(*bus_, 0, INT_MAX);
 }
 
+bool isStop(const LogEvent& e, const BoundsContext& ctx) {
+  run_control_t c;
+  std::string why;
+  return e.channel == ch::runControl.name && decodeChecked(e.data.data(), e.data.size(), ctx, c, why) &&
+         c.command == run_control_t::STOP;
+}
+
 namespace {
+
+// A recorded START or STOP of the run's request, made out to the configuration replayed (its checkpoint taken
+// out: another digest), which the replayed processes took.
+void readdressControl(LogEvent& e, const BoundsContext& ctx, std::int64_t recorded, std::int64_t replayed) {
+  run_control_t c;
+  std::string why;
+  if (e.channel != ch::runControl.name || !decodeChecked(e.data.data(), e.data.size(), ctx, c, why) ||
+      c.config_digest != recorded)
+    return;
+  c.config_digest = replayed;
+  e.data = sealed(c);
+}
 
 // A recorded event as its channel's type would take it (bounds, fields, digest); "" or why not.
 std::string checkRecorded(const LogEvent& e, const BoundsContext& ctx) {
@@ -239,8 +259,8 @@ bool SerialRuns::insert(std::int64_t s) {
   return true;
 }
 
-GapFinder::GapFinder(std::string run_id, Phase phase, const BoundsContext& ctx)
-    : run_id_(std::move(run_id)), phase_(phase), ctx_(ctx) {}
+GapFinder::GapFinder(std::string run_id, Phase phase, const BoundsContext& ctx, std::int64_t config_digest)
+    : run_id_(std::move(run_id)), config_digest_(config_digest), phase_(phase), ctx_(ctx) {}
 
 void GapFinder::add(const LogEvent& e) {
   if (isSerialChannel(e.channel)) {
@@ -252,7 +272,9 @@ void GapFinder::add(const LogEvent& e) {
   } else if (e.channel == ch::status.name) {
     process_status_t st;
     std::string why;
-    if (!decodeChecked(e.data.data(), e.data.size(), ctx_, st, why) || st.counts_run != run_id_) return;
+    if (!decodeChecked(e.data.data(), e.data.size(), ctx_, st, why) || st.counts_run != run_id_ ||
+        (config_digest_ != 0 && st.counts_config != config_digest_))
+      return;  // another run's counts, or another request's
     for (int i = 0; i < st.n_channels; ++i)
       if (publisherOf(st.channels[i], phase_) == st.process)
         claimed_[st.channels[i]] = std::max(claimed_[st.channels[i]], std::min(st.counts[i], kMostSerials));
@@ -404,6 +426,32 @@ void compareReplayed(ReplayedProcess& p, const BoundsContext& ctx, ReplayResult&
 
 }  // namespace
 
+namespace {
+// What the record says of the run's decisions, goals and weights.
+void noteRecorded(const LogEvent& e, const BoundsContext& ctx, ReplayResult& result, DecisionMatch& decisions,
+                  DecisionMatch& goals) {
+  RunHeader h;
+  if ((e.channel != ch::decision.name && e.channel != ch::goal.name && e.channel != ch::result.name) ||
+      !peekRunHeader(e.data.data(), static_cast<std::uint32_t>(e.data.size()), h) || h.run_id != result.run_id)
+    return;
+  if (e.channel == ch::decision.name) decisions.recorded(h.serial, digestOf(e));
+  if (e.channel == ch::goal.name) goals.recorded(h.serial, digestOf(e));
+  run_result_t m;
+  std::string why;
+  if (e.channel == ch::result.name && decodeChecked(e.data.data(), e.data.size(), ctx, m, why))
+    result.recorded_checksum = m.weights_checksum;
+}
+
+// An event into every replayed process, and what they publish meanwhile compared with the record.
+void feedAll(std::vector<std::unique_ptr<ReplayedProcess>>& procs, const LogEvent& e, const BoundsContext& ctx,
+             ReplayResult& result, DecisionMatch& decisions, DecisionMatch& goals) {
+  for (auto& p : procs) {
+    p->feed(e);
+    compareReplayed(*p, ctx, result, decisions, goals);
+  }
+}
+}  // namespace
+
 ReplayResult replayRun(const ReplayOptions& o, spdlog::logger& log) {
   ReplayResult result;
   const std::shared_ptr<const BusKey> key = o.bus_key.empty() ? nullptr : busKeyFrom(o.bus_key);
@@ -416,6 +464,8 @@ ReplayResult replayRun(const ReplayOptions& o, spdlog::logger& log) {
   std::unique_ptr<RunConfig> config;
   BoundsContext ctx{nullptr, nullptr};
   std::unique_ptr<GapFinder> gaps;
+  std::int64_t recorded_digest = 0, replayed_digest = 0;  // the recorded RUN_CONFIG's, and the one replayed
+  std::vector<LogEvent> stops;                            // the run's STOP, fed after everything else
   std::vector<std::unique_ptr<ReplayedProcess>> procs;
   DecisionMatch decisions, goals;
   bool decider_replayed = false, chooser_replayed = false;
@@ -431,13 +481,15 @@ ReplayResult replayRun(const ReplayOptions& o, spdlog::logger& log) {
       result.phase = config->phase;
       result.extrinsic = config->phase == Phase::Extrinsic;
       ctx = BoundsContext{&config->protocol, config.get()};
-      gaps = std::make_unique<GapFinder>(result.run_id, result.phase, ctx);
+      gaps = std::make_unique<GapFinder>(result.run_id, result.phase, ctx, config_msg.digest);
+      recorded_digest = config_msg.digest;
       // The replayed processes write nothing: no checkpoint goes into the recorded run's folder.
       YAML::Node node = YAML::Load(config_msg.config_yaml);
       node["run"]["checkpoint"] = "";
       node["run"]["checkpoint_after_actions"] = 0;
       config_msg.config_yaml = emitYaml(node);
-      e.data = sealed(config_msg);
+      e.data = sealed(config_msg);  // (the same request number: every recorded chain still follows)
+      replayed_digest = config_msg.digest;
       const fs::path log_folder =
           fs::is_directory(o.log_dir) ? fs::path(o.log_dir) : fs::path(o.log_dir).parent_path();
       // (a file named without a folder is in the current one)
@@ -454,25 +506,19 @@ ReplayResult replayRun(const ReplayOptions& o, spdlog::logger& log) {
       }
     }
     gaps->add(e);
+    readdressControl(e, ctx, recorded_digest, replayed_digest);
     if (const std::string why = checkRecorded(e, ctx); !why.empty()) {
       ++result.dropped;
       log.warn("{}: a recorded message is refused: {}", e.channel, why);
     }
-    RunHeader h;
-    if ((e.channel == ch::decision.name || e.channel == ch::goal.name || e.channel == ch::result.name) &&
-        peekRunHeader(e.data.data(), static_cast<std::uint32_t>(e.data.size()), h) && h.run_id == result.run_id) {
-      if (e.channel == ch::decision.name) decisions.recorded(h.serial, digestOf(e));
-      if (e.channel == ch::goal.name) goals.recorded(h.serial, digestOf(e));
-      run_result_t m;
-      std::string why;
-      if (e.channel == ch::result.name && decodeChecked(e.data.data(), e.data.size(), ctx, m, why))
-        result.recorded_checksum = m.weights_checksum;
-    }
-    for (auto& p : procs) {
-      p->feed(e);
-      compareReplayed(*p, ctx, result, decisions, goals);
-    }
+    noteRecorded(e, ctx, result, decisions, goals);
+    // The run's STOP goes in last: what the logger took after it (late answers to its RESENDs) is the run's too.
+    if (isStop(e, ctx))
+      stops.push_back(std::move(e));
+    else
+      feedAll(procs, e, ctx, result, decisions, goals);
   }
+  for (const LogEvent& stop : stops) feedAll(procs, stop, ctx, result, decisions, goals);
   result.torn_bytes = in.counts().torn_bytes;
   result.malformed = in.counts().malformed;
   result.untagged = in.counts().untagged;

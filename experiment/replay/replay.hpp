@@ -101,12 +101,14 @@ class SerialRuns {
 // consecutive serials, not the serials.
 class GapFinder {
  public:
-  GapFinder(std::string run_id, Phase phase, const BoundsContext& ctx);
+  // `config_digest`: the request whose publishers' counts (a recording's STATUS) are taken; 0: any request's.
+  GapFinder(std::string run_id, Phase phase, const BoundsContext& ctx, std::int64_t config_digest = 0);
   void add(const LogEvent& e);
   std::vector<LogGap> gaps() const;
 
  private:
   std::string run_id_;
+  std::int64_t config_digest_ = 0;
   Phase phase_;
   BoundsContext ctx_;
   std::map<std::string, SerialRuns> had_;         // channel: the serials recorded
@@ -177,6 +179,10 @@ class ReplayedProcess {
   std::set<std::string> outputs_;
   std::vector<LogEvent> published_;
 };
+
+// A run's STOP (RUN_CONTROL): a replay feeds it after every other event of the run, since the logger records
+// what comes after it too (the late answers to its requests).
+bool isStop(const LogEvent& e, const BoundsContext& ctx);
 
 struct ReplayOptions {
   std::string log_dir;                    // a run's folder: log.NN.lcm segments (or one .lcm file)

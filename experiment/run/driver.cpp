@@ -122,27 +122,32 @@ bool RunDriver::ours(const std::string& process) const {
   return spec_ && std::find(spec_->processes.begin(), spec_->processes.end(), process) != spec_->processes.end();
 }
 
-void RunDriver::sendControl(const std::string& run_id, int8_t command) {
+void RunDriver::sendControl(const std::string& run_id, int8_t command, std::int64_t config_digest) {
   run_control_t c;
   c.run_id = run_id;
   c.step = command == run_control_t::STOP && spec_ && run_id == spec_->run_id ? spec_->steps : 0;
   c.command = command;
+  c.config_digest = config_digest;
   edge_.send(ch::runControl, c);
+}
+
+bool RunDriver::ourRequest(const Seen& s) const {
+  return spec_ && s.run_id == spec_->run_id && s.config_digest == config_msg_.digest;
 }
 
 Turn RunDriver::onStatus(const process_status_t& m) {
   if (!isProcessName(m.process)) return Turn::take();  // not one of ours (a tool, or a forgery)
   Seen& s = seen_[m.process];
-  s = {m.run_id, m.step, m.state, m.pid, m.config_digest, m.detail, Clock::now()};
+  s = {m.run_id, m.step, m.state, m.pid, m.config_digest, m.detail, m.stuck, Clock::now()};
   edge_.claim(m);
   if (phase_ == Phase::Idle || !spec_) return Turn::take();
-  if (on_step_ && phase_ == Phase::Running && m.run_id == spec_->run_id && m.step >= 0 && ours(m.process))
-    on_step_(m.step);
+  if (on_step_ && phase_ == Phase::Running && ourRequest(s) && m.step >= 0 && ours(m.process)) on_step_(m.step);
   // The logger closed the log: it says DONE with the log's folder, then, free
   // again, the run it left (its DONE may have been lost on the way).
-  const bool closed = m.state == process_status_t::DONE && m.run_id == spec_->run_id;
+  const bool closed = m.state == process_status_t::DONE && ourRequest(s);
   const bool left = phase_ == Phase::Stopping && m.state == process_status_t::WAITING && m.run_id.empty() &&
-                    m.counts_run == spec_->run_id && std::filesystem::is_directory(m.detail);
+                    m.counts_run == spec_->run_id && m.counts_config == config_msg_.digest &&
+                    std::filesystem::is_directory(m.detail);
   if (m.process == "logger" && (closed || left) && outcome_) {
     // The run's log folder is the one under the runner's --log-root, whatever a message names.
     if (isRunFolder(m.detail))
@@ -159,46 +164,58 @@ Turn RunDriver::onStatus(const process_status_t& m) {
 void RunDriver::nudge(const std::string& process, const Seen& s) {
   const std::string& run = spec_->run_id;
   const bool free = s.run_id.empty() && s.state == process_status_t::WAITING;
+  // In another request of this run id (a recording played back, an earlier runner's): it is told to leave it,
+  // so that it takes ours; what that request publishes follows no chain of ours and is dropped.
+  const bool other_request = s.run_id == run && s.config_digest != config_msg_.digest && s.state != process_status_t::FAILED;
   const auto now = Clock::now();
   auto& last = nudged_[process];
   if (now - last < milliseconds(config_.protocol.retry_ms)) return;  // told a moment ago: the answer is on its way
+  const auto leave = [&] {
+    if (other_request) {
+      ++foreign_[process];
+      log_->info("run '{}': process {} holds another request of this run id: told to leave it", run, process);
+    }
+    sendControl(s.run_id, run_control_t::STOP, s.config_digest);
+    last = now;
+  };
   switch (phase_) {
     case Phase::Freeing:
-      // Still in another run a while after this one began (its WAITING is not simply on its way):
+      // Still in another run (or request) a while after this one began (its WAITING is not simply on its way):
       // its STOP was lost, or it serves a run nobody runs.
-      if (!s.run_id.empty() && s.run_id != run && now - phase_at_ >= milliseconds(config_.protocol.retry_ms)) {
+      if (!s.run_id.empty() && (s.run_id != run || other_request) &&
+          now - phase_at_ >= milliseconds(config_.protocol.retry_ms)) {
         log_->warn("process '{}' is still in run '{}': told to stop again", process, s.run_id);
-        sendControl(s.run_id, run_control_t::STOP);
-        last = now;
+        leave();
       }
       return;
     case Phase::Configuring:
       if (free) {  // it has not had the configuration (lost, or it started after it went out)
         edge_.send(ch::runConfig, config_msg_);
         last = now;
-      } else if (!s.run_id.empty() && s.run_id != run) {
-        sendControl(s.run_id, run_control_t::STOP);
-        last = now;
+      } else if (!s.run_id.empty() && (s.run_id != run || other_request)) {
+        leave();
       }
       return;
     case Phase::Running:
       if (free) {  // restarted: give it the run again; it catches up
         std::int64_t step = -1;
         for (const auto& [p, other] : seen_)
-          if (other.run_id == run) step = std::max(step, other.step);
+          if (ourRequest(other)) step = std::max(step, other.step);
         log_->warn("run '{}': process {} is free again (restarted?) at step {}: sending it the run's configuration",
                    run, process, step);
         edge_.send(ch::runConfig, config_msg_);
-        sendControl(run, run_control_t::START);
+        sendOurs(run_control_t::START);
         last = now;
-      } else if (s.run_id == run && s.state == process_status_t::READY) {  // its START was lost
-        sendControl(run, run_control_t::START);
+      } else if (ourRequest(s) && s.state == process_status_t::READY) {  // its START was lost
+        sendOurs(run_control_t::START);
         last = now;
+      } else if (other_request) {
+        leave();
       }
       return;
     case Phase::Stopping:
-      if (s.run_id == run && s.state != process_status_t::FAILED) {  // its STOP was lost
-        sendControl(run, run_control_t::STOP);
+      if (ourRequest(s) && s.state != process_status_t::FAILED) {  // its STOP was lost
+        sendOurs(run_control_t::STOP);
         last = now;
       }
       return;
@@ -213,7 +230,7 @@ bool RunDriver::logged() const {
 
 bool RunDriver::loggerJoined() const {
   const auto it = seen_.find("logger");
-  return it != seen_.end() && it->second.run_id == spec_->run_id;
+  return it != seen_.end() && ourRequest(it->second);
 }
 
 std::string RunDriver::missing(const std::function<bool(const Seen&)>& pred) const {
@@ -236,22 +253,37 @@ std::string RunDriver::failedProcess() const {
   return "";
 }
 
-// A process that took a configuration of this run other than ours: another publisher on the bus.
-std::string RunDriver::impostor() const {
+// The processes that took a configuration of this run other than ours, and were told to leave it.
+std::string RunDriver::foreign() const {
+  std::string said;
+  for (const auto& [p, times] : foreign_)
+    said += (said.empty() ? "" : ", ") + p + " (" + std::to_string(times) + (times == 1 ? " time)" : " times)");
+  return said.empty() ? ""
+                      : "; told to leave another configuration of this run id: " + said +
+                            " (another publisher on the bus sends RUN_CONFIG with this run id)";
+}
+
+// What each process of the run could not take when it last said so: where the chain broke, and why.
+std::string RunDriver::stuckProcesses() const {
+  std::string said;
   for (const auto& p : spec_->processes) {
-    auto it = seen_.find(p);
-    if (it != seen_.end() && it->second.run_id == spec_->run_id && it->second.state != process_status_t::FAILED &&
-        it->second.config_digest != config_msg_.digest)
-      return "process '" + p + "' took a configuration of this run that is not the runner's: another publisher "
-             "on the bus sends RUN_CONFIG with this run id";
+    const auto it = seen_.find(p);
+    if (it == seen_.end() || !ourRequest(it->second) || it->second.stuck.empty()) continue;
+    said += "; " + p + " cannot take " + it->second.stuck;
+    // The same message at its serial, refused again and again: its publisher gives, for that serial, a message
+    // other than the one taken before it (a restarted component that does not compute what it computed).
+    if (it->second.stuck.find("prev_digest does not follow") != std::string::npos)
+      said += " (its publisher, asked again, sends a message other than the one that followed the message taken "
+              "before it: a restarted component that does not compute what it computed before, e.g. randomness "
+              "not keyed by the run's seed, step and purpose)";
   }
-  return "";
+  return said;
 }
 
 void RunDriver::stopAndWait(const Waiting& w) {
   const bool opened = phase_ == Phase::Running || loggerJoined();
   phase_ = Phase::Stopping;
-  sendControl(spec_->run_id, run_control_t::STOP);
+  sendOurs(run_control_t::STOP);
   const auto until = Clock::now() + milliseconds(config_.protocol.close_timeout_ms);
   while (logged() && opened && !logger_done_ && Clock::now() < until && w.health().empty()) w.pump();
 }
@@ -262,7 +294,7 @@ RunOutcome& RunDriver::failed(const std::string& why) {
   out.error = "run '" + spec_->run_id + "': " + why;
   if (phase_ != Phase::Freeing) {
     phase_ = Phase::Stopping;
-    sendControl(spec_->run_id, run_control_t::STOP);  // no process stays in a failed run
+    sendOurs(run_control_t::STOP);  // no process stays in a failed run
   }
   out.wall_seconds = std::chrono::duration<double>(Clock::now() - started_at_).count();
   return out;
@@ -271,7 +303,7 @@ RunOutcome& RunDriver::failed(const std::string& why) {
 RunOutcome& RunDriver::interrupted(const Waiting& w) {
   std::int64_t step = -1;
   for (const auto& [p, s] : seen_)
-    if (s.run_id == spec_->run_id) step = std::max(step, s.step);
+    if (ourRequest(s)) step = std::max(step, s.step);
   stopAndWait(w);
   RunOutcome& out = *outcome_;
   out.ok = false;
@@ -310,13 +342,13 @@ RunDriver::Ending RunDriver::configure(const Waiting& w) {
   auto said = Clock::now();
   auto again = milliseconds(protocol.retry_ms);
   const auto deadline = Clock::now() + milliseconds(protocol.ready_timeout_ms);
-  const auto ready = [&](const Seen& s) { return s.run_id == spec_->run_id && s.state == process_status_t::READY; };
+  const auto ready = [&](const Seen& s) { return ourRequest(s) && s.state == process_status_t::READY; };
   while (!missing(ready).empty()) {
     if (auto h = w.health(); !h.empty()) return {false, h};
     if (auto f = failedProcess(); !f.empty()) return {false, f};
-    if (auto f = impostor(); !f.empty()) return {false, f};
     if (stopRequested()) return {true, ""};
-    if (Clock::now() > deadline) return {false, "not configured within the protocol's ready_timeout_ms: " + missing(ready)};
+    if (Clock::now() > deadline)
+      return {false, "not configured within the protocol's ready_timeout_ms: " + missing(ready) + foreign()};
     if (Clock::now() - said > again) {  // a datagram lost on the way there or back: say it again, backing off
       edge_.send(ch::runConfig, config_msg_);
       said = Clock::now();
@@ -332,7 +364,7 @@ RunDriver::Ending RunDriver::runSteps(const Waiting& w) {
   const RunSpec& spec = *spec_;
   RunOutcome& out = *outcome_;
   phase_ = Phase::Running;
-  sendControl(spec.run_id, run_control_t::START);
+  sendOurs(run_control_t::START);
   const auto started = Clock::now();
   std::int64_t progress = -1;
   auto progress_at = Clock::now();
@@ -359,7 +391,7 @@ RunDriver::Ending RunDriver::runSteps(const Waiting& w) {
       if (now - it->second.at > silence)
         return {false, "process '" + p + "' stopped reporting (last heard " +
                            std::to_string(std::chrono::duration<double>(now - it->second.at).count()) + " s ago)"};
-      if (it->second.run_id == spec.run_id) handled += it->second.step + 1;
+      if (ourRequest(it->second)) handled += it->second.step + 1;
     }
     // Progress is any process moving on (a restarted one catching up included), or a table coming in.
     if (const auto p = handled + static_cast<std::int64_t>(out.curve.size()); p != progress) {
@@ -374,8 +406,8 @@ RunDriver::Ending RunDriver::runSteps(const Waiting& w) {
       for (const auto& [channel, range] : edge_.missingRanges())
         lacking += " " + channel + " " + std::to_string(range.first) + ".." + std::to_string(range.second - 1);
       return {false, "stalled: no progress for " + std::to_string(static_cast<int>(spec.stall_seconds)) +
-                         " s (last step handled per process:" + where + ")" +
-                         (lacking.empty() ? "" : "; the runner still misses" + lacking)};
+                         " s (last step handled per process:" + where + ")" + stuckProcesses() +
+                         (lacking.empty() ? "" : "; the runner still misses" + lacking) + foreign()};
     }
   }
   out.run_seconds = std::chrono::duration<double>(Clock::now() - started).count();
@@ -398,15 +430,17 @@ RunOutcome RunDriver::run(const RunSpec& spec, const std::function<void()>& pump
   goals_ended_ = false;
   logger_done_ = false;
   nudged_.clear();
-  edge_.join(spec.run_id, &config_);
+  foreign_.clear();
   config_msg_ = run_config_t();
   config_msg_.run_id = spec.run_id;
   config_msg_.step = 0;
+  config_msg_.request = BusKey::newRequest();  // this request's own: nothing said for another is taken for it
   config_msg_.seed = spec.seed;
   config_msg_.experiment = spec.experiment;
   config_msg_.system = spec.system;
   config_msg_.config_yaml = spec.config_yaml;
-  sealed(config_msg_);  // its digest: what the processes' STATUS name
+  sealed(config_msg_);  // its digest: what the processes' STATUS name, and where every chain of the request starts
+  edge_.join(spec.run_id, &config_, requestOf(config_msg_));
   struct Reset {
     RunDriver* d;
     ~Reset() {

@@ -9,7 +9,12 @@
 // free again mid-run (killed and started anew) is given the run's RUN_CONFIG
 // and START again: it catches up by asking for the run's messages
 // (docs/operating.md, "Killing and restarting a process"). Stalls and
-// silent processes fail the run, naming them.
+// silent processes fail the run, naming them and what each could not take.
+// Each run() is a request of its own (run_config_t.request, drawn afresh):
+// the runner takes only what concerns that request, whatever run id and
+// configuration it shares with earlier ones, and a process that holds
+// another request of the run id (a recording played back, an earlier
+// runner's) is told to leave it.
 // Channels in:  STATUS, AFFORDANCE_TABLE, RESULT, EXTRINSIC_RESULT (in serial order, through the edge)
 // Channels out: RUN_CONFIG, RUN_CONTROL, RESEND
 #pragma once
@@ -176,6 +181,7 @@ class RunDriver {
     int pid = 0;
     std::int64_t config_digest = 0;  // of the configuration its state is about
     std::string detail;
+    std::string stuck;  // what it could not take, when it said so
     Clock::time_point at;
   };
   // What one run() waits with: the caller's pump and health.
@@ -195,16 +201,20 @@ class RunDriver {
   void stopAndWait(const Waiting& w);  // STOP; the logger closes the log, if it opened one
   RunOutcome& failed(const std::string& why);
   RunOutcome& interrupted(const Waiting& w);
+  // Does this state concern our request (our run id and configuration)?
+  bool ourRequest(const Seen& s) const;
   // The run's processes for which `pred` does not hold, by name.
   std::string missing(const std::function<bool(const Seen&)>& pred) const;
   std::string failedProcess() const;  // a process of the run that failed with our configuration, and why
-  std::string impostor() const;       // one that took another configuration of this run
+  std::string foreign() const;        // the processes told to leave another configuration of this run, and how often
+  std::string stuckProcesses() const; // what each process of the run could not take, as its STATUS said
   bool logged() const;                // the run is recorded: the logger is one of its processes
   bool loggerJoined() const;          // the logger took the run, as far as its STATUS says
   Turn onStatus(const process_status_t& m);
   // Tell a process of the run what it missed (a lost datagram, or a restart).
   void nudge(const std::string& process, const Seen& s);
-  void sendControl(const std::string& run_id, int8_t command);
+  void sendControl(const std::string& run_id, int8_t command, std::int64_t config_digest);
+  void sendOurs(int8_t command) { sendControl(spec_->run_id, command, config_msg_.digest); }
   bool ours(const std::string& process) const;
   // Is `folder` the run's own (<log_root>/<run_id>)?
   bool isRunFolder(const std::string& folder) const;
@@ -214,6 +224,7 @@ class RunDriver {
   Edge edge_;
   std::map<std::string, Seen> seen_;
   std::map<std::string, Clock::time_point> nudged_;  // last time each process was told again
+  std::map<std::string, int> foreign_;  // times each process was told to leave another request of this run id
   const RunSpec* spec_ = nullptr;
   RunConfig config_;
   run_config_t config_msg_;

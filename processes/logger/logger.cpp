@@ -45,6 +45,8 @@ RecordedSoFar readRecorded(const std::string& dir, const LogLimits& limits) {
         if (ev.channel == ch::result.name || ev.channel == ch::extrinsicResult.name) r.ended = true;
       } else {
         r.untracked[ev.channel].insert(std::string(reinterpret_cast<const char*>(ev.data.data()), ev.data.size()));
+        if (ev.channel == ch::runConfig.name && !r.request && size >= 8)
+          r.request = static_cast<std::int64_t>(bigEndian(ev.data.data() + size - 8, 8));
       }
     }
     for (const LogProblem& p : in.problems()) r.problems.push_back({p.offset, path.string() + ": " + p.what});

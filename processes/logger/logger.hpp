@@ -11,6 +11,7 @@
 #include <cstdint>
 #include <map>
 #include <memory>
+#include <optional>
 #include <set>
 #include <string>
 #include <vector>
@@ -27,6 +28,7 @@ struct RecordedSoFar {
   std::map<std::string, std::int64_t> last_digest;          // ... the digest of the last one recorded
   std::map<std::string, std::set<std::string>> untracked;   // the others: contents
   std::int64_t events = 0;
+  std::optional<std::int64_t> request;  // the digest of the RUN_CONFIG they record (the request they are of)
   bool ended = false;  // the run's end (RESULT or EXTRINSIC_RESULT) is in them
   std::vector<LogProblem> problems;  // malformed parts of them, skipped (a file's name in `what`)
 };

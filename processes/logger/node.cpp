@@ -48,6 +48,7 @@ void LoggerNode::onConfigured(const RunConfig& config) {
       {"run_id", m.run_id},         {"experiment", m.experiment}, {"system", m.system},
       {"seed", m.seed},             {"steps", config.steps},      {"afford_version", affordVersion()},
       {"config_yaml", m.config_yaml}, {"segments", nlohmann::json::array()}, {"complete", false},
+      {"config_digest", m.digest},  // the request recorded (run_config_t.request)
       {"bus_keyed", edge().key() != nullptr}};  // recorded without the tags either way
   const std::string dir = (std::filesystem::path(log_root_) / m.run_id).string();
   written_.clear();
@@ -62,6 +63,13 @@ void LoggerNode::onConfigured(const RunConfig& config) {
   const RecordedSoFar before = readRecorded(dir, limits);
   for (const LogProblem& p : before.problems)
     log_->warn("an earlier segment of run '{}': offset {}: {}: skipped", m.run_id, p.offset, p.what);
+  // Earlier segments of this request (a restarted logger) are gone on from; another request's log is never mixed
+  // with this one, nor moved or overwritten: the folder is someone else's record.
+  if (before.events > 0 && before.request != m.digest)
+    throw ConfigError(dir + " holds the log of " +
+                      (before.request ? "another request of run '" + m.run_id + "' (another RUN_CONFIG)"
+                                      : "a run whose RUN_CONFIG cannot be read") +
+                      ": its log is kept as it is; move the folder aside, or use another run id");
   log_file_ = std::make_unique<RunLog>(dir, manifest);  // refuses a folder that holds a complete log
   log_file_->sawProcess(process(), static_cast<int>(getpid()));
   control_dropped_ = log_file_->count("control_dropped");  // an earlier segment's
@@ -100,14 +108,15 @@ void LoggerNode::onControl(const Envelope& e) {
 
 void LoggerNode::onPeerStatus(const process_status_t& st) {
   if (!log_file_ || !isProcessName(st.process)) return;
-  if (st.run_id == runId()) {
+  const std::int64_t request = runConfigMessage().digest;
+  if (st.run_id == runId() && st.config_digest == request) {
     log_file_->sawProcess(st.process, st.pid);
     // Its final counts matter if it publishes a channel of the run.
     bool publisher = false;
     for (const std::string& ch : channelNames(/*serial_only=*/true))
       publisher = publisher || publisherOf(ch, config().phase) == st.process;
     if (publisher) left_.emplace(st.process, false);
-  } else if (st.counts_run == runId() && left_.count(st.process)) {
+  } else if (st.counts_run == runId() && st.counts_config == request && left_.count(st.process)) {
     left_[st.process] = true;  // it left the run: its counts are final
   }
 }

@@ -37,7 +37,7 @@ std::string ViewFeed::handleConfig(const run_config_t& m, Edge* edge) {
   config_ = std::move(parsed);
   have_config_ = true;
   shown_ = m.run_id;
-  if (edge) edge->join(m.run_id, &config_);
+  if (edge) edge->join(m.run_id, &config_, requestOf(m));
   view_.onRun(m.run_id, std::string(nameOf(kPhaseNames, config_.phase)) + " " + m.experiment + " " + m.system);
   view_.onConfig(m, config_);
   if (log_) log_->info("showing run '{}'", m.run_id);

@@ -32,6 +32,18 @@ std::vector<T> decoded(const InProcessRun& run, const std::string& channel) {
   return out;
 }
 
+// A channel's messages by serial, each once (a restarted process may say one again), without the bytes that name
+// the run's request (two requests of one run are compared).
+std::map<std::int64_t, std::vector<std::uint8_t>> bySerial(const InProcessRun& run, const std::string& channel) {
+  std::map<std::int64_t, std::vector<std::uint8_t>> out;
+  for (const auto& e : run.events)
+    if (e.channel == channel) {
+      RunHeader h;
+      if (peekRunHeader(e.data.data(), e.data.size(), h)) out[h.serial] = test::withoutRequest(channel, e.data);
+    }
+  return out;
+}
+
 TEST(Goals, EachStepLooksAtOneObjectAndDecidesOnceAndEveryGoalEnds) {
   const std::int64_t steps = 300;
   InProcessRun run(goalsYaml(steps, 3), System::GOALS, 3, steps);
@@ -78,9 +90,10 @@ TEST(Goals, TheSameRunTwiceIsTheSameRun) {
   ASSERT_TRUE(a.outcome.ok) << a.outcome.error;
   ASSERT_TRUE(b.outcome.ok) << b.outcome.error;
   EXPECT_EQ(a.outcome.weights_checksum, b.outcome.weights_checksum);
-  const auto ga = decoded<goal_t>(a, ch::goal.name), gb = decoded<goal_t>(b, ch::goal.name);
+  const auto ga = bySerial(a, ch::goal.name), gb = bySerial(b, ch::goal.name);
   ASSERT_EQ(ga.size(), gb.size());
-  for (std::size_t i = 0; i < ga.size(); ++i) EXPECT_EQ(ga[i].digest, gb[i].digest) << "goal " << i;
+  EXPECT_GT(ga.size(), 1u);
+  EXPECT_EQ(ga, gb);
 }
 
 }  // namespace
@@ -103,11 +116,7 @@ TEST(Goals, AProcessKilledMidGoalAndStartedAgainLeavesTheRunUnchanged) {
     ASSERT_TRUE(run.restarted) << p;
     EXPECT_GE(run.restored_step, 100) << p << " went on from no snapshot";
     EXPECT_EQ(run.outcome.weights_checksum, plain.outcome.weights_checksum) << p;
-    const auto a = decoded<goal_result_t>(plain, ch::goalResult.name), b = decoded<goal_result_t>(run, ch::goalResult.name);
-    std::map<std::int64_t, std::int64_t> da, db;  // each result once (a restarted planner may say one again)
-    for (const auto& r : a) da[r.serial] = r.digest;
-    for (const auto& r : b) db[r.serial] = r.digest;
-    EXPECT_EQ(da, db) << p;
+    EXPECT_EQ(bySerial(plain, ch::goalResult.name), bySerial(run, ch::goalResult.name)) << p;
   }
 }
 

@@ -208,6 +208,8 @@ AloneOutcome feedAlone(const Recording& rec, const std::string& process, Feed fe
   std::map<std::string, std::map<std::string, std::int64_t>> counts;
   for (const Event& e : s.inputs) ++counts[publisherOf(e.channel, rec.phase)][e.channel];
   std::int64_t beat = 0;
+  run_config_t recorded_config;  // the request the peers' counts are of
+  recorded_config.decode(s.config.data(), 0, static_cast<int>(s.config.size()));
   auto heartbeats = [&] {
     int pid = 1000;
     for (const auto& [peer, channels] : counts) {
@@ -218,7 +220,7 @@ AloneOutcome feedAlone(const Recording& rec, const std::string& process, Feed fe
       st.pid = ++pid;
       st.beat = beat;
       st.state = process_status_t::RUNNING;
-      st.config_digest = 0;
+      st.config_digest = st.counts_config = recorded_config.digest;
       for (const auto& [ch, n] : channels) st.channels.push_back(ch), st.counts.push_back(n), st.held_from.push_back(0);
       st.n_channels = static_cast<int32_t>(st.channels.size());
       st.n_takes = 0;

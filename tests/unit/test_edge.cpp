@@ -4,9 +4,13 @@
 // for it without end. And the bus below it: a keyed bus takes only tagged
 // messages, a run id that is no safe name is dropped, a RESEND at the largest
 // serials and a message larger than the bus takes are handled, forged process
-// ids are bounded.
+// ids are bounded. What it says of what it drops: a flood costs a few lines.
 #include <gtest/gtest.h>
 #include <spdlog/sinks/null_sink.h>
+#include <spdlog/sinks/ostream_sink.h>
+
+#include <regex>
+#include <sstream>
 
 #include <chrono>
 #include <string>
@@ -57,8 +61,8 @@ struct Refusing : ::testing::Test {
   int offered_step1 = 0;
 
   void SetUp() override {
-    environment.join("run-1", &config);
-    eye.join("run-1", &config);
+    environment.join("run-1", &config, {});
+    eye.join("run-1", &config, {});
     eye.onFailure([this](const std::string& ch, const std::string& why) { failure = ch + ": " + why; });
   }
   void pump() {
@@ -119,8 +123,8 @@ struct EdgeOnTheBus : ::testing::Test {
   std::vector<std::int64_t> taken;
 
   void SetUp() override {
-    sender.join("run-1", &config);
-    receiver.join("run-1", &config);
+    sender.join("run-1", &config, {});
+    receiver.join("run-1", &config, {});
     receiver.subscribe(ch::scene,
         [this](const scene_t& m) {
           taken.push_back(m.step);
@@ -257,6 +261,7 @@ TEST_F(EdgeOnTheBus, AResendAskingFromTheLargestSerialIsAnsweredWithNothing) {
   r.step = 0;
   r.channel = ch::scene.name;
   r.requester = "test";
+  r.config_digest = 0;  // the request the sender joined
   for (const auto& [first, last] : std::vector<std::pair<std::int64_t, std::int64_t>>{
            {INT64_MAX, INT64_MAX}, {INT64_MAX - 1, INT64_MAX}, {0, INT64_MAX}}) {
     r.first = first;
@@ -295,6 +300,7 @@ TEST_F(EdgeOnTheBus, ForgedProcessIdsCannotGrowWhatAReceiverRemembers) {
   st.beat = 1;
   st.state = process_status_t::WAITING;
   st.config_digest = 0;
+  st.counts_config = 0;
   st.n_channels = 0;
   st.n_takes = 0;
   const int forged = protocol.limits.peers * 3;
@@ -317,8 +323,8 @@ TEST(UsualWait, IsTheTimeFromAPublicationToTheNextRunMessageTakenUnlessAnnounced
   ProtocolConfig protocol = test::shippedProtocol();
   Edge environment{lcm, quiet("environment"), "environment", protocol};
   Edge motivation{lcm, quiet("motivation"), "motivation", protocol};
-  environment.join("run-1", &config);
-  motivation.join("run-1", &config);
+  environment.join("run-1", &config, {});
+  motivation.join("run-1", &config, {});
   int taken = 0;
   motivation.subscribe(ch::scene,
       [&](const scene_t&) {
@@ -381,6 +387,88 @@ TEST(Bus, AUdpmUrlGetsTheBusBoundsUnlessItSetsThemAndOtherProvidersAreRefused) {
       EXPECT_NE(std::string(e.what()).find("udpm://"), std::string::npos) << e.what();
     }
   }
+}
+
+// ---- what the edge says of what it drops ------------------------------------------------
+
+struct Said {
+  std::ostringstream text;
+  std::shared_ptr<spdlog::logger> log = [this] {
+    auto l = std::make_shared<spdlog::logger>("eye", std::make_shared<spdlog::sinks::ostream_sink_st>(text));
+    l->set_pattern("%v");
+    return l;
+  }();
+  std::vector<std::string> lines() const {
+    std::vector<std::string> out;
+    std::istringstream in(text.str());
+    for (std::string line; std::getline(in, line);) out.push_back(line);
+    return out;
+  }
+  // The drops the lines account for: one each said alone, and the counts of the summaries.
+  std::int64_t accounted() const {
+    std::int64_t n = 0;
+    const std::regex summary(R"(^dropped (\d+) more message)");
+    for (const auto& line : lines()) {
+      std::smatch m;
+      if (std::regex_search(line, m, summary))
+        n += std::stoll(m[1]);
+      else if (line.find(": dropped message: ") != std::string::npos)
+        ++n;
+    }
+    return n;
+  }
+};
+
+// Ten thousand drops of three kinds (numbers in their reasons differ: they are of one kind) are a handful of
+// lines, and every drop is in them.
+TEST(DropLog, AFloodIsSaidInAFewLinesAndEveryDropIsCounted) {
+  Said said;
+  DropLog drops(said.log);
+  for (int i = 0; i < 10000; ++i) {
+    if (i % 3 == 0) drops.drop("SCENE", "field prev_digest does not follow the channel's message " + std::to_string(i));
+    if (i % 3 == 1) drops.drop("FOCUS", "field digest does not match the message (corrupted or forged)");
+    if (i % 3 == 2) drops.drop("STATUS", "a message said again: counter " + std::to_string(i) + " taken already");
+  }
+  drops.flush();
+  EXPECT_LE(said.lines().size(), 3u * DropLog::kSaidPerKind + 2) << said.text.str();
+  EXPECT_EQ(said.accounted(), 10000) << said.text.str();
+  EXPECT_NE(said.text.str().find("(more drops are counted and summarised)"), std::string::npos);
+  EXPECT_NE(said.text.str().find("like \"SCENE: field prev_digest does not follow"), std::string::npos) << said.text.str();
+}
+
+// A kind not seen before is said at once, even in the middle of a flood of another.
+TEST(DropLog, ANewKindIsSaidAtOnceDuringAFlood) {
+  Said said;
+  DropLog drops(said.log);
+  for (int i = 0; i < 500; ++i) drops.drop("SCENE", "field step " + std::to_string(i) + " is in the past");
+  drops.drop("RUN_CONTROL", "a command for another request of run 'r'");
+  EXPECT_NE(said.text.str().find("RUN_CONTROL: dropped message: a command for another request"), std::string::npos)
+      << said.text.str();
+}
+
+// Through the edge: thousands of malformed messages on a run channel, a few dozen lines at most (a replayed
+// recording once wrote a line for each of 12,700 events, in every process).
+TEST_F(EdgeOnTheBus, ThousandsOfBadMessagesCostAFewLines) {
+  Said said;
+  std::int64_t drops = 0;
+  {
+    Edge eye{lcm, said.log, "eye", protocol};
+    eye.join("run-1", &config, {});
+    eye.subscribe(ch::scene, [](const scene_t&) { return Turn::take(); }, Scope::Run, Order::Serial);
+    for (int i = 0; i < 3000; ++i) {
+      scene_t s = sceneOf("run-1", i % 7);
+      s.serial = i % 5;
+      s.prev_digest = i;  // follows no chain
+      auto bytes = sealed(s);
+      if (i % 2) bytes[bytes.size() - 1] ^= 1;  // and half of them damaged
+      lcm.publish(ch::scene.name, bytes.data(), static_cast<unsigned>(bytes.size()));
+      pump();
+    }
+    drops = eye.drops().refused;
+  }  // the edge's end says the rest
+  EXPECT_GE(drops, 1500);  // (those beyond the next serial are gaps, asked for, not drops)
+  EXPECT_LE(said.lines().size(), 40u) << said.text.str();
+  EXPECT_EQ(said.accounted(), drops) << said.text.str();
 }
 
 }  // namespace

@@ -132,6 +132,7 @@ TEST(LoggerNode, RecordsAtMostTheControlMessagesItsLimitAllowsAndCountsTheRest) 
   run_config_t rc;
   rc.run_id = "flooded";
   rc.step = 0;
+  rc.request = 1;
   rc.seed = 1;
   rc.experiment = "base";
   rc.system = "IMP";
@@ -143,6 +144,7 @@ TEST(LoggerNode, RecordsAtMostTheControlMessagesItsLimitAllowsAndCountsTheRest) 
   run_control_t c;
   c.run_id = "flooded";
   c.command = run_control_t::START;
+  c.config_digest = rc.digest;  // (set as it was sent)
   for (int i = 0; i < flood; ++i) {
     c.step = i;
     runner.send(ch::runControl, c);

@@ -220,6 +220,7 @@ process_status_t readerStatus(const std::string& run, const std::string& process
   st.process = process;
   st.pid = 1;
   st.state = process_status_t::RUNNING;
+  st.config_digest = st.counts_config = 0;  // the request joined
   st.n_channels = 0;
   for (const auto& [channel, from] : takes) {
     st.takes.push_back(channel);
@@ -254,13 +255,14 @@ struct Outbound : ::testing::Test {
     r.first = first;
     r.last = last;
     r.requester = "eye";
+    r.config_digest = 0;
     out.answer(r, protocol);
     return republished;
   }
 };
 
 TEST_F(Outbound, APublisherLetsGoOnlyOfWhatEveryReaderOfTheRunHasASnapshotAfter) {
-  out.join("run-1", recovery, {"eye", "predictors", "motivation"});
+  out.join("run-1", {}, recovery, {"eye", "predictors", "motivation"});
   publish(10);
   EXPECT_EQ(heldFrom(), 0);
   out.readerSaid(readerStatus("run-1", "eye", {{"SCENE", 6}, {"DECISION", 4}}));
@@ -279,7 +281,7 @@ TEST_F(Outbound, APublisherLetsGoOnlyOfWhatEveryReaderOfTheRunHasASnapshotAfter)
 
 TEST_F(Outbound, WithoutSnapshotsOrBeforeEveryReaderIsHeardEverythingIsHeld) {
   recovery.snapshot_steps = 0;
-  out.join("run-1", recovery, {"eye"});
+  out.join("run-1", {}, recovery, {"eye"});
   publish(10);
   out.readerSaid(readerStatus("run-1", "eye", {{"SCENE", 8}}));
   EXPECT_EQ(heldFrom(), 0);
@@ -288,7 +290,7 @@ TEST_F(Outbound, WithoutSnapshotsOrBeforeEveryReaderIsHeardEverythingIsHeld) {
 
 TEST_F(Outbound, WhatIsHeldStaysUnderHistoryMbWhateverReadersSay) {
   recovery.history_mb = 1;
-  out.join("run-1", recovery, {"eye"});
+  out.join("run-1", {}, recovery, {"eye"});
   publish(20, 300 * 1024);  // 6 MB published, nobody heard
   EXPECT_LE(out.heldBytes(), std::size_t{1} << 20);
   EXPECT_EQ(heldFrom(), 17);
@@ -297,7 +299,7 @@ TEST_F(Outbound, WhatIsHeldStaysUnderHistoryMbWhateverReadersSay) {
 }
 
 TEST_F(Outbound, ASnapshotOfWhatWasPublishedIsReadBackWhole) {
-  out.join("run-1", recovery, {"eye"});
+  out.join("run-1", {}, recovery, {"eye"});
   publish(10);
   out.readerSaid(readerStatus("run-1", "eye", {{"SCENE", 5}}));
   const std::string path = test::tempDir("snapshot-outbound") + "/environment.snapshot";
@@ -307,7 +309,7 @@ TEST_F(Outbound, ASnapshotOfWhatWasPublishedIsReadBackWhole) {
     w.commit();
   }
   EdgeOutbound back(quiet("environment"), [](const std::string&, const std::vector<std::uint8_t>&) {});
-  back.join("run-1", recovery, {"eye"});
+  back.join("run-1", {}, recovery, {"eye"});
   SnapshotReader r(path, 1 << 20);
   back.load(r, 1 << 20);
   r.end();
@@ -322,12 +324,13 @@ TEST(Snapshot, AReceiverNeedingWhatWasLetGoFailsTheRunNamingTheChannel) {
   lcm::LCM lcm{"memq://"};
   RunConfig config = test::shippedConfig();
   Edge eye{lcm, quiet("eye"), "eye", config.protocol};
-  eye.join("run-1", &config);
+  eye.join("run-1", &config, {});
   eye.subscribe(ch::decision, [](const decision_t&) { return Turn::take(); }, Scope::Run, Order::Serial);
   std::string failure;
   eye.onFailure([&](const std::string& channel, const std::string& why) { failure = channel + ": " + why; });
   process_status_t st;
   st.run_id = st.counts_run = "run-1";
+  st.config_digest = st.counts_config = 0;
   st.process = "motivation";
   st.pid = 7;
   st.state = process_status_t::RUNNING;

@@ -166,6 +166,7 @@ class Hostile {
         r.first = coin(0.2) ? static_cast<std::int64_t>(pick(0, 1'000'000'000'000)) : static_cast<std::int64_t>(pick(0, 3000));
         r.last = r.first + static_cast<std::int64_t>(coin(0.3) ? pick(0, 1'000'000'000) : pick(0, 200));
         r.requester = "hostile";
+        r.config_digest = config_.digest;  // the run's request, as heard
         const Bytes s = afford::sealed(r);
         publish(afford::ch::resend.name, s);
       }
@@ -177,6 +178,7 @@ class Hostile {
       c.run_id = run_;
       c.step = static_cast<std::int64_t>(pick(0, 1'000'000'000));
       c.command = afford::run_control_t::START;
+      c.config_digest = coin(0.5) ? config_.digest : static_cast<std::int64_t>(rng_());
       b = afford::sealed(c);
       ch = afford::ch::runControl.name;
     } else if (k == "statusflood") {
@@ -188,7 +190,7 @@ class Hostile {
       st.pid = static_cast<std::int32_t>(pick(100000, 2'000'000'000));
       st.beat = static_cast<std::int64_t>(pick(0, 1000));
       st.state = afford::process_status_t::WAITING;
-      st.config_digest = 0;
+      st.config_digest = st.counts_config = 0;
       st.n_channels = 0;
       st.n_takes = 0;
       b = afford::sealed(st);
@@ -199,6 +201,7 @@ class Hostile {
       afford::run_config_t c;
       c.run_id = coin(0.5) ? run_ + "-not" : run_;
       c.step = 0;
+      c.request = static_cast<std::int64_t>(rng_());
       c.seed = 1;
       c.experiment = "base";
       c.system = "IMP";
@@ -248,6 +251,7 @@ class Hostile {
       st.n_channels = 0;
       st.n_takes = 0;
       st.counts_run = run_;
+      st.counts_config = config_.digest;
       publish(afford::ch::status.name, afford::sealed(st));
       return;
     }
@@ -283,6 +287,7 @@ class Hostile {
       c.run_id = run_;
       c.step = 0;
       c.command = afford::run_control_t::STOP;
+      c.config_digest = config_.digest;  // a perfect forgery: the request as heard
       publish(afford::ch::runControl.name, afford::sealed(c));
       return;
     }
@@ -296,6 +301,7 @@ class Hostile {
       st.beat = std::numeric_limits<std::int64_t>::max();
       st.state = afford::process_status_t::FAILED;
       st.config_digest = config_.digest;
+      st.counts_config = 0;
       st.detail = "forged failure";
       st.n_channels = 0;
       st.n_takes = 0;
@@ -466,7 +472,7 @@ class Hostile {
   std::string outside_;
   std::shared_ptr<const afford::BusKey> forge_key_;
   bool tagged_ = false;
-  afford::run_config_t config_;  // the run's, as heard
+  afford::run_config_t config_{};  // the run's, as heard
   std::map<std::string, std::int32_t> pids_;
   struct Last {
     std::int64_t serial = -1, digest = 0;

@@ -47,6 +47,11 @@ void printHeard(const Heard& heard, std::int64_t forgotten, int peers, const Edg
                      states[m.state], m.step, m.run_id.empty() ? "-" : printable(m.run_id, 200), run_width,
                      printable(m.detail, 400)));
   }
+  // What stands in a process's way, if it said (its next message refused since it last took one: a stall's cause).
+  for (const auto& [id, entry] : heard)
+    if (!entry.first.stuck.empty())
+      std::printf("%s (pid %d) cannot take %s\n", printable(entry.first.process, 64).c_str(), entry.first.pid,
+                  printable(entry.first.stuck, 400).c_str());
   if (forgotten > 0)
     std::printf("(and %lld more process ids heard, beyond protocol.limits.peers = %d: not listed)\n",
                 static_cast<long long>(forgotten), peers);

@@ -57,6 +57,8 @@ class BusKey {
   bool verify(const std::string& channel, const void* data, std::size_t size_with_trailer, Stamp* stamp = nullptr) const;
   // A new random session (libsodium's generator: not the runs' keyed one, and no decision reads it).
   static std::uint64_t newSession();
+  // A new number for a request of a run (run_config_t.request), from the same generator.
+  static std::int64_t newRequest() { return static_cast<std::int64_t>(newSession()); }
 
  private:
   std::array<std::uint8_t, kKeyBytes> key_;

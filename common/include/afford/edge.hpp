@@ -29,8 +29,9 @@
 //      asked for, fails the run naming the channel, rather than being asked
 //      for without end).
 //
-// A bad message is dropped with one log line naming the channel and the field,
-// and counted (drops()). An exception from a handler never leaves the edge: the
+// A bad message is dropped and counted (drops()); the first few of each kind
+// with a line naming the channel and the field, the rest in summaries
+// (afford/drop_log.hpp). An exception from a handler never leaves the edge: the
 // edge stops taking the run's messages and reports the failure (the process
 // then says FAILED). What it sends is tagged on a keyed bus, and refused (an
 // exception naming the channel) if it is larger than protocol.bus.max_message_bytes.
@@ -53,6 +54,7 @@
 
 #include "afford/auth.hpp"
 #include "afford/decode.hpp"
+#include "afford/drop_log.hpp"
 #include "afford/edge_inbound.hpp"
 #include "afford/edge_outbound.hpp"
 #include "afford/edge_peers.hpp"
@@ -65,6 +67,9 @@
 #include "afford/wire.hpp"
 
 namespace afford {
+
+// The request a RUN_CONFIG asks for.
+inline RequestId requestOf(const run_config_t& m) { return {m.digest, m.request}; }
 
 // The bytes a message arrived as (for a handler that records them).
 struct Envelope {
@@ -120,16 +125,18 @@ class Edge {
   const EdgeDrops& drops() const { return drops_; }
 
   // ---- the run served -----------------------------------------------------------
-  // Serve `run_id` with `config` (kept by the caller, alive until leave()):
-  // ordering, deferral and history start anew; the run's protocol applies.
-  void join(const std::string& run_id, const RunConfig* config);
+  // Serve `request` of `run_id` with `config` (kept by the caller, alive until leave()): ordering, deferral
+  // and history start anew, even for a run id served before; every channel's chain starts from the request
+  // (afford/seal.hpp); the run's protocol applies.
+  void join(const std::string& run_id, const RunConfig* config, RequestId request);
   // Leave the run: its messages are dropped from now on; the history of what
-  // was published stays, to answer late requests, until the next join().
+  // was published stays, to answer late requests of that request, until the next join().
   void leave();
   // Forget what was published in the run left (a process leaving a run that goes on: its STATUS then
   // claims no counts of it, so none becomes final).
-  void forgetPublished() { outbound_.join("", protocol_->recovery, {}); }
+  void forgetPublished() { outbound_.join("", {}, protocol_->recovery, {}); }
   const std::string& run() const { return run_; }
+  const RequestId& request() const { return request_; }
   const RunConfig* config() const { return config_; }
   const ProtocolConfig& protocol() const { return *protocol_; }
   BoundsContext context() const { return {protocol_, config_}; }
@@ -209,6 +216,11 @@ class Edge {
   void save(SnapshotWriter& w) const;
   void load(SnapshotReader& r);
   const std::string& historyRun() const { return outbound_.run(); }
+  std::int64_t historyConfig() const { return outbound_.request().config_digest; }
+  // Why this process cannot go on, if a message of its run stands in its way (EdgeInbound::stuck()).
+  std::string stuck() const { return inbound_.stuck(); }
+  // Say what was dropped and not said yet (the drops' summary), e.g. at the end of a process.
+  void flushDrops() { drop_log_.flush(); }
 
  private:
   struct Subscription {
@@ -241,6 +253,7 @@ class Edge {
   ProtocolConfig own_protocol_;  // between runs
   std::vector<std::unique_ptr<Subscription>> subs_;
   std::string run_;
+  RequestId request_;
   const RunConfig* config_ = nullptr;
   bool warn_other_runs_ = true;
   bool answering_ = false;
@@ -250,6 +263,7 @@ class Edge {
   const std::uint64_t session_ = BusKey::newSession();  // this edge's, under its tags (a keyed bus)
   std::uint64_t sent_ = 0;                              // tagged messages sent: the next one's counter
   EdgeDrops drops_;
+  DropLog drop_log_;       // the lines about drops, counted and summarised
   EdgeInbound inbound_;    // the run's messages in order: chains, deferral, refusals, asking (steps 6 and 7)
   EdgeOutbound outbound_;  // what was published: serials, history, answering RESEND
   EdgePeers peers_;        // the processes heard (their STATUS beats)

@@ -25,6 +25,14 @@
 
 namespace afford {
 
+// Which request of a run a subscriber serves (run_config_t): the digest of its RUN_CONFIG, by which STATUS,
+// RUN_CONTROL and RESEND name it, and its request number, from which every channel's chain starts
+// (afford/seal.hpp). A replay that changes the recorded configuration (and so its digest) keeps the number.
+struct RequestId {
+  std::int64_t config_digest = 0;
+  std::int64_t number = 0;
+};
+
 // What a handler makes of a message offered to it.
 class Turn {
  public:
@@ -66,8 +74,8 @@ class EdgeInbound {
 
   EdgeInbound(std::shared_ptr<spdlog::logger> log, const ProtocolConfig& protocol, Hooks hooks);
 
-  // A run joined (its protocol) or left: everything about the last run's order is forgotten.
-  void join(const std::string& run_id, const RunConfig* config, const ProtocolConfig& protocol);
+  // A run joined (its request; its protocol) or left: everything about the last run's order is forgotten.
+  void join(const std::string& run_id, RequestId request, const RunConfig* config, const ProtocolConfig& protocol);
   void leave(const ProtocolConfig& protocol);
   // A channel taken in serial order (Order::Serial): its gaps are asked for.
   void track(const std::string& channel) { tracked_.push_back(channel); }
@@ -88,8 +96,13 @@ class EdgeInbound {
   }
   void onFailure(std::function<void(const std::string&, const std::string&)> f) { on_failure_ = std::move(f); }
 
-  // A publisher's counts (its STATUS) as claims on the channels it publishes.
+  // A publisher's counts (its STATUS) as claims on the channels it publishes, if they are of the request
+  // served.
   void claim(const process_status_t& status);
+  // Why this process cannot go on, if a message of its own run stands in its way: the last message at a
+  // channel's expected serial that was dropped or refused since a message was last taken ("CHANNEL serial N
+  // (published by P): why, K times"), "" while its inputs flow.
+  std::string stuck() const;
   // Ask for what is missing, if due.
   void askMissing();
   std::int64_t missing() const { return serials_.missing(); }
@@ -136,6 +149,7 @@ class EdgeInbound {
   const ProtocolConfig* protocol_;
   Hooks hooks_;
   std::string run_;
+  RequestId request_;
   const RunConfig* config_ = nullptr;
   bool failed_ = false;
   std::function<void(const std::string&, const std::string&)> on_failure_;
@@ -154,6 +168,12 @@ class EdgeInbound {
   // refused again, after it was asked for, is the channel's genuine message
   // that its handler will never take, and the run fails rather than ask forever.
   std::map<std::string, std::pair<std::int64_t, std::int64_t>> refused_;
+  // The last expected message dropped or refused since one was last taken (stuck()).
+  struct Stuck {
+    std::string channel, why;
+    std::int64_t serial = -1, times = 0;
+  } stuck_;
+  void stuckOn(const std::string& channel, std::int64_t serial, const std::string& why);
 };
 
 }  // namespace afford

@@ -28,6 +28,7 @@
 #include <vector>
 
 #include "afford/config.hpp"
+#include "afford/edge_inbound.hpp"
 #include "afford/process_status_t.hpp"
 #include "afford/resend_t.hpp"
 
@@ -43,10 +44,13 @@ class EdgeOutbound {
 
   EdgeOutbound(std::shared_ptr<spdlog::logger> log, Transmit transmit);
 
-  // A run joined: what is published from now is that run's (what the last run published is forgotten).
-  // `readers`: the processes of the run besides this one, whose restart positions decide what is let go.
-  void join(const std::string& run_id, const RecoveryConfig& recovery, std::vector<std::string> readers);
+  // A run joined: what is published from now is that request's (what the last one published is forgotten,
+  // even under the same run id). `readers`: the processes of the run besides this one, whose restart positions
+  // decide what is let go.
+  void join(const std::string& run_id, RequestId request, const RecoveryConfig& recovery,
+            std::vector<std::string> readers);
   const std::string& run() const { return run_; }
+  const RequestId& request() const { return request_; }
   // Nothing published is held (a process fed a recording: no peer of its can ask it for anything).
   void holdNothing() { hold_nothing_ = true; }
 
@@ -56,9 +60,10 @@ class EdgeOutbound {
   // ... and once sealed (its digest known) and sent: held.
   void kept(const std::string& channel, std::int64_t digest, std::vector<std::uint8_t> bytes);
 
-  // A RESEND: what is asked of this publisher's history republished, within the protocol's budget.
+  // A RESEND of the request held: what is asked of this publisher's history republished, within the
+  // protocol's budget (a RESEND of another request, of the same run id or not, is not answered).
   void answer(const resend_t& r, const ProtocolConfig& protocol);
-  // A STATUS of a process of the run: where a restart of it would take each channel it takes again.
+  // A STATUS of a process of the request: where a restart of it would take each channel it takes again.
   void readerSaid(const process_status_t& st);
 
   struct Count {
@@ -93,6 +98,7 @@ class EdgeOutbound {
   std::shared_ptr<spdlog::logger> log_;
   Transmit transmit_;
   std::string run_;
+  RequestId request_;
   RecoveryConfig recovery_;
   std::map<std::string, History> history_;  // by channel
   std::size_t bytes_ = 0;                   // held, over every channel

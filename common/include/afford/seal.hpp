@@ -27,8 +27,11 @@ std::int64_t sealBuffer(std::uint8_t* buf, std::size_t n);
 // The `prev_digest` of a channel's first message (serial 0) in a run: every
 // run message names the digest of its channel's previous one, so a copy given
 // another serial (re-sealed or not) does not follow the real one and is refused
-// before it can take that serial's place.
-std::int64_t chainSeed(const std::string& run_id, const std::string& channel);
+// before it can take that serial's place. The seed is the request's
+// (run_config_t.request: a number the runner draws for each request), so
+// nothing published for another request of the same run id, with the same
+// configuration or not, follows this one's chain.
+std::int64_t chainSeed(const std::string& run_id, const std::string& channel, std::int64_t request);
 
 // Encode `msg` with its digest (also set in msg.digest).
 template <class Msg>
