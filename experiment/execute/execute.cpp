@@ -150,8 +150,10 @@ RunOutcome runOverUdpm(const PlannedRun& run, const HostRequest& o, const std::s
     slot.phase = run.spec.phase;
     std::map<std::string, std::vector<std::string>> own{{"predictors", {"--checkpoint-dir", log_root}}};
     if (!o.processes.count("eye")) own["eye"] = {"--speculate", slot.machine_full ? "off" : "on"};  // ours only
+    // Every process's snapshots in the log root, a --process command's too (processMain gives it --state-dir):
+    // else its default, $AFFORD_LOGS or the working folder's logs/.
     for (const std::string& p : runProcesses(run.spec.phase, /*recorded=*/false))
-      if (!o.processes.count(p)) own[p].insert(own[p].end(), {"--state-dir", log_root});
+      own[p].insert(own[p].end(), {"--state-dir", log_root});
     slot.group = std::make_unique<ProcessGroup>(bin, runProcesses(run.spec.phase, /*recorded=*/false), slot.url,
                                                 out, common, own, o.processes);
   }
