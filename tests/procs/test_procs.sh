@@ -1,7 +1,8 @@
 #!/usr/bin/env bash
 # scripts/procs.sh as a user drives it: start a group, status, a run on it,
 # kill -9 and start one process during the run from another working folder
-# (the run's weights are an undisturbed run's), restart one, stop them all.
+# (the run's weights are an undisturbed run's), afford clean during the run,
+# restart one, stop them all.
 #   tests/procs/test_procs.sh BUILD_DIR WORK_DIR
 set -euo pipefail
 root=$(cd "$(dirname "$0")/../.." && pwd)
@@ -31,6 +32,11 @@ experiment=(base --system FIX --reps 1 --steps 3000 --seed 2 --set protocol.reco
 runner=$!
 "$procs" status demo --wait-for eye --step 600 --seconds 60 >/dev/null ||
   { cat "$out/run.txt"; echo "the eye never reached step 600"; exit 1; }
+# afford clean never offers the group's run going on (its runner holds its experiment's folder).
+"$build/bin/afford" clean --log-root "$logs" --all >"$out/clean-run.txt"
+grep -q "would remove.*/demo-base-FIX-s2$" "$out/clean-run.txt" && { cat "$out/clean-run.txt"; echo "clean offers the group's run going on"; exit 1; }
+grep -q "^left alone .*/demo-base-FIX-s2: its experiment is running (in $out/run)" "$out/clean-run.txt" ||
+  { cat "$out/clean-run.txt"; echo "clean does not say the group's run is going on"; exit 1; }
 "$procs" kill demo eye
 "$procs" status demo | grep "^eye" | head -1 | grep -q " no$" || { echo "status does not show the killed eye as dead"; exit 1; }
 (cd "$out/b" && "$procs" start demo eye)
