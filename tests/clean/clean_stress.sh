@@ -83,7 +83,7 @@ while :; do
   fi
   echo $((($(date +%s%N) - t0) / 1000000)) >>"$out/times.txt"
   listings=$((listings + 1))
-  echo "$listings" >"$out/listings"
+  echo "$listings" >"$out/listings.part" && mv "$out/listings.part" "$out/listings"  # whole when read
   n=$(grep -c "^would remove \|^left alone " "$out/listing.txt" || true)
   ((n > most)) && most=$n
   while read -r path; do
