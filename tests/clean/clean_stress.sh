@@ -18,6 +18,8 @@ steps=${3:-5000}
 afford=$build/bin/afford logs=$out/logs
 export AFFORD_NETNS=none AFFORD_BIN=$build/bin AFFORD_LOGS=$logs AFFORD_GRACE=3
 export AFFORD_URL="udpm://239.255.76.67:7510?ttl=0&recv_buf_size=2097152"
+# The group's processes are procs.sh's: whatever happens, they end with this script.
+trap 'kill $(jobs -p) 2>/dev/null || true; "$root/scripts/procs.sh" kill g environment eye predictors motivation planner logger >/dev/null 2>&1 || true' EXIT
 common=(--reps 2 --steps "$steps" --no-reuse-agents --quiet --progress none --log-root "$logs")
 done_mark() { touch "$out/done-$1"; }
 listed() { (($(cat "$out/listings") >= $1)); }  # the poller has made $1 listings

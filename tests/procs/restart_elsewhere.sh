@@ -21,6 +21,8 @@ ln -s "$root/scripts/procs.sh" "$out/checkout/scripts/procs.sh"  # a checkout's 
 unset AFFORD_LOGS
 export AFFORD_NETNS=none AFFORD_BIN=$build/bin AFFORD_GRACE=3
 procs=$out/checkout/scripts/procs.sh logs=$out/checkout/logs
+# The group's processes are procs.sh's: whatever happens, they end with this script.
+trap 'kill $(jobs -p) 2>/dev/null || true; "$procs" kill demo environment eye predictors motivation planner logger >/dev/null 2>&1 || true' EXIT
 victims=(environment eye predictors motivation logger)
 experiment=(base --system IMP --reps 1 --steps "$steps" --seed 4 --set "protocol.recovery.snapshot_steps=$snapshot"
   --no-reuse-agents)

@@ -16,6 +16,8 @@ unset AFFORD_LOGS
 export AFFORD_NETNS=none AFFORD_BIN=$build/bin AFFORD_GRACE=3
 procs=$out/checkout/scripts/procs.sh logs=$out/checkout/logs
 cd "$out/a"
+# The group's processes are procs.sh's, not this script's jobs: a test that fails midway kills them too.
+trap 'kill $(jobs -p) 2>/dev/null || true; "$procs" kill demo environment eye predictors motivation planner logger >/dev/null 2>&1 || true' EXIT
 
 "$procs" start demo | tee "$out/start.txt"
 [[ $(grep -c "started (pid" "$out/start.txt") -eq 6 ]] || { echo "expected 6 processes started"; exit 1; }
