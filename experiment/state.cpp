@@ -31,7 +31,11 @@ std::string resumeCommand(const ExperimentRequest& o) {
 OutDirLock::OutDirLock(const fs::path& out) {
   const fs::path lock = out / ".lock";
   fd_ = open(lock.c_str(), O_RDWR | O_CREAT | O_CLOEXEC, 0644);
-  if (fd_ >= 0 && flock(fd_, LOCK_EX | LOCK_NB) == 0) return;
+  // `afford clean` tests the lock by taking it shared for an instant: a few tries get past that.
+  for (int tries = 0; fd_ >= 0 && tries < 100; ++tries) {
+    if (flock(fd_, LOCK_EX | LOCK_NB) == 0) return;
+    usleep(1000);
+  }
   if (fd_ >= 0) close(fd_);
   fd_ = -1;
   throw ConfigError("another afford experiment is writing to " + out.string() + " (it holds " + lock.string() + ")");

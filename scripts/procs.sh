@@ -20,7 +20,10 @@
 # PROCESS: environment eye predictors motivation planner logger.
 # Where: a group's folder is LOGS/RUN and its runs' logs and checkpoints are
 # LOGS/<run-id>, LOGS being $AFFORD_LOGS, else the checkout's logs/ (an
-# installed copy: ./logs). Each process's output goes to LOGS/RUN/<process>.log
+# installed copy: ./logs). Every process gets LOGS, whatever the current folder:
+# the logger as its --log-dir, the predictors as their --checkpoint-dir, and
+# each as its --state-dir (its snapshots, which a restart goes on from). Each
+# process's output goes to LOGS/RUN/<process>.log
 # (appended), its pid to LOGS/RUN/<process>.pid, its command line to
 # LOGS/RUN/<process>.cmd (and a --process command to LOGS/RUN/<process>.process);
 # the bus to LOGS/RUN/lcm-url. The bus is $AFFORD_URL (default below) at `start`.
@@ -49,6 +52,9 @@ else
   bin=${AFFORD_BIN:-$root/build/bin}
   logs=${AFFORD_LOGS:-$root/logs}
 fi
+# One folder whatever the current one: every process gets it (its logs, checkpoints and snapshots), so a
+# process started or restarted from anywhere finds its snapshot of the run.
+[[ $logs == /* ]] || logs=$PWD/$logs
 netns=${AFFORD_NETNS:-afford}
 grace=${AFFORD_GRACE:-5}
 mapfile -t all < <("$bin/afford" processes)  # the registry of processes
@@ -105,6 +111,7 @@ start_one() {
   [[ -n ${AFFORD_BUS_KEY:-} ]] && line+=(--bus-key "$AFFORD_BUS_KEY")
   [[ $p == logger ]] && line+=(--log-dir "$logs")
   [[ $p == predictors ]] && line+=(--checkpoint-dir "$logs")
+  line+=(--state-dir "$logs")
   printf '%q ' "${line[@]}" >"$dir/$p.cmd"
   echo "=== $(date -Is) start: $(cat "$dir/$p.cmd")" >>"$dir/$p.log"
   # A simple command in the background, so that $! is the process itself

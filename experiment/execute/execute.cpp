@@ -85,6 +85,20 @@ void removeSnapshots(const fs::path& run_dir) {
   }
 }
 
+// A run that wrote nothing in its folder (no log, no checkpoint) leaves none: only run.json was there.
+void dropIfOnlyRunJson(const fs::path& run_dir) {
+  std::error_code ec;
+  int entries = 0;
+  bool only_run_json = true;
+  for (auto it = fs::directory_iterator(run_dir, ec); !ec && it != fs::directory_iterator(); it.increment(ec)) {
+    ++entries;
+    only_run_json = only_run_json && it->path().filename() == "run.json";
+  }
+  if (ec || entries != 1 || !only_run_json) return;
+  fs::remove(run_dir / "run.json", ec);
+  fs::remove(run_dir, ec);  // (only if nothing came meanwhile)
+}
+
 RunOutcome runInProcess(const PlannedRun& run, const HostRequest& o, const std::string& log_root,
                         const ProtocolConfig& protocol, Slot& slot, const RunHooks& hooks) {
   const std::string tag = o.jobs > 1 ? "#" + std::to_string(slot.index) : "";
@@ -150,8 +164,10 @@ RunOutcome runOverUdpm(const PlannedRun& run, const HostRequest& o, const std::s
     slot.phase = run.spec.phase;
     std::map<std::string, std::vector<std::string>> own{{"predictors", {"--checkpoint-dir", log_root}}};
     if (!o.processes.count("eye")) own["eye"] = {"--speculate", slot.machine_full ? "off" : "on"};  // ours only
+    // Every process's snapshots in the log root, a --process command's too (processMain gives it --state-dir):
+    // else its default, $AFFORD_LOGS or the working folder's logs/.
     for (const std::string& p : runProcesses(run.spec.phase, /*recorded=*/false))
-      if (!o.processes.count(p)) own[p].insert(own[p].end(), {"--state-dir", log_root});
+      own[p].insert(own[p].end(), {"--state-dir", log_root});
     slot.group = std::make_unique<ProcessGroup>(bin, runProcesses(run.spec.phase, /*recorded=*/false), slot.url,
                                                 out, common, own, o.processes);
   }
@@ -367,6 +383,18 @@ void runOne(PhaseState& st, std::size_t i, Slot& slot, Progress& progress) {
     };
   PlannedRun run = runs[i];
   run.spec.stall_seconds = o.stall_seconds;
+  // Whose the run's folder is, before any process writes in it: `afford clean` checks that experiment's lock and
+  // state (running, or stopped and resumable) and leaves the folder alone while it is in use. (Without it, clean
+  // cannot attribute the folder, and leaves it alone too.)
+  const fs::path run_dir = fs::path(c.log_root) / id;
+  try {
+    fs::create_directories(run_dir);
+    writeWhole(run_dir / "run.json",
+               json{{"run_id", id}, {"experiment", runs[i].spec.experiment}, {"out_dir", fs::absolute(c.out_dir).string()}}
+                       .dump() + "\n");
+  } catch (const std::exception& e) {
+    progress.say([&] { log.warn("run '{}': cannot write {} ({})", id, (run_dir / "run.json").string(), e.what()); });
+  }
   try {
     serve(slot, run, o, c.log_root, c.out_dir);
     r = o.transport == "memq" ? runInProcess(run, o, c.log_root, c.protocol, slot, hooks)
@@ -377,7 +405,8 @@ void runOne(PhaseState& st, std::size_t i, Slot& slot, Progress& progress) {
     r.error = "run '" + id + "': " + e.what();
   }
   if (!r.ok) slot.serving.clear();  // the next run starts the slot afresh: its bus, driver and processes
-  removeSnapshots(fs::path(c.log_root) / id);
+  removeSnapshots(run_dir);
+  dropIfOnlyRunJson(run_dir);
   // A run that fails while the processes are being stopped failed because of it: cut too.
   const bool cut = r.interrupted || (!r.ok && stopRequested());
   if (r.ok && !r.log_dir.empty()) {
@@ -387,12 +416,6 @@ void runOne(PhaseState& st, std::size_t i, Slot& slot, Progress& progress) {
   }
   if (!cut) try {
       keepOutcome(c.out_dir, id, r);
-      // What `afford clean` reads to tell the experiment of a run's folder (a folder without a log has no manifest).
-      if (const fs::path dir = fs::path(c.log_root) / id; fs::is_directory(dir))
-        writeWhole(dir / "run.json", json{{"run_id", id},
-                                          {"experiment", runs[i].spec.experiment},
-                                          {"out_dir", fs::absolute(c.out_dir).string()}}
-                                         .dump() + "\n");
     } catch (const std::exception& e) {
       log.error("cannot keep the outcome of run '{}' ({}): --resume would run it again", id, e.what());
     }

@@ -2,6 +2,10 @@
 
 #include "afford/protocol.hpp"
 
+#include <fcntl.h>
+#include <sys/file.h>
+#include <unistd.h>
+
 #include <cerrno>
 #include <cstdio>
 #include <cstring>
@@ -22,6 +26,18 @@ std::uint64_t bigEndian(const unsigned char* p, int n) {
 }  // namespace
 
 
+
+// Only a test of the lock takes it exclusively, for an instant (afford clean): a few tries get past one.
+void HeldFolder::hold(const std::string& dir) {
+  release();
+  fd_ = open(dir.c_str(), O_RDONLY | O_DIRECTORY | O_CLOEXEC);
+  for (int tries = 0; fd_ >= 0 && tries < 100 && flock(fd_, LOCK_SH | LOCK_NB) != 0; ++tries) usleep(1000);
+}
+
+void HeldFolder::release() {
+  if (fd_ >= 0) ::close(fd_);  // (which lets go of the lock)
+  fd_ = -1;
+}
 
 RecordedSoFar readRecorded(const std::string& dir, const LogLimits& limits) {
   RecordedSoFar r;
@@ -67,6 +83,7 @@ RunLog::RunLog(const std::string& dir, nlohmann::json manifest) : dir_(dir), man
                                "': refusing to mix runs (use another run id)");
   }
   fs::create_directories(dir_);
+  folder_.hold(dir_);
   if (fs::exists(old_manifest)) {  // a later segment of the same run: keep the list
     std::ifstream in(old_manifest);
     const nlohmann::json old = nlohmann::json::parse(in, nullptr, false);
@@ -123,6 +140,7 @@ void RunLog::close(const std::string& incomplete, const nlohmann::json& missing)
     manifest_["missing"] = missing;
   }
   writeManifest();
+  folder_.release();
   if (!close_error.empty()) throw std::runtime_error(close_error);
 }
 

@@ -4,7 +4,9 @@
 // version, the processes that took part, and whether the log is complete
 // (`complete`; else `incomplete` says why and `missing` lists what is missing).
 // Every event is flushed as it is written, so a killed logger loses nothing
-// it had received.
+// it had received. While a log is written, its folder is held (a shared
+// flock, the kernel's: let go when the logger closes the log or dies), so
+// `afford clean` never offers it.
 #pragma once
 #include <nlohmann/json.hpp>
 
@@ -34,6 +36,20 @@ struct RecordedSoFar {
 };
 // Read with the project's log reader (afford/logfile.hpp) and its caps.
 RecordedSoFar readRecorded(const std::string& dir, const LogLimits& limits);
+
+// A folder held by a shared flock until release() or the end of this object (or of the process).
+class HeldFolder {
+ public:
+  HeldFolder() = default;
+  ~HeldFolder() { release(); }
+  HeldFolder(const HeldFolder&) = delete;
+  HeldFolder& operator=(const HeldFolder&) = delete;
+  void hold(const std::string& dir);
+  void release();
+
+ private:
+  int fd_ = -1;
+};
 
 class RunLog {
  public:
@@ -71,6 +87,7 @@ class RunLog {
   std::map<std::string, int> processes_;
   std::int64_t events_ = 0, bytes_ = 0;
   bool closed_ = false;
+  HeldFolder folder_;  // from before the segment's first byte to the final manifest
 };
 
 }  // namespace afford

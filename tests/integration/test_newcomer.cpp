@@ -16,6 +16,8 @@
 #include <set>
 #include <sstream>
 
+#include "experiment/state.hpp"
+#include "processes/logger/logger.hpp"
 #include "tests/support.hpp"
 
 namespace afford {
@@ -203,6 +205,63 @@ TEST(Newcomer, CleanLeavesAloneGroupsRunningExperimentsAndWhatItCannotAttribute)
   Output after = run("clean --all --delete --log-root " + logs.string());
   EXPECT_FALSE(fs::exists(logs / "r-running")) << after.output;
   EXPECT_TRUE(fs::exists(logs / "demo") && fs::exists(logs / "mystery")) << after.output;
+}
+
+// What is in use says so, and is never offered: a log a logger is writing (it holds the folder, whatever its
+// experiment), the runs of an experiment that stopped before it finished (the resume command said), a study's
+// trials (by their runs and by the trial folders); a log without a run.json that is incomplete. Once the log is
+// closed and the experiment finished, the run goes.
+TEST(Newcomer, CleanLeavesAloneALogBeingWrittenAResumableExperimentsRunsAndAStudysTrials) {
+  const std::string dir = test::tempDir("clean-in-use");
+  const fs::path logs = fs::path(dir) / "logs";
+  const auto state = [&](const fs::path& out, const std::string& how) {
+    ExperimentState s;
+    s.experiment = "base";
+    s.cwd = "/home/me/afford";
+    s.state = how;
+    s.resume = "afford experiment --resume --out " + out.string();
+    if (how == "interrupted") s.interruptions.push_back({"SIGINT", "intrinsic", {}});
+    fs::create_directories(out);
+    writeState(out, s);
+  };
+  const auto runOf = [&](const std::string& id, const fs::path& out) {
+    spit(logs / id / "run.json", json{{"run_id", id}, {"experiment", "base"}, {"out_dir", out.string()}}.dump());
+    spit(logs / id / "predictors.ckpt", "weights");
+  };
+  state(fs::path(dir) / "done", "finished");
+  state(fs::path(dir) / "cut", "interrupted");
+  state(fs::path(dir) / "gone", "running");  // its runner was killed: it holds no lock
+  state(fs::path(dir) / "study/trials/0002", "finished");
+  spit(fs::path(dir) / "study/study.json", "{}");
+  runOf("r-closing", fs::path(dir) / "done");
+  runOf("r-cut", fs::path(dir) / "cut");
+  runOf("r-gone", fs::path(dir) / "gone");
+  runOf("r-trial", fs::path(dir) / "study/trials/0002");
+  spit(logs / "r-by-hand/manifest.json", json{{"run_id", "r-by-hand"}, {"experiment", "base"}}.dump());
+  auto log = std::make_unique<RunLog>((logs / "r-closing").string(), json{{"run_id", "r-closing"}, {"experiment", "base"}});
+
+  Output listed = run("clean --all --log-root " + logs.string());
+  ASSERT_EQ(listed.exit_code, 0) << listed.output;
+  EXPECT_EQ(listed.output.find("would remove  "), std::string::npos) << listed.output;
+  const auto said = [&](const std::string& folder, const std::string& why) {
+    EXPECT_NE(listed.output.find("/" + folder + ": " + why), std::string::npos) << folder << "\n" << listed.output;
+  };
+  said("r-closing", "a log is being written in it (a logger holds it");
+  said("r-cut", "its experiment (in " + dir + "/cut) stopped before it finished (interrupted by SIGINT): `afford "
+                "experiment --resume --out " + dir + "/cut` (in /home/me/afford) continues it");
+  said("r-gone", "its experiment (in " + dir + "/gone) stopped before it finished (its runner ended before it "
+                 "finished): `afford experiment --resume --out " + dir + "/gone`");
+  said("r-trial", "a trial of the study in " + dir + "/study (" + dir + "/study/trials/0002): afford tune keeps");
+  said("r-by-hand", "its log is incomplete and no run.json names its experiment");
+  Output trials = run("clean --all --log-root " + dir + "/study/trials");
+  EXPECT_NE(trials.output.find("/0002: a trial of the study in " + dir + "/study: afford tune keeps its trials"),
+            std::string::npos) << trials.output;
+
+  log->close();  // the log closed, its experiment finished: the run may go
+  Output after = run("clean --all --delete --log-root " + logs.string());
+  EXPECT_FALSE(fs::exists(logs / "r-closing")) << after.output;
+  for (const char* kept : {"r-cut", "r-gone", "r-trial", "r-by-hand"})
+    EXPECT_TRUE(fs::exists(logs / kept)) << kept << "\n" << after.output;
 }
 
 // Names a person reads: the experiments' list in one column however long a

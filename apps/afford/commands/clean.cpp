@@ -1,9 +1,14 @@
 // afford clean: the folders of a log root (run logs and checkpoints, stored
 // agents) chosen by age, size or experiment; a dry run unless --delete. Only
-// what it can attribute is offered: a finished run's folder (its run.json or
-// manifest.json says whose it is) whose experiment is not running, and a stored
-// agent. A scripts/procs.sh group's folder, a run under way and anything it
-// cannot attribute are left alone, and said.
+// what it can attribute and is not in use is offered: a run's folder (its
+// run.json, written as the run starts, or its manifest.json says whose it is)
+// whose experiment finished, and a stored agent. What is in use says so with a
+// lock the kernel holds for as long as its holder lives, or in its
+// experiment's state: a run going on (its experiment's lock), a log being
+// written (the logger's lock on the folder), a run whose experiment stopped
+// before it finished (--resume continues it), a study's trial, a
+// scripts/procs.sh group. Those, and what it cannot attribute, are left alone,
+// each with its reason.
 #include <fcntl.h>
 #include <sys/file.h>
 #include <sys/stat.h>
@@ -17,12 +22,14 @@
 #include <fstream>
 #include <memory>
 #include <iterator>
+#include <map>
 #include <nlohmann/json.hpp>
 #include <optional>
 #include <sstream>
 
 #include "apps/afford/commands.hpp"
 #include "afford/config.hpp"
+#include "experiment/state.hpp"
 
 namespace afford {
 namespace fs = std::filesystem;
@@ -53,14 +60,56 @@ std::optional<nlohmann::json> smallJson(const fs::path& file) {
   }
 }
 
-// The experiment folder's lock is held: its runner is running (experiment/state.hpp's OutDirLock).
-bool experimentRunning(const fs::path& out_dir) {
-  const fs::path lock = out_dir / ".lock";
-  const int fd = open(lock.c_str(), O_RDONLY | O_CLOEXEC);
+// Someone holds a kernel lock on `path` (flock): tested by taking it, without waiting, and letting it go at
+// once. `exclusive`: the test conflicts with a shared hold too. A lock that cannot be tested counts as held.
+bool lockHeld(const fs::path& path, bool exclusive) {
+  const int fd = open(path.c_str(), O_RDONLY | O_CLOEXEC);
   if (fd < 0) return false;
-  const bool held = flock(fd, LOCK_SH | LOCK_NB) != 0;
+  const bool held = flock(fd, (exclusive ? LOCK_EX : LOCK_SH) | LOCK_NB) != 0;
   close(fd);
   return held;
+}
+
+// The experiment folder's lock is held: its runner is running (experiment/state.hpp's OutDirLock).
+bool experimentRunning(const fs::path& out_dir) { return lockHeld(out_dir / ".lock", /*exclusive=*/false); }
+
+// A logger is writing a log in the folder: it holds the folder (a shared flock) from the log's first byte to its
+// final manifest (logger/logger.hpp's RunLog), whoever started it and whether or not its runner lives.
+bool beingRecorded(const fs::path& dir) { return lockHeld(dir, /*exclusive=*/true); }
+
+// The study (afford tune) of which the experiment folder is a trial: STUDY/trials/NNNN beside STUDY/study.json.
+std::optional<fs::path> studyOf(const fs::path& out_dir) {
+  const fs::path out = fs::path(out_dir).lexically_normal();
+  const fs::path trials = (out.has_filename() ? out : out.parent_path()).parent_path();
+  std::error_code ec;
+  if (trials.filename() != "trials" || !fs::is_regular_file(trials.parent_path() / "study.json", ec))
+    return std::nullopt;
+  return trials.parent_path();
+}
+
+// Why the runs of the experiment in `out_dir` are in use, or "" if they are not: it is running, it is a study's
+// trial, or it stopped before it finished (its --resume takes its runs' checkpoints and moves a cut run aside).
+// An experiment folder that is gone leaves its runs to clean.
+std::string experimentInUse(const std::string& out_dir) {
+  const fs::path out = out_dir;
+  if (experimentRunning(out)) return "its experiment is running (in " + out_dir + ")";
+  if (const auto study = studyOf(out))
+    return "a trial of the study in " + study->string() + " (" + out_dir +
+           "): afford tune keeps its trials (an interrupted one runs again when the study goes on)";
+  std::error_code ec;
+  if (!fs::exists(statePath(out), ec)) return "";
+  ExperimentState state;
+  try {
+    state = readState(out);
+  } catch (const std::exception& e) {
+    return "its experiment's state does not read (" + std::string(e.what()) + ")";
+  }
+  if (state.state == "finished") return "";
+  const std::string how = state.state == "interrupted" && !state.interruptions.empty()
+                              ? "interrupted by " + state.interruptions.back().signal
+                              : "its runner ended before it finished";
+  return "its experiment (in " + out_dir + ") stopped before it finished (" + how + "): `" + state.resume + "`" +
+         (state.cwd.empty() ? "" : " (in " + state.cwd + ")") + " continues it";
 }
 
 // The processes of a scripts/procs.sh group that are alive: a pid file whose process has the start
@@ -87,8 +136,23 @@ std::vector<std::string> groupAlive(const fs::path& dir) {
   return alive;
 }
 
+// Why the experiments' runs are in use ("" if not), by experiment folder: asked once per clean.
+using InUse = std::map<std::string, std::string>;
+
+// Whose the folder is (e.kind, e.experiment); the experiment folder its run.json names, if any.
+std::string attribute(Entry& e) {
+  for (const char* name : {"run.json", "manifest.json", "outcome.json"}) {
+    const auto j = smallJson(e.path / name);
+    if (!j || !j->is_object() || !j->contains("experiment") || !(*j)["experiment"].is_string()) continue;
+    e.experiment = (*j)["experiment"].get<std::string>();
+    e.kind = e.label.rfind("agents/", 0) == 0 ? Kind::Agent : Kind::Run;
+    return j->contains("out_dir") && (*j)["out_dir"].is_string() ? (*j)["out_dir"].get<std::string>() : "";
+  }
+  return "";
+}
+
 // What the folder is, and whether it may go.
-void classify(Entry& e) {
+void classify(Entry& e, InUse& in_use) {
   std::error_code ec;
   if (fs::exists(e.path / "lcm-url", ec) || fs::exists(e.path / "bus.key", ec)) {
     e.kind = Kind::Group;
@@ -99,24 +163,40 @@ void classify(Entry& e) {
                      "); stop it and remove its folder yourself";
     return;
   }
-  for (const char* name : {"run.json", "manifest.json", "outcome.json"}) {
-    const auto j = smallJson(e.path / name);
-    if (!j || !j->is_object() || !j->contains("experiment") || !(*j)["experiment"].is_string()) continue;
-    e.experiment = (*j)["experiment"].get<std::string>();
-    e.kind = e.label.rfind("agents/", 0) == 0 ? Kind::Agent : Kind::Run;
-    if (j->contains("out_dir") && (*j)["out_dir"].is_string() && experimentRunning((*j)["out_dir"].get<std::string>()))
-      e.kept_because = "its experiment is running (in " + (*j)["out_dir"].get<std::string>() + ")";
+  const std::string out_dir = attribute(e);
+  if (e.label.rfind("agents/", 0) == 0 && e.label.find(".part.") != std::string::npos) {
+    e.kept_because = "an agent being stored (its runner renames it once whole; if none runs, remove it yourself)";
     return;
   }
-  e.kept_because = "nothing in it says whose it is (a run under way, a cut run, or not afford's)";
+  if (!out_dir.empty()) {
+    const auto known = in_use.find(out_dir);
+    e.kept_because = known != in_use.end() ? known->second : (in_use[out_dir] = experimentInUse(out_dir));
+  }
+  if (e.kept_because.empty() && beingRecorded(e.path))
+    e.kept_because = "a log is being written in it (a logger holds it: a run going on, or its log being closed)";
+  if (!out_dir.empty() || !e.kept_because.empty()) return;
+  if (fs::exists(statePath(e.path), ec)) {  // an experiment's folder, not a run's
+    const auto study = studyOf(e.path);
+    e.kept_because = study ? "a trial of the study in " + study->string() + ": afford tune keeps its trials"
+                           : "an experiment's folder (its results), not a run's: remove it yourself";
+    return;
+  }
+  if (e.kind == Kind::Run) {  // attributed by its log's manifest alone: no runner said where its experiment is
+    const auto manifest = smallJson(e.path / "manifest.json");
+    if (manifest && manifest->is_object() && !manifest->value("complete", false))
+      e.kept_because = "its log is incomplete and no run.json names its experiment (a run cut, or recorded by a "
+                       "logger started by hand): remove it yourself";
+    return;
+  }
+  if (e.kind == Kind::Unknown) e.kept_because = "nothing in it says whose it is (not afford's, or not a run's)";
 }
 
-Entry measure(const fs::path& dir, const std::string& label) {
+Entry measure(const fs::path& dir, const std::string& label, InUse& in_use) {
   Entry e;
   e.path = dir;
   e.label = label;
   e.experiment = "?";
-  classify(e);
+  classify(e, in_use);
   std::error_code ec;
   for (auto it = fs::recursive_directory_iterator(dir, ec); !ec && it != fs::recursive_directory_iterator(); it.increment(ec)) {
     struct stat st {};
@@ -138,14 +218,15 @@ struct Args {
 // The folders of the log root: runs, stored agents, and whatever else is there (hidden ones aside).
 std::vector<Entry> entriesOf(const std::string& log_root) {
   std::vector<Entry> entries;
+  InUse in_use;
   for (const auto& d : fs::directory_iterator(log_root)) {
     const std::string name = d.path().filename().string();
     if (!d.is_directory() || name.front() == '.') continue;  // .prefixes: the run prefixes taken
     if (name == "agents") {
       for (const auto& k : fs::directory_iterator(d.path()))
-        if (k.is_directory()) entries.push_back(measure(k.path(), "agents/" + k.path().filename().string()));
+        if (k.is_directory()) entries.push_back(measure(k.path(), "agents/" + k.path().filename().string(), in_use));
     } else {
-      entries.push_back(measure(d.path(), name));
+      entries.push_back(measure(d.path(), name, in_use));
     }
   }
   std::sort(entries.begin(), entries.end(), [](const Entry& x, const Entry& y) {
@@ -204,9 +285,10 @@ int clean(const Args& a) {
 Command cleanCommand(CLI::App& app, const FrontDoor&) {
   auto a = std::make_shared<Args>();
   auto* cmd = app.add_subcommand("clean", "list, then with --delete remove, the run folders and stored agents of a log "
-                                          "root chosen by age, size or experiment (a dry run by default); a "
-                                          "scripts/procs.sh group, a running experiment's runs and folders it "
-                                          "cannot attribute are left alone");
+                                          "root chosen by age, size or experiment (a dry run by default); what is "
+                                          "in use (a run going on, a log being written, the runs of an experiment "
+                                          "that --resume continues, a study's trials, a scripts/procs.sh group) "
+                                          "and folders it cannot attribute are left alone, each with its reason");
   cmd->add_option("--log-root", a->log_root, "the log root (an experiment's --log-root)")->capture_default_str();
   cmd->add_option("--older-than", a->older_than_days, "folders last changed more than this many days ago")
       ->check(CLI::NonNegativeNumber);
