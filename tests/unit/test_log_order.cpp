@@ -3,7 +3,8 @@
 // interleave, so a log shuffled as the protocol allows (tests/logorder/
 // shuffle.hpp: each channel in its own order, the channels up to a window of
 // steps apart, in one segment or two) gives the same messages in the same
-// order as the log as recorded. The logs: a short intrinsic run of IMP and one of the GOALS
+// order as the log as recorded, and `afford watch --log` shows the same state
+// at every step. The logs: a short intrinsic run of IMP and one of the GOALS
 // agent, recorded when a test first needs them (memq), and a stored extrinsic
 // test.
 #include <gtest/gtest.h>
@@ -14,11 +15,15 @@
 #include <utility>
 #include <vector>
 
+#include <nlohmann/json.hpp>
+
 #include "afford/config.hpp"
 #include "afford/logging.hpp"
 #include "afford/process_main.hpp"
 #include "afford/protocol.hpp"
 #include "experiment/replay/replay.hpp"
+#include "experiment/watch/player.hpp"
+#include "experiment/watch/state.hpp"
 #include "tests/logorder/shuffle.hpp"
 #include "tests/support.hpp"
 #include "viewer/step_order.hpp"
@@ -194,6 +199,42 @@ TEST(StepOrder, ALogThatChangesBetweenItsReadingsIsSaidToHaveChanged) {
   std::size_t given = 0;
   while (grew.next(e, key)) ++given;
   EXPECT_EQ(given, events.size() - 50);
+}
+
+// ---- afford watch --log ---------------------------------------------------------------------
+
+// What the page is sent, but for the counters of changes.
+nlohmann::json shown(const WatchState& state) {
+  nlohmann::json j = nlohmann::json::parse(state.snapshot(true));
+  j.erase("version");
+  j.erase("curves_version");
+  return j;
+}
+
+TEST(LogPlayer, AShuffledLogShowsTheSameStateAtEveryStep) {
+  const ProtocolConfig protocol = loadProtocol(defaultConfigDir());
+  for (const fs::path& log : {intrinsicLog(), goalsLog(), extrinsicLog()}) {
+    SCOPED_TRACE(log.string());
+    WatchState a, b;
+    PlayerOptions o;
+    o.log = log;
+    o.play = false;
+    LogPlayer recorded(a, protocol, o, quiet());
+    o.log = shuffled(log, 40, 2);
+    LogPlayer played(b, protocol, o, quiet());
+    ASSERT_EQ(recorded.firstStep(), played.firstStep());
+    ASSERT_EQ(recorded.lastStep(), played.lastStep());
+    std::vector<std::int64_t> steps;
+    for (std::int64_t s = recorded.firstStep(); s <= recorded.lastStep(); s += 3) steps.push_back(s);
+    steps.push_back(recorded.firstStep() + 7);  // back: read again from the start
+    int differ = 0;
+    for (std::int64_t s : steps) {
+      recorded.seekTo(s);
+      played.seekTo(s);
+      if (shown(a) != shown(b) && differ++ < 3) ADD_FAILURE() << "step " << s << ": the pages differ";
+    }
+    EXPECT_EQ(differ, 0) << "of " << steps.size() << " steps";
+  }
 }
 
 }  // namespace
