@@ -84,14 +84,22 @@ Phase phaseOf(const LogEvent& e, const BoundsContext& ctx) {
 }  // namespace
 
 StepOrdered::StepOrdered(std::function<Pass(bool quiet)> open, const ProtocolConfig& protocol)
-    : open_(std::move(open)) {
+    : open_(std::move(open)), name_bytes_(protocol.limits.name_bytes) {
   const BoundsContext ctx{&protocol, nullptr};
-  Pass first = open_(true);
-  bool configured = false;
   LogEvent e;
-  while (first.next(e)) {
-    if (!first.take(e)) continue;
-    if (!configured) phase_ = phaseOf(e, ctx), configured = true;
+  {  // Where the run's RUN_CONFIG is (a logger's log begins with it), its run id and its phase.
+    Pass find = open_(true);
+    for (std::int64_t at = 0; find.next(e); ++at)
+      if (find.take(e)) {
+        config_at_ = at;
+        peekRunId(e.data.data(), e.data.size(), name_bytes_, run_id_);
+        phase_ = phaseOf(e, ctx);
+        break;
+      }
+  }
+  Pass first = open_(true);
+  for (std::int64_t at = 0; first.next(e); ++at) {
+    if (!ofRun(first, e, at)) continue;
     Channel& c = channelOf(e.channel);
     const std::optional<StepKey> key = stepKeyOf(e, phase_, ctx);
     // A message whose content cannot say goes with the one before it on its channel (the edge refuses it anyway).
@@ -102,6 +110,14 @@ StepOrdered::StepOrdered(std::function<Pass(bool quiet)> open, const ProtocolCon
     }
   }
   pass_ = open_(false);
+}
+
+bool StepOrdered::ofRun(Pass& pass, const LogEvent& e, std::int64_t at) const {
+  if (pass.take(e)) return true;
+  // Before the RUN_CONFIG: the events of the run's id (a log interleaved anew may put some there).
+  std::string id;
+  return at < config_at_ && !run_id_.empty() && peekRunId(e.data.data(), e.data.size(), name_bytes_, id) &&
+         id == run_id_;
 }
 
 StepOrdered::Channel& StepOrdered::channelOf(const std::string& name) {
@@ -116,6 +132,7 @@ StepOrdered::Channel& StepOrdered::channelOf(const std::string& name) {
 
 void StepOrdered::rewind() {
   pass_ = open_(false);
+  read_ = 0;
   for (Channel& c : channels_) c.at = {}, c.given = 0, c.held.clear();
   held_ = most_held_ = 0;
   left_out_ = 0;
@@ -126,7 +143,7 @@ bool StepOrdered::readFor(Channel& c) {
   LogEvent e;
   while (c.held.empty()) {
     if (!pass_.next(e)) return false;
-    if (!pass_.take(e)) {
+    if (!ofRun(pass_, e, read_++)) {
       ++left_out_;
       continue;
     }
@@ -150,7 +167,7 @@ bool StepOrdered::next(LogEvent& e, StepKey& key) {
   }
   if (!best) {  // every message given: the rest of the reading (what it skips is said and counted)
     while (pass_.next(e))
-      if (!pass_.take(e)) ++left_out_;
+      if (!ofRun(pass_, e, read_++)) ++left_out_;
     ended_ = true;
     return false;
   }

@@ -76,15 +76,17 @@ class StepTrail {
   std::int64_t size_ = 0, last_ = 0;
 };
 
-// A run of a log, given in step order. The log is read twice: once through
-// for the key of every message of the run (StepTrail: a few bytes a channel),
-// then as the messages are given, holding only those read ahead of their turn
-// (none for a log recorded in step order; a channel's lead where one ran ahead).
+// A run of a log, given in step order. The log is read up to the run's
+// RUN_CONFIG, once through for the key of every message of the run
+// (StepTrail: a few bytes a channel), then as the messages are given, holding
+// only those read ahead of their turn (none for a log recorded in step order;
+// a channel's lead where one ran ahead).
 class StepOrdered {
  public:
   // One reading of the log from its start, in the log's order: `next` gives its
   // next event (false after the last), `take` says whether an event is the
-  // run's (the run's RUN_CONFIG first, then the run's own events).
+  // run's (the run's RUN_CONFIG first, then the run's own events). Events of
+  // the run's id before its RUN_CONFIG are the run's too.
   struct Pass {
     std::function<bool(LogEvent&)> next;
     std::function<bool(const LogEvent&)> take;
@@ -120,11 +122,17 @@ class StepOrdered {
     std::deque<LogEvent> held;
   };
   Channel& channelOf(const std::string& name);
+  // Is the event at `at` in the reading the run's?
+  bool ofRun(Pass& pass, const LogEvent& e, std::int64_t at) const;
   // Reads on until `c` has a message held; false if the reading ends first.
   bool readFor(Channel& c);
 
   std::function<Pass(bool)> open_;
+  int name_bytes_;
   Pass pass_;
+  std::int64_t read_ = 0;       // events of this reading so far
+  std::int64_t config_at_ = -1;  // the run's RUN_CONFIG among the log's events
+  std::string run_id_;
   Phase phase_ = Phase::Intrinsic;
   std::vector<Channel> channels_;
   std::map<std::string, std::size_t> index_;

@@ -29,6 +29,7 @@ struct ShuffleOptions {
   std::int64_t window = 100;  // the most steps one channel runs ahead of another
   std::uint64_t seed = 1;
   int segments = 1;           // files written: log.00.lcm, ...
+  bool config_too = false;    // the RUN_CONFIG interleaved too (a logger writes it first; another tool may not)
 };
 
 struct ShuffleReport {
@@ -100,8 +101,8 @@ inline ShuffleReport shuffleLog(const std::filesystem::path& in, const std::file
   std::vector<LogEvent> events = readRecordedLog(in, *quiet).events;
   // What comes up to the first RUN_CONFIG stays first: a run's log begins with it.
   std::size_t start = 0;
-  while (start < events.size() && events[start].channel != ch::runConfig.name) ++start;
-  start = std::min(start + 1, events.size());
+  while (!o.config_too && start < events.size() && events[start].channel != ch::runConfig.name) ++start;
+  if (!o.config_too) start = std::min(start + 1, events.size());
   std::vector<LogEvent> shuffled(events.begin(), events.begin() + static_cast<std::ptrdiff_t>(start));
   for (LogEvent& e : interleaved(events, start, o)) shuffled.push_back(std::move(e));
   ShuffleReport r;

@@ -1,4 +1,4 @@
-// shuffle-log IN OUT [--window N] [--seed S] [--segments K]: the run's log at IN
+// shuffle-log IN OUT [--window N] [--seed S] [--segments K] [--move-config]: the run's log at IN
 // (a folder of segments or one .lcm file) written into the new folder OUT with
 // its channels interleaved anew (tests/logorder/shuffle.hpp), for the tests
 // that compare what a tool makes of a log and of the same log shuffled.
@@ -17,6 +17,7 @@ int main(int argc, char** argv) {
   app.add_option("--window", o.window, "the most steps a channel runs ahead of another")->capture_default_str();
   app.add_option("--seed", o.seed, "the draw's seed")->capture_default_str();
   app.add_option("--segments", o.segments, "segments written (log.00.lcm, ...)")->capture_default_str();
+  app.add_flag("--move-config", o.config_too, "the RUN_CONFIG interleaved too (a logger writes it first)");
   CLI11_PARSE(app, argc, argv);
   try {
     if (std::filesystem::exists(out)) throw std::runtime_error(out + " exists");
