@@ -26,6 +26,7 @@
 #include "experiment/export/foxglove.hpp"
 #include "experiment/export/mcap.hpp"
 #include "experiment/replay/replay.hpp"
+#include "viewer/step_order.hpp"
 
 namespace afford {
 
@@ -37,6 +38,36 @@ constexpr std::int64_t kMostWarnings = 10;
 // The gaze's colours.
 const foxglove::Colour kFocusGaze{1, 1, 0, 1};   // yellow: a FOCUS
 const foxglove::Colour kEffectGaze{0, 1, 1, 1};  // cyan: an EFFECT's gaze after the action
+
+// A message's time in the file, from its place in the run: the time the log
+// gives the run's RUN_CONFIG, a millisecond a step, a microsecond a message
+// within its step (the messages come in step order).
+class StepClock {
+ public:
+  static constexpr std::uint64_t kStep = 1'000'000, kPlace = 1'000, kMostPlaces = 999;  // nanoseconds
+
+  // False if the time would be beyond MCAP's (a step out of any run's range: the edge refuses it anyway).
+  bool timeOf(const LogEvent& e, const StepKey& key, std::uint64_t& time) {
+    if (!started_) {  // the run's RUN_CONFIG, first
+      started_ = true;
+      const auto most = std::numeric_limits<std::uint64_t>::max() / 1000 / 2;
+      start_ = e.utime > 0 && static_cast<std::uint64_t>(e.utime) < most ? static_cast<std::uint64_t>(e.utime) * 1000 : 0;
+    }
+    // Before the first step: -1; STOP: after the last.
+    const std::int64_t step = key.step == StepKey::kAfter ? last_ + 1 : std::max<std::int64_t>(key.step, -1);
+    if (step != at_) at_ = step, place_ = 0;
+    const std::uint64_t steps = static_cast<std::uint64_t>(step + 1);
+    if (steps > (std::numeric_limits<std::uint64_t>::max() - start_) / kStep - 1) return false;
+    time = start_ + steps * kStep + std::min(place_++, kMostPlaces) * kPlace;
+    last_ = std::max(last_, step);
+    return true;
+  }
+
+ private:
+  bool started_ = false;
+  std::uint64_t start_ = 0, place_ = 0;
+  std::int64_t at_ = -2, last_ = -1;
+};
 
 // Writes the run's messages into the MCAP file, one event at a time.
 class Exporter {
@@ -56,13 +87,14 @@ class Exporter {
                                  {"log", source_}});
   }
 
-  void event(const LogEvent& e, const BoundsContext& ctx) {
+  // The run's next message in step order, and its key.
+  void event(const LogEvent& e, const StepKey& key, const BoundsContext& ctx) {
     ++result_.events;
-    if (e.utime < 0 || static_cast<std::uint64_t>(e.utime) > std::numeric_limits<std::uint64_t>::max() / 1000) {
-      skip(topic(e.channel, ""), e, "its time " + std::to_string(e.utime) + " us is out of MCAP's range");
+    std::uint64_t time = 0;
+    if (!clock_.timeOf(e, key, time)) {
+      skip(topic(e.channel, ""), e, "its step " + std::to_string(key.step) + " is beyond MCAP's times");
       return;
     }
-    const std::uint64_t time = static_cast<std::uint64_t>(e.utime) * 1000;
     const bool known = withChannel(e.channel, [&](const auto& c) {
       using Msg = typename std::decay_t<decltype(c)>::Message;
       ExportedTopic& t = topic(e.channel, json_messages::Schema<Msg>::kName);
@@ -162,6 +194,7 @@ class Exporter {
         foxglove::box(time, left, top, side, colour));
   }
 
+  StepClock clock_;
   McapWriter& mcap_;
   ExportResult& result_;
   std::string source_;  // the log, as given
@@ -183,22 +216,24 @@ ExportResult exportMcap(const ExportOptions& o, spdlog::logger& log) {
   result.file = o.mcap;
   if (o.mcap.empty()) throw std::runtime_error("no MCAP file to write (--mcap FILE)");
   const std::shared_ptr<const BusKey> key = o.bus_key.empty() ? nullptr : busKeyFrom(o.bus_key);
-  RecordedLogStream in(o.log, log, key.get());  // throws when there is no log
+  // The run's messages in step order (throws when there is no log): the file is the same however the log
+  // interleaves its channels.
+  StepOrderedLog<RecordedLogStream, RunSelector> in(
+      [&](spdlog::logger& l) { return std::make_unique<RecordedLogStream>(o.log, l, key.get()); },
+      [&](spdlog::logger& l) { return std::make_unique<RunSelector>(o.run_id, o.log, l); },
+      loadProtocol(defaultConfigDir()), log);
   std::vector<LogGap> manifest_missing;
   result.incomplete = manifestIncomplete(o.log, manifest_missing);
   McapWriter mcap(o.mcap, McapOptions{"", std::string("afford ") + affordVersion(), o.chunk_bytes});
   Exporter exporter(mcap, result, o.log, log);
-  RunSelector select(o.run_id, o.log, log);
+  const RunSelector& select = in.selector();
   std::unique_ptr<RunConfig> config;
   BoundsContext ctx{nullptr, nullptr};
   LogEvent e;
-  while (in.next(e)) {
+  StepKey at;
+  while (in.next(e, at)) {
     // Ctrl-C (when the command installed the stop handlers): the partial file goes with the writer.
     if (stopRequested()) throw std::runtime_error("interrupted: " + o.mcap + " not written");
-    if (!select.take(e)) {
-      ++result.left_out;
-      continue;
-    }
     if (!config) {
       config = std::make_unique<RunConfig>(parseRunConfigText(select.config().config_yaml));
       ctx = BoundsContext{&config->protocol, config.get()};
@@ -206,11 +241,12 @@ ExportResult exportMcap(const ExportOptions& o, spdlog::logger& log) {
       result.phase = config->phase;
       exporter.start(select.config(), *config);
     }
-    exporter.event(e, ctx);
+    exporter.event(e, at, ctx);
   }
-  result.torn_bytes = in.counts().torn_bytes;
-  result.malformed = in.counts().malformed;
-  result.untagged = in.counts().untagged;
+  result.left_out = in.order().leftOut();
+  result.torn_bytes = in.stream().counts().torn_bytes;
+  result.malformed = in.stream().counts().malformed;
+  result.untagged = in.stream().counts().untagged;
   result.refused_configs = select.refusedConfigs();
   result.left_out -= result.refused_configs;  // (counted apart)
   select.check();  // (the partial file goes with the writer)

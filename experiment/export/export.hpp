@@ -2,16 +2,19 @@
 // (https://mcap.dev/spec) that Foxglove, PlotJuggler and Rerun open. The log is
 // read as replay reads it (experiment/replay/replay.hpp: the project's log
 // reader, the run's RUN_CONFIG first, then that run's events; with a bus key,
-// only events with a valid tag), and each message is decoded and checked as
-// the edge does (afford/decode.hpp) with the run's own configuration: one that
-// does not decode or that the edge refuses is skipped and counted per channel,
-// and so is a malformed part of the file.
+// only events with a valid tag), its messages taken in step order
+// (viewer/step_order.hpp), and each message is decoded and checked as the edge
+// does (afford/decode.hpp) with the run's own configuration: one that does not
+// decode or that the edge refuses is skipped and counted per channel, and so
+// is a malformed part of the file. The file is a function of the log's
+// messages, not of how the log interleaves its channels.
 //
 // Every channel of the run becomes an MCAP channel of its own name, message
 // encoding "json", its schema the type's JSON Schema ("afford.<type>",
 // encoding "jsonschema"), generated from the .lcm files by afford-lcmwire
-// (afford/json_messages.hpp). A message's log_time and publish_time are both the
-// event's time in the log (its microseconds x 1000: an LCM log holds one time).
+// (afford/json_messages.hpp). A message's log_time and publish_time are both its
+// place in the run: the log's time of the run's RUN_CONFIG, plus a millisecond
+// a step and a microsecond for each message of its step before it.
 // Beside them, in Foxglove's own schemas (foxglove.hpp): each SCENE's image on
 // /SCENE/image (foxglove.CompressedImage, PNG) and each FOCUS image on /FOCUS/image (foxglove.RawImage, rgb8),
 // and the eye's gaze on /SCENE/gaze (foxglove.ImageAnnotations: the focus

@@ -14,10 +14,10 @@
 
 #include "afford/auth.hpp"
 #include "afford/config.hpp"
-#include "afford/edge.hpp"
 #include "afford/process_main.hpp"
 #include "experiment/replay/replay.hpp"
 #include "viewer/feed.hpp"
+#include "viewer/step_order.hpp"
 #include "viewer/viewer.hpp"
 
 extern char** environ;
@@ -120,8 +120,11 @@ VideoResult renderVideo(const VideoOptions& o, spdlog::logger& log) {
   const fs::path partial = o.out.string() + ".partial";
   if (fs::exists(partial)) throw std::runtime_error(partial.string() + " exists (another render writing it?)");
   const std::shared_ptr<const BusKey> key = o.bus_key.empty() ? nullptr : busKeyFrom(o.bus_key);
-  RecordedLogStream in(o.log, log, key.get());
   const ProtocolConfig protocol = loadProtocol(o.config_dir.empty() ? defaultConfigDir() : o.config_dir);
+  // The run's messages in step order: each frame pairs a step's own messages, however the log interleaves them.
+  StepOrderedLog<RecordedLogStream, RunSelector> in(
+      [&](spdlog::logger& l) { return std::make_unique<RecordedLogStream>(o.log, l, key.get()); },
+      [&](spdlog::logger& l) { return std::make_unique<RunSelector>(o.run_id, o.log.string(), l); }, protocol, log);
   Viewer viewer;
   ViewFeed feed(viewer, protocol, o.run_id);
   VideoResult r;
@@ -143,16 +146,14 @@ VideoResult renderVideo(const VideoOptions& o, spdlog::logger& log) {
   auto due = [&] { return viewer.step() >= 0 && (drawn < 0 || viewer.step() - drawn >= o.every); };
   try {
     LogEvent e;
+    StepKey at;
     std::string why;
-    while (in.next(e) && (o.max_frames <= 0 || r.frames < o.max_frames)) {
+    while (in.next(e, at) && (o.max_frames <= 0 || r.frames < o.max_frames)) {
       // Ctrl-C (when the command installed the stop handlers): the partial file is removed below.
       if (stopRequested()) throw std::runtime_error("interrupted: " + o.out.string() + " not written");
       ++r.events;
-      RunHeader h;
-      // An event of a later step: the step shown is complete.
-      if (due() && peekRunHeader(e.data.data(), e.data.size(), h) && h.run_id == feed.shown() &&
-          h.step > viewer.step())
-        draw();
+      // A message of a later step: the step shown is complete (the messages come in step order).
+      if (due() && at.step > viewer.step()) draw();
       if (!feed.take(e, why) && r.refused++ < 10) log.warn("{}: {}: skipped", e.channel, why);
     }
     if (due() && (o.max_frames <= 0 || r.frames < o.max_frames)) draw();
@@ -169,8 +170,8 @@ VideoResult renderVideo(const VideoOptions& o, spdlog::logger& log) {
     throw;
   }
   r.run_id = feed.shown();
-  r.malformed = in.counts().malformed;
-  r.untagged = in.counts().untagged;
+  r.malformed = in.stream().counts().malformed;
+  r.untagged = in.stream().counts().untagged;
   return r;
 }
 

@@ -4,7 +4,6 @@
 #include <cmath>
 #include <stdexcept>
 
-#include "afford/edge.hpp"
 #include "experiment/replay/replay.hpp"
 #include "viewer/feed.hpp"
 
@@ -12,40 +11,27 @@ namespace afford {
 
 using Clock = std::chrono::steady_clock;
 
-namespace {
-// The run an event belongs to and its step, if it has them.
-bool headerOf(const LogEvent& e, RunHeader& h) { return peekRunHeader(e.data.data(), e.data.size(), h); }
-}  // namespace
-
 LogPlayer::LogPlayer(WatchState& state, const ProtocolConfig& protocol, PlayerOptions options, spdlog::logger& log)
     : state_(state), protocol_(protocol), options_(std::move(options)), log_(log) {
   if (!(options_.speed > 0 && options_.speed <= kMostSpeed))
     throw std::runtime_error("--speed must be above 0 and at most " + std::to_string(static_cast<int>(kMostSpeed)));
   key_ = options_.bus_key.empty() ? nullptr : busKeyFrom(options_.bus_key);
-  // Through once: the run shown (the feed's choice) and its steps.
-  {
-    WatchState scratch;
-    RecordedLogStream in(options_.log, log_, key_.get());
-    ViewFeed feed(scratch, protocol_, options_.run_id);
-    LogEvent e;
-    std::string why;
-    while (in.next(e)) {
-      feed.take(e, why);
-      RunHeader h;
-      if (!feed.shown().empty() && headerOf(e, h) && h.run_id == feed.shown() && e.channel != "RUN_CONFIG" &&
-          e.channel != "RUN_CONTROL") {
-        if (first_ < 0) first_ = h.step;
-        last_ = std::max(last_, h.step);
-      }
-    }
-    run_id_ = feed.shown();
-  }
-  if (run_id_.empty() || first_ < 0)
-    throw std::runtime_error(options_.log.string() + ": no " +
-                             (options_.run_id.empty() ? "run" : "message of run '" + options_.run_id + "'") + " in it");
+  // Read through once for the step of every message of the run (the first run, or --run's): it is played in
+  // step order, whatever the log's interleaving of its channels.
+  in_ = std::make_unique<StepOrderedLog<RecordedLogStream, RunSelector>>(
+      [this](spdlog::logger& l) { return std::make_unique<RecordedLogStream>(options_.log, l, key_.get()); },
+      [this](spdlog::logger& l) { return std::make_unique<RunSelector>(options_.run_id, options_.log.string(), l); },
+      protocol_, log_);
+  first_ = in_->order().firstStep();
+  last_ = in_->order().lastStep();
   playing_ = options_.play;
   speed_ = options_.speed;
   rewind();
+  nextStep();  // the run's configuration taken: the run shown
+  run_id_ = feed_->shown();
+  if (run_id_.empty() || first_ < 0)
+    throw std::runtime_error(options_.log.string() + ": no " +
+                             (options_.run_id.empty() ? "run" : "message of run '" + options_.run_id + "'") + " in it");
   feedThrough(first_);
   published();
 }
@@ -54,8 +40,8 @@ LogPlayer::~LogPlayer() = default;
 
 void LogPlayer::rewind() {
   state_.clearRun();
-  in_ = std::make_unique<RecordedLogStream>(options_.log, log_, key_.get());
-  feed_ = std::make_unique<ViewFeed>(state_, protocol_, run_id_);
+  if (feed_) in_->order().rewind();  // (from the start again: built, it is there)
+  feed_ = std::make_unique<ViewFeed>(state_, protocol_, options_.run_id);
   ahead_.reset();
   ended_ = false;
   at_ = -1;
@@ -65,17 +51,15 @@ std::optional<std::int64_t> LogPlayer::nextStep() {
   while (!ended_) {
     if (!ahead_) {
       LogEvent e;
-      if (!in_->next(e)) {
+      if (!in_->next(e, ahead_key_)) {
         ended_ = true;
         break;
       }
       ahead_ = std::move(e);
     }
-    RunHeader h;
-    if (feed_->shown() == run_id_ && headerOf(*ahead_, h) && h.run_id == run_id_ && ahead_->channel != "RUN_CONFIG")
-      return h.step;
-    std::string why;  // the run's configuration, or another run's event: taken (or passed over) at once
-    feed_->take(*ahead_, why);
+    if (ahead_key_.step != StepKey::kBefore && ahead_key_.step != StepKey::kAfter) return ahead_key_.step;
+    std::string why;  // the run's configuration and START, or STOP: taken at once
+    if (!feed_->take(*ahead_, why)) log_.warn("{}: {}: skipped", ahead_->channel, why);
     ahead_.reset();
   }
   return std::nullopt;
@@ -91,6 +75,11 @@ bool LogPlayer::feedThrough(std::int64_t target) {
     at_ = std::max(at_, *next);
     ahead_.reset();
   }
+}
+
+void LogPlayer::seekTo(std::int64_t step) {
+  if (step < at_) rewind();
+  feedThrough(step);
 }
 
 void LogPlayer::published() {
@@ -160,8 +149,7 @@ void LogPlayer::run() {
       }
     }
     if (seek) {
-      if (*seek < at_) rewind();
-      feedThrough(*seek);
+      seekTo(*seek);
     } else if (const auto next = nextStep()) {
       feedThrough(*next);
     }

@@ -1,7 +1,10 @@
 // `afford watch --log LOG`: a finished run played to the page, with its
-// controls: play, pause, step, seek and speed. The log is read as it is played
-// (nothing of it held but the page's state); seeking back reads it again from
-// its start, feeding the state without pacing up to the step asked for.
+// controls: play, pause, step, seek and speed. The run's messages are played
+// in step order, whatever the log's interleaving of its channels
+// (viewer/step_order.hpp): the log is read through once for their steps, then
+// as it is played (nothing of it held but the page's state and what came
+// ahead of its step); seeking back reads it again from its start, feeding the
+// state without pacing up to the step asked for.
 #pragma once
 #include <spdlog/spdlog.h>
 
@@ -18,10 +21,12 @@
 #include "afford/logfile.hpp"
 #include "experiment/watch/server.hpp"
 #include "experiment/watch/state.hpp"
+#include "viewer/step_order.hpp"
 
 namespace afford {
 
 class RecordedLogStream;
+class RunSelector;
 class ViewFeed;
 
 struct PlayerOptions {
@@ -46,6 +51,9 @@ class LogPlayer : public PlaybackControls {
 
   // "play", "pause", "step", "seek" (value: a step), "speed" (value: steps a second); "" or why not.
   std::string control(const std::string& command, const std::string& value) override;
+  // The state of step `step` (from the start again if it is behind), fed on this thread: run()'s, or the
+  // caller's while run() is not running.
+  void seekTo(std::int64_t step);
 
   const std::string& runId() const { return run_id_; }
   std::int64_t firstStep() const { return first_; }
@@ -53,9 +61,9 @@ class LogPlayer : public PlaybackControls {
 
  private:
   void rewind();
-  // Feeds every event up to and including step `target` of the run; false at the end of the log.
+  // Feeds every message up to and including step `target` of the run; false at the end of the log.
   bool feedThrough(std::int64_t target);
-  std::optional<std::int64_t> nextStep();  // of the next event of the run, read ahead
+  std::optional<std::int64_t> nextStep();  // of the run's next message, read ahead (its configuration taken at once)
   void published();                        // the controls' state to the page
 
   WatchState& state_;
@@ -65,9 +73,10 @@ class LogPlayer : public PlaybackControls {
   std::shared_ptr<const BusKey> key_;
   std::string run_id_;
   std::int64_t first_ = -1, last_ = -1, at_ = -1;  // the log's first and last step of the run, the step shown
-  std::unique_ptr<RecordedLogStream> in_;
+  std::unique_ptr<StepOrderedLog<RecordedLogStream, RunSelector>> in_;
   std::unique_ptr<ViewFeed> feed_;
   std::optional<LogEvent> ahead_;
+  StepKey ahead_key_;
   bool ended_ = false;
 
   std::mutex mutex_;

@@ -2,7 +2,9 @@
 
 The log is read by the project's own log reader and each message is decoded
 and checked as the processes' edge checks it (the C++ module _afford): no
-file format or message layout is written again in Python. Scenes come as
+file format or message layout is written again in Python. The messages come
+in step order (docs/watching.md, "A log's order"), whatever the log's
+interleaving of its channels. Scenes come as
 height x width x 3 arrays of bytes; focus images (and the other images of
 side x side RGB pixels) as side x side x 3 arrays.
 """
@@ -54,7 +56,7 @@ class Message(Mapping):
     """
 
     channel: str
-    utime: int                 # when the logger recorded it, microseconds
+    utime: int                 # when the logger recorded it, microseconds (not always in step order)
     fields: dict[str, Any]     # the message's fields by name (docs/processes-and-channels.md)
 
     def __getitem__(self, name: str) -> Any:
@@ -92,7 +94,7 @@ class RunLog:
         return len(self.messages)
 
     def channel(self, name: str) -> list[Message]:
-        """The messages of one channel, in log order."""
+        """The messages of one channel, in their order."""
         return [m for m in self.messages if m.channel == name]
 
     def frame(self, name: str) -> pd.DataFrame:
@@ -110,7 +112,7 @@ class RunLog:
 
 def read_log(log: str | Path, run: str | None = None, bus_key: str | Path | None = None,
              channels: list[str] | None = None) -> RunLog:
-    """The messages of one run: `log` a run's log folder (logs/<run-id>) or one .lcm file.
+    """The messages of one run, in step order: `log` a run's log folder (logs/<run-id>) or one .lcm file.
 
     `run` picks a run in a log of several (default: the first); `bus_key`, the
     key file of a keyed bus an lcm-logger recording was made on; `channels`

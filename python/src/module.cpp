@@ -25,6 +25,7 @@
 #include "afford/image.hpp"
 #include "afford/protocol.hpp"
 #include "experiment/replay/replay.hpp"
+#include "viewer/step_order.hpp"
 #include "afford/rng.hpp"
 #include "environment/environment.hpp"
 #include "eye/eye.hpp"
@@ -56,17 +57,21 @@ py::dict readLog(const std::string& path, const std::string& run_id, const std::
                  const std::vector<std::string>& channels) {
   auto log = std::make_shared<spdlog::logger>("read_log", std::make_shared<spdlog::sinks::null_sink_mt>());
   std::shared_ptr<const BusKey> key = bus_key.empty() ? nullptr : busKeyFrom(bus_key);
-  // Streamed: what is held is what is kept (a log of gigabytes read for one channel holds that channel).
-  RecordedLogStream in(path, *log, key.get());
-  RunSelector select(run_id, path, *log);
+  // Streamed, in step order (viewer/step_order.hpp): what is held is what is kept (a log of gigabytes read for
+  // one channel holds that channel), and the messages come in the same order however the log interleaves them.
+  StepOrderedLog<RecordedLogStream, RunSelector> in(
+      [&](spdlog::logger& l) { return std::make_unique<RecordedLogStream>(path, l, key.get()); },
+      [&](spdlog::logger& l) { return std::make_unique<RunSelector>(run_id, path, l); },
+      loadProtocol(defaultConfigDir()), *log);
+  const RunSelector& select = in.selector();
   std::unique_ptr<RunConfig> config;
   BoundsContext ctx{nullptr, nullptr};
   py::list messages;
   std::int64_t refused = 0, unknown = 0;
   std::string first_refusal;
   LogEvent e;
-  while (in.next(e)) {
-    if (!select.take(e)) continue;
+  StepKey at;
+  while (in.next(e, at)) {
     if (!config) {
       config = std::make_unique<RunConfig>(parseRunConfigText(select.config().config_yaml));
       ctx = BoundsContext{&config->protocol, config.get()};
@@ -93,8 +98,8 @@ py::dict readLog(const std::string& path, const std::string& run_id, const std::
   out["refused"] = refused;
   out["first_refusal"] = first_refusal;
   out["unknown_channels"] = unknown;
-  out["malformed"] = in.counts().malformed;
-  out["torn_bytes"] = in.counts().torn_bytes;
+  out["malformed"] = in.stream().counts().malformed;
+  out["torn_bytes"] = in.stream().counts().torn_bytes;
   return out;
 }
 

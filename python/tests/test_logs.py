@@ -1,5 +1,6 @@
 """afford.read_log: a run's messages through the project's log reader and the edge's checks."""
 import json
+import subprocess
 
 import numpy as np
 import pytest
@@ -68,3 +69,28 @@ def test_bad_logs_are_named(tmp_path):
     (tmp_path / "junk" / "log.00.lcm").write_bytes(b"not an LCM log")
     with pytest.raises(RuntimeError, match="no RUN_CONFIG"):
         afford.read_log(tmp_path / "junk")
+
+
+def same_message(a, b):
+    return a.channel == b.channel and a.fields.keys() == b.fields.keys() and all(
+        np.array_equal(a[k], b[k]) if isinstance(a[k], np.ndarray) else a[k] == b[k] for k in a.fields)
+
+
+def test_a_shuffled_log_reads_as_the_log_as_recorded(made, tmp_path):
+    """The messages come in step order: the same whatever the log's interleaving of its channels."""
+    from conftest import BIN
+    run = made / "logs" / run_of(made)["run_id"]
+    recorded = afford.read_log(run)
+    assert [m.channel for m in recorded][:8] == ["RUN_CONFIG", "RUN_CONTROL", "PROBE", "SCENE", "FOCUS",
+                                                 "AFFORDANCE_TABLE", "PREDICTION", "DECISION"]
+    # The last with the RUN_CONFIG interleaved too (a logger writes it first; another tool may not).
+    for window, segments, more in ((20, 1, []), (1000, 2, []), (50, 2, ["--move-config"])):
+        copy = tmp_path / f"shuffled-{window}"
+        r = subprocess.run([str(BIN / "shuffle-log"), str(run), str(copy), "--window", str(window),
+                            "--segments", str(segments), *more], capture_output=True, text=True)
+        assert r.returncode == 0, r.stdout + r.stderr
+        log = afford.read_log(copy)
+        assert len(log) == len(recorded)
+        assert all(same_message(a, b) for a, b in zip(log, recorded)), f"window {window}: another order"
+        for channel in ("SCENE", "DECISION", "EFFECT"):  # each row's values but the time the logger wrote it
+            assert log.frame(channel).drop(columns="utime").equals(recorded.frame(channel).drop(columns="utime"))

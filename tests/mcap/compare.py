@@ -1,8 +1,9 @@
 """The messages of an exported MCAP file, as tools/mcapcheck/check.mjs printed them (JSON lines),
 against the run's log read by the Python package (afford.read_log), which decodes each message
-on its own (python/afford/logs.py): the same messages per channel, in order, at the log's times,
-with the same field values; the scene and focus images byte for byte; a gaze box per FOCUS and
-EFFECT where the focus window is.
+on its own (python/afford/logs.py): the same messages per channel, in order, each at its place
+in the run (docs/watching.md: the time the log gives the run's RUN_CONFIG, a millisecond a step,
+a microsecond a message within its step), with the same field values; the scene and focus
+images byte for byte; a gaze box per FOCUS and EFFECT where the focus window is.
 
     compare.py LOG CHECKER_OUTPUT.jsonl AFFORD_BINARY
 """
@@ -92,13 +93,15 @@ def main(log_path, lines_path, afford_bin):
     channels = {t for t in topics if not t.startswith("/")}
     if channels != set(by_channel):
         fail(f"channels {sorted(channels)} against the log's {sorted(by_channel)}")
+    times = places(log)
     for channel, messages in by_channel.items():
         exported = topics[channel]
         if len(exported) != len(messages):
             fail(f"{channel}: {len(exported)} messages exported, {len(messages)} in the log")
         for i, (m, e) in enumerate(zip(messages, exported)):
-            if e["log_time"] != m.utime * 1000 or e["publish_time"] != e["log_time"] or e["sequence"] != i:
-                fail(f"{channel}[{i}]: times {e['log_time']}, {e['publish_time']} against utime {m.utime}")
+            if e["log_time"] != times[id(m)] or e["publish_time"] != e["log_time"] or e["sequence"] != i:
+                fail(f"{channel}[{i}] of step {m['step']}: times {e['log_time']}, {e['publish_time']}, "
+                     f"not its place {times[id(m)]}")
             if e["schema"] != f"afford.{types[channel]}":
                 fail(f"{channel}: schema {e['schema']}")
             fields = dict(m.fields)
@@ -110,6 +113,25 @@ def main(log_path, lines_path, afford_bin):
     print(f"{log_path}: every message of the log is in the MCAP file as the Python package decodes it ({counts}), "
           f"with {len(topics.get('/SCENE/image', []))} scene images, {len(topics.get('/FOCUS/image', []))} focus "
           f"images and {len(topics.get('/SCENE/gaze', []))} gaze boxes")
+
+
+def places(log):
+    """Each message's time in the file (by id), from its place in the run: the log's messages come in step order."""
+    extrinsic = "phase: extrinsic" in log.config_yaml.splitlines()
+    start = log.messages[0].utime * 1000  # the run's RUN_CONFIG
+    times, at, place, last = {}, None, 0, -1
+    for m in log:
+        step = m["step"]
+        if m.channel == "RUN_CONFIG" or (m.channel == "RUN_CONTROL" and m["command"] == 1):  # START
+            step = -1
+        elif m.channel == "RUN_CONTROL":  # STOP
+            step = last + 1
+        elif m.channel == "EFFECT" and not extrinsic:  # seen on the scene of the step after its action
+            step += 1
+        place = place + 1 if step == at else 0
+        at, last = step, max(last, step)
+        times[id(m)] = start + (step + 1) * 1_000_000 + min(place, 999) * 1_000
+    return times
 
 
 def channel_types(afford_bin):
@@ -134,6 +156,7 @@ def png_pixels(data):
 def check_images(log, topics):
     """Each SCENE's and FOCUS's image byte for byte; a gaze box per FOCUS and EFFECT, in log order."""
     scenes, focus, gaze = (topics.get(t, []) for t in ("/SCENE/image", "/FOCUS/image", "/SCENE/gaze"))
+    times = places(log)
     size = None
     n = {"SCENE": 0, "FOCUS": 0, "EFFECT": 0}
     for m in log:
@@ -143,7 +166,7 @@ def check_images(log, topics):
             image = scenes[n["SCENE"]]["message"]
             size = (m["width"], m["height"])
             if image["format"] != "png" or not (png_pixels(image["data"]) == m["image"]).all() \
-                    or stamp(image) != m.utime * 1000:
+                    or stamp(image) != times[id(m)]:
                 fail(f"/SCENE/image[{n['SCENE']}] is not SCENE[{n['SCENE']}]'s image")
         if m.channel == "FOCUS":
             image = focus[n["FOCUS"]]["message"]
@@ -154,8 +177,8 @@ def check_images(log, topics):
             x, y = (m["x"], m["y"]) if m.channel == "FOCUS" else (m["after_x"], m["after_y"])
             left, top = round_half_away(x * size[0] - m["side"] / 2), round_half_away(y * size[1] - m["side"] / 2)
             if box["type"] != 2 or box["points"][0] != {"x": left, "y": top} or \
-                    box["points"][2] != {"x": left + m["side"], "y": top + m["side"]} or stamp(box) != m.utime * 1000:
-                fail(f"the gaze box of {m.channel} at utime {m.utime}: {box['points']}, not at ({left}, {top})")
+                    box["points"][2] != {"x": left + m["side"], "y": top + m["side"]} or stamp(box) != times[id(m)]:
+                fail(f"the gaze box of {m.channel} of step {m['step']}: {box['points']}, not at ({left}, {top})")
         n[m.channel] += 1
     if (len(scenes), len(focus), len(gaze)) != (n["SCENE"], n["FOCUS"], n["FOCUS"] + n["EFFECT"]):
         fail(f"{len(scenes)} scene images, {len(focus)} focus images, {len(gaze)} gaze boxes for {n}")

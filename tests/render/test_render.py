@@ -6,6 +6,10 @@ A video and a GIF of a run have one frame per step drawn (counted from the
 log by the Python package: the steps of the messages the viewer draws), of
 the size the command says; an existing file is refused and left as it was; a
 failing encoder leaves nothing; a log cut mid-event still renders what it holds.
+And the frames are a function of the log's messages, not of their order: the
+same logs with their channels interleaved anew (shuffle-log: each channel in
+its own order, the channels up to a window of steps apart, in two segments)
+give the same frames, decoded pixel for pixel (ffmpeg's framemd5).
 """
 import gzip
 import json
@@ -18,6 +22,7 @@ from pathlib import Path
 ROOT = Path(__file__).resolve().parents[2]
 BUILD, OUT = Path(sys.argv[1]), Path(sys.argv[2])
 AFFORD = BUILD / "bin" / "afford"
+SHUFFLE = BUILD / "bin" / "shuffle-log"
 sys.path.insert(0, str(BUILD / "python"))
 import afford  # noqa: E402
 
@@ -56,6 +61,35 @@ def expected_frames(log, every):
         if not drawn or s - drawn[-1] >= every:
             drawn.append(s)
     return drawn
+
+
+def frames_of(video):
+    """The MD5 of each decoded frame."""
+    r = subprocess.run(["ffmpeg", "-v", "error", "-i", str(video), "-f", "framemd5", "-"], capture_output=True,
+                       text=True, check=True)
+    return [line.split()[-1] for line in r.stdout.splitlines() if line and not line.startswith("#")]
+
+
+def shuffled(log, out, window, seed=1):
+    r = subprocess.run([str(SHUFFLE), str(log), str(out), "--window", str(window), "--seed", str(seed),
+                        "--segments", "2"], capture_output=True, text=True)
+    if r.returncode != 0:
+        sys.exit(f"shuffle-log {log} failed:\n{r.stdout}{r.stderr}")
+    return out, r.stdout.strip()
+
+
+def same_frames_shuffled(log, every, window):
+    """The log's video and its shuffled copy's: the same frames, at the same steps."""
+    name = f"{Path(log).stem}-w{window}"
+    copy, how = shuffled(log, OUT / f"{name}-shuffled", window)
+    want, got = (render(l, OUT / f"{name}-{k}.mp4", "--every", str(every)) for k, l in (("log", log), ("shuffled", copy)))
+    a, b = frames_of(OUT / f"{name}-log.mp4"), frames_of(OUT / f"{name}-shuffled.mp4")
+    steps = [line for line in (want.stdout + got.stdout).splitlines() if line.startswith("wrote ")]
+    differ = sum(x != y for x, y in zip(a, b)) + abs(len(a) - len(b))
+    assert differ == 0, f"{name} ({how}): {differ} of {len(a)} frames differ from the log's ({steps})"
+    assert steps[0].split(": ")[1] == steps[1].split(": ")[1], f"{name}: {steps}"
+    assert len(a) == len(expected_frames(log, every)), f"{name}: {len(a)} frames"
+    print(f"{name}: shuffled ({how}): the same {len(a)} frames")
 
 
 def said(stdout):
@@ -109,8 +143,16 @@ def main():
     full, _, _ = said(render(log, OUT / "full-again.mp4", "--every", "3").stdout)
     assert 0 < frames < full, f"a cut log gave {frames} frames, the whole {full}"
     assert probe(OUT / "cut.mp4")[0] == frames
+    # The same logs and a short intrinsic run's, their channels up to 20 and 1,000 steps apart.
+    run = subprocess.run([str(AFFORD), "experiment", "base", "--system", "IMP", "--reps", "1", "--steps", "300",
+                          "--transport", "memq", "--quiet", "--keep-logs", "all", "--run-prefix", "render",
+                          "--out", str(OUT / "intrinsic"), "--log-root", str(OUT / "logs")], capture_output=True, text=True)
+    assert run.returncode == 0, run.stdout + run.stderr
+    intrinsic = OUT / "logs" / "render-base-IMP-s1"
+    for log, every, window in ((intrinsic, 10, 20), (intrinsic, 10, 1000), (OUT / "multi-step-top-down-budget.lcm", 3, 50)):
+        same_frames_shuffled(log, every, window)
     print(f"render: {checked} files checked; an existing file refused; a failed encoder left nothing; a cut log: "
-          f"{frames} of {full} frames")
+          f"{frames} of {full} frames; shuffled logs give the same frames")
 
 
 if __name__ == "__main__":

@@ -2,7 +2,9 @@
 // holds one JSON message per log message that the edge takes, beside the
 // images and the gaze; a corrupted or forged event is skipped and counted; an
 // existing output file is refused and left as it was; a truncated log exports
-// what it holds; a keyed recording exports with its key; and the writer leaves
+// what it holds; a keyed recording exports with its key; a log whose channels
+// are interleaved anew exports the same messages at the same times, each at
+// its step's place in the run; and the writer leaves
 // nothing behind when it fails. The file is read back here by a small reader
 // of the spec's records that checks the CRCs and the indexes (the independent
 // check with Foxglove's reader is tests/mcap/test_mcap.sh).
@@ -30,6 +32,7 @@
 #include "experiment/export/export.hpp"
 #include "experiment/export/mcap.hpp"
 #include "experiment/replay/replay.hpp"
+#include "tests/logorder/shuffle.hpp"
 #include "tests/support.hpp"
 
 namespace afford {
@@ -254,6 +257,33 @@ TEST_F(Export, AStoredLogHasOneMessagePerLogMessageTheEdgeTakesWithItsImagesAndG
                 msg.log_time);
       break;
     }
+}
+
+// The log's channels interleaved anew, as the protocol allows a logger to record them, in two segments: the
+// same messages in the same order at the same times, each in its step's millisecond after the run's RUN_CONFIG.
+TEST_F(Export, AShuffledLogExportsTheSameMessagesEachAtItsStepsPlace) {
+  const fs::path log = storedLog("multi-step-top-down-budget");
+  const auto report = testing::shuffleLog(log, dir_ / "shuffled", {1000, 1, 2});
+  EXPECT_GT(report.most_ahead, 50);
+  exportLog(log, "recorded.mcap");
+  exportLog(dir_ / "shuffled", "shuffled.mcap");
+  const ReadMcap a = readMcap(dir_ / "recorded.mcap"), b = readMcap(dir_ / "shuffled.mcap");
+  ASSERT_EQ(a.messages.size(), b.messages.size());
+  std::size_t differ = 0;
+  for (std::size_t i = 0; i < a.messages.size(); ++i) {
+    const ReadMessage &x = a.messages[i], &y = b.messages[i];
+    differ += x.topic != y.topic || x.log_time != y.log_time || x.publish_time != y.publish_time || x.data != y.data;
+  }
+  EXPECT_EQ(differ, 0u) << "of " << a.messages.size();
+  const std::uint64_t start = a.messages.front().log_time;  // the run's RUN_CONFIG
+  std::uint64_t before = 0;
+  for (const ReadMessage& m : a.messages) {
+    EXPECT_GE(m.log_time, before) << m.topic;  // in step order
+    before = m.log_time;
+    if (m.topic[0] == '/' || m.topic == "RUN_CONFIG" || m.topic == "RUN_CONTROL") continue;
+    const std::int64_t step = nlohmann::json::parse(m.data)["step"];
+    EXPECT_EQ(static_cast<std::int64_t>((m.log_time - start) / 1000000) - 1, step) << m.topic;
+  }
 }
 
 // Events of the run changed or made up in the log: each is skipped and counted, the rest exported.
