@@ -33,6 +33,11 @@
 #     a run watched by afford watch's page (in headless Chromium here, or elsewhere: a client of its stream)
 #     against it unwatched, over udpm: the same weights checksum, and steps per second at least F (0.95) of
 #     unwatched (median of R pairs; exit 1 below).
+#   bench/run.sh watch-hold [--idle 1000] [--dribble 100] [--stalled N] [--kept N] [--unread N] [--seconds S]
+#                           [--port P] [--watcher-files N] [--afford PROGRAM] [--out DIR]
+#     afford watch's page held by clients that do not finish (idle, dribbling a head, stalled, kept alive,
+#     never reading the stream), reopened as the server closes them: GET / answered within 1 s throughout,
+#     the watcher at most 64 MB above its start, a second watcher on the port refused (exit 1 otherwise).
 #   bench/run.sh env [--worlds N] [--steps S] [--reps R] [--threads 1,2] [--grid G] [--out DIR]
 #     afford.env's batched form (AffordVectorEnv: N worlds in one call of the C++ core) against N single
 #     environments in a Python loop: environment steps per second, and the same rewards.
@@ -46,6 +51,7 @@ set -euo pipefail
 cd "$(dirname "$0")/.."
 [[ ${1:-} == loss ]] && { shift; exec bench/loss.sh "$@"; }
 [[ ${1:-} == watch ]] && { shift; exec bench/watch.sh "$@"; }
+[[ ${1:-} == watch-hold ]] && { shift; [[ -x build/bin/afford ]] || scripts/setup.sh; exec /usr/bin/python3 bench/watch_hold.py "$@"; }
 [[ ${1:-} == python ]] && { shift; [[ -x build/bin/afford ]] || scripts/setup.sh;
   PYTHONPATH=build/python exec /usr/bin/python3 bench/python_bench.py "$@"; }
 [[ ${1:-} == env ]] && { shift; [[ -x build/bin/afford ]] || scripts/setup.sh;

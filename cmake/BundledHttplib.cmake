@@ -58,8 +58,8 @@ function(afford_bundled_httplib target)
   # As a system header: upstream's warnings are not ours to fix here.
   target_include_directories(${target} SYSTEM INTERFACE ${src})
   target_link_libraries(${target} INTERFACE Threads::Threads)
-  # A listen backlog for a page's server that a burst of connections does not fill (upstream's 5 left a
-  # thousand sockets opened at once in the kernel's retries for a minute, the page unserved meanwhile).
-  # poll(), not select(): a socket numbered past FD_SETSIZE (1024) is served, not closed unanswered.
-  target_compile_definitions(${target} INTERFACE CPPHTTPLIB_LISTEN_BACKLOG=1024 CPPHTTPLIB_USE_POLL)
+  # poll(), not select(): a request on a socket numbered past FD_SETSIZE (1024) is served, not answered 500.
+  # (The page's server listens and accepts itself, experiment/watch/connections.hpp: httplib's listen
+  # backlog, accept loop and thread pool are not used.)
+  target_compile_definitions(${target} INTERFACE CPPHTTPLIB_USE_POLL)
 endfunction()

@@ -6,10 +6,23 @@
 
 #include <chrono>
 #include <stdexcept>
+#include <thread>
 
 namespace afford {
 
 using Clock = std::chrono::steady_clock;
+constexpr std::size_t kBodyBytes = 64 * 1024;  // a request's body, at most (a control request is a few bytes)
+
+// httplib's server for what it is good at, reading a request and writing its answer; the connections are
+// the stage's, which hands it one whole request at a time.
+class WatchServer::Http : public httplib::Server {
+ public:
+  bool serve(httplib::Stream& stream, bool close_connection, bool& closed) {
+    return process_request(stream, close_connection, closed, nullptr);
+  }
+  // An event stream goes on while this is set (httplib's own sign that its server is running).
+  void running(int listener) { svr_sock_ = listener; }
+};
 
 bool isLoopback(const std::string& address) {
   if (address == "localhost" || address == "::1") return true;
@@ -27,7 +40,7 @@ std::string newToken() {
 }
 
 WatchServer::WatchServer(WatchState& state, WatchServerOptions options, PlaybackControls* controls)
-    : state_(state), options_(std::move(options)), controls_(controls), server_(std::make_unique<httplib::Server>()) {
+    : state_(state), options_(std::move(options)), controls_(controls), server_(std::make_unique<Http>()) {
   if (!isLoopback(options_.bind) && options_.token.empty())
     throw std::runtime_error("--bind " + options_.bind + ": not loopback, so a token is required");
 }
@@ -50,7 +63,7 @@ void error(httplib::Response& res, int status, const std::string& why) {
   res.set_content(why + "\n", "text/plain; charset=utf-8");
 }
 
-// Why cpp-httplib itself refused a request (it answers with a status and no body).
+// Why cpp-httplib, or the connections' stage, refused a request (they answer with a status and no words).
 std::string refusal(int status) {
   switch (status) {
     case 400:
@@ -60,6 +73,7 @@ std::string refusal(int status) {
       return "no such page: afford watch serves /, /state, /events and, playing a log, POST /control";
     case 413: return "the request's body is larger than afford watch takes (64 KB)";
     case 414: return "the request's address is too long";
+    case 431: return "the request's head is larger than afford watch takes (64 KB)";
     default: return std::string("refused: ") + httplib::detail::status_message(status);
   }
 }
@@ -67,12 +81,6 @@ std::string refusal(int status) {
 
 void WatchServer::routes() {
   httplib::Server& s = *server_;
-  s.set_pre_routing_handler([this](const httplib::Request& req, httplib::Response& res) {
-    if (authorised(req.get_param_value("token"), req.get_header_value("Authorization")))
-      return httplib::Server::HandlerResponse::Unhandled;
-    error(res, 401, "a token is required: the address afford watch printed at its start has it");
-    return httplib::Server::HandlerResponse::Handled;
-  });
   s.Get("/", [](const httplib::Request&, httplib::Response& res) {
     res.set_header("Cache-Control", "no-store");
     res.set_content(watchPage(), "text/html; charset=utf-8");
@@ -136,25 +144,35 @@ void WatchServer::routes() {
 
 void WatchServer::start() {
   httplib::Server& s = *server_;
-  const int threads = options_.most_streams + 4;  // every stream a thread, and a few for the rest
-  s.new_task_queue = [threads] { return new httplib::ThreadPool(static_cast<std::size_t>(threads)); };
-  s.set_read_timeout(options_.timeout_s, 0);
-  s.set_write_timeout(options_.timeout_s, 0);
-  s.set_keep_alive_timeout(options_.timeout_s);
-  s.set_payload_max_length(64 * 1024);  // a control request is a few bytes
+  s.set_payload_max_length(kBodyBytes);
+  s.set_keep_alive_timeout(options_.timeout_s);  // (what its answers say of the connection: the stage's)
   routes();
-  port_ = options_.port == 0 ? s.bind_to_any_port(options_.bind) : (s.bind_to_port(options_.bind, options_.port) ? options_.port : -1);
-  if (port_ < 0)
-    throw std::runtime_error("cannot serve on " + options_.bind + ":" + std::to_string(options_.port) +
-                             " (the port in use, or no such address here)");
-  thread_ = std::thread([this] { server_->listen_after_bind(); });
+  const int listener = listenOn(options_.bind, options_.port, port_);
+  server_->running(listener);
+  StageOptions o;
+  o.timeout_s = options_.timeout_s;
+  o.workers = options_.most_streams + 4;  // every stream a worker, and a few for the rest
+  o.most_connections = options_.most_connections;
+  o.body_bytes = kBodyBytes;
+  o.requests_per_connection = CPPHTTPLIB_KEEPALIVE_MAX_COUNT;  // (as its answers say)
+  o.streamed_path = "/events";
+  StageHooks hooks;
+  // The token, from the request's head alone: a request without it never reaches a worker.
+  hooks.check = [this](const httplib::Request& req) {
+    if (authorised(req.get_param_value("token"), req.get_header_value("Authorization"))) return Verdict{};
+    return Verdict{401, "a token is required: the address afford watch printed at its start has it"};
+  };
+  hooks.serve = [this](httplib::Stream& stream, bool close, bool& closed) { return server_->serve(stream, close, closed); };
+  hooks.why = refusal;
+  stage_ = std::make_unique<ConnectionStage>(listener, o, std::move(hooks));
+  stage_->start();
 }
 
 void WatchServer::stop() {
   if (stopping_.exchange(true)) return;
   state_.wakeAll();
-  server_->stop();
-  if (thread_.joinable()) thread_.join();
+  server_->running(-1);  // INVALID_SOCKET: the streams end
+  if (stage_) stage_->stop();
 }
 
 std::string WatchServer::url() const {

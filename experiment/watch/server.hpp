@@ -1,4 +1,5 @@
-// The page of `afford watch`: an HTTP server (cpp-httplib, from Debian) that
+// The page of `afford watch`: an HTTP server (cpp-httplib, from Debian, for
+// requests and answers; its connections are ours, connections.hpp) that
 // serves one page and streams the WatchState to it as server-sent events. It
 // never slows the run: the feed only changes the state and wakes the streams;
 // each stream sends the latest snapshot when it can (at most `most_per_second`
@@ -8,19 +9,15 @@
 //
 // Exposure is explicit: loopback unless another address is given; then a
 // token is required on every request (?token=... or "Authorization: Bearer
-// ..."), and a request without it is refused with 401.
+// ..."), and a request without it is refused with 401, from its head alone.
+// A client that does not finish its request holds no worker.
 #pragma once
 #include <atomic>
 #include <memory>
-#include <mutex>
 #include <string>
-#include <thread>
 
+#include "experiment/watch/connections.hpp"
 #include "experiment/watch/state.hpp"
-
-namespace httplib {
-class Server;
-}
 
 namespace afford {
 
@@ -37,7 +34,8 @@ struct WatchServerOptions {
   std::string token;            // required on every request when not empty
   int most_streams = 16;        // pages following at once; more are refused (503)
   double most_per_second = 5;   // snapshots a stream sends at most
-  int timeout_s = 5;            // a request not read, or a stream not taken, within this is dropped
+  int timeout_s = 5;            // a request not in whole, an idle connection, an answer not taken: dropped after it
+  std::size_t most_connections = 8192;  // waiting for their requests at once; more: the oldest dropped
 };
 
 // True for 127.0.0.0/8, ::1 and "localhost".
@@ -52,23 +50,26 @@ class WatchServer {
   WatchServer(const WatchServer&) = delete;
   WatchServer& operator=(const WatchServer&) = delete;
 
-  // Binds and serves on a thread of its own; throws std::runtime_error naming the address if it cannot bind.
+  // Binds and serves on threads of its own; throws std::runtime_error naming the address and port if it
+  // cannot bind (a port in use is never shared).
   void start();
   void stop();
   int port() const { return port_; }
   // The page's address (with its token when one is required).
   std::string url() const;
   int streams() const { return streams_.load(); }
+  StageCounts connections() const { return stage_ ? stage_->counts() : StageCounts{}; }
 
  private:
+  class Http;
   void routes();
   bool authorised(const std::string& query_token, const std::string& header) const;
 
   WatchState& state_;
   WatchServerOptions options_;
   PlaybackControls* controls_;
-  std::unique_ptr<httplib::Server> server_;
-  std::thread thread_;
+  std::unique_ptr<Http> server_;
+  std::unique_ptr<ConnectionStage> stage_;
   int port_ = -1;
   std::atomic<int> streams_{0};
   std::atomic<bool> stopping_{false};

@@ -1,6 +1,8 @@
 // afford watch's state and page server (experiment/watch/): bounded whatever
 // the run's length, a page that stops reading holds nothing, off loopback a
-// token is required, and bad requests are refused without holding memory.
+// token is required, bad requests are refused without holding memory, and
+// clients that do not finish their requests (or take their answers) hold no
+// worker.
 #include <gtest/gtest.h>
 #include <httplib.h>
 #include <netinet/in.h>
@@ -9,8 +11,12 @@
 #include <sys/socket.h>
 #include <unistd.h>
 
+#include <atomic>
+#include <cerrno>
 #include <chrono>
+#include <condition_variable>
 #include <fstream>
+#include <mutex>
 #include <string>
 #include <thread>
 #include <vector>
@@ -133,13 +139,19 @@ TEST(WatchSampler, TakesAStepOfFocusAndPredictionOncePerGapAndShowsThatStep) {
   EXPECT_TRUE(taking);
 }
 
-// A raw client socket on the server's port.
-int connectTo(int port) {
-  const int fd = socket(AF_INET, SOCK_STREAM, 0);
+// The server's address on loopback.
+sockaddr_in loopback(int port) {
   sockaddr_in a{};
   a.sin_family = AF_INET;
   a.sin_port = htons(static_cast<std::uint16_t>(port));
   a.sin_addr.s_addr = htonl(INADDR_LOOPBACK);
+  return a;
+}
+
+// A raw client socket on the server's port.
+int connectTo(int port) {
+  const int fd = socket(AF_INET, SOCK_STREAM, 0);
+  sockaddr_in a = loopback(port);
   if (connect(fd, reinterpret_cast<sockaddr*>(&a), sizeof a) != 0) {
     close(fd);
     return -1;
@@ -278,14 +290,22 @@ TEST(WatchServer, BadRequestsAreRefusedAndHoldNoMemory) {
         close(fd);
       });
     for (auto& t : senders) t.join();
-    for (const auto& a : answers) EXPECT_TRUE(a.empty() || a.rfind("HTTP/1.1 400", 0) == 0) << a;
+    // (refused at 64 KB of head, 431, as it arrives)
+    for (const auto& a : answers) EXPECT_TRUE(a.empty() || a.rfind("HTTP/1.1 431", 0) == 0) << a;
   }
 
-  // A request that never ends is dropped after the read timeout.
+  // A request that never ends is dropped at its deadline.
   int fd = connectTo(server.port());
   sendAll(fd, "GET /state HTTP/1.1\r\nX-Slow: ");
   const std::string slow = answer(fd);
   EXPECT_TRUE(slow.empty() || slow.rfind("HTTP/1.1 400", 0) == 0) << slow;
+  close(fd);
+
+  // A request whose client then closes its side is still answered.
+  fd = connectTo(server.port());
+  sendAll(fd, "GET /state HTTP/1.1\r\n\r\n");
+  shutdown(fd, SHUT_WR);
+  EXPECT_EQ(answer(fd).rfind("HTTP/1.1 200", 0), 0u);
   close(fd);
 
   // A WebSocket upgrade (the page has none), then frames that are not WebSocket's.
@@ -325,6 +345,275 @@ TEST(WatchServer, BadRequestsAreRefusedAndHoldNoMemory) {
   EXPECT_NE(bodiless.find("Content-Length"), std::string::npos) << bodiless;
   const long grown = statusKb("VmHWM:") - before;
   EXPECT_LT(grown, 48 * 1024) << "kB held by bad requests";
+  server.stop();
+}
+
+// Open: the server has neither closed it nor answered anything on it.
+bool open(int fd) {
+  char b;
+  return recv(fd, &b, 1, MSG_PEEK | MSG_DONTWAIT) < 0 && errno == EAGAIN;
+}
+
+// Connections that do not finish their requests, held until the end: idle (nothing sent), stalled (a request
+// line and a field, no end), dribbling (a head, a byte every 20 ms, never ending), kept (answered once,
+// kept alive, then idle), unread (the event stream asked for, never read).
+struct Unfinished {
+  std::vector<int> all, waiting, dribbling;  // waiting: all but the streams
+  std::atomic<bool> stop{false};
+  std::thread dribbler;
+
+  Unfinished(int port, int idle, int stalled, int dribble, int kept, int unread, const std::string& query = "") {
+    auto add = [&](const std::string& sent, int buffer = 0) {
+      const int fd = connectTo(port);
+      EXPECT_GE(fd, 0);
+      if (buffer) setsockopt(fd, SOL_SOCKET, SO_RCVBUF, &buffer, sizeof buffer);
+      if (!sent.empty()) sendAll(fd, sent);
+      all.push_back(fd);
+      if (!buffer) waiting.push_back(fd);
+      return fd;
+    };
+    for (int i = 0; i < idle; ++i) add("");
+    for (int i = 0; i < stalled; ++i) add("GET /state" + query + " HTTP/1.1\r\nHost: x\r\n");
+    for (int i = 0; i < dribble; ++i) dribbling.push_back(add("GET /" + query + " HTTP/1.1\r\nX-Slow: "));
+    for (int i = 0; i < kept; ++i) {
+      const int fd = add("GET /nowhere" + query + " HTTP/1.1\r\nHost: x\r\n\r\n");
+      const std::string a = answer(fd, 4096);  // (the whole answer: a 404 of a few lines)
+      EXPECT_EQ(a.rfind("HTTP/1.1 404", 0), 0u) << a;
+    }
+    for (int i = 0; i < unread; ++i) add("GET /events" + query + " HTTP/1.1\r\nHost: x\r\n\r\n", 4096);
+    dribbler = std::thread([this] {
+      while (!stop) {
+        for (int fd : dribbling) send(fd, "a", 1, MSG_NOSIGNAL);
+        std::this_thread::sleep_for(std::chrono::milliseconds(20));  // (the client's pace, not a wait)
+      }
+    });
+  }
+  ~Unfinished() {
+    stop = true;
+    dribbler.join();
+    for (int fd : all) close(fd);
+  }
+  int stillWaiting() const {
+    int n = 0;
+    for (int fd : waiting) n += open(fd);
+    return n;
+  }
+};
+
+// More connections that never finish a request than the server has workers (20), and the streams of pages
+// that never read: the page is served meanwhile, and none of them has been dropped by then.
+TEST(WatchServer, ClientsThatDoNotFinishTheirRequestsHoldNoWorker) {
+  WatchState state;
+  WatchServerOptions o;
+  o.port = 0, o.timeout_s = 30;  // (none dropped at its deadline while the test runs)
+  WatchServer server(state, o);
+  server.start();
+  Unfinished held(server.port(), 64, 8, 8, 8, 4);
+  ASSERT_TRUE(eventually([&] { return server.streams() == 4; }));
+  ASSERT_TRUE(eventually([&] { return server.connections().held >= 64 + 8 + 8 + 8; }));
+  httplib::Client client("127.0.0.1", server.port());
+  client.set_read_timeout(60, 0);  // (past the server's timeout: an answer only once they are dropped is late)
+  for (const char* path : {"/", "/state"}) {
+    const auto res = client.Get(path);
+    ASSERT_TRUE(res) << path << ": " << httplib::to_string(res.error());
+    EXPECT_EQ(res->status, 200) << path;
+  }
+  EXPECT_EQ(held.stillWaiting(), static_cast<int>(held.waiting.size())) << "answered once the unfinished were dropped";
+  EXPECT_EQ(server.streams(), 4);
+  server.stop();
+}
+
+// The server's end of a client's connection (the test's process is the server's): found by its peer's port.
+int serverEnd(int client) {
+  sockaddr_in mine{}, peer{};
+  socklen_t len = sizeof mine;
+  getsockname(client, reinterpret_cast<sockaddr*>(&mine), &len);
+  for (int fd = 0; fd < 4096; ++fd) {
+    len = sizeof peer;
+    if (fd != client && getpeername(fd, reinterpret_cast<sockaddr*>(&peer), &len) == 0 && peer.sin_port == mine.sin_port)
+      return fd;
+  }
+  return -1;
+}
+
+// Answers their clients are slow to take (the kernel's buffers of both ends full) wait with the connections,
+// not in the workers: more of them than workers, and the page is served; each is then taken whole.
+TEST(WatchServer, AnswersTakenSlowlyHoldNoWorker) {
+  WatchState state;
+  feedRun(state, "long", 20000, test::shippedConfig());  // /state: about 80 kB
+  WatchServerOptions o;
+  o.port = 0, o.timeout_s = 30, o.most_streams = 2;  // 6 workers
+  WatchServer server(state, o);
+  server.start();
+  std::vector<int> slow;
+  for (int i = 0; i < 12; ++i) {
+    const int fd = socket(AF_INET, SOCK_STREAM, 0);
+    int small = 4096;
+    setsockopt(fd, SOL_SOCKET, SO_RCVBUF, &small, sizeof small);
+    sockaddr_in a = loopback(server.port());
+    ASSERT_EQ(connect(fd, reinterpret_cast<sockaddr*>(&a), sizeof a), 0);
+    int end = -1;  // (once accepted; its send buffer as small as the kernel allows: the answer cannot fit)
+    ASSERT_TRUE(eventually([&] { return (end = serverEnd(fd)) >= 0; }));
+    ASSERT_EQ(setsockopt(end, SOL_SOCKET, SO_SNDBUF, &small, sizeof small), 0);
+    sendAll(fd, "GET /state HTTP/1.1\r\n\r\n");
+    slow.push_back(fd);
+  }
+  httplib::Client client("127.0.0.1", server.port());
+  client.set_read_timeout(60, 0);
+  const auto res = client.Get("/");
+  ASSERT_TRUE(res) << httplib::to_string(res.error());
+  EXPECT_EQ(res->status, 200);
+  for (int fd : slow) {
+    std::string got;
+    for (std::string part; !(part = answer(fd, 65536)).empty();) {
+      got += part;
+      const auto body = got.find("\r\n\r\n");
+      const auto length = got.find("Content-Length: ");
+      if (body != std::string::npos && length != std::string::npos &&
+          got.size() - body - 4 == std::stoul(got.substr(length + 16)))
+        break;
+    }
+    EXPECT_EQ(got.rfind("HTTP/1.1 200", 0), 0u);
+    EXPECT_GT(got.size(), 65536u);
+    EXPECT_EQ(json::parse(got.substr(got.find("\r\n\r\n") + 4))["step"], 19999) << "the whole answer";
+    close(fd);
+  }
+  server.stop();
+}
+
+// Blocks every worker in POST /control until released.
+struct BlockingControls : PlaybackControls {
+  std::mutex mutex;
+  std::condition_variable changed;
+  bool released = false;
+  int waiting = 0;
+  std::string control(const std::string&, const std::string&) override {
+    std::unique_lock<std::mutex> lock(mutex);
+    ++waiting;
+    changed.notify_all();
+    changed.wait(lock, [&] { return released; });
+    return "";
+  }
+  void release() {
+    std::lock_guard<std::mutex> lock(mutex);
+    released = true;
+    changed.notify_all();
+  }
+};
+
+// Off loopback, with every worker busy and idle connections held, a request without the token is still
+// refused: from its head, never waiting for a worker.
+TEST(WatchServer, OffLoopbackARequestWithoutTheTokenIsRefusedWithoutAWorker) {
+  WatchState state;
+  BlockingControls controls;
+  WatchServerOptions o;
+  o.bind = "0.0.0.0", o.port = 0, o.timeout_s = 30, o.most_streams = 2, o.token = newToken();  // 6 workers
+  WatchServer server(state, o, &controls);
+  server.start();
+  Unfinished held(server.port(), 64, 4, 4, 0, 0, "?token=" + o.token);
+  std::vector<int> busy;
+  for (int i = 0; i < o.most_streams + 4; ++i) {
+    busy.push_back(connectTo(server.port()));
+    sendAll(busy.back(), "POST /control?command=play&token=" + o.token + " HTTP/1.1\r\nContent-Length: 0\r\n\r\n");
+  }
+  ASSERT_TRUE(eventually([&] {
+    std::lock_guard<std::mutex> lock(controls.mutex);
+    return controls.waiting == o.most_streams + 4;
+  }));
+  std::string refused;
+  for (const std::string& request : std::vector<std::string>{"GET / HTTP/1.1\r\n\r\n", "GET /state?token=" + std::string(32, 'f') + " HTTP/1.1\r\n\r\n",
+                                    "POST /control?command=play HTTP/1.1\r\nContent-Length: 0\r\n\r\n"}) {
+    const int fd = connectTo(server.port());
+    sendAll(fd, request);
+    refused = answer(fd, 4096);  // (within 10 s, or "")
+    close(fd);
+    EXPECT_EQ(refused.rfind("HTTP/1.1 401", 0), 0u) << request << " answered " << refused;
+    EXPECT_NE(refused.find("a token is required"), std::string::npos) << refused;
+  }
+  controls.release();
+  for (int fd : busy) EXPECT_EQ(answer(fd, 4096).rfind("HTTP/1.1 200", 0), 0u), close(fd);
+  EXPECT_EQ(held.stillWaiting(), static_cast<int>(held.waiting.size()));
+  server.stop();
+}
+
+TEST(WatchServer, ASecondServerOnAPortInUseFailsNamingIt) {
+  WatchState state;
+  WatchServerOptions o;
+  o.port = 0;
+  WatchServer first(state, o);
+  first.start();
+  o.port = first.port();
+  WatchServer second(state, o);
+  try {
+    second.start();
+    ADD_FAILURE() << "a second server started on port " << o.port;
+  } catch (const std::runtime_error& e) {
+    const std::string said = e.what();
+    EXPECT_NE(said.find("127.0.0.1:" + std::to_string(o.port)), std::string::npos) << said;
+    EXPECT_NE(said.find("in use"), std::string::npos) << said;
+  }
+  httplib::Client client("127.0.0.1", first.port());
+  for (int i = 0; i < 8; ++i) {  // every request still the first's (a shared port would hand some to the second)
+    const auto res = client.Get("/state");
+    ASSERT_TRUE(res);
+    EXPECT_EQ(res->status, 200);
+  }
+  first.stop();
+}
+
+// Bounded: past `most_connections` waiting at once, the oldest is dropped, so a new client still gets in.
+TEST(WatchServer, WhenFullTheOldestWaitingConnectionMakesRoom) {
+  WatchState state;
+  WatchServerOptions o;
+  o.port = 0, o.timeout_s = 30, o.most_connections = 16;
+  WatchServer server(state, o);
+  server.start();
+  std::vector<int> idle;
+  for (int i = 0; i < 40; ++i) {
+    idle.push_back(connectTo(server.port()));
+    ASSERT_TRUE(eventually([&] { return server.connections().held == std::min<std::uint64_t>(i + 1, 16); }));
+  }
+  httplib::Client client("127.0.0.1", server.port());
+  const auto res = client.Get("/");
+  ASSERT_TRUE(res);
+  EXPECT_EQ(res->status, 200);
+  // The GET's connection dropped one more: the first 25 are closed, the last 15 still wait.
+  for (int i = 0; i < 40; ++i) {
+    if (i < 25) EXPECT_TRUE(eventually([&] { return !open(idle[i]); })) << i;
+    else EXPECT_TRUE(open(idle[i])) << i;
+  }
+  EXPECT_EQ(server.connections().dropped, 25u);
+  for (int fd : idle) close(fd);
+  server.stop();
+}
+
+// With no file left to take a connection with, the server waits for one (and drops what it holds to make
+// one), instead of trying the listener again and again.
+TEST(WatchServer, OutOfFilesItWaitsInsteadOfSpinning) {
+  WatchState state;
+  WatchServerOptions o;
+  o.port = 0;
+  WatchServer server(state, o);
+  server.start();
+  const int client = socket(AF_INET, SOCK_STREAM, 0);
+  rlimit files{};
+  getrlimit(RLIMIT_NOFILE, &files);
+  const rlimit before = files;
+  files.rlim_cur = static_cast<rlim_t>(client) + 64;
+  setrlimit(RLIMIT_NOFILE, &files);
+  std::vector<int> filler;
+  for (int fd; (fd = dup(client)) >= 0;) filler.push_back(fd);
+  sockaddr_in a = loopback(server.port());
+  ASSERT_EQ(connect(client, reinterpret_cast<sockaddr*>(&a), sizeof a), 0);
+  const bool paused = eventually([&] { return server.connections().paused >= 5; }, 10);
+  const StageCounts c = server.connections();
+  for (int fd : filler) close(fd);
+  setrlimit(RLIMIT_NOFILE, &before);
+  EXPECT_TRUE(paused) << c.wakeups << " wake-ups";
+  EXPECT_LE(c.wakeups, 4 * c.paused + 10) << "it spun on the listener";
+  sendAll(client, "GET / HTTP/1.1\r\n\r\n");
+  EXPECT_EQ(answer(client).rfind("HTTP/1.1 200", 0), 0u);
+  close(client);
   server.stop();
 }
 

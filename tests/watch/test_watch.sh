@@ -1,9 +1,10 @@
 #!/usr/bin/env bash
 # afford watch in headless Chromium, during a real run over udpm and on its log
 # afterwards (tests/watch/browser.py says what is checked); a server bound off
-# loopback refuses every request without its token. The run watched gives the
-# results of the same run unwatched (in one process). Screenshots stay as
-# artefacts: watch-live.png, watch-playback.png.
+# loopback refuses every request without its token; a second watcher on a port
+# in use is refused. The run watched gives the results of the same run
+# unwatched (in one process). Screenshots stay as artefacts: watch-live.png,
+# watch-playback.png.
 #   tests/watch/test_watch.sh BUILD_DIR ARTEFACT_DIR
 set -euo pipefail
 root=$(cd "$(dirname "$0")/../.." && pwd)
@@ -18,6 +19,13 @@ experiment=(base --system IMP --reps 1 --steps 3000 --extrinsic-reps 1 --scenari
 
 "$build/bin/afford" watch --lcm-url "$url" --port 8090 >"$out/watch-live.log" 2>&1 &
 wait_until 30 grep -qs "the page:" "$out/watch-live.log" || { cat "$out/watch-live.log"; echo "afford watch never served"; exit 1; }
+# A second watcher on the port in use is refused, naming it (the port is never shared).
+second=0
+timeout 10 "$build/bin/afford" watch --lcm-url "$url" --port 8090 >"$out/watch-second.log" 2>&1 || second=$?
+[[ $second == 1 ]] || { cat "$out/watch-second.log"; echo "a second afford watch on port 8090: exit $second, not 1 (124: it served)"; exit 1; }
+grep -q "cannot serve on 127.0.0.1:8090: Address already in use" "$out/watch-second.log" ||
+  { cat "$out/watch-second.log"; echo "the second watcher's refusal does not name the port"; exit 1; }
+echo "a second watcher on port 8090: refused ($(tail -1 "$out/watch-second.log"))"
 /usr/bin/python3 "$root/tests/watch/browser.py" live http://127.0.0.1:8090/ "$out" >"$out/browser-live.log" 2>&1 &
 browser=$!
 wait_until 60 test -e "$out/page-ready" || { cat "$out/browser-live.log"; echo "the page never opened"; exit 1; }

@@ -42,6 +42,16 @@ void giveWay(int nice) {
     std::fprintf(stderr, "afford watch: cannot lower its priority (--nice %d): %s\n", nice, std::strerror(errno));
 }
 
+// Every file the process may have: each connection to the page is one, and held ones are many (the page's
+// server bounds them below this; connections.hpp).
+void moreFiles() {
+  rlimit files{};
+  if (getrlimit(RLIMIT_NOFILE, &files) == 0 && files.rlim_cur < files.rlim_max) {
+    files.rlim_cur = files.rlim_max;
+    setrlimit(RLIMIT_NOFILE, &files);
+  }
+}
+
 std::string tokenFor(const WatchArgs& a) {
   if (a.token_file.empty()) return isLoopback(a.server.bind) ? "" : newToken();
   std::ifstream in(a.token_file);
@@ -139,6 +149,7 @@ Command watchCommand(CLI::App& app, const FrontDoor& door) {
       ->capture_default_str()->check(CLI::Range(1, 256));
   return {watch, [a, &door] {
             a->server.token = tokenFor(*a);
+            moreFiles();
             return a->player.log.empty() ? watchLive(*a, door) : watchLog(*a, door);
           }};
 }
