@@ -173,7 +173,9 @@ void RunDriver::nudge(const std::string& process, const Seen& s) {
   const auto leave = [&] {
     if (other_request) {
       ++foreign_[process];
-      log_->info("run '{}': process {} holds another request of this run id: told to leave it", run, process);
+      if (warned_.insert({process + " another", s.pid}).second)
+        log_->info("run '{}': process {} (pid {}) holds another request of this run id: told to leave it", run,
+                   process, s.pid);
     }
     sendControl(s.run_id, run_control_t::STOP, s.config_digest);
     last = now;
@@ -184,7 +186,8 @@ void RunDriver::nudge(const std::string& process, const Seen& s) {
       // its STOP was lost, or it serves a run nobody runs.
       if (!s.run_id.empty() && (s.run_id != run || other_request) &&
           now - phase_at_ >= milliseconds(config_.protocol.retry_ms)) {
-        log_->warn("process '{}' is still in run '{}': told to stop again", process, s.run_id);
+        if (warned_.insert({process + " in " + s.run_id, s.pid}).second)
+          log_->warn("process '{}' is still in run '{}': told to stop again", process, s.run_id);
         leave();
       }
       return;
@@ -201,8 +204,9 @@ void RunDriver::nudge(const std::string& process, const Seen& s) {
         std::int64_t step = -1;
         for (const auto& [p, other] : seen_)
           if (ourRequest(other)) step = std::max(step, other.step);
-        log_->warn("run '{}': process {} is free again (restarted?) at step {}: sending it the run's configuration",
-                   run, process, step);
+        if (warned_.insert({process, s.pid}).second)
+          log_->warn("run '{}': process {} is free again (restarted?) at step {}: sending it the run's configuration",
+                     run, process, step);
         edge_.send(ch::runConfig, config_msg_);
         sendOurs(run_control_t::START);
         last = now;
@@ -431,6 +435,7 @@ RunOutcome RunDriver::run(const RunSpec& spec, const std::function<void()>& pump
   logger_done_ = false;
   nudged_.clear();
   foreign_.clear();
+  warned_.clear();
   config_msg_ = run_config_t();
   config_msg_.run_id = spec.run_id;
   config_msg_.step = 0;

@@ -25,6 +25,7 @@
 #include <functional>
 #include <map>
 #include <memory>
+#include <set>
 #include <string>
 #include <vector>
 
@@ -225,6 +226,8 @@ class RunDriver {
   std::map<std::string, Seen> seen_;
   std::map<std::string, Clock::time_point> nudged_;  // last time each process was told again
   std::map<std::string, int> foreign_;  // times each process was told to leave another request of this run id
+  // Whom a warning was said of (process, pid): once each in a run, however often a recording says it again.
+  std::set<std::pair<std::string, int>> warned_;
   const RunSpec* spec_ = nullptr;
   RunConfig config_;
   run_config_t config_msg_;

@@ -42,6 +42,14 @@ runner=$!
 target=$((300 + RANDOM % 1500))
 "$procs" status own --wait-for motivation --step "$target" --seconds 60 >/dev/null ||
   { echo "the motivation never reached step $target"; exit 1; }
+# Stopped at once (SIGSTOP: it publishes nothing more), then killed only once it is sure the run still needs
+# it: the environment, which takes every decision, has not had the last one. (The heartbeat the wait read may
+# be half a second old, and a loaded machine delays what follows: a motivation killed after its last decision
+# is not needed again, the run ends without it, and nothing would have been tried.)
+kill -STOP "$(cat "$out/logs/own/motivation.pid")"
+environment_step=$("$procs" status own | awk '$1 == "environment" && NF >= 5 && $3 != "yes" {print $4}' | tail -1)
+[[ -n $environment_step && $environment_step -lt 2999 ]] ||
+  { kill -CONT "$(cat "$out/logs/own/motivation.pid")"; echo "the motivation decided every step before it was stopped (the environment is at ${environment_step:-?})"; exit 1; }
 kill -0 "$runner" 2>/dev/null || { echo "the run ended before the kill"; exit 1; }
 "$procs" kill own motivation
 "$procs" start own motivation  # the stored --process: the same command again
