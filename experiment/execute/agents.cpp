@@ -96,6 +96,12 @@ std::optional<RunOutcome> AgentStore::find(const std::string& key, std::int64_t 
   RunOutcome r = std::move(stored.outcome);
   r.reused_from = stored.run_id;
   r.checkpoint = (dir / "predictors.ckpt").string();
+  // Nothing of the stored run's running is this run's: no log, no time, no memory (a run reported with the log
+  // folder, the speed and the memory of the run it was taken from said what did not happen).
+  r.log_dir.clear();
+  r.log_bytes = 0;
+  r.wall_seconds = r.run_seconds = 0;
+  r.peak_rss_kb.clear();
   if (!fs::exists(r.checkpoint)) return std::nullopt;
   if (after_actions > 0 && !fs::exists(actionsCheckpoint(r.checkpoint, after_actions))) return std::nullopt;
   return r;

@@ -71,6 +71,13 @@ TEST(Workflow, AnExperimentSharingTheIntrinsicRunsReusesTheStoredAgents) {
   EXPECT_EQ(att["systems"]["IMP"]["runs"][0]["reused_from"], "a-base-IMP-s1");
   EXPECT_TRUE(fresh["systems"]["IMP"]["runs"][0]["reused_from"].is_null());
   EXPECT_FALSE(fs::exists(dir + "/logs/b-attention-IMP-s1"));  // not run, so no folder of its own
+  // ... and nothing of the stored run's running is said of it: not its log folder, its speed or its memory.
+  const json& taken = att["systems"]["IMP"]["runs"][0];
+  EXPECT_TRUE(taken["log_dir"].is_null()) << taken.dump();
+  EXPECT_EQ(taken["steps_per_second"], 0.0);
+  EXPECT_EQ(taken["wall_seconds"], 0.0);
+  EXPECT_EQ(taken["log_bytes"], 0);
+  EXPECT_TRUE(taken["peak_rss_kb"].empty());
   // The tests from the reused agents: the same outcomes as from agents trained afresh.
   EXPECT_EQ(att["systems"]["IMP"]["extrinsic"]["conditions"], fresh["systems"]["IMP"]["extrinsic"]["conditions"]);
   // Another seed is another agent: trained, not taken.

@@ -5,9 +5,11 @@
 # request must really run, with the first one's weights: every step in its log
 # (its manifest complete, its PREDICTION events counted), its checkpoint
 # written, a plausible speed. A kept folder is refused before anything runs,
-# naming it, and nothing is reported. (A group that had finished a run used to
-# answer the next request of it with the earlier result: "done in 0.1 s",
-# 1.78e9 steps a second, a checkpoint that did not exist.)
+# naming it, and nothing is reported. (With --no-reuse-agents each request
+# runs; one that takes a stored agent says so, reused_from, and claims no log,
+# speed or memory.) A group that had finished a run used to answer the next
+# request of it with the earlier result: "done in 0.1 s", 1.78e9 steps a
+# second, a checkpoint that did not exist.
 #   tests/requests/same_id.sh BUILD_DIR WORK_DIR [N] [STEPS]
 # Not a ctest test (it takes minutes): its figures are in docs/performance.md.
 set -euo pipefail
@@ -26,7 +28,7 @@ id=exp1-base-IMP-s7
 ran=0 refused=0 first=""
 request() {  # LABEL: the same run again, into out-LABEL
   "$procs" run g base --system IMP --reps 1 --steps "$steps" --seed 7 --extrinsic-reps 0 --run-prefix exp1 \
-    --quiet --out "$out/out-$1" >"$out/run-$1.txt" 2>&1
+    --no-reuse-agents --quiet --out "$out/out-$1" >"$out/run-$1.txt" 2>&1
 }
 for ((i = 1; i <= n; i++)); do
   request "$i" || { cat "$out/run-$i.txt"; echo "request $i failed"; exit 1; }
