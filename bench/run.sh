@@ -35,7 +35,8 @@
 #     unwatched (median of R pairs; exit 1 below).
 #   bench/run.sh env [--worlds N] [--steps S] [--reps R] [--threads 1,2] [--grid G] [--out DIR]
 #     afford.env's batched form (AffordVectorEnv: N worlds in one call of the C++ core) against N single
-#     environments in a Python loop: environment steps per second, and the same rewards.
+#     environments in a Python loop: environment steps per second, and the same rewards; what the check of an
+#     action against the action space costs against a step, in each form.
 #   bench/run.sh tune [--trials 24] [--workers 2] [--steps 6000] [--param KEY=SPEC ...] [--seed S] [--out DIR]
 #     afford tune: a study by W workers sharing a journal file, with pruning and without: every trial finished,
 #     none twice, the intrinsic steps pruning saves (floor 30%), the best trial replayed (exit 1 below a floor).

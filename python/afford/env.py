@@ -73,7 +73,7 @@ class Discrete:
     """gymnasium.spaces.Discrete's interface, for when Gymnasium is absent."""
 
     def __init__(self, n: int):
-        self.n, self.shape, self.dtype = n, (), np.dtype(np.int64)
+        self.n, self.start, self.shape, self.dtype = n, 0, (), np.dtype(np.int64)
         self._rng = np.random.default_rng()
 
     def seed(self, seed=None):
@@ -117,7 +117,7 @@ class MultiDiscrete:
 
     def __init__(self, nvec):
         self.nvec = np.asarray(nvec, dtype=np.int64)
-        self.shape, self.dtype = self.nvec.shape, np.dtype(np.int64)
+        self.start, self.shape, self.dtype = np.zeros_like(self.nvec), self.nvec.shape, np.dtype(np.int64)
         self._rng = np.random.default_rng()
 
     def seed(self, seed=None):
@@ -135,16 +135,31 @@ class MultiDiscrete:
 
 # ---- what an environment is given, against its spaces ----------------------------------------------------------
 
+_KINDS: dict[type, str] = {}
+
+
+def space_kind(space) -> str:
+    """"Dict", "MultiDiscrete", "Discrete" or "Box": which of the spaces `space` is, Gymnasium's or this module's
+    (known by what it holds; kept per class)."""
+    kind = _KINDS.get(type(space))
+    if kind is None:
+        kind = _KINDS[type(space)] = ("Dict" if isinstance(getattr(space, "spaces", None), dict) else
+                                      "MultiDiscrete" if hasattr(space, "nvec") else
+                                      "Discrete" if hasattr(space, "n") else "Box")
+    return kind
+
+
 def _text(space) -> str:
     """A space as Gymnasium writes it: Discrete(41), Box(-1.0, 1.0, (2,), float64), Dict(act: ..., look: ...);
     MultiDiscrete([41] * 16) when its entries are alike."""
-    if isinstance(getattr(space, "spaces", None), dict):
+    kind = space_kind(space)
+    if kind == "Dict":
         return "Dict(" + ", ".join(f"{k}: {_text(s)}" for k, s in space.spaces.items()) + ")"
-    if hasattr(space, "nvec"):
+    if kind == "MultiDiscrete":
         nvec = np.asarray(space.nvec)
         same = nvec.size > 1 and bool(np.all(nvec == nvec.flat[0]))
         return f"MultiDiscrete([{nvec.flat[0]}] * {nvec.size})" if same else f"MultiDiscrete({nvec.tolist()})"
-    if hasattr(space, "n"):
+    if kind == "Discrete":
         start = int(getattr(space, "start", 0))
         return f"Discrete({int(space.n)}{f', start={start}' if start else ''})"
     bound = [np.asarray(b) for b in (space.low, space.high)]
@@ -164,18 +179,34 @@ def _first(bad: np.ndarray, x: np.ndarray, low: np.ndarray, high: np.ndarray) ->
     return f"entry {i} ({x.flat[i].item()!r}) is not in [{low.flat[i].item()}, {high.flat[i].item()}]{more}"
 
 
+def _within(a: np.ndarray, low, high) -> bool:
+    """Every entry of `a` in [low, high] (not NaN); a few entries (an action's) compared as Python numbers, which
+    is faster than numpy's comparisons of small arrays."""
+    if a.size > 64:
+        return bool((a >= low).all() and (a <= high).all())
+    values = a.ravel().tolist()
+    if isinstance(low, np.ndarray) or isinstance(high, np.ndarray):  # (Gymnasium's bounds: one per entry)
+        return all(lo <= v <= hi for v, lo, hi in zip(values, np.broadcast_to(low, a.shape).ravel().tolist(),
+                                                       np.broadcast_to(high, a.shape).ravel().tolist()))
+    for v in values:
+        if not low <= v <= high:
+            return False
+    return True
+
+
 def _why(space, x) -> tuple[type[Exception], str] | None:
     """Why `x` is not in `space` (the error to raise, and why), or None when it is (a Dict's parts aside: _refusal):
     Discrete takes one integer; MultiDiscrete an array (or list) of integers of its shape; Box an array of real
     numbers of its shape that its dtype holds; each within its bounds. As Gymnasium's `contains`, but stricter on
     integers: its Discrete takes True (as 1), its MultiDiscrete takes 2.5."""
-    if isinstance(getattr(space, "spaces", None), dict):
+    kind = space_kind(space)
+    if kind == "Dict":
         if not isinstance(x, dict):
             return TypeError, f"not a dict ({type(x).__name__})"
         if x.keys() != space.spaces.keys():
             return ValueError, f"its keys are {list(x)}, the space's {list(space.spaces)}"
         return None
-    if hasattr(space, "nvec"):
+    if kind == "MultiDiscrete":
         a = np.asarray(x) if isinstance(x, (list, tuple)) else x
         if not isinstance(a, np.ndarray) or a.dtype.kind not in "iu":
             of = f" of {a.dtype}" if isinstance(a, np.ndarray) else ""
@@ -186,7 +217,7 @@ def _why(space, x) -> tuple[type[Exception], str] | None:
         low = np.broadcast_to(np.asarray(getattr(space, "start", 0)), nvec.shape)
         bad = (a < low) | (a >= low + nvec)
         return (ValueError, _first(bad, a, low, low + nvec - 1)) if bad.any() else None
-    if hasattr(space, "n"):
+    if kind == "Discrete":
         if not _integer(x):
             return TypeError, f"not an integer ({type(x).__name__})"
         low = int(getattr(space, "start", 0))
@@ -196,14 +227,15 @@ def _why(space, x) -> tuple[type[Exception], str] | None:
     except (TypeError, ValueError):
         a = np.asarray(None)
     dtype = np.dtype(space.dtype)
-    if a.dtype.kind not in "iuf" or not np.can_cast(a.dtype, dtype):
+    if a.dtype != dtype and (a.dtype.kind not in "iuf" or not np.can_cast(a.dtype, dtype)):
         of = f" of {a.dtype}" if a.dtype.kind != "O" else ""
         return TypeError, f"not numbers {dtype.name} holds ({type(x).__name__}{of})"
     if a.shape != tuple(space.shape):
         return ValueError, f"of shape {a.shape}, not {tuple(space.shape)}"
+    if _within(a, space.low, space.high):
+        return None
     low, high = (np.broadcast_to(np.asarray(b), a.shape) for b in (space.low, space.high))
-    bad = ~((a >= low) & (a <= high))  # (NaN too)
-    return (ValueError, _first(bad, a, low, high)) if bad.any() else None
+    return ValueError, _first(~((a >= low) & (a <= high)), a, low, high)
 
 
 def _shown(x) -> str:
@@ -216,7 +248,7 @@ def _refusal(space, x, what: str) -> Exception | None:
     why = _why(space, x)
     if why is not None:
         return why[0](f"{what} {_shown(x)} is not in {_text(space)}: {why[1]}".lstrip())
-    if isinstance(getattr(space, "spaces", None), dict):
+    if space_kind(space) == "Dict":
         for key, part in space.spaces.items():
             if (e := _refusal(part, x[key], f"{what}[{key!r}]")) is not None:
                 return e
