@@ -400,7 +400,8 @@ def test_a_trial_asked_for_by_a_worker_that_died_before_claiming_it_runs_again(t
     assert "trial 1: its worker died before claiming it: it runs again" in said
     df = afford.load_study(out).trials
     assert df["state"].tolist() == ["COMPLETE", "FAIL", "COMPLETE"] and df["stopped"].iloc[1] == "worker lost"
-    assert df["retry_of"].iloc[2] == 1 and df["param motivation.leak"].iloc[2] == before["param motivation.leak"].iloc[1]
+    assert df["retry_of"].iloc[2] == 1
+    assert df["param motivation.leak"].iloc[2] == before["param motivation.leak"].iloc[1]
 
 
 def test_another_hosts_trial_runs_again_once_its_worker_is_gone_and_not_before(tmp_path):
