@@ -5,18 +5,39 @@
 The same worlds (seeds 1..N), the same actions (drawn once from a seeded generator), stepped as N
 FlatAffordEnv in a Python loop and as one AffordVectorEnv (one call of the C++ core per step, the GIL
 released) on each number of threads. Episodes of run.steps = 500 end and restart on the way. Checks that
-both gave the same rewards; docs/performance.md reports it.
+both gave the same rewards. Then what each form's check of a step's action against its space (check_in) costs
+against its step (the best of 7 timings of each). docs/performance.md reports it.
 """
 import argparse
 import json
 import statistics
 import sys
 import time
+import timeit
 from pathlib import Path
 
 import numpy as np
 
-from afford.env import AffordVectorEnv, FlatAffordEnv
+from afford.env import AffordEnv, AffordVectorEnv, FlatAffordEnv, check_in
+
+
+def check_cost(n: int) -> dict:
+    """Microseconds of each form's check of an action, and of its step (each the best of 7 timings)."""
+    def best(f, number):
+        return min(timeit.repeat(f, number=number, repeat=7)) / number * 1e6
+    settings = {"run.steps": 10**8}
+    flat, plain = FlatAffordEnv(world="base", seed=1, set=settings), AffordEnv(world="base", seed=1, set=settings)
+    vec = AffordVectorEnv(n, world="base", seed=1, set=settings)
+    for e in (flat, plain, vec):
+        e.reset(seed=1)
+    acts, look = np.arange(n, dtype=np.int64) % vec.single_action_space.n, np.array([-1.0, -1.0])
+    forms = {"FlatAffordEnv": (flat, 7), "AffordEnv": (plain, {"act": 2, "look": look}),
+             f"AffordVectorEnv ({n})": (vec, acts)}
+    out = {}
+    for name, (env, action) in forms.items():
+        check, step = best(lambda: check_in(env.action_space, action), 2000), best(lambda: env.step(action), 200)
+        out[name] = {"check_us": round(check, 2), "step_us": round(step, 1), "share": round(check / step, 4)}
+    return out
 
 
 def main() -> int:
@@ -73,6 +94,10 @@ def main() -> int:
     for th, v in results["batched"].items():
         m = statistics.median(v)
         print(f"  AffordVectorEnv, {th} thread(s): {m:.0f}  {v}  ({m / single:.2f} x)")
+    results["check"] = check_cost(n)
+    print("the check of a step's action against the action space, against the step (best of 7):")
+    for name, c in results["check"].items():
+        print(f"  {name}: check {c['check_us']} us, step {c['step_us']} us ({100 * c['share']:.1f}%)")
     out = Path(a.out)
     out.mkdir(parents=True, exist_ok=True)
     (out / "results.json").write_text(json.dumps(results, indent=1))

@@ -40,10 +40,16 @@
 #     the watcher at most 64 MB above its start, a second watcher on the port refused (exit 1 otherwise).
 #   bench/run.sh env [--worlds N] [--steps S] [--reps R] [--threads 1,2] [--grid G] [--out DIR]
 #     afford.env's batched form (AffordVectorEnv: N worlds in one call of the C++ core) against N single
-#     environments in a Python loop: environment steps per second, and the same rewards.
+#     environments in a Python loop: environment steps per second, and the same rewards; what the check of an
+#     action against the action space costs against a step, in each form.
 #   bench/run.sh tune [--trials 24] [--workers 2] [--steps 6000] [--param KEY=SPEC ...] [--seed S] [--out DIR]
 #     afford tune: a study by W workers sharing a journal file, with pruning and without: every trial finished,
 #     none twice, the intrinsic steps pruning saves (floor 30%), the best trial replayed (exit 1 below a floor).
+#   bench/run.sh tune-kill [--trials 20] [--workers 2] [--kills 30] [--journal-kills 10] [--claim-kills 5]
+#                          [--unclaimed-kills 5] [--steps 20000] [--prune-warmup 0.5] [--seed S] [--out DIR]
+#     afford tune's workers killed (SIGKILL) at random moments, inside the journal's lock, the study's claim and
+#     between asking for a trial and claiming it too, and started again: no worker waits for good, every trial
+#     counted once, none left running (exit 1 if not).
 #   bench/run.sh reproduction [--reps R] [--ext-reps K] [--jobs J] [--transport memq|udpm] [--out DIR] [WHAT ...]
 #     the whole reproduction (scripts/reproduce.sh WHAT, default all, its report in DIR): wall time beside its
 #     critical path and the share of the time the cores were busy.
@@ -58,6 +64,8 @@ cd "$(dirname "$0")/.."
   PYTHONPATH=build/python exec /usr/bin/python3 bench/env_bench.py "$@"; }
 [[ ${1:-} == tune ]] && { shift; [[ -x build/bin/afford ]] || scripts/setup.sh;
   PYTHONPATH=build/python exec /usr/bin/python3 bench/tune_bench.py "$@"; }
+[[ ${1:-} == tune-kill ]] && { shift; [[ -x build/bin/afford ]] || scripts/setup.sh;
+  PYTHONPATH=build/python exec /usr/bin/python3 bench/tune_kill.py "$@"; }
 [[ ${1:-} == reproduction ]] && { shift; exec /usr/bin/python3 bench/reproduction.py "$@"; }
 [[ ${1:-} == long ]] && { shift; [[ -x build/bin/afford ]] || scripts/setup.sh; exec /usr/bin/python3 bench/long_run.py "$@"; }
 [[ ${1:-} == full ]] && { shift; [[ -x build/bin/afford ]] || scripts/setup.sh;

@@ -63,18 +63,17 @@ class Box:
         return self._rng.uniform(self.low, self.high, self.shape).astype(self.dtype)
 
     def contains(self, x) -> bool:
-        x = np.asarray(x)
-        return x.shape == self.shape and bool(np.all(x >= self.low)) and bool(np.all(x <= self.high))
+        return _refusal(self, x, "") is None
 
     def __repr__(self):
-        return f"Box({self.low}, {self.high}, {self.shape}, {self.dtype})"
+        return _text(self)
 
 
 class Discrete:
     """gymnasium.spaces.Discrete's interface, for when Gymnasium is absent."""
 
     def __init__(self, n: int):
-        self.n, self.shape, self.dtype = n, (), np.dtype(np.int64)
+        self.n, self.start, self.shape, self.dtype = n, 0, (), np.dtype(np.int64)
         self._rng = np.random.default_rng()
 
     def seed(self, seed=None):
@@ -84,10 +83,10 @@ class Discrete:
         return int(self._rng.integers(self.n))
 
     def contains(self, x) -> bool:
-        return isinstance(x, (int, np.integer)) and 0 <= int(x) < self.n
+        return _refusal(self, x, "") is None
 
     def __repr__(self):
-        return f"Discrete({self.n})"
+        return _text(self)
 
 
 class Dict:
@@ -104,14 +103,13 @@ class Dict:
         return {k: s.sample() for k, s in self.spaces.items()}
 
     def contains(self, x) -> bool:
-        return isinstance(x, dict) and x.keys() == self.spaces.keys() and all(
-            s.contains(x[k]) for k, s in self.spaces.items())
+        return _refusal(self, x, "") is None
 
     def __getitem__(self, key):
         return self.spaces[key]
 
     def __repr__(self):
-        return f"Dict({self.spaces})"
+        return _text(self)
 
 
 class MultiDiscrete:
@@ -119,7 +117,7 @@ class MultiDiscrete:
 
     def __init__(self, nvec):
         self.nvec = np.asarray(nvec, dtype=np.int64)
-        self.shape, self.dtype = self.nvec.shape, np.dtype(np.int64)
+        self.start, self.shape, self.dtype = np.zeros_like(self.nvec), self.nvec.shape, np.dtype(np.int64)
         self._rng = np.random.default_rng()
 
     def seed(self, seed=None):
@@ -129,11 +127,159 @@ class MultiDiscrete:
         return self._rng.integers(0, self.nvec, dtype=np.int64)
 
     def contains(self, x) -> bool:
-        x = np.asarray(x)
-        return x.shape == self.shape and np.issubdtype(x.dtype, np.integer) and bool(np.all((x >= 0) & (x < self.nvec)))
+        return _refusal(self, x, "") is None
 
     def __repr__(self):
-        return f"MultiDiscrete({self.nvec})"
+        return _text(self)
+
+
+# ---- what an environment is given, against its spaces ----------------------------------------------------------
+
+_KINDS: dict[type, str] = {}
+
+
+def space_kind(space) -> str:
+    """"Dict", "MultiDiscrete", "Discrete" or "Box": which of the spaces `space` is, Gymnasium's or this module's
+    (known by what it holds; kept per class)."""
+    kind = _KINDS.get(type(space))
+    if kind is None:
+        kind = _KINDS[type(space)] = ("Dict" if isinstance(getattr(space, "spaces", None), dict) else
+                                      "MultiDiscrete" if hasattr(space, "nvec") else
+                                      "Discrete" if hasattr(space, "n") else "Box")
+    return kind
+
+
+def _text(space) -> str:
+    """A space as Gymnasium writes it: Discrete(41), Box(-1.0, 1.0, (2,), float64), Dict(act: ..., look: ...);
+    MultiDiscrete([41] * 16) when its entries are alike."""
+    kind = space_kind(space)
+    if kind == "Dict":
+        return "Dict(" + ", ".join(f"{k}: {_text(s)}" for k, s in space.spaces.items()) + ")"
+    if kind == "MultiDiscrete":
+        nvec = np.asarray(space.nvec)
+        same = nvec.size > 1 and bool(np.all(nvec == nvec.flat[0]))
+        return f"MultiDiscrete([{nvec.flat[0]}] * {nvec.size})" if same else f"MultiDiscrete({nvec.tolist()})"
+    if kind == "Discrete":
+        start = int(getattr(space, "start", 0))
+        return f"Discrete({int(space.n)}{f', start={start}' if start else ''})"
+    bound = [np.asarray(b) for b in (space.low, space.high)]
+    low, high = (b.flat[0].item() if b.size and np.all(b == b.flat[0]) else b.tolist() for b in bound)
+    return f"Box({low!r}, {high!r}, {tuple(space.shape)}, {np.dtype(space.dtype).name})"
+
+
+def _integer(x) -> bool:
+    """One integer: a Python int or a numpy integer (a bool is not one)."""
+    return (isinstance(x, (int, np.integer)) and not isinstance(x, bool)) or (
+        isinstance(x, np.ndarray) and x.shape == () and x.dtype.kind in "iu")
+
+
+def _first(bad: np.ndarray, x: np.ndarray, low: np.ndarray, high: np.ndarray) -> str:
+    i = int(np.flatnonzero(bad)[0])
+    more = f" ({int(bad.sum())} entries are outside)" if bad.sum() > 1 else ""
+    return f"entry {i} ({x.flat[i].item()!r}) is not in [{low.flat[i].item()}, {high.flat[i].item()}]{more}"
+
+
+def _within(a: np.ndarray, low, high) -> bool:
+    """Every entry of `a` in [low, high] (not NaN); a few entries (an action's) compared as Python numbers, which
+    is faster than numpy's comparisons of small arrays."""
+    if a.size > 64:
+        return bool((a >= low).all() and (a <= high).all())
+    values = a.ravel().tolist()
+    if isinstance(low, np.ndarray) or isinstance(high, np.ndarray):  # (Gymnasium's bounds: one per entry)
+        return all(lo <= v <= hi for v, lo, hi in zip(values, np.broadcast_to(low, a.shape).ravel().tolist(),
+                                                       np.broadcast_to(high, a.shape).ravel().tolist()))
+    for v in values:
+        if not low <= v <= high:
+            return False
+    return True
+
+
+def _why(space, x) -> tuple[type[Exception], str] | None:
+    """Why `x` is not in `space` (the error to raise, and why), or None when it is (a Dict's parts aside: _refusal):
+    Discrete takes one integer; MultiDiscrete an array (or list) of integers of its shape; Box an array of real
+    numbers of its shape that its dtype holds; each within its bounds. As Gymnasium's `contains`, but stricter on
+    integers: its Discrete takes True (as 1), its MultiDiscrete takes 2.5."""
+    kind = space_kind(space)
+    if kind == "Dict":
+        if not isinstance(x, dict):
+            return TypeError, f"not a dict ({type(x).__name__})"
+        if x.keys() != space.spaces.keys():
+            return ValueError, f"its keys are {list(x)}, the space's {list(space.spaces)}"
+        return None
+    if kind == "MultiDiscrete":
+        a = np.asarray(x) if isinstance(x, (list, tuple)) else x
+        if not isinstance(a, np.ndarray) or a.dtype.kind not in "iu":
+            of = f" of {a.dtype}" if isinstance(a, np.ndarray) else ""
+            return TypeError, f"not integers ({type(x).__name__}{of})"
+        nvec = np.asarray(space.nvec)
+        if a.shape != nvec.shape:
+            return ValueError, f"of shape {a.shape}, not {nvec.shape}"
+        low = np.broadcast_to(np.asarray(getattr(space, "start", 0)), nvec.shape)
+        bad = (a < low) | (a >= low + nvec)
+        return (ValueError, _first(bad, a, low, low + nvec - 1)) if bad.any() else None
+    if kind == "Discrete":
+        if not _integer(x):
+            return TypeError, f"not an integer ({type(x).__name__})"
+        low = int(getattr(space, "start", 0))
+        return None if low <= int(x) < low + int(space.n) else (ValueError, f"not in {low} to {low + int(space.n) - 1}")
+    try:
+        a = np.asarray(x)
+    except (TypeError, ValueError):
+        a = np.asarray(None)
+    dtype = np.dtype(space.dtype)
+    if a.dtype != dtype and (a.dtype.kind not in "iuf" or not np.can_cast(a.dtype, dtype)):
+        of = f" of {a.dtype}" if a.dtype.kind != "O" else ""
+        return TypeError, f"not numbers {dtype.name} holds ({type(x).__name__}{of})"
+    if a.shape != tuple(space.shape):
+        return ValueError, f"of shape {a.shape}, not {tuple(space.shape)}"
+    if _within(a, space.low, space.high):
+        return None
+    low, high = (np.broadcast_to(np.asarray(b), a.shape) for b in (space.low, space.high))
+    return ValueError, _first(~((a >= low) & (a <= high)), a, low, high)
+
+
+def _shown(x) -> str:
+    r = repr(x)
+    return r if len(r) <= 120 else r[:117] + "..."
+
+
+def _refusal(space, x, what: str) -> Exception | None:
+    """The error naming the value and the space (the part of a Dict it fails in), or None when `x` is in `space`."""
+    why = _why(space, x)
+    if why is not None:
+        return why[0](f"{what} {_shown(x)} is not in {_text(space)}: {why[1]}".lstrip())
+    if space_kind(space) == "Dict":
+        for key, part in space.spaces.items():
+            if (e := _refusal(part, x[key], f"{what}[{key!r}]")) is not None:
+                return e
+    return None
+
+
+def check_in(space, x, what: str = "action") -> None:
+    """TypeError (not the kind of value the space holds) or ValueError (outside it) naming `what`, the value and the
+    space, unless `x` is in `space`: every environment's check of what it is given, and its spaces' contains."""
+    if (e := _refusal(space, x, what)) is not None:
+        raise e
+
+
+def _whole(x, what: str, low: int, high: int = 2**63 - 1, none: bool = False) -> None:
+    """A whole number in [low, high] (None too, when `none`), given to a constructor or to reset."""
+    if x is None and none:
+        return
+    if not _integer(x):
+        raise TypeError(f"{what} {_shown(x)}: a whole number {low} to {high}{' or None' if none else ''}, not "
+                        f"{type(x).__name__}")
+    if not low <= int(x) <= high:
+        raise ValueError(f"{what} {x}: a whole number {low} to {high}")
+
+
+def _check_reset(seed, options, worlds: int = 1) -> None:
+    """reset's seed (None, or one every world's seed, seed + i, is in range) and options (none taken)."""
+    _whole(seed, "seed", 0, 2**63 - worlds, none=True)
+    if options is not None and not isinstance(options, dict):
+        raise TypeError(f"options {_shown(options)}: a dict or None (this environment takes no options)")
+    if options:
+        raise ValueError(f"options {_shown(options)}: this environment takes no reset options")
 
 
 def _box(low, high, shape, dtype):
@@ -153,6 +299,7 @@ def _multi_discrete(nvec):
 
 
 PASS = 4  # the action that does nothing
+_NO_LOOK = np.array([-1.0, -1.0])  # AffordEnv's look None: act on what the scan found
 
 GAZE_COLOUR = (255, 255, 0)  # yellow, as afford-viewer's gaze box
 
@@ -208,6 +355,7 @@ class AffordEnv(gymnasium.Env if gymnasium else object):
             raise ValueError("reward 'goal' needs a scenario")
         if render_mode not in (None, "rgb_array"):
             raise ValueError(f"render_mode {render_mode!r}: None or 'rgb_array'")
+        _whole(seed, "seed", 0)
         self._args = (world, system, [f"{k}={v}" for k, v in (set or {}).items()], scenario or "")
         self._reward = reward
         self.render_mode = render_mode
@@ -222,6 +370,7 @@ class AffordEnv(gymnasium.Env if gymnasium else object):
         self.action_space = _dict({"act": _discrete(PASS + 1), "look": _box(-1.0, 1.0, (2,), np.float64)})
 
     def reset(self, *, seed: int | None = None, options: dict[str, Any] | None = None):
+        _check_reset(seed, options)
         if seed is not None and seed != self._seed:
             self._seed = seed
             world, system, settings, scenario = self._args
@@ -238,10 +387,11 @@ class AffordEnv(gymnasium.Env if gymnasium else object):
         return self._world.observation(), info
 
     def step(self, action: dict[str, Any]):
-        act = int(action["act"])
-        look = action.get("look")
-        x, y = (-1.0, -1.0) if look is None else (float(look[0]), float(look[1]))
-        return self._step(act, x, y)
+        if isinstance(action, dict) and "look" in action and action["look"] is None:  # (act on what the scan found)
+            action = {**action, "look": _NO_LOOK}
+        check_in(self.action_space, action)
+        look = action["look"]
+        return self._step(int(action["act"]), float(look[0]), float(look[1]))
 
     def _step(self, act: int, x: float, y: float):
         info = self._world.step(act, x, y)
@@ -278,7 +428,9 @@ class AffordEnv(gymnasium.Env if gymnasium else object):
 def flat_action(action: int, grid: int) -> tuple[int, float, float]:
     """FlatAffordEnv's action `action` as (act, x, y): 0-4 act on what the scan found (x = y = -1); then, for
     each place of a grid x grid grid over the scene (row by row) and each act 0-3, look at the place's centre
-    and act. An action out of range raises ValueError naming the range."""
+    and act. An action not in Discrete(5 + 4 grid^2) raises TypeError or ValueError naming the space."""
+    _check_grid(grid)
+    check_in(Discrete(PASS + 1 + 4 * int(grid) ** 2), action)
     return _afford.flat_action(int(action), int(grid))
 
 
@@ -289,8 +441,7 @@ def flat_observation(scene: np.ndarray, gaze, side: int, goal: np.ndarray | None
 
 
 def _check_grid(grid) -> None:
-    if not isinstance(grid, (int, np.integer)) or not 1 <= grid <= 64:
-        raise ValueError(f"grid {grid!r}: places per side, 1 to 64")
+    _whole(grid, "grid (places per side)", 1, 64)
 
 
 class FlatAffordEnv(AffordEnv):
@@ -317,7 +468,8 @@ class FlatAffordEnv(AffordEnv):
         return self._observe(), info
 
     def step(self, action: int):
-        return self._step(*flat_action(action, self.grid))
+        check_in(self.action_space, action)
+        return self._step(*_afford.flat_action(int(action), self.grid))
 
     def _observe(self):
         return self._world.flat_observation()
@@ -346,8 +498,11 @@ class AffordVectorEnv:
             raise ValueError(f"reward {reward!r}: 'success' or 'goal'")
         if reward == "goal" and not scenario:
             raise ValueError("reward 'goal' needs a scenario")
-        if not isinstance(num_envs, (int, np.integer)) or num_envs < 1:
-            raise ValueError(f"num_envs {num_envs!r}: at least 1")
+        _whole(num_envs, "num_envs", 1)
+        _whole(seed, "seed", 0, 2**63 - int(num_envs))
+        _whole(threads, "threads", 1, 1024)
+        if not isinstance(copy, (bool, np.bool_)):
+            raise TypeError(f"copy {_shown(copy)}: True or False")
         _check_grid(grid)
         self.num_envs, self.grid, self._reward = int(num_envs), int(grid), reward
         self._args = (world, system, [f"{k}={v}" for k, v in (set or {}).items()], scenario or "")
@@ -366,6 +521,7 @@ class AffordVectorEnv:
                                       self._threads)
 
     def reset(self, *, seed: int | None = None, options: dict[str, Any] | None = None):
+        _check_reset(seed, options, self.num_envs)
         if seed is not None and seed != self._seed:
             self._seed = seed
             self._make(seed)
@@ -379,10 +535,7 @@ class AffordVectorEnv:
         return self._worlds.flat_observation(), {"step": np.zeros(self.num_envs, np.int64)}
 
     def step(self, actions):
-        actions = np.asarray(actions).reshape(-1)
-        if actions.shape != (self.num_envs,) or not np.issubdtype(actions.dtype, np.integer):
-            raise ValueError(f"actions: {self.num_envs} integers 0 to {self.single_action_space.n - 1}, "
-                             f"not {actions!r}")
+        check_in(self.action_space, actions, "actions")
         obs, reward, terminated, truncated, info, final = self._worlds.step_flat(actions, self.grid,
                                                                                  self._reward == "goal")
         obs = obs.copy() if self._copy else obs

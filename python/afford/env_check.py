@@ -15,6 +15,8 @@ from typing import Any
 
 import numpy as np
 
+from .env import space_kind
+
 
 def _same(a: Any, b: Any) -> bool:
     """Observations equal, whatever their form (arrays, dicts of arrays, tuples)."""
@@ -36,9 +38,31 @@ def _check_obs(obs, space, where: str):
         assert obs.dtype == space.dtype, f"the observation of {where} is {obs.dtype}, its space says {space.dtype}"
 
 
-def _rollout(env, seed: int, steps: int):
+def _outside(space) -> list[tuple[Any, Any]]:
+    """Values outside `space`, each with the space (a Dict's part) it is outside: for a Discrete, one past each
+    end, a float, the text of an integer, None, a list, True; for a Box, a value of another shape, one past its
+    upper bound, text; for a MultiDiscrete, one past the end, floats, another shape; for a Dict, each part's (the
+    other parts sampled), a key missing, and not a dict."""
+    kind = space_kind(space)
+    if kind == "Dict":
+        sample = space.sample()
+        out = [({**sample, key: bad}, part) for key, s in space.spaces.items() for bad, part in _outside(s)]
+        return out + [({k: v for k, v in list(sample.items())[1:]}, space), (0, space)]
+    if kind == "MultiDiscrete":
+        nvec = np.asarray(space.nvec)
+        return [(nvec.copy(), space), (nvec * 0.5, space), (np.zeros(nvec.shape + (1,), np.int64), space)]
+    if kind == "Discrete":
+        low = int(getattr(space, "start", 0))
+        return [(v, space) for v in (low + int(space.n), low - 1, low + 0.5, str(low), None, [low, low], True)]
+    high = np.broadcast_to(np.asarray(space.high, dtype=np.float64), space.shape)
+    return [(np.zeros(tuple(space.shape) + (1,)), space), (high + 1, space), (np.full(space.shape, "0"), space)]
+
+
+def _rollout(env, seed: int, steps: int, first=None):
     obs, _ = env.reset(seed=seed)
     env.action_space.seed(seed)
+    if first:
+        first()
     out = [obs]
     for _ in range(steps):
         obs, reward, terminated, truncated, _ = env.step(env.action_space.sample())
@@ -60,6 +84,8 @@ def check_env(env, steps: int = 50, seed: int = 7) -> None:
       reward a real number, terminated and truncated booleans, info a dict; an action of
       action_space.sample() is taken; an episode's last info has "episode" with "r" (the sum of its
       rewards), "l" (its length) and "t";
+    * an action outside the action space (of another kind, or out of its range or shape) is refused with
+      TypeError or ValueError naming the space, and not taken (Gymnasium's checker does not check this);
     * render follows render_mode (None: returns None; "rgb_array": an H x W x 3 uint8 image), and
       metadata["render_modes"] lists the modes;
     * close() can be called.
@@ -107,6 +133,25 @@ def check_env(env, steps: int = 50, seed: int = 7) -> None:
     assert _same(a[0], b[0]), "reset(seed=) twice: different first observations"
     for t, (x, y) in enumerate(zip(a[1:], b[1:])):
         assert _same(x[0], y[0]) and x[1:] == y[1:], f"reset(seed=) twice with the same actions: step {t} differs"
+    # Refusals: an action outside the action space raises TypeError or ValueError naming the space (the part of a
+    # Dict it is outside), and is not taken: the episode goes on as if it had not been given.
+    refused = []
+
+    def give_outside():
+        for bad, part in outside:
+            try:
+                env.step(bad)
+            except (TypeError, ValueError) as e:
+                assert space_kind(part) in str(e), f"step({bad!r}) was refused without naming the space: {e}"
+                refused.append(bad)
+            else:
+                raise AssertionError(f"step({bad!r}) was taken: it is not in the action space ({part!r})")
+    outside = _outside(env.action_space)
+    r = _rollout(env, seed, steps, first=give_outside)
+    assert len(refused) == len(outside)
+    assert len(r) == len(a) and all(_same(x, y) for x, y in zip([r[0]] + [x[0] for x in r[1:]],
+                                                                [a[0]] + [x[0] for x in a[1:]])), \
+        "after actions it refused, the episode went otherwise than without them"
     c = _rollout(env, seed + 1, steps)
     assert not all(_same(x if i == 0 else x[0], y if i == 0 else y[0]) for i, (x, y) in enumerate(zip(a, c))), \
         "another seed gives the same trajectory: the seed is not used"

@@ -8,8 +8,9 @@
 
 A study is a folder: study.json (what it searches and how), study.journal
 (Optuna's journal file storage, which every worker shares through the file
-system), trials/NNNN (each trial an ordinary experiment folder: it loads,
-plots and replays as any other), and, as trials end, trials.csv,
+system), study.lock and workers/ (its locks, python/afford/locks.py),
+trials/NNNN (each trial an ordinary experiment folder: it loads, plots and
+replays as any other), and, as trials end, trials.csv,
 fig_tune_history.png, fig_tune_params.png and report.md. Several workers
 (processes, or Slurm array tasks of scripts/slurm-submit.sh --tune) given
 the same folder share the study: together they run `trials` trials, each
@@ -22,13 +23,10 @@ trial's parameters first. docs/python.md#studies.
 from __future__ import annotations
 
 import argparse
-import contextlib
-import fcntl
 import json
 import math
 import os
 import signal
-import socket
 import sys
 import threading
 import time
@@ -36,7 +34,7 @@ from dataclasses import dataclass
 from pathlib import Path
 from typing import Any, Callable, Iterable, Sequence
 
-from . import _afford
+from . import _afford, locks
 from .experiments import CurvePoint, ExperimentError, ExperimentStopped, check, run
 from .results import Experiment
 from .search import OBJECTIVES, Choice, _distribution, _objective, _scalar, parse_param
@@ -59,47 +57,19 @@ def _stopped(t) -> str | None:
 
 # ---- the study folder ----------------------------------------------------------------------------------------
 
-@contextlib.contextmanager
-def _claim(folder: Path):
-    """The study's own lock (a file lock the kernel queues waiters on): asking for a trial and counting them."""
-    with open(folder / "study.lock", "a") as f:
-        fcntl.flock(f, fcntl.LOCK_EX)
-        try:
-            yield
-        finally:
-            fcntl.flock(f, fcntl.LOCK_UN)
-
-
 def _write_whole(path: Path, text: str) -> None:
     tmp = path.with_name(f".{path.name}.{os.getpid()}.tmp")
     tmp.write_text(text)
     os.replace(tmp, path)
 
 
-def _start_time(pid: int) -> str | None:
-    try:
-        return Path(f"/proc/{pid}/stat").read_text().rsplit(")", 1)[1].split()[19]
-    except (OSError, IndexError):
-        return None
-
-
-def _worker() -> dict[str, Any]:
-    return {"host": socket.gethostname(), "pid": os.getpid(), "started": _start_time(os.getpid())}
-
-
-def _gone(worker: dict[str, Any] | None) -> bool:
-    """A worker of this host that is no longer running (another host's cannot be told from here)."""
-    return (isinstance(worker, dict) and worker.get("host") == socket.gethostname() and
-            _start_time(int(worker.get("pid", 0))) != worker.get("started"))
-
-
 def _storage(folder: Path):
     import warnings
     import optuna
-    from optuna.storages import JournalFileStorage, JournalStorage
+    from optuna.storages import JournalStorage
     with warnings.catch_warnings():  # (Optuna 3.1 calls its journal storage experimental; it is what shares a study)
         warnings.simplefilter("ignore", optuna.exceptions.ExperimentalWarning)
-        return JournalStorage(JournalFileStorage(str(folder / "study.journal")))
+        return JournalStorage(locks.journal(folder / "study.journal"))  # (its locks: flocks, locks.py)
 
 
 def _sampler(seed: int, number: int):
@@ -366,7 +336,7 @@ def _open(folder: Path, d: dict[str, Any]):
     import optuna
     optuna.logging.set_verbosity(optuna.logging.WARNING)
     folder.mkdir(parents=True, exist_ok=True)
-    with _claim(folder):
+    with locks.claim(folder):
         stored = folder / "study.json"
         if stored.is_file():
             old = json.loads(stored.read_text())
@@ -386,20 +356,23 @@ def _open(folder: Path, d: dict[str, Any]):
                                    load_if_exists=True)
 
 
-def _retry_stopped(study, say) -> None:
-    """Under the claim: this host's trials whose worker is gone fail as lost; each interrupted or lost trial
-    not yet retried is queued again with its parameters (the retry says which it retries)."""
-    import optuna
+def _retry_stopped(study, folder: Path, say) -> None:
+    """Under the claim: a running trial whose worker is gone (its worker file free, locks.gone), or that no
+    worker claimed (a worker asks for a trial and claims it under the claim, which this one holds now: its
+    asker died before claiming it), fails as lost; each interrupted or lost trial not yet retried is queued
+    again with its parameters (the retry says which it retries)."""
     from optuna.trial import TrialState
-    trials = study.get_trials(deepcopy=False)
-    for t in trials:
-        if t.state == TrialState.RUNNING and _gone(t.user_attrs.get("worker")):
-            study.tell(t.number, state=TrialState.FAIL)  # with no error said: lost (_stopped)
-            say(f"trial {t.number}: its worker ({t.user_attrs['worker']['pid']}) is gone: it runs again")
+    for t in study.get_trials(deepcopy=False, states=(TrialState.RUNNING,)):
+        who = t.user_attrs.get("worker")
+        if who is None or locks.gone(folder, who):
+            study.tell(t.number, state=TrialState.FAIL, skip_if_finished=True)  # with no error said: lost
+            why = "its worker died before claiming it" if who is None else \
+                f"its worker ({who.get('host')}:{who.get('pid')}) is gone"
+            say(f"trial {t.number}: {why}: it runs again")
     retried = {t.user_attrs.get("retry_of") for t in study.get_trials(deepcopy=False)}
     for t in study.get_trials(deepcopy=False, states=(TrialState.FAIL,)):
-        if _stopped(t) in RETRIED and t.number not in retried:
-            study.enqueue_trial(t.params, user_attrs={"retry_of": t.number})
+        if _stopped(t) in RETRIED and t.number not in retried:  # (a retry's own values are in fixed_params)
+            study.enqueue_trial(t.system_attrs.get("fixed_params", t.params), user_attrs={"retry_of": t.number})
 
 
 def _counts(study) -> tuple[int, int]:
@@ -455,10 +428,11 @@ def tune(out: str | Path, experiment: str = "base", params: dict[str, Any] | Non
     distributions = {k: _distribution(parse_param(k, v)) for k, v in d["params"].items()}
     (folder / "trials").mkdir(exist_ok=True)
     try:
-        _work(study, d, folder, offsets, total, distributions, value_of, log_level, say)
+        with locks.worker(folder) as me:  # (held while this call runs: its trials' worker is alive)
+            _work(study, d, folder, me, offsets, total, distributions, value_of, log_level, say)
     finally:  # the report, from the study as it is now: under the claim, so that a worker's report of an
         # older state never lands after a later one's (the last worker to end writes the whole study)
-        with _claim(folder):
+        with locks.claim(folder):
             result = load_study(folder)
             if len(result.trials):
                 write_report(result)
@@ -468,23 +442,25 @@ def tune(out: str | Path, experiment: str = "base", params: dict[str, Any] | Non
     return result
 
 
-def _work(study, d, folder: Path, offsets, total: int, distributions, value_of, log_level: str, say) -> None:
-    """This worker's trials, one after another, until the study has its trials finished or under way."""
+def _work(study, d, folder: Path, me: dict[str, Any], offsets, total: int, distributions, value_of, log_level: str,
+          say) -> None:
+    """This worker's (`me`, locks.worker) trials, one after another, until the study has its trials finished or
+    under way. A trial is asked for and claimed (its worker named) under the claim."""
     import optuna
     with _Stop() as stop:
         while True:
             if stop.signal:
                 raise KeyboardInterrupt("afford tune: stopped between trials; the same command continues the study")
-            with _claim(folder):
+            with locks.claim(folder):
                 if stop.signal:  # (one that came while this worker waited for the claim)
                     raise KeyboardInterrupt("afford tune: stopped between trials; the same command continues the study")
-                _retry_stopped(study, say)
+                _retry_stopped(study, folder, say)
                 finished, running = _counts(study)
                 if finished + running >= json.loads((folder / "study.json").read_text())["trials"]:
                     break
                 study.sampler = _sampler(d["seed"], len(study.get_trials(deepcopy=False)))
                 trial = study.ask(distributions)
-                trial.set_user_attr("worker", _worker())
+                trial.set_user_attr("worker", me)
                 trial.set_user_attr("folder", f"trials/{trial.number:04d}")
                 trial.set_user_attr("planned_steps", total)
                 if stop.signal:  # (one that came while the trial was asked for: it runs again, when continued)
@@ -594,7 +570,7 @@ def main(argv: list[str] | None = None) -> int:
         if not stored:
             print(f"afford tune: {out} holds no study.json: no study to report", file=sys.stderr)
             return 2
-        with _claim(out):
+        with locks.claim(out):
             print(write_report(load_study(out)))
         return 0
 

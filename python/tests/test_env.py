@@ -94,7 +94,7 @@ def test_bad_arguments_are_named():
         AffordEnv(reward="money")
     env = AffordEnv()
     env.reset()
-    with pytest.raises(ValueError, match="action 7"):
+    with pytest.raises(ValueError, match=r"action\['act'\] 7 is not in Discrete\(5\): not in 0 to 4"):
         env.step({"act": 7, "look": None})
     with pytest.raises(ValueError):
         AffordEnv(world="no-such-world")
@@ -146,8 +146,10 @@ def test_a_flat_action_is_an_act_on_what_the_scan_found_or_a_look_at_a_place_the
     assert flat_action(5, 3) == (0, 1 / 6, 1 / 6)           # the first place, move
     assert flat_action(5 + 4 * 4 + 2, 3) == (2, 0.5, 0.5)   # the centre place (cell 4: row 1, column 1), turn red
     assert flat_action(5 + 4 * 9 - 1, 3) == (3, 5 / 6, 5 / 6)
-    with pytest.raises(ValueError, match="action 41: 0 to 40"):
+    with pytest.raises(ValueError, match=r"action 41 is not in Discrete\(41\): not in 0 to 40"):
         flat_action(41, 3)
+    with pytest.raises(TypeError, match=r"action 2.5 is not in Discrete\(41\): not an integer"):
+        flat_action(2.5, 3)
     env = FlatAffordEnv(world="base", seed=2, grid=3)
     obs, _ = env.reset(seed=2)
     assert env.action_space.n == 41 and obs.shape == (150, 150, 4)
@@ -197,5 +199,119 @@ def test_the_batched_env_goes_as_single_envs_of_the_same_seeds(threads):
             changed += int(inf["image_changed"]) if "image_changed" in inf else 0
             assert np.array_equal(obs[i], o), (t, i)
     assert ended == 2 * n and changed > 0
-    with pytest.raises(ValueError, match="16 integers 0 to 68"):
+    with pytest.raises(ValueError, match=r"actions array\(\[0, 0, 0\]\) is not in MultiDiscrete\(\[69\] \* 16\): "
+                                         r"of shape \(3,\), not \(16,\)"):
         vec.step(np.zeros(3, np.int64))
+
+
+# ---- what is outside an environment's spaces is refused, naming the space; what is inside is taken -------------
+
+FLAT, VEC = "Discrete(21)", "MultiDiscrete([21] * 3)"  # (grid 2: 5 + 4 * 2 * 2 actions)
+DICT_ACT, DICT_LOOK = "Discrete(5)", "Box(-1.0, 1.0, (2,), float64)"
+OUTSIDE = [  # (env, action, error, what it says)
+    ("flat", 2.5, TypeError, f"action 2.5 is not in {FLAT}: not an integer (float)"),
+    ("flat", "3", TypeError, f"action '3' is not in {FLAT}: not an integer (str)"),
+    ("flat", "move", TypeError, f"action 'move' is not in {FLAT}: not an integer (str)"),
+    ("flat", None, TypeError, f"action None is not in {FLAT}: not an integer (NoneType)"),
+    ("flat", [1, 2], TypeError, f"action [1, 2] is not in {FLAT}: not an integer (list)"),
+    ("flat", True, TypeError, f"action True is not in {FLAT}: not an integer (bool)"),
+    ("flat", np.float64(3.0), TypeError, f"action 3.0 is not in {FLAT}: not an integer (float64)"),
+    ("flat", np.array([3]), TypeError, f"action array([3]) is not in {FLAT}: not an integer (ndarray)"),
+    ("flat", 21, ValueError, f"action 21 is not in {FLAT}: not in 0 to 20"),
+    ("flat", np.int64(-1), ValueError, f"action -1 is not in {FLAT}: not in 0 to 20"),
+    ("dict", {"act": 2.5, "look": None}, TypeError, f"action['act'] 2.5 is not in {DICT_ACT}: not an integer (float)"),
+    ("dict", {"act": "3", "look": None}, TypeError, f"action['act'] '3' is not in {DICT_ACT}: not an integer (str)"),
+    ("dict", {"act": 5, "look": None}, ValueError, f"action['act'] 5 is not in {DICT_ACT}: not in 0 to 4"),
+    ("dict", {"act": 2}, ValueError, "action {'act': 2} is not in Dict(act: Discrete(5), look: Box(-1.0, 1.0, (2,), "
+                                     "float64)): its keys are ['act'], the space's ['act', 'look']"),
+    ("dict", 2, TypeError, f"action 2 is not in Dict(act: {DICT_ACT}, look: {DICT_LOOK}): not a dict"),
+    ("dict", {"act": 2, "look": [0.5, 2.0]}, ValueError,
+     f"action['look'] [0.5, 2.0] is not in {DICT_LOOK}: entry 1 (2.0) is not in [-1.0, 1.0]"),
+    ("dict", {"act": 2, "look": [float("nan"), 0.5]}, ValueError,
+     f"action['look'] [nan, 0.5] is not in {DICT_LOOK}: entry 0 (nan) is not in [-1.0, 1.0]"),
+    ("dict", {"act": 2, "look": 0.5}, ValueError, f"action['look'] 0.5 is not in {DICT_LOOK}: of shape (), not (2,)"),
+    ("dict", {"act": 2, "look": ["a", "b"]}, TypeError,
+     f"action['look'] ['a', 'b'] is not in {DICT_LOOK}: not numbers"),
+    ("vec", [2.5, 1, 1], TypeError, f"actions [2.5, 1, 1] is not in {VEC}: not integers (list of float64)"),
+    ("vec", ["3", "1", "1"], TypeError, f"actions ['3', '1', '1'] is not in {VEC}: not integers"),
+    ("vec", "move", TypeError, f"actions 'move' is not in {VEC}: not integers (str)"),
+    ("vec", None, TypeError, f"actions None is not in {VEC}: not integers (NoneType)"),
+    ("vec", [1, 2], ValueError, f"actions [1, 2] is not in {VEC}: of shape (2,), not (3,)"),
+    ("vec", np.array([[1, 2, 3]]), ValueError,
+     f"actions array([[1, 2, 3]]) is not in {VEC}: of shape (1, 3), not (3,)"),
+    ("vec", [1, 21, -1], ValueError, f"actions [1, 21, -1] is not in {VEC}: entry 1 (21) is not in [0, 20] "
+                                     "(2 entries are outside)"),
+]
+
+
+def make(kind):
+    env = {"flat": lambda: FlatAffordEnv(world="base", seed=3, grid=2),
+           "dict": lambda: AffordEnv(world="base", seed=3),
+           "vec": lambda: AffordVectorEnv(3, world="base", seed=3, grid=2)}[kind]()
+    env.reset(seed=3)
+    return env
+
+
+@pytest.mark.parametrize("kind, action, error, says", OUTSIDE, ids=[f"{k}-{a!r}" for k, a, *_ in OUTSIDE])
+def test_an_action_outside_the_space_is_refused_naming_the_space_and_the_value(kind, action, error, says):
+    env, twin = make(kind), make(kind)
+    with pytest.raises(error) as refused:
+        env.step(action)
+    assert str(refused.value).startswith(says), str(refused.value)
+    space = env.action_space
+    assert not space.contains({**action, "look": [-1.0, -1.0]} if isinstance(action, dict) and "look" in action
+                              and action["look"] is None else action)  # (the space says the same)
+    good = {"flat": 7, "dict": {"act": 1, "look": None}, "vec": [7, 0, 20]}[kind]  # nothing of it was taken:
+    assert _same(env.step(good)[0], twin.step(good)[0])  # the next step as a twin's that was given none
+
+
+def _same(a, b):
+    return all(np.array_equal(a[k], b[k]) for k in a) if isinstance(a, dict) else np.array_equal(a, b)
+
+
+@pytest.mark.parametrize("kind, actions", [
+    ("flat", [7, np.int64(7), np.int32(7), np.uint8(7), np.array(7), 20, 0]),
+    ("dict", [{"act": 1, "look": None}, {"act": np.int64(1), "look": [-1, -1]}, {"act": np.array(1), "look": None},
+              {"act": 1, "look": np.array([-1.0, -0.5], np.float32)}, {"act": 4, "look": (0.5, 1)}]),
+    ("vec", [[7, 0, 20], np.array([7, 0, 20]), np.array([7, 0, 20], np.uint8), (7, 0, 20)]),
+])
+def test_every_form_of_a_value_the_space_holds_is_taken_as_that_value(kind, actions):
+    env = make(kind)
+    for a in actions:
+        twin = make(kind)
+        plain = {"act": int(a["act"]), "look": None if a["look"] is None or a["look"][0] < 0 else
+                 [float(a["look"][0]), float(a["look"][1])]} if kind == "dict" else (
+            int(a) if kind == "flat" else [int(x) for x in a])
+        env.reset(seed=3)
+        assert _same(env.step(a)[0], twin.step(plain)[0]), a
+
+
+@pytest.mark.parametrize("kind", ["flat", "dict", "vec"])
+def test_reset_refuses_a_seed_or_options_it_does_not_take(kind):
+    env = make(kind)
+    top = 2**63 - (3 if kind == "vec" else 1)
+    for seed, error, says in [(2.5, TypeError, "seed 2.5: a whole number 0 to"), ("3", TypeError, "seed '3'"),
+                              (True, TypeError, "seed True"), (-1, ValueError, f"seed -1: a whole number 0 to {top}"),
+                              (top + 1, ValueError, f"seed {top + 1}: a whole number 0 to {top}")]:
+        with pytest.raises(error, match=f"^{says}"):
+            env.reset(seed=seed)
+    with pytest.raises(ValueError, match=r"options \{'render': True\}: this environment takes no reset options"):
+        env.reset(options={"render": True})
+    with pytest.raises(TypeError, match="options 'fast': a dict or None"):
+        env.reset(options="fast")
+    env.reset(seed=np.int64(4), options={})
+    env.reset(seed=top, options=None)
+
+
+def test_constructors_refuse_what_they_do_not_take():
+    for make_it, error, says in [
+            (lambda: AffordEnv(seed=1.5), TypeError, "seed 1.5: a whole number"),
+            (lambda: FlatAffordEnv(grid=2.0), TypeError, r"grid \(places per side\) 2.0: a whole number 1 to 64"),
+            (lambda: FlatAffordEnv(grid=65), ValueError, r"grid \(places per side\) 65: a whole number 1 to 64"),
+            (lambda: AffordVectorEnv(True), TypeError, "num_envs True: a whole number 1 to"),
+            (lambda: AffordVectorEnv(2, threads=1.5), TypeError, "threads 1.5: a whole number 1 to 1024"),
+            (lambda: AffordVectorEnv(2, copy="no"), TypeError, "copy 'no': True or False"),
+            (lambda: AffordVectorEnv(2, seed=2**63 - 1), ValueError, "seed 9223372036854775807: a whole number 0 to "
+                                                                      "9223372036854775806")]:
+        with pytest.raises(error, match=f"^{says}"):
+            make_it()

@@ -1,4 +1,5 @@
 """afford.tune / `afford tune`: studies with Optuna, shared by workers, pruned on the curves, stopped and continued."""
+import contextlib
 import json
 import os
 import signal
@@ -211,3 +212,219 @@ def test_on_curve_sees_each_point_and_can_stop_the_experiment(tmp_path):
                        capture_output=True, text=True)
     assert r.returncode == 0, r.stdout + r.stderr
     assert len(afford.load(tmp_path / "e").runs) == 2
+
+
+
+# ---- a worker killed at any moment: nothing it leaves stops the others (docs/operating.md#locks) -------------
+
+def tune_here(out: Path, trials: int, **kw) -> list[str]:
+    """tune_command's study, in this process, without pruning: what it says."""
+    said = []
+    afford.tune(out, "base", params=dict(p.split("=", 1) for p in (LEAK, RATE)), trials=trials, steps=300,
+                keep_logs="none", prune=False, say=said.append, **kw)
+    return said
+
+
+@contextlib.contextmanager
+def within(seconds: int, what: str):
+    """A bound on a block that would otherwise wait for good (SIGALRM raises in it)."""
+    def late(*_):
+        raise TimeoutError(f"{what}: still waiting after {seconds} s")
+    old = signal.signal(signal.SIGALRM, late)
+    signal.alarm(seconds)
+    try:
+        yield
+    finally:
+        signal.alarm(0)
+        signal.signal(signal.SIGALRM, old)
+
+
+def dies_inside(what) -> None:
+    """A child process that enters the context `what()` and is killed (SIGKILL) inside it."""
+    r, w = os.pipe()
+    pid = os.fork()
+    if pid == 0:
+        try:
+            with what():
+                os.write(w, b"1")
+                signal.pause()
+        finally:
+            os._exit(1)
+    os.close(w)
+    done = os.read(r, 1)
+    os.kill(pid, signal.SIGKILL)
+    os.waitpid(pid, 0)
+    os.close(r)
+    assert done == b"1", "the child failed before it was killed"
+
+
+def test_a_worker_killed_while_it_holds_the_journals_lock_does_not_stop_the_next(tmp_path):
+    out = tmp_path / "study"
+    tune_here(out, 1)
+    lock = afford.study._storage(out)._backend._lock  # (killed while appending to the journal)
+    dies_inside(lambda: contextlib.nullcontext(lock.acquire()))
+    with within(60, "the next worker, waiting for the journal's lock"):
+        tune_here(out, 2)
+    assert afford.load_study(out).trials["state"].tolist() == ["COMPLETE", "COMPLETE"]
+
+
+@pytest.fixture(scope="module")
+def one_trial(tmp_path_factory) -> Path:
+    """A study of one trial, made once: tests copy it."""
+    out = tmp_path_factory.mktemp("one") / "study"
+    tune_here(out, 1)
+    return out
+
+
+@pytest.mark.parametrize("first", ["writer", "reader"])
+@pytest.mark.parametrize("tail", [b'{"op_code": 2, "worker_id": "w", "study_id": 0, "user_at',
+                                  b'{"op_code": 2, "worker_id": "w", "study_id": 0, "user_attr": {"c": 3}}'],
+                         ids=["torn", "whole"])
+def test_a_journal_line_its_killed_writer_left_unended_is_mended_by_the_next(tmp_path, one_trial, tail, first):
+    import shutil
+    import optuna
+    from optuna.storages import JournalFileStorage
+    out = tmp_path / "study"
+    shutil.copytree(one_trial, out)
+    journal = out / "study.journal"
+    before = journal.read_bytes()
+    with open(journal, "ab") as f:
+        f.write(tail)  # (a line whose writer was killed before its end)
+    whole = tail.endswith(b"}")
+    mended = before + (tail + b"\n" if whole else b"")
+    if first == "writer":  # the next to touch the journal appends to it, without reading it
+        writer = JournalFileStorage(str(journal), lock_obj=afford.locks.JournalLock(journal))
+        for key, value in (("a", 1), ("b", 2)):
+            writer.append_logs([{"op_code": 2, "worker_id": "w", "study_id": 0, "user_attr": {key: value}}])
+    else:  # a worker reads it first (as the killed one left it), then appends
+        study = optuna.load_study(study_name="afford", storage=afford.study._storage(out))
+        assert journal.read_bytes() == mended and study.user_attrs == ({"c": 3} if whole else {})
+        study.set_user_attr("a", 1)
+        study.set_user_attr("b", 2)
+        assert study.user_attrs == ({"c": 3} if whole else {}) | {"a": 1, "b": 2}
+    again = optuna.load_study(study_name="afford", storage=afford.study._storage(out))  # (reads it all anew)
+    assert again.user_attrs == ({"c": 3} if whole else {}) | {"a": 1, "b": 2}
+    assert journal.read_bytes().startswith(mended)
+    lines = journal.read_bytes().split(b"\n")
+    assert lines[-1] == b"" and all(json.loads(line) is not None for line in lines[:-1])
+
+
+def test_a_reader_takes_a_line_being_written_whole_never_in_two_pieces(tmp_path, monkeypatch):
+    import threading
+    from optuna.storages._journal import file as optuna_file
+    out = tmp_path / "study"
+    tune_here(out, 1)
+    journal = out / "study.journal"
+    storage = afford.study._storage(out)  # (a worker's, which has read the journal so far)
+    line = json.dumps({"op_code": 2, "worker_id": "w", "study_id": 0, "user_attr": {"c": 3}}).encode() + b"\n"
+    go_on, half_written = os.pipe(), os.pipe()
+    writer = os.fork()
+    if writer == 0:  # another worker, in the middle of an append: half of its line written, under the lock
+        try:
+            lock = afford.locks.JournalLock(journal)
+            lock.acquire()
+            with open(journal, "ab", buffering=0) as f:
+                f.write(line[:40])
+                os.write(half_written[1], b"1")
+                os.read(go_on[0], 1)
+                f.write(line[40:])
+            lock.release()
+        finally:
+            os._exit(0)
+    assert os.read(half_written[0], 1) == b"1"
+    half = journal.stat().st_size
+    saw_half = threading.Event()
+
+    class Slow:  # (the reader's file: at a line's first half, it waits until the writer has written the rest)
+        def __init__(self, f):
+            self.f = f
+
+        def __getattr__(self, name):
+            return getattr(self.f, name)
+
+        def __enter__(self):
+            return self
+
+        def __exit__(self, *exc):
+            self.f.close()
+
+        def __iter__(self):
+            while piece := self.f.readline():
+                yield piece
+                if not piece.endswith(b"\n"):
+                    saw_half.set()
+                    wait_for(lambda: journal.stat().st_size > half, "the writer to finish its line")
+    monkeypatch.setattr(optuna_file, "open", lambda *a, **k: Slow(open(*a, **k)), raising=False)
+    failed = []
+    reader = threading.Thread(target=lambda: failed.extend(_raised(storage.get_all_studies)))
+    reader.start()
+    wait_for(lambda: saw_half.is_set() or waits_for_a_lock(os.getpid()),
+             "the reader to wait for the writer, or to see half its line")
+    os.write(go_on[1], b"1")
+    reader.join(60)
+    os.waitpid(writer, 0)
+    assert not failed, failed
+    assert storage.get_study_user_attrs(0) == {"c": 3}
+
+
+def waits_for_a_lock(pid: int) -> bool:
+    """The process `pid` waits for a flock (/proc/locks: "N: -> FLOCK ADVISORY READ PID ...")."""
+    return any(f[1:3] == ["->", "FLOCK"] and f[5] == str(pid)
+               for f in (line.split() for line in Path("/proc/locks").read_text().splitlines()) if len(f) > 5)
+
+
+def _raised(call) -> list[BaseException]:
+    try:
+        call()
+    except Exception as e:  # (to the test's thread)
+        return [e]
+    return []
+
+
+def test_a_trial_asked_for_by_a_worker_that_died_before_claiming_it_runs_again(tmp_path):
+    import optuna
+    out = tmp_path / "study"
+    tune_here(out, 1)
+
+    @contextlib.contextmanager
+    def ask():  # as a worker does under the claim; killed there, before it names itself the trial's worker
+        study = optuna.load_study(study_name="afford", storage=afford.study._storage(out))
+        with afford.locks.claim(out):
+            study.ask({k: afford.study._distribution(afford.study.parse_param(k, v))
+                       for k, v in json.loads((out / "study.json").read_text())["params"].items()})
+            yield
+    dies_inside(ask)
+    before = afford.load_study(out).trials
+    assert before["state"].tolist() == ["COMPLETE", "RUNNING"] and before["worker"].iloc[1] is None
+    said = tune_here(out, 2)
+    assert "trial 1: its worker died before claiming it: it runs again" in said
+    df = afford.load_study(out).trials
+    assert df["state"].tolist() == ["COMPLETE", "FAIL", "COMPLETE"] and df["stopped"].iloc[1] == "worker lost"
+    assert df["retry_of"].iloc[2] == 1
+    assert df["param motivation.leak"].iloc[2] == before["param motivation.leak"].iloc[1]
+
+
+def test_another_hosts_trial_runs_again_once_its_worker_is_gone_and_not_before(tmp_path):
+    out = tmp_path / "study"
+    objective = tmp_path / "objective.py"  # on the other host, it holds its trial until killed
+    objective.write_text("import socket, threading\n\ndef mae(e):\n    if socket.gethostname() == 'node-b':\n"
+                         "        print('in the objective', flush=True)\n        threading.Event().wait()\n"
+                         "    return float(e.runs['affordance_mae'].mean())\n")
+    command = tune_command(out, 1, 300, "--keep-logs", "none", "--no-prune", "--objective", f"{objective}:mae")
+    other = subprocess.Popen([PYTHON, "-c", "import socket, sys\nsocket.gethostname = lambda: 'node-b'\n"
+                              "from afford.study import main\nsys.exit(main(sys.argv[1:]))", *command[4:]],
+                             stdout=subprocess.PIPE, text=True)
+    assert other.stdout.readline().strip() == "in the objective"
+    # alive on its host (its worker file held): its trial is left to it
+    said = tune_here(out, 2, objective=f"{objective}:mae")
+    assert "1 trial(s) still run in other workers; this worker is done" in said
+    df = afford.load_study(out).trials
+    assert df["state"].tolist() == ["RUNNING", "COMPLETE"] and df["worker"].iloc[0] == f"node-b:{other.pid}"
+    other.kill()  # (a node lost: its locks go with it)
+    other.wait()
+    other.stdout.close()
+    said = tune_here(out, 2, objective=f"{objective}:mae")
+    assert f"trial 0: its worker (node-b:{other.pid}) is gone: it runs again" in said
+    df = afford.load_study(out).trials
+    assert df["state"].tolist() == ["FAIL", "COMPLETE", "COMPLETE"] and df["retry_of"].iloc[2] == 0
+    assert not list((out / "workers").iterdir())  # (each worker's file gone with it)
