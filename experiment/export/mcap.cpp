@@ -83,13 +83,11 @@ McapWriter::McapWriter(const fs::path& file, McapOptions options)
   std::error_code ec;
   if (fs::exists(fs::symlink_status(file_, ec)))
     throw std::runtime_error(file_.string() + " exists: afford export writes a new file, never over one");
-  const int fd = ::open(partial_.c_str(), O_WRONLY | O_CREAT | O_EXCL | O_CLOEXEC, 0644);
-  if (fd < 0) {
-    const int err = errno;
-    throw std::runtime_error("cannot create " + partial_.string() + ": " + std::strerror(err) +
-                             (err == EEXIST ? " (an export that did not finish? remove it)" : ""));
-  }
-  f_ = ::fdopen(fd, "wb");
+  // Held while it is written (a kernel lock): an export killed half-way leaves a partial file the next one takes
+  // over, and two exports of one file at once are refused, naming it.
+  holdPartial(held_, partial_.string(), "afford export");
+  const int fd = ::dup(held_.fd());
+  f_ = fd < 0 ? nullptr : ::fdopen(fd, "wb");
   if (!f_) {
     ::close(fd);
     ::unlink(partial_.c_str());
@@ -265,6 +263,7 @@ void McapWriter::close() {
   const int closed = std::fclose(f_);
   f_ = nullptr;
   if (closed != 0) fail("close");
+  held_.release();
   int renamed = ::renameat2(AT_FDCWD, partial_.c_str(), AT_FDCWD, file_.c_str(), RENAME_NOREPLACE);
   if (renamed != 0 && (errno == EINVAL || errno == ENOSYS)) {
     // A file system without RENAME_NOREPLACE: look, then rename.

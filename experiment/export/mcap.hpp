@@ -24,6 +24,8 @@
 #include <utility>
 #include <vector>
 
+#include "afford/file_lock.hpp"
+
 namespace afford {
 
 struct McapOptions {
@@ -90,6 +92,7 @@ class McapWriter {
 
   std::filesystem::path file_, partial_;
   McapOptions options_;
+  HeldFile held_;  // the partial file's lock, while it is written
   std::FILE* f_ = nullptr;
   bool closed_ = false;
   std::uint64_t offset_ = 0;

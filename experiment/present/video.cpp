@@ -1,5 +1,7 @@
 #include "experiment/present/video.hpp"
 
+#include "afford/file_lock.hpp"
+
 #include <fcntl.h>
 #include <signal.h>
 #include <spawn.h>
@@ -118,7 +120,10 @@ VideoResult renderVideo(const VideoOptions& o, spdlog::logger& log) {
   const std::string format = formatOf(o.out);
   if (fs::exists(o.out)) throw std::runtime_error("--out " + o.out.string() + " exists: afford never overwrites a file");
   const fs::path partial = o.out.string() + ".partial";
-  if (fs::exists(partial)) throw std::runtime_error(partial.string() + " exists (another render writing it?)");
+  // Held while ffmpeg writes it (a kernel lock): a render killed half-way leaves a partial file the next one takes
+  // over, and two renders of one file at once are refused, naming it.
+  HeldFile held;
+  holdPartial(held, partial.string(), "afford render");
   const std::shared_ptr<const BusKey> key = o.bus_key.empty() ? nullptr : busKeyFrom(o.bus_key);
   const ProtocolConfig protocol = loadProtocol(o.config_dir.empty() ? defaultConfigDir() : o.config_dir);
   // The run's messages in step order: each frame pairs a step's own messages, however the log interleaves them.

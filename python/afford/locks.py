@@ -8,6 +8,8 @@ every lock afford takes, and what frees each: docs/operating.md#locks.
                        reads it under a shared lock, so that no reader takes half a line being written;
   worker(folder)       workers/HOST.PID.START.K, held for as long as a tune() call runs: a trial whose
                        worker's file is free (or gone) has lost its worker, on this host or another.
+
+And pyplot(): Matplotlib's own lock of its font cache, which is not the kernel's, broken when its holder is gone.
 """
 from __future__ import annotations
 
@@ -176,3 +178,24 @@ def gone(folder: Path, who: Any) -> bool:
             return False  # (not a name worker() gives: nothing to look at)
         return _free(folder / WORKERS / name)
     return who.get("host") == socket.gethostname() and start_time(int(who.get("pid", 0))) != who.get("started")
+
+
+# Matplotlib holds its font cache's lock (a file made with O_EXCL) only while it writes the cache: milliseconds. One
+# older than this was left by a process killed meanwhile, which every later Matplotlib would wait 5 s for and fail on.
+MATPLOTLIB_LOCK_STALE_S = 60
+
+
+def pyplot():
+    """matplotlib.pyplot, drawing to files (Agg), after taking away a lock of Matplotlib's font cache that no live
+    process holds (one older than MATPLOTLIB_LOCK_STALE_S): the lock is Matplotlib's own file, not a kernel lock,
+    and a process killed while it wrote the cache left it for good."""
+    import time
+
+    import matplotlib
+    matplotlib.use("Agg")
+    for lock in Path(matplotlib.get_cachedir()).glob("*.matplotlib-lock"):
+        with contextlib.suppress(FileNotFoundError):  # (another process took it away first)
+            if time.time() - lock.stat().st_mtime > MATPLOTLIB_LOCK_STALE_S:
+                lock.unlink()
+    import matplotlib.pyplot as plt
+    return plt

@@ -172,7 +172,7 @@ def _scale(ax, values) -> None:
 
 
 def _save(fig, path: Path) -> None:
-    import matplotlib.pyplot as plt
+    plt = locks.pyplot()
     tmp = path.with_name(f".{path.stem}.{os.getpid()}.tmp.png")
     fig.savefig(tmp)
     plt.close(fig)
@@ -181,9 +181,7 @@ def _save(fig, path: Path) -> None:
 
 def write_report(study: Study) -> Path:
     """trials.csv, fig_tune_history.png, fig_tune_params.png and report.md in the study's folder."""
-    import matplotlib
-    matplotlib.use("Agg")
-    import matplotlib.pyplot as plt
+    plt = locks.pyplot()
 
     folder, d, df = study.folder, study.definition, study.trials
     _write_whole(folder / "trials.csv", df.to_csv(index=False))

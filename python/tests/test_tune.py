@@ -428,3 +428,21 @@ def test_another_hosts_trial_runs_again_once_its_worker_is_gone_and_not_before(t
     df = afford.load_study(out).trials
     assert df["state"].tolist() == ["FAIL", "COMPLETE", "COMPLETE"] and df["retry_of"].iloc[2] == 0
     assert not list((out / "workers").iterdir())  # (each worker's file gone with it)
+
+
+def test_a_lock_matplotlib_left_behind_does_not_stop_a_studys_figures(tmp_path):
+    """Matplotlib's font-cache lock is a file of its own (not a kernel lock): a process killed while it wrote the cache
+    left it, and every later import of pyplot waited 5 s and raised TimeoutError (a study's report with it). One that
+    no live process can hold (older than a writer ever holds it) is taken away by afford's pyplot()."""
+    cache = tmp_path / "mpl"  # a cache without its font list: Matplotlib writes it, under its lock
+    cache.mkdir()
+    from matplotlib import font_manager
+    stale = cache / f"fontlist-v{font_manager.FontManager.__version__}.json.matplotlib-lock"
+    stale.write_text("")
+    then = time.time() - 3600
+    os.utime(stale, (then, then))
+    r = subprocess.run([sys.executable, "-c", "from afford import locks; plt = locks.pyplot(); plt.figure()"],
+                       env={**os.environ, "MPLCONFIGDIR": str(cache)}, capture_output=True, text=True, timeout=120)
+    assert r.returncode == 0, r.stderr
+    assert not stale.exists()
+    assert list(cache.glob("fontlist-*.json")), "Matplotlib wrote no font cache"

@@ -11,6 +11,7 @@ same logs with their channels interleaved anew (shuffle-log: each channel in
 its own order, the channels up to a window of steps apart, in two segments)
 give the same frames, decoded pixel for pixel (ffmpeg's framemd5).
 """
+import fcntl
 import gzip
 import json
 import os
@@ -132,6 +133,19 @@ def main():
     r = render(OUT / "base-scenario3.lcm", failed, "--ffmpeg", "/bin/false", check=False)
     assert r.returncode != 0, "a failing ffmpeg went unnoticed"
     assert not failed.exists() and not Path(str(failed) + ".partial").exists(), "a failed render left a file"
+
+    # What a render killed half-way left (its partial file, no writer holding it) is taken over by the next render
+    # of the file; one a live render holds (its lock taken here, as a render at work holds it) is refused, naming it.
+    left = OUT / "killed.mp4"
+    Path(str(left) + ".partial").write_bytes(b"half a video")
+    render(OUT / "base-scenario3.lcm", left)
+    assert probe(left)[0] > 0 and not Path(str(left) + ".partial").exists(), "a killed render's partial file stayed"
+    busy = OUT / "busy.mp4"
+    with open(str(busy) + ".partial", "wb") as held:
+        fcntl.flock(held, fcntl.LOCK_EX)
+        r = render(OUT / "base-scenario3.lcm", busy, check=False)
+    assert r.returncode != 0 and "busy.mp4.partial is being written by another afford render" in r.stderr, r.stderr
+    assert not busy.exists(), "a render of a file being written wrote it"
 
     # A log cut in the middle of an event: what it holds is drawn.
     log = OUT / "multi-step-top-down-budget.lcm"

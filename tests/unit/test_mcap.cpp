@@ -397,6 +397,30 @@ TEST_F(Export, TheWriterLeavesNothingUnlessClosed) {
   EXPECT_THROW(McapWriter(dir_ / "no-such-folder" / "x.mcap", McapOptions{}), std::runtime_error);
 }
 
+// What an export killed half-way left (FILE.partial, no writer holding it) is taken over by the next export of
+// FILE; a partial file another writer holds (a live export) is refused, naming it. (The partial file was made
+// with O_EXCL: one left by a killed export refused every later one until someone removed it.)
+TEST_F(Export, APartialFileOfAWriterGoneIsTakenOverAndOneInUseIsRefused) {
+  const fs::path log = storedLog();
+  std::ofstream(dir_ / "killed.mcap.partial") << "half an export";  // its writer killed: nobody holds it
+  const ExportResult r = exportLog(log, "killed.mcap");
+  EXPECT_GT(r.events, 0);
+  EXPECT_FALSE(fs::exists(dir_ / "killed.mcap.partial"));
+  EXPECT_GT(readMcap(dir_ / "killed.mcap").messages.size(), 0u);
+  {
+    McapWriter live(dir_ / "busy.mcap", McapOptions{"", "afford test"});  // a writer at work on busy.mcap
+    try {
+      exportLog(log, "busy.mcap");
+      ADD_FAILURE() << "a second export of a file being written was not refused";
+    } catch (const std::runtime_error& e) {
+      EXPECT_NE(std::string(e.what()).find("busy.mcap.partial is being written by another afford export"),
+                std::string::npos)
+          << e.what();
+    }
+    EXPECT_TRUE(fs::exists(dir_ / "busy.mcap.partial"));  // the live writer's file is left to it
+  }
+}
+
 // The generated conversion: int64_t exact at its extremes, bytes as base64, a value that is not finite as null.
 TEST(JsonMessages, IntegersAreExactBytesBase64AndNoInvalidJson) {
   scene_t s{};
