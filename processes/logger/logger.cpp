@@ -73,6 +73,30 @@ RecordedSoFar readRecorded(const std::string& dir, const LogLimits& limits) {
   return r;
 }
 
+bool wroteLog(const std::string& dir, std::int64_t session) {
+  std::ifstream in(fs::path(dir) / "manifest.json");
+  const nlohmann::json m = nlohmann::json::parse(in, nullptr, false);
+  return !m.is_discarded() && m.is_object() && m.contains("logger_session") &&
+         m["logger_session"].is_number_integer() && m["logger_session"].get<std::int64_t>() == session;
+}
+
+std::string setAsideLog(const std::string& dir) {
+  fs::path aside;
+  std::error_code ec;
+  for (int k = 1;; ++k) {
+    aside = fs::path(dir) / ("other-request-" + std::to_string(k));
+    if (fs::create_directory(aside, ec)) break;
+    if (ec) throw std::runtime_error("cannot make " + aside.string() + ": " + ec.message());
+  }
+  for (const auto& e : fs::directory_iterator(dir, ec)) {
+    const std::string name = e.path().filename().string();
+    if (name != "manifest.json" && !(name.rfind("log.", 0) == 0 && e.path().extension() == ".lcm")) continue;
+    fs::rename(e.path(), aside / name, ec);
+    if (ec) throw std::runtime_error("cannot move " + e.path().string() + " into " + aside.string() + ": " + ec.message());
+  }
+  return aside.string();
+}
+
 RunLog::RunLog(const std::string& dir, nlohmann::json manifest) : dir_(dir), manifest_(std::move(manifest)) {
   const fs::path old_manifest = fs::path(dir_) / "manifest.json";
   if (fs::exists(old_manifest)) {

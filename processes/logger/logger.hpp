@@ -36,6 +36,11 @@ struct RecordedSoFar {
 };
 // Read with the project's log reader (afford/logfile.hpp) and its caps.
 RecordedSoFar readRecorded(const std::string& dir, const LogLimits& limits);
+// Does the manifest in `dir` say the logger process of `session` wrote it (its "logger_session")?
+bool wroteLog(const std::string& dir, std::int64_t session);
+// The log in `dir` (its segments and manifest) moved, whole, into dir/other-request-<k>/ (k the first free);
+// returns that folder. Throws std::runtime_error naming what could not be moved.
+std::string setAsideLog(const std::string& dir);
 
 // A folder held by a shared flock until release() or the end of this object (or of the process).
 class HeldFolder {

@@ -49,6 +49,7 @@ void LoggerNode::onConfigured(const RunConfig& config) {
       {"seed", m.seed},             {"steps", config.steps},      {"afford_version", affordVersion()},
       {"config_yaml", m.config_yaml}, {"segments", nlohmann::json::array()}, {"complete", false},
       {"config_digest", m.digest},  // the request recorded (run_config_t.request)
+      {"logger_session", session_},  // this logger process, while it lives
       {"bus_keyed", edge().key() != nullptr}};  // recorded without the tags either way
   const std::string dir = (std::filesystem::path(log_root_) / m.run_id).string();
   written_.clear();
@@ -60,16 +61,23 @@ void LoggerNode::onConfigured(const RunConfig& config) {
   // A logger restarted during the run: go on where the earlier segments end.
   LogLimits limits;
   limits.event_bytes = config.protocol.bus.max_message_bytes;
-  const RecordedSoFar before = readRecorded(dir, limits);
+  RecordedSoFar before = readRecorded(dir, limits);
   for (const LogProblem& p : before.problems)
     log_->warn("an earlier segment of run '{}': offset {}: {}: skipped", m.run_id, p.offset, p.what);
   // Earlier segments of this request (a restarted logger) are gone on from; another request's log is never mixed
-  // with this one, nor moved or overwritten: the folder is someone else's record.
-  if (before.events > 0 && before.request != m.digest)
-    throw ConfigError(dir + " holds the log of " +
-                      (before.request ? "another request of run '" + m.run_id + "' (another RUN_CONFIG)"
-                                      : "a run whose RUN_CONFIG cannot be read") +
-                      ": its log is kept as it is; move the folder aside, or use another run id");
+  // with this one, nor overwritten. One this very process wrote (a request it took from a recording played back,
+  // or from another runner, and was told to leave) is set aside whole, so that the one asked for now is recorded;
+  // one written by anyone else is someone else's record: the run is refused, naming it.
+  if (before.events > 0 && before.request != m.digest) {
+    if (!wroteLog(dir, session_))
+      throw ConfigError(dir + " holds the log of " +
+                        (before.request ? "another request of run '" + m.run_id + "' (another RUN_CONFIG)"
+                                        : "a run whose RUN_CONFIG cannot be read") +
+                        ": its log is kept as it is; move the folder aside, or use another run id");
+    log_->warn("run '{}': {} held the log of another request of it, which this logger recorded and was told to "
+               "leave: set aside in {}", m.run_id, dir, setAsideLog(dir));
+    before = RecordedSoFar{};
+  }
   log_file_ = std::make_unique<RunLog>(dir, manifest);  // refuses a folder that holds a complete log
   log_file_->sawProcess(process(), static_cast<int>(getpid()));
   control_dropped_ = log_file_->count("control_dropped");  // an earlier segment's

@@ -58,6 +58,7 @@ class LoggerNode : public NodeBase {
   std::map<std::string, bool> left_;  // processes of the run -> their final counts are in
   bool ended_ = false;                // the run's end (RESULT, EXTRINSIC_RESULT) is in the log
   std::string write_error_;           // the first write that failed
+  const std::int64_t session_ = BusKey::newRequest();  // this process, in the manifests it writes (wroteLog)
 };
 
 }  // namespace afford

@@ -199,13 +199,28 @@ void PredictorsNode::onConfigured(const RunConfig& config) {
     }
   } else {
     loaded_.reset();
-    // Never overwrite what an earlier run of this id saved (a replayed log on a live bus, a reused id).
+    // Never overwrite what an earlier run of this id saved (a replayed log on a live bus, a reused id). One this
+    // very process saved for another request of the run id (taken from a recording played back, or from another
+    // runner, and then left) is set aside, so that the request asked for now runs. (What was saved for other run
+    // ids is forgotten: the map holds one run's files.)
+    for (auto it = saved_.begin(); it != saved_.end();)
+      it = std::filesystem::path(it->first).parent_path().filename() == runId() ? std::next(it) : saved_.erase(it);
     for (const std::string& file : {config.checkpoint, config.checkpoint_after_actions > 0
                                                            ? actionsCheckpoint(config.checkpoint, config.checkpoint_after_actions)
-                                                           : std::string()})
-      if (!file.empty() && std::filesystem::exists(file))
+                                                           : std::string()}) {
+      if (file.empty() || !std::filesystem::exists(file)) continue;
+      const auto mine = saved_.find(file);
+      if (mine == saved_.end() || mine->second == runConfigMessage().digest)
         throw ConfigError("checkpoint " + file + " exists already: run '" + runId() +
                           "' has been run before, and its weights are not overwritten");
+      std::string aside;
+      for (int k = 1; std::filesystem::exists(aside = file + ".other-request-" + std::to_string(k)); ++k) {
+      }
+      std::filesystem::rename(file, aside);
+      saved_.erase(mine);
+      log_->warn("run '{}': {}, which this process saved for another request of the run, set aside as {}", runId(),
+                 file, aside);
+    }
     core_ = std::make_shared<Predictors>(config);
   }
   if (async_effects_ && learning(config.phase)) trainer_ = std::make_unique<EffectTrainer>(*core_);
@@ -329,6 +344,7 @@ void PredictorsNode::saveActionsCheckpoint() {
   const std::string file = actionsCheckpoint(config().checkpoint, n);
   try {
     core_->save(file);
+    saved_[file] = runConfigMessage().digest;
     log_->info("run '{}': weights after {} actions saved to {}", runId(), n, file);
   } catch (const std::exception& e) {
     log_->error("{}", e.what());
@@ -359,6 +375,7 @@ void PredictorsNode::finish() {
   if (!r.checkpoint.empty()) {
     try {
       core_->save(r.checkpoint, r.weights_checksum);
+      saved_[r.checkpoint] = runConfigMessage().digest;
     } catch (const std::exception& e) {
       log_->error("{}", e.what());
       r.checkpoint.clear();

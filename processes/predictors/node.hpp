@@ -85,6 +85,8 @@ class PredictorsNode : public NodeBase {
   };
   static constexpr std::size_t kWhatKept = 2048;  // of 1323 doubles each: at most ~22 MB
   std::optional<Loaded> loaded_;
+  // The checkpoints this process saved, and the request (its RUN_CONFIG's digest) each was saved for.
+  std::map<std::string, std::int64_t> saved_;
   std::unique_ptr<EffectTrainer> trainer_;  // declared after core_: stops before it goes
   std::vector<std::vector<std::uint8_t>> probes_;
   std::int64_t current_ = -1;          // the step whose focus was handled last

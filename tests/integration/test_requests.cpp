@@ -33,7 +33,30 @@ struct Group {
     return l;
   };
   InProcessHost host{lcm, protocol, logger, HostOptions{/*single_thread=*/false, test::checkpointRoot(), nullptr, ""}};
-  Group() { host.start(runProcesses(Phase::Intrinsic, /*recorded=*/false)); }
+  // `recorded`: with a logger, whose log folder is the checkpoints' (test::checkpointRoot()).
+  explicit Group(bool recorded = false) { host.start(runProcesses(Phase::Intrinsic, recorded)); }
+  // A RUN_CONFIG and START of `yaml` for run `id` that no runner of ours sent (a recording played back): the
+  // processes, free, take it.
+  void playOther(const std::string& id, const std::string& yaml, std::int64_t request) {
+    run_config_t other;
+    other.run_id = id;
+    other.step = 0;
+    other.request = request;
+    other.seed = 3;
+    other.experiment = "base";
+    other.system = "IMP";
+    other.config_yaml = yaml;
+    const auto config = sealed(other);
+    run_control_t start;
+    start.run_id = id;
+    start.step = 0;
+    start.command = run_control_t::START;
+    start.config_digest = other.digest;
+    const auto control = sealed(start);
+    lcm.publish(ch::runConfig.name, config.data(), static_cast<unsigned>(config.size()));
+    for (int i = 0; i < 20; ++i) pump();
+    lcm.publish(ch::runControl.name, control.data(), static_cast<unsigned>(control.size()));
+  }
   void pump() {
     while (lcm.handleTimeout(0) > 0) {
     }
@@ -101,22 +124,7 @@ TEST(Requests, ProcessesHoldingAnotherRequestOfTheRunAreToldToLeaveIt) {
   ASSERT_TRUE(undisturbed.outcome.ok) << undisturbed.outcome.error;
 
   Group group;
-  run_config_t other;
-  other.run_id = "test-run";
-  other.step = 0;
-  other.request = 12345;
-  other.seed = 3;
-  other.experiment = "base";
-  other.system = "IMP";
-  other.config_yaml = yaml;
-  const auto config = sealed(other);
-  run_control_t start;
-  start.run_id = "test-run";
-  start.command = run_control_t::START;
-  start.config_digest = other.digest;
-  const auto control = sealed(start);
-  group.lcm.publish(ch::runConfig.name, config.data(), static_cast<unsigned>(config.size()));
-  group.lcm.publish(ch::runControl.name, control.data(), static_cast<unsigned>(control.size()));
+  group.playOther("test-run", yaml, 12345);
   for (int i = 0; i < 20; ++i) group.pump();
   for (const auto& p : runProcesses(Phase::Intrinsic, false)) ASSERT_EQ(group.host.node(p).runId(), "test-run") << p;
 
@@ -124,6 +132,50 @@ TEST(Requests, ProcessesHoldingAnotherRequestOfTheRunAreToldToLeaveIt) {
   ASSERT_TRUE(out.ok) << out.error << group.said.str();
   EXPECT_EQ(out.weights_checksum, undisturbed.outcome.weights_checksum);
   EXPECT_NE(group.said.str().find("holds another request of this run id: told to leave it"), std::string::npos);
+}
+
+// Another request of the run, played back and taken by the free processes, runs for a while before the runner asks
+// for the run: its logger records it in the run's folder, its predictors save the after-one-action checkpoint there.
+// Told to leave it, they set aside what they wrote for it (the logger its log, in other-request-1/; the predictors
+// their checkpoint, renamed), and the run asked for is recorded and runs. (The logger refused the folder, and the
+// run failed: "holds the log of another request".) What another process wrote is never set aside.
+TEST(Requests, WhatProcessesWroteForAnotherRequestTheyLeftIsSetAsideAndTheRunAskedForRuns) {
+  const std::string id = "written-" + std::to_string(getpid());
+  const fs::path folder = fs::path(test::checkpointRoot()) / id;
+  fs::remove_all(folder);
+  YAML::Node c = YAML::Load(yamlWithCheckpoint(id, 300));
+  c["run"]["record"] = true;
+  c["run"]["checkpoint_after_actions"] = 1;
+  const std::string yaml = emitYaml(c);
+  Group group(/*recorded=*/true);
+  group.playOther(id, yaml, 777);
+  const std::string after_one = actionsCheckpoint((folder / "predictors.ckpt").string(), 1);
+  for (int i = 0; i < 5000 && !(fs::exists(after_one) && group.host.node("logger").lastStep() > 10); ++i) group.pump();
+  ASSERT_TRUE(fs::exists(after_one)) << group.said.str();
+  ASSERT_TRUE(fs::exists(folder / "log.00.lcm"));
+
+  RunSpec spec = specOf(id, yaml, 3, 300);
+  spec.processes = runProcesses(Phase::Intrinsic, /*recorded=*/true);
+  spec.log_root = test::checkpointRoot();
+  const RunOutcome out = group.run(spec);
+  ASSERT_TRUE(out.ok) << out.error << group.said.str();
+  EXPECT_EQ(out.log_dir, folder.string());
+  const auto manifest = test::readJson(folder / "manifest.json");
+  EXPECT_EQ(manifest["complete"], true);
+  EXPECT_NE(manifest["config_digest"], test::readJson(folder / "other-request-1/manifest.json")["config_digest"]);
+  EXPECT_TRUE(fs::exists(after_one));                          // the run's own, saved after its first action
+  EXPECT_TRUE(fs::exists(after_one + ".other-request-1"));     // the other request's, set aside
+  EXPECT_TRUE(fs::exists(folder / "other-request-1/log.00.lcm"));
+
+  // Another group's processes, asked for the run again (the folder kept): what the first group wrote is not theirs
+  // to set aside. The run is refused, naming what it would overwrite, and the folder is left as it was.
+  Group other(/*recorded=*/true);
+  const RunOutcome refused = other.run(spec);
+  EXPECT_FALSE(refused.ok);
+  EXPECT_NE(refused.error.find("exists already"), std::string::npos) << refused.error;
+  EXPECT_EQ(test::readJson(folder / "manifest.json"), manifest);
+  EXPECT_FALSE(fs::exists(folder / "other-request-2"));
+  fs::remove_all(folder);
 }
 
 // Everything another request of the same run id said (here: another seed, recorded whole: its RUN_CONFIG,
