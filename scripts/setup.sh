@@ -44,6 +44,7 @@ packages=(
   clang libclang-rt-14-dev llvm  # scripts/fuzz.sh: libFuzzer, ASan, UBSan, llvm-symbolizer
   # the Python package (python/, docs/python.md), for Debian's /usr/bin/python3
   python3-dev pybind11-dev python3-numpy python3-pandas python3-matplotlib python3-pytest
+  python3-pyte  # tests/terminal: a VT100 emulator reads what the progress board leaves on a terminal
   python3-nbclient python3-nbformat python3-ipykernel python3-venv python3-pip python3-setuptools python3-wheel
   chromium chromium-driver python3-selenium  # tests/watch: the live page in a real browser
   python3-torch  # examples/torch-predictor: an affordance predictor written with PyTorch

@@ -15,6 +15,8 @@ spdlog::level::level_enum parseLevel(const std::string& level) {
   throw std::invalid_argument("unknown log level \"" + level + "\" (trace, debug, info, warn, error, off)");
 }
 
+std::mutex& consoleMutex() { return spdlog::details::console_mutex::mutex(); }
+
 std::shared_ptr<spdlog::logger> makeLogger(const std::string& name, const std::string& level) {
   static auto sink = std::make_shared<spdlog::sinks::stderr_color_sink_mt>();
   auto logger = std::make_shared<spdlog::logger>(name, sink);

@@ -7,6 +7,8 @@
 #include <numeric>
 #include <stdexcept>
 
+#include "experiment/execute/terminal.hpp"
+
 namespace afford {
 
 std::string durationText(double seconds) {
@@ -30,14 +32,23 @@ Progress::Progress(const ProgressOptions& options, std::string phase, int slots,
   else if (options.mode == "auto") terminal_ = isatty(fileno(out)) == 1;
   else if (options.mode != "lines")
     throw std::invalid_argument("--progress must be auto, terminal, lines or none, not \"" + options.mode + "\"");
+  if (terminal_ && enabled_) {
+    relay_ = std::make_unique<TerminalRelay>(out_);
+    if (!relay_->started()) {  // (no process could be started) plain lines, which never erase anything
+      relay_.reset();
+      terminal_ = false;
+    }
+  }
   every_ = options.every >= 0 ? options.every : terminal_ ? 0.25 : 30;
   total_steps_ = std::accumulate(steps.begin(), steps.end(), std::int64_t{0});
   drawn_at_ = began_;
 }
 
+// The board's last drawing stays as it is (a fresh one would be drawn over it: over the lines another process,
+// e.g. a `tee` of the standard output, may have printed below it since).
 Progress::~Progress() {
   std::lock_guard<std::mutex> lock(mutex_);
-  erase();
+  relay_.reset();
 }
 
 void Progress::restart(std::string phase, std::vector<std::int64_t> steps, std::size_t done, std::size_t planned) {
@@ -96,8 +107,6 @@ void Progress::ended(int slot, bool finished) {
 
 void Progress::say(const std::function<void()>& print) {
   std::lock_guard<std::mutex> lock(mutex_);
-  erase();
-  std::fflush(out_);
   print();
   draw(true);
 }
@@ -140,21 +149,12 @@ void Progress::draw(bool force) {
   drawn_at_ = now;
   const std::vector<std::string> text = lines();
   if (terminal_) {
-    erase();
-    for (const auto& l : text) std::fprintf(out_, "\x1b[2K%s\n", l.c_str());
-    drawn_lines_ = static_cast<int>(text.size());
-  } else {
-    std::string one = "progress: " + text.front();
-    for (std::size_t k = 1; k < text.size(); ++k) one += ";" + text[k].substr(1);
-    std::fprintf(out_, "%s\n", one.c_str());
+    relay_->show(text);
+    return;
   }
-  std::fflush(out_);
-}
-
-void Progress::erase() {
-  if (!terminal_ || drawn_lines_ == 0) return;
-  std::fprintf(out_, "\x1b[%dF\x1b[J", drawn_lines_);  // to the board's first line, then clear below
-  drawn_lines_ = 0;
+  std::string one = "progress: " + text.front();
+  for (std::size_t k = 1; k < text.size(); ++k) one += ";" + text[k].substr(1);
+  std::fprintf(out_, "%s\n", one.c_str());
   std::fflush(out_);
 }
 

@@ -1,20 +1,25 @@
 // Progress of a phase's runs as they go: a line per job slot (the run, its
 // step out of its total, steps per second) and one for the phase (runs done,
-// an estimate of the time left). On a terminal the lines are redrawn in place
-// (log lines print above them); otherwise they are printed as plain lines at
-// most every few seconds. Drawing is driven by events (a run starts, a
-// process reports its step in its STATUS heartbeat, a run ends); the clock
-// only paces the drawing and measures rates, it decides nothing.
+// an estimate of the time left). On a terminal the lines are a board redrawn
+// in place below everything else printed (terminal.hpp: every line printed
+// meanwhile stays above it, and its last drawing stays at the end); otherwise
+// they are printed as plain lines at most every few seconds. Drawing is driven
+// by events (a run starts, a process reports its step in its STATUS
+// heartbeat, a run ends); the clock only paces the drawing and measures
+// rates, it decides nothing.
 #pragma once
 #include <chrono>
 #include <cstdint>
 #include <cstdio>
 #include <functional>
+#include <memory>
 #include <mutex>
 #include <string>
 #include <vector>
 
 namespace afford {
+
+class TerminalRelay;  // terminal.hpp
 
 struct ProgressOptions {
   std::string mode = "auto";  // auto (terminal if stderr is one, else lines), terminal, lines, none
@@ -43,7 +48,7 @@ class Progress {
   void started(int slot, const std::string& run_id, std::int64_t steps);
   void step(int slot, std::int64_t step);
   void ended(int slot, bool finished);
-  // Print something (a log line) above the board.
+  // Print something (a log line): above the board, which is drawn anew below it.
   void say(const std::function<void()>& print);
 
  private:
@@ -54,7 +59,6 @@ class Progress {
     Clock::time_point since{};
   };
   void draw(bool force);
-  void erase();
   std::vector<std::string> lines() const;
 
   std::mutex mutex_;
@@ -66,7 +70,7 @@ class Progress {
   std::int64_t total_steps_ = 0, done_steps_ = 0;
   std::size_t done_ = 0, planned_ = 0;
   Clock::time_point began_ = Clock::now(), drawn_at_{};
-  int drawn_lines_ = 0;
+  std::unique_ptr<TerminalRelay> relay_;  // (on a terminal) the terminal's one writer
 };
 
 // "1 h 02 min", "4 min 10 s", "12 s".
