@@ -160,8 +160,9 @@ void takeStoredAgents(const std::vector<PlannedRun>& runs, int after_actions, Ph
     ++taken;
   }
   if (taken)
-    log.info("{} of {} intrinsic run(s) reuse a stored agent of the same configuration and seed ({}; "
-             "--no-reuse-agents runs them again)", taken, runs.size(), agents.root());
+    log.info("{} of {} intrinsic run(s) reuse a stored agent of the same configuration and seed ({}): they do not "
+             "run, nothing of theirs goes on the bus; to run them anew (a fault drill, a check that a run reproduces), "
+             "give --no-reuse-agents", taken, runs.size(), agents.root());
 }
 
 void storeAgent(const PlannedRun& p, const PhaseRuns& phase, const AgentStore& agents, spdlog::logger& log) {

@@ -60,6 +60,11 @@ TEST(Workflow, AnExperimentSharingTheIntrinsicRunsReusesTheStoredAgents) {
   Output b = run("experiment attention" + kSmall + " --out " + dir + "/att --run-prefix b" + logs);
   ASSERT_EQ(b.status, 0) << b.text;
   EXPECT_NE(b.text.find("2 of 2 intrinsic run(s) reuse a stored agent"), std::string::npos) << b.text;
+  // ... and the line says that nothing of them runs, and how to run them anew (a fault drill on a group).
+  EXPECT_NE(b.text.find("they do not run, nothing of theirs goes on the bus; to run them anew (a fault drill, a check "
+                        "that a run reproduces), give --no-reuse-agents"),
+            std::string::npos)
+      << b.text;
   Output c = run("experiment attention" + kSmall + " --out " + dir + "/att-fresh --run-prefix c --no-reuse-agents" + logs);
   ASSERT_EQ(c.status, 0) << c.text;
   EXPECT_EQ(c.text.find("reuse a stored agent"), std::string::npos) << c.text;
