@@ -1,8 +1,9 @@
 // A run's log cut anywhere (issue 55): at every event boundary of a small
 // recorded run, in the middle of events and after an event's header, with its
 // manifest beside it and without. Replay never calls it equal to the record
-// and says what is missing; explain refuses a cut test. The whole log replays
-// equal. The runs are recorded once by `afford experiment` over memq
+// and says what is missing; explain refuses a cut test; the reader the
+// viewers, export and the Python package share warns of it. The whole log
+// replays equal. The runs are recorded once by `afford experiment` over memq
 // (its logger writes the log and the manifest).
 #include <gtest/gtest.h>
 #include <spdlog/sinks/null_sink.h>
@@ -18,6 +19,7 @@
 #include "experiment/replay/replay.hpp"
 #include "logger/logger.hpp"
 #include "tests/support.hpp"
+#include "viewer/step_order.hpp"
 
 namespace afford {
 namespace {
@@ -190,6 +192,30 @@ TEST_F(LogCut, TheReplayCommandSaysTheLogIsCutAndFails) {
   EXPECT_EQ(whole.exit_code, 0) << whole.output;
   EXPECT_NE(whole.output.find("replay equals the record"), std::string::npos) << whole.output;
   EXPECT_EQ(whole.output.find("the log is cut"), std::string::npos) << whole.output;
+}
+
+// What `afford watch --log`, `afford render`, `afford export` and `afford.read_log` read a log through says it
+// is cut, at once; and export says so in its summary.
+TEST_F(LogCut, TheViewersReaderWarnsOfACutLog) {
+  const std::vector<std::int64_t> at = boundaries(intrinsic() / "log.00.lcm");
+  const auto cutOf = [](const fs::path& dir) {
+    StepOrderedLog<RecordedLogStream, RunSelector> in(
+        [&](spdlog::logger& l) { return std::make_unique<RecordedLogStream>(dir, l); },
+        [&](spdlog::logger& l) { return std::make_unique<RunSelector>("", dir.string(), l); },
+        loadProtocol(defaultConfigDir()), *quiet());
+    return in.cut();
+  };
+  for (std::size_t i = 1; i + 1 < at.size(); i += 7)
+    for (bool manifest : {true, false}) {
+      const auto cut = cutOf(cutCopy(intrinsic(), "viewer", at[i] + 30, manifest));
+      EXPECT_TRUE(says(cut, "missing")) << "cut at byte " << at[i] + 30 << ": " << joinedCut(cut);
+    }
+  EXPECT_TRUE(cutOf(intrinsic()).empty()) << joinedCut(cutOf(intrinsic()));
+  const fs::path copy = cutCopy(intrinsic(), "export", at[at.size() / 2], true);
+  const auto r = test::runAfford("export " + copy.string() + " --mcap " + root_ + "/cut.mcap");
+  EXPECT_EQ(r.exit_code, 0) << r.output;
+  EXPECT_NE(r.output.find("[warning] the log is cut: its manifest counts"), std::string::npos) << r.output;
+  EXPECT_NE(r.output.find("so the file holds the run only as far as the log goes"), std::string::npos) << r.output;
 }
 
 // A log of two segments (a logger restarted mid-run): its manifest counts the last one. Whole, it replays
