@@ -224,6 +224,7 @@ ExportResult exportMcap(const ExportOptions& o, spdlog::logger& log) {
       loadProtocol(defaultConfigDir()), log);
   std::vector<LogGap> manifest_missing;
   result.incomplete = manifestIncomplete(o.log, manifest_missing);
+  result.cut = in.cut();  // (warned of as the log was opened)
   McapWriter mcap(o.mcap, McapOptions{"", std::string("afford ") + affordVersion(), o.chunk_bytes});
   Exporter exporter(mcap, result, o.log, log);
   const RunSelector& select = in.selector();
@@ -249,7 +250,7 @@ ExportResult exportMcap(const ExportOptions& o, spdlog::logger& log) {
   result.untagged = in.stream().counts().untagged;
   result.refused_configs = select.refusedConfigs();
   result.left_out -= result.refused_configs;  // (counted apart)
-  select.check();  // (the partial file goes with the writer)
+  select.check(result.cut);  // (the partial file goes with the writer)
   mcap.close();
   result.bytes = mcap.bytes();
   result.chunks = mcap.chunks();

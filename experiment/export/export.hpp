@@ -67,6 +67,7 @@ struct ExportResult {
   std::int64_t refused_configs = 0;  // RUN_CONFIG events the edge refuses, skipped
   std::int64_t untagged = 0;         // with a bus key: events without a valid tag of it, skipped
   std::string incomplete;            // the manifest's reason, when it says the log is incomplete
+  std::vector<std::string> cut;      // what the log lacks of the run, when it is cut short (replay/log_cut.hpp)
   std::uint64_t bytes = 0, chunks = 0;
 };
 

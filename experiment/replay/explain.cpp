@@ -424,16 +424,21 @@ Explanation explainRunEvents(const RunEvents& run, const std::string& where, std
 
 Explanation explainLog(const std::string& log_path, const std::string& run_id, spdlog::logger& log) {
   if (!fs::exists(log_path)) throw std::runtime_error("no such log folder or file: " + log_path);
-  RecordedLog recorded = readRecordedLog(log_path, log);
-  if (recorded.events.empty())
-    throw std::runtime_error(log_path + ": the log holds no complete event" +
-                             (recorded.torn_bytes > 0 ? " (" + std::to_string(recorded.torn_bytes) +
-                                                            " bytes that are not one: a truncated or not an LCM log)"
-                                                      : std::string()));
+  const RunEvents run = readRunEvents(log_path, run_id, log);
+  // A log cut short is not the whole test: no verdict on it, only what is missing.
+  const std::string cut = run.cut.empty() ? "" : "; the log is cut: " + joinedCut(run.cut);
   std::vector<LogGap> missing;
   const std::string incomplete = manifestIncomplete(log_path, missing);
-  const RunEvents run = runEventsOf(std::move(recorded.events), run_id, log_path, log);
-  return explainRunEvents(run, log_path, recorded.torn_bytes, incomplete, missing);
+  Explanation ex;
+  try {
+    ex = explainRunEvents(run, log_path, run.torn_bytes, incomplete, missing);
+  } catch (const NotAnExtrinsicTest&) {
+    throw;
+  } catch (const std::runtime_error& e) {
+    throw std::runtime_error(e.what() + cut);
+  }
+  if (!cut.empty()) throw std::runtime_error(log_path + ": explain gives no verdict on a part of a test" + cut);
+  return ex;
 }
 
 bool ExplainedSubGoal::colourActionBlocked(const PlannerConfig& p) const {

@@ -114,14 +114,15 @@ struct Explanation {
 };
 
 // Explain the extrinsic test whose RUN_CONFIG starts `run.events` (as
-// runEventsOf gives them). `where` names the log in errors; `torn_bytes`,
+// RunSelector takes them). `where` names the log in errors; `torn_bytes`,
 // `incomplete` and `manifest_missing` are what the log file and its manifest
 // say beyond the events. Throws NotAnExtrinsicTest, or std::runtime_error
 // naming what is missing.
 Explanation explainRunEvents(const RunEvents& run, const std::string& where, std::int64_t torn_bytes = 0,
                              const std::string& incomplete = "", const std::vector<LogGap>& manifest_missing = {});
 // Read a run's log folder (or one .lcm file) and explain the test in it: the
-// first run, or `run_id`'s.
+// first run, or `run_id`'s. A log cut short (log_cut.hpp) is refused, saying
+// what is missing.
 Explanation explainLog(const std::string& log_path, const std::string& run_id, spdlog::logger& log);
 
 // ---- a folder of run logs ------------------------------------------------------------

@@ -40,7 +40,7 @@ bool ReplayResult::consistent() const {
 }
 
 bool ReplayResult::ok() const {
-  return consistent() && gaps.empty() && incomplete.empty() &&
+  return consistent() && gaps.empty() && incomplete.empty() && cut.empty() &&
          (!decider_skipped.empty() || decisions == decisions_recorded) &&
          (phase != Phase::Goals || !goals_skipped.empty() || goals == goals_recorded) &&
          (recorded_checksum.empty() || !weights_checksum.empty());
@@ -64,7 +64,11 @@ LogLimits logLimits(const ProtocolConfig& protocol) {
 }
 
 RecordedLogStream::RecordedLogStream(const fs::path& log_path, spdlog::logger& log, const BusKey* key)
-    : segments_(logSegments(log_path)), log_(log), key_(key), limits_(logLimits(loadProtocol(defaultConfigDir()))) {}
+    : path_(log_path),
+      segments_(logSegments(log_path)),
+      log_(log),
+      key_(key),
+      limits_(logLimits(loadProtocol(defaultConfigDir()))) {}
 
 RecordedLogStream::~RecordedLogStream() = default;
 
@@ -79,19 +83,28 @@ void RecordedLogStream::endSegment() {
   counts_.torn_bytes += r.tornBytes();
   counts_.malformed += r.problemCount();
   counts_.skipped_bytes += r.skippedBytes();
+  segment_.torn_bytes = r.tornBytes();
+  counts_.segments.push_back(std::move(segment_));
   reader_.reset();
+}
+
+std::vector<std::string> RecordedLogStream::cutShort(const RunSelector& run) const {
+  return logCut(path_, counts_.segments, run.reach());
 }
 
 bool RecordedLogStream::next(LogEvent& e) {
   for (;;) {
     if (!reader_) {
       if (at_ == segments_.size()) return false;
-      reader_ = std::make_unique<LogReader>(segments_[at_++], limits_);
+      reader_ = std::make_unique<LogReader>(segments_[at_], limits_);
+      segment_ = SegmentRead{segments_[at_++]};
     }
     if (!reader_->next(e)) {
       endSegment();
       continue;
     }
+    ++segment_.events;  // (as the logger counts them: tags and all)
+    segment_.payload_bytes += static_cast<std::int64_t>(e.data.size());
     if (!key_) return true;
     // A recording of a keyed bus: only what carries the key's tag, without it.
     if (key_->verify(e.channel, e.data.data(), e.data.size())) {
@@ -132,32 +145,46 @@ bool RunSelector::take(const LogEvent& e) {
     if (!run_id_.empty() && rc.run_id != run_id_) return false;
     found_ = true;
     config_ = std::move(rc);
+    reach_.add(e);
     return true;
   }
   // The run's own events from there on: those whose run id is the run's.
   std::string id;
   if (!peekRunId(e.data.data(), e.data.size(), observer_.limits.name_bytes, id)) return false;
-  return id == config_.run_id || (id.empty() && e.channel == ch::status.name);
+  const bool taken = id == config_.run_id || (id.empty() && e.channel == ch::status.name);
+  if (taken) reach_.add(e);
+  return taken;
 }
 
-void RunSelector::check() const {
+void RunSelector::check(const std::vector<std::string>& cut) const {
   if (found_) return;
   throw std::runtime_error(
-      where_ + (run_id_.empty() ? std::string(": no RUN_CONFIG that the edge accepts in the log, so nothing says how "
-                                              "the run was configured")
-                                : ": no RUN_CONFIG of run '" + run_id_ + "' that the edge accepts in the log"));
+      where_ +
+      (run_id_.empty() ? std::string(": no RUN_CONFIG that the edge accepts in the log, so nothing says how "
+                                     "the run was configured")
+                       : ": no RUN_CONFIG of run '" + run_id_ + "' that the edge accepts in the log") +
+      (cut.empty() ? std::string() : "; the log is cut: " + joinedCut(cut)));
 }
 
-RunEvents runEventsOf(std::vector<LogEvent> events, const std::string& run_id, const std::string& where,
-                      spdlog::logger& log) {
-  RunSelector select(run_id, where, log);
-  RunEvents out;
-  for (LogEvent& e : events)
-    if (select.take(e)) out.events.push_back(std::move(e));
-  select.check();
-  out.config = select.config();
-  out.refused_configs = select.refusedConfigs();
-  return out;
+RunEvents readRunEvents(const fs::path& log_path, const std::string& run_id, spdlog::logger& log) {
+  RecordedLogStream in(log_path, log);
+  RunSelector select(run_id, log_path.string(), log);
+  RunEvents run;
+  std::int64_t events = 0;
+  for (LogEvent e; in.next(e); ++events)
+    if (select.take(e)) run.events.push_back(std::move(e));
+  run.cut = in.cutShort(select);
+  run.torn_bytes = in.counts().torn_bytes;
+  const std::string torn =
+      run.torn_bytes > 0 ? " (" + std::to_string(run.torn_bytes) + " bytes that are not one: a truncated or not an LCM log)"
+                         : "";
+  if (events == 0)
+    throw std::runtime_error(log_path.string() + ": the log holds no complete event" + torn +
+                             (run.cut.empty() ? std::string() : "; the log is cut: " + joinedCut(run.cut)));
+  select.check(run.cut);
+  run.config = select.config();
+  run.refused_configs = select.refusedConfigs();
+  return run;
 }
 
 namespace {
@@ -523,7 +550,8 @@ ReplayResult replayRun(const ReplayOptions& o, spdlog::logger& log) {
   result.malformed = in.counts().malformed;
   result.untagged = in.counts().untagged;
   result.refused_configs = select.refusedConfigs();
-  select.check();
+  result.cut = in.cutShort(select);
+  select.check(result.cut);
   result.gaps = gaps->gaps();
   for (const auto& g : manifest_missing) {  // what the logger knew it never got, beyond the last recorded
     const bool known = std::any_of(result.gaps.begin(), result.gaps.end(), [&](const ReplayResult::Gap& h) {

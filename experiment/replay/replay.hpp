@@ -27,6 +27,7 @@
 #include "afford/config.hpp"
 #include "afford/logfile.hpp"
 #include "afford/run_config_t.hpp"
+#include "experiment/replay/log_cut.hpp"
 
 namespace afford {
 
@@ -47,6 +48,7 @@ struct RecordedLog {
   std::int64_t malformed = 0;       // malformed parts skipped
   std::int64_t skipped_bytes = 0;   // ... and their bytes
   std::int64_t untagged = 0;        // events without a valid tag of the key given, skipped
+  std::vector<SegmentRead> segments;  // each segment read so far, as read
 };
 // With a bus key (an lcm-logger recording of a keyed bus), every event must end
 // with its tag, which is taken off; one without a valid tag is skipped and counted.
@@ -55,6 +57,7 @@ RecordedLog readRecordedLog(const std::filesystem::path& log_path, spdlog::logge
 // The same events one at a time, nothing held but the event read (replay reads
 // a million-step log of gigabytes this way): counts() says what was skipped so
 // far.
+class RunSelector;
 class RecordedLogStream {
  public:
   RecordedLogStream(const std::filesystem::path& log_path, spdlog::logger& log, const BusKey* key = nullptr);
@@ -63,12 +66,16 @@ class RecordedLogStream {
   RecordedLogStream& operator=(const RecordedLogStream&) = delete;
   bool next(LogEvent& e);  // false after the last segment's last event
   const RecordedLog& counts() const { return counts_; }  // (events stays empty)
+  // Once next() has said false: what the log lacks of the run `run` took (log_cut.hpp); empty if it is whole.
+  std::vector<std::string> cutShort(const RunSelector& run) const;
 
  private:
   void endSegment();
+  std::filesystem::path path_;
   std::vector<std::filesystem::path> segments_;
   std::size_t at_ = 0;
   std::unique_ptr<LogReader> reader_;
+  SegmentRead segment_;  // the one being read
   spdlog::logger& log_;
   const BusKey* key_;
   LogLimits limits_;
@@ -127,27 +134,35 @@ struct RunEvents {
   run_config_t config;
   std::vector<LogEvent> events;      // events.front() is the RUN_CONFIG
   std::int64_t refused_configs = 0;  // RUN_CONFIG events the edge refuses, skipped (warned of)
+  std::int64_t torn_bytes = 0;       // of incomplete last events
+  std::vector<std::string> cut;      // what the log lacks of the run (RecordedLogStream::cutShort)
 };
-// Throws std::runtime_error naming `where` only when the run cannot be
-// rebuilt: the log holds no (such) RUN_CONFIG that the edge accepts.
-RunEvents runEventsOf(std::vector<LogEvent> events, const std::string& run_id, const std::string& where,
-                      spdlog::logger& log);
-// The same choice, event by event: take(e) says whether e is the run's (its
+// The events of one run of a log (the first, or `run_id`'s), read whole. Throws
+// std::runtime_error naming the log, and saying what it lacks, when it holds
+// no event or no run (RunSelector::check).
+RunEvents readRunEvents(const std::filesystem::path& log_path, const std::string& run_id, spdlog::logger& log);
+// The choice, event by event: take(e) says whether e is the run's (its
 // RUN_CONFIG, then its events); once every event has been offered, check()
-// throws as runEventsOf does if the run's RUN_CONFIG never came.
+// throws std::runtime_error naming `where` if the run cannot be rebuilt: the
+// log holds no (such) RUN_CONFIG that the edge accepts (saying, if given, what
+// the log lacks: RecordedLogStream::cutShort).
 class RunSelector {
  public:
   RunSelector(std::string run_id, std::string where, spdlog::logger& log);
+  RunSelector(const RunSelector&) = delete;
+  RunSelector& operator=(const RunSelector&) = delete;
   bool take(const LogEvent& e);
   bool found() const { return found_; }
   const run_config_t& config() const { return config_; }
   std::int64_t refusedConfigs() const { return refused_configs_; }
-  void check() const;
+  const RunReach& reach() const { return reach_; }  // how far the events taken so far go
+  void check(const std::vector<std::string>& cut = {}) const;
 
  private:
   std::string run_id_, where_;
   spdlog::logger& log_;
   ProtocolConfig observer_;
+  RunReach reach_{observer_};
   bool found_ = false;
   run_config_t config_;
   std::int64_t refused_configs_ = 0;
@@ -217,16 +232,17 @@ struct ReplayResult {
   using Gap = LogGap;
   std::vector<Gap> gaps;              // serials a channel's publisher published that the recording lacks
   std::string incomplete;             // the manifest's reason, when it says the log is incomplete
+  std::vector<std::string> cut;       // what the log lacks of the run, when it is cut short (log_cut.hpp)
   std::int64_t dropped = 0;           // recorded messages the edge refused (a corrupted recording)
-  // Everything the record holds was replayed and equals it (a record with gaps
-  // cannot be replayed whole, so it is never ok).
+  // Everything the record holds was replayed and equals it, and the record is
+  // the whole run (a record with gaps, or cut short, is never ok).
   bool ok() const;
   // What was replayed equals the record as far as it goes.
   bool consistent() const;
 };
 
 // Reads `options.log_dir`; throws std::runtime_error naming the file on a
-// log it cannot read.
+// log it cannot read, or with no run in it (saying what the log lacks).
 ReplayResult replayRun(const ReplayOptions& options, spdlog::logger& log);
 
 }  // namespace afford

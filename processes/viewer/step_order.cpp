@@ -109,6 +109,7 @@ StepOrdered::StepOrdered(std::function<Pass(bool quiet)> open, const ProtocolCon
       last_step_ = std::max(last_step_, key->step);
     }
   }
+  if (first.read_through) first.read_through();
   pass_ = open_(false);
 }
 

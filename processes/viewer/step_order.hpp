@@ -90,6 +90,7 @@ class StepOrdered {
   struct Pass {
     std::function<bool(LogEvent&)> next;
     std::function<bool(const LogEvent&)> take;
+    std::function<void()> read_through;  // (optional) called when the first full reading has read the log to its end
   };
   // `open(quiet)` begins a reading; `quiet`: the first one, which must say
   // nothing of what it skips (the second one says it). `protocol` bounds what
@@ -141,11 +142,12 @@ class StepOrdered {
   bool ended_ = false;
 };
 
-// A log read by `Stream` (bool next(LogEvent&): the log's events in its order)
-// for the run `Selector` chooses (bool take(const LogEvent&)), given in step
-// order; both are made anew for each reading, the first with a logger that
-// says nothing. stream() and selector() are the current reading's: what it
-// skipped, the run's configuration.
+// A log read by `Stream` (bool next(LogEvent&): the log's events in its order;
+// std::vector<std::string> cutShort(const Selector&): what the log lacks of the
+// run, once read) for the run `Selector` chooses (bool take(const LogEvent&)),
+// given in step order; both are made anew for each reading, the first with a
+// logger that says nothing. stream() and selector() are the current reading's:
+// what it skipped, the run's configuration.
 template <class Stream, class Selector>
 class StepOrderedLog {
  public:
@@ -154,7 +156,9 @@ class StepOrderedLog {
   StepOrderedLog(MakeStream stream, MakeSelector selector, const ProtocolConfig& protocol, spdlog::logger& log)
       : quiet_(makeLogger("quiet", "off")),
         order_([this, stream, selector, &log](bool quiet) { return open(stream, selector, quiet ? *quiet_ : log); },
-               protocol) {}
+               protocol) {
+    for (const std::string& c : cut_) log.warn("the log is cut: {}", c);
+  }
   StepOrderedLog(const StepOrderedLog&) = delete;
   StepOrderedLog& operator=(const StepOrderedLog&) = delete;
 
@@ -162,17 +166,22 @@ class StepOrderedLog {
   StepOrdered& order() { return order_; }
   const Stream& stream() const { return *stream_; }
   const Selector& selector() const { return *selector_; }
+  // What the log lacks of its run (Stream::cutShort(Selector): a log cut short), found by the first full
+  // reading and said as warnings when the log is opened; empty for a whole log.
+  const std::vector<std::string>& cut() const { return cut_; }
 
  private:
   StepOrdered::Pass open(const MakeStream& stream, const MakeSelector& selector, spdlog::logger& log) {
     stream_ = stream(log);
     selector_ = selector(log);
-    return {[this](LogEvent& e) { return stream_->next(e); }, [this](const LogEvent& e) { return selector_->take(e); }};
+    return {[this](LogEvent& e) { return stream_->next(e); }, [this](const LogEvent& e) { return selector_->take(e); },
+            [this] { cut_ = stream_->cutShort(*selector_); }};
   }
 
   std::shared_ptr<spdlog::logger> quiet_;
   std::unique_ptr<Stream> stream_;
   std::unique_ptr<Selector> selector_;
+  std::vector<std::string> cut_;
   StepOrdered order_;  // (last: its first reading is made as it is built)
 };
 

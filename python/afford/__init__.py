@@ -10,7 +10,7 @@ from . import _afford
 from .components import (ACTIONS, GOAL_MODULES, AffordancePredictor, Decision, Goal, GoalChooser, KeyedRng,
                          Motivation, register_affordance, register_goals, register_motivation)
 from .experiments import CurvePoint, ExperimentError, ExperimentStopped, check, replay, run
-from .logs import Message, RunLog, read_log
+from .logs import LogCutWarning, Message, RunLog, read_log
 from .results import Experiment, load
 from .search import Choice, Float, Int
 from .study import Study, load_study, tune
@@ -21,5 +21,5 @@ channels = _afford.channels
 
 __all__ = ["Motivation", "Decision", "KeyedRng", "ACTIONS", "register_motivation", "AffordancePredictor",
            "GoalChooser", "Goal", "GOAL_MODULES", "register_goals",
-           "register_affordance", "run", "check", "replay", "ExperimentError", "ExperimentStopped", "CurvePoint", "load", "Experiment", "read_log", "RunLog", "Message", "ConfigError", "channels",
+           "register_affordance", "run", "check", "replay", "ExperimentError", "ExperimentStopped", "CurvePoint", "load", "Experiment", "read_log", "RunLog", "Message", "LogCutWarning", "ConfigError", "channels",
            "tune", "load_study", "Study", "Float", "Int", "Choice"]

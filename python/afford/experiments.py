@@ -199,8 +199,8 @@ def replay(log: str | Path, affordance: Any = None, motivation: Any = None, goal
     too. `into`: predictors, motivation, planner (default: the predictors and the run's decider). Returns
     {"weights_checksum": the replayed predictors', "recorded_checksum": the run's, "ok": everything the
     record holds was replayed and equals it, "consistent", "decisions", "decisions_differing",
-    "decider_skipped", "events", "gaps", "dropped", "incomplete", "run_id"}. A log it cannot read raises
-    RuntimeError naming the file.
+    "decider_skipped", "events", "gaps", "dropped", "incomplete", "cut": what the log lacks of the run when
+    it is cut short (then never ok), "run_id"}. A log it cannot read raises RuntimeError naming the file.
     """
     from .components import register_affordance, register_goals, register_motivation
     for cls, register in ((affordance, register_affordance), (motivation, register_motivation),

@@ -11,6 +11,7 @@ side x side RGB pixels) as side x side x 3 arrays.
 from __future__ import annotations
 
 import math
+import warnings
 from collections.abc import Mapping
 from dataclasses import dataclass
 from pathlib import Path
@@ -86,6 +87,7 @@ class RunLog:
     unknown_channels: int      # events of channels the protocol does not have, skipped
     malformed: int             # malformed parts of the files, skipped
     torn_bytes: int            # an incomplete last event (a writer cut mid-write)
+    cut: list[str]             # what the log lacks of the run when it is cut short (empty: whole)
 
     def __iter__(self) -> Iterator[Message]:
         return iter(self.messages)
@@ -107,7 +109,12 @@ class RunLog:
         counts: dict[str, int] = {}
         for m in self.messages:
             counts[m.channel] = counts.get(m.channel, 0) + 1
-        return f"RunLog({self.run_id!r}: {len(self.messages)} messages, {counts})"
+        cut = f", CUT: {'; '.join(self.cut)}" if self.cut else ""
+        return f"RunLog({self.run_id!r}: {len(self.messages)} messages, {counts}{cut})"
+
+
+class LogCutWarning(UserWarning):
+    """A log read is cut short: it holds less than its run (what is missing is in the message)."""
 
 
 def read_log(log: str | Path, run: str | None = None, bus_key: str | Path | None = None,
@@ -117,9 +124,15 @@ def read_log(log: str | Path, run: str | None = None, bus_key: str | Path | None
     `run` picks a run in a log of several (default: the first); `bus_key`, the
     key file of a keyed bus an lcm-logger recording was made on; `channels`
     keeps only those channels (faster: the others are not decoded). Raises
-    RuntimeError naming the file when there is no log or no run in it.
+    RuntimeError naming the file when there is no log or no run in it. A log
+    cut short (a copy of part of it, a writer killed) is read as far as it
+    goes, with a warning (LogCutWarning) saying what is missing; `cut` says it too.
     """
     raw = _afford.read_log(str(log), run or "", str(bus_key) if bus_key else "", list(channels or []))
     messages = [Message(channel, utime, _shaped(fields)) for channel, utime, fields in raw["messages"]]
+    if raw["cut"]:
+        warnings.warn(f"{log}: the log is cut, it is not the whole run: {'; '.join(raw['cut'])}", LogCutWarning,
+                      stacklevel=2)
     return RunLog(raw["run_id"], raw["config_yaml"], messages, raw["refused"], raw["first_refusal"],
-                  raw["unknown_channels"], raw["malformed"], raw["torn_bytes"])
+                  raw["unknown_channels"], raw["malformed"], raw["torn_bytes"], list(raw["cut"]))
+

@@ -91,7 +91,7 @@ py::dict readLog(const std::string& path, const std::string& run_id, const std::
     unknown += !known;
   }
   py::dict out;
-  select.check();
+  select.check(in.cut());
   out["run_id"] = select.config().run_id;
   out["config_yaml"] = select.config().config_yaml;
   out["messages"] = messages;
@@ -100,6 +100,7 @@ py::dict readLog(const std::string& path, const std::string& run_id, const std::
   out["unknown_channels"] = unknown;
   out["malformed"] = in.stream().counts().malformed;
   out["torn_bytes"] = in.stream().counts().torn_bytes;
+  out["cut"] = in.cut();
   return out;
 }
 
@@ -223,6 +224,7 @@ py::dict replayFrom(const std::string& log_dir, const std::vector<std::string>& 
   d["dropped"] = r.dropped;
   d["incomplete"] = r.incomplete;
   d["gaps"] = static_cast<py::ssize_t>(r.gaps.size());
+  d["cut"] = r.cut;
   d["ok"] = r.ok();
   d["consistent"] = r.consistent();
   return d;

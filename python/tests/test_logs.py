@@ -1,6 +1,8 @@
 """afford.read_log: a run's messages through the project's log reader and the edge's checks."""
 import json
+import shutil
 import subprocess
+import warnings
 
 import numpy as np
 import pytest
@@ -57,9 +59,37 @@ def test_a_damaged_log_is_read_as_far_as_it_goes(made, tmp_path):
     data = bytearray(src.read_bytes())
     (tmp_path / "cut").mkdir()
     (tmp_path / "cut" / "log.00.lcm").write_bytes(bytes(data[: len(data) // 2]))
-    log = afford.read_log(tmp_path / "cut")
+    with pytest.warns(afford.LogCutWarning):
+        log = afford.read_log(tmp_path / "cut")
     assert log.torn_bytes > 0
     assert 0 < len(log) < len(afford.read_log(src))
+
+
+def test_a_cut_log_is_never_read_as_the_whole_run(made, tmp_path):
+    """A log cut on an event boundary, with its manifest beside it or not: read as far as it goes, with a warning
+    and `cut` saying what is missing; replay does not call it equal to the record. The whole log: no warning."""
+    run = made / "logs" / run_of(made)["run_id"]
+    with warnings.catch_warnings():
+        warnings.simplefilter("error")
+        assert afford.read_log(run).cut == []
+    data = (run / "log.00.lcm").read_bytes()
+    boundary = 0  # the first event boundary past a third of the log (an event: a 28-byte header, channel, data)
+    while boundary < len(data) // 3:
+        boundary += 28 + int.from_bytes(data[boundary + 20:boundary + 24], "big") + \
+            int.from_bytes(data[boundary + 24:boundary + 28], "big")
+    for manifest in (True, False):
+        cut = tmp_path / f"cut-{manifest}"
+        cut.mkdir()
+        (cut / "log.00.lcm").write_bytes(data[:boundary])
+        if manifest:
+            shutil.copy(run / "manifest.json", cut)
+        with pytest.warns(afford.LogCutWarning, match="steps missing"):
+            log = afford.read_log(cut)
+        assert log.torn_bytes == 0 and all("missing" in c for c in log.cut), log.cut
+        assert any(c.startswith("the log ends at step ") and c.endswith(" steps missing") for c in log.cut), log.cut
+        assert any(c.endswith(" events missing") for c in log.cut) == manifest, log.cut
+        replayed = afford.replay(cut)
+        assert not replayed["ok"] and replayed["cut"] == log.cut, replayed
 
 
 def test_bad_logs_are_named(tmp_path):

@@ -11,11 +11,14 @@
 #include <algorithm>
 #include <cstdint>
 #include <filesystem>
+#include <fstream>
 #include <map>
 #include <numeric>
 #include <random>
 #include <string>
 #include <vector>
+
+#include <nlohmann/json.hpp>
 
 #include "afford/edge.hpp"
 #include "afford/logfile.hpp"
@@ -93,7 +96,7 @@ inline std::vector<LogEvent> interleaved(const std::vector<LogEvent>& events, st
 }
 
 // Writes the log at `in` (a folder of segments or one file), interleaved anew, into the new folder `out` (with
-// the run's manifest.json and run.json beside, if any).
+// the run's run.json beside, if any, and its manifest.json naming the segments written and counting the last).
 inline ShuffleReport shuffleLog(const std::filesystem::path& in, const std::filesystem::path& out,
                                 const ShuffleOptions& o) {
   namespace fs = std::filesystem;
@@ -114,17 +117,30 @@ inline ShuffleReport shuffleLog(const std::filesystem::path& in, const std::file
   r.most_ahead = mostAhead(shuffled);
   fs::create_directories(out);
   const int segments = std::max(1, o.segments);
+  nlohmann::json names = nlohmann::json::array();
+  std::int64_t last_events = 0, last_bytes = 0;  // the last segment's, as a logger's manifest counts them
   for (int s = 0; s < segments; ++s) {
     char name[32];
     std::snprintf(name, sizeof name, "log.%02d.lcm", s);
+    names.push_back(name);
     LogWriter w(out / name);
     const std::size_t from = shuffled.size() * s / segments, to = shuffled.size() * (s + 1) / segments;
-    for (std::size_t i = from; i < to; ++i) w.write(shuffled[i].channel, shuffled[i].data.data(), shuffled[i].data.size(), shuffled[i].utime);
+    last_events = static_cast<std::int64_t>(to - from), last_bytes = 0;
+    for (std::size_t i = from; i < to; ++i) {
+      w.write(shuffled[i].channel, shuffled[i].data.data(), shuffled[i].data.size(), shuffled[i].utime);
+      last_bytes += static_cast<std::int64_t>(shuffled[i].data.size());
+    }
     w.close();
   }
-  if (fs::is_directory(in))
-    for (const char* beside : {"manifest.json", "run.json"})
-      if (fs::exists(in / beside)) fs::copy_file(in / beside, out / beside);
+  if (fs::is_directory(in) && fs::exists(in / "run.json")) fs::copy_file(in / "run.json", out / "run.json");
+  if (fs::is_directory(in) && fs::exists(in / "manifest.json")) {  // naming the segments written
+    std::ifstream from(in / "manifest.json");
+    nlohmann::json m = nlohmann::json::parse(from);
+    m["segments"] = names;
+    m["events"] = last_events;
+    m["payload_bytes"] = last_bytes;
+    std::ofstream(out / "manifest.json") << m.dump(2) << "\n";
+  }
   return r;
 }
 

@@ -16,6 +16,8 @@ void printExport(const ExportResult& r) {
   std::printf("run: %s (%s)\nevents: %lld%s\n", r.run_id.c_str(), phase, static_cast<long long>(r.events),
               r.torn_bytes ? " (then an incomplete event, skipped)" : "");
   if (!r.incomplete.empty()) std::printf("the log is incomplete: %s\n", r.incomplete.c_str());
+  for (const std::string& c : r.cut) std::printf("the log is cut: %s\n", c.c_str());
+  if (!r.cut.empty()) std::printf("so the file holds the run only as far as the log goes\n");
   std::printf("wrote %s: %lld messages on %zu topics, %llu chunks, %llu bytes\n", r.file.c_str(),
               static_cast<long long>(r.messages), r.topics.size(), static_cast<unsigned long long>(r.chunks),
               static_cast<unsigned long long>(r.bytes));

@@ -38,6 +38,7 @@ Command replayCommand(CLI::App& app, const FrontDoor& door) {
             std::printf("run: %s (%s)\nevents: %lld%s\n", r.run_id.c_str(), r.extrinsic ? "extrinsic" : "intrinsic",
                         static_cast<long long>(r.events), r.torn_bytes ? " (then an incomplete event, skipped)" : "");
             if (!r.incomplete.empty()) std::printf("the log is incomplete: %s\n", r.incomplete.c_str());
+            for (const auto& c : r.cut) std::printf("the log is cut: %s\n", c.c_str());
             printLogSkips(r.malformed, r.refused_configs, r.untagged);
             for (const auto& g : r.gaps)
               std::printf("missing from the recording: %s serial%s %lld%s\n", g.channel.c_str(),
@@ -46,7 +47,9 @@ Command replayCommand(CLI::App& app, const FrontDoor& door) {
             if (r.dropped)
               std::printf("refused: %lld recorded message(s) (corrupted; see the warnings)\n",
                           static_cast<long long>(r.dropped));
-            if (!r.weights_checksum.empty() || !r.recorded_checksum.empty())
+            if (r.weights_checksum.empty() && r.recorded_checksum.empty() && !r.cut.empty() && !r.extrinsic)
+              std::printf("weights_checksum: not compared: the log ends before the run's RESULT\n");
+            else if (!r.weights_checksum.empty() || !r.recorded_checksum.empty())
               std::printf("weights_checksum: %s\nrecorded: %s\n",
                           r.weights_checksum.empty() ? "(not reached: the replay stopped before the end)"
                                                      : r.weights_checksum.c_str(),
@@ -67,6 +70,9 @@ Command replayCommand(CLI::App& app, const FrontDoor& door) {
               std::printf("replay equals the record\n");
             else if (!r.consistent())
               std::printf("REPLAY DIFFERS FROM THE RECORD\n");
+            else if (!r.cut.empty())
+              std::printf("THE LOG IS CUT: it is not the whole run (what is missing is above); what it holds "
+                          "replays as recorded\n");
             else
               std::printf("replay equals the record as far as it goes, but the record is %s\n",
                           r.gaps.empty() ? "incomplete" : "missing messages (above)");
