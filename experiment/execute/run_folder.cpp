@@ -168,16 +168,16 @@ std::string missingOutputs(const PlannedRun& run, const RunOutcome& r, const std
                         ")");
     }
   }
-  if (run.keep_log) {
+  // (A logger whose --log-dir is not the runner's --log-root closes the log elsewhere: the run has no log folder.)
+  if (run.keep_log && !r.log_dir.empty()) {
     bool segment = false;
-    for (auto it = fs::directory_iterator(r.log_dir, ec); !r.log_dir.empty() && !ec && it != fs::directory_iterator();
-         it.increment(ec))
+    for (auto it = fs::directory_iterator(r.log_dir, ec); !ec && it != fs::directory_iterator(); it.increment(ec))
       segment = segment || it->path().extension() == ".lcm";
-    if (r.log_dir.empty())
-      missing.push_back("its log was not kept (the logger named no folder)");
-    else if (!segment || !fs::is_regular_file(fs::path(r.log_dir) / "manifest.json", ec))
+    if (!segment || !fs::is_regular_file(fs::path(r.log_dir) / "manifest.json", ec)) {
+      const std::string why = writeProblem(r.log_dir);
       missing.push_back("its log in " + r.log_dir + " lacks " + (segment ? "its manifest.json" : "a log file") +
-                        (writeProblem(r.log_dir).empty() ? "" : " (" + writeProblem(r.log_dir) + ")"));
+                        (why.empty() ? "" : " (" + why + ")"));
+    }
   }
   std::string said;
   for (const std::string& m : missing) said += (said.empty() ? "" : "; ") + m;

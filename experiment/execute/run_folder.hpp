@@ -42,8 +42,8 @@ bool onlyClaimed(const std::filesystem::path& run_dir, const std::string& out_di
 void releaseUnused(const std::filesystem::path& run_dir, const std::string& out_dir);
 
 // What a run that succeeded should have left and did not: its checkpoint (a learning run's configuration names
-// one), and, when its log is kept, the log and its manifest. "" if nothing is missing, else what is missing and
-// why, as far as this process can tell (`their_log`: where the processes' own output is, if known).
+// one), and, when its log is kept in its folder, the log and its manifest. "" if nothing is missing, else what is
+// missing and why, as far as this process can tell (`their_log`: where the processes' own output is, if known).
 std::string missingOutputs(const PlannedRun& run, const RunOutcome& r, const std::string& their_log);
 
 }  // namespace afford
