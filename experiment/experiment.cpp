@@ -23,6 +23,7 @@
 #include "afford/processes.hpp"
 #include "experiment/execute/agents.hpp"
 #include "experiment/execute/execute.hpp"
+#include "experiment/execute/run_folder.hpp"
 #include "experiment/plan/disk.hpp"
 #include "experiment/plan/plan.hpp"
 #include "experiment/plan/sweep.hpp"
@@ -109,6 +110,15 @@ void planRuns(Experiment& x) {
   for (std::size_t k = 0; k < x.parts.size(); ++k) x.parts[k].offset = offsets[k];
 }
 
+// The intrinsic runs this experiment runs itself (a shard's share).
+std::vector<const PlannedRun*> ownRuns(const Experiment& x) {
+  std::vector<const PlannedRun*> mine;
+  const std::vector<char> elsewhere = shardMask(x.o.host, x.runs.size());
+  for (std::size_t i = 0; i < x.runs.size(); ++i)
+    if (i >= elsewhere.size() || !elsewhere[i]) mine.push_back(&x.runs[i]);
+  return mine;
+}
+
 }  // namespace
 
 Experiment prepare(const ExperimentRequest& request) {
@@ -127,6 +137,7 @@ Experiment prepare(const ExperimentRequest& request) {
       x.o.plan.run_prefix = defaultPrefix();
       stamped = true;
     }
+    x.o.resume_with = reachCommand(x.o);
   }
   const ExperimentRequest& o = x.o;
   try {
@@ -150,7 +161,7 @@ Experiment prepare(const ExperimentRequest& request) {
       planRuns(x);
     }
   }
-  if (!o.resume && !x.merging()) refuseUsedLogFolders(x.runs, shardMask(o.host, x.runs.size()), o.plan.log_root);
+  if (!o.resume && !x.merging()) refuseHeldRunFolders(ownRuns(x), o.plan.log_root);
   x.hosting = {o.host.transport, "in-process memq://", o.host.processes};
   if (x.merging())
     x.hosting.network = o.merged_network;
@@ -161,14 +172,28 @@ Experiment prepare(const ExperimentRequest& request) {
 
 namespace {
 
-// The folder: locked, the state of a fresh experiment written (the files of
-// the finished one it replaces, with --replace, removed), marked running.
+// The folder: locked, the run folders of a fresh experiment claimed, its state
+// written (the files of the finished one it replaces, with --replace,
+// removed), marked running.
 void openFolder(Experiment& x) {
   const fs::path out = x.out();
+  std::error_code ec;
+  const bool made = !fs::exists(out, ec);
   fs::create_directories(out);
   x.lock = OutDirLock(out);
   if (!x.o.resume) {
     refuseUsedOutDir(x.o);  // again, now that no other runner can write here
+    // Its runs' folders are its own from here on: another experiment given the same run ids is refused.
+    if (!x.merging()) try {
+        claimRunFolders(ownRuns(x), x.o.plan.log_root, x.o.write.out_dir);
+      } catch (const ConfigError&) {
+        if (made) {  // nothing of this experiment is left
+          x.lock = OutDirLock();
+          fs::remove(out / ".lock", ec);
+          fs::remove(out, ec);
+        }
+        throw;
+      }
     clearReplaced(x.o);
     x.state = ExperimentState{};
     x.state.experiment = x.plan().exp.name;
@@ -185,9 +210,7 @@ void openFolder(Experiment& x) {
 // What the runs will write, before they run (a million steps keep a log of gigabytes).
 void sayDisk(const Experiment& x, spdlog::logger& log) {
   std::vector<PlannedRun> mine;
-  const std::vector<char> elsewhere = shardMask(x.o.host, x.runs.size());
-  for (std::size_t i = 0; i < x.runs.size(); ++i)
-    if (i >= elsewhere.size() || !elsewhere[i]) mine.push_back(x.runs[i]);
+  for (const PlannedRun* p : ownRuns(x)) mine.push_back(*p);
   const DiskNeed need = diskNeed(mine, x.o.host.jobs);
   log.info("{}", diskLine(need));
   std::error_code ec;
@@ -226,11 +249,14 @@ PhaseRuns runPhase(Experiment& x, Executor& exec, const std::vector<PlannedRun>&
       log.info("resuming {}: {} of {} run(s) finished already", x.out().string(), phase.finishedCount(), runs.size());
     else if (phase.finishedCount())
       log.info("{} of {} test(s) finished already", phase.finishedCount(), runs.size());
-    const std::vector<MovedAside> moved = moveUnfinishedAside(runs, phase, x.o.plan.log_root, log);
+    const std::vector<MovedAside> moved = moveUnfinishedAside(runs, phase, x.o.plan.log_root, x.o.write.out_dir, log);
     x.state.moved_aside.insert(x.state.moved_aside.end(), moved.begin(), moved.end());
     if (!moved.empty()) x.saveState();
   }
   exec.execute(runs, extrinsic, phase);
+  // The folders claimed for runs that did not need them (an agent taken from the store) go.
+  for (std::size_t i = 0; i < runs.size(); ++i)
+    if (phase.finished[i] && phase.outcomes[i].ok) releaseUnused(fs::path(x.o.plan.log_root) / runs[i].spec.run_id, x.o.write.out_dir);
   return phase;
 }
 
@@ -366,15 +392,18 @@ int runPrepared(Experiment& x, const std::chrono::steady_clock::time_point began
   const PhaseRuns intrinsic = runPhase(x, *exec, x.runs, false, log);
   Summaries s = summariseIntrinsic(x, intrinsic, log);
   s.began = began;
-  if (stopSignal()) {
-    const Interruption in = interruption("intrinsic", x.runs, intrinsic, x.plan().tests > 0, x.o);
+  // A phase with runs neither finished nor another shard's (a stop signal, a run that could not begin) ends the
+  // experiment short of finished: it stays to be resumed.
+  const SlotPool* pool = share.pool ? share.pool : own.get();
+  if (const std::string why = stoppedShort(intrinsic, pool); !why.empty()) {
+    const Interruption in = interruption("intrinsic", x.runs, intrinsic, x.plan().tests > 0, x.o, why);
     s.write(x, in);
     return stopHere(in, x.o, x.state, log);
   }
   warnCurveGaps(s, log);
   const Tests tests = runTests(x, *exec, s, log);
-  if (stopSignal()) {
-    const Interruption in = interruption("extrinsic", tests.runs, tests.phase, false, x.o);
+  if (const std::string why = stoppedShort(tests.phase, pool); !why.empty()) {
+    const Interruption in = interruption("extrinsic", tests.runs, tests.phase, false, x.o, why);
     s.write(x, in);
     return stopHere(in, x.o, x.state, log);
   }

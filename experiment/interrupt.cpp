@@ -95,24 +95,34 @@ int stopSignal() {
 namespace {
 std::string signalName(int sig) { return sig == SIGINT ? "SIGINT" : sig == SIGTERM ? "SIGTERM" : std::to_string(sig); }
 
+bool elsewhere(const PhaseRuns& phase, std::size_t i) { return !phase.elsewhere.empty() && phase.elsewhere[i]; }
+
 }  // namespace
 
-// After a SIGINT or SIGTERM, once the runs under way have stopped: the summary
-// of what finished, where the others stopped, and the command that goes on.
-// `phase` is "intrinsic" or "extrinsic".
-Interruption interruption(const std::string& phase_name, const std::vector<PlannedRun>& runs, const PhaseRuns& phase,
-                          bool extrinsic_to_come, const ExperimentRequest& o) {
-  Interruption in;
-  if (g_signal) {
-    in.signal = signalName(g_signal);
-  } else {
+std::string stoppedShort(const PhaseRuns& phase, const SlotPool* pool) {
+  if (g_signal) return signalName(g_signal);
+  {
     std::lock_guard<std::mutex> lock(g_reason_mutex);
-    in.signal = g_reason;
+    if (!g_reason.empty()) return g_reason;
   }
+  if (pool)
+    if (std::string why = pool->halted(); !why.empty()) return why;
+  for (std::size_t i = 0; i < phase.finished.size(); ++i)
+    if (!phase.finished[i] && !elsewhere(phase, i)) return "runs that did not run";
+  return "";
+}
+
+// Once the runs under way have stopped: the summary of what finished, where the others stopped, and the command
+// that goes on. `phase_name` is "intrinsic" or "extrinsic"; `why` what stopped it (stoppedShort).
+Interruption interruption(const std::string& phase_name, const std::vector<PlannedRun>& runs, const PhaseRuns& phase,
+                          bool extrinsic_to_come, const ExperimentRequest& o, const std::string& why) {
+  Interruption in;
+  in.signal = why;
   in.phase = phase_name;
   in.finished = static_cast<std::int64_t>(phase.finishedCount());
-  in.planned = static_cast<std::int64_t>(runs.size());
   for (std::size_t i = 0; i < runs.size(); ++i) {
+    if (elsewhere(phase, i)) continue;  // another shard's
+    ++in.planned;
     if (phase.finished[i]) continue;
     const std::string& id = runs[i].spec.run_id;
     const fs::path dir = fs::path(o.plan.log_root) / id;
@@ -127,7 +137,8 @@ Interruption interruption(const std::string& phase_name, const std::vector<Plann
   return in;
 }
 
-// Once `in` is in summary.json: the experiment's state says so, and the log what is kept and what comes.
+// Once `in` is in summary.json: the experiment's state says so, and the log what is kept and what comes. Returns
+// the exit status: 128 + the signal's number, or 1 when the program stopped it (a run that could not begin).
 int stopHere(const Interruption& in, const ExperimentRequest& o, ExperimentState& state, spdlog::logger& log) {
   const std::string &signal = in.signal, &phase_name = in.phase, &cwd = in.resume_in, &command = in.resume;
   state.state = "interrupted";
@@ -135,7 +146,12 @@ int stopHere(const Interruption& in, const ExperimentRequest& o, ExperimentState
   writeState(o.write.out_dir, state);
 
   const std::string what = phase_name == "intrinsic" ? "intrinsic run(s)" : "extrinsic test(s)";
-  log.warn("interrupted by {} during the {} phase", signal, phase_name);
+  if (stopSignal())
+    log.warn("interrupted by {} during the {} phase", signal, phase_name);
+  else
+    log.error("stopped during the {} phase: {} (said above); what did not run is not marked done and runs when the "
+              "experiment is resumed",
+              phase_name, signal);
   log.info("kept: {} of {} {} finished{}, in {} and the CSV files beside it", in.finished, in.planned, what,
            phase_name == "extrinsic" ? " (and every intrinsic run)" : "",
            (fs::path(o.write.out_dir) / "summary.json").string());
@@ -144,7 +160,7 @@ int stopHere(const Interruption& in, const ExperimentRequest& o, ExperimentState
   if (!in.not_started.empty()) log.info("not started: {} {}", in.not_started.size(), what);
   if (in.extrinsic_tests_to_come) log.info("not started: the extrinsic tests");
   log.warn("to resume (in {}): {}", cwd, command);
-  return 128 + stopSignal();
+  return stopSignal() ? 128 + stopSignal() : 1;
 }
 
 

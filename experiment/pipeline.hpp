@@ -110,11 +110,16 @@ int stopSignal();
 // SIGINT and SIGTERM set stopRequested() (the drivers stop their runs) and are
 // remembered for the exit status. `resume`: the command that goes on.
 void installInterruptHandlers(const std::string& resume);
-// After a stop signal, once the runs under way have stopped: the summary of what finished, where the others
-// stopped, and the command that goes on. `phase_name` is "intrinsic" or "extrinsic".
+// Why the experiment stops after a phase instead of going on: a stop signal (or the program's stop), the halt of
+// its slots (a run that could not begin: SlotPool::halt), or runs of the phase neither finished nor another
+// shard's; "" if it goes on.
+std::string stoppedShort(const PhaseRuns& phase, const SlotPool* pool);
+// Then, once the runs under way have stopped: the summary of what finished, where the others stopped, and the
+// command that goes on. `phase_name` is "intrinsic" or "extrinsic"; `why`: stoppedShort's.
 Interruption interruption(const std::string& phase_name, const std::vector<PlannedRun>& runs, const PhaseRuns& phase,
-                          bool extrinsic_to_come, const ExperimentRequest& o);
-// Once `in` is in summary.json: the experiment's state says so, and the log what is kept and what comes.
+                          bool extrinsic_to_come, const ExperimentRequest& o, const std::string& why);
+// Once `in` is in summary.json: the experiment's state says so (resumable), and the log what is kept and what
+// comes. Returns the exit status: 128 + the signal, or 1 if the program stopped it.
 int stopHere(const Interruption& in, const ExperimentRequest& o, ExperimentState& state, spdlog::logger& log);
 
 // ---- summaries (summaries.cpp) -------------------------------------------------------------

@@ -19,6 +19,7 @@ int runQueue(const std::vector<ExperimentRequest>& requests, const std::string& 
   // Every experiment is checked and planned before any is written or started.
   std::vector<Experiment> xs;
   std::map<std::string, std::string> folders;  // out dir -> the experiment writing there
+  std::map<std::string, std::string> run_ids;  // run id -> the experiment running it (its log folder)
   for (const ExperimentRequest& r : requests) {
     const std::string name = r.plan.experiment.empty() ? r.write.out_dir : r.plan.experiment;
     try {
@@ -30,6 +31,10 @@ int runQueue(const std::vector<ExperimentRequest>& requests, const std::string& 
     if (const auto [it, fresh] = folders.emplace(dir, name); !fresh)
       throw ConfigError("queue entries " + it->second + " and " + name + " would both write to " + r.write.out_dir +
                         ": give each its own --out");
+    for (const PlannedRun& p : xs.back().runs)
+      if (const auto [it, fresh] = run_ids.emplace(p.spec.run_id, name); !fresh)
+        throw ConfigError("queue entries " + it->second + " and " + name + " both plan run '" + p.spec.run_id +
+                          "' (one log folder for two runs): give them other --run-prefix values");
   }
   const HostRequest& host = xs.front().o.host;
   Shared share;
@@ -65,7 +70,7 @@ int runQueue(const std::vector<ExperimentRequest>& requests, const std::string& 
     if (codes[k] != 0) log.warn("queue: {} ({}) exited with status {}", xs[k].plan().exp.name, xs[k].out().string(), codes[k]);
     code = std::max(code, codes[k]);
   }
-  if (stopSignal()) log.warn("to resume the whole queue: {}", resume);
+  if (stopSignal() || !pool.halted().empty()) log.warn("to resume the whole queue: {}", resume);
   log.info("queue: {} experiment(s) in {}", xs.size(),
            durationText(std::chrono::duration<double>(std::chrono::steady_clock::now() - began).count()));
   return code;

@@ -2,11 +2,14 @@
 
 #include <fcntl.h>
 #include <sys/file.h>
+#include <sys/stat.h>
 #include <unistd.h>
 
 #include <algorithm>
+#include <cstdlib>
 #include <fstream>
 
+#include "afford/auth.hpp"
 #include "afford/checksum.hpp"
 #include "afford/config.hpp"
 #include "experiment/run/outcome.hpp"
@@ -24,8 +27,44 @@ std::string shellQuoted(const std::string& s) {
   return q + "'";
 }
 
+namespace {
+
+// What scripts/procs.sh run says reaches its group (`<procs.sh> run GROUP`, with the settings that find it).
+std::string procsCommand() {
+  const char* with = std::getenv("AFFORD_RESUME_WITH");
+  return with ? with : "";
+}
+
+// The network namespace this process runs in, if `ip netns` named it (/run/netns/NAME, as `ip netns identify`
+// finds it); "" if none did.
+std::string namedNetns() {
+  struct stat self {};
+  if (stat("/proc/self/ns/net", &self) != 0) return "";
+  std::error_code ec;
+  for (const auto& e : fs::directory_iterator("/run/netns", ec)) {
+    struct stat ns {};
+    if (stat(e.path().c_str(), &ns) == 0 && ns.st_dev == self.st_dev && ns.st_ino == self.st_ino)
+      return e.path().filename().string();
+  }
+  return "";
+}
+
+}  // namespace
+
+std::string reachCommand(const ExperimentRequest& o) {
+  if (const std::string procs = procsCommand(); !procs.empty()) return procs;
+  std::string c = shellQuoted(o.write.program) + " experiment";
+  if (o.host.attach.empty()) return c;  // its own processes: the runner starts them again
+  c += " --attach " + shellQuoted(o.host.attach);
+  if (const std::string key = busKeySource(o.host.bus_key); !key.empty())
+    c += " --bus-key " + shellQuoted(fs::absolute(key).string());
+  if (const std::string ns = namedNetns(); !ns.empty()) c = "ip netns exec " + shellQuoted(ns) + " " + c;
+  return c;
+}
+
 std::string resumeCommand(const ExperimentRequest& o) {
-  return shellQuoted(o.write.program) + " experiment --resume --out " + shellQuoted(o.write.out_dir);
+  return (o.resume_with.empty() ? shellQuoted(o.write.program) + " experiment" : o.resume_with) + " --resume --out " +
+         shellQuoted(o.write.out_dir);
 }
 
 OutDirLock::OutDirLock(const fs::path& out) {
@@ -121,7 +160,7 @@ void refuseUsedOutDir(const ExperimentRequest& o) {
   const std::string& what = state.experiment;
   if (state.state != "finished")
     throw ConfigError("--out " + out.string() + " holds an experiment that did not finish (" + what + ", " +
-                      state.state + "): continue it with `" + resumeCommand(o) +
+                      state.state + "): continue it with `" + (state.resume.empty() ? resumeCommand(o) : state.resume) +
                       "`, or choose another --out");
   if (!o.write.replace)
     throw ConfigError("--out " + out.string() + " holds a finished experiment (" + what + "; its results: " +
@@ -149,6 +188,8 @@ ExperimentRequest resumedRequest(const ExperimentRequest& given, const Experimen
   o.resume = true;
   o.given = given.given;
   o.write.program = given.write.program;
+  o.host.bus_key = given.host.bus_key;  // (never stored: the key file given now, or $AFFORD_BUS_KEY's)
+  o.host.on_curve = given.host.on_curve;
   const auto has = [&](const char* option) { return given.given.count(option) > 0; };
   if (has("--jobs")) o.host.jobs = given.host.jobs;
   if (has("--transport")) o.host.transport = given.host.transport;
@@ -161,6 +202,10 @@ ExperimentRequest resumedRequest(const ExperimentRequest& given, const Experimen
   if (has("--progress-every")) o.host.progress_every = given.host.progress_every;
   if (has("--attach")) o.host.attach = given.host.attach;
   if (has("--reuse-agents")) o.host.reuse_agents = given.host.reuse_agents;
+  // How its processes are reached: as this command says, unless it says nothing of it and they are someone
+  // else's (attached): then as the experiment stored it (a plain --resume then names the command that works).
+  if (o.resume_with.empty() || o.host.attach.empty() || !procsCommand().empty() || has("--attach") || has("--bus-key"))
+    o.resume_with = reachCommand(o);
   const std::string& cwd = state.cwd;
   if (fs::current_path() != fs::path(cwd))
     for (const auto& [option, path] : {std::pair{"--log-root", o.plan.log_root}, {"--config-dir", o.plan.config_dir}})

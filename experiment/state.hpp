@@ -20,6 +20,11 @@
 namespace afford {
 
 std::string shellQuoted(const std::string& s);
+// The command that reaches the processes of the experiment `o` runs, as it runs now: $AFFORD_RESUME_WITH if set
+// (scripts/procs.sh run says how it reaches its group), else `afford experiment` with the bus options given
+// (--attach URL, the key file's path, never the key; in the named network namespace it runs in, if any).
+std::string reachCommand(const ExperimentRequest& o);
+// The command that resumes it: o.resume_with (else the runner's) with --resume --out DIR.
 std::string resumeCommand(const ExperimentRequest& o);
 
 // One runner per output folder, for as long as the lock lives (closed on exec: the children do not hold it;

@@ -14,7 +14,11 @@
 #                                               run id and last step handled (its STATUS)
 #   scripts/procs.sh run     RUN EXPERIMENT [afford experiment options...]
 #                                               drive runs on the group (run ids RUN-<exp>-<sys>-s<seed>;
-#                                               RUN-2-..., RUN-3-... once those exist; or --run-prefix P)
+#                                               RUN-2-..., RUN-3-... once those exist; or --run-prefix P);
+#                                               refused if none of the group's processes runs
+#   scripts/procs.sh run     RUN --resume --out DIR
+#                                               continue an interrupted one on the group (its run ids), as
+#                                               the runner's "to resume" line says
 #   scripts/procs.sh exec    RUN COMMAND...     run a command on RUN's bus (spy, viewer, lcm-logger)
 #
 # PROCESS: environment eye predictors motivation planner logger.
@@ -227,9 +231,25 @@ case $cmd in
   run)
     [[ $# -ge 1 ]] || usage
     u=$(url)
-    # The run ids' prefix: --run-prefix if given, else RUN, or RUN-2, RUN-3, ... once runs of RUN exist.
+    # The group must be up: a run on a bus nobody serves waits for processes that never come.
+    up=() down=()
+    for p in "${all[@]}"; do
+      [[ -f $dir/$p.pid ]] || continue
+      if alive "$p"; then up+=("$p"); else down+=("$p"); fi
+    done
+    [[ ${#up[@]} -gt 0 ]] || die "group '$run' is not up: none of its processes runs (scripts/procs.sh start $run;" \
+      "scripts/procs.sh status $run shows them)"
+    [[ ${#down[@]} -eq 0 ]] || echo "procs.sh: not running in group '$run': ${down[*]} (a run that needs one waits" \
+      "for it: scripts/procs.sh start $run ${down[*]})" >&2
+    # How the runner says to resume what it runs: this script's run of the group, with the settings that find it.
+    with=
+    for v in AFFORD_NETNS AFFORD_BIN AFFORD_PROCS_KEY; do [[ -n ${!v:-} ]] && with+="$v=$(printf '%q' "${!v}") "; done
+    [[ -n ${AFFORD_LOGS:-} ]] && with+="AFFORD_LOGS=$(printf '%q' "$logs") "
+    export AFFORD_RESUME_WITH="$with$(printf '%q' "$0") run $(printf '%q' "$run")"
+    # The run ids' prefix: --run-prefix if given, else RUN, or RUN-2, RUN-3, ... once runs of RUN exist; a resumed
+    # experiment keeps its own (stored).
     prefix=()
-    for a in "$@"; do [[ $a == --run-prefix || $a == --run-prefix=* ]] && prefix=(none); done
+    for a in "$@"; do [[ $a == --run-prefix || $a == --run-prefix=* || $a == --resume ]] && prefix=(none); done
     if [[ ${#prefix[@]} -eq 0 ]]; then
       p=$run k=1
       while compgen -G "$logs/$p-*" >/dev/null; do k=$((k + 1)); p=$run-$k; done

@@ -17,6 +17,7 @@
 #include "afford/logging.hpp"
 #include "afford/processes.hpp"
 #include "experiment/execute/progress.hpp"
+#include "experiment/execute/run_folder.hpp"
 #include "experiment/run/outcome.hpp"
 #include "experiment/schema/summary.hpp"
 #include "afford/config.hpp"
@@ -85,20 +86,6 @@ void removeSnapshots(const fs::path& run_dir) {
   }
 }
 
-// A run that wrote nothing in its folder (no log, no checkpoint) leaves none: only run.json was there.
-void dropIfOnlyRunJson(const fs::path& run_dir) {
-  std::error_code ec;
-  int entries = 0;
-  bool only_run_json = true;
-  for (auto it = fs::directory_iterator(run_dir, ec); !ec && it != fs::directory_iterator(); it.increment(ec)) {
-    ++entries;
-    only_run_json = only_run_json && it->path().filename() == "run.json";
-  }
-  if (ec || entries != 1 || !only_run_json) return;
-  fs::remove(run_dir / "run.json", ec);
-  fs::remove(run_dir, ec);  // (only if nothing came meanwhile)
-}
-
 RunOutcome runInProcess(const PlannedRun& run, const HostRequest& o, const std::string& log_root,
                         const ProtocolConfig& protocol, Slot& slot, const RunHooks& hooks) {
   const std::string tag = o.jobs > 1 ? "#" + std::to_string(slot.index) : "";
@@ -148,7 +135,8 @@ RunOutcome runOverUdpm(const PlannedRun& run, const HostRequest& o, const std::s
       slot.lcm = openBus(slot.url, protocol.bus);
     } catch (const std::exception& e) {
       RunOutcome r;
-      r.error = e.what();
+      r.error = "run '" + run.spec.run_id + "': cannot open the bus " + slot.url + ": " + e.what();
+      r.unreached = true;  // nothing was said to any process
       return r;
     }
     slot.driver = std::make_unique<RunDriver>(*slot.lcm, makeLogger("runner", "warn"), protocol);
@@ -246,11 +234,19 @@ PhaseRuns keptRuns(const std::vector<PlannedRun>& runs, const fs::path& out) {
 // is never reused nor deleted, but moved aside as <run-id>.cut-<k>, and the
 // run starts afresh.
 std::vector<MovedAside> moveUnfinishedAside(const std::vector<PlannedRun>& runs, const PhaseRuns& phase,
-                                            const std::string& log_root, spdlog::logger& log) {
+                                            const std::string& log_root, const std::string& out_dir,
+                                            spdlog::logger& log) {
   std::vector<MovedAside> moved;
   for (std::size_t i = 0; i < runs.size(); ++i) {
     const fs::path dir = fs::path(log_root) / runs[i].spec.run_id;
-    if (phase.finished[i] || !fs::exists(dir)) continue;
+    // (Another shard's run is its own; a folder claimed and never begun is the run's, as it is.)
+    if (phase.finished[i] || (!phase.elsewhere.empty() && phase.elsewhere[i]) || !fs::exists(dir) ||
+        onlyClaimed(dir, out_dir))
+      continue;
+    if (const std::string whose = anotherHolder(dir, out_dir); !whose.empty())
+      throw ConfigError("--resume: run '" + runs[i].spec.run_id + "' did not finish, and its log folder " +
+                        dir.string() + " is another experiment's (" + whose +
+                        "): it is not moved aside; move it away yourself, or resume where the experiment started");
     fs::path aside;
     for (int k = 1; fs::exists(aside = dir.string() + ".cut-" + std::to_string(k)); ++k) {
     }
@@ -281,6 +277,7 @@ struct SlotPool::Impl {
   std::condition_variable wake, finished;
   std::deque<Job> waiting;
   bool closing = false;
+  std::string halted;  // why no more work starts (halt), "" while it does
   std::vector<std::thread> threads;
 
   Impl(const HostRequest& o, bool q, std::string label)
@@ -305,8 +302,13 @@ struct SlotPool::Impl {
         job = std::move(waiting.front());
         waiting.pop_front();
       }
-      // After a stop signal the works not begun are dropped; a work never lets an exception out.
-      if (!stopRequested()) try {
+      // After a stop signal or a halt the works not begun are dropped; a work never lets an exception out.
+      bool dropped = stopRequested();
+      {
+        std::lock_guard<std::mutex> lock(mutex);
+        dropped = dropped || !halted.empty();
+      }
+      if (!dropped) try {
           job.batch->works[job.index](slot);
         } catch (const std::exception&) {
         }
@@ -348,6 +350,16 @@ void SlotPool::wait(const std::shared_ptr<Batch>& batch) {
   impl_->finished.wait(lock, [&] { return batch->left == 0; });
 }
 
+void SlotPool::halt(const std::string& why) {
+  std::lock_guard<std::mutex> lock(impl_->mutex);
+  if (impl_->halted.empty()) impl_->halted = why;
+}
+
+std::string SlotPool::halted() const {
+  std::lock_guard<std::mutex> lock(impl_->mutex);
+  return impl_->halted;
+}
+
 Progress& SlotPool::progress() { return impl_->progress; }
 bool SlotPool::queue() const { return impl_->queue; }
 int SlotPool::slots() const { return impl_->jobs; }
@@ -364,37 +376,26 @@ struct PhaseState {
   std::size_t done = 0;  // finished, for the [k/N] lines
 };
 
-// Run i on the slot, and keep its outcome.
-void runOne(PhaseState& st, std::size_t i, Slot& slot, Progress& progress) {
-  const std::vector<PlannedRun>& runs = *st.runs;
-  PhaseRuns& phase = *st.phase;
-  const RunContext& c = st.c;
+// Where a process of the slot writes its output, if this runner started it (for a message about what it did
+// not write; "" when its output is elsewhere: over memq in this one's, attached in its own).
+std::string processLog(const RunContext& c, const Slot& slot, const std::string& process) {
+  if (!c.o.attach.empty() || c.o.transport != "udpm") return "";
+  return (fs::path(c.out_dir) / "processes" / ("slot" + std::to_string(slot.index)) / (process + ".log")).string();
+}
+
+// Run `planned` on the slot: its outcome, as the driver (or the bus) gave it.
+RunOutcome driveOne(const RunContext& c, const PlannedRun& planned, Slot& slot, Progress& progress) {
   const HostRequest& o = c.o;
-  spdlog::logger& log = *c.log;
   const int slot_index = slot.index;
-  const std::string& id = runs[i].spec.run_id;
-  RunOutcome r;
-  progress.started(slot_index, id, runs[i].spec.steps);
   RunHooks hooks;
   hooks.step = [&progress, slot_index](std::int64_t step) { progress.step(slot_index, step); };
-  if (o.on_curve && !runs[i].spec.extrinsic && !runs[i].target.empty())
-    hooks.table = [&o, &run = runs[i]](const TableSnapshot& t) {
+  if (o.on_curve && !planned.spec.extrinsic && !planned.target.empty())
+    hooks.table = [&o, &run = planned](const TableSnapshot& t) {
       o.on_curve({run.spec.run_id, run.system, run.index, t.step, meanAbsError(t.affordance, run.target)});
     };
-  PlannedRun run = runs[i];
+  PlannedRun run = planned;
   run.spec.stall_seconds = o.stall_seconds;
-  // Whose the run's folder is, before any process writes in it: `afford clean` checks that experiment's lock and
-  // state (running, or stopped and resumable) and leaves the folder alone while it is in use. (Without it, clean
-  // cannot attribute the folder, and leaves it alone too.)
-  const fs::path run_dir = fs::path(c.log_root) / id;
-  try {
-    fs::create_directories(run_dir);
-    writeWhole(run_dir / "run.json",
-               json{{"run_id", id}, {"experiment", runs[i].spec.experiment}, {"out_dir", fs::absolute(c.out_dir).string()}}
-                       .dump() + "\n");
-  } catch (const std::exception& e) {
-    progress.say([&] { log.warn("run '{}': cannot write {} ({})", id, (run_dir / "run.json").string(), e.what()); });
-  }
+  RunOutcome r;
   try {
     serve(slot, run, o, c.log_root, c.out_dir);
     r = o.transport == "memq" ? runInProcess(run, o, c.log_root, c.protocol, slot, hooks)
@@ -402,11 +403,37 @@ void runOne(PhaseState& st, std::size_t i, Slot& slot, Progress& progress) {
   } catch (const std::exception& e) {
     slot.host.reset();  // (memq) nodes left mid-run are not reused
     r.ok = false;
-    r.error = "run '" + id + "': " + e.what();
+    r.error = "run '" + run.spec.run_id + "': " + e.what();
   }
   if (!r.ok) slot.serving.clear();  // the next run starts the slot afresh: its bus, driver and processes
+  return r;
+}
+
+// Run i on the slot, and keep its outcome. A run that did not begin (its processes never said they were free,
+// the bus did not open, its log folder is not this experiment's) is not kept: it stays to be run, and no run
+// starts after it (SlotPool::halt).
+void runOne(PhaseState& st, std::size_t i, Slot& slot, SlotPool& pool) {
+  const std::vector<PlannedRun>& runs = *st.runs;
+  PhaseRuns& phase = *st.phase;
+  const RunContext& c = st.c;
+  spdlog::logger& log = *c.log;
+  Progress& progress = pool.progress();
+  const std::string& id = runs[i].spec.run_id;
+  progress.started(slot.index, id, runs[i].spec.steps);
+  // Whose the run's folder is, before any process writes in it: `afford clean` checks that experiment's lock and
+  // state (running, or stopped and resumable) and leaves the folder alone while it is in use.
+  const fs::path run_dir = fs::path(c.log_root) / id;
+  RunOutcome r;
+  const std::string refused = takeRunFolder(run_dir, runs[i], c.out_dir);
+  if (refused.empty()) r = driveOne(c, runs[i], slot, progress);
   removeSnapshots(run_dir);
-  dropIfOnlyRunJson(run_dir);
+  if (!refused.empty() || r.unreached) {
+    progress.ended(slot.index, false);
+    pool.halt(refused.empty() ? "processes not reached" : "a log folder not its own");
+    const std::string why = refused.empty() ? r.error : "run '" + id + "': " + refused;
+    progress.say([&] { log.error("{}; the run did not begin, and no other starts", why); });
+    return;
+  }
   // A run that fails while the processes are being stopped failed because of it: cut too.
   const bool cut = r.interrupted || (!r.ok && stopRequested());
   if (r.ok && !r.log_dir.empty()) {
@@ -414,12 +441,20 @@ void runOne(PhaseState& st, std::size_t i, Slot& slot, Progress& progress) {
     for (const auto& f : fs::directory_iterator(r.log_dir, ec))
       if (f.path().extension() == ".lcm") r.log_bytes += fs::file_size(f.path(), ec);
   }
+  if (r.ok)  // what the run had to leave and did not is its failure, not a silent ""
+    if (const std::string missing = missingOutputs(runs[i], r, processLog(c, slot, "predictors")); !missing.empty()) {
+      r.ok = false;
+      r.error = "run '" + id + "': " + missing;
+    }
+  // A run that wrote nothing in its folder (a test whose log is not kept) leaves none. (Not one cut or failed: a
+  // logger may still be closing a log there, and run.json says whose it is.)
+  if (r.ok) releaseUnused(run_dir, c.out_dir);
   if (!cut) try {
       keepOutcome(c.out_dir, id, r);
     } catch (const std::exception& e) {
       log.error("cannot keep the outcome of run '{}' ({}): --resume would run it again", id, e.what());
     }
-  progress.ended(slot_index, !cut);
+  progress.ended(slot.index, !cut);
   std::unique_lock<std::mutex> lock(st.mutex);
   if (cut) {
     const std::string prefix = "run '" + id + "': ";
@@ -457,7 +492,7 @@ std::vector<SlotPool::Work> worksOf(const std::shared_ptr<PhaseState>& st, SlotP
   const PhaseRuns& phase = *st->phase;
   for (std::size_t i = 0; i < st->runs->size(); ++i)
     if (!phase.finished[i] && (phase.elsewhere.empty() || !phase.elsewhere[i])) {
-      works.emplace_back([st, i, &pool](Slot& slot) { runOne(*st, i, slot, pool.progress()); });
+      works.emplace_back([st, i, &pool](Slot& slot) { runOne(*st, i, slot, pool); });
       steps.push_back((*st->runs)[i].spec.steps);
     }
   return works;
@@ -467,7 +502,8 @@ std::vector<SlotPool::Work> worksOf(const std::shared_ptr<PhaseState>& st, SlotP
 
 // Run every planned run not finished yet (nor run elsewhere) on the pool's
 // slots, and keep each outcome in DIR/runs/ as it comes. After a SIGINT or
-// SIGTERM no run starts; a run it stopped is cut, not finished.
+// SIGTERM no run starts; a run it stopped is cut, not finished. A run that
+// could not begin (runOne) is neither: it stays to be run, and the pool halts.
 void executeRuns(const std::vector<PlannedRun>& runs, PhaseRuns& phase, const RunContext& c, SlotPool& pool,
                  const OnFinished& on_finished) {
   auto st = std::make_shared<PhaseState>();

@@ -48,9 +48,12 @@ struct MovedAside {
 };
 // A run that did not finish may have left its folder (an incomplete log): it
 // is never reused nor deleted, but moved aside as <run-id>.cut-<k>, and the
-// run starts afresh. Returns what was moved where.
+// run starts afresh. A folder claimed and never begun stays the run's; one that
+// is not this experiment's (out_dir) is refused (ConfigError), never moved.
+// Returns what was moved where.
 std::vector<MovedAside> moveUnfinishedAside(const std::vector<PlannedRun>& runs, const PhaseRuns& phase,
-                                            const std::string& log_root, spdlog::logger& log);
+                                            const std::string& log_root, const std::string& out_dir,
+                                            spdlog::logger& log);
 
 struct Slot;
 
@@ -72,10 +75,14 @@ class SlotPool {
   using Work = std::function<void(Slot&)>;
   struct Batch;
   // Queues the works, to run each on a free slot, in order (after a SIGINT or
-  // SIGTERM the works not begun are dropped) ...
+  // SIGTERM, or a halt, the works not begun are dropped) ...
   std::shared_ptr<Batch> submit(std::vector<Work> works);
   // ... and returns once each has run or was dropped.
   void wait(const std::shared_ptr<Batch>& batch);
+  // No work starts from now on (those not begun are dropped, as after a stop signal): a run could not begin, and
+  // the others would not either. The first `why` is kept.
+  void halt(const std::string& why);
+  std::string halted() const;  // why, or "" if the pool was not halted
   Progress& progress();
   bool queue() const;
   int slots() const;
@@ -99,7 +106,8 @@ struct RunContext {
 
 // Run every planned run not finished yet (nor run elsewhere) on the pool's
 // slots, and keep each outcome in DIR/runs/ as it comes. After a SIGINT or
-// SIGTERM no run starts; a run it stopped is cut, not finished.
+// SIGTERM no run starts; a run it stopped is cut, not finished. A run that
+// could not begin (runOne) is neither: it stays to be run, and the pool halts.
 void executeRuns(const std::vector<PlannedRun>& runs, PhaseRuns& phase, const RunContext& c, SlotPool& pool,
                  const OnFinished& on_finished = {});
 

@@ -228,15 +228,6 @@ Plan planExperiment(const PlanRequest& o) {
   return plan;
 }
 
-void refuseUsedLogFolders(const std::vector<PlannedRun>& runs, const std::vector<char>& elsewhere,
-                          const std::string& log_root) {
-  // The run's folder holds its log and its checkpoint: a run never writes into another's.
-  for (const auto& p : runs)
-    if ((elsewhere.empty() || !elsewhere[p.index]) && fs::exists(fs::path(log_root) / p.spec.run_id))
-      throw ConfigError("the log folder " + (fs::path(log_root) / p.spec.run_id).string() +
-                        " exists already: choose another --run-prefix or --log-root");
-}
-
 std::string joined(const std::vector<std::string>& v) {
   std::string s;
   for (const auto& e : v) s += (s.empty() ? "" : " ") + e;

@@ -72,11 +72,6 @@ std::string reservePrefix(const std::string& log_root);
 
 Plan planExperiment(const PlanRequest& o);
 
-// A fresh experiment's runs (those of this shard: `elsewhere[i]` false) may
-// not have a log folder yet (a resumed experiment's have).
-void refuseUsedLogFolders(const std::vector<PlannedRun>& runs, const std::vector<char>& elsewhere,
-                          const std::string& log_root);
-
 // The tests of every condition and scenario from each intrinsic run that left
 // a checkpoint. An agent without the checkpoint the design asks for (not
 // written, or too few actions for extrinsic.after_actions) is not tested;

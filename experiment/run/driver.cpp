@@ -330,9 +330,11 @@ RunDriver::Ending RunDriver::waitFree(const Waiting& w) {
   while (!missing(free).empty()) {
     if (auto h = w.health(); !h.empty()) return {false, h};
     if (stopRequested()) return {true, ""};
-    if (Clock::now() > deadline)
+    if (Clock::now() > deadline) {
+      outcome_->unreached = true;  // nothing was said to them yet: the run never began
       return {false, "no process of this name reported free for a run within " +
                          std::to_string(protocol.ready_timeout_ms / 1000.0).substr(0, 4) + " s: " + missing(free)};
+    }
     w.pump();
   }
   return {};

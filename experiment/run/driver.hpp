@@ -117,6 +117,7 @@ struct GoalBin {
 struct RunOutcome {
   bool ok = false;
   bool interrupted = false;                   // SIGINT/SIGTERM cut it (error says at which step)
+  bool unreached = false;                     // its processes never said they were free: it never began (not kept)
   std::string error;
   std::string weights_checksum;
   std::string checkpoint;                     // the predictors' saved weights, if any
@@ -132,7 +133,7 @@ struct RunOutcome {
   std::uintmax_t log_bytes = 0;               // size of the run's log, if any
   ExtrinsicOutcome extrinsic;                 // extrinsic runs
   std::vector<GoalBin> goals;                 // goals-phase runs: per curve interval, in step order
-  // Kept (DIR/runs/<run-id>.json) but for `interrupted`: a cut run is not kept.
+  // Kept (DIR/runs/<run-id>.json) but for `interrupted` and `unreached`: such a run is not kept.
   template <class V>
   void visit(V& v) {
     v("ok", ok);

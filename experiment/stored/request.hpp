@@ -23,6 +23,9 @@ struct ExperimentRequest {
   std::string merged_network;              // ... and the network they ran over
   std::set<std::string> given;             // options given on the command line ("--reps", "name", ...): with
                                            // resume, plan options must match the stored ones, run options override
+  // The command, before `--resume --out DIR`, that reaches this experiment's processes again (state.hpp's
+  // reachCommand): scripts/procs.sh's run of its group, or the runner with the bus options it was given.
+  std::string resume_with;
   // What an experiment keeps of its request (the "options" of DIR/experiment.json, experiment/stored/state_file.hpp):
   // one map of the plan's keys, the host's and these.
   template <class V>
@@ -32,6 +35,7 @@ struct ExperimentRequest {
     v("quiet", write.quiet);
     v.since("merged_from", merged_from, std::vector<std::string>());  // a merge resumes as one: it gathers its shards again
     v.since("merged_network", merged_network, std::string());
+    v.since("resume_with", resume_with, std::string());  // (before issue 55: the runner alone)
   }
 };
 

@@ -1,6 +1,7 @@
 #include "predictors/predictors.hpp"
 
 #include <algorithm>
+#include <cerrno>
 #include <cmath>
 #include <cstdio>
 #include <cstring>
@@ -387,14 +388,19 @@ void Predictors::save(const std::string& path, const std::string& checksum) cons
   if (!parent.empty()) std::filesystem::create_directories(parent, ec);
   {
     std::ofstream out(tmp, std::ios::binary);
-    if (!out) throw std::runtime_error("cannot write checkpoint " + tmp);
+    if (!out) throw std::runtime_error("cannot write checkpoint " + tmp + ": " + std::strerror(errno));
     const std::uint64_t size = raw.plainSize();
     out.write(kPackedMagic, sizeof kPackedMagic);
     out.write(reinterpret_cast<const char*>(&size), sizeof size);
     out.write(packed.data(), static_cast<std::streamsize>(packed.size()));
-    if (!out) throw std::runtime_error("cannot write checkpoint " + tmp);
+    out.close();  // (what is still buffered is written here: a full disk says so now, not never)
+    if (!out) {
+      const int err = errno;
+      std::filesystem::remove(tmp, ec);
+      throw std::runtime_error("cannot write checkpoint " + tmp + ": " + std::strerror(err));
+    }
   }
-  if (std::rename(tmp.c_str(), path.c_str()) != 0) throw std::runtime_error("cannot rename " + tmp + " to " + path);
+  if (std::rename(tmp.c_str(), path.c_str()) != 0) throw std::runtime_error("cannot rename " + tmp + " to " + path + ": " + std::strerror(errno));
 }
 
 void Predictors::load(const std::string& path) {

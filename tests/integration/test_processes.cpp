@@ -530,21 +530,20 @@ TEST(Processes, ARunNeverWritesIntoTheLogFolderOfAnotherRun) {
   EXPECT_FALSE(fs::exists(dir + "/out"));
 }
 
-// The predictors cannot write the checkpoint (the log root is a file): the
-// agent is not tested, and the experiment says so and fails.
-TEST(Processes, AnAgentWithoutACheckpointIsNotTestedAndTheExperimentSaysWhy) {
+// A log root that is a file: no run can have its folder there, so the experiment is refused before any run,
+// naming the folder and why (not run to the end with a checkpoint it could not write).
+TEST(Processes, ALogRootWhereNoRunFolderCanBeMadeIsRefusedBeforeAnyRun) {
   const std::string dir = test::tempDir("no-checkpoint");
   std::ofstream(dir + "/not-a-folder") << "x";
   const auto r = test::runCommand(test::afford("experiment base --system IMP --reps 1 --steps 50 --extrinsic-reps 1"
                                                " --scenarios scenario1 --transport memq --keep-logs none --quiet"
                                                " --run-prefix nc --out " + dir + "/out --log-root " + dir +
                                                "/not-a-folder"));
-  EXPECT_EQ(r.exit_code, 1) << r.output;
-  EXPECT_NE(r.output.find("cannot write checkpoint"), std::string::npos) << r.output;
-  EXPECT_NE(r.output.find("run 'nc-base-IMP-s1' left no checkpoint"), std::string::npos) << r.output;
-  const json s = readJson(fs::path(dir) / "out" / "summary.json");
-  EXPECT_EQ(s["extrinsic_tests"], 0);
-  ASSERT_EQ(s["untested_agents"].size(), 1u);
+  EXPECT_EQ(r.exit_code, 2) << r.output;
+  EXPECT_NE(r.output.find("cannot make the log folder " + dir + "/not-a-folder/nc-base-IMP-s1 (Not a directory)"),
+            std::string::npos)
+      << r.output;
+  EXPECT_FALSE(fs::exists(fs::path(dir) / "out")) << "a refused experiment leaves no folder";
 }
 
 TEST(Processes, AKilledProcessEndsTheRunWithinSecondsNamingIt) {
