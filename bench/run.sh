@@ -14,6 +14,10 @@
 #   bench/run.sh auth [--steps N] [--reps R] [--floor F] [--out DIR]
 #     an authenticated bus: steps per second over udpm with a bus key against without (floor 0.9,
 #     exit 1 below it), and the time to tag one message by size.
+#   bench/run.sh logger-faults [N] [FAULT ...]
+#     the logger killed and started again after the run's last step or 6 s later, or paused past
+#     close_timeout_ms or 20 s, N times at random steps and seeds (bench/logger_faults.sh): how many runs
+#     completed, replayed and equal an undisturbed run (in out/logger-faults).
 #   bench/run.sh loss [--reps R] [--seed S] [--rates "0.01 0.05 0.20"] [--out DIR]
 #     packet loss: how much longer a run takes when datagrams are dropped at random (floor: 5% loss at
 #     most 3 times as long, median over seeds; exit 1 above it). Root; a private network namespace.
@@ -56,6 +60,8 @@
 set -euo pipefail
 cd "$(dirname "$0")/.."
 [[ ${1:-} == loss ]] && { shift; exec bench/loss.sh "$@"; }
+[[ ${1:-} == logger-faults ]] && { shift; [[ -x build/bin/afford ]] || scripts/setup.sh;
+  exec bench/logger_faults.sh build out/logger-faults "$@"; }
 [[ ${1:-} == watch ]] && { shift; exec bench/watch.sh "$@"; }
 [[ ${1:-} == watch-hold ]] && { shift; [[ -x build/bin/afford ]] || scripts/setup.sh; exec /usr/bin/python3 bench/watch_hold.py "$@"; }
 [[ ${1:-} == python ]] && { shift; [[ -x build/bin/afford ]] || scripts/setup.sh;

@@ -34,6 +34,18 @@ process_command() {
   esac
 }
 
+# show_why LABEL DETAIL: after a failed run, what the runner said (the last
+# lines of $out/attached.txt) and each process of "${processes[@]}" (its
+# last warnings and errors in $out/<process>.log), so a CI log shows why.
+show_why() {
+  local p
+  echo "--- diagnostics ($1): $2"
+  tail -n 15 "$out/attached.txt" 2>/dev/null || true
+  for p in "${processes[@]}"; do
+    grep -h -E "\] \[(warning|error|critical)\]" "$out/$p.log" 2>/dev/null | tail -n 6 | sed "s/^/$p: /" || true
+  done
+}
+
 # wait_until SECONDS COMMAND...: returns as soon as COMMAND succeeds, or 1
 # after SECONDS. For conditions no event announces (a line in a file); the
 # processes on a bus are waited for with `afford status --wait-for`.

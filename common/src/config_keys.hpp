@@ -44,11 +44,14 @@ void declareProtocol(V& v, ProtocolConfig& c) {
   v.integer("resend_cap", c.resend_cap, 1, 100'000, "serials republished for one `RESEND`");
   v.integer("resend_budget", c.resend_budget, 1, 1'000'000,
             "serials a publisher republishes per channel within `retry_ms`");
-  v.integer("stop_grace_ms", c.stop_grace_ms, 0, 600'000, "after `STOP`, the logger waits this long for missing messages");
+  v.integer("stop_grace_ms", c.stop_grace_ms, 0, 600'000,
+            "after `STOP`, the logger waits for missing messages until this long passes with none coming");
   v.integer("ready_timeout_ms", c.ready_timeout_ms, 100, 600'000,
-            "the runner fails a run whose processes are not free, configured or started by then");
+            "the runner fails a run whose processes are not free, or not configured, after this long in which no "
+            "more of them became so");
   v.integer("close_timeout_ms", c.close_timeout_ms, 100, 600'000,
-            "... whose log is not closed by then after `STOP` (longer than `stop_grace_ms`)");
+            "... whose logger, heard after `STOP`, has neither recorded more nor closed the log for this long "
+            "(longer than `stop_grace_ms`)");
   v.integer("max_deferred", c.max_deferred, 1, 1'000'000,
             "messages waiting for their turn in a process; reaching it fails the run naming the channel "
             "(at least `resend_batch`)");

@@ -104,15 +104,16 @@ Turn NodeBase::onRunControl(const run_control_t& msg, const Envelope& envelope) 
     if (restored_step_ < 0) onStart();  // a process gone on from a snapshot had started before it
     edge_.retry();  // messages that came before START
   } else {
-    stop_received_ = true;  // the run is over: its snapshot goes with it
-    if (readyToLeave()) {
-      leaveRun();
-      return Turn::take();
-    }
-    if (!stop_pending_) stop_deadline_ = Clock::now() + milliseconds(protocol().stop_grace_ms);
-    stop_pending_ = true;
+    takeStop();
   }
   return Turn::take();
+}
+
+void NodeBase::takeStop() {
+  stop_received_ = true;  // the run is over: its snapshot goes with it
+  if (readyToLeave()) return leaveRun();
+  if (!stop_pending_) stop_deadline_ = Clock::now() + milliseconds(protocol().stop_grace_ms);
+  stop_pending_ = true;
 }
 
 Turn NodeBase::onStatus(const process_status_t& st) {
@@ -197,7 +198,7 @@ void NodeBase::tick() {
   const auto now = Clock::now();
   if (now >= next_beat_) publishStatus();
   const bool in_run = state_ == process_status_t::RUNNING || state_ == process_status_t::DONE;
-  if (in_run && edge_.publishedAny()) {
+  if (in_run && announcesIdle()) {
     // Idle after publishing: say what we published, in case the last of it was lost.
     const auto idle = idleAnnounceAfter();
     if (edge_.lastActivity() > announced_at_ || announce_wait_ == Clock::duration{}) announce_wait_ = idle;
@@ -210,10 +211,18 @@ void NodeBase::tick() {
   }
   if (!run_id_.empty()) edge_.askMissing();
   maybeSnapshot();
-  if (stop_pending_ && (readyToLeave() || now > stop_deadline_)) {
-    if (!readyToLeave()) onLeaveTimeout();
-    leaveRun();
+  if (stop_pending_) {
+    // The grace runs while nothing comes: a message taken (a catching up goes on), or the process held up
+    // (SIGSTOP, a suspended machine: it could take nothing meanwhile), starts it again.
+    const auto grace = milliseconds(protocol().stop_grace_ms);
+    stop_deadline_ = std::max(stop_deadline_, edge_.lastActivity() + grace);
+    if (now - last_tick_ > milliseconds(protocol().heartbeat_ms)) stop_deadline_ = std::max(stop_deadline_, now + grace);
+    if (readyToLeave() || now > stop_deadline_) {
+      if (!readyToLeave()) onLeaveTimeout();
+      leaveRun();
+    }
   }
+  last_tick_ = now;
 }
 
 auto NodeBase::idleAnnounceAfter() const -> Clock::duration {
@@ -225,7 +234,7 @@ auto NodeBase::idleAnnounceAfter() const -> Clock::duration {
 int NodeBase::msUntilDue() const {
   const auto now = Clock::now();
   Clock::time_point due = std::min(next_beat_, edge_.nextDue());
-  if ((state_ == process_status_t::RUNNING || state_ == process_status_t::DONE) && edge_.publishedAny()) {
+  if ((state_ == process_status_t::RUNNING || state_ == process_status_t::DONE) && announcesIdle()) {
     const auto idle = idleAnnounceAfter();
     due = std::min(due, std::max(edge_.lastActivity() + idle, announced_at_ + std::max<Clock::duration>(announce_wait_, idle)));
   }

@@ -138,7 +138,29 @@ bool RunDriver::ourRequest(const Seen& s) const {
 Turn RunDriver::onStatus(const process_status_t& m) {
   if (!isProcessName(m.process)) return Turn::take();  // not one of ours (a tool, or a forgery)
   Seen& s = seen_[m.process];
-  s = {m.run_id, m.step, m.state, m.pid, m.config_digest, m.detail, m.stuck, Clock::now()};
+  std::int64_t taken = 0;
+  for (int i = 0; i < m.n_takes; ++i) taken += m.takes_from[i];
+  if (s.pid == m.pid && s.run_id == m.run_id && s.config_digest == m.config_digest && (m.step > s.step || taken > s.taken))
+    ++s.moves;
+  s.run_id = m.run_id;
+  s.step = m.step;
+  s.state = m.state;
+  s.pid = m.pid;
+  s.config_digest = m.config_digest;
+  s.detail = m.detail;
+  s.stuck = m.stuck;
+  s.at = Clock::now();
+  s.counts_run = m.counts_run;
+  s.counts_config = m.counts_config;
+  s.taken = taken;
+  if (spec_ && m.counts_run == spec_->run_id && m.counts_config == config_msg_.digest)
+    for (int i = 0; i < m.n_channels; ++i)
+      if (publisherOf(m.channels[i], config_.phase) == m.process) {  // only a channel's publisher speaks for it
+        std::int64_t& most = published_[m.channels[i]];
+        most = std::max(most, m.counts[i]);
+      }
+  if (m.process == "logger" && ourRequest(s))
+    for (int i = 0; i < m.n_takes; ++i) logged_[m.takes[i]] = m.takes_from[i];
   edge_.claim(m);
   if (phase_ == Phase::Idle || !spec_) return Turn::take();
   if (on_step_ && phase_ == Phase::Running && ourRequest(s) && m.step >= 0 && ours(m.process)) on_step_(m.step);
@@ -218,6 +240,20 @@ void RunDriver::nudge(const std::string& process, const Seen& s) {
       }
       return;
     case Phase::Stopping:
+      // The logger killed after the STOP, before it closed the log (its log held all that was published: the
+      // STOP waited for it), and started again: it is given the run again (the free processes take it too, and
+      // leave it on the STOP that follows: no START), goes on from its log's segments, and closes the log on the
+      // STOP. (Free with our request's counts, it has left the run: its log is closed.)
+      if (process == "logger" && closing_ && !logger_done_ && !stopRequested()) {
+        if (free && !(s.counts_run == run && s.counts_config == config_msg_.digest)) {
+          if (warned_.insert({process + " closing", s.pid}).second)
+            log_->warn("run '{}': the logger is free again (restarted?) before it closed the run's log: sending it "
+                       "the run's configuration", run);
+          edge_.send(ch::runConfig, config_msg_);
+          last = now;
+          return;
+        }
+      }
       if (ourRequest(s) && s.state != process_status_t::FAILED) {  // its STOP was lost
         sendOurs(run_control_t::STOP);
         last = now;
@@ -284,14 +320,6 @@ std::string RunDriver::stuckProcesses() const {
   return said;
 }
 
-void RunDriver::stopAndWait(const Waiting& w) {
-  const bool opened = phase_ == Phase::Running || loggerJoined();
-  phase_ = Phase::Stopping;
-  sendOurs(run_control_t::STOP);
-  const auto until = Clock::now() + milliseconds(config_.protocol.close_timeout_ms);
-  while (logged() && opened && !logger_done_ && Clock::now() < until && w.health().empty()) w.pump();
-}
-
 RunOutcome& RunDriver::failed(const std::string& why) {
   RunOutcome& out = *outcome_;
   out.ok = false;
@@ -308,116 +336,13 @@ RunOutcome& RunDriver::interrupted(const Waiting& w) {
   std::int64_t step = -1;
   for (const auto& [p, s] : seen_)
     if (ourRequest(s)) step = std::max(step, s.step);
-  stopAndWait(w);
+  stopAndWait(w, /*patient=*/false);
   RunOutcome& out = *outcome_;
   out.ok = false;
   out.interrupted = true;
   out.error = "run '" + spec_->run_id + "': interrupted at step " + std::to_string(step);
   out.wall_seconds = std::chrono::duration<double>(Clock::now() - started_at_).count();
   return out;
-}
-
-// 1. Every process present and free (one still in another run is told to stop on its next STATUS).
-RunDriver::Ending RunDriver::waitFree(const Waiting& w) {
-  const ProtocolConfig& protocol = config_.protocol;
-  const auto fresh = milliseconds(3 * protocol.heartbeat_ms);  // heard within three heartbeats: alive
-  const auto free = [&](const Seen& s) {
-    return s.state == process_status_t::WAITING && s.run_id.empty() && Clock::now() - s.at < fresh;
-  };
-  phase_ = Phase::Freeing;
-  phase_at_ = Clock::now();
-  const auto deadline = Clock::now() + milliseconds(protocol.ready_timeout_ms);
-  while (!missing(free).empty()) {
-    if (auto h = w.health(); !h.empty()) return {false, h};
-    if (stopRequested()) return {true, ""};
-    if (Clock::now() > deadline) {
-      outcome_->unreached = true;  // nothing was said to them yet: the run never began
-      return {false, "no process of this name reported free for a run within " +
-                         std::to_string(protocol.ready_timeout_ms / 1000.0).substr(0, 4) + " s: " + missing(free)};
-    }
-    w.pump();
-  }
-  return {};
-}
-
-// 2. Configure: START as soon as every one says READY.
-RunDriver::Ending RunDriver::configure(const Waiting& w) {
-  const ProtocolConfig& protocol = config_.protocol;
-  phase_ = Phase::Configuring;
-  edge_.send(ch::runConfig, config_msg_);
-  auto said = Clock::now();
-  auto again = milliseconds(protocol.retry_ms);
-  const auto deadline = Clock::now() + milliseconds(protocol.ready_timeout_ms);
-  const auto ready = [&](const Seen& s) { return ourRequest(s) && s.state == process_status_t::READY; };
-  while (!missing(ready).empty()) {
-    if (auto h = w.health(); !h.empty()) return {false, h};
-    if (auto f = failedProcess(); !f.empty()) return {false, f};
-    if (stopRequested()) return {true, ""};
-    if (Clock::now() > deadline)
-      return {false, "not configured within the protocol's ready_timeout_ms: " + missing(ready) + foreign()};
-    if (Clock::now() - said > again) {  // a datagram lost on the way there or back: say it again, backing off
-      edge_.send(ch::runConfig, config_msg_);
-      said = Clock::now();
-      again = std::min(again * 2, milliseconds(protocol.heartbeat_ms));
-    }
-    w.pump();
-  }
-  return {};
-}
-
-// 3. Run: until the result, every affordance table and the logger are in.
-RunDriver::Ending RunDriver::runSteps(const Waiting& w) {
-  const RunSpec& spec = *spec_;
-  RunOutcome& out = *outcome_;
-  phase_ = Phase::Running;
-  sendOurs(run_control_t::START);
-  const auto started = Clock::now();
-  std::int64_t progress = -1;
-  auto progress_at = Clock::now();
-  const auto silence = std::chrono::duration<double>(spec.stall_seconds);
-  // An intrinsic run reports its affordance table every curve_interval steps and at the end.
-  const std::size_t tables = spec.extrinsic ? 0
-                                            : static_cast<std::size_t>(config_.steps / config_.curve_interval + 1 +
-                                                                       (config_.steps % config_.curve_interval != 0));
-  // The logger must be in the run to close its log: one restarted after the
-  // last step still catches up first.
-  // A goals run ends with its last GOAL_RESULT too: the goals' figures are whole.
-  const bool goals = config_.phase == afford::Phase::Goals;
-  while (!have_result_ || out.curve.size() < tables || (goals && !goals_ended_) || (logged() && !loggerJoined())) {
-    if (auto h = w.health(); !h.empty()) return {false, h};
-    if (auto f = failedProcess(); !f.empty()) return {false, f};
-    if (stopRequested()) return {true, ""};
-    w.pump();
-    edge_.askMissing();
-    const auto now = Clock::now();
-    std::int64_t handled = 0;  // the steps of all, in the run
-    for (const auto& p : spec.processes) {
-      auto it = seen_.find(p);
-      if (it == seen_.end()) continue;
-      if (now - it->second.at > silence)
-        return {false, "process '" + p + "' stopped reporting (last heard " +
-                           std::to_string(std::chrono::duration<double>(now - it->second.at).count()) + " s ago)"};
-      if (ourRequest(it->second)) handled += it->second.step + 1;
-    }
-    // Progress is any process moving on (a restarted one catching up included), or a table coming in.
-    if (const auto p = handled + static_cast<std::int64_t>(out.curve.size()); p != progress) {
-      progress = p;
-      progress_at = now;
-    }
-    if (now - progress_at > silence) {
-      std::string where;
-      for (const auto& p : spec.processes)
-        if (seen_.count(p)) where += " " + p + "@" + std::to_string(seen_[p].step);
-      std::string lacking;
-      for (const auto& [channel, range] : edge_.missingRanges())
-        lacking += " " + channel + " " + std::to_string(range.first) + ".." + std::to_string(range.second - 1);
-      return {false, "stalled: no progress for " + std::to_string(static_cast<int>(spec.stall_seconds)) +
-                         " s (last step handled per process:" + where + ")" + stuckProcesses() +
-                         (lacking.empty() ? "" : "; the runner still misses" + lacking) + foreign()};
-    }
-  }
-  out.run_seconds = std::chrono::duration<double>(Clock::now() - started).count();
-  return {};
 }
 
 RunOutcome RunDriver::run(const RunSpec& spec, const std::function<void()>& pump,
@@ -435,6 +360,9 @@ RunOutcome RunDriver::run(const RunSpec& spec, const std::function<void()>& pump
   have_result_ = false;
   goals_ended_ = false;
   logger_done_ = false;
+  closing_ = false;
+  published_.clear();
+  logged_.clear();
   nudged_.clear();
   foreign_.clear();
   warned_.clear();
@@ -464,12 +392,7 @@ RunOutcome RunDriver::run(const RunSpec& spec, const std::function<void()>& pump
     if (!e.why.empty()) return failed(e.why);
   }
   // 4. Stop, and let the logger close the log.
-  stopAndWait(w);
-  if (logged() && !logger_done_) {
-    if (auto h = health(); !h.empty()) return failed(h);
-    if (auto f = failedProcess(); !f.empty()) return failed(f);
-    return failed("the logger did not close the log within the protocol's close_timeout_ms");
-  }
+  if (const Ending e = stopAndWait(w, /*patient=*/true); !e.why.empty()) return failed(e.why);
   if (auto f = failedProcess(); !f.empty()) return failed(f);
   out.ok = true;
   out.wall_seconds = std::chrono::duration<double>(Clock::now() - started_at_).count();

@@ -1,7 +1,8 @@
 // The runner's side of one run's choreography: it waits until the processes
 // of the run are free, publishes RUN_CONFIG, publishes START as soon as every
-// one has said READY, collects the affordance tables and the result, then
-// publishes STOP and waits for the logger to close the log. Every boundary is
+// one has said READY, collects the affordance tables and the result, waits
+// until the logger's log holds all that was published, then publishes STOP
+// and waits for the logger to close the log. Every boundary is
 // an event (a STATUS saying so); timers only recover lost datagrams: the
 // configuration is said again (backing off) while someone has not taken it,
 // and a process that says it is free, ready or still in the run when it
@@ -10,6 +11,7 @@
 // and START again: it catches up by asking for the run's messages
 // (docs/operating.md, "Killing and restarting a process"). Stalls and
 // silent processes fail the run, naming them and what each could not take.
+// The waits of the stages are in experiment/run/waits.cpp.
 // Each run() is a request of its own (run_config_t.request, drawn afresh):
 // the runner takes only what concerns that request, whatever run id and
 // configuration it shares with earlier ones, and a process that holds
@@ -185,6 +187,10 @@ class RunDriver {
     std::string detail;
     std::string stuck;  // what it could not take, when it said so
     Clock::time_point at;
+    std::string counts_run;          // the run (and configuration) of what it says it published
+    std::int64_t counts_config = 0;
+    std::int64_t taken = 0;          // the sum of its restart positions (the logger: what its log holds)
+    std::int64_t moves = 0;          // STATUS that said it went further in one run (step, restart positions)
   };
   // What one run() waits with: the caller's pump and health.
   struct Waiting {
@@ -200,18 +206,28 @@ class RunDriver {
   Ending waitFree(const Waiting& w);   // every process present and free
   Ending configure(const Waiting& w);  // RUN_CONFIG until every one is READY
   Ending runSteps(const Waiting& w);   // START, then until the result, every table and the logger are in
-  void stopAndWait(const Waiting& w);  // STOP; the logger closes the log, if it opened one
+  // STOP; the logger closes the log, if it opened one. `patient`: a silent logger (killed, paused) is waited
+  // for as long as the run's stall bound, else (the run cut by a signal) close_timeout_ms.
+  Ending stopAndWait(const Waiting& w, bool patient);
+  std::string loggerBehind() const;    // where the logger's log stands against what was published
   RunOutcome& failed(const std::string& why);
   RunOutcome& interrupted(const Waiting& w);
   // Does this state concern our request (our run id and configuration)?
   bool ourRequest(const Seen& s) const;
   // The run's processes for which `pred` does not hold, by name.
   std::string missing(const std::function<bool(const Seen&)>& pred) const;
+  // How many of the run's processes `pred` holds for, and how often they went further (Seen::moves), as one
+  // mark that grows with both: a wait's progress.
+  std::int64_t progressOf(const std::function<bool(const Seen&)>& pred) const;
+  // Is a process of the run for which `pred` does not hold silent for less than the run's stall bound (heard
+  // before, then killed and not started again yet, or paused)? The run waits for it, as it does mid-run.
+  bool awaitingSilent(const std::function<bool(const Seen&)>& pred) const;
   std::string failedProcess() const;  // a process of the run that failed with our configuration, and why
   std::string foreign() const;        // the processes told to leave another configuration of this run, and how often
   std::string stuckProcesses() const; // what each process of the run could not take, as its STATUS said
   bool logged() const;                // the run is recorded: the logger is one of its processes
   bool loggerJoined() const;          // the logger took the run, as far as its STATUS says
+  bool loggerHolds() const;           // ... and its log holds all that the run's publishers said they published
   Turn onStatus(const process_status_t& m);
   // Tell a process of the run what it missed (a lost datagram, or a restart).
   void nudge(const std::string& process, const Seen& s);
@@ -239,6 +255,9 @@ class RunDriver {
   bool have_result_ = false;
   bool goals_ended_ = false;  // goals phase: the last GOAL_RESULT (step run.steps) is in
   bool logger_done_ = false;
+  bool closing_ = false;  // the logger opened the run's log: STOP waits for it to close it
+  // Per run channel: the most its publisher said it published in our request, and what the logger's log holds.
+  std::map<std::string, std::int64_t> published_, logged_;
   std::function<void(std::int64_t)> on_step_;
   std::function<void(const TableSnapshot&)> on_table_;
 };

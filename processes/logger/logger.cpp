@@ -73,11 +73,23 @@ RecordedSoFar readRecorded(const std::string& dir, const LogLimits& limits) {
   return r;
 }
 
-bool wroteLog(const std::string& dir, std::int64_t session) {
+namespace {
+// The manifest in `dir` as JSON (discarded if there is none, or it does not parse).
+nlohmann::json manifestIn(const std::string& dir) {
   std::ifstream in(fs::path(dir) / "manifest.json");
-  const nlohmann::json m = nlohmann::json::parse(in, nullptr, false);
-  return !m.is_discarded() && m.is_object() && m.contains("logger_session") &&
-         m["logger_session"].is_number_integer() && m["logger_session"].get<std::int64_t>() == session;
+  return nlohmann::json::parse(in, nullptr, false);
+}
+bool says(const nlohmann::json& m, const char* key, std::int64_t value) {
+  return !m.is_discarded() && m.is_object() && m.contains(key) && m[key].is_number_integer() &&
+         m[key].get<std::int64_t>() == value;
+}
+}  // namespace
+
+bool wroteLog(const std::string& dir, std::int64_t session) { return says(manifestIn(dir), "logger_session", session); }
+
+bool closedLog(const std::string& dir, std::int64_t config_digest) {
+  const nlohmann::json m = manifestIn(dir);
+  return says(m, "config_digest", config_digest) && m.value("complete", false);
 }
 
 std::string setAsideLog(const std::string& dir) {
@@ -114,6 +126,12 @@ RunLog::RunLog(const std::string& dir, nlohmann::json manifest) : dir_(dir), man
     if (!old.is_discarded() && old.contains("segments")) manifest_["segments"] = old["segments"];
     if (!old.is_discarded() && old.contains("control_dropped") && old["control_dropped"].is_number_integer())
       manifest_["control_dropped"] = old["control_dropped"];
+    // ... and the processes seen in them (a logger started again after the others left the run sees none).
+    if (!old.is_discarded() && old.contains("processes") && old["processes"].is_array())
+      for (const nlohmann::json& p : old["processes"])
+        if (p.is_object() && p.contains("process") && p["process"].is_string() && p.contains("pid") &&
+            p["pid"].is_number_integer())
+          processes_[p["process"].get<std::string>()] = p["pid"].get<int>();
   }
   int segment = 0;
   char name[32];

@@ -38,6 +38,9 @@ struct RecordedSoFar {
 RecordedSoFar readRecorded(const std::string& dir, const LogLimits& limits);
 // Does the manifest in `dir` say the logger process of `session` wrote it (its "logger_session")?
 bool wroteLog(const std::string& dir, std::int64_t session);
+// Does the manifest in `dir` say its log is complete and of the request `config_digest` (an earlier logger
+// process closed it)?
+bool closedLog(const std::string& dir, std::int64_t config_digest);
 // The log in `dir` (its segments and manifest) moved, whole, into dir/other-request-<k>/ (k the first free);
 // returns that folder. Throws std::runtime_error naming what could not be moved.
 std::string setAsideLog(const std::string& dir);

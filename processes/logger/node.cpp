@@ -52,12 +52,22 @@ void LoggerNode::onConfigured(const RunConfig& config) {
       {"logger_session", session_},  // this logger process, while it lives
       {"bus_keyed", edge().key() != nullptr}};  // recorded without the tags either way
   const std::string dir = (std::filesystem::path(log_root_) / m.run_id).string();
+  closed_dir_.clear();
   written_.clear();
   control_written_ = 0;
   control_dropped_ = 0;
   left_.clear();
   ended_ = false;
   write_error_.clear();
+  // Closed complete by an earlier logger process of this request (killed before its DONE reached the runner):
+  // nothing is left to record, and the STOP gets its DONE.
+  if (closedLog(dir, m.digest)) {
+    closed_dir_ = dir;
+    log_->info("{} already holds the complete log of run '{}', of this very request (a logger process closed it, "
+               "perhaps killed before it said so): nothing to record",
+               dir, m.run_id);
+    return;
+  }
   // A logger restarted during the run: go on where the earlier segments end.
   LogLimits limits;
   limits.event_bytes = config.protocol.bus.max_message_bytes;
@@ -114,18 +124,27 @@ void LoggerNode::onControl(const Envelope& e) {
   write(e);
 }
 
+bool LoggerNode::publishes(const std::string& process) const {
+  for (const std::string& ch : channelNames(/*serial_only=*/true))
+    if (publisherOf(ch, config().phase) == process) return true;
+  return false;
+}
+
 void LoggerNode::onPeerStatus(const process_status_t& st) {
   if (!log_file_ || !isProcessName(st.process)) return;
   const std::int64_t request = runConfigMessage().digest;
   if (st.run_id == runId() && st.config_digest == request) {
     log_file_->sawProcess(st.process, st.pid);
-    // Its final counts matter if it publishes a channel of the run.
-    bool publisher = false;
-    for (const std::string& ch : channelNames(/*serial_only=*/true))
-      publisher = publisher || publisherOf(ch, config().phase) == st.process;
-    if (publisher) left_.emplace(st.process, false);
+    if (publishes(st.process)) left_.emplace(st.process, false);  // its final counts matter
   } else if (st.counts_run == runId() && st.counts_config == request && left_.count(st.process)) {
     left_[st.process] = true;  // it left the run: its counts are final
+    // Only the run's STOP makes a process leave with final counts: this logger did not have it (lost, or the
+    // logger was paused through it and its datagram dropped). It closes the log as on STOP.
+    if (state() == process_status_t::RUNNING && !stopTaken()) {
+      log_->warn("run '{}': {} left the run (its final counts) but no STOP came here: closing the log once nothing "
+                 "is missing", runId(), st.process);
+      takeStop();
+    }
   }
 }
 
@@ -157,6 +176,7 @@ void LoggerNode::onLeaveTimeout() {
 }
 
 void LoggerNode::onStop() {
+  if (!log_file_ && !closed_dir_.empty()) setState(process_status_t::DONE, closed_dir_);
   if (!log_file_) return;
   nlohmann::json missing = nlohmann::json::object();
   for (const auto& [channel, range] : edge().missingRanges())

@@ -15,11 +15,17 @@
 // the log. A logger restarted during a run opens the next segment (log.01.lcm,
 // ...), reads its earlier segments to know where each channel stopped, and
 // asks for everything it missed. On STOP it closes the log once nothing is
-// missing and every process of the run has left (at most
-// protocol.stop_grace_ms later). The manifest says `complete` only when the
-// log holds the run's end (RESULT or EXTRINSIC_RESULT), nothing is missing and
-// every write succeeded; otherwise it says why not. A write error (a full
-// disk) fails the run with the reason; the logger stays alive for the next.
+// missing and every publisher of the run (those its earlier segments saw
+// too) has left; or once protocol.stop_grace_ms passed with nothing taken
+// (and the logger not held up, e.g. paused), naming what is missing. The
+// manifest says `complete` only when the log holds the run's end (RESULT or
+// EXTRINSIC_RESULT), nothing is missing and every write succeeded; otherwise
+// it says why not. A write error (a full disk) fails the run with the reason;
+// the logger stays alive for the next. A logger the STOP did not reach
+// (paused through it) learns that the run was stopped from a publisher's
+// final counts, and closes the log as on STOP. Given a run whose log an
+// earlier logger process closed complete (killed before its DONE went out),
+// it records nothing and says DONE.
 #pragma once
 #include <map>
 #include <memory>
@@ -45,10 +51,15 @@ class LoggerNode : public NodeBase {
   void onLeaveTimeout() override;
   void onControl(const Envelope& envelope) override;
   void onPeerStatus(const process_status_t& status) override;
+  // Once its log holds the run's end, it says at once what its log holds whenever it goes idle: the runner
+  // stops the run once the log holds everything published.
+  bool announcesIdle() const override { return ended_; }
   // Its log is its snapshot: every event is flushed as it is written, and a restarted logger goes on from
   // where the log's segments end. So a restart would take each channel again from what it has recorded.
   void restartPositions(process_status_t& st) const override;
   void write(const Envelope& envelope);
+  // Does `process` publish a channel of the run (its final counts matter)?
+  bool publishes(const std::string& process) const;
 
   std::string log_root_;
   std::unique_ptr<RunLog> log_file_;
@@ -58,6 +69,7 @@ class LoggerNode : public NodeBase {
   std::map<std::string, bool> left_;  // processes of the run -> their final counts are in
   bool ended_ = false;                // the run's end (RESULT, EXTRINSIC_RESULT) is in the log
   std::string write_error_;           // the first write that failed
+  std::string closed_dir_;            // the run's log, closed complete by an earlier logger process ("": none)
   const std::int64_t session_ = BusKey::newRequest();  // this process, in the manifests it writes (wroteLog)
 };
 

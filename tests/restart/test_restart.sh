@@ -25,12 +25,7 @@ seed=${4:-$((1 + RANDOM % 20))}
 diagnose() {
   local rc=$?
   kill $(jobs -p) 2>/dev/null || true
-  ((rc == 0)) && return
-  echo "--- diagnostics (seed $seed, $victim): $(cat "$out/kill.txt" 2>/dev/null)"
-  tail -n 15 "$out/attached.txt" 2>/dev/null || true
-  for p in "${processes[@]}"; do
-    grep -h -E "\] \[(warning|error|critical)\]" "$out/$p.log" 2>/dev/null | tail -n 6 | sed "s/^/$p: /" || true
-  done
+  ((rc == 0)) || show_why "seed $seed, $victim" "$(cat "$out/kill.txt" 2>/dev/null)"
 }
 trap diagnose EXIT
 

@@ -287,8 +287,16 @@ class NodeBase {
   Edge& edge() { return edge_; }
   const Edge& edge() const { return edge_; }
 
-  // On STOP, leave only once this says so (or after protocol.stop_grace_ms).
+  // On STOP, leave only once this says so (or after protocol.stop_grace_ms in which no message of the run was
+  // taken and the process was not held up, e.g. paused).
   virtual bool readyToLeave() { return true; }
+  // Announce its STATUS when idle in a run (see the file comment): a node that published something, whose
+  // counts a receiver may lack. (The logger, once its log holds the run's end: what its log holds.)
+  virtual bool announcesIdle() const { return edge_.publishedAny(); }
+  // The run's STOP, as if it had come: for a node that learns otherwise that its run was stopped (the logger,
+  // from its peers' final counts, when the STOP did not reach it).
+  void takeStop();
+  bool stopTaken() const { return stop_received_; }  // the run's STOP came (or takeStop())
   virtual void onLeaveTimeout() {}
   // Take part in this run? (The logger records only runs with run.record.)
   virtual bool wantsRun(const RunConfig&) { return true; }
@@ -343,6 +351,7 @@ class NodeBase {
   Clock::duration announce_wait_{};
   bool stop_pending_ = false;
   Clock::time_point stop_deadline_{};
+  Clock::time_point last_tick_{};  // a longer gap between two ticks than a heartbeat: the process was held up
   std::vector<InputRule> rules_;
   std::vector<std::function<void()>> joins_;  // clearing each join (at each RUN_CONFIG)
   // Snapshots.
