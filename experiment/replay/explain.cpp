@@ -422,9 +422,10 @@ Explanation explainRunEvents(const RunEvents& run, const std::string& where, std
   return ex;
 }
 
-Explanation explainLog(const std::string& log_path, const std::string& run_id, spdlog::logger& log) {
+Explanation explainLog(const std::string& log_path, const std::string& run_id, spdlog::logger& log,
+                       const BusKey* key) {
   if (!fs::exists(log_path)) throw std::runtime_error("no such log folder or file: " + log_path);
-  RecordedLog recorded = readRecordedLog(log_path, log);
+  RecordedLog recorded = readRecordedLog(log_path, log, key);
   if (recorded.events.empty())
     throw std::runtime_error(log_path + ": the log holds no complete event" +
                              (recorded.torn_bytes > 0 ? " (" + std::to_string(recorded.torn_bytes) +
@@ -432,7 +433,7 @@ Explanation explainLog(const std::string& log_path, const std::string& run_id, s
                                                       : std::string()));
   std::vector<LogGap> missing;
   const std::string incomplete = manifestIncomplete(log_path, missing);
-  const RunEvents run = runEventsOf(std::move(recorded.events), run_id, log_path, log);
+  const RunEvents run = runEventsOf(std::move(recorded.events), run_id, log_path, log, recorded.key);
   return explainRunEvents(run, log_path, recorded.torn_bytes, incomplete, missing);
 }
 
@@ -477,7 +478,7 @@ bool isLogRoot(const std::string& path) {
   return false;
 }
 
-ExplainSummary explainLogRoot(const std::string& root, spdlog::logger& log) {
+ExplainSummary explainLogRoot(const std::string& root, spdlog::logger& log, const BusKey* key) {
   ExplainSummary s;
   s.root = root;
   std::vector<fs::path> dirs;
@@ -491,7 +492,7 @@ ExplainSummary explainLogRoot(const std::string& root, spdlog::logger& log) {
       continue;
     }
     try {
-      s.tests.push_back(explainLog(d.string(), "", log));
+      s.tests.push_back(explainLog(d.string(), "", log, key));
     } catch (const NotAnExtrinsicTest& e) {
       s.skipped.emplace_back(d.string(), e.what());
     } catch (const std::exception& e) {

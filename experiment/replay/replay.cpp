@@ -98,7 +98,14 @@ bool RecordedLogStream::next(LogEvent& e) {
       e.data.resize(e.data.size() - BusKey::kTrailerBytes);
       return true;
     }
-    if (counts_.untagged++ < 10)
+    // Recorded on a bus without the key, or with another: one line naming the fix; anything else: a few lines.
+    ++counts_.untagged;
+    const KeyMismatch m = keyMismatchOf(key_, e.data.data(), e.data.size());
+    counts_.key.count(m);
+    if (m != KeyMismatch::None && counts_.key.of(m) == 1)
+      log_.warn("{}: offset {}: {} (events without a valid tag of the key given are skipped, and counted)",
+                reader_->file().string(), e.offset, keyHint(m));
+    else if (m == KeyMismatch::None && counts_.untagged - counts_.key.untagged - counts_.key.other_key <= 10)
       log_.warn("{}: offset {}: a {} event without a valid tag of the key: skipped", reader_->file().string(),
                 e.offset, e.channel);
   }
@@ -121,12 +128,15 @@ bool RunSelector::take(const LogEvent& e) {
   // Our logger's logs start with the RUN_CONFIG; a plain lcm-logger recording
   // may hold heartbeats before it, other runs around it, and forged datagrams.
   if (!found_) {
-    if (e.channel != ch::runConfig.name) return false;
+    if (e.channel != ch::runConfig.name) {
+      tagged(e);  // (counted, and said once: why no RUN_CONFIG may come)
+      return false;
+    }
     run_config_t rc;
     std::string why;
     if (!decodeChecked(e.data.data(), e.data.size(), BoundsContext{&observer_, nullptr}, rc, why)) {
       ++refused_configs_;
-      log_.warn("{}: the RUN_CONFIG event at offset {} is refused ({}): skipped", where_, e.offset, why);
+      if (!tagged(e)) log_.warn("{}: the RUN_CONFIG event at offset {} is refused ({}): skipped", where_, e.offset, why);
       return false;
     }
     if (!run_id_.empty() && rc.run_id != run_id_) return false;
@@ -140,21 +150,33 @@ bool RunSelector::take(const LogEvent& e) {
   return id == config_.run_id || (id.empty() && e.channel == ch::status.name);
 }
 
-void RunSelector::check() const {
+bool RunSelector::tagged(const LogEvent& e) {
+  const KeyMismatch m = keyMismatchOf(nullptr, e.data.data(), e.data.size());
+  if (m == KeyMismatch::None) return false;
+  key_.count(m);
+  if (key_.of(m) == 1) log_.warn("{}: offset {}: {} (a recording of a keyed bus)", where_, e.offset, keyHint(m));
+  return true;
+}
+
+void RunSelector::check(const KeyMismatches& read) const {
   if (found_) return;
+  // The key does not fit the recording: "tagged messages heard: ...; give --bus-key ...".
+  const std::string key =
+      KeyMismatches{key_.tagged + read.tagged, key_.untagged + read.untagged, key_.other_key + read.other_key}.said();
   throw std::runtime_error(
       where_ + (run_id_.empty() ? std::string(": no RUN_CONFIG that the edge accepts in the log, so nothing says how "
                                               "the run was configured")
-                                : ": no RUN_CONFIG of run '" + run_id_ + "' that the edge accepts in the log"));
+                                : ": no RUN_CONFIG of run '" + run_id_ + "' that the edge accepts in the log") +
+      (key.empty() ? "" : "; " + key));
 }
 
 RunEvents runEventsOf(std::vector<LogEvent> events, const std::string& run_id, const std::string& where,
-                      spdlog::logger& log) {
+                      spdlog::logger& log, const KeyMismatches& skipped) {
   RunSelector select(run_id, where, log);
   RunEvents out;
   for (LogEvent& e : events)
     if (select.take(e)) out.events.push_back(std::move(e));
-  select.check();
+  select.check(skipped);
   out.config = select.config();
   out.refused_configs = select.refusedConfigs();
   return out;
@@ -523,7 +545,7 @@ ReplayResult replayRun(const ReplayOptions& o, spdlog::logger& log) {
   result.malformed = in.counts().malformed;
   result.untagged = in.counts().untagged;
   result.refused_configs = select.refusedConfigs();
-  select.check();
+  select.check(in.counts().key);
   result.gaps = gaps->gaps();
   for (const auto& g : manifest_missing) {  // what the logger knew it never got, beyond the last recorded
     const bool known = std::any_of(result.gaps.begin(), result.gaps.end(), [&](const ReplayResult::Gap& h) {

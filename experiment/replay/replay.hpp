@@ -47,6 +47,7 @@ struct RecordedLog {
   std::int64_t malformed = 0;       // malformed parts skipped
   std::int64_t skipped_bytes = 0;   // ... and their bytes
   std::int64_t untagged = 0;        // events without a valid tag of the key given, skipped
+  KeyMismatches key;                // of those: untagged, or tagged with another key (by their structure)
 };
 // With a bus key (an lcm-logger recording of a keyed bus), every event must end
 // with its tag, which is taken off; one without a valid tag is skipped and counted.
@@ -130,11 +131,13 @@ struct RunEvents {
 };
 // Throws std::runtime_error naming `where` only when the run cannot be
 // rebuilt: the log holds no (such) RUN_CONFIG that the edge accepts.
+// `skipped`: what the log's reader skipped for a key that does not fit (named in that error).
 RunEvents runEventsOf(std::vector<LogEvent> events, const std::string& run_id, const std::string& where,
-                      spdlog::logger& log);
+                      spdlog::logger& log, const KeyMismatches& skipped = {});
 // The same choice, event by event: take(e) says whether e is the run's (its
 // RUN_CONFIG, then its events); once every event has been offered, check()
-// throws as runEventsOf does if the run's RUN_CONFIG never came.
+// throws as runEventsOf does if the run's RUN_CONFIG never came (naming the fix if the recording's key does
+// not fit: tagged RUN_CONFIG events read without a key, or `read`, what the log's reader skipped).
 class RunSelector {
  public:
   RunSelector(std::string run_id, std::string where, spdlog::logger& log);
@@ -142,7 +145,7 @@ class RunSelector {
   bool found() const { return found_; }
   const run_config_t& config() const { return config_; }
   std::int64_t refusedConfigs() const { return refused_configs_; }
-  void check() const;
+  void check(const KeyMismatches& read = {}) const;
 
  private:
   std::string run_id_, where_;
@@ -151,6 +154,10 @@ class RunSelector {
   bool found_ = false;
   run_config_t config_;
   std::int64_t refused_configs_ = 0;
+  // Is `e`, before the run's RUN_CONFIG, tagged (by its structure: a keyed bus's recording read without its
+  // key)? Counted, and said the first time.
+  bool tagged(const LogEvent& e);
+  KeyMismatches key_;  // the events found tagged
 };
 
 // One fresh process of a run, on an in-process bus of its own, fed a

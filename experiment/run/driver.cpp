@@ -327,12 +327,16 @@ RunDriver::Ending RunDriver::waitFree(const Waiting& w) {
   phase_ = Phase::Freeing;
   phase_at_ = Clock::now();
   const auto deadline = Clock::now() + milliseconds(protocol.ready_timeout_ms);
+  const KeyMismatches heard = edge_.drops().key;  // a key that does not fit the bus: why nobody is heard
   while (!missing(free).empty()) {
     if (auto h = w.health(); !h.empty()) return {false, h};
     if (stopRequested()) return {true, ""};
-    if (Clock::now() > deadline)
+    if (Clock::now() > deadline) {
+      const std::string key = edge_.drops().key.since(heard).said();
       return {false, "no process of this name reported free for a run within " +
-                         std::to_string(protocol.ready_timeout_ms / 1000.0).substr(0, 4) + " s: " + missing(free)};
+                         std::to_string(protocol.ready_timeout_ms / 1000.0).substr(0, 4) + " s: " + missing(free) +
+                         (key.empty() ? "" : "; " + key)};
+    }
     w.pump();
   }
   return {};
