@@ -55,6 +55,7 @@ void pumpLcm(lcm::LCM& lcm) { pumpBus(lcm, 5, 512); }
 struct RunHooks {
   std::function<void(std::int64_t)> step;
   std::function<void(const TableSnapshot&)> table;
+  std::function<void(const std::string&)> waiting;  // processes not heard (RunDriver::onWaiting)
 };
 
 
@@ -122,6 +123,7 @@ RunOutcome runInProcess(const PlannedRun& run, const HostRequest& o, const std::
   lcm::LCM& lcm = *slot.lcm;
   slot.driver->onStep(hooks.step);
   slot.driver->onTable(hooks.table);
+  slot.driver->onWaiting(hooks.waiting);
   RunOutcome r = slot.driver->run(
       run.spec,
       [&] {
@@ -181,6 +183,7 @@ RunOutcome runOverUdpm(const PlannedRun& run, const HostRequest& o, const std::s
   RunDriver& driver = *slot.driver;
   driver.onStep(hooks.step);
   driver.onTable(hooks.table);
+  driver.onWaiting(hooks.waiting);
   auto health = [&]() {
     std::string h = slot.group ? slot.group->health() : std::string();
     if (h.empty() && slot.logger && run.keep_log) h = slot.logger->health();
@@ -377,6 +380,7 @@ void runOne(PhaseState& st, std::size_t i, Slot& slot, Progress& progress) {
   progress.started(slot_index, id, runs[i].spec.steps);
   RunHooks hooks;
   hooks.step = [&progress, slot_index](std::int64_t step) { progress.step(slot_index, step); };
+  hooks.waiting = [&progress, slot_index](const std::string& who) { progress.waiting(slot_index, who); };
   if (o.on_curve && !runs[i].spec.extrinsic && !runs[i].target.empty())
     hooks.table = [&o, &run = runs[i]](const TableSnapshot& t) {
       o.on_curve({run.spec.run_id, run.system, run.index, t.step, meanAbsError(t.affordance, run.target)});

@@ -66,7 +66,10 @@ void takeGoal(std::vector<GoalBin>& bins, const goal_result_t& m, std::int64_t i
 }  // namespace
 
 RunDriver::RunDriver(lcm::LCM& lcm, std::shared_ptr<spdlog::logger> log, const ProtocolConfig& protocol)
-    : lcm_(lcm), log_(std::move(log)), edge_(lcm, log_, "runner", protocol) {
+    : lcm_(lcm),
+      log_(std::move(log)),
+      edge_(lcm, log_, "runner", protocol),
+      silence_(log_, milliseconds(6 * protocol.heartbeat_ms)) {
   edge_.warnOtherRuns(false);  // late messages of the slot's previous run are normal
   edge_.subscribe(ch::status, [this](const process_status_t& m) { return onStatus(m); }, Scope::Any, Order::None);
   edge_.subscribe(ch::affordanceTable,
@@ -393,14 +396,17 @@ RunDriver::Ending RunDriver::runSteps(const Waiting& w) {
     edge_.askMissing();
     const auto now = Clock::now();
     std::int64_t handled = 0;  // the steps of all, in the run
+    std::vector<Silence::Heard> heard;
     for (const auto& p : spec.processes) {
       auto it = seen_.find(p);
       if (it == seen_.end()) continue;
+      heard.push_back({p, it->second.pid, it->second.at});
       if (now - it->second.at > silence)
         return {false, "process '" + p + "' stopped reporting (last heard " +
                            std::to_string(std::chrono::duration<double>(now - it->second.at).count()) + " s ago)"};
       if (ourRequest(it->second)) handled += it->second.step + 1;
     }
+    silence_.look(spec.run_id, heard, now);
     // Progress is any process moving on (a restarted one catching up included), or a table coming in.
     if (const auto p = handled + static_cast<std::int64_t>(out.curve.size()); p != progress) {
       progress = p;
@@ -457,6 +463,7 @@ RunOutcome RunDriver::run(const RunSpec& spec, const std::function<void()>& pump
       d->outcome_ = nullptr;
       d->spec_ = nullptr;
       d->edge_.leave();
+      d->silence_.reset();
     }
   } reset{this};
   const Waiting w{pump, health};
