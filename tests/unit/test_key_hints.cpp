@@ -6,10 +6,6 @@
 // without its key (afford replay, explain, watch --log, the Python package's
 // read_log) says so, once, and its refusal names the fix.
 #include <gtest/gtest.h>
-#include <spdlog/sinks/ostream_sink.h>
-
-#include <regex>
-#include <sstream>
 #include <string>
 #include <vector>
 
@@ -18,46 +14,13 @@
 #include "afford/process_status_t.hpp"
 #include "afford/run_config_t.hpp"
 #include "experiment/replay/replay.hpp"
+#include "tests/said.hpp"
 #include "tests/support.hpp"
 
 namespace afford {
 namespace {
 
-// What a logger said, line by line (its pattern: the message only).
-struct Said {
-  std::ostringstream text;
-  std::shared_ptr<spdlog::logger> log = [this] {
-    auto l = std::make_shared<spdlog::logger>("reader", std::make_shared<spdlog::sinks::ostream_sink_st>(text));
-    l->set_pattern("%v");
-    return l;
-  }();
-  std::vector<std::string> lines() const {
-    std::vector<std::string> out;
-    std::istringstream in(text.str());
-    for (std::string line; std::getline(in, line);) out.push_back(line);
-    return out;
-  }
-  int count(const std::string& part) const {  // lines holding `part`
-    int n = 0;
-    for (const auto& l : lines()) n += l.find(part) != std::string::npos;
-    return n;
-  }
-  int starting(const std::string& part) const {  // lines beginning with `part`
-    int n = 0;
-    for (const auto& l : lines()) n += l.rfind(part, 0) == 0;
-    return n;
-  }
-  // The drops counted in the summaries ("dropped N more message(s) ...").
-  std::int64_t summarised() const {
-    std::int64_t n = 0;
-    const std::regex summary(R"(^dropped (\d+) more message)");
-    for (const auto& line : lines()) {
-      std::smatch m;
-      if (std::regex_search(line, m, summary)) n += std::stoll(m[1]);
-    }
-    return n;
-  }
-};
+using test::Said;
 
 constexpr const char* kTaggedHint = "tagged messages heard: this bus is keyed; give --bus-key";
 constexpr const char* kUntaggedHint = "untagged messages heard: this bus is not keyed (or its publishers lack the key)";

@@ -5,34 +5,21 @@
 // time left that only grows. The wrong-URL restart this is for, on a live
 // group: tests/keys/test_key_hints.sh.
 #include <gtest/gtest.h>
-#include <spdlog/sinks/ostream_sink.h>
 
 #include <cstdio>
-#include <sstream>
 #include <string>
 #include <vector>
 
 #include "experiment/execute/progress.hpp"
 #include "experiment/run/silence.hpp"
+#include "tests/said.hpp"
 
 namespace afford {
 namespace {
 
 using std::chrono::milliseconds;
 
-struct Said {
-  std::ostringstream text;
-  std::shared_ptr<spdlog::logger> log = [this] {
-    auto l = std::make_shared<spdlog::logger>("runner", std::make_shared<spdlog::sinks::ostream_sink_st>(text));
-    l->set_pattern("%v");
-    return l;
-  }();
-  int lines() const {
-    int n = 0;
-    for (char c : text.str()) n += c == '\n';
-    return n;
-  }
-};
+using test::Said;
 
 TEST(Silence, AProcessNotHeardForAFewBeatsIsSaidOnceAtOnceAndSaidBackWhenHeardAgain) {
   Said said;
@@ -48,7 +35,7 @@ TEST(Silence, AProcessNotHeardForAFewBeatsIsSaidOnceAtOnceAndSaidBackWhenHeardAg
 
   // The eye's last beat was at 0 (killed, and started on another bus): said as the third second passes.
   silence.look("r1", {{"environment", 40, at(3000)}, {"eye", 41, at(0)}}, at(3100));
-  EXPECT_EQ(said.lines(), 1) << said.text.str();
+  EXPECT_EQ(static_cast<int>(said.lines().size()), 1) << said.text.str();
   EXPECT_NE(said.text.str().find("run 'r1': process eye not heard for 3.1 s (pid 41 last)"), std::string::npos)
       << said.text.str();
   EXPECT_NE(said.text.str().find("check its bus URL"), std::string::npos) << said.text.str();
@@ -56,12 +43,12 @@ TEST(Silence, AProcessNotHeardForAFewBeatsIsSaidOnceAtOnceAndSaidBackWhenHeardAg
 
   // Still silent: nothing more (once), however often the runner looks.
   for (int ms = 3200; ms < 30000; ms += 100) silence.look("r1", {{"environment", 40, at(ms)}, {"eye", 41, at(0)}}, at(ms));
-  EXPECT_EQ(said.lines(), 1) << said.text.str();
+  EXPECT_EQ(static_cast<int>(said.lines().size()), 1) << said.text.str();
   EXPECT_EQ(waited, std::vector<std::string>{"eye"});
 
   // Started again where it should be: heard, said back, and nobody is waited for.
   silence.look("r1", {{"environment", 40, at(30000)}, {"eye", 57, at(30000)}}, at(30000));
-  EXPECT_EQ(said.lines(), 2) << said.text.str();
+  EXPECT_EQ(static_cast<int>(said.lines().size()), 2) << said.text.str();
   EXPECT_NE(said.text.str().find("process eye heard again (pid 57)"), std::string::npos) << said.text.str();
   EXPECT_EQ(waited, (std::vector<std::string>{"eye", ""}));
 
