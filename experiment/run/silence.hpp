@@ -4,6 +4,8 @@
 // the run would otherwise only fail when it stalls, half a minute later. The
 // progress display is told whom the run waits for, so that it shows that
 // rather than a time left that only grows. A process heard again is said back.
+// Only a silence the runner listened through counts: after a pause of its own
+// (a long handler in its thread), it listens afresh before it says anything.
 #pragma once
 #include <spdlog/spdlog.h>
 
@@ -41,6 +43,7 @@ class Silence {
   std::function<void(const std::string&)> on_waiting_;
   std::map<std::string, Clock::time_point> silent_;  // process -> when it was last heard (silent since)
   std::string waiting_;
+  Clock::time_point looked_{}, listening_since_{};  // the last look; the first of the looks since without a pause
 };
 
 }  // namespace afford

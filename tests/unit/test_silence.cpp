@@ -29,7 +29,9 @@ TEST(Silence, AProcessNotHeardForAFewBeatsIsSaidOnceAtOnceAndSaidBackWhenHeardAg
   const auto t0 = Silence::Clock::now();
   const auto at = [&](int ms) { return t0 + milliseconds(ms); };
 
-  silence.look("r1", {{"environment", 40, at(0)}, {"eye", 41, at(0)}}, at(2900));
+  // The runner looks after each message it handles, or every few milliseconds.
+  for (int ms = 0; ms <= 2900; ms += 100)
+    silence.look("r1", {{"environment", 40, at(ms - ms % 500)}, {"eye", 41, at(0)}}, at(ms));
   EXPECT_EQ(said.text.str(), "");
   EXPECT_TRUE(waited.empty());
 
@@ -53,10 +55,29 @@ TEST(Silence, AProcessNotHeardForAFewBeatsIsSaidOnceAtOnceAndSaidBackWhenHeardAg
   EXPECT_EQ(waited, (std::vector<std::string>{"eye", ""}));
 
   // Two at once are both waited for; the run's end waits for none.
-  silence.look("r1", {{"environment", 40, at(30000)}, {"eye", 57, at(30000)}}, at(34000));
+  for (int ms = 30100; ms <= 34000; ms += 100)
+    silence.look("r1", {{"environment", 40, at(30000)}, {"eye", 57, at(30000)}}, at(ms));
   EXPECT_EQ(waited.back(), "environment, eye");
   silence.reset();
   EXPECT_EQ(waited.back(), "");
+}
+
+// A silence the runner did not listen through (a pause of its own, e.g. a long handler in its thread) is no
+// process's: it listens afresh, and says only what stays silent while it does.
+TEST(Silence, APauseOfTheRunnerItselfIsNotAProcesssSilence) {
+  Said said;
+  Silence silence(said.log, milliseconds(3000));
+  const auto t0 = Silence::Clock::now();
+  const auto at = [&](int ms) { return t0 + milliseconds(ms); };
+  silence.look("r1", {{"eye", 41, at(0)}}, at(0));
+  silence.look("r1", {{"eye", 41, at(0)}}, at(10000));  // ten seconds away: the eye's beats wait in the queue
+  EXPECT_EQ(said.text.str(), "");
+  silence.look("r1", {{"eye", 41, at(10050)}}, at(10050));  // ... and come
+  for (int ms = 10100; ms < 12950; ms += 100) silence.look("r1", {{"eye", 41, at(10050)}}, at(ms));
+  EXPECT_EQ(said.text.str(), "");
+  // Heard at 10050 and not since, while the runner listened: said once three seconds are over.
+  for (int ms = 12950; ms < 13200; ms += 100) silence.look("r1", {{"eye", 41, at(10050)}}, at(ms));
+  EXPECT_EQ(said.starting("run 'r1': process eye not heard for 3.0"), 1) << said.text.str();
 }
 
 // The board's lines as printed (--progress lines, drawn at every event).
