@@ -158,6 +158,13 @@ fi
 
 # ---- 4. two groups on one port, other addresses -----------------------------------------------------------------
 if part 4; then
+# The groups' processes are procs.sh's children, not this script's jobs: stopped whatever ends the script.
+stop_groups() {
+  local f
+  for f in "$out"/groups/*/*.pid; do [[ -f $f ]] && kill -INT "$(cat "$f")" 2>/dev/null; done
+  return 0
+}
+trap 'rc=$?; stop_groups; (exit $rc); group_on_exit' EXIT
 export AFFORD_NETNS=none AFFORD_LOGS=$out/groups AFFORD_BIN=$build/bin
 unset AFFORD_BUS_KEY
 AFFORD_URL="udpm://239.255.76.67:7996?ttl=0" "$root/scripts/procs.sh" start ga >"$out/start-ga.txt" 2>&1
