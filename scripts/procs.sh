@@ -132,6 +132,41 @@ start_one() {
   echo "$p started (pid $pid, output in $dir/$p.log)"
 }
 
+# warn_port_shared URL: a warning for each other group of LOGS with a process running whose bus is on URL's
+# port: on the same address it is the same bus (each group hears the other's messages and drops them); on
+# another address, afford's processes hear only their own (third_party/lcm, patch 0012), but other LCM
+# programs (Debian's lcm-spy, lcm-logger) hear both.
+warn_port_shared() {
+  local mine=${1#*://} f g other oport pidf f19 live
+  local addr=${mine%%:*} port=${mine#*:}
+  port=${port%%[?/]*}
+  for f in "$logs"/*/lcm-url; do
+    g=${f%/lcm-url}
+    [[ -f $f && $g != "$dir" ]] || continue
+    other=$(cat "$f")
+    other=${other#*://}
+    oport=${other#*:}
+    oport=${oport%%[?/]*}
+    [[ $oport == "$port" ]] || continue
+    live=
+    for pidf in "$g"/*.pid; do
+      f19=($(stat_of "$(cat "$pidf" 2>/dev/null)" 2>/dev/null)) || continue
+      [[ ${f19[0]} != Z && ${f19[19]} == "$(cat "${pidf%.pid}.started" 2>/dev/null)" ]] && live=1
+    done
+    [[ -n $live ]] || continue
+    if [[ ${other%%:*} == "$addr" ]]; then
+      echo "procs.sh: warning: group '${g##*/}' (running) is on this same bus ($addr:$port): each group's" \
+        "processes hear the other's messages (dropped: another key, or another run); give this group its own" \
+        "port (AFFORD_URL at its first start, or edit $dir/lcm-url)" >&2
+    else
+      echo "procs.sh: warning: group '${g##*/}' (running) uses port $port too, with address ${other%%:*} (this" \
+        "group: $addr): afford's processes hear only their own address, but other LCM programs (lcm-spy," \
+        "lcm-logger) on either bus hear both; another port keeps them apart (AFFORD_URL at a group's first" \
+        "start, or edit $dir/lcm-url)" >&2
+    fi
+  done
+}
+
 stop_one() {
   local p=$1
   check_process "$p"
@@ -162,6 +197,7 @@ case $cmd in
       export AFFORD_BUS_KEY=$key
     fi
     u=$(url)
+    warn_port_shared "$u"
     procs=()
     while [[ $# -gt 0 ]]; do
       case $1 in

@@ -1,5 +1,7 @@
 #include "afford/auth.hpp"
 
+#include "afford/seal.hpp"
+
 #include <fcntl.h>
 #include <sodium.h>
 #include <sys/stat.h>
@@ -138,6 +140,55 @@ std::uint64_t BusKey::newSession() {
   std::uint64_t session = 0;
   randombytes_buf(&session, sizeof session);
   return session;
+}
+
+KeyMismatch keyMismatchOf(const BusKey* key, const void* data, std::size_t size) {
+  const SealAt at = sealAt(data, size, BusKey::kTrailerBytes);
+  if (!key) return at == SealAt::BeforeTrailer ? KeyMismatch::TaggedWithoutKey : KeyMismatch::None;
+  if (at == SealAt::End) return KeyMismatch::UntaggedWithKey;
+  return at == SealAt::BeforeTrailer ? KeyMismatch::OtherKey : KeyMismatch::None;
+}
+
+const char* keyHint(KeyMismatch m) {
+  switch (m) {
+    case KeyMismatch::TaggedWithoutKey:
+      return "tagged messages heard: this bus is keyed; give --bus-key FILE (or $AFFORD_BUS_KEY) with the group's key";
+    case KeyMismatch::UntaggedWithKey:
+      return "untagged messages heard: this bus is not keyed (or its publishers lack the key); give them the key "
+             "(--bus-key), or leave it out here";
+    case KeyMismatch::OtherKey:
+      return "messages tagged with another key heard: the key given here is not this bus's; give --bus-key the "
+             "group's key file";
+    case KeyMismatch::None:
+      break;
+  }
+  return "";
+}
+
+void KeyMismatches::count(KeyMismatch m) {
+  if (m == KeyMismatch::TaggedWithoutKey) ++tagged;
+  if (m == KeyMismatch::UntaggedWithKey) ++untagged;
+  if (m == KeyMismatch::OtherKey) ++other_key;
+}
+
+std::int64_t KeyMismatches::of(KeyMismatch m) const {
+  return m == KeyMismatch::TaggedWithoutKey ? tagged
+         : m == KeyMismatch::UntaggedWithKey ? untagged
+         : m == KeyMismatch::OtherKey        ? other_key
+                                             : 0;
+}
+
+KeyMismatches KeyMismatches::since(const KeyMismatches& before) const {
+  return {tagged - before.tagged, untagged - before.untagged, other_key - before.other_key};
+}
+
+std::string KeyMismatches::said() const {
+  KeyMismatch most = KeyMismatch::None;
+  std::int64_t n = 0;
+  for (KeyMismatch m : {KeyMismatch::TaggedWithoutKey, KeyMismatch::UntaggedWithKey, KeyMismatch::OtherKey})
+    if (of(m) > n) most = m, n = of(m);
+  if (n == 0) return "";
+  return std::string(keyHint(most)) + " (" + std::to_string(n) + " such message" + (n == 1 ? "" : "s") + " dropped)";
 }
 
 std::string busKeySource(const std::string& option) {

@@ -21,12 +21,25 @@ std::string kindOf(const std::string& channel, const std::string& why) {
 }
 }  // namespace
 
+DropLog::Kind& DropLog::kind(const std::string& key, const std::string& example) {
+  const bool other = !kinds_.count(key) && kinds_.size() >= static_cast<std::size_t>(kKinds);
+  Kind& k = kinds_[other ? "other" : key];
+  if (k.example.empty()) k.example = other ? "other reasons" : example;
+  return k;
+}
+
+void DropLog::unsaid(Kind& k, Clock::time_point now) {
+  if (unsaid_++ == 0) first_unsaid_ = now;
+  ++k.unsaid;
+  if (now - last_line_ >= delay_) {
+    summarise("so far");
+    delay_ = std::min<Clock::duration>(delay_ * 2, kLongestDelay);
+  }
+}
+
 void DropLog::drop(const std::string& channel, const std::string& why) {
   const auto now = Clock::now();
-  std::string key = kindOf(channel, why);
-  if (!kinds_.count(key) && kinds_.size() >= static_cast<std::size_t>(kKinds)) key = "other";
-  Kind& k = kinds_[key];
-  if (k.example.empty()) k.example = key == "other" ? "other reasons" : channel + ": " + why;
+  Kind& k = kind(kindOf(channel, why), channel + ": " + why);
   if (k.said < kSaidPerKind && said_ < kSaidAtMost) {
     ++k.said;
     ++said_;
@@ -35,12 +48,18 @@ void DropLog::drop(const std::string& channel, const std::string& why) {
                k.said == kSaidPerKind || said_ == kSaidAtMost ? " (more drops are counted and summarised)" : "");
     return;
   }
-  if (unsaid_++ == 0) first_unsaid_ = now;
-  ++k.unsaid;
-  if (now - last_line_ >= delay_) {
-    summarise("so far");
-    delay_ = std::min<Clock::duration>(delay_ * 2, kLongestDelay);
+  unsaid(k, now);
+}
+
+void DropLog::keyMismatch(const std::string& channel, KeyMismatch m) {
+  const auto now = Clock::now();
+  const std::string hint = keyHint(m);
+  if (hinted_.insert(m).second) {
+    last_line_ = now;
+    log_->warn("{} (first on {}: such messages are dropped, and counted below)", hint, channel);
+    return;
   }
+  unsaid(kind(hint, hint), now);
 }
 
 void DropLog::summarise(const char* when) {

@@ -95,7 +95,8 @@ void Edge::leave() {
   inbound_.leave(own_protocol_);
 }
 
-bool Edge::inScope(const std::string& channel, const std::string& run_id, Scope scope) {
+bool Edge::inScope(const std::string& channel, const lcm::ReceiveBuffer* rb, const std::string& run_id,
+                   Scope scope) {
   if (scope == Scope::Any) return true;
   if (run_.empty()) {
     if (scope == Scope::RunOrAny) return true;
@@ -104,7 +105,7 @@ bool Edge::inScope(const std::string& channel, const std::string& run_id, Scope 
   }
   if (run_id != run_) {
     if (warn_other_runs_)
-      drop(channel, "unknown run id '" + run_id + "' (this process serves run '" + run_ + "')");
+      refuse(channel, rb, "unknown run id '" + run_id + "' (this process serves run '" + run_ + "')");
     else
       log_->debug("{}: message of run '{}' ignored (serving run '{}')", channel, run_id, run_);
     return false;
@@ -115,6 +116,14 @@ bool Edge::inScope(const std::string& channel, const std::string& run_id, Scope 
 void Edge::drop(const std::string& channel, const std::string& why) {
   ++drops_.refused;
   drop_log_.drop(channel, why);
+}
+
+void Edge::refuse(const std::string& channel, const lcm::ReceiveBuffer* rb, const std::string& why) {
+  const KeyMismatch m = key_ ? KeyMismatch::None : keyMismatchOf(nullptr, rb->data, rb->data_size);
+  if (m == KeyMismatch::None) return drop(channel, why);
+  ++drops_.refused;
+  drops_.key.count(m);
+  drop_log_.keyMismatch(channel, m);
 }
 
 namespace {
@@ -131,7 +140,12 @@ bool Edge::untag(const std::string& channel, const lcm::ReceiveBuffer* rb, std::
   Stamp stamp;
   if (!key_->verify(channel, rb->data, rb->data_size, &stamp)) {
     ++drops_.untagged;
-    drop_log_.drop(channel, "no valid tag of this bus's key (" + std::to_string(rb->data_size) + " bytes)");
+    if (const KeyMismatch m = keyMismatchOf(key_.get(), rb->data, rb->data_size); m != KeyMismatch::None) {
+      drops_.key.count(m);
+      drop_log_.keyMismatch(channel, m);
+    } else {
+      drop_log_.drop(channel, "no valid tag of this bus's key (" + std::to_string(rb->data_size) + " bytes)");
+    }
     return false;
   }
   if (const std::string why =

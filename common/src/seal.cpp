@@ -10,6 +10,12 @@ constexpr std::uint64_t kPrime = 0x100000001B3ull;
 // multiply it by the prime's eighth power (mod 2^64): a word of zeros, common
 // in weights never trained and in mostly black images, costs one step, not eight.
 constexpr std::uint64_t kPrime8 = kPrime * kPrime * kPrime * kPrime * kPrime * kPrime * kPrime * kPrime;
+
+std::uint64_t bigEndian64(const unsigned char* p) {
+  std::uint64_t v = 0;
+  for (int i = 0; i < 8; ++i) v = (v << 8) | p[i];
+  return v;
+}
 }  // namespace
 
 std::uint64_t fnv1a64(std::uint64_t h, const void* data, std::size_t n) {
@@ -39,9 +45,26 @@ std::uint64_t fnv1a64(const void* data, std::size_t n) { return fnv1a64(0xCBF29C
 bool sealIntact(const void* data, std::size_t n) {
   if (n < 16) return false;  // a fingerprint and a digest at least
   const auto* p = static_cast<const unsigned char*>(data);
-  std::uint64_t stored = 0;
-  for (std::size_t i = n - 8; i < n; ++i) stored = (stored << 8) | p[i];
-  return stored == fnv1a64(p, n - 8);
+  return bigEndian64(p + n - 8) == fnv1a64(p, n - 8);
+}
+
+SealAt sealAt(const void* data, std::size_t n, std::size_t trailer) {
+  const auto* p = static_cast<const unsigned char*>(data);
+  if (n < 16) return SealAt::Neither;
+  // The digest over the bytes before a trailer's would-be digest is a state on the way to the whole one's.
+  const bool trailed = trailer > 0 && n >= trailer + 16;
+  std::uint64_t h = 0xCBF29CE484222325ull;
+  bool before_trailer = false;
+  if (trailed) {
+    const std::size_t sealed = n - trailer;  // the message's own bytes, its digest last
+    h = fnv1a64(h, p, sealed - 8);
+    before_trailer = h == bigEndian64(p + sealed - 8);
+    h = fnv1a64(h, p + sealed - 8, trailer);  // its digest and the trailer but the trailer's last 8
+  } else {
+    h = fnv1a64(h, p, n - 8);
+  }
+  if (h == bigEndian64(p + n - 8)) return SealAt::End;
+  return before_trailer ? SealAt::BeforeTrailer : SealAt::Neither;
 }
 
 std::int64_t chainSeed(const std::string& run_id, const std::string& channel, std::int64_t request) {

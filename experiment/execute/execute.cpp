@@ -56,6 +56,7 @@ void pumpLcm(lcm::LCM& lcm) { pumpBus(lcm, 5, 512); }
 struct RunHooks {
   std::function<void(std::int64_t)> step;
   std::function<void(const TableSnapshot&)> table;
+  std::function<void(const std::string&)> waiting;  // processes not heard (RunDriver::onWaiting)
 };
 
 
@@ -109,6 +110,7 @@ RunOutcome runInProcess(const PlannedRun& run, const HostRequest& o, const std::
   lcm::LCM& lcm = *slot.lcm;
   slot.driver->onStep(hooks.step);
   slot.driver->onTable(hooks.table);
+  slot.driver->onWaiting(hooks.waiting);
   RunOutcome r = slot.driver->run(
       run.spec,
       [&] {
@@ -169,6 +171,7 @@ RunOutcome runOverUdpm(const PlannedRun& run, const HostRequest& o, const std::s
   RunDriver& driver = *slot.driver;
   driver.onStep(hooks.step);
   driver.onTable(hooks.table);
+  driver.onWaiting(hooks.waiting);
   auto health = [&]() {
     std::string h = slot.group ? slot.group->health() : std::string();
     if (h.empty() && slot.logger && run.keep_log) h = slot.logger->health();
@@ -389,6 +392,7 @@ RunOutcome driveOne(const RunContext& c, const PlannedRun& planned, Slot& slot, 
   const int slot_index = slot.index;
   RunHooks hooks;
   hooks.step = [&progress, slot_index](std::int64_t step) { progress.step(slot_index, step); };
+  hooks.waiting = [&progress, slot_index](const std::string& who) { progress.waiting(slot_index, who); };
   if (o.on_curve && !planned.spec.extrinsic && !planned.target.empty())
     hooks.table = [&o, &run = planned](const TableSnapshot& t) {
       o.on_curve({run.spec.run_id, run.system, run.index, t.step, meanAbsError(t.affordance, run.target)});

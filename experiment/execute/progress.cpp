@@ -82,7 +82,7 @@ void Progress::uncount(std::size_t finished) {
 
 void Progress::started(int slot, const std::string& run_id, std::int64_t steps) {
   std::lock_guard<std::mutex> lock(mutex_);
-  slots_.at(static_cast<std::size_t>(slot)) = {run_id, 0, steps, Clock::now()};
+  slots_.at(static_cast<std::size_t>(slot)) = {run_id, 0, steps, Clock::now(), {}};
   draw(false);
 }
 
@@ -92,6 +92,14 @@ void Progress::step(int slot, std::int64_t step) {
   if (s.run_id.empty()) return;
   s.step = std::max(s.step, std::min(step, s.steps));
   draw(false);
+}
+
+void Progress::waiting(int slot, const std::string& processes) {
+  std::lock_guard<std::mutex> lock(mutex_);
+  Slot& s = slots_.at(static_cast<std::size_t>(slot));
+  if (s.run_id.empty() || s.waiting == processes) return;
+  s.waiting = processes;
+  draw(true);
 }
 
 void Progress::ended(int slot, bool finished) {
@@ -115,6 +123,7 @@ std::vector<std::string> Progress::lines() const {
   std::vector<std::string> out;
   const auto now = Clock::now();
   std::int64_t under_way = 0;
+  std::string waiting;  // for processes not heard: no estimate of the time left (it would only grow)
   char buf[256];
   for (std::size_t k = 0; k < slots_.size(); ++k) {
     const Slot& s = slots_[k];
@@ -124,6 +133,11 @@ std::vector<std::string> Progress::lines() const {
       const double t = std::chrono::duration<double>(now - s.since).count();
       std::snprintf(buf, sizeof buf, "  slot %zu: %s step %lld/%lld (%.0f steps/s)", k, s.run_id.c_str(),
                     static_cast<long long>(s.step), static_cast<long long>(s.steps), t > 0 ? s.step / t : 0.0);
+      if (!s.waiting.empty()) {
+        std::snprintf(buf, sizeof buf, "  slot %zu: %s step %lld/%lld, waiting for %s", k, s.run_id.c_str(),
+                      static_cast<long long>(s.step), static_cast<long long>(s.steps), s.waiting.c_str());
+        waiting += (waiting.empty() ? "" : ", ") + s.waiting;
+      }
     }
     under_way += s.step;
     out.emplace_back(buf);
@@ -131,7 +145,9 @@ std::vector<std::string> Progress::lines() const {
   const double elapsed = std::chrono::duration<double>(now - began_).count();
   const std::int64_t done = done_steps_ + under_way;
   std::string left = "estimating the time left";
-  if (done > 0 && elapsed > 0 && total_steps_ > 0)
+  if (!waiting.empty())
+    left = "waiting for " + waiting;
+  else if (done > 0 && elapsed > 0 && total_steps_ > 0)
     left = "about " + durationText((total_steps_ - done) / (done / elapsed)) + " left";
   std::snprintf(buf, sizeof buf, "%s: %zu of %zu done, %.0f%% of the steps, %s (%s so far)", phase_.c_str(),
                 done_, planned_,

@@ -47,6 +47,9 @@ class Progress {
 
   void started(int slot, const std::string& run_id, std::int64_t steps);
   void step(int slot, std::int64_t step);
+  // The slot's run waits for these processes (not heard: RunDriver::onWaiting), "" once it does not: the board
+  // says so instead of a time left that would only grow.
+  void waiting(int slot, const std::string& processes);
   void ended(int slot, bool finished);
   // Print something (a log line): above the board, which is drawn anew below it.
   void say(const std::function<void()>& print);
@@ -57,6 +60,7 @@ class Progress {
     std::string run_id;
     std::int64_t step = 0, steps = 0;
     Clock::time_point since{};
+    std::string waiting;  // processes the run waits for
   };
   void draw(bool force);
   std::vector<std::string> lines() const;

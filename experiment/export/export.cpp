@@ -250,7 +250,7 @@ ExportResult exportMcap(const ExportOptions& o, spdlog::logger& log) {
   result.untagged = in.stream().counts().untagged;
   result.refused_configs = select.refusedConfigs();
   result.left_out -= result.refused_configs;  // (counted apart)
-  select.check(result.cut);  // (the partial file goes with the writer)
+  select.check(result.cut, in.stream().counts().key);  // (the partial file goes with the writer)
   mcap.close();
   result.bytes = mcap.bytes();
   result.chunks = mcap.chunks();

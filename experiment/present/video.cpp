@@ -162,6 +162,7 @@ VideoResult renderVideo(const VideoOptions& o, spdlog::logger& log) {
       if (!feed.take(e, why) && r.refused++ < 10) log.warn("{}: {}: skipped", e.channel, why);
     }
     if (due() && (o.max_frames <= 0 || r.frames < o.max_frames)) draw();
+    if (!encoder) in.selector().check(in.cut(), in.stream().counts().key);  // no RUN_CONFIG: why (a key that does not fit?)
     if (!encoder) throw std::runtime_error(o.log.string() + ": no scene of " +
                                            (o.run_id.empty() ? "any run" : "run '" + o.run_id + "'") + " to draw");
     if (const int status = encoder->finish(); status != 0)

@@ -422,9 +422,10 @@ Explanation explainRunEvents(const RunEvents& run, const std::string& where, std
   return ex;
 }
 
-Explanation explainLog(const std::string& log_path, const std::string& run_id, spdlog::logger& log) {
+Explanation explainLog(const std::string& log_path, const std::string& run_id, spdlog::logger& log,
+                       const BusKey* key) {
   if (!fs::exists(log_path)) throw std::runtime_error("no such log folder or file: " + log_path);
-  const RunEvents run = readRunEvents(log_path, run_id, log);
+  const RunEvents run = readRunEvents(log_path, run_id, log, key);
   // A log cut short is not the whole test: no verdict on it, only what is missing.
   const std::string cut = run.cut.empty() ? "" : "; the log is cut: " + joinedCut(run.cut);
   std::vector<LogGap> missing;
@@ -482,7 +483,7 @@ bool isLogRoot(const std::string& path) {
   return false;
 }
 
-ExplainSummary explainLogRoot(const std::string& root, spdlog::logger& log) {
+ExplainSummary explainLogRoot(const std::string& root, spdlog::logger& log, const BusKey* key) {
   ExplainSummary s;
   s.root = root;
   std::vector<fs::path> dirs;
@@ -496,7 +497,7 @@ ExplainSummary explainLogRoot(const std::string& root, spdlog::logger& log) {
       continue;
     }
     try {
-      s.tests.push_back(explainLog(d.string(), "", log));
+      s.tests.push_back(explainLog(d.string(), "", log, key));
     } catch (const NotAnExtrinsicTest& e) {
       s.skipped.emplace_back(d.string(), e.what());
     } catch (const std::exception& e) {

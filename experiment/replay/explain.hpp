@@ -122,8 +122,9 @@ Explanation explainRunEvents(const RunEvents& run, const std::string& where, std
                              const std::string& incomplete = "", const std::vector<LogGap>& manifest_missing = {});
 // Read a run's log folder (or one .lcm file) and explain the test in it: the
 // first run, or `run_id`'s. A log cut short (log_cut.hpp) is refused, saying
-// what is missing.
-Explanation explainLog(const std::string& log_path, const std::string& run_id, spdlog::logger& log);
+// what is missing. `key`: an lcm-logger recording of a keyed bus (its tags checked and taken off).
+Explanation explainLog(const std::string& log_path, const std::string& run_id, spdlog::logger& log,
+                       const BusKey* key = nullptr);
 
 // ---- a folder of run logs ------------------------------------------------------------
 
@@ -137,7 +138,7 @@ struct ExplainSummary {
 // True when `path` is a folder of run log folders rather than one run's log.
 bool isLogRoot(const std::string& path);
 // Every extrinsic test under `root` (one level down). Throws when there is none.
-ExplainSummary explainLogRoot(const std::string& root, spdlog::logger& log);
+ExplainSummary explainLogRoot(const std::string& root, spdlog::logger& log, const BusKey* key = nullptr);
 
 // ---- per agent and sub-goal (afford explain ROOT --by-agent) --------------------------
 

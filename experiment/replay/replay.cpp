@@ -111,7 +111,14 @@ bool RecordedLogStream::next(LogEvent& e) {
       e.data.resize(e.data.size() - BusKey::kTrailerBytes);
       return true;
     }
-    if (counts_.untagged++ < 10)
+    // Recorded on a bus without the key, or with another: one line naming the fix; anything else: a few lines.
+    ++counts_.untagged;
+    const KeyMismatch m = keyMismatchOf(key_, e.data.data(), e.data.size());
+    counts_.key.count(m);
+    if (m != KeyMismatch::None && counts_.key.of(m) == 1)
+      log_.warn("{}: offset {}: {} (events without a valid tag of the key given are skipped, and counted)",
+                reader_->file().string(), e.offset, keyHint(m));
+    else if (m == KeyMismatch::None && counts_.untagged - counts_.key.untagged - counts_.key.other_key <= 10)
       log_.warn("{}: offset {}: a {} event without a valid tag of the key: skipped", reader_->file().string(),
                 e.offset, e.channel);
   }
@@ -134,12 +141,15 @@ bool RunSelector::take(const LogEvent& e) {
   // Our logger's logs start with the RUN_CONFIG; a plain lcm-logger recording
   // may hold heartbeats before it, other runs around it, and forged datagrams.
   if (!found_) {
-    if (e.channel != ch::runConfig.name) return false;
+    if (e.channel != ch::runConfig.name) {
+      tagged(e);  // (counted, and said once: why no RUN_CONFIG may come)
+      return false;
+    }
     run_config_t rc;
     std::string why;
     if (!decodeChecked(e.data.data(), e.data.size(), BoundsContext{&observer_, nullptr}, rc, why)) {
       ++refused_configs_;
-      log_.warn("{}: the RUN_CONFIG event at offset {} is refused ({}): skipped", where_, e.offset, why);
+      if (!tagged(e)) log_.warn("{}: the RUN_CONFIG event at offset {} is refused ({}): skipped", where_, e.offset, why);
       return false;
     }
     if (!run_id_.empty() && rc.run_id != run_id_) return false;
@@ -156,18 +166,29 @@ bool RunSelector::take(const LogEvent& e) {
   return taken;
 }
 
-void RunSelector::check(const std::vector<std::string>& cut) const {
+bool RunSelector::tagged(const LogEvent& e) {
+  const KeyMismatch m = keyMismatchOf(nullptr, e.data.data(), e.data.size());
+  if (m == KeyMismatch::None) return false;
+  key_.count(m);
+  if (key_.of(m) == 1) log_.warn("{}: offset {}: {} (a recording of a keyed bus)", where_, e.offset, keyHint(m));
+  return true;
+}
+
+void RunSelector::check(const std::vector<std::string>& cut, const KeyMismatches& read) const {
   if (found_) return;
+  // The key does not fit the recording: "tagged messages heard: ...; give --bus-key ...".
+  const std::string key =
+      KeyMismatches{key_.tagged + read.tagged, key_.untagged + read.untagged, key_.other_key + read.other_key}.said();
   throw std::runtime_error(
       where_ +
       (run_id_.empty() ? std::string(": no RUN_CONFIG that the edge accepts in the log, so nothing says how "
                                      "the run was configured")
                        : ": no RUN_CONFIG of run '" + run_id_ + "' that the edge accepts in the log") +
-      (cut.empty() ? std::string() : "; the log is cut: " + joinedCut(cut)));
+      (cut.empty() ? std::string() : "; the log is cut: " + joinedCut(cut)) + (key.empty() ? "" : "; " + key));
 }
 
-RunEvents readRunEvents(const fs::path& log_path, const std::string& run_id, spdlog::logger& log) {
-  RecordedLogStream in(log_path, log);
+RunEvents readRunEvents(const fs::path& log_path, const std::string& run_id, spdlog::logger& log, const BusKey* key) {
+  RecordedLogStream in(log_path, log, key);
   RunSelector select(run_id, log_path.string(), log);
   RunEvents run;
   std::int64_t events = 0;
@@ -181,7 +202,7 @@ RunEvents readRunEvents(const fs::path& log_path, const std::string& run_id, spd
   if (events == 0)
     throw std::runtime_error(log_path.string() + ": the log holds no complete event" + torn +
                              (run.cut.empty() ? std::string() : "; the log is cut: " + joinedCut(run.cut)));
-  select.check(run.cut);
+  select.check(run.cut, in.counts().key);
   run.config = select.config();
   run.refused_configs = select.refusedConfigs();
   return run;
@@ -551,7 +572,7 @@ ReplayResult replayRun(const ReplayOptions& o, spdlog::logger& log) {
   result.untagged = in.counts().untagged;
   result.refused_configs = select.refusedConfigs();
   result.cut = in.cutShort(select);
-  select.check(result.cut);
+  select.check(result.cut, in.counts().key);
   result.gaps = gaps->gaps();
   for (const auto& g : manifest_missing) {  // what the logger knew it never got, beyond the last recorded
     const bool known = std::any_of(result.gaps.begin(), result.gaps.end(), [&](const ReplayResult::Gap& h) {

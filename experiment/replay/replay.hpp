@@ -49,6 +49,7 @@ struct RecordedLog {
   std::int64_t skipped_bytes = 0;   // ... and their bytes
   std::int64_t untagged = 0;        // events without a valid tag of the key given, skipped
   std::vector<SegmentRead> segments;  // each segment read so far, as read
+  KeyMismatches key;                // of those: untagged, or tagged with another key (by their structure)
 };
 // With a bus key (an lcm-logger recording of a keyed bus), every event must end
 // with its tag, which is taken off; one without a valid tag is skipped and counted.
@@ -139,13 +140,16 @@ struct RunEvents {
 };
 // The events of one run of a log (the first, or `run_id`'s), read whole. Throws
 // std::runtime_error naming the log, and saying what it lacks, when it holds
-// no event or no run (RunSelector::check).
-RunEvents readRunEvents(const std::filesystem::path& log_path, const std::string& run_id, spdlog::logger& log);
+// no event or no run (RunSelector::check). `key`: an lcm-logger recording of a keyed bus.
+RunEvents readRunEvents(const std::filesystem::path& log_path, const std::string& run_id, spdlog::logger& log,
+                        const BusKey* key = nullptr);
 // The choice, event by event: take(e) says whether e is the run's (its
 // RUN_CONFIG, then its events); once every event has been offered, check()
 // throws std::runtime_error naming `where` if the run cannot be rebuilt: the
 // log holds no (such) RUN_CONFIG that the edge accepts (saying, if given, what
-// the log lacks: RecordedLogStream::cutShort).
+// the log lacks: RecordedLogStream::cutShort, and naming the fix if the
+// recording's key does not fit: tagged RUN_CONFIG events read without a key,
+// or `read`, what the log's reader skipped).
 class RunSelector {
  public:
   RunSelector(std::string run_id, std::string where, spdlog::logger& log);
@@ -156,7 +160,7 @@ class RunSelector {
   const run_config_t& config() const { return config_; }
   std::int64_t refusedConfigs() const { return refused_configs_; }
   const RunReach& reach() const { return reach_; }  // how far the events taken so far go
-  void check(const std::vector<std::string>& cut = {}) const;
+  void check(const std::vector<std::string>& cut = {}, const KeyMismatches& read = {}) const;
 
  private:
   std::string run_id_, where_;
@@ -166,6 +170,10 @@ class RunSelector {
   bool found_ = false;
   run_config_t config_;
   std::int64_t refused_configs_ = 0;
+  // Is `e`, before the run's RUN_CONFIG, tagged (by its structure: a keyed bus's recording read without its
+  // key)? Counted, and said the first time.
+  bool tagged(const LogEvent& e);
+  KeyMismatches key_;  // the events found tagged
 };
 
 // One fresh process of a run, on an in-process bus of its own, fed a

@@ -66,7 +66,10 @@ void takeGoal(std::vector<GoalBin>& bins, const goal_result_t& m, std::int64_t i
 }  // namespace
 
 RunDriver::RunDriver(lcm::LCM& lcm, std::shared_ptr<spdlog::logger> log, const ProtocolConfig& protocol)
-    : lcm_(lcm), log_(std::move(log)), edge_(lcm, log_, "runner", protocol) {
+    : lcm_(lcm),
+      log_(std::move(log)),
+      edge_(lcm, log_, "runner", protocol),
+      silence_(log_, milliseconds(6 * protocol.heartbeat_ms)) {
   edge_.warnOtherRuns(false);  // late messages of the slot's previous run are normal
   edge_.subscribe(ch::status, [this](const process_status_t& m) { return onStatus(m); }, Scope::Any, Order::None);
   edge_.subscribe(ch::affordanceTable,
@@ -383,6 +386,7 @@ RunOutcome RunDriver::run(const RunSpec& spec, const std::function<void()>& pump
       d->outcome_ = nullptr;
       d->spec_ = nullptr;
       d->edge_.leave();
+      d->silence_.reset();
     }
   } reset{this};
   const Waiting w{pump, health};

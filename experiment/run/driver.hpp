@@ -34,6 +34,7 @@
 #include "afford/config.hpp"
 #include "afford/edge.hpp"
 #include "afford/process_main.hpp"
+#include "experiment/run/silence.hpp"
 
 namespace afford {
 
@@ -172,6 +173,8 @@ class RunDriver {
   void onStep(std::function<void(std::int64_t)> f) { on_step_ = std::move(f); }
   // Told each affordance table of the run as the driver takes it into the run's curve (afford.tune's pruning).
   void onTable(std::function<void(const TableSnapshot&)> f) { on_table_ = std::move(f); }
+  // Told whom a run waits for, as that changes: processes not heard for a few heartbeats ("" once all are).
+  void onWaiting(std::function<void(const std::string&)> f) { silence_.onWaiting(std::move(f)); }
   // A keyed bus (afford/auth.hpp): set before the first run.
   void useBusKey(std::shared_ptr<const BusKey> key) { edge_.useKey(std::move(key)); }
 
@@ -260,6 +263,7 @@ class RunDriver {
   std::map<std::string, std::int64_t> published_, logged_;
   std::function<void(std::int64_t)> on_step_;
   std::function<void(const TableSnapshot&)> on_table_;
+  Silence silence_;  // the run's processes gone silent mid-run, said at once
 };
 
 }  // namespace afford

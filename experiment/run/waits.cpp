@@ -46,13 +46,16 @@ RunDriver::Ending RunDriver::waitFree(const Waiting& w) {
   // The deadline counts from the last progress: one more free, or one still in another run going further (told
   // to stop, a logger catching up closes its log first); one silent for a while (killed, paused) is waited for.
   Progress progress{progressOf(free)};
+  const KeyMismatches heard = edge_.drops().key;  // a key that does not fit the bus: why nobody is heard
   while (!missing(free).empty()) {
     if (auto h = w.health(); !h.empty()) return {false, h};
     if (stopRequested()) return {true, ""};
     if (progress.stalled(progressOf(free), milliseconds(protocol.ready_timeout_ms)) && !awaitingSilent(free)) {
       outcome_->unreached = true;  // nothing was said to them yet: the run never began
+      const std::string key = edge_.drops().key.since(heard).said();
       return {false, "no process of this name reported free for a run within " +
-                         std::to_string(protocol.ready_timeout_ms / 1000.0).substr(0, 4) + " s: " + missing(free)};
+                         std::to_string(protocol.ready_timeout_ms / 1000.0).substr(0, 4) + " s: " + missing(free) +
+                         (key.empty() ? "" : "; " + key)};
     }
     w.pump();
   }
@@ -113,14 +116,17 @@ RunDriver::Ending RunDriver::runSteps(const Waiting& w) {
     edge_.askMissing();
     const auto now = Clock::now();
     std::int64_t handled = 0;  // the steps of all, in the run
+    std::vector<Silence::Heard> heard;
     for (const auto& p : spec.processes) {
       auto it = seen_.find(p);
       if (it == seen_.end()) continue;
+      heard.push_back({p, it->second.pid, it->second.at});
       if (now - it->second.at > silence)
         return {false, "process '" + p + "' stopped reporting (last heard " +
                            std::to_string(std::chrono::duration<double>(now - it->second.at).count()) + " s ago)"};
       if (ourRequest(it->second)) handled += it->second.step + 1 + it->second.taken;
     }
+    silence_.look(spec.run_id, heard, now);
     // Progress is any process moving on (a restarted one catching up included: the logger's log growing), or a
     // table coming in.
     if (const auto p = handled + static_cast<std::int64_t>(out.curve.size()); p != progress) {

@@ -29,6 +29,7 @@ LogPlayer::LogPlayer(WatchState& state, const ProtocolConfig& protocol, PlayerOp
   rewind();
   nextStep();  // the run's configuration taken: the run shown
   run_id_ = feed_->shown();
+  if (run_id_.empty()) in_->selector().check(in_->cut(), in_->stream().counts().key);  // no RUN_CONFIG: why (a key?)
   if (run_id_.empty() || first_ < 0)
     throw std::runtime_error(options_.log.string() + ": no " +
                              (options_.run_id.empty() ? "run" : "message of run '" + options_.run_id + "'") + " in it");

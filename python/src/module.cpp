@@ -91,7 +91,7 @@ py::dict readLog(const std::string& path, const std::string& run_id, const std::
     unknown += !known;
   }
   py::dict out;
-  select.check(in.cut());
+  select.check(in.cut(), in.stream().counts().key);
   out["run_id"] = select.config().run_id;
   out["config_yaml"] = select.config().config_yaml;
   out["messages"] = messages;

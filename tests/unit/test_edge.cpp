@@ -7,10 +7,6 @@
 // ids are bounded. What it says of what it drops: a flood costs a few lines.
 #include <gtest/gtest.h>
 #include <spdlog/sinks/null_sink.h>
-#include <spdlog/sinks/ostream_sink.h>
-
-#include <regex>
-#include <sstream>
 
 #include <chrono>
 #include <string>
@@ -23,6 +19,7 @@
 #include "afford/process_status_t.hpp"
 #include "afford/resend_t.hpp"
 #include "afford/scene_t.hpp"
+#include "tests/said.hpp"
 #include "tests/support.hpp"
 
 namespace afford {
@@ -391,33 +388,7 @@ TEST(Bus, AUdpmUrlGetsTheBusBoundsUnlessItSetsThemAndOtherProvidersAreRefused) {
 
 // ---- what the edge says of what it drops ------------------------------------------------
 
-struct Said {
-  std::ostringstream text;
-  std::shared_ptr<spdlog::logger> log = [this] {
-    auto l = std::make_shared<spdlog::logger>("eye", std::make_shared<spdlog::sinks::ostream_sink_st>(text));
-    l->set_pattern("%v");
-    return l;
-  }();
-  std::vector<std::string> lines() const {
-    std::vector<std::string> out;
-    std::istringstream in(text.str());
-    for (std::string line; std::getline(in, line);) out.push_back(line);
-    return out;
-  }
-  // The drops the lines account for: one each said alone, and the counts of the summaries.
-  std::int64_t accounted() const {
-    std::int64_t n = 0;
-    const std::regex summary(R"(^dropped (\d+) more message)");
-    for (const auto& line : lines()) {
-      std::smatch m;
-      if (std::regex_search(line, m, summary))
-        n += std::stoll(m[1]);
-      else if (line.find(": dropped message: ") != std::string::npos)
-        ++n;
-    }
-    return n;
-  }
-};
+using test::Said;
 
 // Ten thousand drops of three kinds (numbers in their reasons differ: they are of one kind) are a handful of
 // lines, and every drop is in them.

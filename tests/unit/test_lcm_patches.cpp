@@ -545,6 +545,28 @@ TEST_F(LcmPatches, AReceiverWithReceiveBatchMsTakesAStreamInBatches) {
                                   << " datagrams in " << ms.count() << " ms";
 }
 
+// 0012: a udpm receiver was handed the datagrams of every multicast group that any socket of the host had
+// joined on its port (Linux's IP_MULTICAST_ALL): a second bus on the same port with another address was heard
+// by every process of the first, which dropped its messages one warning line each.
+TEST_F(LcmPatches, AReceiverHearsOnlyItsOwnGroupNotAnotherOnItsPort) {
+  listen("");  // 239.255.76.67, BAD and SYNC
+  lcm::LCM other("udpm://239.255.76.68:" + std::to_string(kPort) + "?ttl=0");
+  ASSERT_TRUE(other.good());
+  Taken heard;
+  other.subscribe("BAD", &Taken::on, &heard);  // (its socket joins 239.255.76.68 on the port)
+  const Bytes message = pattern(40, 3);
+  for (int i = 0; i < 5; ++i) {
+    other.publish("BAD", message.data(), static_cast<unsigned>(message.size()));
+    while (heard.by_channel["BAD"] == i && other.handleTimeout(10000) > 0) {
+    }
+  }
+  ASSERT_EQ(heard.by_channel["BAD"], 5) << "the other bus did not hear itself";
+  Sender s;
+  ASSERT_TRUE(receiveQueueDrained());
+  sync(s);
+  EXPECT_TRUE(bad_.empty()) << bad_.size() << " messages of the bus at 239.255.76.68 heard on 239.255.76.67";
+}
+
 // 0007: a data length of 0x7FFFFFFF overflowed 'datalen + 1' and the reader wrote through a null pointer.
 TEST(LcmEventLog, AnEventClaimingTheLargestLengthIsRefused) {
   const std::string file = test::tempDir("lcm-eventlog") + "/huge.lcm";

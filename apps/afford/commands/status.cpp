@@ -55,9 +55,9 @@ void printHeard(const Heard& heard, std::int64_t forgotten, int peers, const Edg
   if (forgotten > 0)
     std::printf("(and %lld more process ids heard, beyond protocol.limits.peers = %d: not listed)\n",
                 static_cast<long long>(forgotten), peers);
-  if (drops.untagged > 0)
-    std::printf("(%lld messages without a valid tag of the bus's key dropped)\n",
-                static_cast<long long>(drops.untagged));
+  if (const std::string key = drops.key.said(); !key.empty()) std::printf("(%s)\n", key.c_str());
+  if (const std::int64_t other = drops.untagged - drops.key.untagged - drops.key.other_key; other > 0)
+    std::printf("(%lld messages without a valid tag of the bus's key dropped)\n", static_cast<long long>(other));
   if (drops.replayed > 0)
     std::printf("(%lld messages said again dropped: taken already, or a recording's)\n",
                 static_cast<long long>(drops.replayed));

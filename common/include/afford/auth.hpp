@@ -64,6 +64,30 @@ class BusKey {
   std::array<std::uint8_t, kKeyBytes> key_;
 };
 
+// A message a reader does not take because its key, or its lack of one, does not fit the bus: told from the
+// message's structure (where its digest is: at its end, or kTrailerBytes before it, afford/seal.hpp), never
+// from what a decoder made of it.
+enum class KeyMismatch {
+  None,              // the key fits, or the message is none of ours (malformed, forged): dropped as such
+  TaggedWithoutKey,  // a reader without a key heard a tagged message: the bus is keyed
+  UntaggedWithKey,   // a keyed reader heard an untagged message: the bus is not keyed, or its publisher lacks the key
+  OtherKey,          // a keyed reader heard a tagged message its key does not verify: another key (or channel)
+};
+// Why `key` (nullptr: none) does not take these bytes; with a key, ask only once verify() has failed.
+KeyMismatch keyMismatchOf(const BusKey* key, const void* data, std::size_t size);
+// The one line that names the fix ("" for None).
+const char* keyHint(KeyMismatch m);
+
+// Messages dropped for a key that does not fit, by kind: what a wait that hears nobody says.
+struct KeyMismatches {
+  std::int64_t tagged = 0, untagged = 0, other_key = 0;  // TaggedWithoutKey, UntaggedWithKey, OtherKey
+  void count(KeyMismatch m);
+  std::int64_t of(KeyMismatch m) const;
+  KeyMismatches since(const KeyMismatches& before) const;
+  // The most frequent kind's hint and count ("tagged messages heard: ...; give --bus-key ... (240 dropped)"), or "".
+  std::string said() const;
+};
+
 // The key of a command line's --bus-key (`option`, "" if not given), else of
 // $AFFORD_BUS_KEY, else none (nullptr). Throws std::runtime_error naming the
 // file (and where its name came from) if it cannot be read.

@@ -103,6 +103,7 @@ bool peekRunHeader(const void* data, std::size_t size, RunHeader& out);
 // What an edge dropped, by kind (each also a log line).
 struct EdgeDrops {
   std::int64_t untagged = 0;        // no valid tag on a keyed bus
+  KeyMismatches key;                // the reader's key does not fit the bus: tagged, untagged, another key's
   std::int64_t replayed = 0;        // a keyed bus's message said again: taken already, or too old (freshness)
   std::int64_t refused = 0;         // every other message dropped: malformed, forged, another run's, ...
   std::int64_t peers_forgotten = 0; // (process, pid) pairs forgotten beyond protocol.limits.peers
@@ -238,8 +239,11 @@ class Edge {
   void transmit(const std::string& channel, const std::vector<std::uint8_t>& bytes);
   // Step 0: the message without its tag, or false (dropped) on a keyed bus without a valid one.
   bool untag(const std::string& channel, const lcm::ReceiveBuffer* rb, std::size_t& size);
-  bool inScope(const std::string& channel, const std::string& run_id, Scope scope);
+  bool inScope(const std::string& channel, const lcm::ReceiveBuffer* rb, const std::string& run_id, Scope scope);
   void drop(const std::string& channel, const std::string& why);
+  // A message heard dropped before its handler: as a key that does not fit the bus (a reader without a key
+  // hearing a tagged one, afford/auth.hpp), else for `why`.
+  void refuse(const std::string& channel, const lcm::ReceiveBuffer* rb, const std::string& why);
   void fail(const std::string& channel, const std::string& why) { inbound_.fail(channel, why); }
   // Is this STATUS newer (by beat) than the last one taken from its process and pid?
   bool newerStatus(const process_status_t& st) {
@@ -317,19 +321,19 @@ void Edge::receive(const std::string& channel, const lcm::ReceiveBuffer* rb, con
   if (!untag(channel, rb, size)) return;
   std::int64_t hash = 0;
   if (size < 8 || (__int64_t_decode_array(data, 0, 8, &hash, 1), hash != Msg::getHash()))
-    return drop(channel, std::string("wrong fingerprint: not an afford.") + wire::Bounds<Msg>::kName);
+    return refuse(channel, rb, std::string("wrong fingerprint: not an afford.") + wire::Bounds<Msg>::kName);
   std::string run_id;
   if (!peekRunId(data, size, protocol_->limits.name_bytes, run_id))
-    return drop(channel, "field run_id: no string of at most " + std::to_string(protocol_->limits.name_bytes) +
-                             " bytes where it begins");
+    return refuse(channel, rb, "field run_id: no string of at most " + std::to_string(protocol_->limits.name_bytes) +
+                                   " bytes where it begins");
   if (!run_id.empty()) {
     if (std::string why = runIdProblem(run_id, protocol_->limits.run_id_bytes); !why.empty())
-      return drop(channel, "field run_id '" + printable(run_id, 80) + "' " + why);
+      return refuse(channel, rb, "field run_id '" + printable(run_id, 80) + "' " + why);
   }
-  if (!inScope(channel, run_id, scope)) return;
+  if (!inScope(channel, rb, run_id, scope)) return;
   auto msg = std::make_shared<Msg>();
   std::string why;
-  if (!decodeChecked(data, size, context(), *msg, why)) return drop(channel, why);
+  if (!decodeChecked(data, size, context(), *msg, why)) return refuse(channel, rb, why);
   if constexpr (std::is_same_v<Msg, process_status_t>) {
     if (!newerStatus(*msg)) return log_->trace("{}: an old STATUS of {} (pid {}) again", channel, msg->process, msg->pid);
   }

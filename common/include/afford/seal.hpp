@@ -21,6 +21,12 @@ std::uint64_t fnv1a64(std::uint64_t h, const void* data, std::size_t n);
 // True if the last 8 bytes of the buffer are the digest of the bytes before them.
 bool sealIntact(const void* data, std::size_t n);
 
+// Where a buffer's digest is, in one pass over it: at its end (a message as sealed), `trailer` bytes before its
+// end (a sealed message with that many bytes appended: a keyed bus's stamp and tag, afford/auth.hpp), or
+// neither (malformed, forged, not a message of ours).
+enum class SealAt { End, BeforeTrailer, Neither };
+SealAt sealAt(const void* data, std::size_t n, std::size_t trailer);
+
 // Write the digest of buf[0, n-8) into buf[n-8, n); returns it.
 std::int64_t sealBuffer(std::uint8_t* buf, std::size_t n);
 
