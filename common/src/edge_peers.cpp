@@ -122,7 +122,8 @@ std::vector<std::string> Copies::named(Clock::time_point now, Clock::duration li
 }
 
 std::string Copies::describe(const Instance& copy) const {
-  return copy.text() + (copy.before(self_) ? ", started earlier (it goes on serving)"
+  return copy.text() + (copy.before(self_) ? ", started earlier (this one refuses once it is named by that one, which "
+                                             "a recording's STATUS never does)"
                                            : ", started later (it refuses to serve)");
 }
 

@@ -28,8 +28,10 @@ bool RunnerBeat::heard(const process_status_t& m) {
       if (who.before(runners_.self()))  // until it answers (it names this one), or is found not to be alive
         quiet_from_ = std::max(quiet_from_, now);
       log_->warn("another runner on this bus: {} (run {}): {}", who.text(),
-                 m.run_id.empty() ? "-" : printable(m.run_id, 200), who.before(runners_.self()) ?
-                 "started before this one" : "started after this one, which goes on (the later one is refused)");
+                 m.run_id.empty() ? "-" : printable(m.run_id, 200),
+                 who.before(runners_.self())
+                     ? "started before this one, which is refused once that one answers it (a recording's beat does not)"
+                     : "started after this one, which goes on (the later one is refused)");
       break;
     case Copies::Heard::Refuse:
       refusal_ = "another runner (" + who.text() + ", run " + (m.run_id.empty() ? "-" : printable(m.run_id, 200)) +

@@ -98,7 +98,7 @@ class Copies {
   // Why this one refuses to serve ("" while it serves).
   const std::string& refusal() const { return refusal_; }
   const Instance& self() const { return self_; }
-  // "pid P on host H, started earlier (it goes on serving)" or "... later (it refuses to serve)".
+  // "pid P on host H, started earlier (...)" or "... later (it refuses to serve)".
   std::string describe(const Instance& copy) const;
 
  private:
