@@ -4,7 +4,6 @@
 #include <unistd.h>
 
 #include <csignal>
-#include <mutex>
 
 #include "afford/process_main.hpp"
 #include <nlohmann/json.hpp>
@@ -22,8 +21,6 @@ namespace {
 volatile std::sig_atomic_t g_signal = 0;  // the first SIGINT or SIGTERM received (0: none)
 void (*g_stop_handler)(int) = nullptr;     // common's handler: it sets stopRequested()
 std::string g_quit_message;                // said on a second signal (set before the handlers, then never changed)
-std::mutex g_reason_mutex;
-std::string g_reason;                      // stopExperiment's reason ("": the program did not stop it)
 
 void onInterrupt(int sig) {
   if (g_signal != 0) {  // a second one: quit now; every file written so far is whole (written aside, then renamed)
@@ -63,33 +60,21 @@ InterruptScope::~InterruptScope() {
   sigaction(SIGINT, &int_, nullptr);
   sigaction(SIGTERM, &term_, nullptr);
   g_signal = 0;
-  {
-    std::lock_guard<std::mutex> lock(g_reason_mutex);
-    g_reason.clear();
-  }
-  clearStopRequest();
+  clearStopRequest();  // and its reason
 }
 
 int InterruptScope::signal() const { return g_signal; }
 
-std::string InterruptScope::stoppedFor() const {
-  std::lock_guard<std::mutex> lock(g_reason_mutex);
-  return g_reason;
-}
+std::string InterruptScope::stoppedFor() const { return stopReason(); }
 
-void stopExperiment(const std::string& why) {
-  {
-    std::lock_guard<std::mutex> lock(g_reason_mutex);
-    if (g_reason.empty()) g_reason = why.empty() ? "stopped" : why;
-  }
-  requestStop();
-}
+// The reason is kept beside the stop itself (afford/process_main.hpp), where a lower layer may give one too: a
+// runner that finds another driving its bus (experiment/run/runners.hpp).
+void stopExperiment(const std::string& why) { requestStop(why.empty() ? "stopped" : why); }
 
 // A stop the program asked for counts as a SIGINT (the exit status 130).
 int stopSignal() {
   if (g_signal) return g_signal;
-  std::lock_guard<std::mutex> lock(g_reason_mutex);
-  return g_reason.empty() ? 0 : SIGINT;
+  return stopReason().empty() ? 0 : SIGINT;
 }
 
 namespace {
@@ -101,10 +86,7 @@ bool elsewhere(const PhaseRuns& phase, std::size_t i) { return !phase.elsewhere.
 
 std::string stoppedShort(const PhaseRuns& phase, const SlotPool* pool) {
   if (g_signal) return signalName(g_signal);
-  {
-    std::lock_guard<std::mutex> lock(g_reason_mutex);
-    if (!g_reason.empty()) return g_reason;
-  }
+  if (std::string why = stopReason(); !why.empty()) return why;
   if (pool)
     if (std::string why = pool->halted(); !why.empty()) return why;
   for (std::size_t i = 0; i < phase.finished.size(); ++i)

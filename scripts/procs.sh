@@ -5,13 +5,20 @@
 #                                               start processes (default: all six) on RUN's bus; with
 #                                               --process, CMD runs in place of afford-NAME, its standard
 #                                               arguments (--lcm-url URL ...) appended, in this start and
-#                                               every later one (--process NAME= goes back to the shipped one)
+#                                               every later one (--process NAME= goes back to the shipped one).
+#                                               A process running already is not started again (exit 1); a
+#                                               program that is not there is refused before anything; each is
+#                                               said started once its first STATUS is heard, or said to have
+#                                               exited, with its last lines (exit 1)
 #   scripts/procs.sh stop    RUN [PROCESS...]   SIGINT, then SIGTERM after $AFFORD_GRACE s (default 5), then
 #                                               SIGKILL
-#   scripts/procs.sh restart RUN PROCESS...     stop, then start again with the same command
+#   scripts/procs.sh restart RUN [--process NAME='CMD ARGS']... PROCESS...
+#                                               stop, then start again (with the same command, or CMD)
 #   scripts/procs.sh kill    RUN PROCESS...     kill -9 (to try a live restart)
-#   scripts/procs.sh status  RUN [OPTIONS]      pid and liveness, then each process's state,
-#                                               run id and last step handled (its STATUS)
+#   scripts/procs.sh status  RUN [OPTIONS]      pid and liveness (yes, no, paused), then what the bus says:
+#                                               each process's state, run id and last step handled (its
+#                                               STATUS), the runner driving a run and what it waits for, and
+#                                               each live process not heard (silent)
 #   scripts/procs.sh run     RUN EXPERIMENT [afford experiment options...]
 #                                               drive runs on the group (run ids RUN-<exp>-<sys>-s<seed>;
 #                                               RUN-2-..., RUN-3-... once those exist; or --run-prefix P);
@@ -31,6 +38,8 @@
 # (appended), its pid to LOGS/RUN/<process>.pid, its command line to
 # LOGS/RUN/<process>.cmd (and a --process command to LOGS/RUN/<process>.process);
 # the bus to LOGS/RUN/lcm-url. The bus is $AFFORD_URL (default below) at `start`.
+# start, stop, restart and kill of a group take turns (a lock, LOGS/RUN/procs.lock): two starts of one process
+# at once cannot both start it. A start waits at most $AFFORD_START_SECONDS s (default 30) for the first STATUS.
 # A stopped group's folder stays (its key, its processes' output): remove it
 # yourself; `afford clean` leaves it alone.
 #
@@ -61,6 +70,7 @@ fi
 [[ $logs == /* ]] || logs=$PWD/$logs
 netns=${AFFORD_NETNS:-afford}
 grace=${AFFORD_GRACE:-5}
+start_seconds=${AFFORD_START_SECONDS:-30}
 mapfile -t all < <("$bin/afford" processes)  # the registry of processes
 
 usage() { sed -n '2,/^set -euo/p' "$0" | sed '$d' | sed 's/^# \{0,1\}//'; exit 2; }
@@ -104,11 +114,88 @@ running() {
   [[ ${f[0]} != Z && ${f[19]} == "$(cat "$dir/$2.started" 2>/dev/null)" ]]
 }
 alive() { [[ -f $dir/$1.pid ]] && running "$(cat "$dir/$1.pid")" "$1"; }
+# paused PID: stopped by SIGSTOP (or Ctrl-Z): alive, but it handles nothing until SIGCONT.
+paused() { local f; f=($(stat_of "$1")) && [[ ${f[0]} == [Tt] ]]; }
 
-start_one() {
+# The group's lock, held by this script from here to its end (the kernel frees it however the script ends):
+# start, stop, restart and kill take turns, so two starts of a process at once cannot both pass its checks.
+# Not inherited by what the script starts ({lock}>&- on each command line).
+lock_group() {
+  exec {lock}>>"$dir/procs.lock"
+  if ! flock -n "$lock"; then
+    echo "procs.sh: another procs.sh is starting or stopping processes of '$run': waiting for it" >&2
+    flock "$lock"
+  fi
+}
+
+# The --process options of start and restart, into swaps[NAME] (the command, "" for the shipped one), each
+# checked before anything is done: its program must be there and executable.
+declare -A swaps
+args=()
+parse_swaps() {
+  local swap name
+  while [[ $# -gt 0 ]]; do
+    case $1 in
+      --process | --process=*)
+        if [[ $1 == --process ]]; then
+          [[ $# -ge 2 ]] || die "--process needs NAME='CMD ARGS'"
+          swap=$2
+          shift
+        else
+          swap=${1#--process=}
+        fi
+        [[ $swap == *=* ]] || die "--process '$swap': give NAME='CMD ARGS'"
+        name=${swap%%=*}
+        check_process "$name"
+        swaps[$name]=$(printf '%s\n' "${swap#*=}" | sed '/^[[:space:]]*$/d')
+        [[ -z ${swaps[$name]} ]] || check_program "--process $name='${swaps[$name]}'" "${swaps[$name]}"
+        ;;
+      *) args+=("$1") ;;
+    esac
+    shift
+  done
+}
+# check_program WHAT COMMAND: the program COMMAND runs (its first word, as the shell splits it) is there and
+# executable, from this folder and $PATH as the process will be started.
+check_program() {
+  local first
+  first=$(xargs -n 1 printf '%s\n' <<<"$2" 2>/dev/null | head -n 1) || true
+  [[ -n $first ]] || die "$1: no program named"
+  if [[ $first == */* ]]; then
+    [[ -e $first ]] || die "$1: $first: not found (from $PWD)"
+    [[ -f $first && -x $first ]] || die "$1: $first: not an executable file"
+  else
+    command -v -- "$first" >/dev/null 2>&1 || die "$1: $first: not found in \$PATH"
+  fi
+}
+# The program that starts PROCESS: the --process command given now, else the one it has, else the shipped
+# afford-PROCESS.
+check_start() {
+  if [[ -v swaps[$1] ]]; then
+    [[ -z ${swaps[$1]} ]] || return 0  # checked as given
+    [[ -x $bin/afford-$1 ]] || die "$bin/afford-$1: not found or not executable (is the build done?)"
+  elif [[ -s $dir/$1.process ]]; then
+    check_program "$1's --process command ($dir/$1.process)" "$(cat "$dir/$1.process")"
+  else
+    [[ -x $bin/afford-$1 ]] || die "$bin/afford-$1: not found or not executable (is the build done?)"
+  fi
+}
+# A process's --process command as given (swaps), for this start and the later ones.
+apply_swap() {
+  [[ -v swaps[$1] ]] || return 0
+  if [[ -n ${swaps[$1]} ]]; then printf '%s\n' "${swaps[$1]}" >"$dir/$1.process"; else rm -f "$dir/$1.process"; fi
+}
+
+# The lines of PROCESS's output since its last start.
+last_lines() {
+  awk '/^=== .* start: / {n = 0; delete l; next} {l[++n] = $0} END {for (i = (n > 8 ? n - 7 : 1); i <= n; i++) print l[i]}' \
+    "$dir/$1.log"
+}
+
+# launch PROCESS URL: start it in the background (`launched` gets PROCESS:PID). Not said started yet: heard()
+# says so once its first STATUS is heard.
+launch() {
   local p=$1 u=$2
-  check_process "$p"
-  alive "$p" && { echo "$p is running already (pid $(cat "$dir/$p.pid"))"; return 0; }
   local line=("$bin/afford-$p" --lcm-url "$u")
   # A swapped process: the shell runs the command with the standard arguments as "$@", and becomes it (exec).
   [[ -s $dir/$p.process ]] && line=(/bin/sh -c "exec $(cat "$dir/$p.process") \"\$@\"" "afford-$p" --lcm-url "$u")
@@ -121,15 +208,72 @@ start_one() {
   # A simple command in the background, so that $! is the process itself
   # (`ip netns exec` execs it), and signals reach it.
   if [[ $netns == none ]]; then
-    "${line[@]}" >>"$dir/$p.log" 2>&1 </dev/null &
+    "${line[@]}" >>"$dir/$p.log" 2>&1 </dev/null {lock}>&- &
   else
-    ip netns exec "$netns" "${line[@]}" >>"$dir/$p.log" 2>&1 </dev/null &
+    ip netns exec "$netns" "${line[@]}" >>"$dir/$p.log" 2>&1 </dev/null {lock}>&- &
   fi
   local pid=$! f
   # The pid and its start time (`running`): the same through every exec from here to the process itself.
   f=($(stat_of "$pid")) && echo "${f[19]}" >"$dir/$p.started"
   echo "$pid" >"$dir/$p.pid"
-  echo "$p started (pid $pid, output in $dir/$p.log)"
+  launched+=("$p:$pid")
+}
+
+# heard URL: each launched process said started once its first STATUS is heard on the bus, or said to have
+# exited (with its last lines) if it exits first; at most $start_seconds each. Returns 1 if one did not start.
+heard() {
+  local u=$1 e p pid rc=0 code
+  local -A waiter
+  local listen=("$bin/afford" status --lcm-url "$u" --wait-for "" --seconds "$start_seconds")
+  [[ $netns == none ]] || listen=(ip netns exec "$netns" "${listen[@]}")
+  for e in "${launched[@]}"; do
+    listen[${#listen[@]} - 3]=$e  # (a simple command in the background: $! is the listener itself)
+    "${listen[@]}" >/dev/null 2>&1 {lock}>&- &
+    waiter[$e]=$!
+  done
+  local pending=("${launched[@]}") next
+  while [[ ${#pending[@]} -gt 0 ]]; do
+    next=()
+    for e in "${pending[@]}"; do
+      p=${e%%:*} pid=${e#*:}
+      if ! running "$pid" "$p"; then
+        kill "${waiter[$e]}" 2>/dev/null || true
+        wait "${waiter[$e]}" 2>/dev/null || true
+        code=0
+        wait "$pid" 2>/dev/null || code=$?
+        echo "procs.sh: $p (pid $pid) exited at once (exit status $code); the last lines of its output" \
+          "($dir/$p.log):" >&2
+        last_lines "$p" | sed 's/^/  /' >&2
+        rc=1
+      elif ! kill -0 "${waiter[$e]}" 2>/dev/null; then
+        if wait "${waiter[$e]}"; then
+          echo "$p started (pid $pid, heard on the bus; output in $dir/$p.log)"
+        else
+          echo "procs.sh: $p (pid $pid) runs, but was not heard on the bus within $start_seconds s (its output:" \
+            "$dir/$p.log)" >&2
+          rc=1
+        fi
+      else
+        next+=("$e")
+      fi
+    done
+    pending=("${next[@]}")
+    [[ ${#pending[@]} -eq 0 ]] || sleep 0.05
+  done
+  launched=()
+  return $rc
+}
+
+# start_one PROCESS URL: launched, unless it runs already (then refused: returns 1).
+start_one() {
+  local p=$1 u=$2
+  if alive "$p"; then
+    echo "procs.sh: $p is running already (pid $(cat "$dir/$p.pid")): not started again" \
+      "(\`scripts/procs.sh restart $run $p\` starts it anew)" >&2
+    return 1
+  fi
+  apply_swap "$p"
+  launch "$p" "$u"
 }
 
 # warn_port_shared URL: a warning for each other group of LOGS with a process running whose bus is on URL's
@@ -174,6 +318,7 @@ stop_one() {
   local pid
   pid=$(cat "$dir/$p.pid")
   kill -INT "$pid"
+  paused "$pid" && kill -CONT "$pid"  # a paused process takes its SIGINT once it goes on
   for _ in $(seq $((grace * 10))); do running "$pid" "$p" || break; sleep 0.1; done
   if running "$pid" "$p"; then  # (a program started in the background may ignore SIGINT: SIGTERM then)
     kill -TERM "$pid"
@@ -198,36 +343,26 @@ case $cmd in
     fi
     u=$(url)
     warn_port_shared "$u"
-    procs=()
-    while [[ $# -gt 0 ]]; do
-      case $1 in
-        --process | --process=*)
-          if [[ $1 == --process ]]; then
-            [[ $# -ge 2 ]] || die "--process needs NAME='CMD ARGS'"
-            swap=$2
-            shift
-          else
-            swap=${1#--process=}
-          fi
-          [[ $swap == *=* ]] || die "--process '$swap': give NAME='CMD ARGS'"
-          check_process "${swap%%=*}"
-          printf '%s\n' "${swap#*=}" | sed '/^[[:space:]]*$/d' >"$dir/${swap%%=*}.process"
-          ;;
-        *) procs+=("$1") ;;
-      esac
-      shift
-    done
+    parse_swaps "$@"
+    procs=("${args[@]}")
     [[ ${#procs[@]} -gt 0 ]] || procs=("${all[@]}")
-    for p in "${procs[@]}"; do start_one "$p" "$u"; done
+    for p in "${procs[@]}"; do check_process "$p"; check_start "$p"; done  # every program is there, first
+    lock_group
+    launched=()
+    rc=0
+    for p in "${procs[@]}"; do start_one "$p" "$u" || rc=1; done
+    # A --process for a process not started here (it runs already) is not kept: its command stays what runs.
+    heard "$u" || rc=1
     echo "group folder: $dir (each process's output, pid and command; runs' logs in $logs)"
     if [[ $netns == none ]]; then echo "bus: $u"; else echo "bus: $u (network namespace '$netns')"; fi
     [[ -n ${AFFORD_BUS_KEY:-} ]] && echo "key: $AFFORD_BUS_KEY (every process of the group needs it: --bus-key)"
-    true
+    exit $rc
     ;;
   stop)
     url >/dev/null
     procs=("$@")
     [[ ${#procs[@]} -gt 0 ]] || procs=("${all[@]}")
+    lock_group
     for p in "${procs[@]}"; do stop_one "$p"; done
     if [[ $netns != none ]] && ip netns list | grep -qw "^$netns" && ! ip netns pids "$netns" | grep -q .; then
       echo "no process runs in the network namespace '$netns' now: \`ip netns delete $netns\` removes it" \
@@ -235,14 +370,22 @@ case $cmd in
     fi
     ;;
   restart)
-    [[ $# -ge 1 ]] || usage
     u=$(url)
+    parse_swaps "$@"
+    [[ ${#args[@]} -ge 1 ]] || usage
+    for p in "${args[@]}"; do check_process "$p"; check_start "$p"; done  # before any is stopped
     ensure_ns
-    for p in "$@"; do stop_one "$p"; start_one "$p" "$u"; done
+    lock_group
+    launched=()
+    rc=0
+    for p in "${args[@]}"; do stop_one "$p"; start_one "$p" "$u" || rc=1; done
+    heard "$u" || rc=1
+    exit $rc
     ;;
   kill)
     [[ $# -ge 1 ]] || usage
     url >/dev/null
+    lock_group
     for p in "$@"; do
       check_process "$p"
       alive "$p" || { echo "$p is not running"; continue; }
@@ -255,14 +398,25 @@ case $cmd in
   status)
     u=$(url)
     printf '%-12s %8s  %s\n' process pid alive
+    expect=()  # the live ones: each must be heard on the bus, else it is listed as silent
     for p in "${all[@]}"; do
       [[ -f $dir/$p.pid ]] || continue
-      if alive "$p"; then a=yes; else a=no; fi
-      printf '%-12s %8s  %s\n' "$p" "$(cat "$dir/$p.pid")" "$a"
+      pid=$(cat "$dir/$p.pid")
+      if ! alive "$p"; then
+        a=no
+      elif paused "$pid"; then
+        a="paused (SIGSTOP: it handles nothing until \`kill -CONT $pid\`)"
+        expect+=("$p:$pid")
+      else
+        a=yes
+        expect+=("$p:$pid")
+      fi
+      printf '%-12s %8s  %s\n' "$p" "$pid" "$a"
       [[ -s $dir/$p.process ]] && printf '%-12s %8s  runs: %s\n' "" "" "$(cat "$dir/$p.process")"
     done
     echo
-    in_ns "$bin/afford" status --lcm-url "$u" "$@"  # e.g. --wait-for eye --state running
+    # e.g. --wait-for eye --state running
+    in_ns "$bin/afford" status --lcm-url "$u" --expect "$(IFS=,; echo "${expect[*]}")" "$@"
     ;;
   run)
     [[ $# -ge 1 ]] || usage

@@ -297,6 +297,10 @@ inline process_status_t sample(const process_status_t*) {
   m.takes = {ch::decision.name, ch::effect.name};
   m.takes_from = {40, 12};
   m.n_takes = static_cast<int32_t>(m.takes.size());
+  m.host = "lab-1";
+  m.started = 1700000000000000;
+  m.copies = {"4343@lab-1/1700000000000001"};
+  m.n_copies = static_cast<int32_t>(m.copies.size());
   m.digest = 0x1234;
   return m;
 }

@@ -9,6 +9,7 @@
 #include <iterator>
 
 #include "afford/actions.hpp"
+#include "afford/edge_peers.hpp"
 #include "afford/protocol.hpp"
 
 namespace afford {
@@ -114,7 +115,10 @@ wire::process_status_t_bounds boundsOf(const BoundsContext& c, const process_sta
           /*n_channels*/ channels(),
           /*channels*/ nameBytes(c),
           /*n_takes*/ channels(),
-          /*takes*/ nameBytes(c)};
+          /*takes*/ nameBytes(c),
+          /*host*/ nameBytes(c),
+          /*n_copies*/ Max(kCopiesNamed),
+          /*copies*/ nameBytes(c)};
 }
 
 wire::resend_t_bounds boundsOf(const BoundsContext& c, const resend_t*) {

@@ -312,7 +312,8 @@ std::string checkMessage(const extrinsic_result_t& m, const BoundsContext& c) {
 std::string checkMessage(const process_status_t& m, const BoundsContext&) {
   if (auto why = first({checkInt("step", m.step, -1, INT64_MAX), m.process.empty() ? "field process is empty" : "",
                         checkInt("pid", m.pid, 0, INT32_MAX),
-                        checkInt("state", m.state, process_status_t::WAITING, process_status_t::FAILED)});
+                        checkInt("state", m.state, process_status_t::WAITING, process_status_t::FAILED),
+                        checkInt("started", m.started, 0, INT64_MAX)});
       !why.empty())
     return why;
   for (int i = 0; i < m.n_channels; ++i) {

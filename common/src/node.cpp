@@ -12,6 +12,8 @@
 #include <csignal>
 
 #include "afford/bus.hpp"
+#include "afford/process_main.hpp"
+#include "afford/processes.hpp"
 #include "afford/protocol.hpp"
 #include "afford/logging.hpp"
 
@@ -22,7 +24,11 @@ using std::chrono::milliseconds;
 
 NodeBase::NodeBase(lcm::LCM& lcm, std::string process, std::shared_ptr<spdlog::logger> log,
                    const ProtocolConfig& protocol)
-    : lcm_(lcm), log_(std::move(log)), process_(std::move(process)), edge_(lcm, log_, process_, protocol) {
+    : lcm_(lcm),
+      log_(std::move(log)),
+      process_(std::move(process)),
+      edge_(lcm, log_, process_, protocol),
+      copies_(Instance::self(process_)) {
   edge_.subscribe(ch::runConfig, [this](const run_config_t& m, const Envelope& e) { return onRunConfig(m, e); }, Scope::Any,
       Order::None);
   edge_.subscribe(ch::runControl, [this](const run_control_t& m, const Envelope& e) { return onRunControl(m, e); },
@@ -81,6 +87,9 @@ Turn NodeBase::onRunConfig(const run_config_t& msg, const Envelope& envelope) {
     st.detail = detail_.substr(0, static_cast<std::size_t>(protocol().limits.text_bytes));
     st.n_channels = 0;  // nothing published in that run
     st.n_takes = 0;
+    st.host = copies_.self().host;
+    st.started = copies_.self().started;
+    st.n_copies = 0;
     edge_.send(ch::status, st);
     return Turn::take();
   }
@@ -117,15 +126,40 @@ void NodeBase::takeStop() {
 }
 
 Turn NodeBase::onStatus(const process_status_t& st) {
-  if (st.process == process_ && st.pid == getpid()) return Turn::take();  // our own
+  if (st.process == process_) {  // our own, or a copy of this process's
+    if (st.pid != getpid() || st.host != copies_.self().host) onCopy(st);
+    return Turn::take();
+  }
   edge_.claim(st);
   onPeerStatus(st);
-  // A process that has just (re)joined our run catches up from what we say we published.
+  // A process that has just (re)joined our run catches up from what we say we published (the runner's beat
+  // names the run too: it is not a process that joins it).
   const bool joined = !run_id_.empty() && st.run_id == run_id_ && st.config_digest == run_msg_.digest && st.step == -1 &&
-                      (st.state == process_status_t::READY || st.state == process_status_t::RUNNING);
+                      (st.state == process_status_t::READY || st.state == process_status_t::RUNNING) &&
+                      isProcessName(st.process);
   if (joined && edge_.publishedAny() && Clock::now() - announced_at_ >= milliseconds(protocol().idle_announce_ms))
     publishStatus();
   return Turn::take();
+}
+
+void NodeBase::onCopy(const process_status_t& st) {
+  if (!copies_.refusal().empty()) return;  // refused already: leaving
+  switch (copies_.heard(st, Clock::now(), protocol().limits.peers, copies_forgotten_)) {
+    case Copies::Heard::Nothing:
+      return;
+    case Copies::Heard::New:
+      // Said once for each copy, a few in all (the table of copies is bounded by protocol.limits.peers).
+      if (++copies_said_ <= 5)
+        log_->warn("another copy of {} on this bus: {}; this one is {}", process_, copies_.describe(Instance::of(st)),
+                   copies_.self().text());
+      publishStatus();  // named at once: the copy learns it is heard, and the later of the two refuses
+      return;
+    case Copies::Heard::Refuse:
+      log_->error("{}", copies_.refusal());
+      publishStatus();  // says FAILED, in no run, naming the earlier copy: it stops naming this one
+      requestStop();
+      return;
+  }
 }
 
 void NodeBase::leaveRun() {
@@ -168,28 +202,40 @@ void NodeBase::failRun(const std::string& why) {
 }
 
 void NodeBase::publishStatus() {
+  const auto now = Clock::now();
+  const std::size_t text = static_cast<std::size_t>(protocol().limits.text_bytes);
+  // A copy that refuses to serve says so, in no run, and claims no counts (its peers would take them as final).
+  const bool refused = !copies_.refusal().empty();
   process_status_t st;
-  st.run_id = run_id_;
-  st.step = last_step_;
+  st.run_id = refused ? "" : run_id_;
+  st.step = refused ? -1 : last_step_;
   st.process = process_;
   st.pid = static_cast<int32_t>(getpid());
   st.beat = beat_++;
-  st.state = state_;
-  st.config_digest = run_id_.empty() ? 0 : run_msg_.digest;
-  st.detail = detail_.substr(0, static_cast<std::size_t>(protocol().limits.text_bytes));
-  if (state_ == process_status_t::RUNNING) st.stuck = edge_.stuck().substr(0, static_cast<std::size_t>(protocol().limits.text_bytes));
-  st.counts_run = edge_.historyRun();
-  st.counts_config = edge_.historyConfig();
-  for (const EdgeOutbound::Count& c : edge_.counts()) {
-    st.channels.push_back(c.channel);
-    st.counts.push_back(c.published);
-    st.held_from.push_back(c.held_from);
-  }
+  st.state = refused ? process_status_t::FAILED : state_;
+  st.config_digest = st.run_id.empty() ? 0 : run_msg_.digest;
+  st.detail = (refused ? copies_.refusal() : detail_).substr(0, text);
+  // In a run of a phase it takes no part in (the planner in an intrinsic run): what is true of it.
+  const std::vector<std::string> part = runProcesses(config_.phase, /*recorded=*/true);
+  if (st.detail.empty() && !st.run_id.empty() && std::find(part.begin(), part.end(), process_) == part.end())
+    st.detail = "idle in this run: its " + std::string(nameOf(kPhaseNames, config_.phase)) + " phase needs no " + process_;
+  if (state_ == process_status_t::RUNNING && !refused) st.stuck = edge_.stuck().substr(0, text);
+  st.counts_run = refused ? "" : edge_.historyRun();
+  st.counts_config = refused ? 0 : edge_.historyConfig();
+  if (!refused)
+    for (const EdgeOutbound::Count& c : edge_.counts()) {
+      st.channels.push_back(c.channel);
+      st.counts.push_back(c.published);
+      st.held_from.push_back(c.held_from);
+    }
   st.n_channels = static_cast<int32_t>(st.channels.size());
   st.n_takes = 0;
-  if (!run_id_.empty()) restartPositions(st);
+  if (!st.run_id.empty()) restartPositions(st);
+  st.host = copies_.self().host;
+  st.started = copies_.self().started;
+  st.copies = copies_.named(now, 3 * milliseconds(protocol().heartbeat_ms));
+  st.n_copies = static_cast<int32_t>(st.copies.size());
   edge_.send(ch::status, st);
-  const auto now = Clock::now();
   next_beat_ = now + milliseconds(protocol().heartbeat_ms);
   announced_at_ = now;
 }

@@ -8,6 +8,7 @@
 #include <cstdio>
 #include <cstdlib>
 #include <filesystem>
+#include <mutex>
 
 #include "afford/auth.hpp"
 #include "afford/bus.hpp"
@@ -18,11 +19,28 @@ namespace afford {
 namespace {
 volatile std::sig_atomic_t g_stop = 0;
 void onSignal(int) { g_stop = 1; }
+std::mutex g_reason_mutex;
+std::string g_reason;  // why the program asked to stop ("": it did not say)
 }  // namespace
 
 bool stopRequested() { return g_stop != 0; }
-void clearStopRequest() { g_stop = 0; }
+void clearStopRequest() {
+  g_stop = 0;
+  std::lock_guard<std::mutex> lock(g_reason_mutex);
+  g_reason.clear();
+}
 void requestStop() { g_stop = 1; }
+void requestStop(const std::string& why) {
+  {
+    std::lock_guard<std::mutex> lock(g_reason_mutex);
+    if (g_reason.empty()) g_reason = why;
+  }
+  g_stop = 1;
+}
+std::string stopReason() {
+  std::lock_guard<std::mutex> lock(g_reason_mutex);
+  return g_reason;
+}
 void installStopHandlers() {
   struct sigaction sa {};
   sa.sa_handler = onSignal;
@@ -142,6 +160,13 @@ int processMain(int argc, char** argv, const ProcessSpec& spec, const std::funct
       log->error("{}", e.what());
     }
     std::fflush(stderr);  // the log lines of the burst, in one write
+  }
+  if (!node->refusal().empty()) {
+    // Another copy serves the bus: this one leaves as it came, writing nothing (no snapshot of a run it may have
+    // joined: the copy that serves it keeps its own).
+    log->info("stopped without serving (another copy of {} serves this bus)", spec.name);
+    std::fflush(stderr);
+    return 1;
   }
   node->leaveRun();
   const EdgeDrops drops = node->drops();

@@ -2,6 +2,8 @@
 
 #include "afford/names.hpp"
 
+#include <spdlog/fmt/fmt.h>
+
 #include <algorithm>
 #include <filesystem>
 
@@ -69,6 +71,7 @@ RunDriver::RunDriver(lcm::LCM& lcm, std::shared_ptr<spdlog::logger> log, const P
     : lcm_(lcm),
       log_(std::move(log)),
       edge_(lcm, log_, "runner", protocol),
+      runners_(edge_, log_, protocol),
       silence_(log_, milliseconds(6 * protocol.heartbeat_ms)) {
   edge_.warnOtherRuns(false);  // late messages of the slot's previous run are normal
   edge_.subscribe(ch::status, [this](const process_status_t& m) { return onStatus(m); }, Scope::Any, Order::None);
@@ -139,7 +142,9 @@ bool RunDriver::ourRequest(const Seen& s) const {
 }
 
 Turn RunDriver::onStatus(const process_status_t& m) {
+  if (runners_.heard(m)) return Turn::take();  // another runner's beat
   if (!isProcessName(m.process)) return Turn::take();  // not one of ours (a tool, or a forgery)
+  if (runners_.refusingCopy(m)) return Turn::take();  // a copy that refuses to serve: not the run's
   Seen& s = seen_[m.process];
   std::int64_t taken = 0;
   for (int i = 0; i < m.n_takes; ++i) taken += m.takes_from[i];
@@ -182,7 +187,7 @@ Turn RunDriver::onStatus(const process_status_t& m) {
                  spec_->run_id, printable(m.detail), spec_->log_root);
     logger_done_ = true;
   }
-  if (ours(m.process)) nudge(m.process, s);
+  if (ours(m.process) && !runners_.anotherServes(m, spec_->run_id, config_msg_.digest)) nudge(m.process, s);
   return Turn::take();
 }
 
@@ -196,6 +201,7 @@ void RunDriver::nudge(const std::string& process, const Seen& s) {
   auto& last = nudged_[process];
   if (now - last < milliseconds(config_.protocol.retry_ms)) return;  // told a moment ago: the answer is on its way
   const auto leave = [&] {
+    if (!runners_.settled()) return;  // another runner may drive that run: not before it could have been heard
     if (other_request) {
       ++foreign_[process];
       if (warned_.insert({process + " another", s.pid}).second)
@@ -210,7 +216,7 @@ void RunDriver::nudge(const std::string& process, const Seen& s) {
       // Still in another run (or request) a while after this one began (its WAITING is not simply on its way):
       // its STOP was lost, or it serves a run nobody runs.
       if (!s.run_id.empty() && (s.run_id != run || other_request) &&
-          now - phase_at_ >= milliseconds(config_.protocol.retry_ms)) {
+          now - phase_at_ >= milliseconds(config_.protocol.retry_ms) && runners_.settled()) {
         if (warned_.insert({process + " in " + s.run_id, s.pid}).second)
           log_->warn("process '{}' is still in run '{}': told to stop again", process, s.run_id);
         leave();
@@ -389,7 +395,21 @@ RunOutcome RunDriver::run(const RunSpec& spec, const std::function<void()>& pump
       d->silence_.reset();
     }
   } reset{this};
-  const Waiting w{pump, health};
+  // While it drives, the runner beats; another runner driving the bus, or two copies of a process in the run,
+  // end the run as a process gone would (the first stops the experiment: its runs are for another time).
+  const std::function<void()> beating = [&] {
+    pump();
+    if (runners_.due(static_cast<int>(phase_))) runners_.beat(static_cast<int>(phase_), doing());
+  };
+  const std::function<std::string()> healthy = [&] {
+    if (const std::string& r = runners_.refusal(); !r.empty()) {
+      requestStop("another runner on this bus");  // (the experiment is "interrupted by" it; the run says who)
+      return r;
+    }
+    const std::string mixed = runners_.mixed(spec.run_id, config_msg_.digest, spec.processes);
+    return mixed.empty() ? health() : mixed;
+  };
+  const Waiting w{beating, healthy};
   for (auto stage : {&RunDriver::waitFree, &RunDriver::configure, &RunDriver::runSteps}) {
     const Ending e = (this->*stage)(w);
     if (e.interrupted) return interrupted(w);
@@ -401,6 +421,48 @@ RunOutcome RunDriver::run(const RunSpec& spec, const std::function<void()>& pump
   out.ok = true;
   out.wall_seconds = std::chrono::duration<double>(Clock::now() - started_at_).count();
   return out;
+}
+
+// What the runner's beat says: its run, the last step reported, what it waits for, who is silent.
+RunnerBeat::Doing RunDriver::doing() const {
+  RunnerBeat::Doing d;
+  if (!spec_) return d;
+  d.run_id = spec_->run_id;
+  d.request = config_msg_.digest;
+  const auto now = Clock::now();
+  std::string silent;  // the processes of the run not heard for two heartbeats
+  for (const auto& p : spec_->processes) {
+    const auto it = seen_.find(p);
+    if (it != seen_.end() && ourRequest(it->second)) d.step = std::max(d.step, it->second.step);
+    const double quiet = it == seen_.end() ? -1 : std::chrono::duration<double>(now - it->second.at).count();
+    if (quiet * 1000 > 2 * config_.protocol.heartbeat_ms)
+      silent += fmt::format("{}{} (not heard for {:.1f} s)", silent.empty() ? "" : ", ", p, quiet);
+  }
+  switch (phase_) {
+    case Phase::Freeing:
+      d.detail = "waits for these to be free: " + missing([](const Seen& s) {
+                   return s.state == process_status_t::WAITING && s.run_id.empty();
+                 });
+      if (!runners_.settled()) d.detail += " (before it tells one to leave another run, it listens for its runner)";
+      break;
+    case Phase::Configuring:
+      d.detail = "configures the run; waits for READY from: " +
+                 missing([&](const Seen& s) { return ourRequest(s) && s.state == process_status_t::READY; });
+      break;
+    case Phase::Running:
+      d.detail = !logged()           ? "runs"
+                 : !loggerJoined()     ? "runs; waits for the logger to take the run"
+                 : have_result_ && !loggerHolds() ? "the result is in; waits for the logger's log to hold all that was published"
+                                                  : "runs";
+      break;
+    case Phase::Stopping:
+      d.detail = logged() && !logger_done_ ? "stopped the run; waits for the logger to close its log" : "stops the run";
+      break;
+    case Phase::Idle:
+      break;
+  }
+  if (!silent.empty()) d.detail += "; silent: " + silent;
+  return d;
 }
 
 }  // namespace afford

@@ -16,9 +16,11 @@
 // the runner takes only what concerns that request, whatever run id and
 // configuration it shares with earlier ones, and a process that holds
 // another request of the run id (a recording played back, an earlier
-// runner's) is told to leave it.
+// runner's) is told to leave it. While it drives, the runner beats on STATUS
+// as "runner", and refuses to drive a bus another runner drives
+// (experiment/run/runners.hpp).
 // Channels in:  STATUS, AFFORDANCE_TABLE, RESULT, EXTRINSIC_RESULT (in serial order, through the edge)
-// Channels out: RUN_CONFIG, RUN_CONTROL, RESEND
+// Channels out: RUN_CONFIG, RUN_CONTROL, RESEND, STATUS (its beat)
 #pragma once
 #include <lcm/lcm-cpp.hpp>
 #include <spdlog/spdlog.h>
@@ -34,6 +36,7 @@
 #include "afford/config.hpp"
 #include "afford/edge.hpp"
 #include "afford/process_main.hpp"
+#include "experiment/run/runners.hpp"
 #include "experiment/run/silence.hpp"
 
 namespace afford {
@@ -239,10 +242,13 @@ class RunDriver {
   bool ours(const std::string& process) const;
   // Is `folder` the run's own (<log_root>/<run_id>)?
   bool isRunFolder(const std::string& folder) const;
+  // What the runner's beat says it waits for (experiment/run/runners.hpp).
+  RunnerBeat::Doing doing() const;
 
   lcm::LCM& lcm_;
   std::shared_ptr<spdlog::logger> log_;
   Edge edge_;
+  RunnerBeat runners_;  // its beat; the other runners and the processes' copies heard
   std::map<std::string, Seen> seen_;
   std::map<std::string, Clock::time_point> nudged_;  // last time each process was told again
   std::map<std::string, int> foreign_;  // times each process was told to leave another request of this run id

@@ -720,6 +720,8 @@ std::vector<BadInput> badInputs() {
          st.counts_config = 0;
          st.n_channels = 0;
          st.n_takes = 0;
+         st.started = 0;
+         st.n_copies = 0;
          auto b = sealed(st);
          // n_channels sits after run_id, step, process, pid, beat, state, config_digest, detail, stuck, counts_run
          // and counts_config.

@@ -224,6 +224,8 @@ AloneOutcome feedAlone(const Recording& rec, const std::string& process, Feed fe
       for (const auto& [ch, n] : channels) st.channels.push_back(ch), st.counts.push_back(n), st.held_from.push_back(0);
       st.n_channels = static_cast<int32_t>(st.channels.size());
       st.n_takes = 0;
+      st.started = 0;
+      st.n_copies = 0;
       publish(ch::status.name, sealed(st));
     }
     ++beat;

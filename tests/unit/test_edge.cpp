@@ -300,6 +300,8 @@ TEST_F(EdgeOnTheBus, ForgedProcessIdsCannotGrowWhatAReceiverRemembers) {
   st.counts_config = 0;
   st.n_channels = 0;
   st.n_takes = 0;
+  st.started = 0;
+  st.n_copies = 0;
   const int forged = protocol.limits.peers * 3;
   for (int pid = 1; pid <= forged; ++pid) {
     st.pid = pid;

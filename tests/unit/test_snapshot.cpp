@@ -227,6 +227,8 @@ process_status_t readerStatus(const std::string& run, const std::string& process
     st.takes_from.push_back(from);
   }
   st.n_takes = static_cast<int32_t>(st.takes.size());
+  st.started = 0;
+  st.n_copies = 0;
   return st;
 }
 
@@ -339,6 +341,8 @@ TEST(Snapshot, AReceiverNeedingWhatWasLetGoFailsTheRunNamingTheChannel) {
   st.held_from = {4000};
   st.n_channels = 1;
   st.n_takes = 0;
+  st.started = 0;
+  st.n_copies = 0;
   eye.claim(st);
   EXPECT_TRUE(eye.failed());
   EXPECT_NE(failure.find("DECISION: serials 0..3999 are no longer held by its publisher (motivation holds it from "

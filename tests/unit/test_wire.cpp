@@ -284,9 +284,12 @@ TEST(Wire, AStatusWithAHugeChannelCountIsRefused) {
   m.state = process_status_t::WAITING;
   m.n_channels = 0;
   m.n_takes = 0;
+  m.started = 0;
+  m.n_copies = 0;
   m.digest = 0;
   Bytes b = encode(m);
-  const std::size_t at = b.size() - 8 - 4 - 4;  // n_channels, n_takes (0), then digest
+  // n_channels, n_takes (0), host ("": its length and NUL), started, n_copies (0), then digest
+  const std::size_t at = b.size() - 8 - 4 - 8 - 5 - 4 - 4;
   put(b, at, 4, 0x01000000);  // LCM's decode would allocate 16 M strings and counts
   std::string why;
   EXPECT_FALSE(

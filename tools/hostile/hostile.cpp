@@ -193,6 +193,8 @@ class Hostile {
       st.config_digest = st.counts_config = 0;
       st.n_channels = 0;
       st.n_takes = 0;
+      st.started = 0;
+      st.n_copies = 0;
       b = afford::sealed(st);
       ch = afford::ch::status.name;
     } else if (k == "forge") {
@@ -252,6 +254,8 @@ class Hostile {
       st.n_takes = 0;
       st.counts_run = run_;
       st.counts_config = config_.digest;
+      st.started = 0;
+      st.n_copies = 0;
       publish(afford::ch::status.name, afford::sealed(st));
       return;
     }
@@ -305,6 +309,8 @@ class Hostile {
       st.detail = "forged failure";
       st.n_channels = 0;
       st.n_takes = 0;
+      st.started = 0;
+      st.n_copies = 0;
       publish(afford::ch::status.name, afford::sealed(st));
       return;
     }

@@ -242,6 +242,9 @@ class NodeBase {
   std::int64_t restoredStep() const { return restored_step_; }
   std::int64_t snapshotsTaken() const { return snapshots_taken_; }
   const EdgeDrops& drops() const { return edge_.drops(); }
+  // Why this process refuses to serve: an earlier copy of it on the bus names it (afford/edge_peers.hpp,
+  // Copies). It has said so (a STATUS saying FAILED) and asked to stop (requestStop()); "" while it serves.
+  const std::string& refusal() const { return copies_.refusal(); }
 
  protected:
   // An input of the node (see Input): a channel of the run, taken in serial
@@ -330,6 +333,7 @@ class NodeBase {
   Turn onRunConfig(const run_config_t& msg, const Envelope& envelope);
   Turn onRunControl(const run_control_t& msg, const Envelope& envelope);
   Turn onStatus(const process_status_t& msg);
+  void onCopy(const process_status_t& msg);  // a STATUS of this process's name from another pid or host
   void publishStatus();
   const ProtocolConfig& protocol() const { return edge_.protocol(); }
 
@@ -342,6 +346,9 @@ class NodeBase {
   std::string detail_;
   int64_t last_step_ = -1;
   std::int64_t beat_ = 0;  // STATUS messages published so far
+  Copies copies_;          // the other copies of this process heard on the bus; who this one is
+  std::int64_t copies_said_ = 0;  // copies said in the log (the first few)
+  std::int64_t copies_forgotten_ = 0;  // copies forgotten beyond protocol.limits.peers
   Clock::time_point next_beat_{};
   // Idle announcement: after protocol.idle_announce_ms, or idle_announce_pace times the usual wait for an
   // input if longer (never longer than the heartbeat).

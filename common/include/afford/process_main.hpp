@@ -65,5 +65,8 @@ void installStopHandlers();
 void clearStopRequest();
 // Stop as a SIGINT or SIGTERM would (stopRequested() becomes true), asked by the program itself.
 void requestStop();
+// ... saying why (the first reason given is kept: stopReason()). clearStopRequest() forgets it.
+void requestStop(const std::string& why);
+std::string stopReason();
 
 }  // namespace afford

@@ -79,7 +79,8 @@ inline constexpr Channel<run_control_t> runControl{
     "RUN_CONTROL", {kRunner, kRunner, kRunner}, {kEveryProcess}, true, "`START`, then `STOP` after the result"};
 inline constexpr Channel<process_status_t> status{
     "STATUS", {kEveryProcess, kEveryProcess, kEveryProcess}, {kRunner, kEveryProcess}, false,
-    "on every state change, twice a second, and when idle in a run (its counts tell a receiver what it missed)"};
+    "on every state change, twice a second, and when idle in a run (its counts tell a receiver what it missed); "
+    "at once on hearing a copy of itself; the runner's beat too (as `runner`, while it drives a run)"};
 inline constexpr Channel<object_probe_t> probe{
     "PROBE", {"environment", "environment", "environment"}, {"predictors"}, true,
     "once, at `START`: each object's focus image alone and centred"};
