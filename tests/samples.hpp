@@ -278,7 +278,7 @@ inline prediction_t sample(const prediction_t*) {
 }
 
 inline process_status_t sample(const process_status_t*) {
-  process_status_t m;
+  process_status_t m{};
   m.run_id = kSampleRunId;
   m.step = 42;
   m.process = "logger";

@@ -75,7 +75,7 @@ Turn NodeBase::onRunConfig(const run_config_t& msg, const Envelope& envelope) {
     log_->error("RUN_CONFIG: rejected run '{}': {}", msg.run_id, e.what());
     detail_ = e.what();
     state_ = process_status_t::WAITING;
-    process_status_t st;
+    process_status_t st{};
     st.run_id = msg.run_id;
     st.step = -1;
     st.process = process_;
@@ -206,7 +206,7 @@ void NodeBase::publishStatus() {
   const std::size_t text = static_cast<std::size_t>(protocol().limits.text_bytes);
   // A copy that refuses to serve says so, in no run, and claims no counts (its peers would take them as final).
   const bool refused = !copies_.refusal().empty();
-  process_status_t st;
+  process_status_t st{};
   st.run_id = refused ? "" : run_id_;
   st.step = refused ? -1 : last_step_;
   st.process = process_;

@@ -106,6 +106,9 @@ bool RecordedLogStream::next(LogEvent& e) {
     ++segment_.events;  // (as the logger counts them: tags and all)
     segment_.payload_bytes += static_cast<std::int64_t>(e.data.size());
     if (!key_) return true;
+    // Another program's channel on the bus (LCM's own LCM_SELF_TEST, which lcm-logger records): not afford's,
+    // so nothing of its key; passed on as without a key, for the readers to leave aside as they do then.
+    if (!channelNamed(e.channel)) return true;
     // A recording of a keyed bus: only what carries the key's tag, without it.
     if (key_->verify(e.channel, e.data.data(), e.data.size())) {
       e.data.resize(e.data.size() - BusKey::kTrailerBytes);
@@ -318,7 +321,7 @@ void GapFinder::add(const LogEvent& e) {
         h.serial >= 0 && h.serial < kMostSerials)
       had_[e.channel].insert(h.serial);
   } else if (e.channel == ch::status.name) {
-    process_status_t st;
+    process_status_t st{};
     std::string why;
     if (!decodeChecked(e.data.data(), e.data.size(), ctx_, st, why) || st.counts_run != run_id_ ||
         (config_digest_ != 0 && st.counts_config != config_digest_))

@@ -452,7 +452,7 @@ RunnerBeat::Doing RunDriver::doing() const {
     case Phase::Running:
       d.detail = !logged()           ? "runs"
                  : !loggerJoined()     ? "runs; waits for the logger to take the run"
-                 : have_result_ && !loggerHolds() ? "the result is in; waits for the logger's log to hold all that was published"
+                 : have_result_ && !loggerHolds() ? "the result is in; waits for the logger: its log does not yet hold all that was published"
                                                   : "runs";
       break;
     case Phase::Stopping:

@@ -95,7 +95,7 @@ void RunnerBeat::beat(int stage, const Doing& doing) {
   step_ = doing.run_id == run_ && doing.request == request_ ? std::max(step_, doing.step) : doing.step;
   run_ = doing.run_id;
   request_ = doing.request;
-  process_status_t st;
+  process_status_t st{};
   st.run_id = doing.run_id;
   st.step = step_;
   st.process = kRunnerName;

@@ -35,7 +35,7 @@ std::optional<StepKey> stepKeyOf(const LogEvent& e, Phase phase, const BoundsCon
     return StepKey{m.command == run_control_t::START ? StepKey::kBefore : StepKey::kAfter, rank};
   }
   if (e.channel == ch::status.name) {
-    process_status_t m;
+    process_status_t m{};
     if (!decodeChecked(e.data.data(), e.data.size(), ctx, m, why)) return std::nullopt;
     return StepKey{m.step, rank};
   }

@@ -710,7 +710,7 @@ std::vector<BadInput> badInputs() {
        }},
       {"HugeStatusCount", "STATUS", "field n_channels",
        [](lcm::LCM& l, const std::string& run, std::int64_t s, const Bytes&) {
-         process_status_t st;
+         process_status_t st{};
          st.run_id = run;
          st.step = s;
          st.process = "eye";

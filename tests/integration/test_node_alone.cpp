@@ -213,7 +213,7 @@ AloneOutcome feedAlone(const Recording& rec, const std::string& process, Feed fe
   auto heartbeats = [&] {
     int pid = 1000;
     for (const auto& [peer, channels] : counts) {
-      process_status_t st;
+      process_status_t st{};
       st.run_id = st.counts_run = rec.run_id;
       st.step = 0;
       st.process = peer;

@@ -37,10 +37,10 @@ grep -Eq "^runner +[0-9]+  running +[0-9]+  st-base-FIX-s2 +runs" "$out/status-p
 says runner-eye "the runner naming the silent eye" "^runner .*silent: eye \(not heard for [0-9.]+ s\)"
 kill -CONT "$eye"
 
-# The logger paused before the run's end: the runner waits for it to close the log.
+# The logger paused before the run's end: the runner waits for it (its log to hold the run, then to close it).
 logger=$(cat "$logs/demo/logger.pid")
 kill -STOP "$logger"
-says logger "the runner waiting for the logger" "^runner .*waits for the logger to close its log"
+says logger "the runner waiting for the logger" "^runner .*waits for the logger"
 kill -CONT "$logger"
 wait "$runner" || { cat "$out/run.txt"; echo "the run failed"; exit 1; }
 [[ -f $logs/st-base-FIX-s2/log.00.lcm ]] || { echo "no log of the run"; exit 1; }

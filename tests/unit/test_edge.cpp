@@ -291,7 +291,7 @@ TEST_F(EdgeOnTheBus, ForgedProcessIdsCannotGrowWhatAReceiverRemembers) {
         return Turn::take();
       },
       Scope::Any, Order::None);
-  process_status_t st;
+  process_status_t st{};
   st.step = -1;
   st.process = "eye";
   st.beat = 1;

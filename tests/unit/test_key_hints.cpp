@@ -27,7 +27,7 @@ constexpr const char* kUntaggedHint = "untagged messages heard: this bus is not 
 constexpr const char* kOtherKeyHint = "messages tagged with another key heard";
 
 process_status_t statusOf(const std::string& process, int pid, std::int64_t beat) {
-  process_status_t st;
+  process_status_t st{};
   st.step = -1;
   st.process = process;
   st.pid = pid;

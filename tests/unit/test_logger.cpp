@@ -192,7 +192,7 @@ struct LoggerInARun {
     LoggerInARun* t;
     void on(const lcm::ReceiveBuffer* b, const std::string& channel) {
       const auto* d = static_cast<const std::uint8_t*>(b->data);
-      process_status_t st;
+      process_status_t st{};
       if (channel == ch::decision.name) {
         if (t->logger->runId().empty()) t->decisions.emplace_back(d, d + b->data_size);  // (not those fed again)
       }
@@ -248,7 +248,7 @@ struct LoggerInARun {
   }
   // The motivation's STATUS: in the run, or (left) free again with its final counts.
   void motivationSays(bool left) {
-    process_status_t st;
+    process_status_t st{};
     st.run_id = left ? "" : rc.run_id;
     st.step = left ? -1 : static_cast<std::int64_t>(decisions.size()) - 1;
     st.process = "motivation";

@@ -59,7 +59,7 @@ TEST(Freshness, TheTableHoldsAtMostItsLimitAndAForgottenSessionMustBeRecentAgain
 TEST(Peers, AStatusBeatIsTakenOnceAndTheTableIsBounded) {
   EdgePeers p;
   std::int64_t forgotten = 0;
-  process_status_t st;
+  process_status_t st{};
   st.process = "eye";
   st.pid = 1;
   st.host = "lab-1";
@@ -81,7 +81,7 @@ TEST(Peers, AStatusBeatIsTakenOnceAndTheTableIsBounded) {
 
 // A STATUS of `who`, naming `copies`.
 process_status_t statusOf(const Instance& who, std::vector<std::string> copies = {}) {
-  process_status_t st;
+  process_status_t st{};
   st.process = who.process;
   st.pid = who.pid;
   st.host = who.host;

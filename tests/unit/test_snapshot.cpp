@@ -215,7 +215,7 @@ TEST(Snapshot, AForkedCopyDiesWithItsProcessAndTheEarlierSnapshotStaysWhole) {
 
 process_status_t readerStatus(const std::string& run, const std::string& process,
                               const std::vector<std::pair<std::string, std::int64_t>>& takes) {
-  process_status_t st;
+  process_status_t st{};
   st.run_id = run;
   st.process = process;
   st.pid = 1;
@@ -330,7 +330,7 @@ TEST(Snapshot, AReceiverNeedingWhatWasLetGoFailsTheRunNamingTheChannel) {
   eye.subscribe(ch::decision, [](const decision_t&) { return Turn::take(); }, Scope::Run, Order::Serial);
   std::string failure;
   eye.onFailure([&](const std::string& channel, const std::string& why) { failure = channel + ": " + why; });
-  process_status_t st;
+  process_status_t st{};
   st.run_id = st.counts_run = "run-1";
   st.config_digest = st.counts_config = 0;
   st.process = "motivation";

@@ -276,7 +276,7 @@ TEST(Wire, APredictionWithAHugeActionCountIsRefused) {
 }
 
 TEST(Wire, AStatusWithAHugeChannelCountIsRefused) {
-  process_status_t m;
+  process_status_t m{};
   m.run_id = "";
   m.step = -1;
   m.process = "eye";
@@ -354,7 +354,7 @@ TEST(Decode, AStringWithANulInsideIsRefused) {
   ASSERT_NE(f, sizes.end());
   b.at(f->offset + 4 + 16) = 0;  // "20240501-120000-\0ase-IMP-s1"
   sealBuffer(b.data(), b.size());
-  process_status_t out;
+  process_status_t out{};
   EXPECT_FALSE(decodeChecked(b.data(), b.size(), observerContext(), out, why));
   EXPECT_EQ(why, "field counts_run: the string holds a NUL before its end");
 }

@@ -182,7 +182,7 @@ class Hostile {
       b = afford::sealed(c);
       ch = afford::ch::runControl.name;
     } else if (k == "statusflood") {
-      afford::process_status_t st;
+      afford::process_status_t st{};
       st.run_id = "";
       st.step = -1;
       const char* names[] = {"environment", "eye", "predictors", "motivation", "planner", "logger"};
@@ -241,7 +241,7 @@ class Hostile {
     const std::string n = std::to_string(pick(0, 999999));
     const int which = static_cast<int>(pick(0, 5));
     if (which == 5) {
-      afford::process_status_t st;
+      afford::process_status_t st{};
       st.run_id = run_;
       st.step = 0;
       st.process = "logger";
@@ -296,7 +296,7 @@ class Hostile {
       return;
     }
     if (kind < 0.1) {
-      afford::process_status_t st;
+      afford::process_status_t st{};
       st.run_id = run_;
       st.step = 1;
       const char* names[] = {"environment", "eye", "predictors", "motivation", "planner"};
@@ -374,7 +374,7 @@ class Hostile {
       else if (config_.run_id.empty() && afford::decodeChecked(d, size, {&g_protocol, nullptr}, c, why)) config_ = c;
     }
     if (ch == afford::ch::status.name) {
-      afford::process_status_t st;
+      afford::process_status_t st{};
       if (afford::decodeChecked(d, size, {&g_protocol, nullptr}, st, why) && st.beat < (1 << 30)) pids_[st.process] = st.pid;
     }
     // The latest message of each run channel (its serial and digest), for `forge`.
