@@ -3,11 +3,13 @@
 # at a random moment and start it again with the same command. The run must
 # complete with the same final weights and the same summary as an
 # uninterrupted run, and its log (the segments together) must replay to them.
-#   tests/restart/test_restart.sh BUILD_DIR WORK_DIR PROCESS [SEED]
+#   tests/restart/test_restart.sh BUILD_DIR WORK_DIR PROCESS[,PROCESS...] [SEED]
 # AFFORD_KILL_STEP=N kills at step N (at least) instead of a random step; for the
 # planner AFFORD_KILL_DELAY_MS=N kills at N ms into its second test.
 # PROCESS: environment, eye, predictors, motivation, logger (killed during the
-# intrinsic run) or planner (killed during the extrinsic tests).
+# intrinsic run) or planner (killed during the extrinsic tests). Several, comma-separated, are killed one after
+# another in a random order during one longer intrinsic run (the planner among them with GOALS only), each once
+# the one before has rejoined the run and caught up: one run checks them all.
 # AFFORD_RESTART_SYSTEM=GOALS runs the goals agent instead of IMP: every process,
 # the planner too, is killed during its intrinsic run, in the middle of a goal
 # (the step is random; a goal lasts up to goals.budget steps).
@@ -19,13 +21,13 @@ set -euo pipefail
 root=$(cd "$(dirname "$0")/../.." && pwd)
 source "$root/tests/netns.sh"
 enter_test "$0" "$@"
-victim=$3
+IFS=, read -r -a victims <<<"$3"
 seed=${4:-$((1 + RANDOM % 20))}
 # On failure, what the runner and the processes said, so a CI log shows why.
 diagnose() {
   local rc=$?
   kill $(jobs -p) 2>/dev/null || true
-  ((rc == 0)) || show_why "seed $seed, $victim" "$(cat "$out/kill.txt" 2>/dev/null)"
+  ((rc == 0)) || show_why "seed $seed, ${victims[*]}" "$(cat "$out/kill.txt" 2>/dev/null)"
 }
 trap diagnose EXIT
 
@@ -35,6 +37,15 @@ steps=3000
 snapshot=500
 # The goals agent steps four to five times slower: a shorter run, snapshots as often in steps.
 [[ $system == GOALS ]] && { steps=1500; snapshot=300; }
+# Several in turn: a run long enough for each to be killed, come back and catch up before the next.
+((${#victims[@]} > 1)) && steps=$((steps * 2))
+victim=${victims[0]}
+if ((${#victims[@]} > 1)); then
+  for v in "${victims[@]}"; do
+    [[ $v != planner || $system == GOALS ]] || { echo "the planner is killed alone (in an extrinsic test)"; exit 1; }
+  done
+  mapfile -t victims < <(printf '%s\n' "${victims[@]}" | shuf --random-source=<(yes "$seed"))
+fi
 mapfile -t processes < <("$build/bin/afford" processes)  # the registry's
 declare -A pid
 own=${AFFORD_RESTART_PREDICTORS:-}
@@ -65,34 +76,59 @@ runner=$!
 # into the second test. The others: a random step of the intrinsic run, read
 # from the STATUS heartbeats (a time would land after the run on a fast
 # machine, or between runs on a slow one).
-if [[ $victim == planner && $system == IMP ]]; then
-  wait_until 60 grep -q "configured for run '.*-e1'" "$out/planner.log" ||
-    { cat "$out/attached.txt"; echo "the planner never took the second test"; exit 1; }
-  delay=${AFFORD_KILL_DELAY_MS:-$((20 + RANDOM % 200))}
-  sleep "$(printf '%d.%03d' $((delay / 1000)) $((delay % 1000)))"
-  moment="${delay} ms into its second test"
-else
-  # The run's step: the furthest process's.
-  target=${AFFORD_KILL_STEP:-$((200 + RANDOM % (steps / 3)))}  # heartbeats come every 0.5 s, so it overshoots
-  at=-1
-  for _ in $(seq 200); do
-    at=$("$build/bin/afford" status --lcm-url "$url" --seconds 0.55 |
-      awk -v p="$victim" -v r="restart-base-$system-s$seed" '$5 == r && $4 > max {max = $4}
-        $1 == p && ($3 == "running" || $3 == "done") && $5 == r {in_run = 1} END {if (in_run) print max + 0}')
-    [[ -n $at ]] && ((at >= target)) && break
+run_id="restart-base-$system-s$seed"
+# step_of PROCESS: the run's step (the furthest process's), printed once PROCESS is in the run ("" before).
+step_of() {
+  "$build/bin/afford" status --lcm-url "$url" --seconds 0.55 |
+    awk -v p="$1" -v r="$run_id" '$5 == r && $4 > max {max = $4}
+      $1 == p && ($3 == "running" || $3 == "done") && $5 == r {in_run = 1; mine = $4} END {if (in_run) print max + 0, mine + 0}'
+}
+: >"$out/kill.txt"
+from=200  # the first kill's earliest step; each later one's is after the one before has caught up
+for victim in "${victims[@]}"; do
+  if [[ $victim == planner && $system == IMP ]]; then
+    wait_until 60 grep -q "configured for run '.*-e1'" "$out/planner.log" ||
+      { cat "$out/attached.txt"; echo "the planner never took the second test"; exit 1; }
+    delay=${AFFORD_KILL_DELAY_MS:-$((20 + RANDOM % 200))}
+    sleep "$(printf '%d.%03d' $((delay / 1000)) $((delay % 1000)))"
+    moment="${delay} ms into its second test"
+  else
+    # heartbeats come every 0.5 s, so it overshoots
+    target=${AFFORD_KILL_STEP:-$((from + RANDOM % (steps / (3 * ${#victims[@]}))))}
+    at=-1
+    for _ in $(seq 200); do
+      read -r at _ < <(step_of "$victim") || at=
+      [[ -n $at ]] && ((at >= target)) && break
+      kill -0 "$runner" 2>/dev/null || break
+    done
+    moment="at step ${at:-?} of the intrinsic run (aimed at $target)"
+  fi
+  kill -0 "$runner" 2>/dev/null || { cat "$out/attached.txt"; echo "the run ended before the kill of $victim"; exit 1; }
+  kill -9 "${pid[$victim]}"
+  wait "${pid[$victim]}" 2>/dev/null || true
+  echo "killed $victim $moment" | tee -a "$out/kill.txt"
+  start "$victim"  # at once: the process is gone (waited for above), and its peers must cope with a quick return
+  ((${#victims[@]} > 1)) || break
+  # Back in the run and caught up (its own step where the run was at the kill) before the next is killed.
+  mine=-1
+  for _ in $(seq 120); do
+    read -r now mine < <(step_of "$victim") || mine=
+    [[ -n $mine ]] && ((mine >= at)) && break
     kill -0 "$runner" 2>/dev/null || break
   done
-  moment="at step ${at:-?} of the intrinsic run (aimed at $target)"
-fi
-kill -0 "$runner" 2>/dev/null || { cat "$out/attached.txt"; echo "the run ended before the kill"; exit 1; }
-kill -9 "${pid[$victim]}"
-wait "${pid[$victim]}" 2>/dev/null || true
-echo "killed $victim $moment" | tee "$out/kill.txt"
-start "$victim"  # at once: the process is gone (waited for above), and its peers must cope with a quick return
-wait "$runner" || { cat "$out/attached.txt"; echo "the run with a restarted $victim failed"; exit 1; }
+  kill -0 "$runner" 2>/dev/null || { cat "$out/attached.txt"; echo "the run ended before $victim caught up"; exit 1; }
+  [[ -n $mine ]] && ((mine >= at)) || { cat "$out/attached.txt"; echo "$victim did not catch up with the run"; exit 1; }
+  echo "  $victim caught up at step $mine (the run at step $now)"
+  from=$((now + 50))
+done
+wait "$runner" || { cat "$out/attached.txt"; echo "the run with a restarted ${victims[*]} failed"; exit 1; }
 grep -q "free again" "$out/attached.txt" || { cat "$out/attached.txt"; echo "the runner never re-sent the run"; exit 1; }
-grep -o "process $victim is free again.* at step [0-9]*" "$out/attached.txt" | head -1
-grep -o "goes on from its snapshot of step [0-9]*" "$out/$victim.log" | tail -1 || echo "(it took the run from its start)"
+for victim in "${victims[@]}"; do
+  ((${#victims[@]} == 1)) || grep -q "process $victim is free again" "$out/attached.txt" ||
+    { cat "$out/attached.txt"; echo "the runner never re-sent the run to $victim"; exit 1; }
+  grep -o "process $victim is free again.* at step [0-9]*" "$out/attached.txt" | head -1
+  grep -o "goes on from its snapshot of step [0-9]*" "$out/$victim.log" | tail -1 || echo "($victim took the run from its start)"
+done
 
 # The same experiment uninterrupted, hosted by the runner in one process.
 # Its own log root: the checkpoint goes there, and the same seed may be run by
@@ -126,7 +162,7 @@ else
   "$build/bin/afford" replay "$log" | tee "$out/replay.txt"
 fi
 grep -q "weights_checksum: $sum" "$out/replay.txt" || { echo "the log replays differently"; exit 1; }
-if [[ $victim == logger ]]; then
+if [[ " ${victims[*]} " == *" logger "* ]]; then
   [[ -f $log/log.01.lcm ]] || { echo "the restarted logger wrote no second segment"; exit 1; }
   echo "the restarted logger continued the log in $(ls "$log" | grep -c 'log\..*\.lcm') segments"
 fi
