@@ -353,9 +353,12 @@ TEST(Workflow, ASweepRunsTheCrossProductAndEachConditionIsItsSettings) {
 // tests from them; the merge then removes them, as one machine does.
 TEST(Workflow, ShardsOfTheForwardModelDesignMergeWithTheirTestsWhateverCheckpointsAreKept) {
   const std::string dir = test::tempDir("shards-fm");
-  const std::string plan = "experiment forward-models --transport memq --system FIX --reps 2 --steps 4500 "
-                           "--extrinsic-reps 1 --scenarios scenario1 --quiet --keep-logs none --keep-checkpoints none "
-                           "--no-reuse-agents --run-prefix f";
+  // The design tests the weights saved after its action count (4000 in the paper; 500 here, to be short).
+  std::ofstream(dir + "/forward-models-500.yaml") << "extends: forward-models\ndescription: forward-models after "
+                                                     "500 actions\nextrinsic:\n  after_actions: 500\n";
+  const std::string plan = "experiment --config " + dir + "/forward-models-500.yaml --transport memq --system FIX "
+                           "--reps 2 --steps 700 --extrinsic-reps 1 --scenarios scenario1 --quiet --keep-logs none "
+                           "--keep-checkpoints none --no-reuse-agents --run-prefix f";
   Output whole = run(plan + " --out " + dir + "/whole --log-root " + dir + "/logs-whole");
   ASSERT_EQ(whole.status, 0) << whole.text;
   std::string shards;
