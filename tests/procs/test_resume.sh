@@ -88,19 +88,31 @@ code=0
 [[ $code -ne 0 ]] && grep -q "group 'demo' is not up: none of its processes runs" "$out/down.txt" &&
   [[ ! -e $out/down ]] || { cat "$out/down.txt"; fail "procs.sh run on a stopped group was not refused"; }
 
-# Attached by hand, in a named network namespace (made in a mount namespace of its own, so that the
-# machine's /run/netns does not see it), to a bus nobody serves: the experiment stops at once, resumable,
-# and its resume line carries the namespace, the URL and the key file.
+# Attached by hand, in a named network namespace, to a bus nobody serves: the experiment stops at once,
+# resumable, and its resume line carries the namespace, the URL and the key file. The namespace is made in a
+# mount namespace of its own, so that the machine's /run/netns does not see it; in a chroot (whose root is not
+# a mount point) there is none, and it is one of the machine's, removed at once.
 "$build/bin/afford" bus-key "$out/hand.key" >/dev/null
 bare="udpm://239.255.76.67:7993?ttl=0"
+cat >"$out/bare.sh" <<SH
+ip link set lo up multicast on && ip route add 224.0.0.0/4 dev lo &&
+  exec $build/bin/afford experiment base --system FIX --reps 1 --steps 100 --set protocol.ready_timeout_ms=1000 \
+    --attach "$bare" --bus-key $out/hand.key --keep-logs none --run-prefix bare --log-root $out/bare-logs \
+    --out $out/bare --quiet --progress lines
+SH
 code=0
-unshare -m bash -c "mount -t tmpfs tmpfs /run && ip netns add t && ip netns exec t bash -c '
-  ip link set lo up multicast on && ip route add 224.0.0.0/4 dev lo &&
-  $build/bin/afford experiment base --system FIX --reps 1 --steps 100 --set protocol.ready_timeout_ms=1000 \
-    --attach \"$bare\" --bus-key $out/hand.key --keep-logs none --run-prefix bare --log-root $out/bare-logs \
-    --out $out/bare --quiet --progress lines'" >"$out/bare.txt" 2>&1 || code=$?
+if unshare -m true 2>/dev/null; then
+  ns=t
+  unshare -m bash -c "mount -t tmpfs tmpfs /run && ip netns add $ns && ip netns exec $ns bash $out/bare.sh" \
+    >"$out/bare.txt" 2>&1 || code=$?
+else
+  ns=afford-resume-test-$$
+  ip netns add "$ns"
+  ip netns exec "$ns" bash "$out/bare.sh" >"$out/bare.txt" 2>&1 || code=$?
+  ip netns delete "$ns"
+fi
 [[ $code -eq 1 ]] || { cat "$out/bare.txt"; fail "an attached run that reaches no process exited $code, not 1"; }
-expected="ip netns exec t $build/bin/afford experiment --attach '$bare' --bus-key $out/hand.key --resume --out $out/bare"
+expected="ip netns exec $ns $build/bin/afford experiment --attach '$bare' --bus-key $out/hand.key --resume --out $out/bare"
 [[ $(resume_line "$out/bare.txt") == "$out"$'\t'"$expected" ]] ||
   { cat "$out/bare.txt"; fail "the attached run's resume line is not '$expected'"; }
 grep -q "$(cat "$out/hand.key")" "$out/bare.txt" "$out/bare/experiment.json" && fail "the key itself was printed or stored"
