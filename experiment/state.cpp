@@ -182,6 +182,17 @@ void clearReplaced(const ExperimentRequest& o) {
 }
 
 // The stored experiment's options, with the run options given now (--jobs, --transport, ...).
+namespace {
+// `path` as seen from the experiment's folder `out` (both as given where it started), if it lies inside it: "logs"
+// for "exp/logs" and "exp"; "" if it lies outside it, or either is absolute.
+std::string movedWithTheFolder(const std::string& path, const std::string& out) {
+  if (out.empty() || fs::path(out).is_absolute() || fs::path(path).is_absolute()) return "";
+  const fs::path inside = fs::path(path).lexically_normal().lexically_relative(fs::path(out).lexically_normal());
+  if (inside.empty() || *inside.begin() == "..") return "";
+  return inside.string();
+}
+}  // namespace
+
 ExperimentRequest resumedRequest(const ExperimentRequest& given, const ExperimentState& state) {
   ExperimentRequest o = state.options;
   o.write.out_dir = given.write.out_dir;
@@ -208,10 +219,17 @@ ExperimentRequest resumedRequest(const ExperimentRequest& given, const Experimen
     o.resume_with = reachCommand(o);
   const std::string& cwd = state.cwd;
   if (fs::current_path() != fs::path(cwd))
-    for (const auto& [option, path] : {std::pair{"--log-root", o.plan.log_root}, {"--config-dir", o.plan.config_dir}})
-      if (!path.empty() && fs::path(path).is_relative())  // (an empty --config-dir: the default, not a path)
-        throw ConfigError("--resume: the experiment in " + given.write.out_dir + " was started in " + cwd + ", and its " +
-                          option + " '" + path + "' is relative to that folder: resume it from there");
+    for (auto [option, path] : {std::pair{"--log-root", &o.plan.log_root}, {"--config-dir", &o.plan.config_dir}}) {
+      if (path->empty() || fs::path(*path).is_absolute()) continue;  // (an empty --config-dir: the default)
+      // A folder moved (to another machine, or kept in a repository) with the paths it holds inside it, as it was
+      // started with them: they are found where the folder is now.
+      if (const auto inside = movedWithTheFolder(*path, state.options.write.out_dir); !inside.empty()) {
+        *path = (fs::path(given.write.out_dir) / inside).lexically_normal().string();
+        continue;
+      }
+      throw ConfigError("--resume: the experiment in " + given.write.out_dir + " was started in " + cwd + ", and its " +
+                        option + " '" + *path + "' is relative to that folder: resume it from there");
+    }
   return o;
 }
 

@@ -11,6 +11,7 @@
 #include <mutex>
 
 #include "afford/auth.hpp"
+#include "afford/version.hpp"
 #include "afford/bus.hpp"
 #include "afford/logging.hpp"
 
@@ -85,6 +86,7 @@ int processMain(int argc, char** argv, const ProcessSpec& spec, const std::funct
                 const std::function<std::unique_ptr<NodeBase>(lcm::LCM&, std::shared_ptr<spdlog::logger>,
                                                               const ProtocolConfig&)>& make_node) {
   CLI::App app{spec.description, "afford-" + spec.name};
+  app.set_version_flag("--version", "afford-" + spec.name + " " + affordVersion());
   std::string url = "udpm://239.255.76.67:7667?ttl=0";
   std::string level = "info";
   std::string config_dir = defaultConfigDir();

@@ -11,6 +11,7 @@
 #include <nlohmann/json.hpp>
 
 #include "afford/config.hpp"
+#include "afford/version.hpp"
 #include "experiment/run/outcome.hpp"
 
 namespace afford {
@@ -54,7 +55,7 @@ std::string claim(const fs::path& run_dir, const PlannedRun& run, const std::str
   try {
     writeWhole(run_dir / "run.json",
                json{{"run_id", run.spec.run_id}, {"experiment", run.spec.experiment},
-                    {"out_dir", fs::absolute(out_dir).string()}}
+                    {"out_dir", fs::absolute(out_dir).string()}, {"afford_version", affordVersion()}}
                        .dump() + "\n");
   } catch (const std::exception& e) {
     fs::remove(run_dir, ec);

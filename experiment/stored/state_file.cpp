@@ -4,6 +4,7 @@
 
 #include "afford/checksum.hpp"
 #include "afford/config.hpp"
+#include "afford/version.hpp"
 #include "experiment/run/outcome.hpp"
 #include "experiment/schema/codec.hpp"
 
@@ -22,7 +23,9 @@ ExperimentState readState(const fs::path& out) {
 }
 
 void writeState(const fs::path& out, const ExperimentState& state) {
-  writeWhole(statePath(out), toJsonOf(state).dump(2) + "\n");
+  ExperimentState written = state;
+  written.afford_version = affordVersion();
+  writeWhole(statePath(out), toJsonOf(written).dump(2) + "\n");
 }
 
 std::vector<RunFingerprint> fingerprint(const std::vector<PlannedRun>& runs) {

@@ -54,6 +54,7 @@ struct ExperimentState {
   std::optional<std::vector<std::string>> merged_from;  // afford merge: the shards' folders
   std::string state = "running";            // running, interrupted or finished
   std::string resume;                       // the command that continues it
+  std::optional<std::string> afford_version;  // the build that wrote it last (afford --version); absent: 0.1.0
   template <class V>
   void visit(V& v) {
     v("experiment", experiment);
@@ -66,13 +67,14 @@ struct ExperimentState {
     v("merged_from", merged_from);
     v("state", state);
     v("resume", resume);
+    v("afford_version", afford_version);
   }
 };
 inline constexpr std::uintmax_t kMostStateBytes = 64u << 20;  // an experiment.json (its plan's fingerprint)
 
 // DIR/experiment.json, read only if it is a regular file of a sane size, strictly; ConfigError naming it.
 ExperimentState readState(const std::filesystem::path& out);
-// ... written whole (aside, then renamed).
+// ... written whole (aside, then renamed), with the version of this build.
 void writeState(const std::filesystem::path& out, const ExperimentState& state);
 
 // The fingerprints of the runs planned; refused when they are not those stored (naming the first that differs).

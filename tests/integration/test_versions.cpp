@@ -1,0 +1,104 @@
+// Releases (CHANGELOG.md): every program says the version it is, and what it writes says the version that
+// wrote it; a folder written before versions were kept there (0.1.0) reads as before.
+#include <gtest/gtest.h>
+
+#include <filesystem>
+#include <fstream>
+#include <nlohmann/json.hpp>
+#include <regex>
+
+#include "afford/version.hpp"
+#include "experiment/stored/state_file.hpp"
+#include "tests/support.hpp"
+
+namespace afford {
+namespace {
+namespace fs = std::filesystem;
+
+TEST(Versions, EveryProgramSaysTheVersionItIs) {
+  const std::string version = affordVersion();
+  const test::CommandResult front = test::runAfford("--version");
+  EXPECT_EQ(front.exit_code, 0) << front.output;
+  EXPECT_EQ(front.output, "afford " + version + "\n");
+  for (const std::string process : {"environment", "eye", "predictors", "motivation", "planner", "logger", "viewer"}) {
+    const test::CommandResult r =
+        test::runCommand(std::string(AFFORD_BIN_DIR) + "/afford-" + process + " --version");
+    EXPECT_EQ(r.exit_code, 0) << process << ": " << r.output;
+    EXPECT_EQ(r.output, "afford-" + process + " " + version + "\n");
+  }
+}
+
+// One version: CMakeLists.txt's project(), python/pyproject.toml's, and what the build says it is.
+TEST(Versions, TheBuildThePythonPackageAndTheProjectSayOneVersion) {
+  const std::string cmake = test::slurp(std::string(AFFORD_SOURCE_DIR) + "/CMakeLists.txt");
+  const std::string pyproject = test::slurp(std::string(AFFORD_SOURCE_DIR) + "/python/pyproject.toml");
+  std::smatch m;
+  ASSERT_TRUE(std::regex_search(cmake, m, std::regex(R"(project\(afford VERSION ([0-9]+\.[0-9]+\.[0-9]+))")));
+  const std::string version = m[1];
+  ASSERT_TRUE(std::regex_search(pyproject, m, std::regex(R"(\nversion = "([^"]+)")")));
+  EXPECT_EQ(m[1], version) << "python/pyproject.toml";
+  EXPECT_EQ(std::string(affordVersion()).rfind(version + "+", 0), 0u) << affordVersion();
+  const std::string changelog = test::slurp(std::string(AFFORD_SOURCE_DIR) + "/CHANGELOG.md");
+  EXPECT_NE(changelog.find("\n## " + version + " - "), std::string::npos)
+      << "CHANGELOG.md has no section for " << version << " (or it is still Unreleased)";
+}
+
+TEST(Versions, AnExperimentFolderSaysTheVersionThatWroteIt) {
+  const std::string dir = test::tempDir("versions");
+  const test::CommandResult r =
+      test::runAfford("experiment base --system FIX --reps 1 --steps 50 --extrinsic-reps 0 --transport memq --quiet "
+                      "--keep-logs none --run-prefix v --out " + dir + "/out --log-root " + dir + "/logs");
+  ASSERT_EQ(r.exit_code, 0) << r.output;
+  EXPECT_EQ(test::readJson(dir + "/out/experiment.json")["afford_version"], affordVersion());
+  EXPECT_EQ(test::readJson(dir + "/out/summary.json")["afford_version"], affordVersion());
+  EXPECT_EQ(readState(dir + "/out").afford_version, std::optional<std::string>(affordVersion()));
+  EXPECT_EQ(test::readJson(dir + "/out/runs/v-base-FIX-s1.json")["afford_version"], affordVersion());
+}
+
+TEST(Versions, AnExperimentStateOf010WithoutAVersionReadsAsBefore) {
+  const std::string dir = test::tempDir("versions-010");
+  const test::CommandResult r =
+      test::runAfford("experiment base --system FIX --reps 1 --steps 50 --extrinsic-reps 0 --transport memq --quiet "
+                      "--keep-logs none --run-prefix w --out " + dir + "/out --log-root " + dir + "/logs");
+  ASSERT_EQ(r.exit_code, 0) << r.output;
+  // As 0.1.0 wrote it: the same keys, without afford_version.
+  nlohmann::json state = test::readJson(dir + "/out/experiment.json");
+  state.erase("afford_version");
+  std::ofstream(dir + "/out/experiment.json") << state.dump(2);
+  const fs::path outcome = dir + "/out/runs/w-base-FIX-s1.json";
+  nlohmann::json kept = test::readJson(outcome);
+  kept.erase("afford_version");
+  std::ofstream(outcome) << kept.dump();
+  const ExperimentState read = readState(dir + "/out");
+  EXPECT_FALSE(read.afford_version.has_value());
+  EXPECT_EQ(read.state, "finished");
+  const test::CommandResult report = test::runAfford("report " + dir + "/out --out " + dir + "/report.md");
+  EXPECT_EQ(report.exit_code, 0) << report.output;
+}
+
+// A folder kept elsewhere (another machine, a repository's test data) with its logs inside it resumes there.
+TEST(Versions, AnInterruptedExperimentMovedWithItsLogsResumesWhereItIsNow) {
+  const std::string dir = test::tempDir("versions-moved");
+  fs::create_directories(dir + "/a");
+  fs::create_directories(dir + "/b");
+  const test::CommandResult r = test::runCommand(
+      "cd " + dir + "/a && " +
+      test::afford("experiment base --system FIX --reps 2 --steps 50 --extrinsic-reps 0 --transport memq --quiet "
+                   "--keep-logs none --run-prefix m --out exp --log-root exp/logs"));
+  ASSERT_EQ(r.exit_code, 0) << r.output;
+  // As an interruption leaves it: the second run not finished.
+  nlohmann::json state = test::readJson(dir + "/a/exp/experiment.json");
+  state["state"] = "interrupted";
+  std::ofstream(dir + "/a/exp/experiment.json") << state.dump(2);
+  fs::remove(dir + "/a/exp/runs/m-base-FIX-s2.json");
+  fs::rename(dir + "/a/exp", dir + "/b/exp");
+  const test::CommandResult resumed =
+      test::runCommand("cd " + dir + "/b && " + test::afford("experiment --resume --out exp --quiet"));
+  ASSERT_EQ(resumed.exit_code, 0) << resumed.output;
+  EXPECT_EQ(test::readJson(dir + "/b/exp/experiment.json")["state"], "finished");
+  EXPECT_TRUE(fs::exists(dir + "/b/exp/runs/m-base-FIX-s2.json"));
+  EXPECT_FALSE(fs::exists(dir + "/a/exp")) << "the resumed experiment wrote where the folder was";
+}
+
+}  // namespace
+}  // namespace afford
