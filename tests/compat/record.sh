@@ -33,7 +33,7 @@ made=$(/usr/bin/python3 -c 'import json, sys; print(json.load(open(sys.argv[1]))
 [[ $made != *dirty* ]] || { echo "record.sh: $afford was built with uncommitted changes ($made)" >&2; exit 2; }
 
 # Cut: SIGINT once the first of its two runs is done (the second is then under way, or not begun).
-"$afford" experiment base --system IMP --reps 2 --steps 3000 --transport memq --seed 5 --extrinsic-reps 0 \
+"$afford" experiment base --system IMP --reps 2 --steps 1500 --transport memq --seed 5 --extrinsic-reps 0 \
   --progress lines --keep-logs none --keep-checkpoints none --run-prefix cut --out cut --log-root cut/logs >cut.txt 2>&1 &
 runner=$!
 for _ in $(seq 600); do
