@@ -404,6 +404,9 @@ TEST(GoalChooser, GoalsAreKeyedDrawsAndASnapshotRestoresThem) {
 }  // namespace
 }  // namespace afford
 
+namespace afford {
+namespace {
+
 // The stable surface (docs/writing-a-component.md): a motivation factory of the whole RunConfig, the form before
 // MotivationParams, still registers, is given the run's configuration, and says once what to write instead.
 TEST(ComponentSurface, AMotivationFactoryOfTheWholeRunConfigStillRegistersAndSaysWhatToWriteInstead) {
@@ -431,3 +434,6 @@ TEST(ComponentSurface, AMotivationFactoryOfTheWholeRunConfigStillRegistersAndSay
   EXPECT_EQ(seed, 7);
   EXPECT_EQ(experiment, "base");
 }
+
+}  // namespace
+}  // namespace afford
