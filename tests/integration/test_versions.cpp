@@ -33,9 +33,9 @@ TEST(Versions, TheBuildThePythonPackageAndTheProjectSayOneVersion) {
   const std::string cmake = test::slurp(std::string(AFFORD_SOURCE_DIR) + "/CMakeLists.txt");
   const std::string pyproject = test::slurp(std::string(AFFORD_SOURCE_DIR) + "/python/pyproject.toml");
   std::smatch m;
-  ASSERT_TRUE(std::regex_search(cmake, m, std::regex(R"(project\(afford VERSION ([0-9]+\.[0-9]+\.[0-9]+))")));
+  ASSERT_TRUE(std::regex_search(cmake, m, std::regex(R"re(project\(afford VERSION ([0-9]+\.[0-9]+\.[0-9]+))re")));
   const std::string version = m[1];
-  ASSERT_TRUE(std::regex_search(pyproject, m, std::regex(R"(\nversion = "([^"]+)")")));
+  ASSERT_TRUE(std::regex_search(pyproject, m, std::regex(R"re(\nversion = "([^"]+)")re")));
   EXPECT_EQ(m[1], version) << "python/pyproject.toml";
   EXPECT_EQ(std::string(affordVersion()).rfind(version + "+", 0), 0u) << affordVersion();
   const std::string changelog = test::slurp(std::string(AFFORD_SOURCE_DIR) + "/CHANGELOG.md");
