@@ -1,6 +1,15 @@
 # Sourced by the shell tests that put a live run on a bus of their own
 # (tests/spy, viewer, attach, procs, restart, hostile, loss, hosts, logger, replay).
 #
+# enter_mount_namespace "$0" "$@": re-runs the calling script in a mount namespace of its own, where there can
+# be one (root); in a chroot, whose root is not a mount point, there cannot, and the script goes on where it is
+# (it mounts where it runs and unmounts when it ends).
+enter_mount_namespace() {
+  if [[ -z ${AFFORD_TEST_MOUNTNS:-} ]] && unshare --mount true 2>/dev/null; then
+    exec unshare --mount env AFFORD_TEST_MOUNTNS=1 bash "$@"
+  fi
+}
+
 # enter_private_netns "$0" "$@": re-runs the calling script in a private
 # network namespace (root), with multicast routed over its loopback, so no
 # datagram leaves the machine. Background jobs are killed when the script ends.

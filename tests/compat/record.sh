@@ -36,11 +36,8 @@ made=$(/usr/bin/python3 -c 'import json, sys; print(json.load(open(sys.argv[1]))
 "$afford" experiment base --system IMP --reps 2 --steps 1500 --transport memq --seed 5 --extrinsic-reps 0 \
   --progress lines --keep-logs none --keep-checkpoints none --run-prefix cut --out cut --log-root cut/logs >cut.txt 2>&1 &
 runner=$!
-for _ in $(seq 600); do
-  grep -q "\[1/2\] .* done" cut.txt && break
-  kill -0 "$runner" 2>/dev/null || break
-  sleep 0.05
-done
+# (tail follows the output as it is written, and ends with the runner: no polling)
+tail --pid="$runner" -n +1 -f cut.txt | grep -q -m 1 "\[1/2\] .* done" || true
 kill -INT "$runner" 2>/dev/null || true
 wait "$runner" && { cat cut.txt; echo "record.sh: the experiment to cut ended before the signal" >&2; exit 1; }
 grep -q -- "--resume" cut.txt || { cat cut.txt; echo "record.sh: the cut experiment names no resume" >&2; exit 1; }

@@ -6,12 +6,8 @@
 #   tests/folders/test_unwritable.sh BUILD_DIR WORK_DIR
 set -euo pipefail
 root=$(cd "$(dirname "$0")/../.." && pwd)
-# A mount namespace of its own for the two file systems, where there can be one: in a chroot (whose root is not
-# a mount point) there cannot, and they are mounted where the test runs and unmounted when it ends.
-if [[ -z ${AFFORD_TEST_MOUNTNS:-} ]] && unshare --mount true 2>/dev/null; then
-  exec unshare --mount env AFFORD_TEST_MOUNTNS=1 bash "$0" "$@"
-fi
 source "$root/tests/netns.sh"
+enter_mount_namespace "$0" "$@"  # for the file systems it mounts
 enter_test "$0" "$@"
 fail() { echo "$*"; exit 1; }
 mkdir -p "$out/ro" "$out/logs"
