@@ -127,6 +127,7 @@ Experiment prepare(const ExperimentRequest& request) {
   bool stamped = false;  // the run prefix is the wall clock's, to be reserved once all is checked
   if (request.resume) {
     x.state = unfinishedState(request);
+    x.notes = followMovedFolder(x.state, request);
     x.o = resumedRequest(request, x.state);
   } else {
     refuseUsedOutDir(request);
@@ -149,7 +150,7 @@ Experiment prepare(const ExperimentRequest& request) {
   planRuns(x);
   if (o.resume) {
     refuseChangedPlan(request, x.state.options, x.plan());
-    refuseOtherPlan(x.state.runs, fingerprint(x.runs), "intrinsic runs");
+    refuseOtherPlan(x.state.runs, fingerprint(x.runs, x.moves()), "intrinsic runs");
   }
   if (!x.merging()) checkProcesses(o.host, x.runs);
   // Everything checked: the prefix is reserved in the log root (stored, so --resume plans the same run ids),
@@ -242,7 +243,7 @@ void sayWhatRuns(const Experiment& x, spdlog::logger& log) {
 PhaseRuns runPhase(Experiment& x, Executor& exec, const std::vector<PlannedRun>& runs, bool extrinsic,
                    spdlog::logger& log) {
   exec.gather(runs, extrinsic);
-  PhaseRuns phase = keptRuns(runs, x.out());
+  PhaseRuns phase = keptRuns(runs, x.out(), x.moves());
   if (!extrinsic) phase.elsewhere = shardMask(x.o.host, runs.size());  // a shard's tests are those of its own agents
   if (x.o.resume) {
     if (!extrinsic)
@@ -327,9 +328,9 @@ Tests runTests(Experiment& x, Executor& exec, Summaries& s, spdlog::logger& log)
   std::vector<std::size_t> offsets;
   t.runs = concatRuns(part_tests, offsets);
   if (x.state.tests) {
-    refuseOtherPlan(*x.state.tests, fingerprint(t.runs), "extrinsic tests");
+    refuseOtherPlan(*x.state.tests, fingerprint(t.runs, x.moves()), "extrinsic tests");
   } else {
-    x.state.tests = fingerprint(t.runs);
+    x.state.tests = fingerprint(t.runs, x.moves());  // (as the experiment was started: see fingerprint)
     x.saveState();
   }
   for (const auto& e : t.untested) log.error("{}", e);
@@ -387,6 +388,7 @@ int runPrepared(Experiment& x, const std::chrono::steady_clock::time_point began
     exec = hostedExecutor(x, log, *pool, share);
   }
   if (!share.pool) installInterruptHandlers(resumeCommand(x.o));  // from here a signal stops the experiment in order
+  for (const std::string& note : x.notes) log.warn("{}", note);
   openFolder(x);
   sayWhatRuns(x, log);
   const PhaseRuns intrinsic = runPhase(x, *exec, x.runs, false, log);

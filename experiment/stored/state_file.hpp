@@ -46,6 +46,7 @@ struct StoppedAt {
 struct ExperimentState {
   std::string experiment;                   // its name
   std::string cwd;                          // where it was started (relative paths are from there)
+  std::optional<std::string> out;           // --out as given there (from 0.2.0; 0.1.0 named it in `resume` alone)
   ExperimentRequest options;                // as it runs (experiment/request.hpp)
   std::vector<RunFingerprint> runs;         // the intrinsic runs planned
   std::optional<std::vector<RunFingerprint>> tests;  // the extrinsic tests, once planned
@@ -55,10 +56,12 @@ struct ExperimentState {
   std::string state = "running";            // running, interrupted or finished
   std::string resume;                       // the command that continues it
   std::optional<std::string> afford_version;  // the build that wrote it last (afford --version); absent: 0.1.0
+  std::optional<std::vector<PathMove>> moved;  // from 0.2.0: where it was resumed after its folder moved
   template <class V>
   void visit(V& v) {
     v("experiment", experiment);
     v("cwd", cwd);
+    v("out", out);
     v("options", options);
     v("runs", runs);
     v("tests", tests);
@@ -68,6 +71,7 @@ struct ExperimentState {
     v("state", state);
     v("resume", resume);
     v("afford_version", afford_version);
+    v("moved", moved);
   }
 };
 inline constexpr std::uintmax_t kMostStateBytes = 64u << 20;  // an experiment.json (its plan's fingerprint)
@@ -78,7 +82,9 @@ ExperimentState readState(const std::filesystem::path& out);
 void writeState(const std::filesystem::path& out, const ExperimentState& state);
 
 // The fingerprints of the runs planned; refused when they are not those stored (naming the first that differs).
-std::vector<RunFingerprint> fingerprint(const std::vector<PlannedRun>& runs);
+// `moves`: the paths of their configurations as they were stored (a moved folder's fingerprints are those of
+// the paths it was started with).
+std::vector<RunFingerprint> fingerprint(const std::vector<PlannedRun>& runs, const std::vector<PathMove>& moves = {});
 void refuseOtherPlan(const std::vector<RunFingerprint>& stored, const std::vector<RunFingerprint>& now,
                      const std::string& what);
 
