@@ -127,7 +127,7 @@ Experiment prepare(const ExperimentRequest& request) {
   bool stamped = false;  // the run prefix is the wall clock's, to be reserved once all is checked
   if (request.resume) {
     x.state = unfinishedState(request);
-    x.notes = followMovedFolder(x.state, request);
+    x.followed = followMovedFolder(x.state, request);
     x.o = resumedRequest(request, x.state);
   } else {
     refuseUsedOutDir(request);
@@ -203,6 +203,8 @@ void openFolder(Experiment& x) {
     x.state.runs = fingerprint(x.runs);
     if (x.merging()) x.state.merged_from = x.o.merged_from;
   }
+  if (x.o.resume && !x.followed.was.empty() && x.followed.log_root_inside)
+    reclaimMovedRunFolders(x.o.plan.log_root, x.followed.was, x.o.write.out_dir);
   x.state.state = "running";
   x.state.resume = resumeCommand(x.o);
   x.saveState();
@@ -388,7 +390,7 @@ int runPrepared(Experiment& x, const std::chrono::steady_clock::time_point began
     exec = hostedExecutor(x, log, *pool, share);
   }
   if (!share.pool) installInterruptHandlers(resumeCommand(x.o));  // from here a signal stops the experiment in order
-  for (const std::string& note : x.notes) log.warn("{}", note);
+  for (const std::string& note : x.followed.notes) log.warn("{}", note);
   openFolder(x);
   sayWhatRuns(x, log);
   const PhaseRuns intrinsic = runPhase(x, *exec, x.runs, false, log);

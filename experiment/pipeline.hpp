@@ -45,7 +45,7 @@ struct Experiment {
   Hosting hosting;
   std::string bin;               // the processes' executables (udpm)
   OutDirLock lock;               // its folder's, from openFolder until it is over
-  std::vector<std::string> notes;  // to say before it runs (a resumed folder that moved)
+  FollowedFolder followed;       // a resumed folder that moved: what to say, where it was
   std::vector<PathMove> moves() const { return state.moved.value_or(std::vector<PathMove>{}); }
   bool merging() const { return !o.merged_from.empty(); }
   const Plan& plan() const { return parts.front().plan; }  // what every part shares

@@ -207,8 +207,9 @@ std::string storedOut(const ExperimentState& state) {
 }
 }  // namespace
 
-std::vector<std::string> followMovedFolder(ExperimentState& state, const ExperimentRequest& given) {
-  std::vector<std::string> notes;
+FollowedFolder followMovedFolder(ExperimentState& state, const ExperimentRequest& given) {
+  FollowedFolder followed;
+  std::vector<std::string>& notes = followed.notes;
   const fs::path here = fs::current_path();
   const fs::path started = state.cwd;
   const std::string stored_out = storedOut(state);
@@ -226,6 +227,7 @@ std::vector<std::string> followMovedFolder(ExperimentState& state, const Experim
       now = (inside == "." ? fs::path(given.write.out_dir) : fs::path(given.write.out_dir) / inside)
                 .lexically_normal()
                 .string();
+      if (option == std::string("--log-root")) followed.log_root_inside = true;
     } else if (!fs::path(*path).is_absolute() && here != started) {
       // Outside it, relative to where it was started: there still.
       if (!fs::is_directory(started))
@@ -252,9 +254,11 @@ std::vector<std::string> followMovedFolder(ExperimentState& state, const Experim
     if (!state.moved) state.moved.emplace();
     state.moved->insert(state.moved->end(), moves.begin(), moves.end());
   }
+  if (const fs::path is = fs::absolute(given.write.out_dir).lexically_normal(); !was.empty() && was != is)
+    followed.was = was.string();
   state.cwd = here.string();
   state.out = given.write.out_dir;
-  return notes;
+  return followed;
 }
 
 // The stored experiment's options, with the run options given now.

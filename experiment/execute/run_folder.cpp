@@ -122,6 +122,19 @@ void claimRunFolders(std::vector<const PlannedRun*> runs, const std::string& log
   }
 }
 
+void reclaimMovedRunFolders(const std::string& log_root, const std::string& was, const std::string& out_dir) {
+  std::error_code ec;
+  const std::string former = fs::path(was).lexically_normal().string();
+  for (auto it = fs::directory_iterator(log_root, ec); !ec && it != fs::directory_iterator(); it.increment(ec)) {
+    const fs::path note_file = it->path() / "run.json";
+    auto note = smallJson(note_file);
+    if (!note || fs::path(stringAt(*note, "out_dir")).lexically_normal().string() != former) continue;
+    (*note)["out_dir"] = fs::absolute(out_dir).lexically_normal().string();
+    (*note)["afford_version"] = affordVersion();
+    writeWhole(note_file, note->dump() + "\n");
+  }
+}
+
 std::string takeRunFolder(const fs::path& run_dir, const PlannedRun& run, const std::string& out_dir) {
   std::error_code ec;
   if (!fs::exists(run_dir, ec)) {

@@ -77,27 +77,76 @@ TEST(Versions, AnExperimentStateOf010WithoutAVersionReadsAsBefore) {
 }
 
 // A folder kept elsewhere (another machine, a repository's test data) with its logs inside it resumes there.
-TEST(Versions, AnInterruptedExperimentMovedWithItsLogsResumesWhereItIsNow) {
-  const std::string dir = test::tempDir("versions-moved");
+// An experiment started in DIR/a as `--out exp --log-root exp/logs`, cut in its extrinsic phase (its test not
+// finished), and its folder moved to DIR/b/<name>.
+void cutAndMove(const std::string& dir, const std::string& name) {
   fs::create_directories(dir + "/a");
   fs::create_directories(dir + "/b");
   const test::CommandResult r = test::runCommand(
       "cd " + dir + "/a && " +
-      test::afford("experiment base --system FIX --reps 2 --steps 50 --extrinsic-reps 0 --transport memq --quiet "
-                   "--keep-logs none --run-prefix m --out exp --log-root exp/logs"));
+      test::afford("experiment base --system FIX --reps 1 --steps 50 --extrinsic-reps 1 --scenarios scenario1 "
+                   "--transport memq --quiet --keep-logs none --run-prefix m --out exp --log-root exp/logs"));
   ASSERT_EQ(r.exit_code, 0) << r.output;
-  // As an interruption leaves it: the second run not finished.
+  // As an interruption leaves it: the test not finished.
   nlohmann::json state = test::readJson(dir + "/a/exp/experiment.json");
   state["state"] = "interrupted";
   std::ofstream(dir + "/a/exp/experiment.json") << state.dump(2);
-  fs::remove(dir + "/a/exp/runs/m-base-FIX-s2.json");
-  fs::rename(dir + "/a/exp", dir + "/b/exp");
+  fs::remove(dir + "/a/exp/runs/m-base-FIX-s1-scenario1-e0.json");
+  fs::rename(dir + "/a/exp", dir + "/b/" + name);
+}
+
+void expectFinishedThere(const std::string& dir, const std::string& folder, const test::CommandResult& resumed) {
+  ASSERT_EQ(resumed.exit_code, 0) << resumed.output;
+  EXPECT_EQ(test::readJson(folder + "/experiment.json")["state"], "finished");
+  EXPECT_TRUE(fs::exists(folder + "/runs/m-base-FIX-s1-scenario1-e0.json")) << resumed.output;
+  // The run folder is the experiment's where it is now; nothing was written where it was.
+  EXPECT_EQ(test::readJson(folder + "/logs/m-base-FIX-s1/run.json")["out_dir"], fs::absolute(folder).string());
+  EXPECT_FALSE(fs::exists(dir + "/a/exp")) << "the resumed experiment wrote where the folder was";
+}
+
+TEST(Versions, AnInterruptedExperimentMovedWithItsLogsResumesWhereItIsNow) {
+  const std::string dir = test::tempDir("versions-moved");
+  cutAndMove(dir, "exp");
   const test::CommandResult resumed =
       test::runCommand("cd " + dir + "/b && " + test::afford("experiment --resume --out exp --quiet"));
-  ASSERT_EQ(resumed.exit_code, 0) << resumed.output;
-  EXPECT_EQ(test::readJson(dir + "/b/exp/experiment.json")["state"], "finished");
-  EXPECT_TRUE(fs::exists(dir + "/b/exp/runs/m-base-FIX-s2.json"));
-  EXPECT_FALSE(fs::exists(dir + "/a/exp")) << "the resumed experiment wrote where the folder was";
+  expectFinishedThere(dir, dir + "/b/exp", resumed);
+}
+
+TEST(Versions, AMovedExperimentResumesUnderAnotherNameGivenFromElsewhere) {
+  // Its paths are spelt otherwise now (absolute, another name): its agent's checkpoint, named by the kept
+  // outcome and by the stored plan as exp/logs/..., is found where the folder is.
+  const std::string dir = test::tempDir("versions-renamed");
+  cutAndMove(dir, "renamed");
+  fs::create_directories(dir + "/c");
+  const test::CommandResult resumed = test::runCommand(
+      "cd " + dir + "/c && " + test::afford("experiment --resume --out " + dir + "/b/renamed --quiet"));
+  expectFinishedThere(dir, dir + "/b/renamed", resumed);
+  const nlohmann::json state = test::readJson(dir + "/b/renamed/experiment.json");
+  ASSERT_TRUE(state.contains("moved")) << state.dump(2);
+  EXPECT_EQ(state["moved"][0]["from"], "exp/logs");
+  EXPECT_EQ(state["moved"][0]["to"], dir + "/b/renamed/logs");
+  EXPECT_TRUE(fs::is_empty(dir + "/c")) << "the resumed experiment wrote in the folder it was resumed from";
+}
+
+TEST(Versions, AMovedExperimentWhoseLogRootStayedBehindIsRefusedNamingIt) {
+  // Its log root was relative to a folder that is gone, and outside the experiment's own: nothing to follow.
+  const std::string dir = test::tempDir("versions-behind");
+  fs::create_directories(dir + "/a");
+  const test::CommandResult r = test::runCommand(
+      "cd " + dir + "/a && " +
+      test::afford("experiment base --system FIX --reps 1 --steps 50 --extrinsic-reps 0 --transport memq --quiet "
+                   "--keep-logs none --run-prefix m --out exp --log-root logs"));
+  ASSERT_EQ(r.exit_code, 0) << r.output;
+  nlohmann::json state = test::readJson(dir + "/a/exp/experiment.json");
+  state["state"] = "interrupted";
+  std::ofstream(dir + "/a/exp/experiment.json") << state.dump(2);
+  fs::rename(dir + "/a/exp", dir + "/exp");
+  fs::remove_all(dir + "/a");
+  const test::CommandResult resumed =
+      test::runCommand("cd " + dir + " && " + test::afford("experiment --resume --out exp --quiet"));
+  EXPECT_EQ(resumed.exit_code, 2) << resumed.output;
+  EXPECT_NE(resumed.output.find("--log-root 'logs' is relative to that folder"), std::string::npos) << resumed.output;
+  EXPECT_NE(resumed.output.find(dir + "/a, which is gone"), std::string::npos) << resumed.output;
 }
 
 }  // namespace
