@@ -53,6 +53,14 @@ TEST(Versions, AnExperimentFolderSaysTheVersionThatWroteIt) {
   EXPECT_EQ(test::readJson(dir + "/out/summary.json")["afford_version"], affordVersion());
   EXPECT_EQ(readState(dir + "/out").afford_version, std::optional<std::string>(affordVersion()));
   EXPECT_EQ(test::readJson(dir + "/out/runs/v-base-FIX-s1.json")["afford_version"], affordVersion());
+  EXPECT_EQ(test::readJson(dir + "/logs/v-base-FIX-s1/run.json")["afford_version"], affordVersion());
+  // The agent it trained, kept for reuse; its checkpoint says the release too (test_predictors.cpp).
+  int agents = 0;
+  for (const auto& agent : fs::directory_iterator(dir + "/logs/agents")) {
+    EXPECT_EQ(test::readJson(agent.path() / "outcome.json")["afford_version"], affordVersion());
+    ++agents;
+  }
+  EXPECT_EQ(agents, 1);
 }
 
 TEST(Versions, AnExperimentStateOf010WithoutAVersionReadsAsBefore) {
