@@ -21,6 +21,7 @@
 #include "afford/node.hpp"
 #include "afford/process_main.hpp"
 #include "afford/processes.hpp"
+#include "afford/version.hpp"
 #include "experiment/execute/agents.hpp"
 #include "experiment/execute/execute.hpp"
 #include "experiment/execute/run_folder.hpp"
@@ -150,7 +151,7 @@ Experiment prepare(const ExperimentRequest& request) {
   planRuns(x);
   if (o.resume) {
     refuseChangedPlan(request, x.state.options, x.plan());
-    refuseOtherPlan(x.state.runs, fingerprint(x.runs, x.moves()), "intrinsic runs");
+    refuseOtherPlan(x.state.runs, fingerprint(x.runs, x.moves(), x.plannedBy()), "intrinsic runs");
   }
   if (!x.merging()) checkProcesses(o.host, x.runs);
   // Everything checked: the prefix is reserved in the log root (stored, so --resume plans the same run ids),
@@ -201,6 +202,7 @@ void openFolder(Experiment& x) {
     x.state.cwd = fs::current_path().string();
     x.state.options = x.o;
     x.state.runs = fingerprint(x.runs);
+    x.state.planned_by = affordVersion();
     if (x.merging()) x.state.merged_from = x.o.merged_from;
   }
   if (x.o.resume && !x.followed.was.empty() && x.followed.log_root_inside)
@@ -330,9 +332,9 @@ Tests runTests(Experiment& x, Executor& exec, Summaries& s, spdlog::logger& log)
   std::vector<std::size_t> offsets;
   t.runs = concatRuns(part_tests, offsets);
   if (x.state.tests) {
-    refuseOtherPlan(*x.state.tests, fingerprint(t.runs, x.moves()), "extrinsic tests");
+    refuseOtherPlan(*x.state.tests, fingerprint(t.runs, x.moves(), x.plannedBy()), "extrinsic tests");
   } else {
-    x.state.tests = fingerprint(t.runs, x.moves());  // (as the experiment was started: see fingerprint)
+    x.state.tests = fingerprint(t.runs, x.moves(), x.plannedBy());  // (as the experiment was started: see fingerprint)
     x.saveState();
   }
   for (const auto& e : t.untested) log.error("{}", e);

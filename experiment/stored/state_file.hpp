@@ -56,6 +56,7 @@ struct ExperimentState {
   std::string state = "running";            // running, interrupted or finished
   std::string resume;                       // the command that continues it
   std::optional<std::string> afford_version;  // the build that wrote it last (afford --version); absent: 0.1.0
+  std::optional<std::string> planned_by;      // the build that planned it (its fingerprints); absent: 0.1.0
   std::optional<std::vector<PathMove>> moved;  // from 0.2.0: where it was resumed after its folder moved
   template <class V>
   void visit(V& v) {
@@ -71,6 +72,7 @@ struct ExperimentState {
     v("state", state);
     v("resume", resume);
     v("afford_version", afford_version);
+    v("planned_by", planned_by);
     v("moved", moved);
   }
 };
@@ -84,7 +86,10 @@ void writeState(const std::filesystem::path& out, const ExperimentState& state);
 // The fingerprints of the runs planned; refused when they are not those stored (naming the first that differs).
 // `moves`: the paths of their configurations as they were stored (a moved folder's fingerprints are those of
 // the paths it was started with).
-std::vector<RunFingerprint> fingerprint(const std::vector<PlannedRun>& runs, const std::vector<PathMove>& moves = {});
+// `planned_by`: the release whose configurations they are to match: keys added since (config/migrations.yaml)
+// that hold the value that release had are left out, as it wrote them ("": this build's).
+std::vector<RunFingerprint> fingerprint(const std::vector<PlannedRun>& runs, const std::vector<PathMove>& moves = {},
+                                        const std::string& planned_by = "");
 void refuseOtherPlan(const std::vector<RunFingerprint>& stored, const std::vector<RunFingerprint>& now,
                      const std::string& what);
 
