@@ -5,7 +5,10 @@
 #   - every extrinsic test's log is explained;
 #   - the experiment folder reports and plots, and afford.load reads it; afford.read_log reads every log;
 #   - the experiment cut short resumes and finishes, its finished run kept as it was;
-#   - the study reports.
+#   - the study reports;
+#   - the components written against it (components/: C++ built unchanged by tests/CMakeLists.txt as
+#     compat-VERSION-NAME, Python as they are) run as the motivation of a run on the bus; the Python port of
+#     the paper's IMP gives the weights of the shipped one.
 #   tests/compat/read.sh BUILD_DIR WORK_DIR [VERSION...]   (default: every corpus)
 set -euo pipefail
 root=$(cd "$(dirname "$0")/../.." && pwd)
@@ -75,4 +78,35 @@ PY
 
   "$afford" tune --out study --report >study.txt 2>&1 || { cat study.txt; fail "the study does not report"; }
   echo "the study reports"
+
+  if [[ -d components ]]; then
+    export AFFORD_NETNS=none  # (the bus: 239.255.76.67 from --base-port on, ttl=0: it stays on this machine)
+    run_own() {  # NAME KIND COMMAND [EXTRA...]: a run with the component as its motivation
+      local name=$1 kind=$2 command=$3
+      shift 3
+      "$afford" experiment base --system IMP --reps 1 --steps 300 --seed 4 --extrinsic-reps 0 --quiet \
+        --transport udpm --base-port 7620 --keep-logs none --set motivation.kind="$kind" "$@" \
+        --process motivation="$command" --out "own-$name" --log-root "own-$name-logs" >"own-$name.txt" 2>&1 ||
+        { cat "own-$name.txt"; fail "a run with the component $name as its motivation failed"; }
+    }
+    checksum_of() { grep -o '"weights_checksum": "[0-9a-f]*"' "$1/summary.json" | head -1 | grep -o '[0-9a-f]\{16\}'; }
+    for src in components/*.cpp; do
+      [[ -e $src ]] || continue
+      name=$(basename "$src" .cpp)
+      exe=$build/bin/compat-$version-${name//_/-}
+      [[ -x $exe ]] || fail "$src was not built (expected $exe)"
+      run_own "$name" random "$exe"
+    done
+    if [[ -f components/motivations.py ]]; then
+      run_own py-paper py-paper "/usr/bin/python3 -m afford.process motivation $PWD/components/motivations.py:PyPaper" \
+        --set predictors.memory.keep=never
+      "$afford" experiment base --system IMP --reps 1 --steps 300 --seed 4 --extrinsic-reps 0 --quiet \
+        --transport memq --keep-logs none --set predictors.memory.keep=never --out paper --log-root paper-logs \
+        >paper.txt 2>&1 || { cat paper.txt; fail "the shipped IMP's run failed"; }
+      own=$(checksum_of own-py-paper) paper=$(checksum_of paper)
+      [[ -n $own && $own == "$paper" ]] ||
+        fail "the Python IMP written against $version gave other weights ($own) than the shipped one ($paper)"
+    fi
+    echo "its components ran as the motivation: $(ls components | tr '\n' ' ')"
+  fi
 done
