@@ -84,21 +84,25 @@ TEST(Versions, AnExperimentStateOf010WithoutAVersionReadsAsBefore) {
   EXPECT_EQ(report.exit_code, 0) << report.output;
 }
 
-// A folder kept elsewhere (another machine, a repository's test data) with its logs inside it resumes there.
-// An experiment started in DIR/a as `--out exp --log-root exp/logs`, cut in its extrinsic phase (its test not
+// An experiment run in FOLDER as `--out exp --log-root LOG_ROOT ...`, then marked as an interruption leaves it.
+void startedAndInterrupted(const std::string& folder, const std::string& log_root, const std::string& more) {
+  fs::create_directories(folder);
+  const test::CommandResult r = test::runCommand(
+      "cd " + folder + " && " +
+      test::afford("experiment base --system FIX --reps 1 --steps 50 --transport memq --quiet --keep-logs none "
+                   "--run-prefix m --out exp --log-root " + log_root + " " + more));
+  ASSERT_EQ(r.exit_code, 0) << r.output;
+  nlohmann::json state = test::readJson(folder + "/exp/experiment.json");
+  state["state"] = "interrupted";
+  std::ofstream(folder + "/exp/experiment.json") << state.dump(2);
+}
+
+// A folder kept elsewhere (another machine, a repository's test data) with its logs inside it resumes there:
+// an experiment started in DIR/a as `--out exp --log-root exp/logs`, cut in its extrinsic phase (its test not
 // finished), and its folder moved to DIR/b/<name>.
 void cutAndMove(const std::string& dir, const std::string& name) {
-  fs::create_directories(dir + "/a");
+  startedAndInterrupted(dir + "/a", "exp/logs", "--extrinsic-reps 1 --scenarios scenario1");
   fs::create_directories(dir + "/b");
-  const test::CommandResult r = test::runCommand(
-      "cd " + dir + "/a && " +
-      test::afford("experiment base --system FIX --reps 1 --steps 50 --extrinsic-reps 1 --scenarios scenario1 "
-                   "--transport memq --quiet --keep-logs none --run-prefix m --out exp --log-root exp/logs"));
-  ASSERT_EQ(r.exit_code, 0) << r.output;
-  // As an interruption leaves it: the test not finished.
-  nlohmann::json state = test::readJson(dir + "/a/exp/experiment.json");
-  state["state"] = "interrupted";
-  std::ofstream(dir + "/a/exp/experiment.json") << state.dump(2);
   fs::remove(dir + "/a/exp/runs/m-base-FIX-s1-scenario1-e0.json");
   fs::rename(dir + "/a/exp", dir + "/b/" + name);
 }
@@ -139,15 +143,7 @@ TEST(Versions, AMovedExperimentResumesUnderAnotherNameGivenFromElsewhere) {
 TEST(Versions, AMovedExperimentWhoseLogRootStayedBehindIsRefusedNamingIt) {
   // Its log root was relative to a folder that is gone, and outside the experiment's own: nothing to follow.
   const std::string dir = test::tempDir("versions-behind");
-  fs::create_directories(dir + "/a");
-  const test::CommandResult r = test::runCommand(
-      "cd " + dir + "/a && " +
-      test::afford("experiment base --system FIX --reps 1 --steps 50 --extrinsic-reps 0 --transport memq --quiet "
-                   "--keep-logs none --run-prefix m --out exp --log-root logs"));
-  ASSERT_EQ(r.exit_code, 0) << r.output;
-  nlohmann::json state = test::readJson(dir + "/a/exp/experiment.json");
-  state["state"] = "interrupted";
-  std::ofstream(dir + "/a/exp/experiment.json") << state.dump(2);
+  startedAndInterrupted(dir + "/a", "logs", "--extrinsic-reps 0");
   fs::rename(dir + "/a/exp", dir + "/exp");
   fs::remove_all(dir + "/a");
   const test::CommandResult resumed =
