@@ -21,6 +21,7 @@
 #include "afford/node.hpp"
 #include "afford/process_main.hpp"
 #include "afford/processes.hpp"
+#include "afford/version.hpp"
 #include "experiment/execute/agents.hpp"
 #include "experiment/execute/execute.hpp"
 #include "experiment/execute/run_folder.hpp"
@@ -127,6 +128,7 @@ Experiment prepare(const ExperimentRequest& request) {
   bool stamped = false;  // the run prefix is the wall clock's, to be reserved once all is checked
   if (request.resume) {
     x.state = unfinishedState(request);
+    x.followed = followMovedFolder(x.state, request);
     x.o = resumedRequest(request, x.state);
   } else {
     refuseUsedOutDir(request);
@@ -149,7 +151,7 @@ Experiment prepare(const ExperimentRequest& request) {
   planRuns(x);
   if (o.resume) {
     refuseChangedPlan(request, x.state.options, x.plan());
-    refuseOtherPlan(x.state.runs, fingerprint(x.runs), "intrinsic runs");
+    refuseOtherPlan(x.state.runs, fingerprint(x.runs, x.moves(), x.plannedBy()), "intrinsic runs");
   }
   if (!x.merging()) checkProcesses(o.host, x.runs);
   // Everything checked: the prefix is reserved in the log root (stored, so --resume plans the same run ids),
@@ -200,8 +202,11 @@ void openFolder(Experiment& x) {
     x.state.cwd = fs::current_path().string();
     x.state.options = x.o;
     x.state.runs = fingerprint(x.runs);
+    x.state.planned_by = affordVersion();
     if (x.merging()) x.state.merged_from = x.o.merged_from;
   }
+  if (x.o.resume && !x.followed.was.empty() && x.followed.log_root_inside)
+    reclaimMovedRunFolders(x.o.plan.log_root, x.followed.was, x.o.write.out_dir);
   x.state.state = "running";
   x.state.resume = resumeCommand(x.o);
   x.saveState();
@@ -242,7 +247,7 @@ void sayWhatRuns(const Experiment& x, spdlog::logger& log) {
 PhaseRuns runPhase(Experiment& x, Executor& exec, const std::vector<PlannedRun>& runs, bool extrinsic,
                    spdlog::logger& log) {
   exec.gather(runs, extrinsic);
-  PhaseRuns phase = keptRuns(runs, x.out());
+  PhaseRuns phase = keptRuns(runs, x.out(), x.moves());
   if (!extrinsic) phase.elsewhere = shardMask(x.o.host, runs.size());  // a shard's tests are those of its own agents
   if (x.o.resume) {
     if (!extrinsic)
@@ -327,9 +332,9 @@ Tests runTests(Experiment& x, Executor& exec, Summaries& s, spdlog::logger& log)
   std::vector<std::size_t> offsets;
   t.runs = concatRuns(part_tests, offsets);
   if (x.state.tests) {
-    refuseOtherPlan(*x.state.tests, fingerprint(t.runs), "extrinsic tests");
+    refuseOtherPlan(*x.state.tests, fingerprint(t.runs, x.moves(), x.plannedBy()), "extrinsic tests");
   } else {
-    x.state.tests = fingerprint(t.runs);
+    x.state.tests = fingerprint(t.runs, x.moves(), x.plannedBy());  // (as the experiment was started: see fingerprint)
     x.saveState();
   }
   for (const auto& e : t.untested) log.error("{}", e);
@@ -387,6 +392,7 @@ int runPrepared(Experiment& x, const std::chrono::steady_clock::time_point began
     exec = hostedExecutor(x, log, *pool, share);
   }
   if (!share.pool) installInterruptHandlers(resumeCommand(x.o));  // from here a signal stops the experiment in order
+  for (const std::string& note : x.followed.notes) log.warn("{}", note);
   openFolder(x);
   sayWhatRuns(x, log);
   const PhaseRuns intrinsic = runPhase(x, *exec, x.runs, false, log);

@@ -45,6 +45,10 @@ struct Experiment {
   Hosting hosting;
   std::string bin;               // the processes' executables (udpm)
   OutDirLock lock;               // its folder's, from openFolder until it is over
+  FollowedFolder followed;       // a resumed folder that moved: what to say, where it was
+  std::vector<PathMove> moves() const { return state.moved.value_or(std::vector<PathMove>{}); }
+  // The release whose configurations its stored fingerprints are of (0.1.0 did not say).
+  std::string plannedBy() const { return state.planned_by.value_or("0.1.0"); }
   bool merging() const { return !o.merged_from.empty(); }
   const Plan& plan() const { return parts.front().plan; }  // what every part shares
   std::filesystem::path out() const { return o.write.out_dir; }

@@ -12,6 +12,7 @@
 #include "afford/auth.hpp"
 #include "afford/checksum.hpp"
 #include "afford/config.hpp"
+#include "afford/process_main.hpp"
 #include "experiment/run/outcome.hpp"
 
 namespace afford {
@@ -181,7 +182,86 @@ void clearReplaced(const ExperimentRequest& o) {
   for (const fs::path& p : gone) fs::remove_all(p);
 }
 
-// The stored experiment's options, with the run options given now (--jobs, --transport, ...).
+namespace {
+// One word as shellQuoted wrote it; nullopt if it is not one.
+std::optional<std::string> shellWord(const std::string& s) {
+  std::string w;
+  bool quoted = false;
+  for (char c : s) {
+    if (c == '\'') quoted = !quoted;
+    else if (!quoted && (c == ' ' || c == '\\' || c == '"')) return std::nullopt;  // ('\'': '\'' ends and starts)
+    else w += c;
+  }
+  if (quoted || w.empty()) return std::nullopt;
+  return w;
+}
+
+// --out as the experiment was given it where it was started: stored from 0.2.0; 0.1.0 named it only in the
+// command that resumes it (`... --resume --out DIR`, DIR as shellQuoted writes it). "" if neither says.
+std::string storedOut(const ExperimentState& state) {
+  if (state.out) return *state.out;
+  const std::string flag = " --resume --out ";
+  const auto at = state.resume.rfind(flag);
+  if (at == std::string::npos) return "";
+  return shellWord(state.resume.substr(at + flag.size())).value_or("");
+}
+}  // namespace
+
+FollowedFolder followMovedFolder(ExperimentState& state, const ExperimentRequest& given) {
+  FollowedFolder followed;
+  std::vector<std::string>& notes = followed.notes;
+  const fs::path here = fs::current_path();
+  const fs::path started = state.cwd;
+  const std::string stored_out = storedOut(state);
+  // Where the folder was (from where it was started) and where it is.
+  const fs::path was = stored_out.empty() ? fs::path() : (started / stored_out).lexically_normal();
+  std::vector<PathMove> moves;
+  ExperimentRequest& o = state.options;
+  for (auto [option, path] : {std::pair{"--log-root", &o.plan.log_root}, {"--config-dir", &o.plan.config_dir}}) {
+    if (path->empty()) continue;  // (an empty --config-dir: the default)
+    const fs::path where = (started / *path).lexically_normal();
+    std::string now = *path;
+    if (const fs::path inside = was.empty() ? fs::path() : where.lexically_relative(was);
+        !inside.empty() && *inside.begin() != "..") {
+      // Inside the folder (moved to another machine, kept in a repository): inside it where it is now.
+      now = (inside == "." ? fs::path(given.write.out_dir) : fs::path(given.write.out_dir) / inside)
+                .lexically_normal()
+                .string();
+      if (option == std::string("--log-root")) followed.log_root_inside = true;
+    } else if (!fs::path(*path).is_absolute() && here != started) {
+      // Outside it, relative to where it was started: there still.
+      if (!fs::is_directory(started))
+        throw ConfigError("--resume: the experiment in " + given.write.out_dir + " was started in " + state.cwd +
+                          ", which is gone, and its " + option + " '" + *path +
+                          "' is relative to that folder and outside the experiment's own: make " + state.cwd +
+                          " hold it again, or move it inside the experiment's folder");
+      now = where.string();
+    }
+    if (option == std::string("--config-dir") && !fs::is_directory(now)) {
+      // A config folder that is gone (the source tree or installation that started it moved or was upgraded):
+      // the one named now, or this build's own. A configuration that differs is refused below (its runs'
+      // fingerprints), never run.
+      const std::string instead = given.given.count("--config-dir") ? given.plan.config_dir : defaultConfigDir();
+      notes.push_back("--resume: the experiment's --config-dir " + *path + " is gone; its runs are planned with " +
+                      (given.given.count("--config-dir") ? "the --config-dir given, " : "this build's, ") +
+                      instead + " (its runs must come out the same: any that differ are refused)");
+      now = instead;
+    }
+    if (now != *path) moves.push_back({*path, now});
+    *path = now;
+  }
+  if (!moves.empty()) {
+    if (!state.moved) state.moved.emplace();
+    state.moved->insert(state.moved->end(), moves.begin(), moves.end());
+  }
+  if (const fs::path is = fs::absolute(given.write.out_dir).lexically_normal(); !was.empty() && was != is)
+    followed.was = was.string();
+  state.cwd = here.string();
+  state.out = given.write.out_dir;
+  return followed;
+}
+
+// The stored experiment's options, with the run options given now.
 ExperimentRequest resumedRequest(const ExperimentRequest& given, const ExperimentState& state) {
   ExperimentRequest o = state.options;
   o.write.out_dir = given.write.out_dir;
@@ -206,12 +286,6 @@ ExperimentRequest resumedRequest(const ExperimentRequest& given, const Experimen
   // else's (attached): then as the experiment stored it (a plain --resume then names the command that works).
   if (o.resume_with.empty() || o.host.attach.empty() || !procsCommand().empty() || has("--attach") || has("--bus-key"))
     o.resume_with = reachCommand(o);
-  const std::string& cwd = state.cwd;
-  if (fs::current_path() != fs::path(cwd))
-    for (const auto& [option, path] : {std::pair{"--log-root", o.plan.log_root}, {"--config-dir", o.plan.config_dir}})
-      if (!path.empty() && fs::path(path).is_relative())  // (an empty --config-dir: the default, not a path)
-        throw ConfigError("--resume: the experiment in " + given.write.out_dir + " was started in " + cwd + ", and its " +
-                          option + " '" + path + "' is relative to that folder: resume it from there");
   return o;
 }
 

@@ -52,6 +52,16 @@ void refuseUsedOutDir(const ExperimentRequest& o);
 // (its log root, if inside, stays). After refuseUsedOutDir, under the lock.
 void clearReplaced(const ExperimentRequest& o);
 // The stored experiment's request, with the run options given now (--jobs, --transport, ...).
+// A resumed experiment whose folder was moved (or is resumed from another folder): its log root and config dir
+// as they are found now (inside the folder: where it is now; relative to the folder it was started in: there;
+// a config dir that is gone: the --config-dir given, else this build's), recorded in state.moved; state.cwd
+// and state.out are those of now. ConfigError if a path cannot be found.
+struct FollowedFolder {
+  std::vector<std::string> notes;  // what to tell the user
+  std::string was;                 // where the folder was, absolute, if it moved since; else ""
+  bool log_root_inside = false;    // its log root moved with it
+};
+FollowedFolder followMovedFolder(ExperimentState& state, const ExperimentRequest& given);
 ExperimentRequest resumedRequest(const ExperimentRequest& given, const ExperimentState& state);
 // The stored experiment of DIR, if it did not finish.
 ExperimentState unfinishedState(const ExperimentRequest& given);

@@ -8,6 +8,7 @@
 
 #include "afford/node.hpp"
 #include "afford/process_main.hpp"
+#include "afford/version.hpp"
 #include "apps/afford/commands.hpp"
 #include "afford/config.hpp"
 #include "afford/logging.hpp"
@@ -15,6 +16,8 @@
 int main(int argc, char** argv) {
   CLI::App app{"afford: an embodied agent learning affordances (intrinsic phase) and solving extrinsic tasks", "afford"};
   app.require_subcommand(1);
+  // The release and the commit it was built from (CHANGELOG.md says what each release changed).
+  app.set_version_flag("--version", std::string("afford ") + afford::affordVersion());
   auto log = afford::makeLogger("afford");
   afford::FrontDoor door{afford::defaultConfigDir(), argv[0], std::vector<std::string>(argv + 1, argv + argc), log.get()};
   app.add_option("--config-dir", door.config_dir, "folder with defaults.yaml and experiments/")->capture_default_str();

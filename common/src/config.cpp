@@ -1,5 +1,7 @@
 #include "afford/config.hpp"
 
+#include <spdlog/spdlog.h>
+
 #include <algorithm>
 #include <cctype>
 #include <cmath>
@@ -12,6 +14,7 @@
 #include <sstream>
 
 #include "afford/image.hpp"
+#include "afford/migrations.hpp"
 #include "afford/yaml_reader.hpp"
 
 namespace afford {
@@ -323,7 +326,16 @@ ProtocolConfig loadProtocol(const std::string& config_dir) {
   return parseProtocol(root["protocol"]);
 }
 
-RunConfig parseRunConfig(const YAML::Node& root) {
+RunConfig parseRunConfig(const YAML::Node& given) {
+  // In this build's form: a configuration an earlier release wrote lacks keys added since, or spells renamed
+  // ones as it did (config/migrations.yaml); each change is said once.
+  YAML::Node root = YAML::Clone(given);
+  for (const std::string& line : upgradeConfig(root, configMigrations())) {
+    static std::mutex mutex;
+    static std::set<std::string> said;
+    const std::lock_guard<std::mutex> lock(mutex);
+    if (said.insert(line).second) spdlog::warn("configuration of an earlier release: {}", line);
+  }
   ConfigReader r(root, "");
   RunConfig c;
   Parser v(r);

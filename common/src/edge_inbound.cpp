@@ -300,7 +300,7 @@ void EdgeInbound::askMissing() {
   };
   for (const SerialTracker::Request& r : serials_.due(Clock::now(), may_ask)) {
     log_->debug("{}: asking for serials {}..{}", r.channel, r.first, r.last);
-    resend_t m;
+    resend_t m{};
     m.run_id = run_;
     m.step = 0;
     m.config_digest = request_.config_digest;

@@ -11,6 +11,7 @@
 #include <mutex>
 
 #include "afford/auth.hpp"
+#include "afford/version.hpp"
 #include "afford/bus.hpp"
 #include "afford/logging.hpp"
 
@@ -59,24 +60,6 @@ void boundHeapGrowth() {
   mallopt(M_TRIM_THRESHOLD, 256 * 1024);
 }
 
-std::string installedShareDir() {
-  std::error_code ec;
-  const std::filesystem::path exe = std::filesystem::read_symlink("/proc/self/exe", ec);
-  if (ec) return "";
-  const std::filesystem::path share = exe.parent_path().parent_path() / "share" / "afford";
-  return std::filesystem::is_regular_file(share / "config" / "defaults.yaml", ec) ? share.string() : "";
-}
-
-std::string defaultConfigDir() {
-  const std::string share = installedShareDir();
-  return share.empty() ? std::string(AFFORD_SOURCE_DIR) + "/config" : share + "/config";
-}
-
-std::string defaultLogRoot() {
-  const char* env = std::getenv("AFFORD_LOGS");
-  return env && *env ? std::string(env) : std::string("logs");
-}
-
 void CLIHook::option(const std::string& name, std::string& target, const std::string& help) {
   static_cast<CLI::App*>(app_)->add_option(name, target, help)->capture_default_str();
 }
@@ -85,6 +68,7 @@ int processMain(int argc, char** argv, const ProcessSpec& spec, const std::funct
                 const std::function<std::unique_ptr<NodeBase>(lcm::LCM&, std::shared_ptr<spdlog::logger>,
                                                               const ProtocolConfig&)>& make_node) {
   CLI::App app{spec.description, "afford-" + spec.name};
+  app.set_version_flag("--version", "afford-" + spec.name + " " + affordVersion());
   std::string url = "udpm://239.255.76.67:7667?ttl=0";
   std::string level = "info";
   std::string config_dir = defaultConfigDir();

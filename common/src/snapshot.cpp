@@ -13,6 +13,7 @@
 
 #include "afford/names.hpp"
 #include "afford/seal.hpp"
+#include "afford/version.hpp"
 
 namespace afford {
 
@@ -20,7 +21,8 @@ namespace fs = std::filesystem;
 
 namespace {
 constexpr char kMagic[] = "afford snapshot\n";  // 16 bytes
-constexpr std::int64_t kVersion = 1;
+// 1: the fields; 2: the build that wrote it (afford --version) after the format, then the fields (0.2.0 on).
+constexpr std::int64_t kVersion = 2;
 constexpr std::uint64_t kFnvBasis = 0xCBF29CE484222325ull;
 
 std::string sectionMark(const char* name) { return std::string("[") + name + "]"; }
@@ -41,6 +43,7 @@ SnapshotWriter::SnapshotWriter(std::string path) : path_(std::move(path)), tmp_(
   if (!file_) throw SnapshotError("snapshot " + tmp_ + ": cannot be written (" + std::strerror(errno) + ")");
   put(kMagic, sizeof kMagic - 1);
   i64(kVersion);
+  str(affordVersion());
 }
 
 SnapshotWriter::~SnapshotWriter() {
@@ -189,8 +192,11 @@ SnapshotReader::SnapshotReader(std::string path, std::uint64_t max_bytes) : path
   char magic[sizeof kMagic - 1];
   take("magic", magic, sizeof magic);
   if (std::memcmp(magic, kMagic, sizeof magic) != 0) refuse("magic", "not an afford snapshot");
-  if (const std::int64_t v = i64("version"); v != kVersion)
-    refuse("version", "format " + std::to_string(v) + ", this build reads format " + std::to_string(kVersion));
+  const std::int64_t v = i64("version");
+  if (v < 1 || v > kVersion)
+    refuse("version", "format " + std::to_string(v) + ", this build reads formats 1 to " + std::to_string(kVersion) +
+                          " (written by a later release: restart the process with that release)");
+  written_by_ = v >= 2 ? str("written by", 64) : "0.1.0 or earlier";
 }
 
 SnapshotReader::~SnapshotReader() {

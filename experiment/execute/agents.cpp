@@ -69,12 +69,14 @@ namespace {
 struct StoredAgent {
   std::string run_id, experiment, key;
   RunOutcome outcome;
+  std::optional<std::string> afford_version;  // the build that stored it (from 0.2.0)
   template <class V>
   void visit(V& v) {
     v("run_id", run_id);
     v("experiment", experiment);
     v("key", key);
     v("outcome", outcome);
+    v("afford_version", afford_version);
   }
 };
 
@@ -138,7 +140,7 @@ void AgentStore::keep(const std::string& key, const std::string& run_id, const s
   link(part, false);
   RunOutcome kept = r;
   kept.reused_from.clear();
-  writeWhole(part / "outcome.json", toJsonOf(StoredAgent{run_id, experiment, key, kept}).dump() + "\n");
+  writeWhole(part / "outcome.json", toJsonOf(StoredAgent{run_id, experiment, key, kept, std::string(affordVersion())}).dump() + "\n");
   std::error_code ec;
   fs::rename(part, dir, ec);
   if (ec) fs::remove_all(part);  // another runner kept the same agent first

@@ -220,13 +220,21 @@ PhaseRuns slicePhase(const PhaseRuns& all, std::size_t offset, std::size_t n) {
   return p;
 }
 
+std::string movedPath(std::string path, const std::vector<PathMove>& moves) {
+  for (const PathMove& m : moves)
+    if (path == m.from || path.rfind(m.from + "/", 0) == 0) path = m.to + path.substr(m.from.size());
+  return path;
+}
+
 // The outcomes kept by an earlier invocation (--resume); none on a fresh start.
-PhaseRuns keptRuns(const std::vector<PlannedRun>& runs, const fs::path& out) {
+PhaseRuns keptRuns(const std::vector<PlannedRun>& runs, const fs::path& out, const std::vector<PathMove>& moves) {
   PhaseRuns phase;
   phase.outcomes.resize(runs.size());
   phase.finished.assign(runs.size(), 0);
   for (std::size_t i = 0; i < runs.size(); ++i)
     if (auto r = keptOutcome(out, runs[i].spec)) {
+      if (!r->checkpoint.empty()) r->checkpoint = movedPath(r->checkpoint, moves);
+      if (!r->log_dir.empty()) r->log_dir = movedPath(r->log_dir, moves);
       phase.outcomes[i] = std::move(*r);
       phase.finished[i] = 1;
     }

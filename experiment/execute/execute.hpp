@@ -31,8 +31,24 @@ struct PhaseRuns {
 };
 
 
+// A folder the experiment's paths named when it was started, and where it is now: the experiment folder was
+// moved with its log root or config dir inside it, and resumed where it is now (a path stored as `from`, in a
+// configuration or an outcome, is read as `to`).
+struct PathMove {
+  std::string from, to;
+  template <class V>
+  void visit(V& v) {
+    v("from", from);
+    v("to", to);
+  }
+};
+// `path` as the moves say it is now (each in turn).
+std::string movedPath(std::string path, const std::vector<PathMove>& moves);
+
 // The outcomes kept by an earlier invocation (--resume); none on a fresh start.
-PhaseRuns keptRuns(const std::vector<PlannedRun>& runs, const std::filesystem::path& out);
+// `moves`: folders moved since (their paths in the outcomes are read as they are now).
+PhaseRuns keptRuns(const std::vector<PlannedRun>& runs, const std::filesystem::path& out,
+                   const std::vector<PathMove>& moves);
 
 // The `n` runs of `all` from `offset` on, as a phase of their own.
 PhaseRuns slicePhase(const PhaseRuns& all, std::size_t offset, std::size_t n);

@@ -11,6 +11,7 @@
 #include <nlohmann/json.hpp>
 
 #include "afford/config.hpp"
+#include "afford/version.hpp"
 #include "experiment/run/outcome.hpp"
 
 namespace afford {
@@ -54,7 +55,7 @@ std::string claim(const fs::path& run_dir, const PlannedRun& run, const std::str
   try {
     writeWhole(run_dir / "run.json",
                json{{"run_id", run.spec.run_id}, {"experiment", run.spec.experiment},
-                    {"out_dir", fs::absolute(out_dir).string()}}
+                    {"out_dir", fs::absolute(out_dir).string()}, {"afford_version", affordVersion()}}
                        .dump() + "\n");
   } catch (const std::exception& e) {
     fs::remove(run_dir, ec);
@@ -118,6 +119,19 @@ void claimRunFolders(std::vector<const PlannedRun*> runs, const std::string& log
       fs::remove(m, ec);
     }
     throw ConfigError(why + ": choose another --run-prefix or --log-root");
+  }
+}
+
+void reclaimMovedRunFolders(const std::string& log_root, const std::string& was, const std::string& out_dir) {
+  std::error_code ec;
+  const std::string former = fs::path(was).lexically_normal().string();
+  for (auto it = fs::directory_iterator(log_root, ec); !ec && it != fs::directory_iterator(); it.increment(ec)) {
+    const fs::path note_file = it->path() / "run.json";
+    auto note = smallJson(note_file);
+    if (!note || fs::path(stringAt(*note, "out_dir")).lexically_normal().string() != former) continue;
+    (*note)["out_dir"] = fs::absolute(out_dir).lexically_normal().string();
+    (*note)["afford_version"] = affordVersion();
+    writeWhole(note_file, note->dump() + "\n");
   }
 }
 

@@ -28,6 +28,11 @@ void refuseHeldRunFolders(const std::vector<const PlannedRun*>& runs, const std:
 // cannot be made.
 void claimRunFolders(std::vector<const PlannedRun*> runs, const std::string& log_root, const std::string& out_dir);
 
+// An experiment folder moved from `was` (absolute, as its run folders' run.json name it) to out_dir, with its
+// log root inside it: the run folders there that name `was` are this experiment's where it is now (their
+// run.json says so from here on). A folder naming another experiment is left as it is.
+void reclaimMovedRunFolders(const std::string& log_root, const std::string& was, const std::string& out_dir);
+
 // As a run starts: its folder is this experiment's already (claimed), or is claimed now. "" or why the run cannot
 // have it.
 std::string takeRunFolder(const std::filesystem::path& run_dir, const PlannedRun& run, const std::string& out_dir);

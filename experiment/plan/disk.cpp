@@ -30,7 +30,7 @@ std::uint64_t stepBytes(const RunConfig& c, const std::string& run_id) {
   Focus f;
   f.image.assign(3u * static_cast<std::size_t>(side) * side, 0);
   focus_t focus = focusMessage(run_id, c.steps, f, focus_t::SCENE_SCAN, 0, side);
-  scene_t scene;
+  scene_t scene{};
   scene.run_id = run_id;
   scene.data = encodeScene(Environment(c).render());
   scene.size = static_cast<int32_t>(scene.data.size());
@@ -43,7 +43,7 @@ std::uint64_t stepBytes(const RunConfig& c, const std::string& run_id) {
   t.run_id = run_id;
   prediction_t prediction = predictionMessage(run_id, focus, p, t);
   decision_t decision = decisionMessage(run_id, prediction, Decision{});
-  affordance_table_t table;
+  affordance_table_t table{};
   table.run_id = run_id;
   table.n_actions = kNumActions;
   table.affordance.assign(c.world.objects.size(), std::vector<double>(kNumActions, 0.0));
@@ -74,7 +74,7 @@ std::uint64_t goalsStepBytes(const RunConfig& c, const std::string& run_id) {
   Goal g;
   g.image.assign(image, 0);
   const goal_t goal = goalMessage(run_id, c.steps, 0, g, c.goals.budget);
-  goal_result_t result;
+  goal_result_t result{};
   result.run_id = run_id;
   const int depth = std::max(1, c.planner.max_depth);
   forward_query_t query;

@@ -17,7 +17,7 @@ void RunReach::add(const LogEvent& e) {
   const BoundsContext ctx{protocol_, nullptr};
   std::string why;
   if (!configured_) {
-    run_config_t m;
+    run_config_t m{};
     if (e.channel != ch::runConfig.name || !decodeChecked(e.data.data(), e.data.size(), ctx, m, why)) return;
     configured_ = true;
     digest_ = m.digest;
@@ -31,7 +31,7 @@ void RunReach::add(const LogEvent& e) {
     return;
   }
   if (e.channel == ch::runControl.name) {
-    run_control_t c;
+    run_control_t c{};
     if (decodeChecked(e.data.data(), e.data.size(), ctx, c, why) && c.command == run_control_t::STOP &&
         c.config_digest == digest_)
       stopped_ = true;

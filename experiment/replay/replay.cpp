@@ -148,7 +148,7 @@ bool RunSelector::take(const LogEvent& e) {
       tagged(e);  // (counted, and said once: why no RUN_CONFIG may come)
       return false;
     }
-    run_config_t rc;
+    run_config_t rc{};
     std::string why;
     if (!decodeChecked(e.data.data(), e.data.size(), BoundsContext{&observer_, nullptr}, rc, why)) {
       ++refused_configs_;
@@ -244,7 +244,7 @@ void ReplayedProcess::feed(const LogEvent& e) {
 }
 
 bool isStop(const LogEvent& e, const BoundsContext& ctx) {
-  run_control_t c;
+  run_control_t c{};
   std::string why;
   return e.channel == ch::runControl.name && decodeChecked(e.data.data(), e.data.size(), ctx, c, why) &&
          c.command == run_control_t::STOP;
@@ -255,7 +255,7 @@ namespace {
 // A recorded START or STOP of the run's request, made out to the configuration replayed (its checkpoint taken
 // out: another digest), which the replayed processes took.
 void readdressControl(LogEvent& e, const BoundsContext& ctx, std::int64_t recorded, std::int64_t replayed) {
-  run_control_t c;
+  run_control_t c{};
   std::string why;
   if (e.channel != ch::runControl.name || !decodeChecked(e.data.data(), e.data.size(), ctx, c, why) ||
       c.config_digest != recorded)

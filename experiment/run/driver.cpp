@@ -129,7 +129,7 @@ bool RunDriver::ours(const std::string& process) const {
 }
 
 void RunDriver::sendControl(const std::string& run_id, int8_t command, std::int64_t config_digest) {
-  run_control_t c;
+  run_control_t c{};
   c.run_id = run_id;
   c.step = command == run_control_t::STOP && spec_ && run_id == spec_->run_id ? spec_->steps : 0;
   c.command = command;

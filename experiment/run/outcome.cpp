@@ -9,6 +9,7 @@
 #include <algorithm>
 
 #include "afford/config.hpp"
+#include "afford/version.hpp"
 #include "experiment/schema/codec.hpp"
 
 namespace afford {
@@ -58,7 +59,8 @@ RunOutcome outcomeFromJson(const json& j, const std::string& what) { return from
 // A finished run's outcome, kept as it finishes: --resume does not run it again.
 void keepOutcome(const fs::path& out, const std::string& run_id, const RunOutcome& r) {
   fs::create_directories(out / "runs");
-  writeJsonWhole(outcomePath(out, run_id), json{{"run_id", run_id}, {"outcome", outcomeToJson(r)}});
+  writeJsonWhole(outcomePath(out, run_id),
+                 json{{"run_id", run_id}, {"outcome", outcomeToJson(r)}, {"afford_version", affordVersion()}});
 }
 
 std::uintmax_t mostOutcomeBytes(const RunSpec& spec) {
@@ -84,7 +86,10 @@ std::optional<RunOutcome> keptOutcome(const fs::path& out, const RunSpec& spec) 
     const json j = readJsonFile(path, mostOutcomeBytes(spec));
     if (!j.is_object() || !j.contains("run_id") || j["run_id"] != run_id)
       throw std::runtime_error("it is not the outcome of run '" + run_id + "'");
-    if (j.size() != 2 || !j.contains("outcome")) throw std::runtime_error("expected the keys run_id and outcome");
+    // afford_version: the build that wrote it (from 0.2.0; 0.1.0 wrote the other two alone).
+    const bool versioned = j.contains("afford_version") && j["afford_version"].is_string();
+    if (j.size() != 2u + versioned || !j.contains("outcome"))
+      throw std::runtime_error("expected the keys run_id, outcome and afford_version");
     return outcomeFromJson(j.at("outcome"), path.string() + ": outcome");
   } catch (const std::exception& e) {
     throw ConfigError("cannot read " + path.string() + ": " + e.what());

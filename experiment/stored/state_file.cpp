@@ -4,6 +4,8 @@
 
 #include "afford/checksum.hpp"
 #include "afford/config.hpp"
+#include "afford/migrations.hpp"
+#include "afford/version.hpp"
 #include "experiment/run/outcome.hpp"
 #include "experiment/schema/codec.hpp"
 
@@ -22,14 +24,28 @@ ExperimentState readState(const fs::path& out) {
 }
 
 void writeState(const fs::path& out, const ExperimentState& state) {
-  writeWhole(statePath(out), toJsonOf(state).dump(2) + "\n");
+  ExperimentState written = state;
+  written.afford_version = affordVersion();
+  writeWhole(statePath(out), toJsonOf(written).dump(2) + "\n");
 }
 
-std::vector<RunFingerprint> fingerprint(const std::vector<PlannedRun>& runs) {
+std::vector<RunFingerprint> fingerprint(const std::vector<PlannedRun>& runs, const std::vector<PathMove>& moves,
+                                        const std::string& planned_by) {
   std::vector<RunFingerprint> f;
   for (const auto& p : runs) {
+    // A configuration names its folders as paths (its checkpoint's: <log root>/<run>/predictors.ckpt): as
+    // they were stored, each moved folder's path where the text names it, the last move first.
+    std::string text = planned_by.empty() ? p.spec.config_yaml : configAsWrittenBy(p.spec.config_yaml, planned_by, configMigrations());
+    for (auto m = moves.rbegin(); m != moves.rend(); ++m) {
+      const std::string now = m->to + "/";
+      for (std::size_t at = 0; (at = text.find(now, at)) != std::string::npos;) {
+        const bool starts = at == 0 || text[at - 1] == ' ' || text[at - 1] == '"' || text[at - 1] == '\'';
+        if (starts) text.replace(at, m->to.size(), m->from);
+        at += (starts ? m->from : m->to).size() + 1;
+      }
+    }
     Fnv1a h;
-    h.add(p.spec.config_yaml.data(), p.spec.config_yaml.size());
+    h.add(text.data(), text.size());
     f.push_back({p.spec.run_id, h.hex()});
   }
   return f;

@@ -60,7 +60,7 @@ void EnvironmentNode::onStart() {
 
 void EnvironmentNode::publishScene(std::int64_t step, int8_t cause, bool scan, int action, double tx, double ty,
                                    const cv::Mat* image, const std::vector<cv::Point2d>* centres) {
-  scene_t s;
+  scene_t s{};
   s.run_id = runId();
   s.step = step;
   s.cause = cause;

@@ -1,5 +1,7 @@
 #include "motivation/component.hpp"
 
+#include <spdlog/spdlog.h>
+
 #include "afford/components.hpp"
 
 namespace afford {
@@ -37,6 +39,16 @@ ComponentRegistry<MotivationComponent, MotivationParams>& registry() {
 }  // namespace
 
 void registerMotivation(const std::string& kind, MotivationFactory factory) { registry().add(kind, std::move(factory)); }
+
+void registerRunConfigMotivation(const std::string& kind, RunConfigMotivationFactory factory) {
+  spdlog::warn("motivation '{}': its factory takes the whole RunConfig, which is deprecated since 0.2.0 and kept for "
+               "that release only: take const afford::MotivationParams& (its section, system, seed, steps, and "
+               "config_text for the rest) (docs/writing-a-component.md)",
+               kind);
+  registry().add(kind, [factory = std::move(factory)](const MotivationParams& p) {
+    return factory(parseRunConfigText(p.config_text));
+  });
+}
 
 std::vector<std::string> motivationKinds() { return registry().kinds(); }
 

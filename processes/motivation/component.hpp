@@ -19,6 +19,7 @@
 #include <memory>
 #include <optional>
 #include <string>
+#include <type_traits>
 #include <vector>
 
 #include "afford/actions.hpp"
@@ -67,6 +68,20 @@ class MotivationComponent {
 using MotivationFactory = std::function<std::unique_ptr<MotivationComponent>(const MotivationParams&)>;
 // Make `kind` available to motivation.kind (a process of one's own does this before processMain).
 void registerMotivation(const std::string& kind, MotivationFactory factory);
+
+// Deprecated: a factory of the whole RunConfig (the form of the docs before MotivationParams). It still
+// registers: it is given the run's configuration parsed from MotivationParams::config_text, and says once, when
+// registered, what to write instead. To be removed in the release after 0.2.0 (docs/releases.md).
+using RunConfigMotivationFactory = std::function<std::unique_ptr<MotivationComponent>(const RunConfig&)>;
+void registerRunConfigMotivation(const std::string& kind, RunConfigMotivationFactory factory);
+template <class F, std::enable_if_t<std::is_invocable_v<const F&, const RunConfig&> &&
+                                        !std::is_invocable_v<const F&, const MotivationParams&>,
+                                    int> = 0>
+[[deprecated("a motivation's factory takes const afford::MotivationParams& (its section, system, seed, steps and "
+             "config_text); the RunConfig form is kept for 0.2.0 only")]] void
+registerMotivation(const std::string& kind, F factory) {
+  registerRunConfigMotivation(kind, RunConfigMotivationFactory(std::move(factory)));
+}
 // The kinds registered, the shipped ones first.
 std::vector<std::string> motivationKinds();
 // The component motivation.kind names; throws ConfigError naming the key and the kinds known.

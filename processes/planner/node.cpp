@@ -254,7 +254,7 @@ void PlannerNode::endIteration() {
 
 void PlannerNode::finish(bool success) {
   finished_ = true;
-  extrinsic_result_t r;
+  extrinsic_result_t r{};
   r.run_id = runId();
   r.step = step_ + 1;
   r.scenario = config().scenario->name;
@@ -354,7 +354,7 @@ void PlannerNode::goalIterationDone() {
   after_action_ = false;
   if (!core_->subGoalActive()) return endGoal(true);
   if (!after_action) {  // the object affords nothing to try: a pass
-    decision_t d;
+    decision_t d{};
     d.run_id = runId();
     d.step = step_;
     d.acted = false;
@@ -372,7 +372,7 @@ void PlannerNode::goalIterationDone() {
 }
 
 void PlannerNode::endGoal(bool reached) {
-  goal_result_t r;
+  goal_result_t r{};
   r.run_id = runId();
   r.step = step_;
   r.id = goal_->id;

@@ -352,7 +352,7 @@ void PredictorsNode::saveActionsCheckpoint() {
 }
 
 void PredictorsNode::publishTable(std::int64_t step) {
-  affordance_table_t t;
+  affordance_table_t t{};
   t.run_id = runId();
   t.step = step;
   t.n_actions = kNumActions;

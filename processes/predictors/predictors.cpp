@@ -19,6 +19,7 @@
 #include "afford/names.hpp"
 #include "afford/rng.hpp"
 #include "afford/snapshot.hpp"
+#include "afford/version.hpp"
 
 namespace afford {
 
@@ -157,8 +158,10 @@ constexpr char kMagic[8] = {'A', 'F', 'F', 'O', 'R', 'D', 'C', 'K'};
 // checkpoint (uint64), then the plain checkpoint (kMagic ...) deflated by zlib.
 constexpr char kPackedMagic[8] = {'A', 'F', 'F', 'O', 'R', 'D', 'C', 'Z'};
 // 1: weights and counters; 2: then a byte saying whether a memory follows, and the memory;
-// 3: as 2, with the affordance component's kind (a length, then the name) after the header.
-constexpr std::uint32_t kVersion = 3;
+// 3: as 2, with the affordance component's kind (a length, then the name) after the header;
+// 4: as 3, then the release that wrote it (a length, then afford --version), 0.2.0 on.
+constexpr std::uint32_t kVersion = 4;
+constexpr std::uint32_t kMostNameBytes = 64;
 }  // namespace
 
 template <class F>
@@ -280,15 +283,12 @@ class Inflater : public std::streambuf {
 template <class Out>
 void Predictors::writePlain(Out& raw, const std::string& checksum, const std::string& memory) const {
   raw.write(kMagic, sizeof kMagic);
-  // The paper's component: format 2, as ever; another: format 3, which names it.
-  const bool paper = config_.affordance_kind == "paper";
-  const std::uint32_t header[2] = {paper ? 2u : kVersion, static_cast<std::uint32_t>(input_size_)};
+  const std::uint32_t header[2] = {kVersion, static_cast<std::uint32_t>(input_size_)};
   raw.write(header, sizeof header);
-  if (!paper) {
-    const auto& kind = config_.affordance_kind;
-    const auto size = static_cast<std::uint32_t>(kind.size());
+  for (const std::string& name : {config_.affordance_kind, std::string(affordVersion())}) {
+    const auto size = static_cast<std::uint32_t>(name.size());
     raw.write(&size, sizeof size);
-    raw.write(kind.data(), kind.size());
+    raw.write(name.data(), name.size());
   }
   forEachWeightArray([&](const double* d, std::size_t n) { raw.write(d, n * sizeof(double)); });
   raw.write(executed_.data(), sizeof executed_);
@@ -447,14 +447,16 @@ void Predictors::loadFrom(std::istream& in, const std::string& path) {
   if (header[1] != static_cast<std::uint32_t>(input_size_))
     throw std::runtime_error("checkpoint " + path + ": focus images of " + std::to_string(header[1]) +
                              " values, this run uses " + std::to_string(input_size_));
-  std::string kind = "paper";
-  if (header[0] >= 3) {
+  const auto name = [&](const char* what) {
     std::uint32_t size = 0;
     in.read(reinterpret_cast<char*>(&size), sizeof size);
-    if (!in || size > 64) throw std::runtime_error("checkpoint " + path + ": truncated, or not a component's name");
-    kind.assign(size, '\0');
-    in.read(kind.data(), size);
-  }
+    if (!in || size > kMostNameBytes) throw std::runtime_error("checkpoint " + path + ": truncated, or not " + what);
+    std::string s(size, '\0');
+    in.read(s.data(), size);
+    return s;
+  };
+  const std::string kind = header[0] >= 3 ? name("a component's name") : "paper";
+  written_by_ = header[0] >= 4 ? name("a release's name") : "0.1.0 or earlier";
   if (kind != config_.affordance_kind)
     throw std::runtime_error("checkpoint " + path + ": its affordance predictor is '" + printable(kind) +
                              "', this run's predictors.affordance.kind is '" + config_.affordance_kind + "'");

@@ -103,7 +103,7 @@ class Predictors {
   // same decisions; checkpoints written plain before still load). save() writes atomically (temp + rename);
   // load() throws std::runtime_error naming the file and the problem (missing,
   // wrong format, other dimensions, another affordance component, checksum
-  // mismatch). A component other than the paper's is named in the file.
+  // mismatch). The file names its affordance component and the release that wrote it (format 4, 0.2.0 on).
   // `checksum`: weightsChecksum() if the caller has it already (it takes a
   // pass over every weight), "" to compute it.
   void save(const std::string& path, const std::string& checksum = "") const;
@@ -120,6 +120,8 @@ class Predictors {
   const Memory* memory() const { return memory_.get(); }
   std::int64_t replayedUpdates() const { return replayed_; }         // affordance updates replayed
   std::int64_t replayedEffectUpdates() const { return replayed_effects_; }  // forward-model updates replayed
+  // The release that wrote the checkpoint last loaded ("0.1.0 or earlier" before format 4); "" if none was.
+  const std::string& checkpointWrittenBy() const { return written_by_; }
 
  private:
   SparseInput whereInput(int action, double x, double y, double tx, double ty) const;
@@ -138,6 +140,7 @@ class Predictors {
   std::unique_ptr<AffordanceComponent> affordance_;
   std::vector<Layer> what_, where_;
   std::array<std::int64_t, kNumActions> executed_{}, successes_{};
+  std::string written_by_;
   std::unique_ptr<Memory> memory_;
   std::int64_t replayed_ = 0, replayed_effects_ = 0;
 };

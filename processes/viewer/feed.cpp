@@ -136,7 +136,7 @@ bool ViewFeed::take(const LogEvent& e, std::string& why) {
   withChannel(e.channel, [&](const auto& c) {
     using Msg = typename std::decay_t<decltype(c)>::Message;
     if constexpr (std::is_same_v<Msg, run_config_t>) {
-      run_config_t m;
+      run_config_t m{};
       if (!decodeChecked(e.data.data(), e.data.size(), ctx, m, why)) return void(taken = false);
       if (!wanted_.empty() ? m.run_id != wanted_ : !shown_.empty() && m.run_id != shown_) return;
       why = handleConfig(m, nullptr);

@@ -15,6 +15,7 @@
 
 #include "afford/protocol.hpp"
 #include "afford/logging.hpp"
+#include "afford/version.hpp"
 #include "afford/bus.hpp"
 #include "afford/edge.hpp"
 #include "afford/node.hpp"
@@ -24,6 +25,7 @@
 
 int main(int argc, char** argv) {
   CLI::App app{"afford viewer: watch a run (scene, gaze, goal, focus, affordances, motivation)", "afford-viewer"};
+  app.set_version_flag("--version", std::string("afford-viewer ") + afford::affordVersion());
   std::string url = "udpm://239.255.76.67:7667?ttl=0", png_dir, level = "info";
   std::int64_t every = 10, max_frames = 0;
   app.add_option("--lcm-url", url, "LCM provider URL of the run")->capture_default_str();

@@ -30,7 +30,7 @@ std::optional<StepKey> stepKeyOf(const LogEvent& e, Phase phase, const BoundsCon
   if (!sealIntact(e.data.data(), e.data.size())) return std::nullopt;
   std::string why;
   if (e.channel == ch::runControl.name) {
-    run_control_t m;
+    run_control_t m{};
     if (!decodeChecked(e.data.data(), e.data.size(), ctx, m, why)) return std::nullopt;
     return StepKey{m.command == run_control_t::START ? StepKey::kBefore : StepKey::kAfter, rank};
   }
@@ -71,7 +71,7 @@ void StepTrail::advance(At& at) const {
 namespace {
 // The run's phase, from its RUN_CONFIG (intrinsic if it does not say: the tool refuses such a run itself).
 Phase phaseOf(const LogEvent& e, const BoundsContext& ctx) {
-  run_config_t m;
+  run_config_t m{};
   std::string why;
   if (e.channel != ch::runConfig.name || !decodeChecked(e.data.data(), e.data.size(), ctx, m, why))
     return Phase::Intrinsic;

@@ -51,6 +51,9 @@ def load_class(target: str):
 
 def main(argv: list[str] | None = None) -> int:
     argv = sys.argv[1:] if argv is None else argv
+    if argv == ["--version"]:
+        print(f"afford.process {_afford.version}")
+        return 0
     if len(argv) < 2 or argv[0] in ("-h", "--help"):
         print(USAGE, file=sys.stderr)
         return 2

@@ -209,3 +209,10 @@ def test_a_goal_out_of_the_scene_fails_the_run_naming_the_field(tmp_path):
     with pytest.raises(afford.ExperimentError, match=r"goal chooser 'out-of-place' \(Python\): next\(\) at step 0 "
                                                      r"\(goal 0\) returned x = 1\.5"):
         afford.run("base", system="GOALS", reps=1, steps=20, out=tmp_path / "oop", goals=OutOfPlace, log_level="off")
+
+
+def test_the_process_module_says_the_version_it_is():
+    r = subprocess.run([sys.executable, "-m", "afford.process", "--version"], capture_output=True, text=True,
+                       timeout=60)
+    assert r.returncode == 0, r.stderr
+    assert r.stdout == f"afford.process {afford.__version__}\n"

@@ -1,7 +1,7 @@
 #!/usr/bin/env bash
 # Records a release's compatibility corpus: what that release writes, kept under tests/data/compat/VERSION/ for
 # every later build to read (tests/compat/read.sh, ctest Compat.*). Run it once per release, with a build of the
-# release's own commit (scripts/release.sh does), never with a later build.
+# release's own commit (docs/releases.md, "Making a release"), never with a later build.
 #   tests/compat/record.sh BUILD_DIR VERSION
 # It writes, each small and fast to make (memq: one process, no network):
 #   experiment/  an IMP and a GOALS agent trained 200 steps and tested in scenario2 (summary.json, runs/,
@@ -9,6 +9,8 @@
 #                checkpoints and stored agents
 #   cut/         an experiment of two runs stopped by SIGINT once its first run finished: --resume continues it
 #   study/       a study of two trials (afford tune), its journal and report
+#   components/  the components written against it, as its source tree has them: the example motivation
+#                (C++, built unchanged by later builds) and the Python motivations of its tests
 #   written-by   the version and commit that wrote it all
 set -euo pipefail
 root=$(cd "$(dirname "$0")/../.." && pwd)
@@ -50,4 +52,6 @@ PYTHONPATH=$build/python AFFORD_BIN=$build/bin "$afford" tune base --out study -
 printf '%s\n' "$made" >written-by
 mkdir -p "$out"
 cp -a experiment cut study written-by "$out/"
+mkdir -p "$out/components"
+cp "$root"/examples/random-motivation/*.cpp "$root/python/tests/motivations.py" "$out/components/"
 echo "record.sh: the corpus of $version ($made) is in $out: $(du -sh "$out" | cut -f1)"

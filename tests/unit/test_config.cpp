@@ -10,6 +10,7 @@
 #include <sstream>
 
 #include "afford/config.hpp"
+#include "afford/migrations.hpp"
 #include "tests/support.hpp"
 #include "experiment/design/experiment_file.hpp"
 
@@ -426,6 +427,86 @@ TEST(Configuration, EveryDefaultNamesItsSource) {
         << "' (begin its comment with paper ..., authors' code or ours)";
   }
   EXPECT_GT(checked, 50);
+}
+
+}  // namespace
+}  // namespace afford
+
+namespace afford {
+namespace {
+
+// A configuration as an earlier release wrote it: the table says what it lacks or spells otherwise.
+TEST(Migrations, AKeyAddedSinceAReleaseTakesTheValueTheTableGivesInAConfigurationOfBefore) {
+  YAML::Node old = baseTree();
+  old["goals"].remove("held");  // as before goals.held
+  EXPECT_NE(errorOf(old).find("goals.held"), std::string::npos) << "taken with no table entry";
+  ConfigMigrations m;
+  m.added.push_back({"goals.held", "0.2.0", YAML::Load("64")});
+  YAML::Node upgraded = YAML::Clone(old);
+  const std::vector<std::string> said = upgradeConfig(upgraded, m);
+  ASSERT_EQ(said.size(), 1u);
+  EXPECT_EQ(said[0], "goals.held: absent (written before 0.2.0), read as 64");
+  EXPECT_EQ(parseRunConfig(upgraded).goals.held, 64);
+  // A configuration that has the key keeps its own value.
+  YAML::Node now = baseTree();
+  EXPECT_TRUE(upgradeConfig(now, m).empty());
+  EXPECT_EQ(parseRunConfig(now).goals.held, parseRunConfig(baseTree()).goals.held);
+}
+
+TEST(Migrations, AConfigurationOfThisBuildReadsAsTheReleaseBeforeTheKeyWroteIt) {
+  // What an experiment planned by that release keeps (its runs' fingerprints) is compared with this.
+  YAML::Node then = baseTree();
+  then["goals"].remove("held");
+  const std::string old_text = emitYaml(then), now_text = emitYaml(baseTree());
+  ConfigMigrations m;
+  m.added.push_back({"goals.held", "0.3.0", YAML::Clone(baseTree()["goals"]["held"])});
+  EXPECT_EQ(configAsWrittenBy(now_text, "0.2.0+abc", m), old_text);
+  EXPECT_EQ(configAsWrittenBy(now_text, "0.3.0", m), now_text);
+  // Another value than the one it stands for: no configuration of before had it.
+  YAML::Node other = baseTree();
+  other["goals"]["held"] = 8;
+  EXPECT_EQ(configAsWrittenBy(emitYaml(other), "0.2.0", m), emitYaml(other));
+  EXPECT_TRUE(releaseBefore("0.9.0", "0.10.0"));
+  EXPECT_FALSE(releaseBefore("0.2.0+abc", "0.2.0"));
+}
+
+TEST(Migrations, ARenamedKeyIsReadUnderItsNewNameAndSaidSo) {
+  YAML::Node old = baseTree();
+  const double leak = old["motivation"]["leak"].as<double>();
+  old["motivation"]["leak_rate"] = 0.25;  // as if it had been spelt so before
+  old["motivation"].remove("leak");
+  ConfigMigrations m;
+  m.renamed.push_back({"motivation.leak_rate", "motivation.leak", "0.2.0"});
+  const std::vector<std::string> said = upgradeConfig(old, m);
+  ASSERT_EQ(said.size(), 1u) << leak;
+  EXPECT_NE(said[0].find("motivation.leak_rate is spelt motivation.leak since 0.2.0"), std::string::npos);
+  EXPECT_DOUBLE_EQ(parseRunConfig(old).motivation.leak, 0.25);
+  // Both spelt: the new one counts, and the old one is an unknown key, named.
+  YAML::Node both = baseTree();
+  both["motivation"]["leak_rate"] = 0.25;
+  EXPECT_TRUE(upgradeConfig(both, m).empty());
+  EXPECT_THROW(parseRunConfig(both), ConfigError);
+}
+
+TEST(Migrations, TheShippedTableNamesKeysOfThisBuildAndAMalformedOneIsRefusedNamingTheEntry) {
+  const ConfigMigrations& shipped = loadMigrations(std::string(AFFORD_SOURCE_DIR) + "/config/migrations.yaml");
+  std::set<std::string> keys;
+  for (const KeyInfo& k : configKeys()) keys.insert(k.key);
+  for (const auto& a : shipped.added) EXPECT_TRUE(keys.count(a.key)) << a.key << " is not a key of this build";
+  for (const auto& r : shipped.renamed) {
+    EXPECT_TRUE(keys.count(r.to)) << r.to << " is not a key of this build";
+    EXPECT_FALSE(keys.count(r.from)) << r.from << " is still a key of this build";
+  }
+  const std::string dir = test::tempDir("migrations");
+  std::ofstream(dir + "/bad.yaml") << "added:\n  - {key: goals.held, value: 3}\n";
+  try {
+    loadMigrations(dir + "/bad.yaml");
+    ADD_FAILURE() << "an entry without its release was taken";
+  } catch (const ConfigError& e) {
+    EXPECT_NE(std::string(e.what()).find("bad.yaml: added[0]: needs release"), std::string::npos) << e.what();
+  }
+  std::ofstream(dir + "/other.yaml") << "removed: []\n";
+  EXPECT_THROW(loadMigrations(dir + "/other.yaml"), ConfigError);
 }
 
 }  // namespace

@@ -8,6 +8,7 @@
 #include "motivation/component.hpp"
 #include "motivation/goals.hpp"
 #include "motivation/motivation.hpp"
+#include "tests/said.hpp"
 #include "tests/support.hpp"
 
 namespace afford {
@@ -398,6 +399,40 @@ TEST(GoalChooser, GoalsAreKeyedDrawsAndASnapshotRestoresThem) {
     distinct.emplace(static_cast<int>(g.module), g.x + 10 * g.object_x);
   }
   EXPECT_GT(distinct.size(), 3U);  // the draws differ from goal to goal
+}
+
+}  // namespace
+}  // namespace afford
+
+namespace afford {
+namespace {
+
+// The stable surface (docs/writing-a-component.md): a motivation factory of the whole RunConfig, the form before
+// MotivationParams, still registers, is given the run's configuration, and says once what to write instead.
+TEST(ComponentSurface, AMotivationFactoryOfTheWholeRunConfigStillRegistersAndSaysWhatToWriteInstead) {
+  test::Said said;
+  const auto before = spdlog::default_logger();
+  spdlog::set_default_logger(said.log);
+  std::int64_t seed = -1;
+  std::string experiment;
+#pragma GCC diagnostic push
+#pragma GCC diagnostic ignored "-Wdeprecated-declarations"
+  registerMotivation("whole-config", [&](const RunConfig& c) {
+    seed = c.seed;
+    experiment = c.experiment;
+    return makeNoveltyMotivation(MotivationParams(c));
+  });
+#pragma GCC diagnostic pop
+  spdlog::set_default_logger(before);
+  EXPECT_EQ(said.count("motivation 'whole-config': its factory takes the whole RunConfig, which is deprecated"), 1)
+      << said.text.str();
+  EXPECT_EQ(said.count("take const afford::MotivationParams&"), 1) << said.text.str();
+  // As the motivation process has it: parsed from the RUN_CONFIG's text.
+  const RunConfig c =
+      parseRunConfigText(test::shippedConfigYaml("base", System::IMP, 7, 1000, {"motivation.kind=whole-config"}));
+  EXPECT_NE(makeMotivation(MotivationParams(c)), nullptr);
+  EXPECT_EQ(seed, 7);
+  EXPECT_EQ(experiment, "base");
 }
 
 }  // namespace

@@ -9,6 +9,7 @@
 #include <fstream>
 
 #include "afford/actions.hpp"
+#include "afford/version.hpp"
 #include "environment/environment.hpp"
 #include "predictors/affordance.hpp"
 #include "predictors/predictors.hpp"
@@ -371,8 +372,7 @@ TEST_F(Fixture, TheAffordanceKindPicksTheComponentAndItsStateIsTheChecksumsAndTh
             std::string::npos);
 }
 
-TEST_F(Fixture, ThePapersCheckpointsKeepTheirFormat) {
-  // Format 2, as before components: checkpoints of the paper's agent are written as they were.
+TEST_F(Fixture, ACheckpointSaysItsFormatItsComponentAndTheReleaseThatWroteIt) {
   Predictors p(imp);
   const std::string dir = test::tempDir("ckpt-format");
   p.save(dir + "/p.ckpt");
@@ -380,8 +380,51 @@ TEST_F(Fixture, ThePapersCheckpointsKeepTheirFormat) {
   ASSERT_FALSE(plain.empty()) << "the checkpoint does not inflate";
   std::uint32_t version = 0;
   std::memcpy(&version, plain.data() + 8, sizeof version);
-  EXPECT_EQ(version, 2u);
-  EXPECT_EQ(plain.size(), 8 + 8 + 4 * (2 * 1324 + 1323 * 1324) * 8 + (5 + 3 + 3 + 3) * 2 * 8 + 2 * 4 * 8 + 1 + 16);
+  EXPECT_EQ(version, 4u);
+  const std::string release = affordVersion();
+  EXPECT_NE(plain.find("paper"), std::string::npos);
+  EXPECT_NE(plain.find(release), std::string::npos);
+  EXPECT_EQ(plain.size(), 8 + 8 + (4 + 5) + (4 + release.size()) + 4 * (2 * 1324 + 1323 * 1324) * 8 +
+                              (5 + 3 + 3 + 3) * 2 * 8 + 2 * 4 * 8 + 1 + 16);
+  Predictors back(imp);
+  back.load(dir + "/p.ckpt");
+  EXPECT_EQ(back.checkpointWrittenBy(), release);
+  EXPECT_EQ(back.weightsChecksum(), p.weightsChecksum());
+}
+
+TEST(Checkpoints, EveryCheckpointAnEarlierReleaseWroteLoadsToTheWeightsItKept) {
+  // tests/data/compat/<release>: each run's checkpoint and each stored agent's, loaded with the run's
+  // configuration (its log's manifest), give the checksum of the weights the release kept for it.
+  namespace fs = std::filesystem;
+  int loaded = 0;
+  for (const auto& release : fs::directory_iterator(std::string(AFFORD_SOURCE_DIR) + "/tests/data/compat")) {
+    const fs::path logs = release.path() / "experiment/logs";
+    const std::string name = release.path().filename().string();
+    const auto load = [&](const fs::path& ckpt, const std::string& run_id, const std::string& checksum) {
+      SCOPED_TRACE(ckpt.string());
+      const std::string config_yaml = test::readJson(logs / run_id / "manifest.json")["config_yaml"];
+      Predictors p(parseRunConfigText(config_yaml));
+      p.load(ckpt.string());
+      EXPECT_EQ(p.weightsChecksum(), checksum);
+      // (0.1.0 wrote format 2, which does not say; later ones say themselves: "0.2.0+<commit>")
+      EXPECT_EQ(p.checkpointWrittenBy().substr(0, name == "0.1.0" ? std::string::npos : name.size() + 1),
+                name == "0.1.0" ? "0.1.0 or earlier" : name + "+");
+      ++loaded;
+    };
+    for (const auto& dir : fs::directory_iterator(logs)) {
+      if (dir.path().filename() == "agents") {
+        for (const auto& agent : fs::directory_iterator(dir.path())) {
+          const auto stored = test::readJson(agent.path() / "outcome.json");
+          load(agent.path() / "predictors.ckpt", stored["run_id"], stored["outcome"]["weights_checksum"]);
+        }
+      } else if (fs::exists(dir.path() / "predictors.ckpt")) {
+        const std::string id = dir.path().filename().string();
+        load(dir.path() / "predictors.ckpt", id,
+             test::readJson(release.path() / "experiment/runs" / (id + ".json"))["outcome"]["weights_checksum"]);
+      }
+    }
+  }
+  EXPECT_GE(loaded, 4) << "the corpus holds fewer checkpoints than it was recorded with";
 }
 
 TEST_F(Fixture, AnAffordanceKindNotBuiltInIsRefusedNamingTheKey) {

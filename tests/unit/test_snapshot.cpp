@@ -25,7 +25,9 @@
 #include "afford/process_status_t.hpp"
 #include "afford/protocol.hpp"
 #include "afford/resend_t.hpp"
+#include "afford/seal.hpp"
 #include "afford/snapshot.hpp"
+#include "afford/version.hpp"
 #include "experiment/plan/disk.hpp"
 #include "tests/in_process.hpp"
 #include "tests/support.hpp"
@@ -112,6 +114,32 @@ TEST(Snapshot, ADamagedCutOrForeignFileIsRefusedNamingIt) {
     r.within("n", 0, 3);
   });
   EXPECT_NE(big.find("n: 7 is outside [0, 3]"), std::string::npos) << big;
+}
+
+TEST(Snapshot, ASnapshotSaysTheReleaseThatWroteItAndOneOf010WhichDidNotStillReads) {
+  const std::string dir = test::tempDir("snapshot-release");
+  writeSample(dir + "/now.snapshot", 5);
+  EXPECT_EQ(SnapshotReader(dir + "/now.snapshot", 1 << 20).writtenBy(), affordVersion());
+  // As 0.1.0 wrote it (format 1): the magic, the format, the fields, their FNV-1a 64.
+  const std::string now = test::slurp(dir + "/now.snapshot");
+  const std::size_t head = 16, named = 8 + std::string(affordVersion()).size();
+  std::string old = now.substr(0, head + 8) + now.substr(head + 8 + named, now.size() - 8 - head - 8 - named);
+  const std::int64_t one = 1;
+  old.replace(head, 8, reinterpret_cast<const char*>(&one), 8);
+  const std::uint64_t sum = fnv1a64(old.data(), old.size());
+  old.append(reinterpret_cast<const char*>(&sum), 8);
+  std::ofstream(dir + "/old.snapshot", std::ios::binary) << old;
+  EXPECT_EQ(readSample(dir + "/old.snapshot"), 5);
+  EXPECT_EQ(SnapshotReader(dir + "/old.snapshot", 1 << 20).writtenBy(), "0.1.0 or earlier");
+  // One of a later format than this build reads is refused, saying so.
+  std::string later = old;
+  const std::int64_t nine = 9;
+  later.replace(head, 8, reinterpret_cast<const char*>(&nine), 8);
+  const std::uint64_t later_sum = fnv1a64(later.data(), later.size() - 8);
+  later.replace(later.size() - 8, 8, reinterpret_cast<const char*>(&later_sum), 8);
+  std::ofstream(dir + "/later.snapshot", std::ios::binary) << later;
+  const std::string why = refusal([&] { SnapshotReader r(dir + "/later.snapshot", 1 << 20); });
+  EXPECT_NE(why.find("version: format 9, this build reads formats 1 to"), std::string::npos) << why;
 }
 
 // A process killed with SIGKILL in the middle of writing its next snapshot:

@@ -159,7 +159,7 @@ class Hostile {
       if (n >= 8 && coin(0.5)) writeBig(b, 0, 8, static_cast<std::uint64_t>(channels_[ch].hash));
     } else if (k == "resend") {
       for (std::size_t i = 0, n = pick(1, 10); i < n; ++i) {
-        afford::resend_t r;
+        afford::resend_t r{};
         r.run_id = run_;
         r.step = 0;
         r.channel = realChannel();
@@ -174,7 +174,7 @@ class Hostile {
     } else if (k == "paths") {
       return sendPaths();
     } else if (k == "control") {
-      afford::run_control_t c;
+      afford::run_control_t c{};
       c.run_id = run_;
       c.step = static_cast<std::int64_t>(pick(0, 1'000'000'000));
       c.command = afford::run_control_t::START;
@@ -200,7 +200,7 @@ class Hostile {
     } else if (k == "forge") {
       return sendForgery();
     } else if (k == "config") {
-      afford::run_config_t c;
+      afford::run_config_t c{};
       c.run_id = coin(0.5) ? run_ + "-not" : run_;
       c.step = 0;
       c.request = static_cast<std::int64_t>(rng_());
@@ -287,7 +287,7 @@ class Hostile {
     if (run_.empty()) return;
     const double kind = std::uniform_real_distribution<double>(0, 1)(rng_);
     if (kind < 0.05) {
-      afford::run_control_t c;
+      afford::run_control_t c{};
       c.run_id = run_;
       c.step = 0;
       c.command = afford::run_control_t::STOP;
@@ -369,7 +369,7 @@ class Hostile {
     if (ch == afford::ch::focus.name && afford::peekRunId(d, size, 4096, run)) run_ = run;
     std::string why;
     if (ch == afford::ch::runConfig.name) {
-      afford::run_config_t c;
+      afford::run_config_t c{};
       if (afford::decodeChecked(d, size, {&g_protocol, nullptr}, c, why) && c.run_id == run_) config_ = c;
       else if (config_.run_id.empty() && afford::decodeChecked(d, size, {&g_protocol, nullptr}, c, why)) config_ = c;
     }

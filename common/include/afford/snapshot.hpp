@@ -3,7 +3,8 @@
 // snapshot was taken instead of from the run's first step, so that its peers
 // can let go of what they published before it.
 //
-// The file: a magic line, the format version, the fields in the order the
+// The file: a magic line, the format version, the release that wrote it (afford --version; from format 2,
+// 0.2.0), the fields in the order the
 // process wrote them (each section named, so a reader out of step with its
 // writer stops at the section, naming it), and the FNV-1a 64 of everything
 // before it. It is written to `<path>.tmp`, flushed to the disk, and renamed
@@ -117,6 +118,8 @@ class SnapshotReader {
   // Every field read: nothing is left before the checksum.
   void end();
   const std::string& path() const { return path_; }
+  // The release that wrote it (afford --version; "0.1.0" for format 1, which did not say).
+  const std::string& writtenBy() const { return written_by_; }
   [[noreturn]] void refuse(const std::string& field, const std::string& why) const;
 
  private:
@@ -124,6 +127,7 @@ class SnapshotReader {
   std::string path_;
   std::FILE* file_ = nullptr;
   std::uint64_t left_ = 0;  // bytes of fields not read yet
+  std::string written_by_;
 };
 
 }  // namespace afford
