@@ -6,6 +6,8 @@
 #   - the experiment folder reports and plots, and afford.load reads it; afford.read_log reads every log;
 #   - the experiment cut short resumes and finishes, its finished run kept as it was;
 #   - the study reports;
+#   - every message type whose fingerprint changed since (types.txt) has its earlier form kept in
+#     lcmtypes/compat/VERSION/ (docs/releases.md, "Message types across releases");
 #   - the components written against it (components/: C++ built unchanged by tests/CMakeLists.txt as
 #     compat-VERSION-NAME, Python as they are) run as the motivation of a run on the bus; the Python port of
 #     the paper's IMP gives the weights of the shipped one.
@@ -34,6 +36,17 @@ for version in "${versions[@]}"; do
   cp -a "$root/tests/data/compat/$version" "$work/$version"
   cd "$work/$version"
   echo "== $version ($(cat written-by)), read by $("$afford" --version 2>/dev/null || echo "a build without --version")"
+
+  if [[ -f types.txt ]]; then
+    "$build/bin/afford-type-fingerprints" >types-now.txt
+    while read -r type then; do
+      [[ $type != \#* ]] || continue
+      now=$(awk -v t="$type" '$1 == t { print $2 }' types-now.txt)
+      [[ $now == "$then" || -f $root/lcmtypes/compat/$version/$type.lcm ]] ||
+        fail "message type $type changed since $version (fingerprint $then, now ${now:-gone}): its logs would read as foreign messages; keep $version's $type in lcmtypes/compat/$version/ and read it there (docs/releases.md)"
+    done <types.txt
+    echo "its message types: each as it was, or its earlier form kept"
+  fi
 
   intrinsic=0 tests=0
   for log in experiment/logs/*/; do

@@ -11,6 +11,7 @@
 #   study/       a study of two trials (afford tune), its journal and report
 #   components/  the components written against it, as its source tree has them: the example motivation
 #                (C++, built unchanged by later builds) and the Python motivations of its tests
+#   types.txt    the LCM fingerprint of each message type (what its logs hold at the head of each message)
 #   written-by   the version and commit that wrote it all
 set -euo pipefail
 root=$(cd "$(dirname "$0")/../.." && pwd)
@@ -50,8 +51,10 @@ PYTHONPATH=$build/python AFFORD_BIN=$build/bin "$afford" tune base --out study -
   { cat study.txt; exit 1; }
 
 printf '%s\n' "$made" >written-by
+{ echo "# the LCM fingerprint of each message type of $version, by afford-type-fingerprints of $made"
+  "$build/bin/afford-type-fingerprints"; } >types.txt
 mkdir -p "$out"
-cp -a experiment cut study written-by "$out/"
+cp -a experiment cut study written-by types.txt "$out/"
 mkdir -p "$out/components"
 cp "$root"/examples/random-motivation/*.cpp "$root/python/tests/motivations.py" "$out/components/"
 echo "record.sh: the corpus of $version ($made) is in $out: $(du -sh "$out" | cut -f1)"
