@@ -10,6 +10,7 @@
 #include <deque>
 #include <functional>
 #include <mutex>
+#include <sstream>
 #include <thread>
 
 #include "experiment/run/group.hpp"
@@ -192,7 +193,10 @@ RunOutcome runOverUdpm(const PlannedRun& run, const HostRequest& o, const std::s
 }  // namespace
 
 void checkHostRequest(const HostRequest& o) {
-  if (o.jobs < 1) throw ConfigError("--jobs must be at least 1");
+  if (o.jobs < 1) throw ConfigError("--jobs must be at least 1, not " + std::to_string(o.jobs));
+  if (!(o.stall_seconds > 0))
+    throw ConfigError("--stall-seconds must be more than 0, not " + (std::ostringstream() << o.stall_seconds).str() +
+                      ": a run is failed after this many seconds without progress");
   if (!o.attach.empty() && (o.jobs != 1 || o.transport != "udpm"))
     throw ConfigError("--attach runs one run at a time over the given bus: it needs --jobs 1 and --transport udpm");
   if (o.transport != "udpm" && o.transport != "memq")

@@ -112,7 +112,14 @@ TEST(Newcomer, CountsOutOfRangeAndNamesNearlyRightAreRefusedNamingWhatWasMeant) 
   EXPECT_NE(reps.output.find("--reps must be at least 1, not 0"), std::string::npos) << reps.output;
   Output seed = run("experiment base --transport memq --seed -1 --out " + dir + "/c");
   EXPECT_NE(seed.output.find("--seed must be 0 or more, not -1"), std::string::npos) << seed.output;
-  EXPECT_FALSE(fs::exists(dir + "/a/summary.json") || fs::exists(dir + "/b/summary.json"));
+  // A zero where zero means nothing is refused, not read as "the default".
+  Output stall = run("experiment base --transport memq --stall-seconds 0 --out " + dir + "/f");
+  EXPECT_EQ(stall.exit_code, 2) << stall.output;
+  EXPECT_NE(stall.output.find("--stall-seconds must be more than 0, not 0"), std::string::npos) << stall.output;
+  Output jobs = run("experiment base --transport memq --jobs 0 --out " + dir + "/g");
+  EXPECT_NE(jobs.output.find("--jobs must be at least 1, not 0"), std::string::npos) << jobs.output;
+  EXPECT_FALSE(fs::exists(dir + "/a/summary.json") || fs::exists(dir + "/b/summary.json") ||
+               fs::exists(dir + "/f/summary.json"));
   // A name nearly right is named with the one meant.
   Output name = run("experiment basee --out " + dir + "/d");
   EXPECT_NE(name.output.find("unknown experiment \"basee\"; did you mean \"base\"?"), std::string::npos) << name.output;
@@ -308,6 +315,32 @@ TEST(Newcomer, PlotsOfOneRunShowBarsAndCurvesOfOneColourDifferAllAlong) {
     red_dashes.insert(m[1]);
   }
   EXPECT_EQ(red_dashes.size(), 3u) << curves;
+}
+
+}  // namespace
+}  // namespace afford
+
+namespace afford {
+namespace {
+
+// A zero given is a zero: --extrinsic-reps 0 runs no test even where the experiment file asks for tests; left
+// out, the file's count holds (attention asks for 100 here).
+TEST(Newcomer, ZeroExtrinsicRepsRunsNoTestsWhereTheExperimentAsksForThem) {
+  namespace fs = std::filesystem;
+  const std::string dir = test::tempDir("zero-reps");
+  const auto runs = [&](const std::string& name, const std::string& more) {
+    const test::CommandResult r = test::runAfford(
+        "experiment attention --system IMP --reps 1 --steps 50 --transport memq --keep-logs none --quiet "
+        "--run-prefix z --out " + dir + "/" + name + " --log-root " + dir + "/" + name + "-logs " + more);
+    EXPECT_EQ(r.exit_code, 0) << r.output;
+    int n = 0;
+    for (const auto& f : fs::directory_iterator(dir + "/" + name + "/runs")) n += f.path().extension() == ".json";
+    return n;
+  };
+  EXPECT_EQ(runs("zero", "--extrinsic-reps 0"), 1) << "--extrinsic-reps 0 ran tests";
+  EXPECT_EQ(test::readJson(dir + "/zero/experiment.json")["options"]["extrinsic_tests"], 0);
+  EXPECT_EQ(runs("design", ""), 101) << "left out, the experiment's own tests";
+  EXPECT_FALSE(test::readJson(dir + "/design/experiment.json")["options"].contains("extrinsic_tests"));
 }
 
 }  // namespace
