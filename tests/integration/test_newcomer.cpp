@@ -323,6 +323,44 @@ TEST(Newcomer, PlotsOfOneRunShowBarsAndCurvesOfOneColourDifferAllAlong) {
 namespace afford {
 namespace {
 
+// A typo in every section of an experiment file, and in a file it extends, and on --set: the file (and the
+// one that extends it) named, and the key meant, a swap of two letters counting as one.
+TEST(Newcomer, ATypoInAnySectionNamesTheFileAndTheKeyMeant) {
+  const std::string dir = test::tempDir("typos");
+  const std::vector<std::pair<std::string, std::string>> typos = {
+      {"extrinsic: {generate: {sead: 71}}", "'extrinsic.generate.sead': unknown key; did you mean 'extrinsic.generate.seed'?"},
+      {"extrinsic: {tsets: 2}", "'extrinsic.tsets': unknown key; did you mean 'extrinsic.tests'?"},
+      {"tables: {cuont: 3}", "'tables.cuont': unknown key; did you mean 'tables.count'?"},
+      {"default_system: [IMP]", "unknown block 'default_system'; did you mean 'default_systems'?"},
+      {"run: {stpes: 100}", "'run.stpes': unknown key; did you mean 'run.steps'?"},
+      {"world:\n  objects:\n    - {name: red square, shape: square, colr: red, position: [0.2, 0.2], appears_at: 0, "
+       "affordance: [1.0, 1.0, 0.0, 1.0]}",
+       "'world.objects[0].colr': unknown key; did you mean 'world.objects[0].colour'?"},
+      {"motivation: {laek: 0.3}", "'motivation.laek': unknown key; did you mean 'motivation.leak'?"},
+  };
+  int k = 0;
+  for (const auto& [text, said] : typos) {
+    const std::string file = dir + "/typo" + std::to_string(k) + ".yaml", child = dir + "/child" + std::to_string(k) + ".yaml";
+    spit(file, "extends: base\n" + text + "\n");
+    spit(child, "extends: typo" + std::to_string(k++) + ".yaml\n");
+    for (const std::string& given : {file, child}) {
+      Output r = run("experiment --config " + given + " --system IMP --transport memq --out " + dir + "/o");
+      EXPECT_EQ(r.exit_code, 2) << text << ": " << r.output;
+      EXPECT_NE(r.output.find("experiment file " + file), std::string::npos) << text << ": " << r.output;
+      EXPECT_NE(r.output.find(said), std::string::npos) << text << ": " << r.output;
+      if (given == child)
+        EXPECT_NE(r.output.find("(extended by " + child + ")"), std::string::npos) << text << ": " << r.output;
+    }
+  }
+  spit(dir + "/extend.yaml", "extend: base\n");
+  Output extend = run("experiment --config " + dir + "/extend.yaml --transport memq --out " + dir + "/o");
+  EXPECT_NE(extend.output.find("unknown block 'extend'; did you mean 'extends'?"), std::string::npos) << extend.output;
+  Output set = run("experiment base --set run.stpes=3 --transport memq --out " + dir + "/o");
+  EXPECT_NE(set.output.find("config key 'run.stpes': unknown key; did you mean 'run.steps'?"), std::string::npos)
+      << set.output;
+  EXPECT_FALSE(fs::exists(dir + "/o/summary.json"));
+}
+
 // A zero given is a zero: --extrinsic-reps 0 runs no test even where the experiment file asks for tests; left
 // out, the file's count holds (attention asks for 100 here).
 TEST(Newcomer, ZeroExtrinsicRepsRunsNoTestsWhereTheExperimentAsksForThem) {
