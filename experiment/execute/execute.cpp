@@ -1,6 +1,7 @@
 #include "experiment/execute/execute.hpp"
 
 #include "afford/bus.hpp"
+#include "afford/names.hpp"
 
 #include <sys/resource.h>
 #include <sys/syscall.h>
@@ -488,9 +489,9 @@ void runOne(PhaseState& st, std::size_t i, Slot& slot, SlotPool& pool) {
   const std::size_t done = ++st.done;
   progress.say([&] {
     if (out.ok && runs[i].spec.extrinsic)
-      log.info("[{}/{}] {}: {}, {} action(s), utility {}", done, runs.size(), id,
-               out.extrinsic.success ? "solved in " + std::to_string(out.extrinsic.completion) + " steps" : "not solved",
-               out.extrinsic.attempts, out.extrinsic.utility);
+      log.info("[{}/{}] {}: {}, {}, utility {}", done, runs.size(), id,
+               out.extrinsic.success ? "solved in " + counted(out.extrinsic.completion, "step") : "not solved",
+               counted(out.extrinsic.attempts, "action"), out.extrinsic.utility);
     else if (out.ok)
       log.info("[{}/{}] {} done in {:.1f} s, weights {}", done, runs.size(), id, out.wall_seconds,
                out.weights_checksum);

@@ -361,6 +361,24 @@ TEST(Newcomer, ATypoInAnySectionNamesTheFileAndTheKeyMeant) {
   EXPECT_FALSE(fs::exists(dir + "/o/summary.json"));
 }
 
+// The console's summary says "in brackets the paper's" where the paper's numbers are beside the results, and
+// not where an experiment of one's own has none.
+TEST(Newcomer, TheSummarySaysThePapersNumbersAreInBracketsOnlyWhereTheyAre) {
+  const std::string dir = test::tempDir("brackets");
+  spit(dir + "/mine.yaml", "extends: base\n");
+  const auto summary = [&](const std::string& experiment, const std::string& name) {
+    Output r = run("experiment " + experiment + " --system IMP --reps 1 --steps 50 --transport memq --keep-logs none "
+                   "--extrinsic-reps 1 --scenarios scenario1 --out " + dir + "/" + name + " --log-root " + dir + "/" +
+                   name + "-logs");
+    EXPECT_EQ(r.exit_code, 0) << r.output;
+    return r.output;
+  };
+  const std::string paper = summary("base", "paper"), mine = summary(dir + "/mine.yaml", "mine");
+  EXPECT_NE(paper.find("solved; in brackets the paper's; then the raw share"), std::string::npos) << paper;
+  EXPECT_NE(mine.find("solved; then the raw share"), std::string::npos) << mine;
+  EXPECT_EQ(mine.find("in brackets the paper's"), std::string::npos) << mine;
+}
+
 // A zero given is a zero: --extrinsic-reps 0 runs no test even where the experiment file asks for tests; left
 // out, the file's count holds (attention asks for 100 here).
 TEST(Newcomer, ZeroExtrinsicRepsRunsNoTestsWhereTheExperimentAsksForThem) {
