@@ -318,8 +318,8 @@ void refuseChangedPlan(const ExperimentRequest& given, const ExperimentRequest& 
   // 0 (or none) stands for the experiment's own count: nothing to compare
   if (given.plan.reps) check("--reps", std::to_string(*given.plan.reps), std::to_string(plan.reps));
   if (given.plan.steps) check("--steps", std::to_string(*given.plan.steps), std::to_string(plan.runs.front().spec.steps));
-  if (given.plan.extrinsic_reps > 0)
-    check("--extrinsic-reps", std::to_string(given.plan.extrinsic_reps), std::to_string(plan.tests));
+  if (given.plan.extrinsic_reps)
+    check("--extrinsic-reps", std::to_string(*given.plan.extrinsic_reps), std::to_string(plan.tests));
   check("--seed", std::to_string(given.plan.seed), std::to_string(stored.plan.seed));
   check("--keep-logs", given.plan.keep_logs, stored.plan.keep_logs);
   check("--keep-checkpoints", given.plan.keep_checkpoints, stored.plan.keep_checkpoints);

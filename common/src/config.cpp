@@ -43,6 +43,7 @@ std::string componentKind(ConfigReader& r, const std::string& key) {
 
 ObjectSpec parseObject(const YAML::Node& node, const std::string& path, const WorldConfig& w) {
   ConfigReader r(node, path);
+  r.expect({"name", "shape", "colour", "position", "appears_at", "affordance"});
   ObjectSpec o;
   o.name = r.text("name");
   o.shape = r.choice("shape", kShapeNames);

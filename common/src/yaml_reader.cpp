@@ -7,30 +7,33 @@
 
 namespace afford {
 
-std::string closestName(const std::string& name, const std::vector<std::string>& known) {
-  // Levenshtein distance, one row at a time; close enough: at most a third of the name's letters (1 to 3).
-  const auto distance = [](const std::string& a, const std::string& b) {
-    std::vector<std::size_t> row(b.size() + 1);
-    for (std::size_t j = 0; j <= b.size(); ++j) row[j] = j;
-    for (std::size_t i = 1; i <= a.size(); ++i) {
-      std::size_t diagonal = row[0];
-      row[0] = i;
-      for (std::size_t j = 1; j <= b.size(); ++j) {
-        const std::size_t up = row[j];
-        row[j] = std::min({row[j] + 1, row[j - 1] + 1, diagonal + (a[i - 1] == b[j - 1] ? 0 : 1)});
-        diagonal = up;
-      }
+std::size_t editDistance(const std::string& a, const std::string& b) {
+  // Damerau-Levenshtein (optimal string alignment): a letter added, dropped, changed, or two neighbours swapped
+  // ("stpes" for "steps") each count one. Three rows: the one two back is the swap's.
+  std::vector<std::size_t> before(b.size() + 1), last(b.size() + 1), row(b.size() + 1);
+  for (std::size_t j = 0; j <= b.size(); ++j) last[j] = j;
+  for (std::size_t i = 1; i <= a.size(); ++i) {
+    row[0] = i;
+    for (std::size_t j = 1; j <= b.size(); ++j) {
+      row[j] = std::min({last[j] + 1, row[j - 1] + 1, last[j - 1] + (a[i - 1] == b[j - 1] ? 0 : 1)});
+      if (i > 1 && j > 1 && a[i - 1] == b[j - 2] && a[i - 2] == b[j - 1]) row[j] = std::min(row[j], before[j - 2] + 1);
     }
-    return row[b.size()];
-  };
+    std::swap(before, last);
+    std::swap(last, row);
+  }
+  return last[b.size()];
+}
+
+std::string closestName(const std::string& name, const std::vector<std::string>& known) {
+  // Close enough to be a typo: at most a third of the longer name's letters (1 to 3) ("colr" for "colour").
   if (name.size() > 200) return "";
-  const std::size_t most = std::clamp<std::size_t>(name.size() / 3, 1, 3);
   std::string best;
-  std::size_t best_distance = most + 1;
+  std::size_t best_distance = 4;
   for (const auto& k : known) {
     if (k == name || k.size() > 200) continue;
-    const std::size_t d = distance(name, k);
-    if (d < best_distance) best = k, best_distance = d;
+    const std::size_t most = std::clamp<std::size_t>(std::max(name.size(), k.size()) / 3, 1, 3);
+    const std::size_t d = editDistance(name, k);
+    if (d <= most && d < best_distance) best = k, best_distance = d;
   }
   return best;
 }
@@ -69,8 +72,24 @@ ConfigReader::ConfigReader(YAML::Node node, std::string path) : node_(std::move(
 YAML::Node ConfigReader::raw(const std::string& key) {
   used_.insert(key);
   YAML::Node v = node_[key];
-  if (!v.IsDefined() || v.IsNull()) failKey(keyPath(key), "missing");
+  if (!v.IsDefined() || v.IsNull()) {
+    // A key nobody reads beside it is likelier the cause: a typo of this one, or of another of the map's.
+    for (const auto& kv : node_) {
+      const std::string given = kv.first.Scalar();
+      if (used_.count(given) || (!expected_.empty() && std::count(expected_.begin(), expected_.end(), given))) continue;
+      if (closestName(given, {key}) == key)
+        failKey(keyPath(key), "missing; '" + given + "' is given: did you mean '" + keyPath(key) + "'?");
+    }
+    failKey(keyPath(key), "missing");
+  }
   return v;
+}
+
+void ConfigReader::expect(std::vector<std::string> keys) {
+  expected_ = std::move(keys);
+  for (const auto& kv : node_)
+    if (const std::string k = kv.first.Scalar(); !std::count(expected_.begin(), expected_.end(), k))
+      failKey(keyPath(k), unknownKey(path_, k, expected_));
 }
 
 bool ConfigReader::has(const std::string& key) const { return node_[key].IsDefined() && !node_[key].IsNull(); }
@@ -98,7 +117,11 @@ std::string ConfigReader::text(const std::string& key) {
 void ConfigReader::finish() const {
   for (const auto& kv : node_) {
     const std::string k = kv.first.Scalar();
-    if (!used_.count(k)) failKey(keyPath(k), unknownKey(path_, k, {used_.begin(), used_.end()}));
+    if (!used_.count(k)) {
+      std::vector<std::string> known(used_.begin(), used_.end());
+      known.insert(known.end(), expected_.begin(), expected_.end());
+      failKey(keyPath(k), unknownKey(path_, k, known));
+    }
   }
 }
 

@@ -122,9 +122,11 @@ Scenario loadScenario(const std::string& config_dir, const std::string& name, co
 namespace {
 ExtrinsicDesign parseDesign(const YAML::Node& node, const std::string& file) {
   ConfigReader r(node, "extrinsic");
+  r.expect({"scenarios", "generate", "tests", "after_actions", "vary", "analysis"});
   ExtrinsicDesign d;
   if (r.has("generate")) {
     ConfigReader g = r.map("generate");
+    g.expect({"sub_goals", "objects", "multi_step", "per_point", "seed"});
     GenerateDesign gen;
     auto counts = [&](const char* key) {
       std::vector<int> out;
@@ -246,12 +248,88 @@ std::vector<std::pair<std::string, std::vector<std::string>>> parseConditions(co
   return out;
 }
 
+// One top-level block of an experiment file, into `e` (the experiment it extends, so far).
+void readBlock(ExperimentFile& e, const std::string& key, const YAML::Node& value, const std::filesystem::path& file) {
+    if (key == "description") {
+      e.description = value.Scalar();
+    } else if (key == "repetitions") {
+      YAML::Node one(YAML::NodeType::Map);
+      one["repetitions"] = value;
+      ConfigReader r(one, "");
+      e.repetitions = static_cast<int>(r.integer("repetitions", 1, 100000));
+    } else if (key == "default_systems") {
+      if (!value.IsSequence()) failKey("default_systems", "expected a list of systems (FIX, IGN, IMP, GOALS)");
+      e.default_systems.clear();  // a file's list replaces the one of the file it extends
+      for (const auto& s : value) e.default_systems.push_back(toString(parseSystem(s.Scalar())));
+    } else if (key == "extrinsic") {
+      if (isNone(value)) {  // `extrinsic: none`: no design, whatever the extended experiment had
+        e.extrinsic.reset();
+        e.extrinsic_node = YAML::Node();
+        return;
+      }
+      if (!value.IsMap()) failKey("extrinsic", "expected a map (or none), got " + describeNode(value) + " (" + file.string() + ")");
+      YAML::Node merged = e.extrinsic_node.IsMap() ? e.extrinsic_node : YAML::Node(YAML::NodeType::Map);
+      // The tests' source: a file stating one (scenarios, or generate) does not keep the extended design's other.
+      if (value["scenarios"] && !value["generate"]) merged.remove("generate");
+      if (value["generate"] && !value["scenarios"]) merged.remove("scenarios");
+      mergeInto(merged, value);
+      e.extrinsic_node = merged;
+      e.extrinsic = parseDesign(merged, file.string());
+    } else if (key == "tables") {
+      if (isNone(value)) {
+        e.tables.reset();
+        e.tables_node = YAML::Node();
+        return;
+      }
+      if (!value.IsMap()) failKey("tables", "expected a map (or none), got " + describeNode(value) + " (" + file.string() + ")");
+      YAML::Node merged = e.tables_node.IsMap() ? e.tables_node : YAML::Node(YAML::NodeType::Map);
+      mergeInto(merged, value);
+      e.tables_node = merged;
+      ConfigReader t(merged, "tables");
+      t.expect({"count", "seed"});
+      e.tables = TablesDesign{static_cast<int>(t.integer("count", 1, 100'000)), t.integer("seed", 0, INT64_MAX)};
+      t.finish();
+    } else if (key == "conditions") {
+      if (!value.IsMap() || value.size() == 0)
+        failKey("conditions", "expected a map of condition names to lists of settings (key.path=value), got " +
+                               describeNode(value) + " (" + file.string() + ")");
+      e.conditions = parseConditions(value);
+    } else if (key == "systems") {
+      if (!e.systems.IsMap()) e.systems = YAML::Node(YAML::NodeType::Map);
+      mergeInto(e.systems, value);
+      if (value.IsMap())
+        for (const auto& s : value)
+          recordKeys(s.second, "", "experiment file " + file.string() + ", block systems." + s.first.Scalar(),
+                     e.system_sources[s.first.Scalar()]);
+    } else {
+      // A section of the run's configuration (run, world, motivation, ...); anything else is a typo.
+      std::vector<std::string> blocks = {"extends", "description", "repetitions", "default_systems", "extrinsic",
+                                         "tables", "conditions", "systems"};
+      for (const KeyInfo& k : configKeys())
+        if (const std::string top = k.key.substr(0, k.key.find('.'));
+            std::find(blocks.begin(), blocks.end(), top) == blocks.end())
+          blocks.push_back(top);
+      if (std::find(blocks.begin(), blocks.end(), key) == blocks.end()) {
+        const std::string near = closestName(key, blocks);
+        throw ConfigError("experiment file " + file.string() + ": unknown block '" + key + "'" +
+                              (near.empty() ? "" : "; did you mean '" + near + "'?"),
+                          key);
+      }
+      YAML::Node over(YAML::NodeType::Map);
+      over[key] = value;
+      mergeInto(e.overlay, over);
+      recordKeys(value, key, "experiment file " + file.string() + ", block " + key, e.sources);
+    }
+}
+
 ExperimentFile loadExperimentChain(const std::string& config_dir, const std::string& name, int depth,
                                    const std::filesystem::path& from = {}) {
   const bool path = isExperimentPath(name);
   std::filesystem::path file;
   if (path) {
-    file = std::filesystem::path(name).is_relative() && !from.empty() ? from.parent_path() / name : std::filesystem::path(name);
+    file = (std::filesystem::path(name).is_relative() && !from.empty() ? from.parent_path() / name
+                                                                        : std::filesystem::path(name))
+               .lexically_normal();
     if (!std::filesystem::is_regular_file(file))
       throw ConfigError("experiment file " + file.string() + " does not exist" +
                         (from.empty() ? std::string() : " (named by 'extends' in " + from.string() + ")"));
@@ -263,7 +341,15 @@ ExperimentFile loadExperimentChain(const std::string& config_dir, const std::str
   ExperimentFile e;
   if (root["extends"].IsDefined()) {  // start from the whole of another experiment; this file changes what it states
     if (depth > 8) throw ConfigError("config file " + file.string() + ": 'extends' chain too long (a cycle?)");
-    e = loadExperimentChain(config_dir, root["extends"].Scalar(), depth + 1, file);
+    try {
+      e = loadExperimentChain(config_dir, root["extends"].Scalar(), depth + 1, file);
+    } catch (const ConfigError& err) {
+      throw ConfigError(std::string(err.what()) + " (extended by " + file.string() + ")", err.key());
+    }
+    // What the extended file set, named as such when the run's configuration is read later.
+    for (auto& [key, where] : e.sources) where += " (extended by " + file.string() + ")";
+    for (auto& [system, sources] : e.system_sources)
+      for (auto& [key, where] : sources) where += " (extended by " + file.string() + ")";
     e.overlay = YAML::Clone(e.overlay);
     e.systems = YAML::Clone(e.systems);
     e.extrinsic_node = YAML::Clone(e.extrinsic_node);
@@ -276,59 +362,12 @@ ExperimentFile loadExperimentChain(const std::string& config_dir, const std::str
   for (const auto& kv : root) {
     const std::string key = kv.first.Scalar();
     if (key == "extends") continue;
-    if (key == "description") {
-      e.description = kv.second.Scalar();
-    } else if (key == "repetitions") {
-      ConfigReader r(root, "");
-      e.repetitions = static_cast<int>(r.integer("repetitions", 1, 100000));
-    } else if (key == "default_systems") {
-      if (!kv.second.IsSequence()) failKey("default_systems", "expected a list of systems (FIX, IGN, IMP, GOALS)");
-      e.default_systems.clear();  // a file's list replaces the one of the file it extends
-      for (const auto& s : kv.second) e.default_systems.push_back(toString(parseSystem(s.Scalar())));
-    } else if (key == "extrinsic") {
-      if (isNone(kv.second)) {  // `extrinsic: none`: no design, whatever the extended experiment had
-        e.extrinsic.reset();
-        e.extrinsic_node = YAML::Node();
-        continue;
-      }
-      if (!kv.second.IsMap()) failKey("extrinsic", "expected a map (or none), got " + describeNode(kv.second) + " (" + file.string() + ")");
-      YAML::Node merged = e.extrinsic_node.IsMap() ? e.extrinsic_node : YAML::Node(YAML::NodeType::Map);
-      // The tests' source: a file stating one (scenarios, or generate) does not keep the extended design's other.
-      if (kv.second["scenarios"] && !kv.second["generate"]) merged.remove("generate");
-      if (kv.second["generate"] && !kv.second["scenarios"]) merged.remove("scenarios");
-      mergeInto(merged, kv.second);
-      e.extrinsic_node = merged;
-      e.extrinsic = parseDesign(merged, file.string());
-    } else if (key == "tables") {
-      if (isNone(kv.second)) {
-        e.tables.reset();
-        e.tables_node = YAML::Node();
-        continue;
-      }
-      if (!kv.second.IsMap()) failKey("tables", "expected a map (or none), got " + describeNode(kv.second) + " (" + file.string() + ")");
-      YAML::Node merged = e.tables_node.IsMap() ? e.tables_node : YAML::Node(YAML::NodeType::Map);
-      mergeInto(merged, kv.second);
-      e.tables_node = merged;
-      ConfigReader t(merged, "tables");
-      e.tables = TablesDesign{static_cast<int>(t.integer("count", 1, 100'000)), t.integer("seed", 0, INT64_MAX)};
-      t.finish();
-    } else if (key == "conditions") {
-      if (!kv.second.IsMap() || kv.second.size() == 0)
-        failKey("conditions", "expected a map of condition names to lists of settings (key.path=value), got " +
-                               describeNode(kv.second) + " (" + file.string() + ")");
-      e.conditions = parseConditions(kv.second);
-    } else if (key == "systems") {
-      if (!e.systems.IsMap()) e.systems = YAML::Node(YAML::NodeType::Map);
-      mergeInto(e.systems, kv.second);
-      if (kv.second.IsMap())
-        for (const auto& s : kv.second)
-          recordKeys(s.second, "", "experiment file " + file.string() + ", block systems." + s.first.Scalar(),
-                     e.system_sources[s.first.Scalar()]);
-    } else {
-      YAML::Node over(YAML::NodeType::Map);
-      over[key] = kv.second;
-      mergeInto(e.overlay, over);
-      recordKeys(kv.second, key, "experiment file " + file.string() + ", block " + key, e.sources);
+    try {
+      readBlock(e, key, kv.second, file);
+    } catch (const ConfigError& err) {
+      const std::string what = err.what();
+      if (what.find(file.string()) != std::string::npos) throw;  // (it names the file already)
+      throw ConfigError("experiment file " + file.string() + ", block " + key + ": " + what, err.key());
     }
   }
   if (!e.conditions.empty() && !e.tables)
@@ -393,7 +432,7 @@ YAML::Node effectiveConfig(const std::string& config_dir, const RunRequest& requ
     }
     if (!chain.back()[parts.back()].IsDefined())
       failKey(path, unknownKey(path.substr(0, path.size() - parts.back().size() - (parts.size() > 1 ? 1 : 0)),
-                            parts.back(), keysOf(chain.back())));
+                               parts.back(), keysOf(chain.back())));
     chain.back()[parts.back()] = value;
     sources[path] = "--set " + setting;
   }

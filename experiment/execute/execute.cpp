@@ -1,6 +1,7 @@
 #include "experiment/execute/execute.hpp"
 
 #include "afford/bus.hpp"
+#include "afford/names.hpp"
 
 #include <sys/resource.h>
 #include <sys/syscall.h>
@@ -10,6 +11,7 @@
 #include <deque>
 #include <functional>
 #include <mutex>
+#include <sstream>
 #include <thread>
 
 #include "experiment/run/group.hpp"
@@ -192,7 +194,10 @@ RunOutcome runOverUdpm(const PlannedRun& run, const HostRequest& o, const std::s
 }  // namespace
 
 void checkHostRequest(const HostRequest& o) {
-  if (o.jobs < 1) throw ConfigError("--jobs must be at least 1");
+  if (o.jobs < 1) throw ConfigError("--jobs must be at least 1, not " + std::to_string(o.jobs));
+  if (!(o.stall_seconds > 0))
+    throw ConfigError("--stall-seconds must be more than 0, not " + (std::ostringstream() << o.stall_seconds).str() +
+                      ": a run is failed after this many seconds without progress");
   if (!o.attach.empty() && (o.jobs != 1 || o.transport != "udpm"))
     throw ConfigError("--attach runs one run at a time over the given bus: it needs --jobs 1 and --transport udpm");
   if (o.transport != "udpm" && o.transport != "memq")
@@ -484,9 +489,9 @@ void runOne(PhaseState& st, std::size_t i, Slot& slot, SlotPool& pool) {
   const std::size_t done = ++st.done;
   progress.say([&] {
     if (out.ok && runs[i].spec.extrinsic)
-      log.info("[{}/{}] {}: {}, {} action(s), utility {}", done, runs.size(), id,
-               out.extrinsic.success ? "solved in " + std::to_string(out.extrinsic.completion) + " steps" : "not solved",
-               out.extrinsic.attempts, out.extrinsic.utility);
+      log.info("[{}/{}] {}: {}, {}, utility {}", done, runs.size(), id,
+               out.extrinsic.success ? "solved in " + counted(out.extrinsic.completion, "step") : "not solved",
+               counted(out.extrinsic.attempts, "action"), out.extrinsic.utility);
     else if (out.ok)
       log.info("[{}/{}] {} done in {:.1f} s, weights {}", done, runs.size(), id, out.wall_seconds,
                out.weights_checksum);

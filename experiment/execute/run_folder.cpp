@@ -1,6 +1,7 @@
 #include "experiment/execute/run_folder.hpp"
 
 #include <fcntl.h>
+#include <stdio.h>
 #include <unistd.h>
 
 #include <algorithm>
@@ -45,21 +46,32 @@ std::string notOurs(const fs::path& run_dir, const std::string& out_dir) {
   return runFolderHolder(run_dir);
 }
 
-// Makes the run's folder and its run.json: "" once done, else why not (the folder exists, or cannot be made).
+// Makes the run's folder with its run.json in it, at once: "" once done, else why not (the folder exists, or
+// cannot be made). The folder is made aside (.<run-id>.claim-<pid>) with its run.json, then renamed into place
+// unless something is there already (RENAME_NOREPLACE): another claimant never sees it without its run.json.
 std::string claim(const fs::path& run_dir, const PlannedRun& run, const std::string& out_dir) {
   std::error_code ec;
   fs::create_directories(run_dir.parent_path(), ec);
-  if (!ec && !fs::create_directory(run_dir, ec) && !ec)
-    return "the log folder " + run_dir.string() + " exists already: " + runFolderHolder(run_dir);
   if (ec) return "cannot make the log folder " + run_dir.string() + " (" + ec.message() + ")";
+  if (fs::exists(run_dir, ec)) return "the log folder " + run_dir.string() + " exists already: " + runFolderHolder(run_dir);
+  const fs::path aside = run_dir.parent_path() / ("." + run_dir.filename().string() + ".claim-" + std::to_string(getpid()));
+  fs::remove_all(aside, ec);  // (one this very pid left: a pid is not reused while it lives)
+  if (!fs::create_directory(aside, ec) || ec)
+    return "cannot make the log folder " + run_dir.string() + " (" + (ec ? ec.message() : "exists") + ")";
   try {
-    writeWhole(run_dir / "run.json",
+    writeWhole(aside / "run.json",
                json{{"run_id", run.spec.run_id}, {"experiment", run.spec.experiment},
                     {"out_dir", fs::absolute(out_dir).string()}, {"afford_version", affordVersion()}}
                        .dump() + "\n");
   } catch (const std::exception& e) {
-    fs::remove(run_dir, ec);
+    fs::remove_all(aside, ec);
     return "cannot write " + (run_dir / "run.json").string() + " (" + e.what() + ")";
+  }
+  if (renameat2(AT_FDCWD, aside.c_str(), AT_FDCWD, run_dir.c_str(), RENAME_NOREPLACE) != 0) {
+    const int err = errno;
+    fs::remove_all(aside, ec);
+    if (err == EEXIST) return "the log folder " + run_dir.string() + " exists already: " + runFolderHolder(run_dir);
+    return "cannot make the log folder " + run_dir.string() + " (" + std::strerror(err) + ")";
   }
   return "";
 }

@@ -22,7 +22,7 @@ void checkPlanRequest(const PlanRequest& o) {
     throw ConfigError("--keep-logs must be all, first or none, not \"" + o.keep_logs + "\"");
   if (o.keep_checkpoints != "all" && o.keep_checkpoints != "first" && o.keep_checkpoints != "none")
     throw ConfigError("--keep-checkpoints must be all, first or none, not \"" + o.keep_checkpoints + "\"");
-  if (o.extrinsic_reps < 0) throw ConfigError("--extrinsic-reps must be 0 or more");
+  if (o.extrinsic_reps && *o.extrinsic_reps < 0) throw ConfigError("--extrinsic-reps must be 0 or more");
   if (o.reps && *o.reps < 1) throw ConfigError("--reps must be at least 1, not " + std::to_string(*o.reps));
   if (o.steps && *o.steps < 1) throw ConfigError("--steps must be at least 1, not " + std::to_string(*o.steps));
   if (o.seed < 0) throw ConfigError("--seed must be 0 or more, not " + std::to_string(o.seed));
@@ -197,7 +197,7 @@ Plan planExperiment(const PlanRequest& o) {
                  : !plan.exp.default_systems.empty() ? plan.exp.default_systems
                                                      : std::vector<std::string>{"FIX", "IGN", "IMP"};
   if (plan.exp.extrinsic) plan.design = *plan.exp.extrinsic;
-  plan.tests = o.extrinsic_reps > 0 ? o.extrinsic_reps : plan.design.tests;
+  plan.tests = o.extrinsic_reps ? *o.extrinsic_reps : plan.design.tests;  // (0 given: none)
   if ((o.tables || o.table_seed) && !plan.exp.tables)
     throw ConfigError("--tables and --table-seed are for experiments on random tables (a 'tables:' section, e.g. "
                       "random-tables); " + plan.exp.name + " has none");

@@ -21,7 +21,8 @@ struct PlanRequest {
   std::string config_dir;                  // default: the installed or source config/
   std::vector<std::string> settings;       // key.path=value overrides; key.path=v1,v2,... sweeps (plan/sweep.hpp)
   std::string sweep_file;                  // a YAML map of config keys to lists of values, swept too
-  int extrinsic_reps = 0;                  // tests per scenario from each intrinsic run (0: the design's)
+  std::optional<int> extrinsic_reps;       // tests per scenario from each intrinsic run (0: none); default: the design's
+  std::optional<int> extrinsic_reps_010;   // as 0.1.0 and 0.2.0 kept it, 0 for "not given" (read, never written)
   std::vector<std::string> scenarios;      // default: the design's, or every config/scenarios/*.yaml
   std::optional<int> tables;               // random tables: how many (default: the experiment file's tables.count)
   std::optional<std::int64_t> table_seed;  // ... and the series they are drawn from (default: its tables.seed)
@@ -44,7 +45,8 @@ struct PlanRequest {
     v("config_dir", config_dir);
     v("settings", settings);
     v.since("sweep_file", sweep_file, std::string());  // (before issue 13: no sweeps)
-    v("extrinsic_reps", extrinsic_reps);
+    v("extrinsic_tests", extrinsic_reps);         // absent when not given (0.3.0 on)
+    v("extrinsic_reps", extrinsic_reps_010);      // (0.1.0 and 0.2.0)
     v("scenarios", scenarios);
     visitNullable(v, "tables", tables);
     visitNullable(v, "table_seed", table_seed);

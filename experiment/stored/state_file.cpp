@@ -17,7 +17,12 @@ fs::path statePath(const fs::path& out) { return out / "experiment.json"; }
 ExperimentState readState(const fs::path& out) {
   const fs::path file = statePath(out);
   try {
-    return fromJsonOf<ExperimentState>(readJsonFile(file, kMostStateBytes), file.string());
+    ExperimentState state = fromJsonOf<ExperimentState>(readJsonFile(file, kMostStateBytes), file.string());
+    // 0.1.0 and 0.2.0 kept extrinsic_reps, 0 standing for "not given" (the design's count).
+    PlanRequest& plan = state.options.plan;
+    if (!plan.extrinsic_reps && plan.extrinsic_reps_010 > 0) plan.extrinsic_reps = plan.extrinsic_reps_010;
+    plan.extrinsic_reps_010.reset();
+    return state;
   } catch (const std::exception& e) {
     throw ConfigError("cannot read " + file.string() + ": " + e.what());
   }

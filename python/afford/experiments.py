@@ -67,7 +67,7 @@ def _count(name: str, value: Any) -> None:
 
 def _request(experiment: str, system: Any, reps: int | None, steps: int | None, set: dict[str, Any] | None,
              transport: str, out: str | Path | None, log_root: str | Path | None, seed: int, jobs: int,
-             extrinsic_reps: int, scenarios: Iterable[str], keep_logs: str, run_prefix: str, reuse_agents: bool,
+             extrinsic_reps: int | None, scenarios: Iterable[str], keep_logs: str, run_prefix: str, reuse_agents: bool,
              progress: str, log_level: str, motivation: Any, affordance: Any, goals: Any,
              processes: dict[str, str] | None, tables: int | None, table_seed: int | None,
              replace: bool) -> tuple[dict[str, Any], Path]:
@@ -105,7 +105,7 @@ def _request(experiment: str, system: Any, reps: int | None, steps: int | None, 
 def run(experiment: str, system: str | Iterable[str] | None = None, reps: int | None = None,
         steps: int | None = None, set: dict[str, Any] | None = None, transport: str = "memq",
         out: str | Path | None = None, log_root: str | Path | None = None, seed: int = 1, jobs: int = 1,
-        extrinsic_reps: int = 0, scenarios: Iterable[str] = (), keep_logs: str = "all",
+        extrinsic_reps: int | None = None, scenarios: Iterable[str] = (), keep_logs: str = "all",
         run_prefix: str = "", reuse_agents: bool = True, progress: str = "none",
         log_level: str = "warn", motivation: Any = None, affordance: Any = None, goals: Any = None,
         processes: dict[str, str] | None = None,
@@ -173,7 +173,7 @@ def run(experiment: str, system: str | Iterable[str] | None = None, reps: int | 
 
 
 def check(experiment: str, system: str | Iterable[str] | None = None, reps: int | None = None,
-          steps: int | None = None, set: dict[str, Any] | None = None, seed: int = 1, extrinsic_reps: int = 0,
+          steps: int | None = None, set: dict[str, Any] | None = None, seed: int = 1, extrinsic_reps: int | None = None,
           scenarios: Iterable[str] = (), tables: int | None = None,
           table_seed: int | None = None) -> list[tuple[str, str, int]]:
     """Check an experiment as afford.run would before it runs, and run nothing.

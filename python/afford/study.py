@@ -41,8 +41,17 @@ from .search import OBJECTIVES, Choice, _distribution, _objective, _scalar, pars
 
 STUDY_NAME = "afford"
 KEPT = ("experiment", "system", "reps", "steps", "set", "params", "objective", "direction", "seed", "prune",
-        "pruner", "prune_startup", "prune_warmup", "extrinsic_reps", "scenarios", "keep_logs")  # study.json's fields a later command must match
+        "pruner", "prune_startup", "prune_warmup", "extrinsic_tests", "scenarios", "keep_logs")  # study.json's fields a later command must match
 RETRIED = ("interrupted", "worker lost")  # trials stopped by these run again (their parameters first)
+
+
+def _read_definition(file: Path) -> dict[str, Any]:
+    """study.json as this release writes it: 0.1.0 and 0.2.0 kept `extrinsic_reps`, 0 for "not given" (the
+    experiment's own count); from 0.3.0 `extrinsic_tests` is None for that and 0 for no tests."""
+    d = json.loads(file.read_text())
+    if "extrinsic_tests" not in d:
+        d["extrinsic_tests"] = d.pop("extrinsic_reps", 0) or None
+    return d
 
 
 def _stopped(t) -> str | None:
@@ -157,7 +166,7 @@ def load_study(folder: str | Path) -> Study:
     folder = Path(folder)
     if not (folder / "study.json").is_file():
         raise FileNotFoundError(f"{folder} holds no study.json: not a study's folder")
-    definition = json.loads((folder / "study.json").read_text())
+    definition = _read_definition(folder / "study.json")
     import optuna
     optuna.logging.set_verbosity(optuna.logging.WARNING)
     trials = optuna.load_study(study_name=STUDY_NAME, storage=_storage(folder)).get_trials(deepcopy=False)
@@ -310,7 +319,7 @@ def _definition(experiment, system, reps, steps, set, params, objective, directi
             "pruner": pruner, "prune_startup": prune_startup, "prune_warmup": float(prune_warmup),
             "objective": objective if isinstance(objective, str) else
             f"{getattr(objective, '__module__', '?')}.{getattr(objective, '__qualname__', '?')}",
-            "direction": direction, "extrinsic_reps": extrinsic_reps, "scenarios": list(scenarios),
+            "direction": direction, "extrinsic_tests": extrinsic_reps, "scenarios": list(scenarios),
             "keep_logs": keep_logs, "trials": trials, "afford_version": _afford.version}
 
 
@@ -318,7 +327,7 @@ def _check_keys(d: dict[str, Any]) -> list[tuple[str, str, int]]:
     """Every searched key at its ends (each choice), checked as afford.run checks: a bad key fails now."""
     def plan(values: dict[str, Any]):
         return check(d["experiment"], system=d["system"], reps=d["reps"], steps=d["steps"], set={**d["set"], **values},
-                     seed=d["seed"], extrinsic_reps=d["extrinsic_reps"], scenarios=d["scenarios"])
+                     seed=d["seed"], extrinsic_reps=d["extrinsic_tests"], scenarios=d["scenarios"])
     for key, spec in d["params"].items():
         p = parse_param(key, spec)
         for v in (p.choices if isinstance(p, Choice) else (p.low, p.high)):
@@ -337,7 +346,7 @@ def _open(folder: Path, d: dict[str, Any]):
     with locks.claim(folder):
         stored = folder / "study.json"
         if stored.is_file():
-            old = json.loads(stored.read_text())
+            old = _read_definition(stored)
             differ = [k for k in KEPT if old.get(k) != d.get(k)]
             if differ:
                 said = "; ".join(f"{k}: {old.get(k)!r} there, {d.get(k)!r} here" for k in differ)
@@ -389,7 +398,7 @@ def _counts(study) -> tuple[int, int]:
 def tune(out: str | Path, experiment: str = "base", params: dict[str, Any] | None = None,
          objective: str | Callable[[Experiment], float] = "affordance_mae", direction: str | None = None,
          trials: int = 24, system: str = "IMP", reps: int | None = 1, steps: int | None = None,
-         set: dict[str, Any] | None = None, seed: int = 1, extrinsic_reps: int = 0, scenarios: Iterable[str] = (),
+         set: dict[str, Any] | None = None, seed: int = 1, extrinsic_reps: int | None = None, scenarios: Iterable[str] = (),
          prune: bool | None = None, pruner: str = "halving", prune_startup: int = 5, prune_warmup: float = 0.1,
          keep_logs: str = "all",
          log_level: str = "error", say: Callable[[str], None] | None = print) -> Study:
@@ -487,7 +496,7 @@ def _run_trial(study, trial, d, folder: Path, offsets: list[int], total: int, va
     began = time.monotonic()
     try:
         e = run(d["experiment"], system=d["system"], reps=d["reps"], steps=d["steps"], set={**d["set"], **trial.params},
-                seed=d["seed"], extrinsic_reps=d["extrinsic_reps"], scenarios=d["scenarios"],
+                seed=d["seed"], extrinsic_reps=d["extrinsic_tests"], scenarios=d["scenarios"],
                 keep_logs=d["keep_logs"], out=where, run_prefix=f"trial{trial.number:04d}", log_level=log_level,
                 on_curve=on_curve)
     except ExperimentStopped:
@@ -550,7 +559,7 @@ def main(argv: list[str] | None = None) -> int:
     ap.add_argument("--steps", type=int, help="intrinsic steps per run (default: the experiment's)")
     ap.add_argument("--set", action="append", default=[], metavar="KEY=VALUE", help="a config key fixed in every trial")
     ap.add_argument("--seed", type=int, help="the runs' seed, the same in every trial; and the sampler's (default 1)")
-    ap.add_argument("--extrinsic-reps", type=int, help="extrinsic tests per scenario (for objective success)")
+    ap.add_argument("--extrinsic-reps", type=int, help="extrinsic tests per scenario (for objective success); 0: none (default: the experiment's)")
     ap.add_argument("--scenarios", action="append", help="extrinsic scenarios (for objective success)")
     ap.add_argument("--prune", action=argparse.BooleanOptionalAction, default=None,
                     help="stop a trial whose curve is worse than the median (default: on for the error objectives)")
@@ -563,7 +572,7 @@ def main(argv: list[str] | None = None) -> int:
     ap.add_argument("--report", action="store_true", help="write the report of the study in --out and run nothing")
     a = ap.parse_args(argv)
     out = Path(a.out)
-    stored = json.loads((out / "study.json").read_text()) if (out / "study.json").is_file() else {}
+    stored = _read_definition(out / "study.json") if (out / "study.json").is_file() else {}
     if a.report:
         if not stored:
             print(f"afford tune: {out} holds no study.json: no study to report", file=sys.stderr)
@@ -590,7 +599,7 @@ def main(argv: list[str] | None = None) -> int:
                  trials=given(a.trials, "trials", 24), system=given(a.system, "system", "IMP"),
                  reps=given(a.reps, "reps", 1), steps=given(a.steps, "steps", None),
                  set=fixed if a.set else stored.get("set", {}), seed=given(a.seed, "seed", 1),
-                 extrinsic_reps=given(a.extrinsic_reps, "extrinsic_reps", 0),
+                 extrinsic_reps=given(a.extrinsic_reps, "extrinsic_tests", None),
                  scenarios=given(a.scenarios, "scenarios", []), prune=given(a.prune, "prune", None),
                  pruner=given(a.pruner, "pruner", "halving"),
                  prune_startup=given(a.prune_startup, "prune_startup", 5),

@@ -123,7 +123,7 @@ ExperimentRequest requestFrom(const py::dict& request) {
   o.host.transport = request["transport"].cast<std::string>();
   o.plan.keep_logs = request["keep_logs"].cast<std::string>();
   o.plan.settings = request["settings"].cast<std::vector<std::string>>();
-  o.plan.extrinsic_reps = request["extrinsic_reps"].cast<int>();
+  if (!request["extrinsic_reps"].is_none()) o.plan.extrinsic_reps = request["extrinsic_reps"].cast<int>();
   o.plan.scenarios = request["scenarios"].cast<std::vector<std::string>>();
   o.plan.run_prefix = request["run_prefix"].cast<std::string>();
   o.host.progress = request["progress"].cast<std::string>();

@@ -88,3 +88,12 @@ def test_an_experiment_never_mixes_with_another_in_its_folder(tmp_path):
     with pytest.raises(afford.ConfigError, match=r"files afford did not write \(notes.txt\)"):
         afford.run("base", system="IMP", reps=1, steps=40, out=out, replace=True)
     assert (out / "notes.txt").read_text() == "mine" and afford.load(out).summary["steps"] == 40
+
+
+def test_a_zero_given_is_a_zero_and_left_out_the_experiment_says(tmp_path):
+    # attention asks for tests of its own (extrinsic.tests); extrinsic_reps=0 runs none of them.
+    none = afford.run("attention", system="IMP", reps=1, steps=50, out=tmp_path / "zero", extrinsic_reps=0,
+                      keep_logs="none")
+    assert len(none.extrinsic) == 0
+    own = afford.run("attention", system="IMP", reps=1, steps=50, out=tmp_path / "own", keep_logs="none")
+    assert len(own.extrinsic) > 0

@@ -446,3 +446,15 @@ def test_a_lock_matplotlib_left_behind_does_not_stop_a_studys_figures(tmp_path):
     assert r.returncode == 0, r.stderr
     assert not stale.exists()
     assert list(cache.glob("fontlist-*.json")), "Matplotlib wrote no font cache"
+
+
+def test_a_study_of_0_2_0_reads_its_extrinsic_reps_of_zero_as_the_experiments_count(tmp_path):
+    # 0.1.0 and 0.2.0 kept extrinsic_reps, 0 for "not given"; 0.3.0 keeps extrinsic_tests (None: not given).
+    from afford.study import _read_definition
+    old = tmp_path / "study.json"
+    for kept, read in ((0, None), (2, 2)):
+        old.write_text(json.dumps({"experiment": "base", "extrinsic_reps": kept}))
+        d = _read_definition(old)
+        assert d["extrinsic_tests"] == read and "extrinsic_reps" not in d
+    old.write_text(json.dumps({"experiment": "base", "extrinsic_tests": 0}))
+    assert _read_definition(old)["extrinsic_tests"] == 0

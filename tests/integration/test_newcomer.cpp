@@ -112,7 +112,14 @@ TEST(Newcomer, CountsOutOfRangeAndNamesNearlyRightAreRefusedNamingWhatWasMeant) 
   EXPECT_NE(reps.output.find("--reps must be at least 1, not 0"), std::string::npos) << reps.output;
   Output seed = run("experiment base --transport memq --seed -1 --out " + dir + "/c");
   EXPECT_NE(seed.output.find("--seed must be 0 or more, not -1"), std::string::npos) << seed.output;
-  EXPECT_FALSE(fs::exists(dir + "/a/summary.json") || fs::exists(dir + "/b/summary.json"));
+  // A zero where zero means nothing is refused, not read as "the default".
+  Output stall = run("experiment base --transport memq --stall-seconds 0 --out " + dir + "/f");
+  EXPECT_EQ(stall.exit_code, 2) << stall.output;
+  EXPECT_NE(stall.output.find("--stall-seconds must be more than 0, not 0"), std::string::npos) << stall.output;
+  Output jobs = run("experiment base --transport memq --jobs 0 --out " + dir + "/g");
+  EXPECT_NE(jobs.output.find("--jobs must be at least 1, not 0"), std::string::npos) << jobs.output;
+  EXPECT_FALSE(fs::exists(dir + "/a/summary.json") || fs::exists(dir + "/b/summary.json") ||
+               fs::exists(dir + "/f/summary.json"));
   // A name nearly right is named with the one meant.
   Output name = run("experiment basee --out " + dir + "/d");
   EXPECT_NE(name.output.find("unknown experiment \"basee\"; did you mean \"base\"?"), std::string::npos) << name.output;
@@ -308,6 +315,88 @@ TEST(Newcomer, PlotsOfOneRunShowBarsAndCurvesOfOneColourDifferAllAlong) {
     red_dashes.insert(m[1]);
   }
   EXPECT_EQ(red_dashes.size(), 3u) << curves;
+}
+
+}  // namespace
+}  // namespace afford
+
+namespace afford {
+namespace {
+
+// A typo in every section of an experiment file, and in a file it extends, and on --set: the file (and the
+// one that extends it) named, and the key meant, a swap of two letters counting as one.
+TEST(Newcomer, ATypoInAnySectionNamesTheFileAndTheKeyMeant) {
+  const std::string dir = test::tempDir("typos");
+  const std::vector<std::pair<std::string, std::string>> typos = {
+      {"extrinsic: {generate: {sead: 71}}", "'extrinsic.generate.sead': unknown key; did you mean 'extrinsic.generate.seed'?"},
+      {"extrinsic: {tsets: 2}", "'extrinsic.tsets': unknown key; did you mean 'extrinsic.tests'?"},
+      {"tables: {cuont: 3}", "'tables.cuont': unknown key; did you mean 'tables.count'?"},
+      {"default_system: [IMP]", "unknown block 'default_system'; did you mean 'default_systems'?"},
+      {"run: {stpes: 100}", "'run.stpes': unknown key; did you mean 'run.steps'?"},
+      {"world:\n  objects:\n    - {name: red square, shape: square, colr: red, position: [0.2, 0.2], appears_at: 0, "
+       "affordance: [1.0, 1.0, 0.0, 1.0]}",
+       "'world.objects[0].colr': unknown key; did you mean 'world.objects[0].colour'?"},
+      {"motivation: {laek: 0.3}", "'motivation.laek': unknown key; did you mean 'motivation.leak'?"},
+  };
+  int k = 0;
+  for (const auto& [text, said] : typos) {
+    const std::string file = dir + "/typo" + std::to_string(k) + ".yaml", child = dir + "/child" + std::to_string(k) + ".yaml";
+    spit(file, "extends: base\n" + text + "\n");
+    spit(child, "extends: typo" + std::to_string(k++) + ".yaml\n");
+    for (const std::string& given : {file, child}) {
+      Output r = run("experiment --config " + given + " --system IMP --transport memq --out " + dir + "/o");
+      EXPECT_EQ(r.exit_code, 2) << text << ": " << r.output;
+      EXPECT_NE(r.output.find("experiment file " + file), std::string::npos) << text << ": " << r.output;
+      EXPECT_NE(r.output.find(said), std::string::npos) << text << ": " << r.output;
+      if (given == child)
+        EXPECT_NE(r.output.find("(extended by " + child + ")"), std::string::npos) << text << ": " << r.output;
+    }
+  }
+  spit(dir + "/extend.yaml", "extend: base\n");
+  Output extend = run("experiment --config " + dir + "/extend.yaml --transport memq --out " + dir + "/o");
+  EXPECT_NE(extend.output.find("unknown block 'extend'; did you mean 'extends'?"), std::string::npos) << extend.output;
+  Output set = run("experiment base --set run.stpes=3 --transport memq --out " + dir + "/o");
+  EXPECT_NE(set.output.find("config key 'run.stpes': unknown key; did you mean 'run.steps'?"), std::string::npos)
+      << set.output;
+  EXPECT_FALSE(fs::exists(dir + "/o/summary.json"));
+}
+
+// The console's summary says "in brackets the paper's" where the paper's numbers are beside the results, and
+// not where an experiment of one's own has none.
+TEST(Newcomer, TheSummarySaysThePapersNumbersAreInBracketsOnlyWhereTheyAre) {
+  const std::string dir = test::tempDir("brackets");
+  spit(dir + "/mine.yaml", "extends: base\n");
+  const auto summary = [&](const std::string& experiment, const std::string& name) {
+    Output r = run("experiment " + experiment + " --system IMP --reps 1 --steps 50 --transport memq --keep-logs none "
+                   "--extrinsic-reps 1 --scenarios scenario1 --out " + dir + "/" + name + " --log-root " + dir + "/" +
+                   name + "-logs");
+    EXPECT_EQ(r.exit_code, 0) << r.output;
+    return r.output;
+  };
+  const std::string paper = summary("base", "paper"), mine = summary(dir + "/mine.yaml", "mine");
+  EXPECT_NE(paper.find("solved; in brackets the paper's; then the raw share"), std::string::npos) << paper;
+  EXPECT_NE(mine.find("solved; then the raw share"), std::string::npos) << mine;
+  EXPECT_EQ(mine.find("in brackets the paper's"), std::string::npos) << mine;
+}
+
+// A zero given is a zero: --extrinsic-reps 0 runs no test even where the experiment file asks for tests; left
+// out, the file's count holds (attention asks for 100 here).
+TEST(Newcomer, ZeroExtrinsicRepsRunsNoTestsWhereTheExperimentAsksForThem) {
+  namespace fs = std::filesystem;
+  const std::string dir = test::tempDir("zero-reps");
+  const auto runs = [&](const std::string& name, const std::string& more) {
+    const test::CommandResult r = test::runAfford(
+        "experiment attention --system IMP --reps 1 --steps 50 --transport memq --keep-logs none --quiet "
+        "--run-prefix z --out " + dir + "/" + name + " --log-root " + dir + "/" + name + "-logs " + more);
+    EXPECT_EQ(r.exit_code, 0) << r.output;
+    int n = 0;
+    for (const auto& f : fs::directory_iterator(dir + "/" + name + "/runs")) n += f.path().extension() == ".json";
+    return n;
+  };
+  EXPECT_EQ(runs("zero", "--extrinsic-reps 0"), 1) << "--extrinsic-reps 0 ran tests";
+  EXPECT_EQ(test::readJson(dir + "/zero/experiment.json")["options"]["extrinsic_tests"], 0);
+  EXPECT_EQ(runs("design", ""), 101) << "left out, the experiment's own tests";
+  EXPECT_FALSE(test::readJson(dir + "/design/experiment.json")["options"].contains("extrinsic_tests"));
 }
 
 }  // namespace

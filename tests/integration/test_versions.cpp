@@ -153,5 +153,23 @@ TEST(Versions, AMovedExperimentWhoseLogRootStayedBehindIsRefusedNamingIt) {
   EXPECT_NE(resumed.output.find(dir + "/a, which is gone"), std::string::npos) << resumed.output;
 }
 
+TEST(Versions, AnExperimentOf010Or020ReadsItsExtrinsicRepsOfZeroAsNotGiven) {
+  // 0.1.0 and 0.2.0 kept `extrinsic_reps`, 0 for "the experiment's count"; from 0.3.0 `extrinsic_tests`,
+  // absent when not given and 0 for none.
+  const std::string dir = test::tempDir("versions-reps");
+  const test::CommandResult r =
+      test::runAfford("experiment base --system FIX --reps 1 --steps 50 --extrinsic-reps 0 --transport memq --quiet "
+                      "--keep-logs none --run-prefix r --out " + dir + "/out --log-root " + dir + "/logs");
+  ASSERT_EQ(r.exit_code, 0) << r.output;
+  EXPECT_EQ(readState(dir + "/out").options.plan.extrinsic_reps, std::optional<int>(0));
+  nlohmann::json state = test::readJson(dir + "/out/experiment.json");
+  state["options"].erase("extrinsic_tests");
+  for (const auto& [kept, read] : {std::pair{0, std::optional<int>()}, {3, std::optional<int>(3)}}) {
+    state["options"]["extrinsic_reps"] = kept;
+    std::ofstream(dir + "/out/experiment.json") << state.dump(2);
+    EXPECT_EQ(readState(dir + "/out").options.plan.extrinsic_reps, read) << "kept as " << kept;
+  }
+}
+
 }  // namespace
 }  // namespace afford

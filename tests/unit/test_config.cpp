@@ -11,6 +11,7 @@
 
 #include "afford/config.hpp"
 #include "afford/migrations.hpp"
+#include "afford/yaml_reader.hpp"
 #include "tests/support.hpp"
 #include "experiment/design/experiment_file.hpp"
 
@@ -434,6 +435,18 @@ TEST(Configuration, EveryDefaultNamesItsSource) {
 
 namespace afford {
 namespace {
+
+TEST(Typos, ASwapOfTwoLettersIsOneEditAndTheLongerNameSetsHowManyMayDiffer) {
+  EXPECT_EQ(editDistance("stpes", "steps"), 1u);
+  EXPECT_EQ(editDistance("sead", "seed"), 1u);
+  EXPECT_EQ(editDistance("colr", "colour"), 2u);
+  EXPECT_EQ(editDistance("abc", "abc"), 0u);
+  EXPECT_EQ(editDistance("", "abc"), 3u);
+  EXPECT_EQ(closestName("stpes", {"seed", "steps"}), "steps");
+  EXPECT_EQ(closestName("cuont", {"count", "seed"}), "count");
+  EXPECT_EQ(closestName("colr", {"colour", "shape"}), "colour");
+  EXPECT_EQ(closestName("xyz", {"colour", "shape"}), "");
+}
 
 // A configuration as an earlier release wrote it: the table says what it lacks or spells otherwise.
 TEST(Migrations, AKeyAddedSinceAReleaseTakesTheValueTheTableGivesInAConfigurationOfBefore) {

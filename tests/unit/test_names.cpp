@@ -48,5 +48,12 @@ TEST(Names, APathIsInsideAFolderOnlyIfItStaysThereResolved) {
   EXPECT_FALSE(insideFolder(root / "link" / "x.ckpt", root)) << "a symbolic link out of the folder";
 }
 
+TEST(Names, ACountSaysItsNounInTheSingularForOneAlone) {
+  // The console's "solved in 1 step" (it said "1 steps").
+  EXPECT_EQ(counted(1, "step"), "1 step");
+  EXPECT_EQ(counted(0, "action"), "0 actions");
+  EXPECT_EQ(counted(12, "step"), "12 steps");
+}
+
 }  // namespace
 }  // namespace afford

@@ -22,7 +22,7 @@ struct Args {
   std::vector<std::string> names;
   std::string system, netns = "auto", file, shard, plan;
   std::vector<std::string> processes;
-  int reps = 0, tables = 0;
+  int reps = 0, tables = 0, extrinsic_reps = 0;
   std::int64_t steps = 0, table_seed = 0;
   CLI::Option* tables_option = nullptr;
   CLI::Option* table_seed_option = nullptr;
@@ -87,10 +87,9 @@ void addMoreOptions(CLI::App* exp, Args& a) {
       ->check(CLI::IsMember({"auto", "terminal", "lines", "none"}));
   exp->add_option("--progress-every", o.host.progress_every,
                   "seconds between progress lines (default: 0.25 on a terminal, 30 otherwise)");
-  exp->add_option("--extrinsic-reps", o.plan.extrinsic_reps,
-                  "extrinsic tests of each scenario (and planner condition) from every trained agent "
-                  "(default: the experiment's extrinsic.tests, else 0: intrinsic phase only)")
-      ->capture_default_str();
+  exp->add_option("--extrinsic-reps", a.extrinsic_reps,
+                  "extrinsic tests of each scenario (and planner condition) from every trained agent; 0: none, "
+                  "the intrinsic phase only (default: the experiment's extrinsic.tests, else 0)");
   exp->add_option("--scenarios", o.plan.scenarios, "scenarios to test (default: all in config/scenarios)");
   a.tables_option = exp->add_option("--tables", a.tables,
                                         "experiments on random affordance tables (random-tables): how many tables "
@@ -160,6 +159,7 @@ ExperimentRequest requestOf(Args& a, const CLI::App& app, const CLI::App* exp, c
   if (o.given.count("--reps")) o.plan.reps = a.reps;
   if (o.given.count("--steps")) o.plan.steps = a.steps;
   if (o.given.count("--tables")) o.plan.tables = a.tables;
+  if (o.given.count("--extrinsic-reps")) o.plan.extrinsic_reps = a.extrinsic_reps;
   if (o.given.count("--table-seed")) o.plan.table_seed = a.table_seed;
   if (!a.system.empty()) o.plan.systems = parseSystems({a.system}, "--system");
   if (a.netns == "auto")

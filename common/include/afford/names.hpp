@@ -25,4 +25,9 @@ std::string printable(const std::string& text, std::size_t max_bytes = 200);
 // that exists resolved) inside the folder `root` (resolved the same way)?
 bool insideFolder(const std::filesystem::path& path, const std::filesystem::path& root);
 
+// "1 step", "3 steps": a count and its noun (a regular plural) for a line a person reads.
+inline std::string counted(long long n, const std::string& noun) {
+  return std::to_string(n) + " " + noun + (n == 1 ? "" : "s");
+}
+
 }  // namespace afford

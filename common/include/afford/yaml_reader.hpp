@@ -16,6 +16,9 @@
 
 namespace afford {
 
+// Letters added, dropped, changed or two neighbours swapped, from a to b (Damerau-Levenshtein, as an optimal
+// string alignment): "stpes" is one from "steps".
+std::size_t editDistance(const std::string& a, const std::string& b);
 // Of `known`, the name closest to `name` by edit distance, if close enough to be a typo of it ("" if none).
 std::string closestName(const std::string& name, const std::vector<std::string>& known);
 // "motivation" + "leak" -> "motivation.leak" ("" + key -> key).
@@ -54,6 +57,10 @@ class ConfigReader {
   std::string keyPath(const std::string& key) const { return joinKey(path_, key); }
   // Every key of the map was read, or the first one that was not is refused.
   void finish() const;
+  // The keys this map may hold, said before any is read (a map read by hand, whose keys are read only when
+  // present): a key not among them is refused now, with the one it is likely a typo of, rather than a key it
+  // displaced reported missing.
+  void expect(std::vector<std::string> keys);
 
   static double toNumber(const std::string& key, const YAML::Node& v);
   static double checkRange(const std::string& key, double v, double lo, double hi);
@@ -62,6 +69,7 @@ class ConfigReader {
   YAML::Node node_;
   std::string path_;
   std::set<std::string> used_;
+  std::vector<std::string> expected_;
 };
 
 // A list of exactly n numbers in [lo, hi].
