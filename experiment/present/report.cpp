@@ -279,6 +279,23 @@ std::vector<std::string> systemsOf(const Summary& s) {
     if (std::find(kSystems.begin(), kSystems.end(), sys) == kSystems.end()) out.push_back(sys);
   return out;
 }
+}  // namespace
+
+std::vector<std::string> report::systemsOf(const std::vector<Folder>& folders) {
+  std::vector<std::string> out;
+  for (const auto& sys : kSystems)
+    for (const auto& f : folders)
+      if (f.summary.systems.count(sys)) {
+        out.push_back(sys);
+        break;
+      }
+  for (const auto& f : folders)
+    for (const auto& [sys, js] : f.summary.systems)
+      if (std::find(out.begin(), out.end(), sys) == out.end()) out.push_back(sys);
+  return out;
+}
+
+namespace {
 
 // What was run, read from the folders: a row per folder, and what was set.
 void whatWasRun(std::ostringstream& md, const std::vector<Folder>& folders, const Where& where) {
@@ -325,12 +342,14 @@ void whatWasRun(std::ostringstream& md, const std::vector<Folder>& folders, cons
 
 // The intrinsic phase: the mean absolute errors (paper Table 1), and base's mean table (Figure 5).
 void intrinsicSection(std::ostringstream& md, const std::vector<Folder>& folders) {
-  const std::vector<std::string>& systems = kSystems;
+  const std::vector<std::string> systems = systemsOf(folders);
   md << "\n## Intrinsic phase: learned affordances (paper Table 1, Figure 5)\n\n"
      << "Mean absolute error of the final affordance predictions against the experiment's table, mean over runs:\n\n"
      << "| experiment | steps |";
   for (const auto& s : systems) md << " " << s << " |";
-  md << "\n|---|---|---|---|---|\n";
+  md << "\n|---|---|";
+  for (std::size_t i = 0; i < systems.size(); ++i) md << "---|";
+  md << "\n";
   for (const auto& f : folders) {
     const Summary& s = f.summary;
     if (s.random_tables) continue;  // no one table: see the random-tables section
@@ -353,7 +372,11 @@ void intrinsicSection(std::ostringstream& md, const std::vector<Folder>& folders
     if (s.experiment != "base" || s.systems.empty() || !s.systems.begin()->second.target) continue;
     const SummaryTable& target = *s.systems.begin()->second.target;  // the experiment's table: the same for every system
     md << "\nBase test" << labelled(f)
-       << ", mean final prediction per object and action (FIX / IGN / IMP; the paper's table in brackets):\n\n"
+       << ", mean final prediction per object and action (" << [&] {
+            std::string names;
+            for (const auto& sys : systemsOf(s)) names += (names.empty() ? "" : " / ") + sys;
+            return names;
+          }() << "; the paper's table in brackets):\n\n"
        << "| object | move | turn green | turn red | turn blue |\n|---|---|---|---|---|\n";
     for (std::size_t i = 0; i < s.objects.size() && i < target.size(); ++i) {
       md << "| " << s.objects[i] << " |";

@@ -40,7 +40,7 @@ void tableMetricRow(std::ostream& md, const std::string& sys, const std::string&
 
 // Completion steps by number of sub-goals and their fit (paper Figure 6).
 void completionSection(std::ostream& md, const std::vector<Folder>& folders) {
-  const std::vector<std::string> systems{"FIX", "IGN", "IMP"};
+  const std::vector<std::string> systems = systemsOf(folders);
   md << "\n## Completion steps (paper Figure 6)\n\nMedian iterations of the solved tests, by number of sub-goals, "
         "and the least-squares fit of a x^2 + b x";
   for (const auto& f : folders)

@@ -304,6 +304,28 @@ TEST(Report, EverySystemAFolderRanHasItsExtrinsicRows) {
   EXPECT_NE(rows.find("| GOALS tests solved | 1.00 |"), std::string::npos) << rows;
 }
 
+TEST(Report, EverySystemAFolderRanHasItsColumnOfErrorsAndItsCompletionRows) {
+  // GOALS beside IMP: the intrinsic table has a column for each system any folder ran, and the completion steps a
+  // row for each (they listed FIX, IGN and IMP alone).
+  const fs::path root = test::tempDir("report-goals-columns");
+  Made m = made("0.1.0+aaaaaaa", {"IMP", "GOALS"}, 2, 1, 300, 1);
+  ReportRequest r;
+  r.dirs = {makeFolder(root / "base", m)};
+  r.out = (root / "r.md").string();
+  r.config_dir = kConfigDir;
+  writeReport(r);
+  const std::string md = slurp(root / "r.md");
+  EXPECT_NE(md.find("| experiment | steps | IMP | GOALS |\n|---|---|---|---|\n"), std::string::npos) << md;
+  EXPECT_NE(md.find("| base | 300 | 0.040 (0.026 authors' code) | 0.040 (0.026 authors' code) |"), std::string::npos)
+      << md;
+  EXPECT_NE(md.find("(IMP / GOALS; the paper's table in brackets)"), std::string::npos) << md;
+  const auto completion = md.find("## Completion steps");
+  ASSERT_NE(completion, std::string::npos) << md;
+  const std::string rows = md.substr(completion, md.find("\n## ", completion + 1) - completion);
+  EXPECT_NE(rows.find("| base | IMP |"), std::string::npos) << rows;
+  EXPECT_NE(rows.find("| base | GOALS |"), std::string::npos) << rows;
+}
+
 TEST(Report, AnInterruptedFolderIsMarkedIncomplete) {
   const fs::path root = test::tempDir("report-interrupted");
   Made m = made("0.1.0+ccccccc", {"IMP"}, 3, 1, 300, 1);
