@@ -268,34 +268,15 @@ struct Where {
   std::string note;
 };
 
-const std::vector<std::string> kSystems{"FIX", "IGN", "IMP"};
-
 // The systems a folder ran: the paper's in their order, then any other (GOALS, novelty) by name.
 std::vector<std::string> systemsOf(const Summary& s) {
   std::vector<std::string> out;
-  for (const auto& sys : kSystems)
+  for (const auto& sys : kPaperSystems)
     if (s.systems.count(sys)) out.push_back(sys);
   for (const auto& [sys, js] : s.systems)
-    if (std::find(kSystems.begin(), kSystems.end(), sys) == kSystems.end()) out.push_back(sys);
+    if (std::find(kPaperSystems.begin(), kPaperSystems.end(), sys) == kPaperSystems.end()) out.push_back(sys);
   return out;
 }
-}  // namespace
-
-std::vector<std::string> report::systemsOf(const std::vector<Folder>& folders) {
-  std::vector<std::string> out;
-  for (const auto& sys : kSystems)
-    for (const auto& f : folders)
-      if (f.summary.systems.count(sys)) {
-        out.push_back(sys);
-        break;
-      }
-  for (const auto& f : folders)
-    for (const auto& [sys, js] : f.summary.systems)
-      if (std::find(out.begin(), out.end(), sys) == out.end()) out.push_back(sys);
-  return out;
-}
-
-namespace {
 
 // What was run, read from the folders: a row per folder, and what was set.
 void whatWasRun(std::ostringstream& md, const std::vector<Folder>& folders, const Where& where) {
