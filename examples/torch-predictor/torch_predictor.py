@@ -10,8 +10,9 @@ convolutional trunk between the actions:
         -> features -> affordance head: linear, one sigmoid output per action
                     -> learning-progress heads: one linear output per action, on the features (detached)
 
-learn() takes one plain stochastic-gradient step on the acted action's squared error (as the paper's
-perceptrons do, delta rule through the sigmoid), then IMP's learning-progress head of that action one
+learn() takes one plain stochastic-gradient step on the acted action's logistic loss (binary cross-entropy
+on the logit; the paper's perceptrons take the squared error through the sigmoid, the delta rule), then IMP's
+learning-progress head of that action one
 normalised least-mean-squares step towards the change the update made (after - before). relearn() (replay) takes the affordance step only.
 
 Deterministic, so that the weights checksum, the checkpoints, replay and a live restart hold: one thread,

@@ -268,15 +268,13 @@ struct Where {
   std::string note;
 };
 
-const std::vector<std::string> kSystems{"FIX", "IGN", "IMP"};
-
 // The systems a folder ran: the paper's in their order, then any other (GOALS, novelty) by name.
 std::vector<std::string> systemsOf(const Summary& s) {
   std::vector<std::string> out;
-  for (const auto& sys : kSystems)
+  for (const auto& sys : kPaperSystems)
     if (s.systems.count(sys)) out.push_back(sys);
   for (const auto& [sys, js] : s.systems)
-    if (std::find(kSystems.begin(), kSystems.end(), sys) == kSystems.end()) out.push_back(sys);
+    if (std::find(kPaperSystems.begin(), kPaperSystems.end(), sys) == kPaperSystems.end()) out.push_back(sys);
   return out;
 }
 
@@ -325,12 +323,14 @@ void whatWasRun(std::ostringstream& md, const std::vector<Folder>& folders, cons
 
 // The intrinsic phase: the mean absolute errors (paper Table 1), and base's mean table (Figure 5).
 void intrinsicSection(std::ostringstream& md, const std::vector<Folder>& folders) {
-  const std::vector<std::string>& systems = kSystems;
+  const std::vector<std::string> systems = systemsOf(folders);
   md << "\n## Intrinsic phase: learned affordances (paper Table 1, Figure 5)\n\n"
      << "Mean absolute error of the final affordance predictions against the experiment's table, mean over runs:\n\n"
      << "| experiment | steps |";
   for (const auto& s : systems) md << " " << s << " |";
-  md << "\n|---|---|---|---|---|\n";
+  md << "\n|---|---|";
+  for (std::size_t i = 0; i < systems.size(); ++i) md << "---|";
+  md << "\n";
   for (const auto& f : folders) {
     const Summary& s = f.summary;
     if (s.random_tables) continue;  // no one table: see the random-tables section
@@ -353,7 +353,11 @@ void intrinsicSection(std::ostringstream& md, const std::vector<Folder>& folders
     if (s.experiment != "base" || s.systems.empty() || !s.systems.begin()->second.target) continue;
     const SummaryTable& target = *s.systems.begin()->second.target;  // the experiment's table: the same for every system
     md << "\nBase test" << labelled(f)
-       << ", mean final prediction per object and action (FIX / IGN / IMP; the paper's table in brackets):\n\n"
+       << ", mean final prediction per object and action (" << [&] {
+            std::string names;
+            for (const auto& sys : systemsOf(s)) names += (names.empty() ? "" : " / ") + sys;
+            return names;
+          }() << "; the paper's table in brackets):\n\n"
        << "| object | move | turn green | turn red | turn blue |\n|---|---|---|---|---|\n";
     for (std::size_t i = 0; i < s.objects.size() && i < target.size(); ++i) {
       md << "| " << s.objects[i] << " |";

@@ -33,6 +33,12 @@ struct Folder {
   std::string sweep;  // a sweep's condition: the sweep's folder (its comparison figures), else ""
 };
 
+// The paper's systems, in its order.
+inline const std::vector<std::string> kPaperSystems{"FIX", "IGN", "IMP"};
+// The systems the folders ran: the paper's in their order (FIX, IGN, IMP), then any other (GOALS, a
+// motivation of one's own) by name. Every table of systems has a column or row for each.
+std::vector<std::string> systemsOf(const std::vector<Folder>& folders);
+
 // The paper's claim for a shipped experiment (reference.yaml: <experiment>_claims).
 std::string claim(const Reference& ref, const Summary& s);
 // " (label)" after a heading named by the paper, when the label is not the experiment's name.

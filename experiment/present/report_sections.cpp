@@ -2,6 +2,7 @@
 // 3.2 (experiment/present/report_parts.hpp).
 #include <yaml-cpp/yaml.h>
 
+#include <algorithm>
 #include <cmath>
 #include <map>
 #include <optional>
@@ -38,9 +39,23 @@ void tableMetricRow(std::ostream& md, const std::string& sys, const std::string&
 
 }  // namespace
 
+std::vector<std::string> systemsOf(const std::vector<Folder>& folders) {
+  std::vector<std::string> out;
+  for (const auto& sys : kPaperSystems)
+    for (const auto& f : folders)
+      if (f.summary.systems.count(sys)) {
+        out.push_back(sys);
+        break;
+      }
+  for (const auto& f : folders)
+    for (const auto& [sys, js] : f.summary.systems)
+      if (std::find(out.begin(), out.end(), sys) == out.end()) out.push_back(sys);
+  return out;
+}
+
 // Completion steps by number of sub-goals and their fit (paper Figure 6).
 void completionSection(std::ostream& md, const std::vector<Folder>& folders) {
-  const std::vector<std::string> systems{"FIX", "IGN", "IMP"};
+  const std::vector<std::string> systems = systemsOf(folders);
   md << "\n## Completion steps (paper Figure 6)\n\nMedian iterations of the solved tests, by number of sub-goals, "
         "and the least-squares fit of a x^2 + b x";
   for (const auto& f : folders)

@@ -380,14 +380,15 @@ TEST(Newcomer, TheSummarySaysThePapersNumbersAreInBracketsOnlyWhereTheyAre) {
 }
 
 // A zero given is a zero: --extrinsic-reps 0 runs no test even where the experiment file asks for tests; left
-// out, the file's count holds (attention asks for 100 here).
+// out, the file's count holds (one test here).
 TEST(Newcomer, ZeroExtrinsicRepsRunsNoTestsWhereTheExperimentAsksForThem) {
   namespace fs = std::filesystem;
   const std::string dir = test::tempDir("zero-reps");
+  spit(dir + "/asks.yaml", "extends: base\nextrinsic: {scenarios: [scenario1], tests: 1}\n");
   const auto runs = [&](const std::string& name, const std::string& more) {
     const test::CommandResult r = test::runAfford(
-        "experiment attention --system IMP --reps 1 --steps 50 --transport memq --keep-logs none --quiet "
-        "--run-prefix z --out " + dir + "/" + name + " --log-root " + dir + "/" + name + "-logs " + more);
+        "experiment --config " + dir + "/asks.yaml --system IMP --reps 1 --steps 50 --transport memq --keep-logs none "
+        "--quiet --run-prefix z --out " + dir + "/" + name + " --log-root " + dir + "/" + name + "-logs " + more);
     EXPECT_EQ(r.exit_code, 0) << r.output;
     int n = 0;
     for (const auto& f : fs::directory_iterator(dir + "/" + name + "/runs")) n += f.path().extension() == ".json";
@@ -395,7 +396,7 @@ TEST(Newcomer, ZeroExtrinsicRepsRunsNoTestsWhereTheExperimentAsksForThem) {
   };
   EXPECT_EQ(runs("zero", "--extrinsic-reps 0"), 1) << "--extrinsic-reps 0 ran tests";
   EXPECT_EQ(test::readJson(dir + "/zero/experiment.json")["options"]["extrinsic_tests"], 0);
-  EXPECT_EQ(runs("design", ""), 101) << "left out, the experiment's own tests";
+  EXPECT_EQ(runs("design", ""), 2) << "left out, the experiment's own test";
   EXPECT_FALSE(test::readJson(dir + "/design/experiment.json")["options"].contains("extrinsic_tests"));
 }
 

@@ -283,17 +283,21 @@ TEST(Report, TheAuthorsEyeIsShownBesideOursAndThePapers) {
 }
 
 // Systems beyond the paper's (GOALS, novelty) have their extrinsic rows too, after the paper's.
-TEST(Report, EverySystemAFolderRanHasItsExtrinsicRows) {
-  const fs::path root = test::tempDir("report-systems");
-  Made m = made("0.1.0+aaaaaaa", {"IMP", "GOALS"}, 2, 1, 300, 1);
-  m.experiment = "goals";
-  m.table_metric = 0.5;
+// The report of one hand-made folder FOLDER under ROOT.
+std::string reportOf(const fs::path& root, const std::string& folder, const Made& m) {
   ReportRequest r;
-  r.dirs = {makeFolder(root / "goals", m)};
+  r.dirs = {makeFolder(root / folder, m)};
   r.out = (root / "r.md").string();
   r.config_dir = kConfigDir;
   writeReport(r);
-  const std::string md = slurp(root / "r.md");
+  return slurp(root / "r.md");
+}
+
+TEST(Report, EverySystemAFolderRanHasItsExtrinsicRows) {
+  Made m = made("0.1.0+aaaaaaa", {"IMP", "GOALS"}, 2, 1, 300, 1);
+  m.experiment = "goals";
+  m.table_metric = 0.5;
+  const std::string md = reportOf(test::tempDir("report-systems"), "goals", m);
   const auto section = md.find("## Extrinsic phase");
   ASSERT_NE(section, std::string::npos) << md;
   const std::string rows = md.substr(section, md.find("\n## ", section + 1) - section);
@@ -302,6 +306,22 @@ TEST(Report, EverySystemAFolderRanHasItsExtrinsicRows) {
   ASSERT_NE(goals, std::string::npos) << rows;
   EXPECT_LT(imp, goals);  // the paper's systems first
   EXPECT_NE(rows.find("| GOALS tests solved | 1.00 |"), std::string::npos) << rows;
+}
+
+TEST(Report, EverySystemAFolderRanHasItsColumnOfErrorsAndItsCompletionRows) {
+  // GOALS beside IMP: the intrinsic table has a column for each system any folder ran, and the completion steps a
+  // row for each (they listed FIX, IGN and IMP alone).
+  const std::string md =
+      reportOf(test::tempDir("report-goals-columns"), "base", made("0.1.0+aaaaaaa", {"IMP", "GOALS"}, 2, 1, 300, 1));
+  EXPECT_NE(md.find("| experiment | steps | IMP | GOALS |\n|---|---|---|---|\n"), std::string::npos) << md;
+  EXPECT_NE(md.find("| base | 300 | 0.040 (0.026 authors' code) | 0.040 (0.026 authors' code) |"), std::string::npos)
+      << md;
+  EXPECT_NE(md.find("(IMP / GOALS; the paper's table in brackets)"), std::string::npos) << md;
+  const auto completion = md.find("## Completion steps");
+  ASSERT_NE(completion, std::string::npos) << md;
+  const std::string rows = md.substr(completion, md.find("\n## ", completion + 1) - completion);
+  EXPECT_NE(rows.find("| base | IMP |"), std::string::npos) << rows;
+  EXPECT_NE(rows.find("| base | GOALS |"), std::string::npos) << rows;
 }
 
 TEST(Report, AnInterruptedFolderIsMarkedIncomplete) {
