@@ -330,8 +330,9 @@ ProtocolConfig loadProtocol(const std::string& config_dir) {
 RunConfig parseRunConfig(const YAML::Node& given) {
   // In this build's form: a configuration an earlier release wrote lacks keys added since, or spells renamed
   // ones as it did (config/migrations.yaml); each change is said once.
-  YAML::Node root = YAML::Clone(given);
-  for (const std::string& line : upgradeConfig(root, configMigrations())) {
+  const ConfigMigrations& migrations = configMigrations();
+  YAML::Node root = migrations.added.empty() && migrations.renamed.empty() ? given : YAML::Clone(given);
+  for (const std::string& line : upgradeConfig(root, migrations)) {
     static std::mutex mutex;
     static std::set<std::string> said;
     const std::lock_guard<std::mutex> lock(mutex);

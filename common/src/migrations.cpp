@@ -119,10 +119,10 @@ std::vector<std::string> upgradeConfig(YAML::Node& root, const ConfigMigrations&
   }
   for (const auto& a : m.added) {
     if (find(root, a.key).IsDefined() || !put(root, a.key, YAML::Clone(a.value))) continue;
-    said.push_back(a.key + ": absent (written before " + a.release + "), read as " + emitYaml(a.value).substr(0, 60));
+    std::string value = emitYaml(a.value).substr(0, 60);
+    if (!value.empty() && value.back() == '\n') value.pop_back();  // (emitYaml ends a document with one)
+    said.push_back(a.key + ": absent (written before " + a.release + "), read as " + value);
   }
-  for (auto& s : said)
-    if (!s.empty() && s.back() == '\n') s.pop_back();
   return said;
 }
 

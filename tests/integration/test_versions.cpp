@@ -43,12 +43,18 @@ TEST(Versions, TheBuildThePythonPackageAndTheProjectSayOneVersion) {
       << "CHANGELOG.md has no section for " << version << " (or it is still Unreleased)";
 }
 
-TEST(Versions, AnExperimentFolderSaysTheVersionThatWroteIt) {
-  const std::string dir = test::tempDir("versions");
+// A one-run FIX experiment of 50 steps and no test, run into DIR/out with its logs in DIR/logs.
+void smallExperiment(const std::string& dir, const std::string& prefix) {
   const test::CommandResult r =
       test::runAfford("experiment base --system FIX --reps 1 --steps 50 --extrinsic-reps 0 --transport memq --quiet "
-                      "--keep-logs none --run-prefix v --out " + dir + "/out --log-root " + dir + "/logs");
+                      "--keep-logs none --run-prefix " + prefix + " --out " + dir + "/out --log-root " + dir + "/logs");
   ASSERT_EQ(r.exit_code, 0) << r.output;
+}
+
+TEST(Versions, AnExperimentFolderSaysTheVersionThatWroteIt) {
+  const std::string dir = test::tempDir("versions");
+  smallExperiment(dir, "v");
+  if (HasFatalFailure()) return;
   EXPECT_EQ(test::readJson(dir + "/out/experiment.json")["afford_version"], affordVersion());
   EXPECT_EQ(test::readJson(dir + "/out/summary.json")["afford_version"], affordVersion());
   EXPECT_EQ(readState(dir + "/out").afford_version, std::optional<std::string>(affordVersion()));
@@ -65,10 +71,8 @@ TEST(Versions, AnExperimentFolderSaysTheVersionThatWroteIt) {
 
 TEST(Versions, AnExperimentStateOf010WithoutAVersionReadsAsBefore) {
   const std::string dir = test::tempDir("versions-010");
-  const test::CommandResult r =
-      test::runAfford("experiment base --system FIX --reps 1 --steps 50 --extrinsic-reps 0 --transport memq --quiet "
-                      "--keep-logs none --run-prefix w --out " + dir + "/out --log-root " + dir + "/logs");
-  ASSERT_EQ(r.exit_code, 0) << r.output;
+  smallExperiment(dir, "w");
+  if (HasFatalFailure()) return;
   // As 0.1.0 wrote it: the same keys, without afford_version.
   nlohmann::json state = test::readJson(dir + "/out/experiment.json");
   state.erase("afford_version");
@@ -157,10 +161,8 @@ TEST(Versions, AnExperimentOf010Or020ReadsItsExtrinsicRepsOfZeroAsNotGiven) {
   // 0.1.0 and 0.2.0 kept `extrinsic_reps`, 0 for "the experiment's count"; from 0.3.0 `extrinsic_tests`,
   // absent when not given and 0 for none.
   const std::string dir = test::tempDir("versions-reps");
-  const test::CommandResult r =
-      test::runAfford("experiment base --system FIX --reps 1 --steps 50 --extrinsic-reps 0 --transport memq --quiet "
-                      "--keep-logs none --run-prefix r --out " + dir + "/out --log-root " + dir + "/logs");
-  ASSERT_EQ(r.exit_code, 0) << r.output;
+  smallExperiment(dir, "r");
+  if (HasFatalFailure()) return;
   EXPECT_EQ(readState(dir + "/out").options.plan.extrinsic_reps, std::optional<int>(0));
   nlohmann::json state = test::readJson(dir + "/out/experiment.json");
   state["options"].erase("extrinsic_tests");
