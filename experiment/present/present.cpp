@@ -66,6 +66,23 @@ void randomTablesText(std::ostringstream& t, const Summary& summary) {
   }
 }
 
+// A goals agent's modules: the goals each pursued and reached, and its competence early and late in the runs.
+void goalsText(std::ostringstream& t, const GoalsSummary& g) {
+  int w = 14;  // the module column: 14, or the longest name and two spaces
+  for (const auto& [name, m] : g.modules) w = std::max(w, static_cast<int>(name.size()) + 2);
+  t << "  goals per module: reached of pursued, competence in the first / last tenth of the steps, share chosen in "
+       "the last interval\n";
+  for (const auto& [name, m] : g.modules) {
+    t << "    " << std::left << std::setw(w) << name;
+    if (name == "explore")  // random actions, no goal to reach: no competence (docs/model.md#goals-of-its-own)
+      t << std::setw(30) << (std::to_string(m.set) + " random actions");
+    else
+      t << std::setw(14) << (std::to_string(m.reached - m.found) + " of " + std::to_string(m.set - m.found))
+        << std::setw(16) << (number(m.first_tenth, 2) + " / " + number(m.last_tenth, 2));
+    t << (m.chosen.empty() ? std::string("-") : fixed(m.chosen.back(), 2)) << "\n";
+  }
+}
+
 // The mean learned table of each system beside the experiment's table.
 void learnedTablesText(std::ostringstream& t, const Summary& summary, const Plan& plan) {
   const auto& object_names = summary.objects;
@@ -88,6 +105,7 @@ void learnedTablesText(std::ostringstream& t, const Summary& summary, const Plan
     t << "  mean absolute error " << fixed(js.affordance_mae.value_or(0.0), 3);
     if (js.reference_affordance_mae) t << " (authors' code: " << fixed(*js.reference_affordance_mae, 3) << ")";
     t << "\n";
+    if (js.goals) goalsText(t, *js.goals);
   }
 }
 
@@ -196,7 +214,7 @@ void analysisText(std::ostringstream& t, const Summary& summary, const Plan& pla
 
 }  // namespace
 
-void printTables(const Summary& summary, const Plan& plan, const std::string& out_dir) {
+std::string tablesText(const Summary& summary, const Plan& plan, const std::string& out_dir) {
   std::ostringstream t;
   if (summary.random_tables)
     randomTablesText(t, summary);
@@ -205,7 +223,11 @@ void printTables(const Summary& summary, const Plan& plan, const std::string& ou
   extrinsicText(t, summary, plan);
   analysisText(t, summary, plan);
   t << "\nsummary: " << (fs::path(out_dir) / "summary.json").string() << "\n";
-  std::printf("%s", t.str().c_str());
+  return t.str();
+}
+
+void printTables(const Summary& summary, const Plan& plan, const std::string& out_dir) {
+  std::printf("%s", tablesText(summary, plan, out_dir).c_str());
   std::fflush(stdout);
 }
 

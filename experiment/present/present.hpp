@@ -14,7 +14,10 @@ std::string fixed(double v, int digits);
 // A completion fit a x^2 + b x as a reader writes it: "1.364 x^2 - 0.808 x".
 std::string fitText(double a, double b, int digits = 3);
 
-// The mean learned table of each system beside the experiment's table.
+// The tables of the console summary: each system's mean learned table beside the experiment's, a goals
+// agent's modules, the extrinsic tests and the design's analysis.
+std::string tablesText(const Summary& summary, const Plan& plan, const std::string& out_dir);
+// tablesText on stdout.
 void printTables(const Summary& summary, const Plan& plan, const std::string& out_dir);
 
 }  // namespace afford

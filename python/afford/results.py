@@ -30,6 +30,7 @@ class Experiment:
     design: pd.DataFrame               # extrinsic designs: per system, condition and scenario
     points: pd.DataFrame               # generated scenarios: per system, condition and (k, n, m) point
     figures: dict[str, pd.DataFrame] = field(default_factory=dict)  # fig_<name>.csv by name
+    goals: pd.DataFrame = field(default_factory=pd.DataFrame)  # GOALS: one row per run, curve interval and module
 
     def __repr__(self) -> str:
         return (f"Experiment({self.summary.get('experiment', '?')!r} in {str(self.folder)!r}: "
@@ -40,6 +41,18 @@ def _read_csvs(folder: Path, pattern: str) -> pd.DataFrame:
     frames = [pd.read_csv(f) for f in sorted(folder.glob(pattern)) if f.stat().st_size > 0]
     frames = [f for f in frames if not f.empty]
     return pd.concat(frames, ignore_index=True) if frames else pd.DataFrame()
+
+
+def _goals_of(folder: Path) -> pd.DataFrame:
+    """The goals_<S>.csv files together, with each row's competence: goals reached of those pursued (the goals
+    found reached when set left out), NaN where none was pursued and for `explore`, whose actions are random."""
+    goals = _read_csvs(folder, "goals_*.csv")
+    if goals.empty:
+        return goals
+    pursued = goals["set"] - goals["found"]
+    competence = (goals["reached"] - goals["found"]) / pursued.where(pursued > 0)
+    goals["competence"] = competence.where(goals["module"] != "explore")
+    return goals
 
 
 def _runs_of(summary: dict[str, Any], condition: str | None) -> tuple[list[dict], list[dict], list[dict]]:
@@ -179,4 +192,5 @@ def load(folder: str | Path) -> Experiment:
         design=frame(design),
         points=frame(points),
         figures=figures,
+        goals=_goals_of(folder),
     )

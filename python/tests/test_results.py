@@ -34,6 +34,7 @@ def test_a_plain_experiment_has_its_runs_final_tables_curves_and_tests(made):
     pd.testing.assert_frame_equal(e.curves, curves)
     assert len(e.extrinsic) == s["extrinsic_tests"] == 6 * 2
     assert set(e.extrinsic["scenario"]) == {"scenario1", "scenario2"}
+    assert e.goals.empty  # no goals agent ran
 
 
 def test_a_sweep_names_each_runs_condition(made):
@@ -92,3 +93,24 @@ def test_every_folder_of_the_documented_results_loads_whole():
         for f in csvs:
             lines = [line for line in f.read_text().splitlines() if line.strip()]
             assert len(e.figures[f.stem[len("fig_"):]]) == len(lines) - 1, f  # every row, under its header
+
+
+def test_a_goals_agents_goals_per_module_and_interval_with_their_competence():
+    folder = Path(__file__).resolve().parents[2] / "tests" / "data" / "compat" / "0.2.0" / "experiment"
+    e = afford.load(folder)
+    written = pd.read_csv(folder / "goals_GOALS.csv")
+    pd.testing.assert_frame_equal(e.goals.drop(columns="competence"), written)
+    goals = e.summary["systems"]["GOALS"]["goals"]
+    pooled = e.goals.groupby(["module", "step"]).sum(numeric_only=True)
+    for module, m in goals["modules"].items():
+        for step, competence in zip(goals["steps"], m["competence"]):
+            rows = e.goals[(e.goals["module"] == module) & (e.goals["step"] == step)]
+            if module == "explore":  # random actions: no competence
+                assert rows["competence"].isna().all()
+                continue
+            if competence is None:
+                continue
+            p = pooled.loc[(module, step)]
+            assert (p["reached"] - p["found"]) / (p["set"] - p["found"]) == pytest.approx(competence)
+            if len(rows) == 1:  # one run: its row is the summary's
+                assert rows["competence"].iloc[0] == pytest.approx(competence)

@@ -10,6 +10,7 @@
 #include <regex>
 #include <sstream>
 
+#include "experiment/present/present.hpp"
 #include "experiment/present/report.hpp"
 #include "experiment/stored/state_file.hpp"
 #include "experiment/schema/summary.hpp"
@@ -372,6 +373,30 @@ TEST(Report, FiguresGoBesideTheReportNamedAfterIt) {
   EXPECT_EQ(defaultFiguresDir("report.md"), "report");
   EXPECT_EQ(defaultFiguresDir("docs/results.md"), "docs/results");
   EXPECT_EQ(defaultFiguresDir("out/summary"), "out/summary-figures");  // never the report itself
+}
+
+
+TEST(Console, AGoalsAgentsModulesShowTheirGoalsAndCompetence) {
+  // The console summary showed GOALS's learned table alone: each of its modules now has its goals reached of
+  // those pursued, its competence early and late, and its share chosen (explore: its random actions).
+  const std::string folder = std::string(AFFORD_SOURCE_DIR) + "/tests/data/compat/0.2.0/experiment";
+  const Summary summary = readSummary(folder);
+  Plan plan;
+  plan.systems = {"IMP", "GOALS"};
+  const std::string text = tablesText(summary, plan, folder);
+  const auto goals = text.find("goals per module");
+  ASSERT_NE(goals, std::string::npos) << text;
+  EXPECT_GT(goals, text.find("\nGOALS ")) << text;  // under GOALS's table, not IMP's
+  EXPECT_EQ(text.find("goals per module", goals + 1), std::string::npos) << text;
+  const GoalsSummary& g = *summary.systems.at("GOALS").goals;
+  for (const auto& [name, m] : g.modules) {
+    const std::string cells =
+        name == "explore" ? std::to_string(m.set) + " random actions"
+                          : std::to_string(m.reached - m.found) + " of " + std::to_string(m.set - m.found);
+    EXPECT_NE(text.find("    " + name + std::string(14 - name.size(), ' ') + cells, goals), std::string::npos)
+        << name << "\n" << text;
+  }
+  EXPECT_NE(text.find(fixed(*g.modules.at("colour").first_tenth, 2) + " / -", goals), std::string::npos) << text;
 }
 
 }  // namespace
