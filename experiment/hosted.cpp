@@ -79,18 +79,36 @@ class Hosted : public Executor {
       trained[i - part.offset] = phase.outcomes[i];
       std::vector<std::string> errors;  // said when the extrinsic phase plans every test
       std::vector<PlannedRun> tests;
+      std::size_t kept = 0;
       try {
         for (PlannedRun& t : planExtrinsic(part.plan, trained, part.request, errors))
-          if (!keptOutcome(x_.out(), t.spec)) tests.push_back(std::move(t));
+          if (keptOutcome(x_.out(), t.spec))
+            ++kept;
+          else
+            tests.push_back(std::move(t));
       } catch (const std::exception& e) {
         log_.warn("the tests of run '{}' wait for the extrinsic phase ({})", x_.runs[i].spec.run_id, e.what());
         return;
       }
+      const std::shared_ptr<Tally> tally = aheadTally();
+      tally->done += kept;
       if (tests.empty()) return;
-      auto ahead = std::make_unique<RunsAhead>(std::move(tests), context(), pool_);
+      auto ahead = std::make_unique<RunsAhead>(std::move(tests), context(), pool_, tally);
       std::lock_guard<std::mutex> lock(ahead_mutex_);
       ahead_.push_back(std::move(ahead));
     }
+  }
+
+  // The count of every test started ahead, for their [k/N] lines: N the tests of every agent the parts train.
+  std::shared_ptr<Tally> aheadTally() {
+    std::lock_guard<std::mutex> lock(ahead_mutex_);
+    if (!tally_) {
+      tally_ = std::make_shared<Tally>();
+      for (const Part& p : x_.parts)
+        tally_->total += p.plan.runs.size() * p.plan.conditions.size() * p.plan.scenarios.size() *
+                         static_cast<std::size_t>(std::max(0, p.plan.tests));
+    }
+    return tally_;
   }
 
   // Every test started ahead has run (or was dropped after a stop signal).
@@ -152,6 +170,7 @@ class Hosted : public Executor {
   const bool reuse_;  // agents taken from and kept in the store
   std::mutex ahead_mutex_;
   std::vector<std::unique_ptr<RunsAhead>> ahead_;  // tests started ahead of the extrinsic phase
+  std::shared_ptr<Tally> tally_;                   // ... counted together
   std::map<std::string, std::string> ahead_cut_;   // ... those a stop signal cut (run id -> where)
 };
 

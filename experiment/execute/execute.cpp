@@ -389,7 +389,7 @@ struct PhaseState {
   RunContext c;
   OnFinished on_finished;
   std::mutex mutex;
-  std::size_t done = 0;  // finished, for the [k/N] lines
+  std::shared_ptr<Tally> tally = std::make_shared<Tally>();  // finished, for the [k/N] lines
 };
 
 // Where a process of the slot writes its output, if this runner started it (for a message about what it did
@@ -486,17 +486,17 @@ void runOne(PhaseState& st, std::size_t i, Slot& slot, SlotPool& pool) {
   phase.outcomes[i] = std::move(r);
   phase.finished[i] = 1;
   const RunOutcome& out = phase.outcomes[i];
-  const std::size_t done = ++st.done;
+  const std::size_t done = ++st.tally->done, total = std::max(st.tally->total, done);
   progress.say([&] {
     if (out.ok && runs[i].spec.extrinsic)
-      log.info("[{}/{}] {}: {}, {}, utility {}", done, runs.size(), id,
+      log.info("[{}/{}] {}: {}, {}, utility {}", done, total, id,
                out.extrinsic.success ? "solved in " + counted(out.extrinsic.completion, "step") : "not solved",
                counted(out.extrinsic.attempts, "action"), out.extrinsic.utility);
     else if (out.ok)
-      log.info("[{}/{}] {} done in {:.1f} s, weights {}", done, runs.size(), id, out.wall_seconds,
+      log.info("[{}/{}] {} done in {:.1f} s, weights {}", done, total, id, out.wall_seconds,
                out.weights_checksum);
     else
-      log.error("[{}/{}] {}", done, runs.size(), out.error);
+      log.error("[{}/{}] {}", done, total, out.error);
   });
   lock.unlock();
   if (st.on_finished) st.on_finished(i);
@@ -528,17 +528,19 @@ void executeRuns(const std::vector<PlannedRun>& runs, PhaseRuns& phase, const Ru
   st->phase = &phase;
   st->c = c;
   st->on_finished = on_finished;
-  st->done = phase.finishedCount();
+  const std::size_t done = phase.finishedCount();
+  st->tally->done = done;
+  st->tally->total = runs.size();
   std::vector<std::int64_t> steps;
   std::vector<SlotPool::Work> works = worksOf(st, pool, steps);
   std::size_t planned = runs.size();
   for (std::size_t i = 0; i < runs.size(); ++i) planned -= !phase.elsewhere.empty() && phase.elsewhere[i];
   Progress& progress = pool.progress();
   if (pool.queue())
-    progress.add(steps, st->done, planned);
+    progress.add(steps, done, planned);
   else
     progress.restart(!runs.empty() && runs.front().spec.extrinsic ? "extrinsic tests" : "intrinsic runs",
-                     std::move(steps), st->done, planned);
+                     std::move(steps), done, planned);
   pool.wait(pool.submit(std::move(works)));
 }
 
@@ -547,8 +549,9 @@ struct RunsAhead::State : PhaseState {
   PhaseRuns owned_phase;
 };
 
-RunsAhead::RunsAhead(std::vector<PlannedRun> runs, const RunContext& c, SlotPool& pool)
+RunsAhead::RunsAhead(std::vector<PlannedRun> runs, const RunContext& c, SlotPool& pool, std::shared_ptr<Tally> tally)
     : state_(std::make_shared<State>()), pool_(pool) {
+  state_->tally = std::move(tally);
   state_->owned_runs = std::move(runs);
   state_->owned_phase.outcomes.resize(state_->owned_runs.size());
   state_->owned_phase.finished.assign(state_->owned_runs.size(), 0);

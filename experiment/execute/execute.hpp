@@ -4,6 +4,7 @@
 #pragma once
 #include <spdlog/spdlog.h>
 
+#include <atomic>
 #include <cstddef>
 #include <filesystem>
 #include <functional>
@@ -127,12 +128,20 @@ struct RunContext {
 void executeRuns(const std::vector<PlannedRun>& runs, PhaseRuns& phase, const RunContext& c, SlotPool& pool,
                  const OnFinished& on_finished = {});
 
+// The runs finished of all those a phase will run, for its [k/N] lines: one
+// count for every batch of runs started ahead of the phase.
+struct Tally {
+  std::atomic<std::size_t> done{0};
+  std::size_t total = 0;
+};
+
 // Runs started ahead of their phase (an agent's tests as soon as it is
 // trained): they run on the pool while the caller goes on; their outcomes are
-// kept in DIR/runs/ like any run's, where their phase finds them.
+// kept in DIR/runs/ like any run's, where their phase finds them. Each that
+// finishes is counted in `tally`, shared with the other batches of the phase.
 class RunsAhead {
  public:
-  RunsAhead(std::vector<PlannedRun> runs, const RunContext& c, SlotPool& pool);
+  RunsAhead(std::vector<PlannedRun> runs, const RunContext& c, SlotPool& pool, std::shared_ptr<Tally> tally);
   ~RunsAhead();  // waits for them
   RunsAhead(const RunsAhead&) = delete;
   RunsAhead& operator=(const RunsAhead&) = delete;

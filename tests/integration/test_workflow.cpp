@@ -11,6 +11,7 @@
 #include <filesystem>
 #include <fstream>
 #include <iterator>
+#include <regex>
 #include <set>
 #include <sstream>
 #include <nlohmann/json.hpp>
@@ -144,6 +145,18 @@ TEST(Workflow, AnAgentsTestsStartAsSoonAsItIsTrained) {
   EXPECT_LT(*std::min_element(tests.begin(), tests.end()), *std::max_element(agents.begin(), agents.end()));
   // And the summary is the one of tests run after every agent (the extrinsic phase finds them kept).
   EXPECT_EQ(readJson(dir + "/out/summary.json")["extrinsic_tests"], 15);
+  // One count of the tests for every agent's: [1/15] to [15/15], each once (it restarted at [1/5] per agent).
+  std::set<int> counted;
+  std::istringstream lines(o.text);
+  const std::regex test_line(R"(\[(\d+)/(\d+)\] h-\S+-scenario)");
+  std::smatch m;
+  for (std::string line; std::getline(lines, line);)
+    if (std::regex_search(line, m, test_line)) {
+      EXPECT_EQ(m[2], "15") << line;
+      EXPECT_TRUE(counted.insert(std::stoi(m[1])).second) << "counted twice: " << line;
+    }
+  EXPECT_EQ(counted.size(), 15u) << o.text;
+  EXPECT_EQ(*counted.rbegin(), 15) << o.text;
 }
 
 TEST(Workflow, AQueueRefusesEntriesItCannotRunNamingThem) {
