@@ -237,9 +237,9 @@ void sayWhatRuns(const Experiment& x, spdlog::logger& log) {
   }
   std::string systems;
   for (const auto& sys : x.plan().systems) systems += (systems.empty() ? "" : ", ") + sys;
-  log.info("experiment {} ({}{}): {} run(s) of {} steps, {} at a time, over {} ({})", x.plan().exp.name, systems,
-           x.parts.size() > 1 ? "; " + std::to_string(x.parts.size()) + " sweep conditions" : std::string(),
-           x.runs.size(), x.runs.front().spec.steps, o.host.jobs, o.host.transport, x.hosting.network);
+  log.info("experiment {} ({}{}): {} run(s) of {} steps, {} at a time, over {} ({}), into {}", x.plan().exp.name,
+           systems, x.parts.size() > 1 ? "; " + std::to_string(x.parts.size()) + " sweep conditions" : std::string(),
+           x.runs.size(), x.runs.front().spec.steps, o.host.jobs, o.host.transport, x.hosting.network, x.out().string());
   sayDisk(x, log);
 }
 

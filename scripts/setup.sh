@@ -2,7 +2,8 @@
 # Install every Debian package afford needs (idempotent), fetch LCM's and
 # cpp-httplib's source (scripts/fetch-lcm.sh, scripts/fetch-httplib.sh), then
 # configure and build a Release build into build/ (executables in build/bin/,
-# the Python package in build/python/, put on /usr/bin/python3's path).
+# the Python package in build/python/, put on /usr/bin/python3's path), and
+# put `afford` on the PATH (a link in /usr/local/bin to build/bin/afford).
 # Usage: scripts/setup.sh [--main] [--no-build] [--dry-run]
 #   --main      only what the main job needs (scripts/main.sh): the packages to
 #               build and run the processes and the `afford` command, and those
@@ -83,16 +84,29 @@ if ((!main)); then
 fi
 
 ((build)) || exit 0
+# `afford` as the docs write it: a link in /usr/local/bin (on every PATH) to this checkout's build/bin/afford;
+# one there already that is not a link to an afford build is left alone, and said.
+on_path() {
+  local link=/usr/local/bin/afford target=$PWD/build/bin/afford
+  if [[ -e $link && ! -L $link ]]; then
+    echo "setup.sh: $link exists and is not a link: left alone (run $target instead)" >&2
+    return 0
+  fi
+  local sudo=""; [[ $(id -u) -eq 0 || -w /usr/local/bin ]] || sudo="sudo"
+  run $sudo ln -sfn "$target" "$link"
+}
 configure() { if ((dry)); then echo "would run: cmake $*"; else cmake "$@" >/dev/null; fi; }
 if ((main)); then
   # The main job's targets only: the processes and the front door (no tests, benchmarks or Python).
   configure -S . -B build -DCMAKE_BUILD_TYPE=Release -DAFFORD_TESTS=OFF -DAFFORD_EXTRAS=OFF
   run cmake --build build -j"$(nproc)" --target afford afford-environment afford-eye afford-predictors \
     afford-motivation afford-planner afford-logger
+  on_path
   exit 0
 fi
 configure -S . -B build -DCMAKE_BUILD_TYPE=Release -DAFFORD_TESTS=ON -DAFFORD_EXTRAS=ON
 run cmake --build build -j"$(nproc)"
+on_path
 ((dry)) && exit 0
 
 # `import afford` in Debian's /usr/bin/python3: a .pth file in its site folder

@@ -1,6 +1,6 @@
 """A convolutional affordance and learning-progress predictor written with PyTorch (Debian's python3-torch),
 as an afford.AffordancePredictor: in process (afford.run(..., affordance=TorchConv)) or as the predictors
-process on the bus (python3 -m afford.process predictors examples/torch-predictor/torch_predictor.py:TorchConv).
+process on the bus (/usr/bin/python3 -m afford.process predictors examples/torch-predictor/torch_predictor.py:TorchConv).
 
 The paper's predictors are one perceptron per action over the focus image's pixels (section 2.3); the
 paper's conclusions (section 5) point at more powerful learned models. This one shares a small

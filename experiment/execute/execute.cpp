@@ -298,7 +298,7 @@ struct SlotPool::Impl {
 
   Impl(const HostRequest& o, bool q, std::string label)
       : jobs(o.jobs), base_port(o.base_port), attach(o.attach), queue(q),
-        progress(ProgressOptions{o.progress, o.progress_every}, std::move(label), o.jobs, {}, 0, 0) {}
+        progress(ProgressOptions{o.progress, o.progress_every, o.progress_to}, std::move(label), o.jobs, {}, 0, 0) {}
 
   void serveSlot(int index) {
     Slot slot;

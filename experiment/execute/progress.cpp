@@ -25,13 +25,14 @@ std::string durationText(double seconds) {
 
 Progress::Progress(const ProgressOptions& options, std::string phase, int slots, std::vector<std::int64_t> steps,
                    std::size_t done, std::size_t planned, std::FILE* out)
-    : out_(out), phase_(std::move(phase)), slots_(static_cast<std::size_t>(std::max(slots, 0))), done_(done),
+    : out_(out), write_(options.write), phase_(std::move(phase)), slots_(static_cast<std::size_t>(std::max(slots, 0))), done_(done),
       planned_(planned) {
   if (options.mode == "none") enabled_ = false;
   else if (options.mode == "terminal") terminal_ = true;
-  else if (options.mode == "auto") terminal_ = isatty(fileno(out)) == 1;
+  else if (options.mode == "auto") terminal_ = !write_ && isatty(fileno(out)) == 1;
   else if (options.mode != "lines")
     throw std::invalid_argument("--progress must be auto, terminal, lines or none, not \"" + options.mode + "\"");
+  if (write_) terminal_ = false;  // lines to a function: no board to redraw
   if (terminal_ && enabled_) {
     relay_ = std::make_unique<TerminalRelay>(out_);
     if (!relay_->started()) {  // (no process could be started) plain lines, which never erase anything
@@ -170,6 +171,10 @@ void Progress::draw(bool force) {
   }
   std::string one = "progress: " + text.front();
   for (std::size_t k = 1; k < text.size(); ++k) one += ";" + text[k].substr(1);
+  if (write_) {
+    write_(one);
+    return;
+  }
   std::fprintf(out_, "%s\n", one.c_str());
   std::fflush(out_);
 }

@@ -24,6 +24,7 @@ class TerminalRelay;  // terminal.hpp
 struct ProgressOptions {
   std::string mode = "auto";  // auto (terminal if stderr is one, else lines), terminal, lines, none
   double every = -1;          // seconds between draws (< 0: 0.25 on a terminal, 30 as lines)
+  std::function<void(const std::string&)> write;  // each line drawn, in the place of the FILE (lines only)
 };
 
 class Progress {
@@ -67,6 +68,7 @@ class Progress {
 
   std::mutex mutex_;
   std::FILE* out_;
+  std::function<void(const std::string&)> write_;  // (ProgressOptions::write)
   bool terminal_ = false, enabled_ = true;
   double every_ = 30;
   std::string phase_;

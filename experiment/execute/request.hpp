@@ -41,6 +41,8 @@ struct HostRequest {
   // Told each point of every intrinsic run's curve as it comes, from the slot's thread (the Python package's
   // afford.run(on_curve=...), which afford.tune prunes with); not kept. It must not throw.
   std::function<void(const CurvePoint&)> on_curve;
+  // Where the progress lines go in the place of stderr (afford.run: Python's sys.stderr); not kept.
+  std::function<void(const std::string&)> progress_to;
 
   // A shard as an experiment keeps it: {"index": i, "count": n}, or null without shards.
   struct Shard {

@@ -1,6 +1,7 @@
 """Experiments from Python: afford.run(experiment, ...) runs `afford experiment` in this process."""
 from __future__ import annotations
 
+import sys
 import tempfile
 from pathlib import Path
 from typing import Any, Callable, Iterable, NamedTuple
@@ -59,6 +60,11 @@ class CurvePoint(NamedTuple):
     mae: float
 
 
+def _to_stderr(line: str) -> None:
+    """afford.run's default `say`: Python's sys.stderr, which a notebook shows (the process's own it does not)."""
+    print(line, file=sys.stderr, flush=True)
+
+
 def _count(name: str, value: Any) -> None:
     if value is not None and (isinstance(value, bool) or not isinstance(value, int) or value < 1):
         raise ValueError(f"afford.run({name}={value!r}): {name} is a whole number, at least 1 (or None: the "
@@ -85,7 +91,7 @@ def _request(experiment: str, system: Any, reps: int | None, steps: int | None, 
         if transport != "memq":
             raise ValueError(f"afford.run({argument}=...) runs the class in this process: transport='memq'; over "
                              f"udpm, give processes={{'{'motivation' if role == 'goals' else role}': "
-                             f"'python3 -m afford.process {role} MODULE:CLASS'}} "
+                             f"'{sys.executable} -m afford.process {role} MODULE:CLASS'}} "
                              f"and set={{'{key}': KIND}}")
         settings.setdefault(key, register(cls))
     out = Path(out) if out else Path(tempfile.mkdtemp(prefix=f"afford-{experiment}-"))
@@ -106,11 +112,12 @@ def run(experiment: str, system: str | Iterable[str] | None = None, reps: int | 
         steps: int | None = None, set: dict[str, Any] | None = None, transport: str = "memq",
         out: str | Path | None = None, log_root: str | Path | None = None, seed: int = 1, jobs: int = 1,
         extrinsic_reps: int | None = None, scenarios: Iterable[str] = (), keep_logs: str = "all",
-        run_prefix: str = "", reuse_agents: bool = True, progress: str = "none",
-        log_level: str = "warn", motivation: Any = None, affordance: Any = None, goals: Any = None,
+        run_prefix: str = "", reuse_agents: bool = True, progress: str = "lines",
+        log_level: str = "info", motivation: Any = None, affordance: Any = None, goals: Any = None,
         processes: dict[str, str] | None = None,
         tables: int | None = None, table_seed: int | None = None, replace: bool = False,
-        on_curve: Callable[[CurvePoint], str | None] | None = None) -> Experiment:
+        on_curve: Callable[[CurvePoint], str | None] | None = None,
+        say: Callable[[str], None] | None = _to_stderr) -> Experiment:
     """Run an experiment as `afford experiment` does and return what afford.load returns.
 
     `experiment`: a name of config/experiments/ (base, late1, ...) or an
@@ -129,7 +136,8 @@ def run(experiment: str, system: str | Iterable[str] | None = None, reps: int | 
     of the shipped motivation, in this process (memq): it is registered under
     its kind and motivation.kind is set to it. `processes`: commands in the
     place of shipped processes, as `afford experiment --process NAME=CMD`
-    (udpm), e.g. {"motivation": "python3 -m afford.process motivation mine.py:Mine"}.
+    (udpm), e.g. {"motivation": f"{sys.executable} -m afford.process motivation mine.py:Mine"}: the
+    interpreter running this one, whose `import afford` works (a bare `python3` may be another).
     `goals`: a class written in Python (afford.GoalChooser) in the place of
     the shipped goal chooser of GOALS agents (goals.kind), in this process.
     `affordance`: a class written in Python (afford.AffordancePredictor) in
@@ -146,6 +154,14 @@ def run(experiment: str, system: str | Iterable[str] | None = None, reps: int | 
     is raised; afford.tune prunes this way); an exception it raises stops it
     too and is raised once the runs have stopped.
 
+    What it says, as `afford experiment` says it: what it will run and into
+    which folder, each run and test as it finishes ([k/N]), and at
+    `progress="lines"` (the default) where the runs under way stand, every
+    30 s; `log_level` "info" (the default), "warn", "error" or "off" says
+    less, `progress="none"` leaves the progress lines out. Each line is given
+    to `say` (default: printed on Python's sys.stderr, which a notebook
+    shows); None leaves them to the process's own stderr.
+
     Run ids start with the date and time, made unique in `log_root`: calls
     in a loop, or from several processes, never collide. A run or test
     that fails raises afford.ExperimentError (a RuntimeError) saying why.
@@ -157,6 +173,10 @@ def run(experiment: str, system: str | Iterable[str] | None = None, reps: int | 
         if not callable(on_curve):
             raise TypeError(f"afford.run(on_curve={on_curve!r}): a function of a CurvePoint")
         request["on_curve"] = lambda *point: on_curve(CurvePoint(*point))
+    if say is not None:
+        if not callable(say):
+            raise TypeError(f"afford.run(say={say!r}): a function of a line (str), or None")
+        request["say"] = say
     code, signal, errors, stopped_for = _afford.run_experiment(request)
     if stopped_for and not signal:
         raise ExperimentStopped(f"afford.run({experiment!r}) was stopped by on_curve ({stopped_for}): what "

@@ -6,6 +6,8 @@
 #include <pybind11/numpy.h>
 #include <pybind11/pybind11.h>
 #include <pybind11/stl.h>
+#include <spdlog/pattern_formatter.h>
+#include <spdlog/sinks/sink.h>
 #include <spdlog/sinks/null_sink.h>
 #include <spdlog/sinks/ringbuffer_sink.h>
 #include <spdlog/sinks/stdout_color_sinks.h>
@@ -151,11 +153,63 @@ py::list checkExperimentFrom(const py::dict& request) {
   return out;
 }
 
+// Each line said, given to a Python function (afford.run: Python's sys.stderr, which a notebook shows where
+// the process's own stderr is not), with the GIL, and no lock of the sink held meanwhile (a thread holding the
+// GIL may be logging); what the function raises is dropped, never thrown into the runner's threads.
+class PythonSink : public spdlog::sinks::sink {
+ public:
+  explicit PythonSink(py::object say) : say_(std::move(say)) {}
+  ~PythonSink() override {
+    py::gil_scoped_acquire gil;
+    say_ = py::object();
+  }
+  void say(const std::string& line) {
+    py::gil_scoped_acquire gil;
+    try {
+      say_(line);
+    } catch (py::error_already_set& e) {
+      e.discard_as_unraisable("afford.run's say");
+    }
+  }
+  void log(const spdlog::details::log_msg& msg) override {
+    std::string line;
+    {
+      std::lock_guard<std::mutex> lock(mutex_);
+      spdlog::memory_buf_t text;
+      formatter_->format(msg, text);
+      line = fmt::to_string(text);
+    }
+    while (!line.empty() && (line.back() == '\n' || line.back() == '\r')) line.pop_back();
+    say(line);
+  }
+  void flush() override {}
+  void set_pattern(const std::string& pattern) override {
+    set_formatter(std::make_unique<spdlog::pattern_formatter>(pattern));
+  }
+  void set_formatter(std::unique_ptr<spdlog::formatter> formatter) override {
+    std::lock_guard<std::mutex> lock(mutex_);
+    formatter_ = std::move(formatter);
+  }
+
+ private:
+  py::object say_;
+  std::mutex mutex_;
+  std::unique_ptr<spdlog::formatter> formatter_ = std::make_unique<spdlog::pattern_formatter>();
+};
+
 py::tuple runExperimentFrom(const py::dict& request) {
   ExperimentRequest o = requestFrom(request);
-  // Said on stderr at the level asked; the errors also kept (the last 20), for the exception that says why.
+  // Said at the level asked (on stderr, or to request["say"] and its progress lines too); the errors also kept
+  // (the last 20), for the exception that says why.
   const spdlog::level::level_enum level = parseLevel(request["log_level"].cast<std::string>());
-  auto console = std::make_shared<spdlog::sinks::stderr_color_sink_mt>();
+  spdlog::sink_ptr console;
+  if (request.contains("say") && !request["say"].is_none()) {
+    auto to_python = std::make_shared<PythonSink>(py::object(request["say"]));
+    o.host.progress_to = [to_python](const std::string& line) { to_python->say(line); };
+    console = to_python;
+  } else {
+    console = std::make_shared<spdlog::sinks::stderr_color_sink_mt>();
+  }
   console->set_level(level);
   auto errors = std::make_shared<spdlog::sinks::ringbuffer_sink_mt>(20);
   errors->set_level(spdlog::level::err);

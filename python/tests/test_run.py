@@ -13,8 +13,14 @@ import afford
 
 
 def test_a_run_returns_its_experiment_and_is_the_commands(made, tmp_path):
-    e = afford.run("base", system="IMP", reps=1, steps=400, out=tmp_path / "run", run_prefix="py")
+    said = []
+    e = afford.run("base", system="IMP", reps=1, steps=400, out=tmp_path / "run", run_prefix="py", say=said.append)
     assert len(e.runs) == 1 and e.summary["steps"] == 400
+    # it says, through Python (a notebook shows it), what it runs and where, and each run as it finishes
+    text = "\n".join(said)
+    assert f"experiment base (IMP): 1 run(s) of 400 steps, 1 at a time, over memq" in text, text
+    assert f"into {tmp_path / 'run'}" in text, text
+    assert f"[1/1] py-base-IMP-s1 done in" in text, text
     # the command's run of the same seed and steps (made by conftest: --system all --reps 2 --steps 400)
     base = afford.load(made / "base")
     same = base.runs[(base.runs.system == "IMP") & (base.runs.seed == 1)]

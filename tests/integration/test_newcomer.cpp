@@ -348,8 +348,9 @@ TEST(Newcomer, ATypoInAnySectionNamesTheFileAndTheKeyMeant) {
       EXPECT_EQ(r.exit_code, 2) << text << ": " << r.output;
       EXPECT_NE(r.output.find("experiment file " + file), std::string::npos) << text << ": " << r.output;
       EXPECT_NE(r.output.find(said), std::string::npos) << text << ": " << r.output;
-      if (given == child)
+      if (given == child) {
         EXPECT_NE(r.output.find("(extended by " + child + ")"), std::string::npos) << text << ": " << r.output;
+      }
     }
   }
   spit(dir + "/extend.yaml", "extend: base\n");

@@ -15,6 +15,8 @@ grep -q '^scripts/setup.sh --main$' "$root/scripts/main.sh" || { echo "main.sh d
 programs="afford afford-environment afford-eye afford-predictors afford-motivation afford-planner afford-logger"
 grep -qx "would run: cmake --build build -j[0-9]* --target $programs" "$out/dry-run.txt" ||
   { echo "setup.sh --main builds more or less than the main job's programs"; exit 1; }
+grep -qx "would run: \(sudo \)\?ln -sfn $root/build/bin/afford /usr/local/bin/afford" "$out/dry-run.txt" ||
+  { echo "setup.sh --main does not put afford on the PATH"; exit 1; }
 configure=$(sed -n 's/^would run: cmake \(-S .*\)$/\1/p' "$out/dry-run.txt")
 [[ $configure == *"-DAFFORD_TESTS=OFF"* && $configure == *"-DAFFORD_EXTRAS=OFF"* ]] ||
   { echo "setup.sh --main configures with the tests or the extras: $configure"; exit 1; }

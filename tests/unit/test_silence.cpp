@@ -83,7 +83,7 @@ TEST(Silence, APauseOfTheRunnerItselfIsNotAProcesssSilence) {
 // The board's lines as printed (--progress lines, drawn at every event).
 struct Board {
   std::FILE* f = std::tmpfile();
-  Progress progress{ProgressOptions{"lines", 0}, "intrinsic runs", 1, {1000}, 0, 1, f};
+  Progress progress{ProgressOptions{"lines", 0, {}}, "intrinsic runs", 1, {1000}, 0, 1, f};
   ~Board() { std::fclose(f); }
   std::string last() {
     std::fflush(f);
@@ -110,6 +110,23 @@ TEST(Progress, ARunWaitingForAProcessShowsWhomItWaitsForNotATimeLeft) {
   b.progress.step(0, 102);
   EXPECT_EQ(b.last().find("waiting for"), std::string::npos) << b.last();
   EXPECT_NE(b.last().find(" left"), std::string::npos) << b.last();
+}
+
+TEST(Progress, LinesGivenAFunctionGoToItAndNotToTheFile) {
+  // afford.run gives its lines to Python (a notebook shows sys.stderr, not the process's own).
+  std::vector<std::string> said;
+  std::FILE* f = std::tmpfile();
+  {
+    Progress p{ProgressOptions{"auto", 0, [&said](const std::string& line) { said.push_back(line); }},
+               "intrinsic runs", 1, {1000}, 0, 1, f};
+    p.started(0, "r1", 1000);
+    p.step(0, 100);
+  }
+  ASSERT_FALSE(said.empty());
+  EXPECT_EQ(said.back().rfind("progress: ", 0), 0u) << said.back();
+  EXPECT_NE(said.back().find("r1"), std::string::npos) << said.back();
+  EXPECT_EQ(std::ftell(f), 0) << "written to the file too";
+  std::fclose(f);
 }
 
 }  // namespace
