@@ -324,8 +324,11 @@ void addReference(Summary& summary, const Plan& plan) {
   const Reference& ref = *plan.reference;
   const YAML::Node reference = ref.entry(exp.name);
   const std::string key = exp.name + ".";
+  // The errors after the steps they were measured at: not beside runs of another length (--steps).
+  const bool same_steps = !reference || !reference["steps"] ||
+                          static_cast<std::int64_t>(ref.number(reference["steps"], key + "steps")) == summary.steps;
   for (const auto& sys : plan.systems)
-    if (reference && reference["affordance_mae"] && reference["affordance_mae"][sys])
+    if (same_steps && reference && reference["affordance_mae"] && reference["affordance_mae"][sys])
       summary.systems[sys].reference_affordance_mae =
           ref.number(reference["affordance_mae"][sys], key + "affordance_mae." + sys);
   if (reference && reference["source"]) summary.reference_source = ref.text(reference["source"], key + "source");

@@ -58,6 +58,9 @@ TEST(Workflow, AnExperimentSharingTheIntrinsicRunsReusesTheStoredAgents) {
   const std::string logs = " --log-root " + dir + "/logs";
   Output a = run("experiment base" + kSmall + " --out " + dir + "/base --run-prefix a" + logs);
   ASSERT_EQ(a.status, 0) << a.text;
+  // The authors' errors are those after 6000 steps (config/reference.yaml): not beside runs of 300.
+  EXPECT_FALSE(readJson(dir + "/base/summary.json")["systems"]["IMP"].contains("reference_affordance_mae"));
+  EXPECT_EQ(a.text.find("authors' code"), std::string::npos) << a.text;
   Output b = run("experiment attention" + kSmall + " --out " + dir + "/att --run-prefix b" + logs);
   ASSERT_EQ(b.status, 0) << b.text;
   EXPECT_NE(b.text.find("2 of 2 intrinsic run(s) reuse a stored agent"), std::string::npos) << b.text;
