@@ -41,6 +41,9 @@ struct HostRequest {
   // Told each point of every intrinsic run's curve as it comes, from the slot's thread (the Python package's
   // afford.run(on_curve=...), which afford.tune prunes with); not kept. It must not throw.
   std::function<void(const CurvePoint&)> on_curve;
+  // Told the bus of every job slot once the runs' network is entered, before any run starts, on the thread
+  // that entered it (afford experiment --watch listens there); not kept. What it throws stops the experiment.
+  std::function<void(const std::vector<std::string>& urls)> on_bus;
 
   // A shard as an experiment keeps it: {"index": i, "count": n}, or null without shards.
   struct Shard {
