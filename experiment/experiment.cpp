@@ -23,6 +23,7 @@
 #include "afford/processes.hpp"
 #include "afford/version.hpp"
 #include "experiment/execute/agents.hpp"
+#include "experiment/execute/bus_note.hpp"
 #include "experiment/execute/execute.hpp"
 #include "experiment/execute/run_folder.hpp"
 #include "experiment/plan/disk.hpp"
@@ -227,6 +228,16 @@ void sayDisk(const Experiment& x, spdlog::logger& log) {
       log.warn("{}", warning);
 }
 
+// Where its runs are heard, for afford watch --out (its lock held: the note is of the runner that holds it).
+void noteBus(const Experiment& x) {
+  BusNote note;
+  note.pid = getpid();
+  note.urls = slotUrls(x.o.host);
+  if (const std::string key = busKeySource(x.o.host.bus_key); !key.empty()) note.bus_key = fs::absolute(key).string();
+  note.experiment = x.plan().exp.name;
+  writeBusNote(x.out(), note);
+}
+
 void sayWhatRuns(const Experiment& x, spdlog::logger& log) {
   const ExperimentRequest& o = x.o;
   if (o.host.shard_count) {
@@ -387,6 +398,7 @@ int runPrepared(Experiment& x, const std::chrono::steady_clock::time_point began
       x.hosting.network = share.pool ? share.network : prepareNetwork(x.o.host.netns);
       x.bin = executableDir();
     }
+    if (x.o.host.transport == "udpm" && x.o.host.on_bus && !share.pool) x.o.host.on_bus(slotUrls(x.o.host));
     SlotPool* pool = share.pool;
     if (!pool) pool = (own = std::make_unique<SlotPool>(x.o.host, false)).get();
     exec = hostedExecutor(x, log, *pool, share);
@@ -394,6 +406,7 @@ int runPrepared(Experiment& x, const std::chrono::steady_clock::time_point began
   if (!share.pool) installInterruptHandlers(resumeCommand(x.o));  // from here a signal stops the experiment in order
   for (const std::string& note : x.followed.notes) log.warn("{}", note);
   openFolder(x);
+  if (x.o.host.transport == "udpm" && !x.merging()) noteBus(x);
   sayWhatRuns(x, log);
   const PhaseRuns intrinsic = runPhase(x, *exec, x.runs, false, log);
   Summaries s = summariseIntrinsic(x, intrinsic, log);

@@ -65,7 +65,8 @@ class Hosted : public Executor {
   // The agents stored already, taken, and their tests started.
   void takeStored(const std::vector<PlannedRun>& runs, PhaseRuns& phase) {
     const std::vector<char> before = phase.finished;
-    takeStoredAgents(runs, x_.plan().design.after_actions, phase, agents_, x_.o.write.out_dir, log_);
+    takeStoredAgents(runs, x_.plan().design.after_actions, phase, agents_, x_.o.write.out_dir, log_,
+                     static_cast<bool>(x_.o.host.on_bus));
     for (std::size_t i = 0; i < runs.size(); ++i)
       if (phase.finished[i] && !before[i]) testAhead(i, phase);
   }

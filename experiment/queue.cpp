@@ -3,6 +3,7 @@
 #include <thread>
 
 #include "afford/process_main.hpp"
+#include "experiment/execute/bus_note.hpp"
 #include "experiment/run/netns.hpp"
 #include <nlohmann/json.hpp>
 
@@ -39,6 +40,7 @@ int runQueue(const std::vector<ExperimentRequest>& requests, const std::string& 
   const HostRequest& host = xs.front().o.host;
   Shared share;
   if (host.transport == "udpm") share.network = prepareNetwork(host.netns);
+  if (host.transport == "udpm" && host.on_bus) host.on_bus(slotUrls(host));
   installInterruptHandlers(resume);
   SlotPool pool(host, true, "queue of " + std::to_string(xs.size()) + " experiment(s), runs and tests");
   AgentClaims claims;

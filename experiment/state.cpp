@@ -100,7 +100,7 @@ namespace {
 // kept outcomes, sweep conditions, lock) and `afford plot` (fig_*).
 bool writtenByAfford(const fs::path& entry) {
   const std::string name = entry.filename().string();
-  if (name == "experiment.json" || name == "summary.json" || name == ".lock" || name == "runs" ||
+  if (name == "experiment.json" || name == "summary.json" || name == ".lock" || name == "runs" || name == "bus.json" ||
       name == "conditions" || name == "processes")  // processes/slot<j>/<process>.log: their output (udpm)
     return true;
   const std::string ext = entry.extension().string();
@@ -270,6 +270,7 @@ ExperimentRequest resumedRequest(const ExperimentRequest& given, const Experimen
   o.write.program = given.write.program;
   o.host.bus_key = given.host.bus_key;  // (never stored: the key file given now, or $AFFORD_BUS_KEY's)
   o.host.on_curve = given.host.on_curve;
+  o.host.on_bus = given.host.on_bus;
   const auto has = [&](const char* option) { return given.given.count(option) > 0; };
   if (has("--jobs")) o.host.jobs = given.host.jobs;
   if (has("--transport")) o.host.transport = given.host.transport;

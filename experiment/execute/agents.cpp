@@ -150,7 +150,7 @@ void AgentStore::keep(const std::string& key, const std::string& run_id, const s
 // stored (the same content key) are not run: they take the stored outcome and
 // checkpoints, kept as finished.
 void takeStoredAgents(const std::vector<PlannedRun>& runs, int after_actions, PhaseRuns& phase,
-                      const AgentStore& agents, const std::string& out_dir, spdlog::logger& log) {
+                      const AgentStore& agents, const std::string& out_dir, spdlog::logger& log, bool watched) {
   std::size_t taken = 0;
   for (const auto& p : runs) {
     if (phase.finished[p.index] || (!phase.elsewhere.empty() && phase.elsewhere[p.index])) continue;
@@ -165,6 +165,10 @@ void takeStoredAgents(const std::vector<PlannedRun>& runs, int after_actions, Ph
     log.info("{} of {} intrinsic run(s) reuse a stored agent of the same configuration and seed ({}): they do not "
              "run, nothing of theirs goes on the bus; to run them anew (a fault drill, a check that a run reproduces), "
              "give --no-reuse-agents", taken, runs.size(), agents.root());
+  if (taken && watched)
+    log.warn("--watch: the page will not show {} intrinsic run(s) learning: their agents were stored by an earlier run "
+             "and are taken, not trained again; it shows their tests only. To watch them learn, run the same command "
+             "again with --no-reuse-agents (it trains them again)", taken);
 }
 
 void storeAgent(const PlannedRun& p, const PhaseRuns& phase, const AgentStore& agents, spdlog::logger& log) {

@@ -59,9 +59,9 @@ class AgentStore {
 
 // Intrinsic runs not finished (nor run by another shard) whose agent is
 // stored take the stored outcome and checkpoints (kept in out_dir/runs/ as
-// finished) instead of running.
+// finished) instead of running. `watched`: a page follows the runs (--watch), and is told it will not see them.
 void takeStoredAgents(const std::vector<PlannedRun>& runs, int after_actions, PhaseRuns& phase,
-                      const AgentStore& agents, const std::string& out_dir, spdlog::logger& log);
+                      const AgentStore& agents, const std::string& out_dir, spdlog::logger& log, bool watched);
 
 // An intrinsic run that finished here (not one taken from the store) is stored for reuse (p.index in phase).
 void storeAgent(const PlannedRun& p, const PhaseRuns& phase, const AgentStore& agents, spdlog::logger& log);

@@ -18,6 +18,7 @@
 #include "experiment/run/host.hpp"
 #include "afford/logging.hpp"
 #include "afford/processes.hpp"
+#include "experiment/execute/bus_note.hpp"
 #include "experiment/execute/progress.hpp"
 #include "experiment/execute/run_folder.hpp"
 #include "experiment/run/outcome.hpp"
@@ -285,8 +286,8 @@ struct SlotPool::Impl {
     std::shared_ptr<Batch> batch;
     std::size_t index = 0;
   };
-  int jobs = 1, base_port = 7700;
-  std::string attach;
+  int jobs = 1;
+  HostRequest host;
   bool queue = false;
   Progress progress;
   std::mutex mutex;
@@ -297,18 +298,14 @@ struct SlotPool::Impl {
   std::vector<std::thread> threads;
 
   Impl(const HostRequest& o, bool q, std::string label)
-      : jobs(o.jobs), base_port(o.base_port), attach(o.attach), queue(q),
+      : jobs(o.jobs), host(o), queue(q),
         progress(ProgressOptions{o.progress, o.progress_every, o.progress_to}, std::move(label), o.jobs, {}, 0, 0) {}
 
   void serveSlot(int index) {
     Slot slot;
     slot.index = index;
     slot.machine_full = jobs >= static_cast<int>(std::max(1u, std::thread::hardware_concurrency()));
-    // A 2 MB receive buffer per socket (the kernel's default is 208 KB): every process hears every
-    // datagram of its slot, and one descheduled for a while must not lose any (the kernel caps the
-    // request at net.core.rmem_max).
-    slot.url = "udpm://239.255.76.67:" + std::to_string(base_port + index) + "?ttl=0&recv_buf_size=2097152";
-    if (!attach.empty()) slot.url = attach;
+    slot.url = slotUrls(host)[index];
     for (;;) {
       Job job;
       {

@@ -43,6 +43,9 @@ struct HostRequest {
   std::function<void(const CurvePoint&)> on_curve;
   // Where the progress lines go in the place of stderr (afford.run: Python's sys.stderr); not kept.
   std::function<void(const std::string&)> progress_to;
+  // Told the bus of every job slot once the runs' network is entered, before any run starts, on the thread
+  // that entered it (afford experiment --watch listens there); not kept. What it throws stops the experiment.
+  std::function<void(const std::vector<std::string>& urls)> on_bus;
 
   // A shard as an experiment keeps it: {"index": i, "count": n}, or null without shards.
   struct Shard {

@@ -1,6 +1,9 @@
 #include "experiment/watch/server.hpp"
 
 #include <arpa/inet.h>
+#include <ifaddrs.h>
+#include <net/if.h>
+#include <netinet/in.h>
 #include <httplib.h>
 #include <sodium.h>
 
@@ -103,9 +106,11 @@ void WatchServer::routes() {
     res.set_header("Cache-Control", "no-store");
     struct Stream {
       std::uint64_t seen = ~std::uint64_t{0}, curves = ~std::uint64_t{0};
+      std::uint64_t sent = 0;  // the version it was sent last (0: none yet)
       Clock::time_point next = Clock::now(), next_curves = Clock::now();
     };
     auto stream = std::make_shared<Stream>();
+    sentNow(std::nullopt, stream->sent);
     const auto gap = std::chrono::duration_cast<Clock::duration>(std::chrono::duration<double>(1.0 / options_.most_per_second));
     res.set_chunked_content_provider(
         "text/event-stream",
@@ -122,9 +127,15 @@ void WatchServer::routes() {
           const bool with_curves = curves != stream->curves && Clock::now() >= stream->next_curves;
           if (with_curves) stream->curves = curves, stream->next_curves = Clock::now() + std::chrono::seconds(1);
           const std::string event = "event: state\ndata: " + state_.snapshot(with_curves) + "\n\n";
-          return sink.write(event.data(), event.size());
+          if (!sink.write(event.data(), event.size())) return false;
+          sentNow(stream->sent, v);
+          stream->sent = v;
+          return true;
         },
-        [this](bool) { streams_.fetch_sub(1); });
+        [this, stream](bool) {
+          sentNow(stream->sent, std::nullopt);  // gone: not waited for
+          streams_.fetch_sub(1);
+        });
   });
   s.set_error_handler(httplib::Server::HandlerWithResponse([](const httplib::Request&, httplib::Response& res) {
     if (!res.body.empty()) return httplib::Server::HandlerResponse::Unhandled;  // ours, saying why already
@@ -168,6 +179,19 @@ void WatchServer::start() {
   stage_->start();
 }
 
+void WatchServer::sentNow(std::optional<std::uint64_t> was, std::optional<std::uint64_t> now) {
+  std::lock_guard<std::mutex> lock(sent_mutex_);
+  if (was) sent_.erase(sent_.find(*was));
+  if (now) sent_.insert(*now);
+  sent_cv_.notify_all();
+}
+
+void WatchServer::flush(std::chrono::milliseconds most) {
+  const std::uint64_t now = state_.version();
+  std::unique_lock<std::mutex> lock(sent_mutex_);
+  sent_cv_.wait_for(lock, most, [&] { return sent_.empty() || *sent_.begin() >= now; });
+}
+
 void WatchServer::stop() {
   if (stopping_.exchange(true)) return;
   state_.wakeAll();
@@ -175,9 +199,31 @@ void WatchServer::stop() {
   if (stage_) stage_->stop();
 }
 
-std::string WatchServer::url() const {
-  const std::string host = options_.bind.find(':') != std::string::npos ? "[" + options_.bind + "]" : options_.bind;
-  return "http://" + host + ":" + std::to_string(port_) + "/" + (options_.token.empty() ? "" : "?token=" + options_.token);
+std::vector<std::string> WatchServer::urls() const {
+  const std::string tail = ":" + std::to_string(port_) + "/" + (options_.token.empty() ? "" : "?token=" + options_.token);
+  auto url = [&](const std::string& a) { return "http://" + (a.find(':') != std::string::npos ? "[" + a + "]" : a) + tail; };
+  const bool any4 = options_.bind == "0.0.0.0", any6 = options_.bind == "::";
+  if (!any4 && !any6) return {url(options_.bind)};
+  std::vector<std::string> others, loopback;
+  ifaddrs* list = nullptr;
+  if (getifaddrs(&list) == 0) {
+    for (const ifaddrs* i = list; i; i = i->ifa_next) {
+      if (!i->ifa_addr || !(i->ifa_flags & IFF_UP)) continue;
+      const int family = i->ifa_addr->sa_family;
+      if (family != AF_INET && (family != AF_INET6 || !any6)) continue;
+      char text[INET6_ADDRSTRLEN] = {};
+      const void* at = family == AF_INET ? static_cast<const void*>(&reinterpret_cast<const sockaddr_in*>(i->ifa_addr)->sin_addr)
+                                         : static_cast<const void*>(&reinterpret_cast<const sockaddr_in6*>(i->ifa_addr)->sin6_addr);
+      if (!inet_ntop(family, at, text, sizeof text)) continue;
+      if (family == AF_INET6 && IN6_IS_ADDR_LINKLOCAL(&reinterpret_cast<const sockaddr_in6*>(i->ifa_addr)->sin6_addr))
+        continue;  // (opens only with its interface named)
+      ((i->ifa_flags & IFF_LOOPBACK) ? loopback : others).push_back(url(text));
+    }
+    freeifaddrs(list);
+  }
+  others.insert(others.end(), loopback.begin(), loopback.end());
+  if (others.empty()) others.push_back(url(any4 ? "127.0.0.1" : "::1"));
+  return others;
 }
 
 }  // namespace afford

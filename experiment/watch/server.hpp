@@ -13,8 +13,14 @@
 // A client that does not finish its request holds no worker.
 #pragma once
 #include <atomic>
+#include <chrono>
+#include <condition_variable>
+#include <mutex>
+#include <optional>
+#include <set>
 #include <memory>
 #include <string>
+#include <vector>
 
 #include "experiment/watch/connections.hpp"
 #include "experiment/watch/state.hpp"
@@ -53,10 +59,14 @@ class WatchServer {
   // Binds and serves on threads of its own; throws std::runtime_error naming the address and port if it
   // cannot bind (a port in use is never shared).
   void start();
+  // Waits until every page following has been sent the state as it is now, or `most` has passed (a page
+  // that stopped reading is not waited for past it): the last of a run shown before the server stops.
+  void flush(std::chrono::milliseconds most);
   void stop();
   int port() const { return port_; }
-  // The page's address (with its token when one is required).
-  std::string url() const;
+  // The page's addresses (with its token when one is required): the address bound; for a wildcard one
+  // (0.0.0.0, ::), each address of this machine's interfaces that are up, the others' first, loopback last.
+  std::vector<std::string> urls() const;
   int streams() const { return streams_.load(); }
   StageCounts connections() const { return stage_ ? stage_->counts() : StageCounts{}; }
 
@@ -64,6 +74,8 @@ class WatchServer {
   class Http;
   void routes();
   bool authorised(const std::string& query_token, const std::string& header) const;
+  // A page was sent version `now` (none: it is gone) where it had been sent `was` (none: it is new).
+  void sentNow(std::optional<std::uint64_t> was, std::optional<std::uint64_t> now);
 
   WatchState& state_;
   WatchServerOptions options_;
@@ -72,6 +84,10 @@ class WatchServer {
   std::unique_ptr<ConnectionStage> stage_;
   int port_ = -1;
   std::atomic<int> streams_{0};
+  // The version of the state each following page was sent last (flush waits on it).
+  std::mutex sent_mutex_;
+  std::condition_variable sent_cv_;
+  std::multiset<std::uint64_t> sent_;
   std::atomic<bool> stopping_{false};
 };
 

@@ -57,6 +57,7 @@ void WatchState::onRun(const std::string& run_id, const std::string& title) {
   decision_.clear(), goal_text_.clear();
   own_goal_x_ = own_goal_y_ = -1;
   motivation_.clear(), threshold_.clear(), goals_.clear();
+  recent_goals_.clear(), competence_.clear();
   curve_steps_.clear(), curve_values_.clear();
   curve_stride_ = 1, tables_ = 0, latest_step_ = -1;
   latest_values_.clear();
@@ -71,6 +72,7 @@ void WatchState::onConfig(const run_config_t& m, const RunConfig& config) {
   std::lock_guard<std::mutex> lock(mutex_);
   phase_ = nameOf(kPhaseNames, config.phase);
   steps_ = config.steps;
+  goal_window_ = config.goals.window;
   for (const ObjectSpec& o : config.world.objects) {
     object_names_.push_back(o.name);
     true_affordance_.push_back(o.affordance);
@@ -150,6 +152,19 @@ void WatchState::onGoalResult(std::int64_t step, int id, const std::string& modu
   if (it == goals_.end()) it = goals_.insert(goals_.end(), {module, {0, 0}});
   it->second.first += reached ? 1 : 0;
   ++it->second.second;
+  if (module != goalModuleName(0)) {  // an exploration has no goal image: nothing to reach
+    std::deque<bool>& recent = recent_goals_[module];
+    recent.push_back(reached);
+    while (recent.size() > static_cast<std::size_t>(std::max(1, 2 * goal_window_))) recent.pop_front();
+    std::array<double, 3> point{};
+    for (int m = 1; m <= 3; ++m) {
+      const auto r = recent_goals_.find(goalModuleName(m));
+      point[m - 1] = r == recent_goals_.end() ? -1
+                     : static_cast<double>(std::count(r->second.begin(), r->second.end(), true)) / r->second.size();
+    }
+    competence_.push_back(point);
+    while (competence_.size() > limits_.trace_length) competence_.pop_front();
+  }
   stepTo(step);
   changed();
 }
@@ -192,13 +207,23 @@ void WatchState::onStatus(const process_status_t& m) {
   changed();
 }
 
-void WatchState::onResult(const run_result_t& m) {
+void WatchState::endRun(const std::string& run_id, std::int64_t step) {
   std::lock_guard<std::mutex> lock(mutex_);
-  RunSeen& r = runSeen(m.run_id);
+  if (!runs_.count(run_id) && runs_.size() >= limits_.most_runs) return;  // not one of the runs configured
+  RunSeen& r = runSeen(run_id);
   r.state = "done";
-  r.step = std::max(r.step, m.step);
-  stepTo(m.step);
+  r.step = std::max(r.step, step);
+  if (run_id == run_id_) stepTo(step);
   changed();
+}
+
+void WatchState::onResult(const run_result_t& m) { endRun(m.run_id, m.step); }
+
+void WatchState::onExtrinsicResult(const extrinsic_result_t& m) { endRun(m.run_id, m.step); }
+
+bool WatchState::shows(const std::string& run_id) const {
+  std::lock_guard<std::mutex> lock(mutex_);
+  return run_id == run_id_;
 }
 
 void WatchState::setPlayback(bool playing, double speed, std::int64_t last) {

@@ -52,6 +52,10 @@ class WatchState : public RunView {
   void onTable(const affordance_table_t& m) override;
   void onStatus(const process_status_t& m) override;
   void onResult(const run_result_t& m) override;
+  void onExtrinsicResult(const extrinsic_result_t& m) override;
+
+  // Is this the run shown (the latest whose configuration was heard)?
+  bool shows(const std::string& run_id) const;
 
   // Forget the run shown (a log's playback seeking back); the runs heard stay.
   void clearRun();
@@ -126,6 +130,12 @@ class WatchState : public RunView {
   double own_goal_x_ = -1, own_goal_y_ = -1;
   std::deque<double> motivation_, threshold_;
   std::vector<std::pair<std::string, std::pair<int, int>>> goals_;  // module -> (reached, ended)
+  // The goals phase's trace: after each goal of a module that has a goal image (not an exploration), each such
+  // module's competence, the share of its last 2 x goals.window goals reached (-1: none yet).
+  int goal_window_ = 0;
+  std::map<std::string, std::deque<bool>> recent_goals_;
+  std::deque<std::array<double, 3>> competence_;
+  void endRun(const std::string& run_id, std::int64_t step);
   // Learned affordances: at each kept step, objects x actions.
   std::vector<std::int64_t> curve_steps_;
   std::vector<std::vector<std::array<double, 4>>> curve_values_;

@@ -78,6 +78,8 @@ std::string WatchState::snapshot(bool with_curves) const {
               {"motivation", motivation_},
               {"threshold", threshold_},
               {"goals", goals},
+              {"competence", competence_},
+              {"goal_window", goal_window_},
               {"runs", runs}};
     if (playback_) c.head["playback"] = {{"playing", playing_}, {"speed", speed_}, {"last", last_}};
     c.scene = focus_.step >= 0 && seen_scene_.step >= 0 ? seen_scene_ : scene_;  // the picture of one step

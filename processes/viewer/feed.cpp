@@ -98,6 +98,11 @@ std::string ViewFeed::handle(const run_result_t& m) {
   view_.onResult(m);
   return "";
 }
+template <>
+std::string ViewFeed::handle(const extrinsic_result_t& m) {
+  view_.onExtrinsicResult(m);
+  return "";
+}
 
 namespace {
 template <class F>
@@ -111,8 +116,14 @@ void ViewFeed::subscribe(Edge& edge, bool effects) {
   edge.warnOtherRuns(false);
   edge.subscribe(ch::runConfig, [this, &edge](const run_config_t& m) { return turnOf([&] { return handleConfig(m, &edge); }); },
                  Scope::Any, Order::None);
-  edge.subscribe(ch::status, [this](const process_status_t& m) { return turnOf([&] { return handle(m); }); }, Scope::Any,
-                 Order::None);
+  // Every run's status and result: the runs heard, side by side or one after the other, and when each ended.
+  auto any = [&](const auto& channel) {
+    using Msg = typename std::decay_t<decltype(channel)>::Message;
+    edge.subscribe(channel, [this](const Msg& m) { return turnOf([&] { return handle(m); }); }, Scope::Any, Order::None);
+  };
+  any(ch::status);
+  any(ch::result);
+  any(ch::extrinsicResult);
   auto follow = [&](const auto& channel) {
     using Msg = typename std::decay_t<decltype(channel)>::Message;
     edge.subscribe(channel, [this](const Msg& m) { return turnOf([&] { return handle(m); }); }, Scope::RunOrAny,
@@ -126,7 +137,6 @@ void ViewFeed::subscribe(Edge& edge, bool effects) {
   follow(ch::goal);
   follow(ch::goalResult);
   follow(ch::affordanceTable);
-  follow(ch::result);
 }
 
 bool ViewFeed::take(const LogEvent& e, std::string& why) {
@@ -145,7 +155,8 @@ bool ViewFeed::take(const LogEvent& e, std::string& why) {
                          std::is_same_v<Msg, prediction_t> || std::is_same_v<Msg, decision_t> ||
                          std::is_same_v<Msg, effect_t> || std::is_same_v<Msg, goal_t> ||
                          std::is_same_v<Msg, goal_result_t> || std::is_same_v<Msg, affordance_table_t> ||
-                         std::is_same_v<Msg, run_result_t> || std::is_same_v<Msg, process_status_t>) {
+                         std::is_same_v<Msg, run_result_t> || std::is_same_v<Msg, extrinsic_result_t> ||
+                         std::is_same_v<Msg, process_status_t>) {
       std::string run;
       if (!have_config_ || !peekRunId(e.data.data(), e.data.size(), protocol_.limits.name_bytes, run) ||
           run != shown_)

@@ -13,6 +13,7 @@
 #include <vector>
 
 #include "afford/affordance_table_t.hpp"
+#include "afford/extrinsic_result_t.hpp"
 #include "afford/config.hpp"
 #include "afford/edge.hpp"
 #include "afford/logfile.hpp"
@@ -39,12 +40,13 @@ class RunView {
   virtual void onGoal(std::int64_t step, int id, const std::string& module, const std::vector<std::uint8_t>& image,
                       int side, double x, double y) = 0;
   virtual void onGoalResult(std::int64_t step, int id, const std::string& module, bool reached) = 0;
-  // The run's configuration as taken (after onRun), a learned-affordance table, a process's status (any run), the
-  // run's result.
+  // The run's configuration as taken (after onRun), a learned-affordance table, a process's status (any run), a
+  // run's result (any run: an intrinsic or goals run's, an extrinsic test's).
   virtual void onConfig(const run_config_t&, const RunConfig&) {}
   virtual void onTable(const affordance_table_t&) {}
   virtual void onStatus(const process_status_t&) {}
   virtual void onResult(const run_result_t&) {}
+  virtual void onExtrinsicResult(const extrinsic_result_t&) {}
 };
 
 // The name of a goal module (goal_t.module), "?" for another value.

@@ -237,7 +237,7 @@ TEST(WatchServer, OffLoopbackEveryRequestWithoutTheTokenIsRefused) {
   EXPECT_EQ(o.token.size(), 32u);
   WatchServer server(state, o);
   server.start();
-  EXPECT_NE(server.url().find("?token=" + o.token), std::string::npos);
+  EXPECT_NE(server.urls().front().find("?token=" + o.token), std::string::npos);
   httplib::Client client("127.0.0.1", server.port());
   for (const std::string path : {"/", "/state", "/events", "/control?command=play"}) {
     auto res = client.Get(path.c_str());
@@ -614,6 +614,82 @@ TEST(WatchServer, OutOfFilesItWaitsInsteadOfSpinning) {
   sendAll(client, "GET / HTTP/1.1\r\n\r\n");
   EXPECT_EQ(answer(client).rfind("HTTP/1.1 200", 0), 0u);
   close(client);
+  server.stop();
+}
+
+}  // namespace
+}  // namespace afford
+
+namespace afford {
+namespace {
+
+// Runs heard end when their result is heard, whichever run is shown: an intrinsic or goals run's RESULT, an
+// extrinsic test's EXTRINSIC_RESULT (a test's state stayed "running" before).
+TEST(WatchState, EveryRunHeardEndsWithItsResultATestsToo) {
+  const RunConfig c = test::shippedConfig();
+  WatchState state;
+  feedRun(state, "trained", 5, c);
+  feedRun(state, "test-e0", 3, c);
+  process_status_t running{};
+  running.state = process_status_t::RUNNING;
+  for (const char* run : {"trained", "test-e0"}) running.run_id = run, running.step = 2, state.onStatus(running);
+  run_result_t trained{};
+  trained.run_id = "trained", trained.step = 5;
+  state.onResult(trained);  // not the run shown
+  extrinsic_result_t tested{};
+  tested.run_id = "test-e0", tested.step = 3;
+  state.onExtrinsicResult(tested);
+  state.onStatus(running);  // a heartbeat after the end changes nothing
+  const json s = json::parse(state.snapshot(false));
+  ASSERT_EQ(s["runs"].size(), 2u);
+  for (const auto& r : s["runs"]) EXPECT_EQ(r["state"], "done") << r["id"];
+  EXPECT_EQ(s["run"]["id"], "test-e0");
+  EXPECT_EQ(s["step"], 3);  // (the other run's result did not move the step shown)
+}
+
+// The goals phase's trace: each module's competence after each goal that has a goal image, over its last
+// 2 x goals.window goals; an exploration counts in the table, never in the trace.
+TEST(WatchState, TheGoalsPhaseTracesEachModulesCompetence) {
+  RunConfig c = test::shippedConfig();
+  c.phase = Phase::Goals, c.goals.window = 2;
+  WatchState state;
+  feedRun(state, "goals", 1, c);
+  const std::vector<std::pair<int, bool>> results = {{0, false}, {1, true}, {1, false}, {2, true}, {1, true},
+                                                     {1, true},  {1, true}, {0, false}};
+  int id = 0;
+  for (const auto& [module, reached] : results) state.onGoalResult(10 + id, id, goalModuleName(module), reached), ++id;
+  const json s = json::parse(state.snapshot(false));
+  EXPECT_EQ(s["goal_window"], 2);
+  const auto& trace = s["competence"];
+  ASSERT_EQ(trace.size(), 6u);  // one point per goal of colour, move or colour and place
+  EXPECT_EQ(trace[0], json::array({1.0, -1.0, -1.0}));
+  EXPECT_EQ(trace[1], json::array({0.5, -1.0, -1.0}));
+  EXPECT_EQ(trace[2], json::array({0.5, 1.0, -1.0}));
+  EXPECT_EQ(trace[5], json::array({0.75, 1.0, -1.0}));  // the last 4 colour goals: 0, 1, 1, 1
+  EXPECT_EQ(s["goals"][0]["module"], "explore");
+  EXPECT_EQ(s["goals"][0]["ended"], 2);
+}
+
+// Bound to every address: the addresses printed are this machine's own, never 0.0.0.0 (which no browser
+// opens), loopback among them (opened here; the others are not reached from a test).
+TEST(WatchServer, BoundToEveryAddressItPrintsAddressesThatOpen) {
+  WatchState state;
+  WatchServerOptions o;
+  o.bind = "0.0.0.0", o.port = 0, o.token = newToken();
+  WatchServer server(state, o);
+  server.start();
+  const std::vector<std::string> urls = server.urls();
+  ASSERT_FALSE(urls.empty());
+  const std::string loopback = "http://127.0.0.1:" + std::to_string(server.port()) + "/?token=" + o.token;
+  for (const std::string& u : urls) {
+    EXPECT_EQ(u.find("0.0.0.0"), std::string::npos) << u;
+    EXPECT_NE(u.find(":" + std::to_string(server.port()) + "/?token=" + o.token), std::string::npos) << u;
+  }
+  EXPECT_EQ(urls.back(), loopback);
+  httplib::Client client("127.0.0.1", server.port());
+  auto res = client.Get(("/state?token=" + o.token).c_str());
+  ASSERT_TRUE(res);
+  EXPECT_EQ(res->status, 200);
   server.stop();
 }
 

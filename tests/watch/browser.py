@@ -1,11 +1,19 @@
 """afford watch's page in headless Chromium (Selenium and chromedriver, from Debian).
 
-  browser.py live URL OUT        open the page (then touch OUT/page-ready), follow a live run until
-                                 OUT/run/summary.json exists, then check the
-                                 page against the run's log (OUT/logs): its step advanced, each scene it
-                                 showed is the log's scene of that step, it was never more than a second
-                                 behind the run, its curves grew; screenshots OUT/watch-live.png
-  browser.py playback URL OUT    the controls of a log's playback: step, seek, play, pause, speed
+  browser.py live URL OUT        start Chromium (then touch OUT/page-ready), open the page as soon as it is
+                                 served (afford experiment --watch serves it), follow a GOALS run and its
+                                 tests until OUT/run/summary.json exists, then check the page against the
+                                 run's log (OUT/logs): its step advanced, each scene it showed is the log's
+                                 scene of that step, it was never more than a second behind the run, its
+                                 curves grew; in the goals phase its trace drew the modules' competence and
+                                 its goals table said what an exploration is; at the end (the page's last
+                                 state) every run heard is done, the last test's goal image is shown, and
+                                 shown again after another run without one; at 1280 px the curves have
+                                 their axes' ticks and the legend beside them; screenshots
+                                 OUT/watch-live.png (goals phase), OUT/watch-end.png (the end, 1280 px)
+  browser.py playback URL OUT [IDLE_URL]  the controls of a log's playback: step, seek, play, pause, speed;
+                                 then IDLE_URL, a page with no run: it says so, and shows no step
+                                 (OUT/watch-idle.png)
   browser.py hold URL FILE READY once the page follows, touch READY; keep it open until FILE exists
                                  (bench/watch.sh); print the states it took
   browser.py stream URL FILE READY  the same without a browser: a client reading the page's event stream
@@ -101,26 +109,92 @@ def scenes_of(log):
     return scenes, times
 
 
+def goals_phase(d):
+    """In the goals phase: the trace's lines and title, the goals table's text."""
+    return d.execute_script("""
+      const s = window.afford.state;
+      return {phase: s ? s.run.phase : '', lines: Number(document.getElementById('trace').dataset.lines),
+              title: document.getElementById('trace-title').textContent,
+              goals: document.getElementById('goals').innerText};""")
+
+
+def the_end(d, out):
+    """The page's last state, the experiment over: runs heard, the goal image, the curves' axes at 1280 px."""
+    # The experiment sends the pages following it what they have not seen, then closes: its end is in.
+    wait("the experiment's page closed", lambda: d.execute_script(
+        "return document.getElementById('lost').style.display === 'inline'"), 30)
+    runs = d.execute_script("""return [...document.getElementById('runs').rows].slice(1).map(
+        (r) => [r.cells[0].textContent, r.cells[3].textContent, r.cells[5].textContent]);""")
+    assert len(runs) >= 3 and all(state == "done" for _, _, state in runs), f"runs heard at the end: {runs}"
+    assert sum(phase == "extrinsic" for _, phase, _ in runs) >= 2, f"the tests are not among the runs heard: {runs}"
+    goal = lambda: d.execute_script("""const g = document.getElementById('goal'), s = window.afford.state;
+        return {has: !!s.goal, same: !!s.goal && g.getAttribute('src') === s.goal.png, width: g.naturalWidth,
+                test: s.run.phase};""")
+    g = goal()
+    assert g["test"] == "extrinsic" and g["has"], f"the page's last state is not a test with its goal: {g}"
+    wait("the goal image drawn", lambda: goal()["same"] and goal()["width"] > 0, 5)
+    # Another run without a goal image shown, then this one again (the next test of the same scenario).
+    d.execute_script("const s = window.afford.state; show(Object.assign({}, s, {goal: null})); show(s);")
+    wait("the same goal image shown again", lambda: goal()["same"] and goal()["width"] > 0, 5)
+    d.set_window_size(1280, 1000)
+    axes = lambda: d.execute_script("""
+      const canvases = [...document.querySelectorAll('#curves canvas')], legend = document.getElementById('curve-legend');
+      const last = canvases[canvases.length - 1].getBoundingClientRect(), l = legend.getBoundingClientRect();
+      return {width: window.innerWidth, canvas_right: last.right, canvas_top: last.top, canvas_bottom: last.bottom,
+              legend_left: l.left, legend_top: l.top, legend_right: l.right,
+              x: [...document.querySelectorAll('.xaxis')].map((a) => [...a.children].map((t) => t.textContent)),
+              y: [...document.querySelectorAll('.yaxis')].map((a) => [...a.children].map((t) => t.textContent))};""")
+    wait("the window at 1280 px", lambda: axes()["width"] <= 1280)
+    # The goals run's curves (a test has none) drawn again at this width (the x ticks follow the canvas).
+    d.execute_script("showCurves(window.goalsCurves);")
+    a = axes()
+    assert a["legend_left"] >= a["canvas_right"] and a["legend_top"] < a["canvas_bottom"] and \
+        a["legend_right"] <= a["width"], f"at 1280 px the legend is not beside the curves: {a}"
+    assert all(y == ["1", "0.5", "0"] for y in a["y"]) and len(a["y"]) == 4, f"the y axes' ticks: {a['y']}"
+    for x in a["x"]:
+        steps = [int(t) for t in x]
+        assert len(steps) >= 2 and steps == sorted(steps), f"the x axis' ticks: {a['x']}"
+    d.save_screenshot(str(Path(out) / "watch-end.png"))
+    return runs, a["x"][0]
+
+
 def live(url, out):
     out = Path(out)
-    samples, shot = [], False
+    samples, shot, goals_seen = [], False, []
     with Browser() as d:
-        d.get(url)
-        wait("the page's first state", lambda: shown(d)["states"] > 0)
-        (out / "page-ready").touch()  # the run may start
+        (out / "page-ready").touch()  # Chromium is up: the experiment may start, and serve the page
+        def opened():  # (Chromium shows its own error page while nothing is served: no window.afford)
+            d.get(url)
+            until = time.time() + 5
+            while time.time() < until and d.execute_script("return !!window.afford"):
+                if d.execute_script("return window.afford.states") > 0:
+                    return True
+                time.sleep(0.05)
+            return False
+        wait("the page served", opened, 60)
         wait("the page to show a run", lambda: shown(d)["step"] > 0, 60)
         while not (out / "run" / "summary.json").exists():
             s = shown(d)
             s["time"] = time.time()
             samples.append(s)
-            if not shot and s["step"] >= 1500:
-                d.save_screenshot(str(out / "watch-live.png"))
-                shot = True
+            g = goals_phase(d)
+            if g["phase"] == "goals":
+                d.execute_script("const s = window.afford.state; if (s.curves && s.curves.steps.length > 1) "
+                                 "window.goalsCurves = s.curves;")
+                goals_seen.append(g)
+                if not shot and s["step"] >= 1000:
+                    d.save_screenshot(str(out / "watch-live.png"))
+                    shot = True
             time.sleep(0.1)
+        runs, x_ticks = the_end(d, out)
     run = samples[0]["run"]
     samples = [s for s in samples if s["run"] == run and s["scene"]]
     assert len({s["step"] for s in samples}) >= 5, f"the page's step hardly moved: {[s['step'] for s in samples]}"
-    assert shot, "no screenshot: the page never showed step 1500"
+    assert shot, "no screenshot: the page never showed step 1000 of the goals phase"
+    drawn = [g for g in goals_seen if g["lines"] > 0]
+    assert drawn and "competence per module" in drawn[-1]["title"], f"the goals phase's trace: {goals_seen[-1:]}"
+    assert "explorations (random actions: no goal image to reach)" in drawn[-1]["goals"] and \
+        " of " not in drawn[-1]["goals"].split("explore")[1].split("\n")[0], f"the goals table: {drawn[-1]['goals']}"
     scenes, times = scenes_of(out / "logs" / run)
     checked = 0
     for s in samples:
@@ -141,10 +215,20 @@ def live(url, out):
     assert points[-1] > points[0] >= 0 and points[-1] >= 5, f"the curves did not grow: {points[0]} -> {points[-1]}"
     print(f"live: {len(samples)} looks at run {run}, steps {samples[0]['step']} to {samples[-1]['step']}; "
           f"{checked} scenes equal the log's; at most {max(worst, 0):.2f} s behind; curves {points[0]} -> {points[-1]} "
-          "points")
+          f"points; competence drawn over {drawn[-1]['lines']} goals; at the end {len(runs)} runs heard, all done; "
+          f"the goal image shown again; at 1280 px the legend beside the curves, steps ticked {x_ticks}")
 
 
-def playback(url, out):
+def idle(d, url, out):
+    d.get(url)
+    wait("the page's first state", lambda: d.execute_script("return window.afford.states") > 0)
+    status = d.execute_script("return document.getElementById('status').innerText")
+    d.save_screenshot(str(Path(out) / "watch-idle.png"))
+    assert "-1" not in status and "no run heard yet" in status, f"the idle page says: {status!r}"
+    print(f"idle: {status.strip()!r}")
+
+
+def playback(url, out, idle_url=None):
     with Browser() as d:
         d.get(url)
         wait("the first step", lambda: shown(d)["scene"] and shown(d)["step"] >= 0)
@@ -174,6 +258,8 @@ def playback(url, out):
         d.save_screenshot(str(Path(out) / "watch-playback.png"))
         print(f"playback: step {s0} -> {s1}; seek 1500 (scene of step {back}), back to 200; played to {held} at "
               f"500 steps/s; paused")
+        if idle_url:
+            idle(d, idle_url, out)
 
 
 def hold(url, until, ready):
@@ -223,7 +309,7 @@ if __name__ == "__main__":
     if mode == "live":
         live(sys.argv[2], sys.argv[3])
     elif mode == "playback":
-        playback(sys.argv[2], sys.argv[3])
+        playback(sys.argv[2], sys.argv[3], sys.argv[4] if len(sys.argv) > 4 else None)
     elif mode == "stream":
         stream(sys.argv[2], sys.argv[3], sys.argv[4])
     elif mode == "hold":

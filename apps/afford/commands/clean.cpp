@@ -30,6 +30,7 @@
 #include "apps/afford/commands.hpp"
 #include "afford/config.hpp"
 #include "experiment/state.hpp"
+#include "apps/afford/commands/running.hpp"
 
 namespace afford {
 namespace fs = std::filesystem;
@@ -59,19 +60,6 @@ std::optional<nlohmann::json> smallJson(const fs::path& file) {
     return std::nullopt;  // an unreadable file says nothing about the folder; another one may
   }
 }
-
-// Someone holds a kernel lock on `path` (flock): tested by taking it, without waiting, and letting it go at
-// once. `exclusive`: the test conflicts with a shared hold too. A lock that cannot be tested counts as held.
-bool lockHeld(const fs::path& path, bool exclusive) {
-  const int fd = open(path.c_str(), O_RDONLY | O_CLOEXEC);
-  if (fd < 0) return false;
-  const bool held = flock(fd, (exclusive ? LOCK_EX : LOCK_SH) | LOCK_NB) != 0;
-  close(fd);
-  return held;
-}
-
-// The experiment folder's lock is held: its runner is running (experiment/state.hpp's OutDirLock).
-bool experimentRunning(const fs::path& out_dir) { return lockHeld(out_dir / ".lock", /*exclusive=*/false); }
 
 // A logger is writing a log in the folder: it holds the folder (a shared flock) from the log's first byte to its
 // final manifest (logger/logger.hpp's RunLog), whoever started it and whether or not its runner lives.
@@ -112,30 +100,6 @@ std::string experimentInUse(const std::string& out_dir) {
          (state.cwd.empty() ? "" : " (in " + state.cwd + ")") + " continues it";
 }
 
-// The processes of a scripts/procs.sh group that are alive: a pid file whose process has the start
-// time recorded beside it (procs.sh's own test: pids are reused).
-std::vector<std::string> groupAlive(const fs::path& dir) {
-  std::vector<std::string> alive;
-  std::error_code ec;
-  for (const auto& f : fs::directory_iterator(dir, ec)) {
-    if (f.path().extension() != ".pid") continue;
-    std::ifstream pid_in(f.path()), started_in(fs::path(f.path()).replace_extension(".started"));
-    long pid = 0;
-    std::string started;
-    if (!(pid_in >> pid) || pid <= 0 || !(started_in >> started)) continue;
-    std::ifstream stat("/proc/" + std::to_string(pid) + "/stat");
-    std::string line;
-    if (!std::getline(stat, line)) continue;
-    const auto close_paren = line.rfind(')');
-    if (close_paren == std::string::npos) continue;
-    std::istringstream fields(line.substr(close_paren + 2));
-    std::vector<std::string> v{std::istream_iterator<std::string>(fields), {}};
-    if (v.size() > 19 && v[0] != "Z" && v[19] == started) alive.push_back(f.path().stem().string());
-  }
-  std::sort(alive.begin(), alive.end());
-  return alive;
-}
-
 // Why the experiments' runs are in use ("" if not), by experiment folder: asked once per clean.
 using InUse = std::map<std::string, std::string>;
 
@@ -156,9 +120,9 @@ void classify(Entry& e, InUse& in_use) {
   std::error_code ec;
   if (fs::exists(e.path / "lcm-url", ec) || fs::exists(e.path / "bus.key", ec)) {
     e.kind = Kind::Group;
-    const std::vector<std::string> alive = groupAlive(e.path);
+    const std::vector<GroupProcess> alive = groupAlive(e.path);
     std::string names;
-    for (const auto& n : alive) names += (names.empty() ? "" : ", ") + n;
+    for (const auto& n : alive) names += (names.empty() ? "" : ", ") + n.name;
     e.kept_because = "a scripts/procs.sh group (" + (alive.empty() ? std::string("stopped") : "running: " + names) +
                      "); stop it and remove its folder yourself";
     return;

@@ -12,6 +12,7 @@
 #include "experiment/experiment.hpp"
 #include "experiment/state.hpp"
 #include "experiment/design/experiment_file.hpp"
+#include "experiment/watch/live.hpp"
 
 namespace afford {
 
@@ -22,6 +23,9 @@ struct Args {
   std::vector<std::string> names;
   std::string system, netns = "auto", file, shard, plan;
   std::vector<std::string> processes;
+  bool watch = false;
+  std::string watch_bind = "127.0.0.1";
+  int watch_port = 8077;
   int reps = 0, tables = 0, extrinsic_reps = 0;
   std::int64_t steps = 0, table_seed = 0;
   CLI::Option* tables_option = nullptr;
@@ -109,6 +113,14 @@ void addMoreOptions(CLI::App* exp, Args& a) {
                   "NAME='CMD ARGS': start CMD in place of the shipped process NAME (repeatable; real processes "
                   "only). CMD gets the arguments the shipped one would (--lcm-url URL ...) appended; see "
                   "docs/writing-a-component.md");
+  exp->add_flag("--watch", a.watch,
+                "serve a page that follows the runs in the browser, from this process (its address is printed; "
+                "the page opens from this machine, whatever namespace the runs are in)");
+  exp->add_option("--watch-port", a.watch_port, "with --watch: the page's port (0: any free one)")
+      ->capture_default_str()->check(CLI::Range(0, 65535));
+  exp->add_option("--watch-bind", a.watch_bind, "with --watch: the address to serve the page on; anything but "
+                                                "loopback requires a token, which the address printed has")
+      ->capture_default_str();
   exp->add_flag("--resume", o.resume,
                 "continue the interrupted experiment of --out: the runs not finished, with its stored options");
 }
@@ -175,7 +187,8 @@ ExperimentRequest requestOf(Args& a, const CLI::App& app, const CLI::App* exp, c
 
 // The options of the queue as a whole: a queue entry does not give them.
 const std::set<std::string> kQueueOptions = {"--jobs",     "--transport", "--base-port", "--netns", "--progress",
-                                             "--progress-every", "--attach", "--shard", "--plan", "--resume"};
+                                             "--progress-every", "--attach", "--shard", "--plan", "--resume",
+                                             "--watch", "--watch-port", "--watch-bind"};
 
 // The entries of a --plan file: a YAML list of argument lines.
 std::vector<std::string> planEntries(const std::string& file) {
@@ -268,6 +281,29 @@ int runQueueOf(Args& a, CLI::App& app, const CLI::App* exp, const FrontDoor& doo
   return runQueue(requests, resume, *door.log);
 }
 
+// --watch: the page served here, before the runs' network namespace is entered, so that it opens from this
+// machine; its listeners join the slots' buses once the experiment has entered it (HostRequest::on_bus).
+std::unique_ptr<LiveWatch> servePage(Args& a, const FrontDoor& door, std::unique_ptr<ProtocolConfig>& protocol) {
+  if (a.o.host.transport != "udpm")
+    throw ConfigError("--watch follows the runs on their bus: it needs --transport udpm (memq runs them inside this "
+                      "process, on no bus)");
+  protocol = std::make_unique<ProtocolConfig>(loadProtocol(door.config_dir));
+  LiveWatchOptions o;
+  o.server.bind = a.watch_bind, o.server.port = a.watch_port;
+  o.server.token = isLoopback(a.watch_bind) ? "" : newToken();
+  o.bus_key = a.o.host.bus_key;
+  o.say_runs = false;  // (the experiment says what runs)
+  auto watch = std::make_unique<LiveWatch>(*protocol, o);
+  watch->serve();
+  const std::vector<std::string> urls = watch->pageUrls();
+  std::printf("the page of this experiment (--watch): %s\n", urls.front().c_str());
+  for (std::size_t k = 1; k < urls.size(); ++k) std::printf("                                    or: %s\n", urls[k].c_str());
+  std::fflush(stdout);
+  LiveWatch* w = watch.get();
+  a.o.host.on_bus = [w](const std::vector<std::string>& buses) { w->listen(buses); };
+  return watch;
+}
+
 }  // namespace
 
 Command experimentCommand(CLI::App& app, const FrontDoor& door) {
@@ -276,6 +312,9 @@ Command experimentCommand(CLI::App& app, const FrontDoor& door) {
   addFirstOptions(exp, *a);
   addMoreOptions(exp, *a);
   return {exp, [&app, exp, a, &door] {
+            std::unique_ptr<ProtocolConfig> protocol;
+            std::unique_ptr<LiveWatch> watch;
+            if (a->watch) watch = servePage(*a, door, protocol);
             if (a->names.size() > 1 || !a->plan.empty()) return runQueueOf(*a, app, exp, door);
             return runExperiment(requestOf(*a, app, exp, door), *door.log);
           }};
