@@ -6,6 +6,7 @@
 #include <opencv2/core.hpp>
 
 #include <algorithm>
+#include <filesystem>
 #include <limits>
 #include <map>
 #include <memory>
@@ -18,6 +19,7 @@
 #include "afford/bounds.hpp"
 #include "afford/config.hpp"
 #include "afford/decode.hpp"
+#include "afford/file_lock.hpp"
 #include "afford/image.hpp"
 #include "afford/json_messages.hpp"
 #include "afford/protocol.hpp"
@@ -29,6 +31,7 @@
 #include "viewer/step_order.hpp"
 
 namespace afford {
+namespace fs = std::filesystem;
 
 namespace {
 
@@ -215,6 +218,10 @@ ExportResult exportMcap(const ExportOptions& o, spdlog::logger& log) {
   ExportResult result;
   result.file = o.mcap;
   if (o.mcap.empty()) throw std::runtime_error("no MCAP file to write (--mcap FILE)");
+  // Before any work: the file's name, its folder, and no file there already (McapWriter checks it again).
+  prepareOutput(o.mcap, "--mcap", {".mcap"});
+  if (std::error_code ec; fs::exists(fs::symlink_status(o.mcap, ec)))
+    throw std::runtime_error(o.mcap + " exists: afford export writes a new file, never over one");
   const std::shared_ptr<const BusKey> key = o.bus_key.empty() ? nullptr : busKeyFrom(o.bus_key);
   // The run's messages in step order (throws when there is no log): the file is the same however the log
   // interleaves its channels.
