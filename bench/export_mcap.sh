@@ -1,17 +1,18 @@
 #!/usr/bin/env bash
-# afford export's speed (docs/watching.md): one intrinsic run of IMP recorded over real processes
-# (udpm, `afford experiment`), its log exported as an MCAP file, the export's wall time beside the
-# run's own, and the file read by tools/mcapcheck/check.mjs (Foxglove's reader, every CRC), whose
-# messages per channel must be the log's (afford export's own count, and the Python package's when
-# the build has it).
-#   bench/export_mcap.sh [--build DIR] [--steps N] [--transport udpm|memq] [--out DIR]
-# Defaults: --build build, --steps 6000, --transport udpm, --out out/bench-export-mcap (made anew).
+# afford export's speed and size (docs/watching.md): one run of a system (IMP: intrinsic; GOALS: its
+# own goals) recorded over real processes (udpm, `afford experiment`), its log exported as an MCAP
+# file, the export's wall time beside the run's own, the file's bytes a step, and the file read by
+# tools/mcapcheck/check.mjs (Foxglove's reader, every CRC), whose messages per channel must be the
+# log's (afford export's own count, and the Python package's when the build has it).
+#   bench/export_mcap.sh [--build DIR] [--system IMP|GOALS|...] [--steps N] [--transport udpm|memq] [--out DIR]
+# Defaults: --build build, --system IMP, --steps 6000, --transport udpm, --out out/bench-export-mcap (made anew).
 set -euo pipefail
 cd "$(dirname "$0")/.."
-build=build steps=6000 transport=udpm out=out/bench-export-mcap
+build=build system=IMP steps=6000 transport=udpm out=out/bench-export-mcap
 while (($#)); do
   case $1 in
     --build) build=$2; shift 2 ;;
+    --system) system=$2; shift 2 ;;
     --steps) steps=$2; shift 2 ;;
     --transport) transport=$2; shift 2 ;;
     --out) out=$2; shift 2 ;;
@@ -25,12 +26,12 @@ now() { date +%s.%N; }
 seconds() { awk -v a="$1" -v b="$2" 'BEGIN { printf "%.2f", b - a }'; }
 
 t0=$(now)
-"$build/bin/afford" experiment base --system IMP --reps 1 --steps "$steps" --transport "$transport" --quiet \
+"$build/bin/afford" experiment base --system "$system" --reps 1 --steps "$steps" --transport "$transport" --quiet \
   --keep-logs all --no-reuse-agents --run-prefix mcap --out "$out/run" --log-root "$out/logs" >"$out/run.txt" 2>&1 ||
   { cat "$out/run.txt"; echo "the run failed" >&2; exit 1; }
 t1=$(now)
-log=$out/logs/mcap-base-IMP-s1
-"$build/bin/afford" export "$log" --mcap "$out/run.mcap" >"$out/export.txt" 2>&1 ||
+log=$out/logs/mcap-base-$system-s1
+/usr/bin/time -o "$out/export.time" -f "%U %S %M" "$build/bin/afford" export "$log" --mcap "$out/run.mcap" >"$out/export.txt" 2>&1 ||
   { cat "$out/export.txt"; echo "the export failed" >&2; exit 1; }
 t2=$(now)
 node tools/mcapcheck/check.mjs "$out/run.mcap" --digest >"$out/check.jsonl"
@@ -65,11 +66,12 @@ if counts != exported or log.refused:
 print(f"the Python package reads the same {sum(counts.values())} messages from the log")
 EOF
 fi
-own_s=$(/usr/bin/python3 -c 'import json, sys; print("%.2f" % json.load(open(sys.argv[1]))["systems"]["IMP"]["runs"][0]["wall_seconds"])' \
-  "$out/run/summary.json")
+own_s=$(/usr/bin/python3 -c 'import json, sys; print("%.2f" % json.load(open(sys.argv[1]))["systems"][sys.argv[2]]["runs"][0]["wall_seconds"])' \
+  "$out/run/summary.json" "$system")
 printf '%s\n' \
-  "steps: $steps ($transport)" \
+  "system: $system, steps: $steps ($transport)" \
   "run (afford experiment, wall): ${run_s} s; the run's own wall_seconds (summary.json): ${own_s} s" \
   "export (afford export, wall): ${export_s} s ($(awk -v e="$export_s" -v r="$own_s" 'BEGIN { printf "%.0f", 100 * e / r }')% of the run's own time)" \
+  "export's CPU: $(awk '{ printf "%.2f s, peak memory %.0f MB", $1 + $2, $3 / 1024 }' "$out/export.time")" \
   "check (node check.mjs, wall): ${check_s} s" \
-  "log: ${log_bytes} bytes; mcap: ${mcap_bytes} bytes" | tee "$out/figures.txt"
+  "log: ${log_bytes} bytes; mcap: ${mcap_bytes} bytes, $((mcap_bytes / steps)) bytes a step" | tee "$out/figures.txt"

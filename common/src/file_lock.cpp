@@ -4,6 +4,7 @@
 #include <sys/file.h>
 #include <unistd.h>
 
+#include <cctype>
 #include <cerrno>
 #include <cstring>
 #include <stdexcept>
@@ -41,6 +42,32 @@ void holdPartial(HeldFile& held, const std::string& partial, const std::string& 
     held.release();
     throw std::runtime_error("cannot empty " + partial + ": " + std::strerror(err));
   }
+}
+
+void prepareOutput(const std::filesystem::path& file, const std::string& option,
+                   const std::vector<std::string>& extensions) {
+  namespace fs = std::filesystem;
+  const std::string named = option + " " + file.string();
+  if (file.empty() || !file.has_filename()) throw std::runtime_error(named + ": names no file");
+  if (!extensions.empty()) {
+    std::string ext = file.extension().string();
+    for (char& c : ext) c = static_cast<char>(std::tolower(static_cast<unsigned char>(c)));
+    bool known = false;
+    std::string list;
+    for (const std::string& e : extensions) {
+      known = known || ext == e;
+      list += (list.empty() ? "" : &e == &extensions.back() ? " or " : ", ") + e;
+    }
+    if (!known) throw std::runtime_error(named + ": the name must end in " + list);
+  }
+  std::error_code ec;
+  if (fs::is_directory(file, ec)) throw std::runtime_error(named + ": is a folder, not a file");
+  const fs::path folder = file.parent_path();
+  if (folder.empty() || fs::is_directory(folder, ec)) return;
+  fs::create_directories(folder, ec);
+  if (ec || !fs::is_directory(folder))
+    throw std::runtime_error(named + ": cannot make its folder " + folder.string() + ": " +
+                             (ec ? ec.message() : "a file is in the way"));
 }
 
 }  // namespace afford

@@ -1,11 +1,9 @@
 #include "experiment/export/export.hpp"
 
-#include <opencv2/imgcodecs.hpp>
-#include <opencv2/imgproc.hpp>
-
 #include <opencv2/core.hpp>
 
 #include <algorithm>
+#include <filesystem>
 #include <limits>
 #include <map>
 #include <memory>
@@ -18,17 +16,20 @@
 #include "afford/bounds.hpp"
 #include "afford/config.hpp"
 #include "afford/decode.hpp"
+#include "afford/file_lock.hpp"
 #include "afford/image.hpp"
 #include "afford/json_messages.hpp"
 #include "afford/protocol.hpp"
 #include "afford/process_main.hpp"
 #include "afford/version.hpp"
 #include "experiment/export/foxglove.hpp"
+#include "experiment/export/image_fields.hpp"
 #include "experiment/export/mcap.hpp"
 #include "experiment/replay/replay.hpp"
 #include "viewer/step_order.hpp"
 
 namespace afford {
+namespace fs = std::filesystem;
 
 namespace {
 
@@ -104,8 +105,14 @@ class Exporter {
         skip(t, e, why);
         return;
       }
-      const std::uint16_t id = channel(e.channel, json_messages::Schema<Msg>::kName, json_messages::Schema<Msg>::kText);
-      put(t, id, time, json_messages::jsonText(m));
+      std::string json;
+      try {
+        json = image_fields::messageJson(m);
+      } catch (const std::runtime_error& ex) {  // an image that is not one (the edge refuses it: never)
+        skip(t, e, ex.what());
+        return;
+      }
+      put(t, channel(e.channel, json_messages::Schema<Msg>::kName, image_fields::schemaText<Msg>()), time, json);
       images(m, time, e);
     });
     if (!known) skip(topic(e.channel, ""), e, "not a channel of afford's protocol (afford/protocol.hpp)");
@@ -161,23 +168,38 @@ class Exporter {
     scene_width_ = m.width;
     scene_height_ = m.height;
     // As PNG, lossless: a scene is a few flat shapes (about 1 kB, where its pixels are 67 kB).
-    cv::Mat bgr;
-    cv::cvtColor(rgb, bgr, cv::COLOR_RGB2BGR);
-    std::vector<std::uint8_t> png;
-    cv::imencode(".png", bgr, png);
-    put(t, channel(kSceneImageTopic, foxglove::kCompressedImage, foxglove::compressedImageSchema()), time,
-        foxglove::compressedImage(time, "scene", "png", png));
+    image(kSceneImageTopic, "scene", time, image_fields::png(rgb.data, rgb.cols, rgb.rows));
+  }
+
+  // A PNG on an image topic, as foxglove.CompressedImage.
+  void image(const char* name, const char* frame_id, std::uint64_t time, const std::vector<std::uint8_t>& png) {
+    put(topic(name, foxglove::kCompressedImage),
+        channel(name, foxglove::kCompressedImage, foxglove::compressedImageSchema()), time,
+        foxglove::compressedImage(time, frame_id, "png", png));
   }
 
   void images(const focus_t& m, std::uint64_t time, const LogEvent& e) {
-    ExportedTopic& t = topic(kFocusImageTopic, foxglove::kRawImage);
-    if (static_cast<std::int64_t>(m.side) * m.side * 3 == m.size)
-      put(t, channel(kFocusImageTopic, foxglove::kRawImage, foxglove::rawImageSchema()), time,
-          foxglove::rawImage(time, "focus", m.side, m.side, m.image.data(), m.image.size()));
+    if (std::int64_t{m.side} * m.side * 3 == static_cast<std::int64_t>(m.image.size()))  // (the edge checks it)
+      image(kFocusImageTopic, "focus", time, image_fields::png(m.image.data(), m.side, m.side));
     else
-      skip(t, e, "its image of " + std::to_string(m.size) + " bytes is not " + std::to_string(m.side) + " x " +
-                     std::to_string(m.side) + " RGB");
+      skip(topic(kFocusImageTopic, foxglove::kCompressedImage), e,
+           "its image of " + std::to_string(m.image.size()) + " bytes is not " + std::to_string(m.side) + " x " +
+               std::to_string(m.side) + " RGB");
     gaze(m.x, m.y, m.side, time, kFocusGaze);
+  }
+
+  // The predicted images side by side, in the order of the message's actions.
+  void images(const forward_prediction_t& m, std::uint64_t time, const LogEvent&) {
+    const int side = image_fields::squareSide(m.size);  // (each row a square RGB image: messageJson checked it)
+    if (m.what.empty() || side <= 0) return;
+    std::vector<std::uint8_t> strip(m.what.size() * m.what.front().size());
+    for (std::size_t a = 0; a < m.what.size(); ++a) {
+      const std::vector<std::uint8_t> bytes = image_fields::bytesOf(m.what[a]);
+      for (int row = 0; row < side; ++row)
+        std::copy_n(bytes.begin() + row * side * 3, side * 3, strip.begin() + (row * m.what.size() + a) * side * 3);
+    }
+    image(kPredictionImageTopic, "forward_prediction", time,
+          image_fields::png(strip.data(), side * static_cast<int>(m.what.size()), side));
   }
 
   void images(const effect_t& m, std::uint64_t time, const LogEvent&) {
@@ -215,6 +237,10 @@ ExportResult exportMcap(const ExportOptions& o, spdlog::logger& log) {
   ExportResult result;
   result.file = o.mcap;
   if (o.mcap.empty()) throw std::runtime_error("no MCAP file to write (--mcap FILE)");
+  // Before any work: the file's name, its folder, and no file there already (McapWriter checks it again).
+  prepareOutput(o.mcap, "--mcap", {".mcap"});
+  if (std::error_code ec; fs::exists(fs::symlink_status(o.mcap, ec)))
+    throw std::runtime_error(o.mcap + " exists: afford export writes a new file, never over one");
   const std::shared_ptr<const BusKey> key = o.bus_key.empty() ? nullptr : busKeyFrom(o.bus_key);
   // The run's messages in step order (throws when there is no log): the file is the same however the log
   // interleaves its channels.

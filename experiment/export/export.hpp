@@ -12,14 +12,16 @@
 // Every channel of the run becomes an MCAP channel of its own name, message
 // encoding "json", its schema the type's JSON Schema ("afford.<type>",
 // encoding "jsonschema"), generated from the .lcm files by afford-lcmwire
-// (afford/json_messages.hpp). A message's log_time and publish_time are both its
-// place in the run: the log's time of the run's RUN_CONFIG, plus a millisecond
-// a step and a microsecond for each message of its step before it.
-// Beside them, in Foxglove's own schemas (foxglove.hpp): each SCENE's image on
-// /SCENE/image (foxglove.CompressedImage, PNG) and each FOCUS image on /FOCUS/image (foxglove.RawImage, rgb8),
-// and the eye's gaze on /SCENE/gaze (foxglove.ImageAnnotations: the focus
-// window's square over the scene, from each FOCUS, and from each EFFECT's gaze
-// after the action). A Metadata record "afford" holds the run's configuration
+// (afford/json_messages.hpp), its image fields as PNG (image_fields.hpp). A
+// message's log_time and publish_time are both its place in the run: the log's
+// time of the run's RUN_CONFIG, plus a millisecond a step and a microsecond for
+// each message of its step before it.
+// Beside them, in Foxglove's own schemas (foxglove.hpp), as
+// foxglove.CompressedImage (PNG): each SCENE's image on /SCENE/image, each FOCUS
+// image on /FOCUS/image, each FORWARD_PREDICTION's predicted images side by side
+// on /FORWARD_PREDICTION/what; and the eye's gaze on /SCENE/gaze
+// (foxglove.ImageAnnotations: the focus window's square over the scene, from
+// each FOCUS, and from each EFFECT's gaze after the action). A Metadata record "afford" holds the run's configuration
 // and afford's version. The file is written whole or not at all (mcap.hpp).
 #pragma once
 #include <spdlog/spdlog.h>
@@ -43,11 +45,12 @@ struct ExportOptions {
 // The image topics written beside the channels.
 inline constexpr const char* kSceneImageTopic = "/SCENE/image";
 inline constexpr const char* kFocusImageTopic = "/FOCUS/image";
+inline constexpr const char* kPredictionImageTopic = "/FORWARD_PREDICTION/what";
 inline constexpr const char* kGazeTopic = "/SCENE/gaze";
 
 struct ExportedTopic {
   std::string topic;          // an LCM channel of the run, or one of the image topics
-  std::string schema;         // "afford.scene_t", "foxglove.RawImage", ... ("" for a channel not in the protocol)
+  std::string schema;         // "afford.scene_t", "foxglove.CompressedImage", ... ("" for a channel not in the protocol)
   std::int64_t messages = 0;  // written
   std::int64_t skipped = 0;   // events that do not decode or that the edge refuses, not written
   std::string first_skipped;  // why the first was skipped

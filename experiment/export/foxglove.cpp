@@ -75,26 +75,6 @@ struct ByteView {
   std::size_t size() const { return n; }
 };
 
-Json rawImageSchemaJson() {
-  Json unsigned_int = typed("integer", "");
-  unsigned_int["minimum"] = 0;
-  auto described = [](Json j, const char* description) {
-    j["description"] = description;
-    return j;
-  };
-  Json data = typed("string", "Raw image data");
-  data["contentEncoding"] = "base64";
-  Json schema = object(kRawImage, "A raw image",
-                       Json{{"timestamp", timeSchema("Timestamp of image")},
-                            {"frame_id", typed("string", "Frame of reference for the image")},
-                            {"width", described(unsigned_int, "Image width")},
-                            {"height", described(unsigned_int, "Image height")},
-                            {"encoding", typed("string", "Encoding of the raw image data")},
-                            {"step", described(unsigned_int, "Byte length of a single row")},
-                            {"data", data}});
-  return withDraft(std::move(schema));
-}
-
 Json compressedImageSchemaJson() {
   Json data = typed("string", "Compressed image data");
   data["contentEncoding"] = "base64";
@@ -157,11 +137,6 @@ std::string imageHead(std::uint64_t time_ns, const std::string& frame_id) {
 }
 }  // namespace
 
-const std::string& rawImageSchema() {
-  static const std::string kText = text(rawImageSchemaJson());
-  return kText;
-}
-
 const std::string& compressedImageSchema() {
   static const std::string kText = text(compressedImageSchemaJson());
   return kText;
@@ -170,21 +145,6 @@ const std::string& compressedImageSchema() {
 const std::string& imageAnnotationsSchema() {
   static const std::string kText = text(imageAnnotationsSchemaJson());
   return kText;
-}
-
-std::string rawImage(std::uint64_t time_ns, const std::string& frame_id, int width, int height,
-                     const std::uint8_t* rgb, std::size_t bytes) {
-  std::string o = imageHead(time_ns, frame_id);
-  o += R"(,"width":)";
-  json_messages::integer(o, width);
-  o += R"(,"height":)";
-  json_messages::integer(o, height);
-  o += R"(,"encoding":"rgb8","step":)";
-  json_messages::integer(o, std::int64_t{width} * 3);
-  o += R"(,"data":)";
-  json_messages::base64(o, ByteView{rgb, bytes}, static_cast<std::int64_t>(bytes));
-  o += '}';
-  return o;
 }
 
 std::string compressedImage(std::uint64_t time_ns, const std::string& frame_id, const std::string& format,

@@ -1,9 +1,10 @@
 // Foxglove's own message schemas for images (https://docs.foxglove.dev/docs/visualization/message-schemas),
 // written here as JSON Schemas from their documented definitions, and the
-// messages `afford export` writes with them (export.hpp): a scene as
-// foxglove.CompressedImage (PNG), a focus image as foxglove.RawImage ("rgb8"), the eye's gaze as foxglove.ImageAnnotations
-// (a LINE_LOOP box over the scene image, in its pixels). Foxglove recognises
-// a schema by its name (kRawImage, kCompressedImage, kImageAnnotations) and message encoding "json".
+// messages `afford export` writes with them (export.hpp): an image (a scene, a
+// focus image, predicted images) as foxglove.CompressedImage (PNG), the eye's
+// gaze as foxglove.ImageAnnotations (a LINE_LOOP box over the scene image, in
+// its pixels). Foxglove recognises a schema by its name (kCompressedImage,
+// kImageAnnotations) and message encoding "json".
 #pragma once
 #include <cstddef>
 #include <cstdint>
@@ -12,23 +13,16 @@
 
 namespace afford::foxglove {
 
-inline constexpr const char* kRawImage = "foxglove.RawImage";
 inline constexpr const char* kCompressedImage = "foxglove.CompressedImage";
 inline constexpr const char* kImageAnnotations = "foxglove.ImageAnnotations";
 
 // The JSON Schema texts (draft 2020-12), made once.
-const std::string& rawImageSchema();
 const std::string& compressedImageSchema();
 const std::string& imageAnnotationsSchema();
 
 struct Colour {
   double r = 0, g = 0, b = 0, a = 1;  // each in [0, 1]
 };
-
-// An RGB image of width x height pixels (rows of width * 3 bytes) as foxglove.RawImage
-// JSON, encoding "rgb8", stamped time_ns (nanoseconds).
-std::string rawImage(std::uint64_t time_ns, const std::string& frame_id, int width, int height,
-                     const std::uint8_t* rgb, std::size_t bytes);
 
 // An encoded image (`format`: "png", "jpeg", ...) as foxglove.CompressedImage JSON, stamped time_ns.
 std::string compressedImage(std::uint64_t time_ns, const std::string& frame_id, const std::string& format,

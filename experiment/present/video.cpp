@@ -29,13 +29,11 @@ namespace fs = std::filesystem;
 
 namespace {
 
-// The output's format from its name.
+// The output's format from its name (checked by prepareOutput: .mp4 or .gif, any case).
 std::string formatOf(const fs::path& out) {
   std::string ext = out.extension().string();
   for (char& c : ext) c = static_cast<char>(std::tolower(static_cast<unsigned char>(c)));
-  if (ext == ".mp4") return "mp4";
-  if (ext == ".gif") return "gif";
-  throw std::runtime_error("--out " + out.string() + ": the name must end in .mp4 or .gif");
+  return ext.substr(1);
 }
 
 // ffmpeg reading raw BGR frames on its standard input, writing `file` as `format`.
@@ -117,6 +115,7 @@ struct NoSigpipe {
 VideoResult renderVideo(const VideoOptions& o, spdlog::logger& log) {
   if (o.every < 1) throw std::runtime_error("--every must be at least 1");
   if (o.fps < 1 || o.fps > 240) throw std::runtime_error("--fps must be within 1..240");
+  prepareOutput(o.out, "--out", {".mp4", ".gif"});  // before any work: a name ffmpeg can write, its folder made
   const std::string format = formatOf(o.out);
   if (fs::exists(o.out)) throw std::runtime_error("--out " + o.out.string() + " exists: afford never overwrites a file");
   const fs::path partial = o.out.string() + ".partial";

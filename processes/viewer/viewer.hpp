@@ -1,5 +1,7 @@
 // Viewer core: what a run shows, drawn as one picture. No LCM here: the
 // viewer process (main.cpp) feeds it the messages it hears.
+//   header:     the run (its id and phase), then its step, the last decision
+//               and, in the goals phase, the goal pursued
 //   top row:    the scene with the outer eye's gaze box; the goal image with
 //               the inner eye's focus (extrinsic phase)
 //   bottom row: the focus image and the current sub-goal, enlarged; bars of the
@@ -21,6 +23,17 @@
 
 namespace afford {
 
+// A text of the picture as drawn: what it says, the box it took (its baseline's descent included), the room it
+// was given, its scale, and whether all of it is there (false: its middle left out, for "...").
+struct DrawnText {
+  std::string text;
+  cv::Rect box, room;
+  double scale = 0;
+  bool whole = true;
+};
+
+struct ViewerCanvas;  // (viewer.cpp)
+
 class Viewer : public RunView {
  public:
   explicit Viewer(std::size_t trace_length = 400);
@@ -37,11 +50,16 @@ class Viewer : public RunView {
               double x, double y) override;
   void onGoalResult(std::int64_t step, int id, const std::string& module, bool reached) override;
 
-  // The whole picture, BGR, for cv::imshow or cv::imwrite.
-  cv::Mat render() const;
+  // The whole picture, BGR, for cv::imshow or cv::imwrite; its texts into `drawn`, if given. Every text fits in
+  // its room: drawn smaller if need be, then shortened in its middle.
+  cv::Mat render(std::vector<DrawnText>* drawn = nullptr) const;
   std::int64_t step() const { return step_; }
 
  private:
+  void drawImages(ViewerCanvas& c) const;
+  void drawBars(ViewerCanvas& c, int x) const;
+  void drawTraces(ViewerCanvas& c, int x, int y) const;
+
   std::string run_id_, phase_;
   std::int64_t step_ = -1;
   cv::Mat scene_, goal_;                       // RGB

@@ -2,8 +2,10 @@
 against the run's log read by the Python package (afford.read_log), which decodes each message
 on its own (python/afford/logs.py): the same messages per channel, in order, each at its place
 in the run (docs/watching.md: the time the log gives the run's RUN_CONFIG, a millisecond a step,
-a microsecond a message within its step), with the same field values; the scene and focus
-images byte for byte; a gaze box per FOCUS and EFFECT where the focus window is.
+a microsecond a message within its step), with the same field values, each image field's PNG
+the message's pixels (FORWARD_PREDICTION.what's as round(255 v)); the scene and focus images
+byte for byte, and each FORWARD_PREDICTION's predicted images side by side; a gaze box per FOCUS
+and EFFECT where the focus window is.
 
     compare.py LOG CHECKER_OUTPUT.jsonl AFFORD_BINARY
 """
@@ -62,6 +64,34 @@ def same(want, got, path):
         fail(f"{path}: {want!r} against {got!r}")
 
 
+# The image fields, written as PNG (experiment/export/image_fields.hpp); FORWARD_PREDICTION.what as bytes.
+IMAGE_FIELDS = {"FOCUS": ("image", "diff_image"), "EFFECT": ("image",), "FORWARD_QUERY": ("image",),
+                "GOAL": ("image",), "PROBE": ("images",), "FORWARD_PREDICTION": ("what",)}
+
+
+def as_bytes(values):
+    """Predicted pixels (float32 in [0, 1]) as the export writes them: round(255 v), halves away from zero."""
+    scaled = np.clip(values.astype(np.float32), 0, 1) * np.float32(255)  # (float32 arithmetic, as in C++)
+    return np.floor(scaled.astype(np.float64) + 0.5).astype(np.uint8)
+
+
+def same_images(want, got, path):
+    """An image field (side x side x 3 arrays, one or a list of them) against its PNGs (base64, "" for none)."""
+    if want.dtype != np.uint8:
+        want = as_bytes(want)
+    if want.size == 0:
+        if got not in ("", []):
+            fail(f"{path}: no image, but {got!r:.40}")
+        return
+    if want.ndim == 3:
+        want, got = want[None], [got]
+    if not isinstance(got, list) or len(got) != len(want):
+        fail(f"{path}: {len(want)} images against {got!r:.40}")
+    for k, (w, g) in enumerate(zip(want, got)):
+        if png_pixels(g).shape != w.shape or not (png_pixels(g) == w).all():
+            fail(f"{path}[{k}]: the PNG's pixels are not the message's")
+
+
 def round_half_away(v):
     """afford's roundHalfAway (common/src/image.cpp): C's round of v cleared of noise below 1e-9."""
     def c_round(x):
@@ -104,15 +134,18 @@ def main(log_path, lines_path, afford_bin):
                      f"not its place {times[id(m)]}")
             if e["schema"] != f"afford.{types[channel]}":
                 fail(f"{channel}: schema {e['schema']}")
-            fields = dict(m.fields)
+            fields, got = dict(m.fields), dict(e["message"])
             if channel == "SCENE":
-                del fields["image"]  # the scene decoded: its RawImage, below
-            same(fields, e["message"], f"{channel}[{i}]")
+                del fields["image"]  # the scene decoded: its PNG, below
+            for name in IMAGE_FIELDS.get(channel, ()):
+                same_images(fields.pop(name), got.pop(name, None), f"{channel}[{i}].{name}")
+            same(fields, got, f"{channel}[{i}]")
     check_images(log, topics)
     counts = ", ".join(f"{c} {len(by_channel[c])}" for c in sorted(by_channel))
     print(f"{log_path}: every message of the log is in the MCAP file as the Python package decodes it ({counts}), "
           f"with {len(topics.get('/SCENE/image', []))} scene images, {len(topics.get('/FOCUS/image', []))} focus "
-          f"images and {len(topics.get('/SCENE/gaze', []))} gaze boxes")
+          f"images, {len(topics.get('/FORWARD_PREDICTION/what', []))} images of predictions and "
+          f"{len(topics.get('/SCENE/gaze', []))} gaze boxes, every image field's PNG the message's pixels")
 
 
 def places(log):
@@ -154,13 +187,21 @@ def png_pixels(data):
 
 
 def check_images(log, topics):
-    """Each SCENE's and FOCUS's image byte for byte; a gaze box per FOCUS and EFFECT, in log order."""
-    scenes, focus, gaze = (topics.get(t, []) for t in ("/SCENE/image", "/FOCUS/image", "/SCENE/gaze"))
+    """Each SCENE's and FOCUS's image byte for byte, each FORWARD_PREDICTION's predicted images side by side; a
+    gaze box per FOCUS and EFFECT, in log order."""
+    scenes, focus, gaze, predicted = (topics.get(t, []) for t in ("/SCENE/image", "/FOCUS/image", "/SCENE/gaze",
+                                                                  "/FORWARD_PREDICTION/what"))
     times = places(log)
     size = None
-    n = {"SCENE": 0, "FOCUS": 0, "EFFECT": 0}
+    n = {"SCENE": 0, "FOCUS": 0, "EFFECT": 0, "FORWARD_PREDICTION": 0}
     for m in log:
-        if m.channel not in n or (m.channel != "SCENE" and size is None):
+        if m.channel == "FORWARD_PREDICTION" and m["n_actions"]:
+            image = predicted[n["FORWARD_PREDICTION"]]["message"]
+            if image["format"] != "png" or stamp(image) != times[id(m)] or \
+                    not np.array_equal(png_pixels(image["data"]), np.concatenate(list(as_bytes(m["what"])), axis=1)):
+                fail(f"/FORWARD_PREDICTION/what[{n['FORWARD_PREDICTION']}] is not its message's predictions")
+            n[m.channel] += 1
+        if m.channel not in n or m.channel == "FORWARD_PREDICTION" or (m.channel != "SCENE" and size is None):
             continue  # (a gaze before any scene: none in a run's log)
         if m.channel == "SCENE":
             image = scenes[n["SCENE"]]["message"]
@@ -170,7 +211,8 @@ def check_images(log, topics):
                 fail(f"/SCENE/image[{n['SCENE']}] is not SCENE[{n['SCENE']}]'s image")
         if m.channel == "FOCUS":
             image = focus[n["FOCUS"]]["message"]
-            if base64.b64decode(image["data"]) != m["image"].tobytes() or image["width"] != m["side"]:
+            if image["format"] != "png" or not (png_pixels(image["data"]) == m["image"]).all() \
+                    or stamp(image) != times[id(m)]:
                 fail(f"/FOCUS/image[{n['FOCUS']}] is not FOCUS[{n['FOCUS']}]'s image")
         if m.channel in ("FOCUS", "EFFECT"):
             box = gaze[n["FOCUS"] + n["EFFECT"]]["message"]["points"][0]
@@ -180,8 +222,10 @@ def check_images(log, topics):
                     box["points"][2] != {"x": left + m["side"], "y": top + m["side"]} or stamp(box) != times[id(m)]:
                 fail(f"the gaze box of {m.channel} of step {m['step']}: {box['points']}, not at ({left}, {top})")
         n[m.channel] += 1
-    if (len(scenes), len(focus), len(gaze)) != (n["SCENE"], n["FOCUS"], n["FOCUS"] + n["EFFECT"]):
-        fail(f"{len(scenes)} scene images, {len(focus)} focus images, {len(gaze)} gaze boxes for {n}")
+    if (len(scenes), len(focus), len(gaze), len(predicted)) != \
+            (n["SCENE"], n["FOCUS"], n["FOCUS"] + n["EFFECT"], n["FORWARD_PREDICTION"]):
+        fail(f"{len(scenes)} scene images, {len(focus)} focus images, {len(gaze)} gaze boxes, {len(predicted)} "
+             f"predictions for {n}")
 
 
 if __name__ == "__main__":

@@ -1,10 +1,10 @@
 #!/usr/bin/env bash
-# afford export, read by others: two stored extrinsic tests (tests/data/explain) and a short
-# intrinsic run of IMP (memq, recorded here) exported as MCAP files, each read with Foxglove's
-# own reader by tools/mcapcheck/check.mjs (every record, the index, the summary, the CRCs, each
-# message against its JSON Schema), then every message compared with the run's log as the Python
-# package decodes it (tests/mcap/compare.py): the same messages per channel at the same times with
-# the same values, the images byte for byte. The same logs with their channels interleaved anew
+# afford export, read by others: two stored extrinsic tests (tests/data/explain) and short runs
+# of IMP and GOALS (memq, recorded here) exported as MCAP files, each read with Foxglove's own
+# reader by tools/mcapcheck/check.mjs (every record, the index, the summary, the CRCs, each message
+# against its JSON Schema, each PNG by its signature), then every message compared with the run's
+# log as the Python package decodes it (tests/mcap/compare.py): the same messages per channel at
+# the same times with the same values, the images' pixels byte for byte. The same logs with their channels interleaved anew
 # (shuffle-log: each channel in its own order, up to 1,000 steps apart, in two segments) give the same
 # file, byte for byte. And an existing file is refused, untouched.
 #   tests/mcap/test_mcap.sh BUILD_DIR WORK_DIR PYTHON_DIR
@@ -24,10 +24,10 @@ for name in base-scenario3 multi-step-top-down-budget; do
   gzip -dc "$root/tests/data/explain/$name.lcm.gz" >"$out/$name.lcm"
   logs+=("$out/$name.lcm")
 done
-"$build/bin/afford" experiment base --system IMP --reps 1 --steps 150 --transport memq --quiet --keep-logs all \
+"$build/bin/afford" experiment base --system IMP,GOALS --reps 1 --steps 150 --transport memq --quiet --keep-logs all \
   --run-prefix mcap --out "$out/intrinsic" --log-root "$out/logs" >"$out/intrinsic.txt" 2>&1 ||
-  { cat "$out/intrinsic.txt"; echo "the intrinsic run failed"; exit 1; }
-logs+=("$out/logs/mcap-base-IMP-s1")
+  { cat "$out/intrinsic.txt"; echo "the intrinsic and goals runs failed"; exit 1; }
+logs+=("$out/logs/mcap-base-IMP-s1" "$out/logs/mcap-base-GOALS-s1")
 
 for log in "${logs[@]}"; do
   name=$(basename "$log" .lcm)

@@ -10,10 +10,12 @@
 // check with Foxglove's reader is tests/mcap/test_mcap.sh).
 #include <gtest/gtest.h>
 #include <opencv2/imgcodecs.hpp>
+#include <opencv2/imgproc.hpp>
 #include <sodium.h>
 #include <spdlog/sinks/null_sink.h>
 #include <zlib.h>
 
+#include <cmath>
 #include <cstdint>
 #include <filesystem>
 #include <fstream>
@@ -151,6 +153,66 @@ ReadMcap readMcap(const fs::path& f) {
   return out;
 }
 
+// ---- the image fields ----------------------------------------------------------------------
+// Written as PNG (base64): these fields of these channels; FORWARD_PREDICTION.what (floats) as round(255 v).
+const std::map<std::string, std::vector<std::string>> kImageFields = {
+    {"FOCUS", {"image", "diff_image"}}, {"EFFECT", {"image"}}, {"FORWARD_QUERY", {"image"}},
+    {"GOAL", {"image"}}, {"PROBE", {"images"}}, {"FORWARD_PREDICTION", {"what"}}};
+
+std::string base64Of(const std::vector<std::uint8_t>& bytes) {
+  std::string out(sodium_base64_encoded_len(bytes.size(), sodium_base64_VARIANT_ORIGINAL), '\0');
+  sodium_bin2base64(out.data(), out.size(), bytes.data(), bytes.size(), sodium_base64_VARIANT_ORIGINAL);
+  out.resize(out.size() - 1);  // (its terminating zero)
+  return out;
+}
+
+// A base64 PNG's pixels, RGB (empty for "").
+cv::Mat pngPixels(const std::string& b64) {
+  if (b64.empty()) return {};
+  std::vector<std::uint8_t> png(b64.size());
+  std::size_t n = 0;
+  EXPECT_EQ(sodium_base642bin(png.data(), png.size(), b64.data(), b64.size(), nullptr, &n, nullptr,
+                              sodium_base64_VARIANT_ORIGINAL), 0);
+  png.resize(n);
+  EXPECT_TRUE(n > 8 && png[1] == 'P' && png[2] == 'N' && png[3] == 'G') << "not a PNG";
+  cv::Mat bgr = cv::imdecode(png, cv::IMREAD_UNCHANGED), rgb;
+  if (bgr.empty()) return bgr;
+  cv::cvtColor(bgr, rgb, cv::COLOR_BGR2RGB);
+  return rgb;
+}
+
+std::vector<std::uint8_t> bytesOf(const cv::Mat& rgb) {
+  return rgb.empty() ? std::vector<std::uint8_t>{} : std::vector<std::uint8_t>(rgb.data, rgb.data + rgb.total() * 3);
+}
+
+// A predicted pixel as the export writes it.
+std::uint8_t predictedByte(double v) { return static_cast<std::uint8_t>(std::lround(static_cast<float>(v) * 255.0f)); }
+
+// A message of the file with its PNGs as base64 bytes, and a message as the generated JSON has it, with its
+// predictions (floats) as bytes in base64: the same JSON when the file holds the message's fields and pixels.
+nlohmann::json pixelsAsBase64(const std::string& channel, const std::string& text, bool from_file) {
+  nlohmann::json j = nlohmann::json::parse(text);
+  const auto fields = kImageFields.find(channel);
+  if (fields == kImageFields.end()) return j;
+  for (const std::string& name : fields->second) {
+    nlohmann::json& f = j.at(name);
+    auto one = [&](nlohmann::json& v) {
+      if (from_file) {
+        v = base64Of(bytesOf(pngPixels(v.get<std::string>())));
+      } else if (v.is_array()) {  // a row of predicted pixels
+        std::vector<std::uint8_t> bytes;
+        for (const auto& x : v) bytes.push_back(predictedByte(x.get<double>()));
+        v = base64Of(bytes);
+      }
+    };
+    if (f.is_array())
+      for (auto& v : f) one(v);
+    else
+      one(f);
+  }
+  return j;
+}
+
 // ---- the stored logs -------------------------------------------------------------------------
 
 class Export : public ::testing::Test {
@@ -208,14 +270,16 @@ TEST_F(Export, AStoredLogHasOneMessagePerLogMessageTheEdgeTakesWithItsImagesAndG
   EXPECT_EQ(m.library.rfind("afford ", 0), 0u) << m.library;
   EXPECT_NE(m.metadata_yaml.find("planner:"), std::string::npos);
 
-  // Each channel's messages, in order, as the edge decodes them; their times the log's.
+  // Each channel's messages, in order, as the edge decodes them (their images' pixels); their times the log's.
   const auto taken = takenMessages(log);
-  std::map<std::string, std::vector<std::string>> got;
+  std::map<std::string, std::vector<nlohmann::json>> got, want;
   for (const ReadMessage& msg : m.messages) {
     EXPECT_EQ(msg.log_time, msg.publish_time);
-    if (msg.topic[0] != '/') got[msg.topic].push_back(msg.data);
+    if (msg.topic[0] != '/') got[msg.topic].push_back(pixelsAsBase64(msg.topic, msg.data, true));
   }
-  EXPECT_EQ(got, taken);
+  for (const auto& [channel, messages] : taken)
+    for (const std::string& text : messages) want[channel].push_back(pixelsAsBase64(channel, text, false));
+  EXPECT_EQ(got, want);
   for (const auto& [channel, messages] : taken) {
     SCOPED_TRACE(channel);
     const auto* info = channelNamed(channel);
@@ -257,6 +321,53 @@ TEST_F(Export, AStoredLogHasOneMessagePerLogMessageTheEdgeTakesWithItsImagesAndG
                 msg.log_time);
       break;
     }
+}
+
+// The images of a test that imagines several steps ahead: every image field a PNG in its schema and in each
+// message, a FORWARD_PREDICTION smaller than its predictions' floats, and its predicted images side by side on
+// their own topic. (They were JSON numbers: a FORWARD_PREDICTION of three actions took about 60 KB.)
+TEST_F(Export, ImageFieldsAreWrittenAsPngsAndThePredictionsAsAnImage) {
+  const fs::path log = storedLog("multi-step-top-down-budget");
+  exportLog(log, "images.mcap");
+  const ReadMcap m = readMcap(dir_ / "images.mcap");
+  for (const auto& [channel, names] : kImageFields) {
+    if (!m.schema_of.count(channel)) continue;
+    SCOPED_TRACE(channel);
+    for (const ReadMessage& msg : m.messages)
+      if (msg.topic == channel) {
+        const auto j = nlohmann::json::parse(msg.data);
+        for (const std::string& name : names)
+          for (const auto& v : j.at(name).is_array() ? j.at(name) : nlohmann::json::array({j.at(name)}))
+            EXPECT_TRUE(v.is_string() && (v == "" || pngPixels(v.get<std::string>()).cols == 21)) << name;
+      }
+  }
+  const auto taken = takenMessages(log);
+  const auto& predictions = taken.at("FORWARD_PREDICTION");
+  ASSERT_EQ(m.per_topic.at(kPredictionImageTopic), static_cast<std::int64_t>(predictions.size()));
+  EXPECT_EQ(m.schema_of.at(kPredictionImageTopic), "foxglove.CompressedImage");
+  EXPECT_EQ(m.schema_of.at(kFocusImageTopic), "foxglove.CompressedImage");
+  std::size_t k = 0, diffs = 0;
+  for (const ReadMessage& msg : m.messages) {
+    if (msg.topic == "FOCUS") diffs += nlohmann::json::parse(msg.data)["diff_image"].size();
+    if (msg.topic == "FORWARD_PREDICTION") {
+      const auto what = nlohmann::json::parse(predictions.at(k))["what"];
+      EXPECT_LT(msg.data.size(), what.size() * what[0].size() * sizeof(float)) << "FORWARD_PREDICTION " << k;
+    }
+    if (msg.topic != kPredictionImageTopic) continue;
+    const auto image = nlohmann::json::parse(msg.data);
+    EXPECT_EQ(image["format"], "png");
+    const cv::Mat strip = pngPixels(image["data"].get<std::string>());
+    const auto what = nlohmann::json::parse(predictions.at(k++))["what"];
+    ASSERT_EQ(strip.cols, 21 * static_cast<int>(what.size()));
+    ASSERT_EQ(strip.rows, 21);
+    std::size_t differ = 0;
+    for (std::size_t a = 0; a < what.size(); ++a)  // action a's image in columns 21a to 21a + 20
+      for (int i = 0; i < 21 * 21 * 3; ++i)
+        differ += strip.at<cv::Vec3b>(i / 63, static_cast<int>(a) * 21 + i % 63 / 3)[i % 3] !=
+                  predictedByte(what[a][static_cast<std::size_t>(i)].get<double>());
+    EXPECT_EQ(differ, 0u) << "prediction image " << k;
+  }
+  EXPECT_GT(diffs, 0u);  // (the test's GOAL_DIFF looks: their images too)
 }
 
 // The log's channels interleaved anew, as the protocol allows a logger to record them, in two segments: the

@@ -1,6 +1,12 @@
 #include <gtest/gtest.h>
 
 #include <opencv2/core.hpp>
+#include <opencv2/imgproc.hpp>
+
+#include <filesystem>
+#include <string>
+#include <utility>
+#include <vector>
 
 #include "afford/image.hpp"
 #include "tests/support.hpp"
@@ -60,6 +66,103 @@ TEST(Viewer, ShowsTheAgentsOwnGoalAndTheGoalsReached) {
   cv::absdiff(a, b, diff);
   EXPECT_GT(cv::countNonZero(diff.reshape(1)), 1500);  // the box, the sub-goal panel, the header and the counts
   EXPECT_EQ(goals.step(), 6);
+}
+
+// The longest words each kind of run puts in the picture: its run id (the plan's: date-time prefix, experiment,
+// table, system, seed, scenario and test; 80 characters here), its phase with the longest experiment name of
+// config/experiments, the largest numbers, the longest action and goal module; the goals phase's counts per
+// module (100,000 goals, as many as a 100,000-step run can end).
+struct Longest {
+  std::string run_id = "20261206-191500-" + std::string(48, 'x') + "-GOALS-s1000000-e99";
+  std::string experiment;
+  Longest() {
+    for (const auto& f : std::filesystem::directory_iterator(std::string(AFFORD_SOURCE_DIR) + "/config/experiments"))
+      if (f.path().stem().string().size() > experiment.size()) experiment = f.path().stem().string();
+  }
+};
+
+// A viewer fed a run of `phase` ("intrinsic", "extrinsic" or "goals") and `system` with the longest of it.
+Viewer fedTheLongest(const std::string& phase, const std::string& system) {
+  const Longest longest;
+  const RunConfig c = test::shippedConfig();
+  cv::Mat scene = blankScene(150);
+  paintObject(scene, Shape::Square, Colour::Red, 0.2, 0.2, c.world);
+  Viewer v(400);
+  v.onRun(longest.run_id, phase + " " + longest.experiment + " " + system);
+  v.onScene(999999998, scene, false);
+  if (phase == "extrinsic") v.onScene(999999998, scene, true);
+  v.onFocus(999999998, cropFocus(scene, {30, 30}, 21), 21, 0.2, 0.2, phase == "extrinsic");
+  v.onPrediction(999999998, {0.9, 0.1, 0.5, 0.7});
+  for (int t = 0; t < 400; ++t) v.onDecision(999999999, true, 1, 1e-9 * t, 1e-9);  // "act: turn green"
+  if (phase == "goals") {
+    const char* modules[] = {"explore", "colour", "move", "colour and place"};
+    for (int id = 0; id < 100000; ++id) v.onGoalResult(999999999, id, modules[id % 4], false);
+    for (const char* module : modules) v.onGoalResult(999999999, 999999999, module, false);
+    v.onGoal(999999999, 999999999, "colour and place", cropFocus(scene, {30, 30}, 21), 21, 0.2, 0.2);
+    v.onGoalResult(999999999, 999999999, "colour and place", false);  // "... not reached"
+  }
+  return v;
+}
+
+// Nothing is cut at the picture's edges: the margin of 6 pixels around it is the background's, for the longest
+// words of every system (the goals phase's counts ran over the right edge).
+TEST(Viewer, NothingIsCutAtThePicturesEdgesForAnySystem) {
+  for (const auto& [phase, system] : std::vector<std::pair<std::string, std::string>>{
+           {"intrinsic", "FIX"}, {"intrinsic", "IGN"}, {"intrinsic", "IMP"}, {"extrinsic", "IMP"},
+           {"goals", "GOALS"}}) {
+    SCOPED_TRACE(phase + " " + system);
+    const cv::Mat frame = fedTheLongest(phase, system).render();
+    const int m = 6;
+    cv::Mat inside = cv::Mat::zeros(frame.size(), CV_8U);
+    inside(cv::Rect(m, m, frame.cols - 2 * m, frame.rows - 2 * m)).setTo(255);
+    cv::Mat background;
+    cv::inRange(frame, cv::Scalar(40, 40, 40), cv::Scalar(40, 40, 40), background);
+    cv::Mat drawn_in_margin = ~background & ~inside;
+    EXPECT_EQ(cv::countNonZero(drawn_in_margin), 0);
+  }
+}
+
+// Every text of the picture whole, at a legible scale, within its room and the picture, measured with OpenCV's
+// getTextSize at the scale it was drawn, for the longest words of every system.
+TEST(Viewer, EveryTextFitsItsRoomForTheLongestWordsOfEverySystem) {
+  for (const auto& [phase, system] : std::vector<std::pair<std::string, std::string>>{
+           {"intrinsic", "FIX"}, {"intrinsic", "IGN"}, {"intrinsic", "IMP"}, {"extrinsic", "IMP"},
+           {"goals", "GOALS"}}) {
+    SCOPED_TRACE(phase + " " + system);
+    std::vector<DrawnText> drawn;
+    const cv::Mat frame = fedTheLongest(phase, system).render(&drawn);
+    const cv::Rect picture(0, 0, frame.cols, frame.rows);
+    ASSERT_GE(drawn.size(), 12u);
+    bool counts = false;
+    for (const DrawnText& t : drawn) {
+      SCOPED_TRACE(t.text);
+      int baseline = 0;
+      const cv::Size size = cv::getTextSize(t.text, cv::FONT_HERSHEY_SIMPLEX, t.scale, 1, &baseline);
+      EXPECT_TRUE(t.whole);
+      EXPECT_LE(size.width, t.room.width);  // all of it, at its scale
+      EXPECT_EQ(t.box.width, size.width);
+      EXPECT_GE(t.scale, 0.35);
+      EXPECT_EQ(t.room & picture, t.room);
+      EXPECT_EQ(t.box & t.room, t.box);
+      counts = counts || t.text.rfind("colour and place: 0 of 250", 0) == 0;  // (25,002 goals ended)
+    }
+    EXPECT_EQ(counts, phase == "goals");
+  }
+}
+
+// A run id of the protocol's longest (200 bytes) is shortened in its middle, and stays in the picture.
+TEST(Viewer, ARunIdTooLongForThePictureIsShortenedInItsMiddle) {
+  Viewer v;
+  const std::string id = "head-" + std::string(190, 'x') + "-tail";
+  v.onRun(id, "goals goals GOALS");
+  std::vector<DrawnText> drawn;
+  const cv::Mat frame = v.render(&drawn);
+  ASSERT_FALSE(drawn.empty());
+  const DrawnText& header = drawn.front();
+  EXPECT_EQ(header.text.rfind(id, 0), 0u);
+  EXPECT_FALSE(header.whole);
+  EXPECT_EQ(header.box & cv::Rect(0, 0, frame.cols, frame.rows), header.box);
+  EXPECT_LE(header.box.width, header.room.width);
 }
 
 TEST(Viewer, IgnoresAFocusOfTheWrongSize) {

@@ -13,7 +13,8 @@
 //    stream held, every ChunkIndex and SummaryOffset must point at its records, the metadata
 //    must hold the run's configuration, and readMessages over everything must give the
 //    stream's messages, each once.
-// 3. Every message is UTF-8 JSON that its channel's JSON Schema ("jsonschema") accepts.
+// 3. Every message is UTF-8 JSON that its channel's JSON Schema ("jsonschema") accepts (a string
+//    of contentMediaType image/png: base64 of a PNG, by its signature, or "").
 //
 // Prints one JSON line per message, in file order: topic, schema, channel_id, sequence,
 // log_time, publish_time (integers, exact) and the message as it is in the file (its JSON,
@@ -242,7 +243,8 @@ async function checkIndexed(s) {
 // ---- 3. each message against its JSON Schema (the keywords the export's schemas use) -------------
 const BASE64 = /^(?:[A-Za-z0-9+/]{4})*(?:[A-Za-z0-9+/]{2}==|[A-Za-z0-9+/]{3}=)?$/;
 const KNOWN = new Set(["$schema", "title", "description", "type", "properties", "required", "additionalProperties",
-  "items", "minItems", "maxItems", "minimum", "maximum", "contentEncoding"]);
+  "items", "minItems", "maxItems", "minimum", "maximum", "contentEncoding", "contentMediaType"]);
+const PNG_SIGNATURE = Buffer.from([0x89, 0x50, 0x4e, 0x47, 0x0d, 0x0a, 0x1a, 0x0a]);
 function validate(schema, v, path) {
   for (const k of Object.keys(schema)) check(KNOWN.has(k), `${path}: schema keyword ${k} this checker does not know`);
   const types = { object: () => v !== null && typeof v === "object" && !Array.isArray(v), array: () => Array.isArray(v),
@@ -252,6 +254,11 @@ function validate(schema, v, path) {
   if (schema.minimum !== undefined) check(v >= schema.minimum, `${path}: below ${schema.minimum}`);
   if (schema.maximum !== undefined) check(v <= schema.maximum, `${path}: above ${schema.maximum}`);
   if (schema.contentEncoding === "base64") check(BASE64.test(v), `${path}: not base64`);
+  if (schema.contentMediaType !== undefined) {  // an image: none ("") or a PNG
+    check(schema.contentMediaType === "image/png" && schema.contentEncoding === "base64",
+      `${path}: contentMediaType ${schema.contentMediaType} this checker does not know`);
+    check(v === "" || Buffer.from(v, "base64").subarray(0, 8).equals(PNG_SIGNATURE), `${path}: not a PNG`);
+  }
   if (schema.type === "array") {
     if (schema.minItems !== undefined) check(v.length >= schema.minItems, `${path}: fewer than ${schema.minItems}`);
     if (schema.maxItems !== undefined) check(v.length <= schema.maxItems, `${path}: more than ${schema.maxItems}`);

@@ -3,6 +3,7 @@
 #include <memory>
 
 #include "afford/auth.hpp"
+#include "afford/file_lock.hpp"
 #include "apps/afford/commands.hpp"
 
 namespace afford {
@@ -13,6 +14,7 @@ Command busKeyCommand(CLI::App& app, const FrontDoor&) {
                                             "existing file is never overwritten)");
   cmd->add_option("file", *file, "the key file to create")->required();
   return {cmd, [file] {
+            prepareOutput(*file, "afford bus-key FILE");
             BusKey::writeNew(*file);
             std::printf("%s: a new bus key; give it to every process of the group (--bus-key %s, or "
                         "AFFORD_BUS_KEY=%s)\n",

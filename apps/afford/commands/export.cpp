@@ -22,7 +22,7 @@ void printExport(const ExportResult& r) {
               static_cast<long long>(r.messages), r.topics.size(), static_cast<unsigned long long>(r.chunks),
               static_cast<unsigned long long>(r.bytes));
   for (const ExportedTopic& t : r.topics) {
-    std::printf("  %-20s %-26s %8lld", t.topic.c_str(), t.schema.empty() ? "-" : t.schema.c_str(),
+    std::printf("  %-24s %-26s %8lld", t.topic.c_str(), t.schema.empty() ? "-" : t.schema.c_str(),
                 static_cast<long long>(t.messages));
     if (t.skipped)
       std::printf("   skipped %lld (the first: %s)", static_cast<long long>(t.skipped), t.first_skipped.c_str());

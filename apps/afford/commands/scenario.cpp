@@ -6,6 +6,7 @@
 
 #include "apps/afford/commands.hpp"
 #include "afford/config.hpp"
+#include "afford/file_lock.hpp"
 #include "experiment/design/generate.hpp"
 #include "afford/image.hpp"
 #include "experiment/design/experiment_file.hpp"
@@ -29,6 +30,7 @@ Command scenarioCommand(CLI::App& app, const FrontDoor& door) {
   scen->add_option("--index", a->index, "with --generate: which scenario of the seed");
   scen->add_option("--experiment", a->experiment, "the experiment whose world the scenario is for (default: base)");
   return {scen, [a, &door] {
+            if (!a->png.empty()) prepareOutput(a->png, "--png", {".png"});
             const RunConfig run =
                 parseRunConfig(effectiveConfig(door.config_dir, {a->experiment, System::IMP, 1, std::nullopt, {}}));
             const WorldConfig& world = run.world;

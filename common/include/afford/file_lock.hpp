@@ -1,9 +1,12 @@
 // A file held with a kernel lock (flock) while this object lives: what is in
 // use says so, and the lock goes with its holder however the holder ends
 // (SIGKILL included), so no later taker waits on, or is refused by, a dead
-// one (docs/operating.md, "Locks").
+// one (docs/operating.md, "Locks"). And the check every output file of a
+// command has before any work: its name, and its folder.
 #pragma once
+#include <filesystem>
 #include <string>
+#include <vector>
 
 namespace afford {
 
@@ -29,5 +32,12 @@ class HeldFile {
 // finished (its lock is gone with it), emptied, and held until released. Throws std::runtime_error naming it
 // if another writer holds it (`who`: what writes it, for the message).
 void holdPartial(HeldFile& held, const std::string& partial, const std::string& who);
+
+// A file a command is to write, before any work (`option`: how the command line names it, for the messages):
+// its name must end in one of `extensions` (any case; none given: any name), and its folder is made if it is
+// missing, as every output folder of afford is. Throws std::runtime_error naming the option and the file, and
+// the folder when it cannot be made.
+void prepareOutput(const std::filesystem::path& file, const std::string& option,
+                   const std::vector<std::string>& extensions = {});
 
 }  // namespace afford
