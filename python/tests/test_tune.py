@@ -2,6 +2,7 @@
 import contextlib
 import json
 import os
+import re
 import signal
 import subprocess
 import sys
@@ -206,9 +207,13 @@ def test_on_curve_sees_each_point_and_can_stop_the_experiment(tmp_path):
     assert points[0].mae == pytest.approx(0.5) and points[-1].mae < points[0].mae
     state = json.loads((tmp_path / "e" / "experiment.json").read_text())
     assert state["state"] == "interrupted" and state["interruptions"][0]["signal"] == "enough"
-    # the folder resumes as an interrupted experiment's does
-    r = subprocess.run([str(BIN / "afford"), "experiment", "--resume",
-                        "--out", str(tmp_path / "e"), "--transport", "memq", "--quiet", "--progress", "none"],
+    # the run is said cut where it was (at least the curve point that stopped it), not where a heartbeat last was
+    where = state["interruptions"][0]["cut"][0]["where"]
+    assert re.fullmatch(r"interrupted at step (\d+)", where) and int(where.split()[-1]) >= 300, where
+    # the folder resumes as an interrupted experiment's does, by the command its summary says (and the exception)
+    said = json.loads((tmp_path / "e" / "summary.json").read_text())["interrupted"]
+    assert f"to resume it (in {said['resume_in']}): {said['resume']}" in str(stopped.value)
+    r = subprocess.run(["/bin/sh", "-c", said["resume"] + " --quiet --progress none"], cwd=said["resume_in"],
                        capture_output=True, text=True)
     assert r.returncode == 0, r.stdout + r.stderr
     assert len(afford.load(tmp_path / "e").runs) == 2
