@@ -263,4 +263,7 @@ PYBIND11_MODULE(_afford, m) {
   afford::defineComponents(m);
   afford::defineWorlds(m);
   m.attr("version") = afford::affordVersion();
+  py::list systems;  // every system an experiment runs (afford.run's `system`)
+  for (const auto& s : afford::kSystemNames) systems.append(s.name);
+  m.attr("systems") = py::tuple(systems);
 }
