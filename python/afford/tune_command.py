@@ -2,7 +2,8 @@
 
 SIGINT and SIGTERM: `afford tune` holds them back from its start until the study's handler is in place (the
 first thing here), so that none is lost and none interrupts an import; the first stops the study where nothing
-is lost, and one line says so with the command that continues it; a second quits at once.
+is lost, and one line says so with the command that continues it; a second quits at once. Once the command has
+said how it ended, they are held back again until the process is gone.
 """
 from __future__ import annotations
 
@@ -15,7 +16,7 @@ from pathlib import Path
 
 from . import _afford, locks
 from .search import _scalar
-from .study import PRUNERS, _read_definition, load_study, stop_on_signals, tune, write_report
+from .study import PRUNERS, STOP_SIGNALS, _read_definition, load_study, stop_on_signals, tune, write_report
 
 PROGRAM = "AFFORD_TUNE_PROGRAM"  # the front door's name as it was run (apps/afford/commands/tune.cpp)
 
@@ -66,21 +67,18 @@ def command(argv: list[str]) -> str:
     return shlex.join(([program] if program else [sys.executable, "-m", "afford"]) + ["tune", *argv])
 
 
-def _quit_at_once(sig, frame) -> None:
-    os.write(2, f"\nafford tune: a second signal ({signal.Signals(sig).name}): quitting at once\n".encode())
-    os._exit(128 + sig)
-
-
 def main(argv: list[str] | None = None) -> int:
+    """The command, in a process that ends with it: SIGINT and SIGTERM are held back once it has said how it
+    ended (one that comes then finds nothing left to stop, and the exit status says what was done)."""
     argv = sys.argv[1:] if argv is None else list(argv)
     stop = stop_on_signals()
     try:
         code = _main(_parser().parse_args(argv))
         stop.check("as the study ended (its trials had run; the report is written)")
+        signal.pthread_sigmask(signal.SIG_BLOCK, STOP_SIGNALS)
         return code
     except KeyboardInterrupt as e:
-        for s in (signal.SIGINT, signal.SIGTERM):  # (the line below is said whole, or the process quits at once)
-            signal.signal(s, _quit_at_once)
+        signal.pthread_sigmask(signal.SIG_BLOCK, STOP_SIGNALS)  # (the line below is said whole)
         print(f"afford tune: interrupted by {stop.name or 'SIGINT'} {e or 'as it began'}; the same command continues "
               f"the study (in {os.getcwd()}): {command(argv)}", file=sys.stderr, flush=True)
         return 130
