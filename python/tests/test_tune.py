@@ -285,6 +285,20 @@ def test_a_signal_as_a_trials_experiment_ends_stops_the_study_after_it_with_the_
     assert afford.load_study(tmp_path / "study").trials["state"].tolist() == ["COMPLETE"]
 
 
+def test_a_signal_as_a_trial_begins_stops_it_at_its_first_curve_point(tmp_path, monkeypatch):
+    real = afford.study.run
+
+    def late(*args, **kwargs):  # as if SIGINT came as the trial began, before its experiment's handlers took over
+        os.kill(os.getpid(), signal.SIGINT)
+        return real(*args, **kwargs)
+    monkeypatch.setattr(afford.study, "run", late)
+    with pytest.raises(KeyboardInterrupt, match="during trial 0"):
+        tune_here(tmp_path / "study", 1)
+    df = afford.load_study(tmp_path / "study").trials
+    assert df["state"].tolist() == ["FAIL"] and df["stopped"].iloc[0] == "interrupted"
+    assert df["intrinsic_steps"].iloc[0] < df["planned_steps"].iloc[0]  # (stopped near its start, not at its end)
+
+
 def test_the_help_names_every_system_and_the_default_pruner():
     from afford.tune_command import _parser
     said = {a.dest: " ".join(a.help.split()) for a in _parser()._actions if a.help}
