@@ -2,9 +2,8 @@
 
 Two studies of the same definition, each by W workers (processes running the same `afford tune` command) sharing
 one journal file: one with pruning, one without. For each: trials finished (the floor: all of them), none run
-twice (each trial number's folder holds one experiment, no trial numbers beyond those asked and retried), the
-intrinsic steps run in all; then the saving pruning brings (floor: 30% fewer steps), and the best trial's log
-replayed to its checksum. Exit 1 below a floor.
+twice (`ran_twice`: what the trial folders hold), the intrinsic steps run in all; then the saving pruning brings
+(floor: 30% fewer steps), and the best trial's log replayed to its checksum. Exit 1 below a floor.
 
     bench/run.sh tune [--trials 24] [--workers 2] [--steps 6000] [--experiment base] [--system IMP]
                       [--param KEY=SPEC ...] [--seed 1] [--out DIR]
@@ -18,10 +17,41 @@ import sys
 import time
 from pathlib import Path
 
+import pandas as pd
+
 import afford
 
 AFFORD = Path(__file__).resolve().parents[1] / "build" / "bin" / "afford"
 PARAMS = ["motivation.leak=log:0.01:0.9", "predictors.affordance.learning_rate=log:0.01:1"]
+
+
+def ran_twice(folder: Path, trials) -> list[str]:
+    """The work of a trial done twice, said one line each, from what the study's trial folders hold: each an
+    experiment folder whose experiment.json plans its runs (run ids trialNNNN-...), runs/RUN.json for each run
+    that finished and logs/RUN/run.json naming the folder that claimed the run. Twice: a folder two trials name; a
+    trial's folder holding an experiment planned with another trial's run ids, a finished run it did not plan, or
+    a run folder another experiment claimed; a retry (retry_of) of a trial whose folder holds its experiment
+    finished (its values ran to the end twice). `trials`: afford.load_study(folder).trials."""
+    said = [f"{f}: the folder of {n} trials" for f, n in trials["folder"].value_counts().items() if n > 1]
+    finished = set()
+    for number, f in zip(trials["number"], trials["folder"]):
+        where, own = folder / f, f"trial{number:04d}-"
+        if not (where / "experiment.json").is_file():
+            continue  # (a trial asked for and not begun)
+        state = json.loads((where / "experiment.json").read_text())
+        planned = {r["run_id"] for r in state["runs"]}
+        said += [f"trial {number}: {f} plans run {r}, not its own" for r in sorted(planned) if not r.startswith(own)]
+        said += [f"trial {number}: {f} holds the finished run {p.stem}, which it did not plan"
+                 for p in sorted((where / "runs").glob("*.json")) if p.stem not in planned]
+        for claim in sorted((where / "logs").glob("*/run.json")):
+            if Path(json.loads(claim.read_text())["out_dir"]).resolve() != where.resolve():
+                said.append(f"trial {number}: {claim.parent} was claimed by another experiment")
+        if state["state"] == "finished":
+            finished.add(number)
+    for number, of in zip(trials["number"], trials["retry_of"]):
+        if pd.notna(of) and int(of) in finished:
+            said.append(f"trial {number} ran the values of trial {int(of)} again, which had run to its end")
+    return said
 
 
 def study(folder: Path, a, prune: bool) -> dict:
@@ -42,11 +72,7 @@ def study(folder: Path, a, prune: bool) -> dict:
     # Finished: done, pruned, or failed saying why (a diverged predictor); not running, not stopped short.
     finished = df[df["state"].isin(["COMPLETE", "PRUNED"]) | ((df["state"] == "FAIL") & df["error"].notna())]
     by_worker = df["worker"].value_counts().to_dict()
-    # Run twice: a trial number with two experiments in its folder, or a folder some other trial also names.
-    twice = int(df["folder"].duplicated().sum())
-    for f in df["folder"]:
-        runs = list((folder / f / "runs").glob("*.json")) if (folder / f / "runs").is_dir() else []
-        twice += len(runs) > (a.reps if hasattr(a, "reps") else 1)
+    twice = ran_twice(folder, df)
     best = s.best
     replayed = {}
     if best is not None:
@@ -56,7 +82,7 @@ def study(folder: Path, a, prune: bool) -> dict:
         replayed["recorded"] = e.runs["weights_checksum"].iloc[0]
     return {"prune": prune, "wall_seconds": round(wall, 1), "trials": len(df), "finished": len(finished),
             "pruned": int((df["state"] == "PRUNED").sum()), "failed": int((df["state"] == "FAIL").sum()),
-            "run_twice": twice, "by_worker": by_worker,
+            "run_twice": len(twice), "run_twice_said": twice, "by_worker": by_worker,
             "intrinsic_steps": int(df["intrinsic_steps"].fillna(0).sum()),
             "best": None if best is None else {"trial": int(best["number"]), "value": float(best["value"]),
                                                "params": {k[len("param "):]: best[k] for k in df.columns

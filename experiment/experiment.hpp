@@ -45,24 +45,27 @@ int runExperiment(const ExperimentRequest& request, spdlog::logger& log);
 // resumes the queue, said on SIGINT or SIGTERM. Returns the highest exit code.
 int runQueue(const std::vector<ExperimentRequest>& requests, const std::string& resume, spdlog::logger& log);
 
-// For a host that goes on after an experiment (the Python package): the
-// SIGINT and SIGTERM handlers in place at its construction are put back at its
-// destruction, and the signal runExperiment received is forgotten, so that the
-// next experiment starts afresh.
 // Stops the experiment under way in this process as a SIGINT does (the runs
 // under way are cut, what finished is written, the folder resumes), asked by
 // the program: `why` (e.g. "pruned") stands for the signal's name in its
 // summary and state. Callable from any thread, before or during the run.
 void stopExperiment(const std::string& why);
 
+// For a host that goes on after an experiment (the Python package): from its
+// construction a SIGINT or SIGTERM stops the experiment about to run; the
+// handlers in place before are put back by restore() (else at its
+// destruction), and the signal runExperiment received is forgotten at its
+// destruction, so that the next experiment starts afresh.
 class InterruptScope {
  public:
   InterruptScope();
   ~InterruptScope();
   InterruptScope(const InterruptScope&) = delete;
   InterruptScope& operator=(const InterruptScope&) = delete;
-  // SIGINT or SIGTERM if one stopped the experiment; 0 if none did.
-  int signal() const;
+  // Puts the host's handlers back; returns SIGINT or SIGTERM if one came while the experiment's were in place (0
+  // if none did), read once the host's are back: a signal that comes meanwhile goes to one or the other, never
+  // to neither.
+  int restore();
   // The reason given to stopExperiment, if the program stopped it ("" if not).
   std::string stoppedFor() const;
 

@@ -3,7 +3,10 @@
 // command that resumes is said; a second quits at once.
 #include <unistd.h>
 
+#include <algorithm>
+#include <atomic>
 #include <csignal>
+#include <cstring>
 
 #include "afford/process_main.hpp"
 #include <nlohmann/json.hpp>
@@ -19,29 +22,37 @@ using nlohmann::json;
 namespace {
 
 volatile std::sig_atomic_t g_signal = 0;  // the first SIGINT or SIGTERM received (0: none)
-void (*g_stop_handler)(int) = nullptr;     // common's handler: it sets stopRequested()
-std::string g_quit_message;                // said on a second signal (set before the handlers, then never changed)
+// What a second signal says, in one of two buffers: the handler writes the one g_quit names; a new message is
+// made in the other, then named, so that the handler never reads one being written.
+char g_quit_text[2][4096];
+std::size_t g_quit_size[2] = {0, 0};
+std::atomic<int> g_quit{0};
 
 void onInterrupt(int sig) {
   if (g_signal != 0) {  // a second one: quit now; every file written so far is whole (written aside, then renamed)
-    (void)!write(STDERR_FILENO, g_quit_message.data(), g_quit_message.size());
+    const int q = g_quit.load(std::memory_order_acquire);
+    (void)!write(STDERR_FILENO, g_quit_text[q], g_quit_size[q]);
     _exit(128 + sig);
   }
   g_signal = sig;
   static const char msg[] =
       "\nafford: stopping the runs under way, then writing what finished (a second signal quits at once)\n";
   (void)!write(STDERR_FILENO, msg, sizeof msg - 1);
-  if (g_stop_handler) g_stop_handler(sig);
+  requestStop();  // (stopRequested(): the drivers stop their runs)
+}
+
+void sayOnQuit(const std::string& text) {
+  const int next = 1 - g_quit.load(std::memory_order_relaxed);
+  g_quit_size[next] = std::min(text.size(), sizeof g_quit_text[next]);
+  std::memcpy(g_quit_text[next], text.data(), g_quit_size[next]);
+  g_quit.store(next, std::memory_order_release);
 }
 
 }  // namespace
 
 void installInterruptHandlers(const std::string& resume) {
-  g_quit_message = "\nafford: a second signal: quitting at once; what finished is kept. To resume: " + resume + "\n";
-  installStopHandlers();
-  struct sigaction common {};
-  sigaction(SIGINT, nullptr, &common);
-  g_stop_handler = common.sa_handler;
+  sayOnQuit("\nafford: a second signal: quitting at once; what finished is kept." +
+            (resume.empty() ? std::string() : " To resume: " + resume) + "\n");
   struct sigaction sa {};
   sa.sa_handler = onInterrupt;
   sigemptyset(&sa.sa_mask);
@@ -54,16 +65,20 @@ void installInterruptHandlers(const std::string& resume) {
 InterruptScope::InterruptScope() {
   sigaction(SIGINT, nullptr, &int_);
   sigaction(SIGTERM, nullptr, &term_);
+  installInterruptHandlers("");  // from here, before the experiment is even checked, a signal stops it
 }
 
 InterruptScope::~InterruptScope() {
-  sigaction(SIGINT, &int_, nullptr);
-  sigaction(SIGTERM, &term_, nullptr);
+  restore();
   g_signal = 0;
   clearStopRequest();  // and its reason
 }
 
-int InterruptScope::signal() const { return g_signal; }
+int InterruptScope::restore() {
+  sigaction(SIGINT, &int_, nullptr);
+  sigaction(SIGTERM, &term_, nullptr);
+  return g_signal;
+}
 
 std::string InterruptScope::stoppedFor() const { return stopReason(); }
 

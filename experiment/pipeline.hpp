@@ -112,7 +112,8 @@ int runPrepared(Experiment& x, std::chrono::steady_clock::time_point began, spdl
 // The first SIGINT or SIGTERM received (0: none).
 int stopSignal();
 // SIGINT and SIGTERM set stopRequested() (the drivers stop their runs) and are
-// remembered for the exit status. `resume`: the command that goes on.
+// remembered for the exit status. `resume`: the command that goes on ("": none
+// known yet); installed again, only what a second signal says changes.
 void installInterruptHandlers(const std::string& resume);
 // Why the experiment stops after a phase instead of going on: a stop signal (or the program's stop), the halt of
 // its slots (a run that could not begin: SlotPool::halt), or runs of the phase neither finished nor another

@@ -264,8 +264,8 @@ void EdgeInbound::fail(const std::string& channel, const std::string& why) {
   if (failed_) return log_->debug("{}: {} (after the failure)", channel, why);
   failed_ = true;
   deferred_.clear();
-  log_->error("{}: {}", channel, why);
-  if (on_failure_) on_failure_(channel, why);
+  if (!on_failure_) return log_->error("{}: {}", channel, why);
+  on_failure_(channel, why);  // (which says it: once)
 }
 
 void EdgeInbound::claim(const process_status_t& st) {

@@ -196,7 +196,8 @@ void NodeBase::setState(int8_t state, const std::string& detail) {
 
 void NodeBase::failRun(const std::string& why) {
   if (run_id_.empty()) return log_->error("{}", why);
-  log_->error("run '{}' failed here: {}", run_id_, why);
+  log_->log(failures_said_by_runner_ ? spdlog::level::debug : spdlog::level::err, "run '{}' failed here: {}", run_id_,
+            why);
   edge_.suspend();
   setState(process_status_t::FAILED, why);
 }

@@ -1,6 +1,6 @@
 """PPO on afford's environment, in one file (in the style of CleanRL's ppo_atari.py), with PyTorch from Debian.
 
-    PYTHONPATH=build/python /usr/bin/python3 examples/ppo/ppo.py --scenario scenario1 --total-steps 40000 --out out/ppo
+    PYTHONPATH=build/python /usr/bin/python3 examples/ppo/ppo.py --scenario scenario1 --total-steps 40000 --out ~/ppo
 
 The learner sees what afford.env.AffordVectorEnv gives: one image per world (the scene, the eye's window as a
 mask, the scenario's goal; 150 x 150 x 7), one discrete action (act on what the eye's scan found, pass, or look
@@ -8,7 +8,8 @@ at one of grid x grid places and act), and the goal reward (minus the scene's di
 the episode ends when the scene matches the goal, or after --episode-steps steps). The reward is scaled by
 --reward-scale (the distances are ~3e-4). Every --eval-every updates, --eval-episodes episodes on worlds of other
 seeds are played with the policy's most likely action: their share of successes and steps to success go to
-OUT/ppo_eval.csv (one row per evaluation, with the environment steps trained so far).
+OUT/ppo_eval.csv (one row per evaluation, with the environment steps trained so far). OUT: --out, else a new
+folder in the temporary directory (never inside the checkout).
 
 Reproducible from --seed: one thread, deterministic algorithms, the worlds' seeds and the sampling keyed by it;
 the same command gives the same OUT/ppo_eval.csv and the same final weights (their checksum is printed).
@@ -19,6 +20,7 @@ import argparse
 import csv
 import hashlib
 import json
+import tempfile
 import time
 from pathlib import Path
 
@@ -53,8 +55,16 @@ def parse_args(argv=None):
     p.add_argument("--max-grad-norm", type=float, default=0.5)
     p.add_argument("--eval-every", type=int, default=4, help="updates between evaluations")
     p.add_argument("--eval-episodes", type=int, default=32)
-    p.add_argument("--out", default="out/ppo")
+    p.add_argument("--out", help="the folder written (default: a new one in the temporary directory)")
     return p.parse_args(argv)
+
+
+def output_folder(given: str | None, prefix: str) -> Path:
+    """The folder --out names, made if new; without --out, a new one in the temporary directory (never a folder
+    inside the checkout that the command happens to be run from)."""
+    out = Path(given) if given else Path(tempfile.mkdtemp(prefix=prefix))
+    out.mkdir(parents=True, exist_ok=True)
+    return out
 
 
 def layer(m: nn.Module, std: float = np.sqrt(2), bias: float = 0.0) -> nn.Module:
@@ -126,8 +136,8 @@ def train(a) -> dict:
     torch.set_num_threads(1)
     torch.use_deterministic_algorithms(True)
     np.random.seed(a.seed)
-    out = Path(a.out)
-    out.mkdir(parents=True, exist_ok=True)
+    out = output_folder(a.out, "afford-ppo-")
+    a.out = str(out)  # (in ppo_result.json's args: where it went)
     envs = AffordVectorEnv(a.num_envs, world=a.world, seed=a.seed * 1000, scenario=a.scenario, reward="goal",
                            grid=a.grid, set={"run.steps": a.episode_steps})
     shape = envs.single_observation_space.shape

@@ -104,7 +104,8 @@ RunOutcome runInProcess(const PlannedRun& run, const HostRequest& o, const std::
     slot.phase = run.spec.phase;
     slot.host = std::make_unique<InProcessHost>(
         *slot.lcm, protocol, [tag, level](const std::string& p) { return makeLogger(p + tag, level); },
-        HostOptions{/*single_thread=*/true, log_root, nullptr, /*snapshot_root=*/log_root});
+        HostOptions{/*single_thread=*/true, log_root, nullptr, /*snapshot_root=*/log_root, /*fork_snapshots=*/false,
+                    /*runner_says_failures=*/true});
   }
   // The logger, once started with a recorded run, stays free during the runs not recorded (run.record).
   for (const std::string& p : run.spec.processes)

@@ -342,7 +342,9 @@ RunOutcome& RunDriver::failed(const std::string& why) {
 }
 
 RunOutcome& RunDriver::interrupted(const Waiting& w) {
-  std::int64_t step = -1;
+  // The furthest step the run is known to have reached: its processes' heartbeats, and its curve's last table
+  // (a run stopped at a curve point, as a pruned one is, may be there before any heartbeat says so).
+  std::int64_t step = outcome_->curve.empty() ? -1 : outcome_->curve.back().step;
   for (const auto& [p, s] : seen_)
     if (ourRequest(s)) step = std::max(step, s.step);
   stopAndWait(w, /*patient=*/false);

@@ -37,6 +37,7 @@ std::unique_ptr<NodeBase> makeNode(const std::string& p, lcm::LCM& lcm, std::sha
   std::unique_ptr<NodeBase> node = newNode(p, lcm, std::move(log), protocol, options);
   node->keepSnapshotsIn(options.snapshot_root);  // its peers then hold only what followed its latest one
   node->forkSnapshots(options.fork_snapshots);
+  node->leaveFailuresToRunner(options.runner_says_failures);
   return node;
 }
 

@@ -32,6 +32,8 @@ struct HostOptions {
   std::string snapshot_root;
   // Snapshots written by a forked copy of the process (NodeBase::forkSnapshots): only where no node runs Python.
   bool fork_snapshots = false;
+  // A run's failure is said by the runner that drives it (NodeBase::leaveFailuresToRunner).
+  bool runner_says_failures = false;
 };
 
 using LoggerFactory = std::function<std::shared_ptr<spdlog::logger>(const std::string& process)>;

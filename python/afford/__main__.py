@@ -9,7 +9,7 @@ def main(argv: list[str]) -> int:
         print("usage: python3 -m afford COMMAND ...\n" + "\n".join(f"  {c}: {h}" for c, h in COMMANDS.items()),
               file=sys.stderr)
         return 2
-    from .study import main as tune
+    from .tune_command import main as tune
     return tune(argv[1:])
 
 

@@ -1,6 +1,8 @@
 """Experiments from Python: afford.run(experiment, ...) runs `afford experiment` in this process."""
 from __future__ import annotations
 
+import json
+import signal
 import sys
 import tempfile
 from pathlib import Path
@@ -122,14 +124,15 @@ def run(experiment: str, system: str | Iterable[str] | None = None, reps: int | 
 
     `experiment`: a name of config/experiments/ (base, late1, ...) or an
     experiment file (a path ending in .yaml, as --config takes); `system`:
-    FIX, IGN, IMP, a list of them or "all"; `set`: config keys and values
+    FIX, IGN, IMP, GOALS, a list of them or "all" (the paper's three); `set`: config keys and values
     (`{"motivation.leak": 0.3}`; a list value is a YAML list, not a sweep).
     `out` defaults to a new temporary folder, `log_root` to `out`/logs.
     Over memq (the default) everything runs in this process; udpm starts the
     processes. Ctrl-C (a notebook's interrupt) stops it as it stops the
     command: the runs under way stop, what finished is written, and
-    KeyboardInterrupt is raised naming the folder (`afford experiment
-    --resume --out OUT` completes it). A bad option or config key raises
+    KeyboardInterrupt is raised naming the folder and the command that
+    resumes it (`.../afford experiment --resume --out OUT`, each word quoted
+    for a shell). A bad option or config key raises
     afford.ConfigError (a ValueError) naming it.
 
     `motivation`: a class written in Python (afford.Motivation) in the place
@@ -177,19 +180,36 @@ def run(experiment: str, system: str | Iterable[str] | None = None, reps: int | 
         if not callable(say):
             raise TypeError(f"afford.run(say={say!r}): a function of a line (str), or None")
         request["say"] = say
-    code, signal, errors, stopped_for = _afford.run_experiment(request)
-    if stopped_for and not signal:
+    code, sig, errors, stopped_for = _afford.run_experiment(request)
+    if sig and code != 128 + sig:
+        # A signal that came too late to stop anything (the experiment ended as it would have without it): the
+        # handler in place takes it now (afford.tune's stops the study after this trial; Python's raises
+        # KeyboardInterrupt), and the experiment counts as what it is.
+        signal.raise_signal(sig)
+        sig = 0
+    if stopped_for and not sig:
         raise ExperimentStopped(f"afford.run({experiment!r}) was stopped by on_curve ({stopped_for}): what "
-                                f"finished is in {out}", stopped_for, out)
-    if signal:
-        raise KeyboardInterrupt(f"afford.run({experiment!r}) was interrupted: what finished is in {out}; "
-                                f"`afford experiment --resume --out {out}` completes it")
+                                f"finished is in {out}; {_resume(out)}", stopped_for, out)
+    if sig:
+        interrupted = KeyboardInterrupt(f"afford.run({experiment!r}) was interrupted: what finished is in {out}; "
+                                        f"{_resume(out)}")
+        interrupted.signal = sig  # (SIGINT or SIGTERM)
+        raise interrupted
     if code != 0:
         said = "\n  ".join(errors[-5:]) if errors else "no error was said; see the messages above"
         more = f" (the last 5 of {len(errors)})" if len(errors) > 5 else ""
         raise ExperimentError(f"afford.run({experiment!r}) failed (exit {code}) in {out}{more}:\n  {said}",
                               list(errors), out, code)
     return load(out)
+
+
+def _resume(out: Path) -> str:
+    """What resumes the experiment stopped in `out`, as its summary says (a command for a shell, and where)."""
+    try:
+        said = json.loads((out / "summary.json").read_text())["interrupted"]
+        return f"to resume it (in {said['resume_in']}): {said['resume']}"
+    except (OSError, ValueError, KeyError, TypeError):
+        return "its summary.json says how to resume it"
 
 
 def check(experiment: str, system: str | Iterable[str] | None = None, reps: int | None = None,

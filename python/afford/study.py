@@ -22,7 +22,7 @@ trial's parameters first. docs/python.md#studies.
 """
 from __future__ import annotations
 
-import argparse
+import contextlib
 import json
 import math
 import os
@@ -37,7 +37,7 @@ from typing import Any, Callable, Iterable, Sequence
 from . import _afford, locks
 from .experiments import CurvePoint, ExperimentError, ExperimentStopped, check, run
 from .results import Experiment
-from .search import OBJECTIVES, Choice, _distribution, _objective, _scalar, parse_param
+from .search import OBJECTIVES, Choice, _distribution, _objective, parse_param
 
 STUDY_NAME = "afford"
 KEPT = ("experiment", "system", "reps", "steps", "set", "params", "objective", "direction", "seed", "prune",
@@ -263,30 +263,68 @@ def write_report(study: Study) -> Path:
 
 # ---- running a study --------------------------------------------------------------------------------------------
 
-class _Stop:
-    """SIGINT/SIGTERM between trials: remembered and taken at the next trial's start (a second one quits)."""
+class Stop:
+    """The signal a study was sent (0: none), SIGINT or SIGTERM. The first is said at once and remembered, and
+    `check` raises KeyboardInterrupt where the study stops with nothing lost: before it is made, between trials,
+    after its report (a trial under way stops as an experiment does); a second quits at once (KeyboardInterrupt
+    where the program is)."""
 
     def __init__(self):
         self.signal = 0
-        self._old = {}
 
-    def __enter__(self):
-        if threading.current_thread() is not threading.main_thread():
-            return self  # (signal handlers are the main thread's; afford.run still stops on Ctrl-C)
-        for s in (signal.SIGINT, signal.SIGTERM):
-            self._old[s] = signal.signal(s, self._on)
-        return self
+    @property
+    def name(self) -> str:
+        return signal.Signals(self.signal).name if self.signal else ""
 
-    def _on(self, sig, frame):
+    def on(self, sig, frame) -> None:
         if self.signal:
-            raise KeyboardInterrupt
+            raise KeyboardInterrupt(f"and again by {signal.Signals(sig).name}, at once (what had finished is kept)")
         self.signal = sig
-        print("\nafford tune: stopping once this trial's bookkeeping is done (a second signal quits at once)",
-              file=sys.stderr)
+        print(f"\nafford tune: {self.name}: stopping before the next trial begins, with what finished kept (a second "
+              f"signal quits at once)", file=sys.stderr, flush=True)
 
-    def __exit__(self, *exc):
-        for s, h in self._old.items():
+    def check(self, where: str) -> None:
+        if self.signal:
+            raise KeyboardInterrupt(where)
+
+
+STOP_SIGNALS = {signal.SIGINT, signal.SIGTERM}
+_current: Stop | None = None  # the Stop whose handlers are in place (main thread)
+
+
+def stop_on_signals() -> Stop:
+    """A Stop whose handlers are in place for good (`afford tune`, which ends with the study), and the signals let
+    through: one `afford tune` held back from its start (apps/afford/commands/tune.cpp) comes now."""
+    global _current
+    _current = Stop()
+    for s in STOP_SIGNALS:
+        signal.signal(s, _current.on)
+    signal.pthread_sigmask(signal.SIG_UNBLOCK, STOP_SIGNALS)
+    return _current
+
+
+@contextlib.contextmanager
+def _stopping():
+    """The Stop in place (the command's), else one in place while this runs, its signals let through and the
+    handlers and mask before it put back after. Outside the main thread, whose the handlers are, a Stop no signal
+    reaches (afford.run still stops on Ctrl-C)."""
+    global _current
+    if threading.current_thread() is not threading.main_thread():
+        yield Stop()
+        return
+    if _current is not None:
+        yield _current
+        return
+    stop = _current = Stop()
+    old = {s: signal.signal(s, stop.on) for s in STOP_SIGNALS}
+    mask = signal.pthread_sigmask(signal.SIG_UNBLOCK, STOP_SIGNALS)
+    try:
+        yield stop
+    finally:
+        _current = None
+        for s, h in old.items():
             signal.signal(s, h)
+        signal.pthread_sigmask(signal.SIG_SETMASK, mask)
 
 
 def _definition(experiment, system, reps, steps, set, params, objective, direction, seed, prune, pruner, prune_startup,
@@ -418,66 +456,67 @@ def tune(out: str | Path, experiment: str = "base", params: dict[str, Any] | Non
     under way and raises KeyboardInterrupt; calling again continues. A bad key or value raises ConfigError
     before any trial runs.
     """
-    import optuna
-    from optuna.trial import TrialState
     say = say or (lambda _: None)
     folder = Path(out)
-    d = _definition(experiment, system, reps, steps, set, params, objective, direction, seed, prune, pruner,
-                    prune_startup, prune_warmup, extrinsic_reps, scenarios, keep_logs, trials)
-    planned = _check_keys(d)
-    value_of = _objective(objective)
-    study = _open(folder, d)
-    offsets, total = [], 0  # each planned run's first step in the trial's count of intrinsic steps
-    for _, _, n in planned:
-        offsets.append(total)
-        total += n
-    study.pruner = _pruner(d, planned[0][2] if planned else 0)
-    distributions = {k: _distribution(parse_param(k, v)) for k, v in d["params"].items()}
-    (folder / "trials").mkdir(exist_ok=True)
-    try:
-        with locks.worker(folder) as me:  # (held while this call runs: its trials' worker is alive)
-            _work(study, d, folder, me, offsets, total, distributions, value_of, log_level, say)
-    finally:  # the report, from the study as it is now: under the claim, so that a worker's report of an
-        # older state never lands after a later one's (the last worker to end writes the whole study)
-        with locks.claim(folder):
-            result = load_study(folder)
-            if len(result.trials):
-                write_report(result)
-    finished, running = _counts(study)
-    if running:
-        say(f"{running} trial(s) still run in other workers; this worker is done")
+    with _stopping() as stop:
+        d = _definition(experiment, system, reps, steps, set, params, objective, direction, seed, prune, pruner,
+                        prune_startup, prune_warmup, extrinsic_reps, scenarios, keep_logs, trials)
+        planned = _check_keys(d)
+        value_of = _objective(objective)
+        stop.check("before the study began (nothing was written)")
+        study = _open(folder, d)
+        offsets, total = [], 0  # each planned run's first step in the trial's count of intrinsic steps
+        for _, _, n in planned:
+            offsets.append(total)
+            total += n
+        study.pruner = _pruner(d, planned[0][2] if planned else 0)
+        distributions = {k: _distribution(parse_param(k, v)) for k, v in d["params"].items()}
+        (folder / "trials").mkdir(exist_ok=True)
+        try:
+            with locks.worker(folder) as me:  # (held while this call runs: its trials' worker is alive)
+                _work(study, d, folder, me, offsets, total, distributions, value_of, log_level, say, stop)
+        finally:  # the report, from the study as it is now: under the claim, so that a worker's report of an
+            # older state never lands after a later one's (the last worker to end writes the whole study)
+            with locks.claim(folder):
+                result = load_study(folder)
+                if len(result.trials):
+                    write_report(result)
+        finished, running = _counts(study)
+        if running:
+            say(f"{running} trial(s) still run in other workers; this worker is done")
+        stop.check(f"as this worker ended (its trials had run; the report is written in {folder})")
     return result
 
 
 def _work(study, d, folder: Path, me: dict[str, Any], offsets, total: int, distributions, value_of, log_level: str,
-          say) -> None:
+          say, stop: Stop) -> None:
     """This worker's (`me`, locks.worker) trials, one after another, until the study has its trials finished or
-    under way. A trial is asked for and claimed (its worker named) under the claim."""
+    under way. A trial is asked for and claimed (its worker named) under the claim; `stop` is checked before."""
     import optuna
-    with _Stop() as stop:
-        while True:
-            if stop.signal:
-                raise KeyboardInterrupt("afford tune: stopped between trials; the same command continues the study")
-            with locks.claim(folder):
-                if stop.signal:  # (one that came while this worker waited for the claim)
-                    raise KeyboardInterrupt("afford tune: stopped between trials; the same command continues the study")
-                _retry_stopped(study, folder, say)
-                finished, running = _counts(study)
-                if finished + running >= json.loads((folder / "study.json").read_text())["trials"]:
-                    break
-                study.sampler = _sampler(d["seed"], len(study.get_trials(deepcopy=False)))
-                trial = study.ask(distributions)
-                trial.set_user_attr("worker", me)
-                trial.set_user_attr("folder", f"trials/{trial.number:04d}")
-                trial.set_user_attr("planned_steps", total)
-                if stop.signal:  # (one that came while the trial was asked for: it runs again, when continued)
-                    trial.set_user_attr("stopped", "interrupted")
-                    study.tell(trial, state=optuna.trial.TrialState.FAIL)
-                    raise KeyboardInterrupt("afford tune: stopped before a trial began; the same command continues")
-            _run_trial(study, trial, d, folder, offsets, total, value_of, log_level, say)
+    while True:
+        kept = f"what finished is kept in {folder}"
+        stop.check(f"before this worker's next trial ({kept})")
+        with locks.claim(folder):
+            stop.check(f"before this worker's next trial ({kept})")  # (one that came while it waited for the claim)
+            _retry_stopped(study, folder, say)
+            finished, running = _counts(study)
+            if finished + running >= json.loads((folder / "study.json").read_text())["trials"]:
+                break
+            study.sampler = _sampler(d["seed"], len(study.get_trials(deepcopy=False)))
+            trial = study.ask(distributions)
+            trial.set_user_attr("worker", me)
+            trial.set_user_attr("folder", f"trials/{trial.number:04d}")
+            trial.set_user_attr("planned_steps", total)
+            if stop.signal:  # (one that came while the trial was asked for: it runs again, when continued)
+                trial.set_user_attr("stopped", "interrupted")
+                study.tell(trial, state=optuna.trial.TrialState.FAIL)
+                stop.check(f"before trial {trial.number} began ({kept}; its values run first when the study goes "
+                           f"on)")
+        _run_trial(study, trial, d, folder, offsets, total, value_of, log_level, say, stop)
 
 
-def _run_trial(study, trial, d, folder: Path, offsets: list[int], total: int, value_of, log_level: str, say) -> None:
+def _run_trial(study, trial, d, folder: Path, offsets: list[int], total: int, value_of, log_level: str, say,
+               stop: Stop) -> None:
     from optuna.trial import TrialState
     where = folder / trial.user_attrs["folder"]
     params = ", ".join(f"{k}={v:.4g}" if isinstance(v, float) else f"{k}={v}" for k, v in trial.params.items())
@@ -486,6 +525,8 @@ def _run_trial(study, trial, d, folder: Path, offsets: list[int], total: int, va
     def on_curve(p: CurvePoint) -> str | None:
         at = offsets[p.run] + p.step
         progress["steps"] = at
+        if stop.signal:  # (one this study took as the trial began, before the experiment's handlers took over)
+            return "interrupted"
         if not d["prune"] or p.step == 0:
             return None
         trial.report(p.mae, at)
@@ -494,24 +535,24 @@ def _run_trial(study, trial, d, folder: Path, offsets: list[int], total: int, va
         return "pruned" if trial.should_prune() else None
 
     began = time.monotonic()
+    interrupted = False
     try:
         e = run(d["experiment"], system=d["system"], reps=d["reps"], steps=d["steps"], set={**d["set"], **trial.params},
                 seed=d["seed"], extrinsic_reps=d["extrinsic_tests"], scenarios=d["scenarios"],
-                keep_logs=d["keep_logs"], out=where, run_prefix=f"trial{trial.number:04d}", log_level=log_level,
+                keep_logs=d["keep_logs"], out=where, run_prefix=f"trial{trial.number:04d}", log_level=log_level, progress="none",
                 on_curve=on_curve)
-    except ExperimentStopped:
-        trial.set_user_attr("intrinsic_steps", progress["steps"])
-        trial.set_user_attr("pruned_at", progress["steps"])
-        study.tell(trial, state=TrialState.PRUNED)
-        say(f"trial {trial.number}: {params}: pruned at step {progress['steps']} "
-            f"({time.monotonic() - began:.1f} s)")
-        return
-    except KeyboardInterrupt:
-        trial.set_user_attr("intrinsic_steps", progress["steps"])
-        trial.set_user_attr("stopped", "interrupted")
-        study.tell(trial, state=TrialState.FAIL)
-        say(f"trial {trial.number}: interrupted; its folder {where} is kept; the same command continues the study")
-        raise
+    except ExperimentStopped as x:
+        if x.reason == "pruned":
+            trial.set_user_attr("intrinsic_steps", progress["steps"])
+            trial.set_user_attr("pruned_at", progress["steps"])
+            study.tell(trial, state=TrialState.PRUNED)
+            say(f"trial {trial.number}: {params}: pruned at step {progress['steps']} "
+                f"({time.monotonic() - began:.1f} s)")
+            return
+        interrupted = True  # (on_curve's "interrupted": this study's signal)
+    except KeyboardInterrupt as x:  # (the experiment stopped on the signal: a further one quits at once)
+        stop.signal = stop.signal or getattr(x, "signal", signal.SIGINT)
+        interrupted = True
     except (ExperimentError, ValueError, OSError) as x:  # (afford.ConfigError is a ValueError)
         why = (x.errors[0] if isinstance(x, ExperimentError) and x.errors else str(x)).strip()
         trial.set_user_attr("intrinsic_steps", progress["steps"])
@@ -519,6 +560,13 @@ def _run_trial(study, trial, d, folder: Path, offsets: list[int], total: int, va
         study.tell(trial, state=TrialState.FAIL)
         say(f"trial {trial.number}: {params}: failed: {why}")
         return
+    if interrupted:
+        trial.set_user_attr("intrinsic_steps", progress["steps"])
+        trial.set_user_attr("stopped", "interrupted")
+        study.tell(trial, state=TrialState.FAIL)
+        say(f"trial {trial.number}: {params}: interrupted at step {progress['steps']}")
+        raise KeyboardInterrupt(f"during trial {trial.number} (what finished is kept in {folder}, and the trial's "
+                                f"folder; its values run first when the study goes on)")
     trial.set_user_attr("intrinsic_steps", total)
     try:
         value = float(value_of(e))
@@ -534,91 +582,3 @@ def _run_trial(study, trial, d, folder: Path, offsets: list[int], total: int, va
         return
     study.tell(trial, value)
     say(f"trial {trial.number}: {params}: {d['objective']} {value:.4g} ({time.monotonic() - began:.1f} s)")
-
-
-# ---- afford tune ------------------------------------------------------------------------------------------------
-
-def main(argv: list[str] | None = None) -> int:
-    ap = argparse.ArgumentParser(
-        prog="afford tune",
-        description="A study over config keys with Optuna (TPE, pruning on the learning curves, a journal "
-                    "file every worker shares): each trial an experiment folder OUT/trials/NNNN. Run the same "
-                    "command again to continue it, or in several processes (or Slurm array tasks) to share it.")
-    ap.add_argument("experiment", nargs="?", help="a name of config/experiments/ or an experiment file (default: "
-                    "the study's, when --out holds one; else base)")
-    ap.add_argument("--out", required=True, help="the study's folder")
-    ap.add_argument("--param", action="append", default=[], metavar="KEY=SPEC",
-                    help="a config key searched: float:LOW:HIGH, log:LOW:HIGH, int:LOW:HIGH, intlog:LOW:HIGH, "
-                         "choice:A,B,...")
-    ap.add_argument("--objective", help="affordance_mae (default), curve_mae, success, table2, or FILE.py:FUNCTION (a "
-                    "function of the afford.load result)")
-    ap.add_argument("--direction", choices=["minimize", "maximize"], help="default: the named objective's")
-    ap.add_argument("--trials", type=int, help="trials in all, over every worker (default 24)")
-    ap.add_argument("--system", help="FIX, IGN or IMP (default IMP)")
-    ap.add_argument("--reps", type=int, help="runs per trial (default 1)")
-    ap.add_argument("--steps", type=int, help="intrinsic steps per run (default: the experiment's)")
-    ap.add_argument("--set", action="append", default=[], metavar="KEY=VALUE", help="a config key fixed in every trial")
-    ap.add_argument("--seed", type=int, help="the runs' seed, the same in every trial; and the sampler's (default 1)")
-    ap.add_argument("--extrinsic-reps", type=int, help="extrinsic tests per scenario (for objective success); 0: none (default: the experiment's)")
-    ap.add_argument("--scenarios", action="append", help="extrinsic scenarios (for objective success)")
-    ap.add_argument("--prune", action=argparse.BooleanOptionalAction, default=None,
-                    help="stop a trial whose curve is worse than the median (default: on for the error objectives)")
-    ap.add_argument("--pruner", choices=PRUNERS, help="halving (default: successive halving, a third goes on at "
-                    "each rung) or median (the median pruner)")
-    ap.add_argument("--prune-startup", type=int, help="median: trials finished before any is pruned (default 5)")
-    ap.add_argument("--prune-warmup", type=float, help="the share of its first run a trial runs before it may be "
-                    "pruned (default 0.1)")
-    ap.add_argument("--keep-logs", help="the trials' run logs: all (default: each trial replays), first, none")
-    ap.add_argument("--report", action="store_true", help="write the report of the study in --out and run nothing")
-    a = ap.parse_args(argv)
-    out = Path(a.out)
-    stored = _read_definition(out / "study.json") if (out / "study.json").is_file() else {}
-    if a.report:
-        if not stored:
-            print(f"afford tune: {out} holds no study.json: no study to report", file=sys.stderr)
-            return 2
-        with locks.claim(out):
-            print(write_report(load_study(out)))
-        return 0
-
-    def given(value, key, default):
-        return value if value is not None else stored.get(key, default)
-    try:
-        for p in a.param:
-            if "=" not in p:
-                raise ValueError(f"--param {p}: KEY=SPEC, e.g. motivation.leak=log:0.01:0.9")
-        params = dict(p.split("=", 1) for p in a.param) if a.param else stored.get("params")
-        fixed = {}
-        for s in a.set:
-            key, sep, value = s.partition("=")
-            if not sep:
-                raise ValueError(f"--set {s}: KEY=VALUE")
-            fixed[key] = _scalar(value)
-        s = tune(out, experiment=given(a.experiment, "experiment", "base"), params=params,
-                 objective=given(a.objective, "objective", "affordance_mae"), direction=given(a.direction, "direction", None),
-                 trials=given(a.trials, "trials", 24), system=given(a.system, "system", "IMP"),
-                 reps=given(a.reps, "reps", 1), steps=given(a.steps, "steps", None),
-                 set=fixed if a.set else stored.get("set", {}), seed=given(a.seed, "seed", 1),
-                 extrinsic_reps=given(a.extrinsic_reps, "extrinsic_tests", None),
-                 scenarios=given(a.scenarios, "scenarios", []), prune=given(a.prune, "prune", None),
-                 pruner=given(a.pruner, "pruner", "halving"),
-                 prune_startup=given(a.prune_startup, "prune_startup", 5),
-                 prune_warmup=given(a.prune_warmup, "prune_warmup", 0.1),
-                 keep_logs=given(a.keep_logs, "keep_logs", "all"),
-                 say=lambda line: print(line, flush=True))
-    except KeyboardInterrupt:
-        print(f"afford tune: stopped; the finished trials are kept in {out}; the same command continues the study",
-              file=sys.stderr)
-        return 130
-    except (ValueError, FileNotFoundError) as e:
-        print(f"afford tune: {e}", file=sys.stderr)
-        return 2
-    best = s.best
-    if best is not None:
-        print(f"best: trial {best['number']}, {s.definition['objective']} {best['value']:.4g}, in {s.best_folder}")
-    print(out / "report.md")
-    return 0
-
-
-if __name__ == "__main__":
-    sys.exit(main())

@@ -12,7 +12,10 @@
 #include <spdlog/sinks/ringbuffer_sink.h>
 #include <spdlog/sinks/stdout_color_sinks.h>
 
+#include <unistd.h>
+
 #include <cstring>
+#include <filesystem>
 #include <memory>
 #include <mutex>
 #include <optional>
@@ -106,6 +109,13 @@ py::dict readLog(const std::string& path, const std::string& run_id, const std::
   return out;
 }
 
+// The afford command beside the executables this module runs ($AFFORD_BIN, or the build's), which the command
+// that resumes an experiment started here names; "afford", to be found on PATH, where there is none.
+std::string affordCommand() {
+  const std::filesystem::path exe = std::filesystem::path(executableDir()) / "afford";
+  return access(exe.c_str(), X_OK) == 0 ? std::filesystem::absolute(exe).lexically_normal().string() : "afford";
+}
+
 // `afford experiment` in this process: (exit code, the signal that stopped it or 0, the last errors said, the
 // reason the program stopped it or "").
 // The GIL is released while it runs; SIGINT (a notebook's interrupt) stops
@@ -140,7 +150,7 @@ ExperimentRequest requestFrom(const py::dict& request) {
       "processes");
   o.write.quiet = true;
   o.write.replace = request["replace"].cast<bool>();
-  o.write.program = "python3 -c 'import afford; afford.run(...)'; or: build/bin/afford";
+  o.write.program = affordCommand();
   return o;
 }
 
@@ -245,8 +255,8 @@ py::tuple runExperimentFrom(const py::dict& request) {
     py::gil_scoped_release free;
     InterruptScope scope;
     code = runExperiment(o, *log);
-    signal = scope.signal();
     stopped_for = scope.stoppedFor();
+    signal = scope.restore();
   }
   if (raised) throw std::move(*raised);
   return py::make_tuple(code, signal, errors->last_formatted(), stopped_for);
@@ -307,4 +317,7 @@ PYBIND11_MODULE(_afford, m) {
   afford::defineComponents(m);
   afford::defineWorlds(m);
   m.attr("version") = afford::affordVersion();
+  py::list systems;  // every system an experiment runs (afford.run's `system`)
+  for (const auto& s : afford::kSystemNames) systems.append(s.name);
+  m.attr("systems") = py::tuple(systems);
 }

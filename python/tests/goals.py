@@ -52,3 +52,12 @@ class OutOfPlace(afford.GoalChooser):
 
     def next(self, step, id):
         return afford.Goal("move", 0.5, 0.5, 1.5, 0.5, [[[0, 0, 0]] * 21] * 21)
+
+
+class Raises(afford.GoalChooser):
+    """A chooser whose next() raises: the run fails, its trace said once."""
+
+    kind = "raises"
+
+    def next(self, step, id):
+        raise ValueError("no goal here")

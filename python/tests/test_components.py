@@ -47,11 +47,11 @@ def test_a_python_motivation_as_a_process_on_the_bus_equals_the_cpp_example(tmp_
     assert checksum(inproc) == checksum(py)
 
 
-def test_a_python_error_fails_the_run_naming_the_step_and_the_error(tmp_path):
+def test_a_python_error_fails_the_run_naming_the_step_and_the_error(tmp_path, capfd):
     said = "motivation 'broken' (Python): decide() at step 7 raised ValueError: no decision at step seven"
     with pytest.raises(afford.ExperimentError) as failed:  # the reason is in the exception, not only on stderr
         afford.run("base", system="IMP", reps=1, steps=100, out=tmp_path / "b", motivation=Broken)
-    assert said in str(failed.value) and failed.value.out == tmp_path / "b" and failed.value.exit_code == 1
+    assert capfd.readouterr().err.count(said) == 1  # said once on stderr (by the runner), with its trace    assert said in str(failed.value) and failed.value.out == tmp_path / "b" and failed.value.exit_code == 1
     assert isinstance(failed.value, RuntimeError) and any(said in e for e in failed.value.errors)
     e = afford.load(tmp_path / "b")
     error = e.summary["systems"]["IMP"]["failed_runs"][0]["error"]
@@ -209,6 +209,15 @@ def test_a_goal_out_of_the_scene_fails_the_run_naming_the_field(tmp_path):
     with pytest.raises(afford.ExperimentError, match=r"goal chooser 'out-of-place' \(Python\): next\(\) at step 0 "
                                                      r"\(goal 0\) returned x = 1\.5"):
         afford.run("base", system="GOALS", reps=1, steps=20, out=tmp_path / "oop", goals=OutOfPlace, log_level="off")
+
+
+def test_a_python_chooser_that_raises_is_said_once_with_its_trace(tmp_path, capfd):
+    from goals import Raises
+    with pytest.raises(afford.ExperimentError, match=r"goal chooser 'raises' \(Python\): next\(\) at step 0 \(goal 0\) "
+                                                     r"raised ValueError: no goal here"):
+        afford.run("base", system="GOALS", reps=1, steps=20, out=tmp_path / "r", goals=Raises)
+    err = capfd.readouterr().err
+    assert err.count("raised ValueError: no goal here") == 1 and err.count("goals.py(") == 1, err
 
 
 def test_the_process_module_says_the_version_it_is():

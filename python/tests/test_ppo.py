@@ -22,3 +22,34 @@ def test_the_same_seed_trains_the_same_agent_and_another_does_not(tmp_path):
     assert (tmp_path / "a" / "ppo_episodes.csv").read_text() == (tmp_path / "b" / "ppo_episodes.csv").read_text()
     result = json.loads((tmp_path / "a" / "ppo_result.json").read_text())
     assert result["env_steps"] == 32 and result["updates"] == 2
+
+
+def test_without_out_it_writes_a_new_folder_in_the_temporary_directory_not_where_it_is_run(tmp_path, monkeypatch):
+    import tempfile
+    here, temporary = tmp_path / "checkout", tmp_path / "tmp"
+    here.mkdir()
+    temporary.mkdir()
+    monkeypatch.chdir(here)
+    monkeypatch.setattr(tempfile, "tempdir", str(temporary))
+    result = ppo.train(ppo.parse_args(SMALL))
+    out = Path(result["args"]["out"])
+    assert out.parent == temporary and (out / "ppo_eval.csv").is_file()
+    assert not list(here.iterdir())  # nothing where it was run
+
+
+def test_compare_draws_the_figure_of_docs_ppo_again(tmp_path):
+    import shutil
+    import compare  # (examples/ppo, beside ppo.py)
+    docs = Path(__file__).resolve().parents[2] / "docs" / "ppo"
+    shutil.copytree(docs, tmp_path / "ppo")
+    figure = tmp_path / "ppo" / "fig_ppo_vs_planner.png"
+    figure.unlink()
+    assert compare.main(["--plot", "--out", str(tmp_path / "ppo")]) == 0
+    assert figure.stat().st_size > 0
+    # a folder without a scenario's evaluations is refused naming what it lacks; --plot without --out too
+    (tmp_path / "ppo" / "ppo_eval_scenario2.csv").unlink()
+    with pytest.raises(SystemExit, match="no evaluations of PPO on scenario2: neither ppo-scenario2/ppo_eval.csv"):
+        compare.main(["--plot", "--out", str(tmp_path / "ppo")])
+    with pytest.raises(SystemExit) as refused:
+        compare.main(["--plot"])
+    assert refused.value.code == 2

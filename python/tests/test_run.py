@@ -70,6 +70,25 @@ def test_ctrl_c_stops_it_as_it_stops_the_command_and_python_goes_on(tmp_path):
     assert summary["interrupted"]["signal"] == "SIGINT"
 
 
+def test_a_signal_as_the_experiment_is_checked_stops_it_before_any_run(tmp_path):
+    class SignalsOnce(afford.Motivation):  # its first copy is made as the experiment is checked, before any run
+        kind = "signals-once"
+        made = []
+
+        def __init__(self, *args, **kwargs):
+            if not SignalsOnce.made:
+                os.kill(os.getpid(), signal.SIGINT)  # (Ctrl-C, as the experiment is being checked)
+            SignalsOnce.made.append(1)
+
+        def decide(self, p):
+            return afford.Decision(True, 0, 0.0, 0.0)
+    with pytest.raises(KeyboardInterrupt, match="was interrupted"):
+        afford.run("base", system="IMP", reps=1, steps=100, out=tmp_path / "e", motivation=SignalsOnce,
+                   log_level="off")
+    said = json.loads((tmp_path / "e" / "summary.json").read_text())["interrupted"]
+    assert said["signal"] == "SIGINT" and said["finished"] == 0 and len(said["not_started"]) == 1
+
+
 def test_calls_in_a_loop_with_one_log_root_never_collide(tmp_path):
     # run ids start with the second; twenty calls within a few seconds take twenty prefixes
     ids = set()

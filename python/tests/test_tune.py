@@ -2,6 +2,7 @@
 import contextlib
 import json
 import os
+import re
 import signal
 import subprocess
 import sys
@@ -98,19 +99,33 @@ def test_the_median_pruner_stops_a_trial_whose_curve_is_worse_than_the_median(tm
     assert (done["intrinsic_steps"] == done["planned_steps"]).all()
 
 
+def interrupted_line(stderr: str) -> str:
+    """The one line that says a study was interrupted, checked: no traceback, said once."""
+    assert "Traceback" not in stderr, stderr
+    lines = [line for line in stderr.splitlines() if line.startswith("afford tune: interrupted by SIG")]
+    assert len(lines) == 1, stderr
+    return lines[0]
+
+
+def continue_as_said(line: str) -> subprocess.CompletedProcess:
+    """The command the interrupted line names, pasted into a shell where it says."""
+    where, command = re.fullmatch(r".*; the same command continues the study \(in (.*?)\): (.*)", line).groups()
+    return subprocess.run(["/bin/sh", "-c", command], cwd=where, capture_output=True, text=True, timeout=300)
+
+
 def test_ctrl_c_stops_a_study_and_the_same_command_continues_it(tmp_path):
     out = tmp_path / "study"
-    command = tune_command(out, 2, 5000, "--no-prune", "--keep-logs", "none")
-    worker = subprocess.Popen(command, stdout=subprocess.PIPE, stderr=subprocess.STDOUT, text=True)
+    command = tune_command(out, 2, 1500, "--no-prune", "--keep-logs", "none")
+    worker = subprocess.Popen(command, stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True)
     # once the second trial has begun (its folder holds its experiment), Ctrl-C
     wait_for(lambda: (out / "trials" / "0001" / "experiment.json").exists(), "the second trial")
     worker.send_signal(signal.SIGINT)
-    said = worker.communicate(timeout=120)[0]
-    assert worker.returncode == 130, said
-    assert "the same command continues the study" in said
+    said, stderr = worker.communicate(timeout=120)
+    assert worker.returncode == 130, said + stderr
+    assert "during trial 1" in interrupted_line(stderr)
     before = afford.load_study(out).trials
     assert list(before["state"]) == ["COMPLETE", "FAIL"] and before["stopped"].iloc[1] == "interrupted"
-    again = run_tune(*command, timeout=300)
+    again = continue_as_said(interrupted_line(stderr))
     assert again.returncode == 0, again.stdout + again.stderr
     df = afford.load_study(out).trials
     assert df["state"].iloc[0] == "COMPLETE" and df["value"].iloc[0] == before["value"].iloc[0]  # kept
@@ -120,9 +135,48 @@ def test_ctrl_c_stops_a_study_and_the_same_command_continues_it(tmp_path):
     assert len(retry) == 1 and retry["param motivation.leak"].iloc[0] == before["param motivation.leak"].iloc[1]
 
 
+# SIGINT as `afford tune` starts, at a point of its own: when the process first imports the module named, or
+# opens a file whose name ends so (a sitecustomize.py on its path, which Python runs as it starts).
+SIGINT_AT = """import os, signal, sys
+kind, name = os.environ["AFFORD_TEST_SIGINT_AT"].split(":")
+def at(event, args, sent=[]):
+    if not sent and event == kind and name in str(args[0]):
+        sent.append(1)
+        os.kill(os.getpid(), signal.SIGINT)
+sys.addaudithook(at)
+"""
+
+
+@pytest.mark.parametrize("at", ["import:pandas", "import:optuna", "open:trials.csv"],
+                         ids=["importing the package", "opening the study", "writing the report"])
+def test_sigint_as_afford_tune_starts_and_ends_stops_it_in_one_line_with_nothing_lost(tmp_path, at):
+    (tmp_path / "hook").mkdir()
+    (tmp_path / "hook" / "sitecustomize.py").write_text(SIGINT_AT)
+    out = tmp_path / "study"
+    command = [str(BIN / "afford"), "tune", "base", "--out", str(out), "--param", LEAK, "--trials", "1",
+               "--steps", "100", "--no-prune", "--keep-logs", "none"]
+    r = subprocess.run(command, capture_output=True, text=True, timeout=120,
+                       env={**os.environ, "AFFORD_TEST_SIGINT_AT": at,
+                            "PYTHONPATH": f"{tmp_path / 'hook'}:{os.environ.get('PYTHONPATH', '')}"})
+    assert r.returncode == 130, r.stdout + r.stderr
+    line = interrupted_line(r.stderr)
+    if at == "open:trials.csv":  # after its trial: the study is whole, its report written
+        assert "as this worker ended" in line and (out / "report.md").is_file()
+        assert afford.load_study(out).trials["state"].tolist() == ["COMPLETE"]
+        return
+    if at == "import:pandas":  # (held back until the study's handler was in place)
+        assert "before the study began (nothing was written)" in line and not out.exists()
+        return
+    # as Optuna was imported to open the study: the study is made, no trial ran, and the command said continues it
+    assert "before this worker's next trial" in line and afford.load_study(out).trials.empty
+    again = continue_as_said(line)
+    assert again.returncode == 0, again.stdout + again.stderr
+    assert afford.load_study(out).trials["state"].tolist() == ["COMPLETE"]
+
+
 def test_a_trial_whose_worker_was_killed_runs_again(tmp_path):
     out = tmp_path / "study"
-    command = tune_command(out, 1, 5000, "--no-prune", "--keep-logs", "none")
+    command = tune_command(out, 1, 1500, "--no-prune", "--keep-logs", "none")
     worker = subprocess.Popen(command, stdout=subprocess.DEVNULL, stderr=subprocess.DEVNULL)
     wait_for(lambda: (out / "trials" / "0000" / "experiment.json").exists(), "the first trial")
     worker.kill()
@@ -206,12 +260,53 @@ def test_on_curve_sees_each_point_and_can_stop_the_experiment(tmp_path):
     assert points[0].mae == pytest.approx(0.5) and points[-1].mae < points[0].mae
     state = json.loads((tmp_path / "e" / "experiment.json").read_text())
     assert state["state"] == "interrupted" and state["interruptions"][0]["signal"] == "enough"
-    # the folder resumes as an interrupted experiment's does
-    r = subprocess.run([str(BIN / "afford"), "experiment", "--resume",
-                        "--out", str(tmp_path / "e"), "--transport", "memq", "--quiet", "--progress", "none"],
+    # the run is said cut where it was (at least the curve point that stopped it), not where a heartbeat last was
+    where = state["interruptions"][0]["cut"][0]["where"]
+    assert re.fullmatch(r"interrupted at step (\d+)", where) and int(where.split()[-1]) >= 300, where
+    # the folder resumes as an interrupted experiment's does, by the command its summary says (and the exception)
+    said = json.loads((tmp_path / "e" / "summary.json").read_text())["interrupted"]
+    assert f"to resume it (in {said['resume_in']}): {said['resume']}" in str(stopped.value)
+    r = subprocess.run(["/bin/sh", "-c", said["resume"] + " --quiet --progress none"], cwd=said["resume_in"],
                        capture_output=True, text=True)
     assert r.returncode == 0, r.stdout + r.stderr
     assert len(afford.load(tmp_path / "e").runs) == 2
+
+
+def test_a_signal_as_a_trials_experiment_ends_stops_the_study_after_it_with_the_trial_finished(tmp_path,
+                                                                                               monkeypatch):
+    real = afford._afford.run_experiment
+
+    def late(request):  # as if SIGINT came as the experiment wrote its summary: too late to stop any run
+        code, _, errors, why = real(request)
+        return code, signal.SIGINT, errors, why
+    monkeypatch.setattr(afford._afford, "run_experiment", late)
+    with pytest.raises(KeyboardInterrupt, match="before this worker's next trial"):
+        tune_here(tmp_path / "study", 2)
+    assert afford.load_study(tmp_path / "study").trials["state"].tolist() == ["COMPLETE"]
+
+
+def test_a_signal_as_a_trial_begins_stops_it_at_its_first_curve_point(tmp_path, monkeypatch):
+    real = afford.study.run
+
+    def late(*args, **kwargs):  # as if SIGINT came as the trial began, before its experiment's handlers took over
+        os.kill(os.getpid(), signal.SIGINT)
+        return real(*args, **kwargs)
+    monkeypatch.setattr(afford.study, "run", late)
+    with pytest.raises(KeyboardInterrupt, match="during trial 0"):
+        tune_here(tmp_path / "study", 1)
+    df = afford.load_study(tmp_path / "study").trials
+    assert df["state"].tolist() == ["FAIL"] and df["stopped"].iloc[0] == "interrupted"
+    assert df["intrinsic_steps"].iloc[0] < df["planned_steps"].iloc[0]  # (stopped near its start, not at its end)
+
+
+def test_the_help_names_every_system_and_the_default_pruner():
+    from afford.tune_command import _parser
+    said = {a.dest: " ".join(a.help.split()) for a in _parser()._actions if a.help}
+    assert "GOALS" in afford._afford.systems
+    for system in afford._afford.systems:
+        assert system in said["system"]
+        afford.check("base", system=system, steps=10)  # (one an experiment runs)
+    assert "halving (the default" in said["pruner"] and "median" not in said["prune"]
 
 
 
@@ -412,7 +507,7 @@ def test_another_hosts_trial_runs_again_once_its_worker_is_gone_and_not_before(t
                          "    return float(e.runs['affordance_mae'].mean())\n")
     command = tune_command(out, 1, 300, "--keep-logs", "none", "--no-prune", "--objective", f"{objective}:mae")
     other = subprocess.Popen([PYTHON, "-c", "import socket, sys\nsocket.gethostname = lambda: 'node-b'\n"
-                              "from afford.study import main\nsys.exit(main(sys.argv[1:]))", *command[4:]],
+                              "from afford.tune_command import main\nsys.exit(main(sys.argv[1:]))", *command[4:]],
                              stdout=subprocess.PIPE, text=True)
     assert other.stdout.readline().strip() == "in the objective"
     # alive on its host (its worker file held): its trial is left to it

@@ -1,8 +1,9 @@
 // afford tune ...: a study over config keys (Optuna), run by the Python package: `python3 -m afford tune`
-// (python/afford/study.py), with this build's package first on its path. Every argument goes to it as given.
+// (python/afford/tune_command.py), with this build's package first on its path. Every argument goes to it as given.
 #include <unistd.h>
 
 #include <cerrno>
+#include <csignal>
 #include <cstdlib>
 #include <cstring>
 #include <filesystem>
@@ -36,12 +37,21 @@ Command tuneCommand(CLI::App& app, const FrontDoor& door) {
               const std::string path = package.string() + (old && *old ? ":" + std::string(old) : "");
               setenv("PYTHONPATH", path.c_str(), 1);
             }
+            setenv("AFFORD_TUNE_PROGRAM", door.program.c_str(), 1);  // (the command it names to continue a study)
             std::vector<std::string> args{python, "-m", "afford", "tune"};
             for (const std::string& a : tune->remaining()) args.push_back(a);
             std::vector<char*> argv;
             for (std::string& a : args) argv.push_back(a.data());
             argv.push_back(nullptr);
+            // SIGINT and SIGTERM held back across exec until the study's handler is in place (tune_command.py
+            // lets them through): one sent while Python starts is neither lost nor a traceback from an import.
+            sigset_t stops, before;
+            sigemptyset(&stops);
+            sigaddset(&stops, SIGINT);
+            sigaddset(&stops, SIGTERM);
+            sigprocmask(SIG_BLOCK, &stops, &before);
             execv(python.c_str(), argv.data());
+            sigprocmask(SIG_SETMASK, &before, nullptr);
             std::fprintf(stderr, "afford tune: cannot run %s (%s): afford tune runs the Python package with Debian's "
                          "python3 (scripts/setup.sh installs it and builds the package, not with --main)\n",
                          python.c_str(), std::strerror(errno));

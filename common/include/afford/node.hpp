@@ -237,6 +237,9 @@ class NodeBase {
   // on its own path and flushed on a thread. Only a process whose every component is C++ forks: a copy of a
   // Python interpreter cannot run Python safely.
   void forkSnapshots(bool on) { fork_snapshots_ = on; }
+  // Its run's failure is said by the runner that drives the run, in the same output (memq: which process failed,
+  // and why): said here at debug level only, so that it is said once. Off (the default): said here, as an error.
+  void leaveFailuresToRunner(bool on) { failures_said_by_runner_ = on; }
   std::string snapshotPath(const std::string& run_id) const;
   // The step of the snapshot this process went on from in its run (-1: none).
   std::int64_t restoredStep() const { return restored_step_; }
@@ -376,6 +379,7 @@ class NodeBase {
   std::int64_t snapshots_taken_ = 0;
   bool stop_received_ = false;
   bool fork_snapshots_ = false;
+  bool failures_said_by_runner_ = false;
   std::unique_ptr<SnapshotWriter> durable_writer_;  // declared before durable_: the task ends before it goes
   std::vector<EdgeInbound::Position> durable_at_;
   std::int64_t durable_step_ = -1;
