@@ -539,8 +539,8 @@ def _run_trial(study, trial, d, folder: Path, offsets: list[int], total: int, va
     try:
         e = run(d["experiment"], system=d["system"], reps=d["reps"], steps=d["steps"], set={**d["set"], **trial.params},
                 seed=d["seed"], extrinsic_reps=d["extrinsic_tests"], scenarios=d["scenarios"],
-                keep_logs=d["keep_logs"], out=where, run_prefix=f"trial{trial.number:04d}", log_level=log_level, progress="none",
-                on_curve=on_curve)
+                keep_logs=d["keep_logs"], out=where, run_prefix=f"trial{trial.number:04d}", log_level=log_level,
+                progress="none", on_curve=on_curve)
     except ExperimentStopped as x:
         if x.reason == "pruned":
             trial.set_user_attr("intrinsic_steps", progress["steps"])
