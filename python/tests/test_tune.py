@@ -100,7 +100,7 @@ def test_the_median_pruner_stops_a_trial_whose_curve_is_worse_than_the_median(tm
 
 def test_ctrl_c_stops_a_study_and_the_same_command_continues_it(tmp_path):
     out = tmp_path / "study"
-    command = tune_command(out, 2, 5000, "--no-prune", "--keep-logs", "none")
+    command = tune_command(out, 2, 2000, "--no-prune", "--keep-logs", "none")
     worker = subprocess.Popen(command, stdout=subprocess.PIPE, stderr=subprocess.STDOUT, text=True)
     # once the second trial has begun (its folder holds its experiment), Ctrl-C
     wait_for(lambda: (out / "trials" / "0001" / "experiment.json").exists(), "the second trial")
@@ -122,7 +122,7 @@ def test_ctrl_c_stops_a_study_and_the_same_command_continues_it(tmp_path):
 
 def test_a_trial_whose_worker_was_killed_runs_again(tmp_path):
     out = tmp_path / "study"
-    command = tune_command(out, 1, 5000, "--no-prune", "--keep-logs", "none")
+    command = tune_command(out, 1, 2000, "--no-prune", "--keep-logs", "none")
     worker = subprocess.Popen(command, stdout=subprocess.DEVNULL, stderr=subprocess.DEVNULL)
     wait_for(lambda: (out / "trials" / "0000" / "experiment.json").exists(), "the first trial")
     worker.kill()
