@@ -4,7 +4,7 @@
 #   edge       the message edge's decoding of every type (seeds: a sample of
 #              each type; a custom mutator sets size fields)
 #   logreader  the project's log reader (seeds: the logs of a short real run)
-# Builds the targets with clang in BUILD/fuzz first. Per target, the corpus
+# Builds the targets with clang in BUILD/fuzz first (the main build does, with its tests). Per target, the corpus
 # stays in BUILD/fuzz/<target>/corpus; a crash leaves its input in
 # BUILD/fuzz/<target>/crashes/ and the script fails naming it; the fuzzer's
 # whole output is in BUILD/fuzz/<target>/fuzz.log. The inputs of bugs found
@@ -39,9 +39,12 @@ clang=$(command -v clang || command -v clang-14 || true)
 
 fuzz=$build/fuzz
 mkdir -p "$fuzz"
+# Configured once (the main build with its tests does it, and builds them: then this is quick).
 echo "fuzz.sh: building the fuzz targets in $fuzz"
-cmake -S "$root/tests/fuzz" -B "$fuzz" -DCMAKE_C_COMPILER="$clang" -DCMAKE_CXX_COMPILER="$clangxx" -DAFFORD_MAIN_BUILD="$build" \
-  >"$fuzz/configure.log" 2>&1 || { cat "$fuzz/configure.log"; exit 1; }
+if [[ ! -f $fuzz/CMakeCache.txt ]]; then
+  cmake -S "$root/tests/fuzz" -B "$fuzz" -DCMAKE_C_COMPILER="$clang" -DCMAKE_CXX_COMPILER="$clangxx" \
+    -DAFFORD_MAIN_BUILD="$build" >"$fuzz/configure.log" 2>&1 || { cat "$fuzz/configure.log"; exit 1; }
+fi
 cmake --build "$fuzz" -j2 >"$fuzz/build.log" 2>&1 || { cat "$fuzz/build.log"; exit 1; }
 echo "fuzz.sh: built in $SECONDS s"
 

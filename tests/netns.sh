@@ -67,14 +67,12 @@ wait_until() {
   done
 }
 
-# start_xvfb WIDTHxHEIGHT LOGFILE: an X server on a free display; exports DISPLAY.
+# start_xvfb WIDTHxHEIGHT LOGFILE: an X server on a display it finds free (so that tests can run at once); exports
+# DISPLAY.
 start_xvfb() {
-  local display=:$((100 + $$ % 400))
-  Xvfb "$display" -screen 0 "${1}x24" -nolisten tcp >"$2" 2>&1 &
-  export DISPLAY=$display
-  for _ in $(seq 50); do [[ -e /tmp/.X11-unix/X${display#:} ]] && return 0; sleep 0.1; done
-  echo "Xvfb did not start (see $2)" >&2
-  return 1
+  Xvfb -displayfd 3 -screen 0 "${1}x24" -nolisten tcp 3>"$2.display" >"$2" 2>&1 &
+  wait_until 10 grep -q '^[0-9]' "$2.display" || { echo "Xvfb did not start (see $2)" >&2; return 1; }
+  export DISPLAY=:$(head -n 1 "$2.display")
 }
 
 # summary_results DIR: DIR/summary.json without what the clock, the host or

@@ -116,9 +116,11 @@ def test_an_experiment_never_mixes_with_another_in_its_folder(tmp_path):
 
 
 def test_a_zero_given_is_a_zero_and_left_out_the_experiment_says(tmp_path):
-    # attention asks for tests of its own (extrinsic.tests); extrinsic_reps=0 runs none of them.
-    none = afford.run("attention", system="IMP", reps=1, steps=50, out=tmp_path / "zero", extrinsic_reps=0,
+    # an experiment file asking for a test of its own (extrinsic.tests); extrinsic_reps=0 runs none.
+    asks = tmp_path / "asks.yaml"
+    asks.write_text("extends: base\nextrinsic: {scenarios: [scenario1], tests: 1}\n")
+    none = afford.run(str(asks), system="IMP", reps=1, steps=50, out=tmp_path / "zero", extrinsic_reps=0,
                       keep_logs="none")
     assert len(none.extrinsic) == 0
-    own = afford.run("attention", system="IMP", reps=1, steps=50, out=tmp_path / "own", keep_logs="none")
-    assert len(own.extrinsic) > 0
+    own = afford.run(str(asks), system="IMP", reps=1, steps=50, out=tmp_path / "own", keep_logs="none")
+    assert len(own.extrinsic) == 1

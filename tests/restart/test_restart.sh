@@ -35,8 +35,9 @@ url="udpm://239.255.76.67:7993?ttl=0&recv_buf_size=2097152"
 system=${AFFORD_RESTART_SYSTEM:-IMP}
 steps=3000
 snapshot=500
-# The goals agent steps four to five times slower: a shorter run, snapshots as often in steps.
-[[ $system == GOALS ]] && { steps=1500; snapshot=300; }
+# The goals agent steps four to five times slower, and so does an affordance predictor in Python: a shorter run,
+# snapshots as often in steps.
+[[ $system == GOALS || -n ${AFFORD_RESTART_PREDICTORS:-} ]] && { steps=1500; snapshot=300; }
 # Several in turn: a run long enough for each to be killed, come back and catch up before the next (the STATUS
 # read every 0.55 s overshoots; catching up takes a second or two): IMP goes about 1000 steps a second here,
 # the goals agent about 200.

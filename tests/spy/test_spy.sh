@@ -28,11 +28,14 @@ url="udpm://239.255.76.67:$port?ttl=0"
 export AFFORD_BUS_KEY=$out/bus.key  # the runner, the processes it starts, afford status
 
 "$root/scripts/spy.sh" "$url" >"$out/spy.log" 2>&1 &
+# SpyCheck listens until the runs below are over (this script closes its standard input then), or 120 s.
+mkfifo "$out/spycheck.in"
 java -cp "$build/share/afford-lcmtypes.jar:$build/share/afford-spycheck.jar:/usr/share/java/lcm.jar" \
-  SpyCheck "$url" 20 \
+  SpyCheck "$url" 120 \
   RUN_CONFIG,RUN_CONTROL,STATUS,SCENE,FOCUS,PREDICTION,DECISION,EFFECT,AFFORDANCE_TABLE,RESULT,LOOK,FORWARD_QUERY,FORWARD_PREDICTION,EXTRINSIC_RESULT,GOAL,GOAL_RESULT \
-  >"$out/decoded.txt" 2>&1 &
+  <"$out/spycheck.in" >"$out/decoded.txt" 2>&1 &
 check=$!
+exec 3>"$out/spycheck.in"
 # The listeners are up before the run's first message: SpyCheck says so, and lcm-spy's window is mapped.
 wait_until 60 grep -q "^listening on" "$out/decoded.txt" || { cat "$out/decoded.txt"; echo "SpyCheck never listened"; exit 1; }
 wait_until 60 bash -c 'xwininfo -root -tree | grep -qi "spy"' || { cat "$out/spy.log"; echo "lcm-spy never showed its window"; exit 1; }
@@ -50,6 +53,7 @@ wait "$run" || { echo "the run failed:"; cat "$out/run.log"; exit 1; }
 "$build/bin/afford" experiment base --system GOALS --reps 1 --steps 300 --netns off --base-port "$port" \
   --keep-logs none --quiet --out "$out/goals" --log-root "$out/logs" --run-prefix spy >"$out/goals.log" 2>&1 ||
   { echo "the goals run failed:"; cat "$out/goals.log"; exit 1; }
+exec 3>&-
 status=0
 wait "$check" || status=$?
 import -window root "$out/spy.png"

@@ -15,10 +15,17 @@
 namespace afford {
 namespace {
 
-WorldConfig world() { return test::shippedConfig().world; }
-WorldConfig continuousWorld() {
-  WorldConfig w = world();
-  w.positions = Positions::Continuous;
+// The shipped world, read once per test (the tests below draw shapes in thousands of places).
+const WorldConfig& world() {
+  static const WorldConfig w = test::shippedConfig().world;
+  return w;
+}
+const WorldConfig& continuousWorld() {
+  static const WorldConfig w = [] {
+    WorldConfig c = world();
+    c.positions = Positions::Continuous;
+    return c;
+  }();
   return w;
 }
 

@@ -1,7 +1,8 @@
-// Listens to every channel of an LCM bus for a while and decodes each message
-// the way lcm-spy does: by its fingerprint, with the LCM types found on the
-// CLASSPATH (lcm.spy.LCMTypeDatabase). Prints, per channel, the messages heard
-// and their type. Exits 1 if a message could not be decoded, or if one of the
+// Listens to every channel of an LCM bus for SECONDS, or until its standard
+// input ends, and decodes each message the way lcm-spy does: by its
+// fingerprint, with the LCM types found on the CLASSPATH
+// (lcm.spy.LCMTypeDatabase). Prints, per channel, the messages heard and
+// their type. Exits 1 if a message could not be decoded, or if one of the
 // expected channels was never heard; 2 on bad arguments.
 //   java -cp afford-lcmtypes.jar:afford-spycheck.jar:lcm.jar SpyCheck URL SECONDS [CHANNEL,...]
 import java.io.IOException;
@@ -53,7 +54,16 @@ public class SpyCheck implements LCMSubscriber {
     lcm.subscribe(".*", check);
     System.out.println("listening on " + args[0]);  // the test starts the run on this line
     System.out.flush();
-    Thread.sleep((long) (Double.parseDouble(args[1]) * 1000));
+    // Until SECONDS have passed or its standard input ends (closed by a caller who knows the bus has said all).
+    Thread input = new Thread(() -> {
+      try {
+        while (System.in.read() >= 0) {}
+      } catch (IOException e) {
+      }
+    });
+    input.setDaemon(true);
+    input.start();
+    input.join((long) (Double.parseDouble(args[1]) * 1000));
     lcm.unsubscribe(".*", check);
     int status = 0;
     synchronized (check) {
