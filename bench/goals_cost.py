@@ -18,6 +18,7 @@ import argparse
 import json
 import os
 import pathlib
+import resource
 import statistics
 import subprocess
 import sys
@@ -31,20 +32,23 @@ def load():
 
 
 def experiment(afford, out, prefix, system, steps, reps, jobs, transport):
-    """One `afford experiment base`; its wall time and the runs of its summary.json."""
+    """One `afford experiment base`: its wall time, the CPU time of its processes (user and system, every
+    process it started) and the runs of its summary.json."""
     folder = out / prefix
     cmd = [afford, "experiment", "base", "--system", system, "--reps", str(reps), "--steps", str(steps),
            "--jobs", str(jobs), "--transport", transport, "--keep-logs", "none", "--no-reuse-agents",
            "--progress", "none", "--quiet", "--out", str(folder), "--log-root", str(out / "logs"),
            "--run-prefix", prefix]
-    began = time.monotonic()
+    began, used = time.monotonic(), resource.getrusage(resource.RUSAGE_CHILDREN)
     with open(out / f"{prefix}.txt", "w") as log:
         code = subprocess.call(cmd, stdout=log, stderr=subprocess.STDOUT)
     wall = time.monotonic() - began
+    now = resource.getrusage(resource.RUSAGE_CHILDREN)
+    cpu = (now.ru_utime - used.ru_utime) + (now.ru_stime - used.ru_stime)
     if code != 0:
         sys.exit(f"goals-cost: {' '.join(cmd)} failed (exit {code}); see {out / prefix}.txt")
     summary = json.loads((folder / "summary.json").read_text())
-    return wall, summary["systems"][system]["runs"]
+    return wall, cpu, summary["systems"][system]["runs"]
 
 
 def goals_part(args, builds, out):
@@ -55,11 +59,12 @@ def goals_part(args, builds, out):
         for t in args.transports:
             for b, afford in builds.items():
                 for system in ("IMP", "GOALS"):
-                    _, runs = experiment(afford, out, f"{b}-{system}-{t}-{i}", system, args.steps, 1, 1, t)
+                    _, cpu, runs = experiment(afford, out, f"{b}-{system}-{t}-{i}", system, args.steps, 1, 1, t)
                     sps = runs[0]["steps_per_second"]
                     speeds[b][t][system].append(sps)
                     checksums.setdefault((b, system), set()).add(runs[0]["weights_checksum"])
-                    print(f"  pair {i + 1} {t} {b} {system}: {sps:.0f} steps/s (load {load():.1f})", flush=True)
+                    print(f"  pair {i + 1} {t} {b} {system}: {sps:.0f} steps/s, CPU {1e6 * cpu / args.steps:.0f} µs a "
+                          f"step (load {load():.1f})", flush=True)
     return speeds, checksums
 
 
@@ -69,9 +74,13 @@ def full_part(args, builds, out):
     for i in range(args.rounds):
         for b, afford in builds.items():
             for t in ("udpm", "memq"):
-                wall, _ = experiment(afford, out, f"{b}-full-{t}-{i}", "IMP", args.steps, args.runs, args.jobs, t)
+                wall, cpu, runs = experiment(afford, out, f"{b}-full-{t}-{i}", "IMP", args.steps, args.runs, args.jobs, t)
                 walls[b][t].append(wall)
-                print(f"  round {i + 1} {b} {t}: {args.runs} runs at --jobs {args.jobs} in {wall:.1f} s "
+                # The runs' own time (START to RESULT) against the wall: what the slots spent between runs.
+                running = sum(args.steps / r["steps_per_second"] for r in runs) / args.jobs
+                whole = sum(r["wall_seconds"] for r in runs) / args.jobs
+                print(f"  round {i + 1} {b} {t}: {args.runs} runs at --jobs {args.jobs} in {wall:.1f} s; a slot's runs "
+                      f"{running:.1f} s from START to RESULT, {whole:.1f} s with their set-up; CPU {1e6 * cpu / (args.runs * args.steps):.0f} µs a step "
                       f"(load {load():.1f})", flush=True)
     return walls
 
