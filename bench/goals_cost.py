@@ -85,6 +85,15 @@ def full_part(args, builds, out):
     return walls
 
 
+def listed(text, option, known):
+    """The comma-separated names of --option, each one of `known`."""
+    names = [n for n in text.split(",") if n]
+    for n in names:
+        if n not in known:
+            sys.exit(f"goals-cost: --{option}: '{n}' is not one of {', '.join(known)}")
+    return names
+
+
 def main():
     ap = argparse.ArgumentParser(prog="bench/run.sh goals-cost")
     ap.add_argument("--steps", type=int, default=6000)
@@ -102,14 +111,8 @@ def main():
     for name in ("steps", "pairs", "runs", "jobs", "rounds"):
         if getattr(args, name) < 1:
             sys.exit(f"goals-cost: --{name} must be at least 1")
-    parts = [p for p in args.parts.split(",") if p]
-    for p in parts:
-        if p not in ("goals", "full"):
-            sys.exit(f"goals-cost: --parts: '{p}' is neither goals nor full")
-    args.transports = [t for t in args.transports.split(",") if t]
-    for t in args.transports:
-        if t not in ("udpm", "memq"):
-            sys.exit(f"goals-cost: --transports: '{t}' is neither udpm nor memq")
+    parts = listed(args.parts, "parts", ("goals", "full"))
+    args.transports = listed(args.transports, "transports", ("udpm", "memq"))
     programs = args.afford or [str(ROOT / "build" / "bin" / "afford")]
     builds = {}
     for k, program in enumerate(programs):

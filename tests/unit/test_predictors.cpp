@@ -236,21 +236,22 @@ TEST_F(Fixture, AnUnchangedModelsLastOutputServesTheQueryAskedAgainAndTheUpdateA
   EXPECT_EQ(asked.whatEffect(kTurnGreen, probes[0]), turn_green);
   EXPECT_EQ(asked.whatOutputs(), 4);
 
+  const auto trainBoth = [&](const Experience& e) {
+    asked.train(e);
+    plain.train(e);
+    EXPECT_EQ(asked.weightsChecksum(), plain.weightsChecksum());
+  };
   // The action asked about, on that image: its update starts from the query's output.
-  asked.train(experience(kTurnGreen, true, 0));
-  plain.train(experience(kTurnGreen, true, 0));
+  trainBoth(experience(kTurnGreen, true, 0));
   EXPECT_EQ(asked.whatOutputs(), 4);
-  EXPECT_EQ(asked.weightsChecksum(), plain.weightsChecksum());
   // That model learned: its output is computed again; the move model's is still its last.
   EXPECT_NE(asked.whatEffect(kTurnGreen, probes[0]), turn_green);
   EXPECT_EQ(asked.whatEffect(kTurnGreen, probes[0]), afresh(kTurnGreen, 0));
   EXPECT_EQ(asked.whatEffect(kMove, probes[0]), move);
   EXPECT_EQ(asked.whatOutputs(), 5);
   // An update of an image other than the last asked computes its own output, as before.
-  asked.train(experience(kMove, true, 3));
-  plain.train(experience(kMove, true, 3));
+  trainBoth(experience(kMove, true, 3));
   EXPECT_EQ(asked.whatOutputs(), 6);
-  EXPECT_EQ(asked.weightsChecksum(), plain.weightsChecksum());
   EXPECT_EQ(asked.whatEffect(kMove, probes[0]), afresh(kMove, 0));
 
   // Weights loaded: no earlier output stands for them.
