@@ -54,6 +54,11 @@
 #     afford tune's workers killed (SIGKILL) at random moments, inside the journal's lock, the study's claim and
 #     between asking for a trial and claiming it too, and started again: no worker waits for good, every trial
 #     counted once, none left running (exit 1 if not).
+#   bench/run.sh goals-cost [--steps 6000] [--pairs 3] [--runs 8] [--jobs 2] [--rounds 3] [--parts goals,full]
+#                           [--afford PROGRAM ...] [--out DIR]
+#     a GOALS step beside an IMP step (pairs of runs, udpm and memq: medians, GOALS / IMP, floor 0.5 over udpm), and
+#     --runs IMP runs at --jobs over udpm beside memq (median walls, udpm / memq, floor 0.61); several --afford
+#     builds measured in turn, side by side (bench/goals_cost.py; exit 1 below a floor).
 #   bench/run.sh reproduction [--reps R] [--ext-reps K] [--jobs J] [--transport memq|udpm] [--out DIR] [WHAT ...]
 #     the whole reproduction (scripts/reproduce.sh WHAT, default all, its report in DIR): wall time beside its
 #     critical path and the share of the time the cores were busy.
@@ -74,6 +79,8 @@ cd "$(dirname "$0")/.."
   PYTHONPATH=build/python exec /usr/bin/python3 bench/tune_kill.py "$@"; }
 [[ ${1:-} == reproduction ]] && { shift; exec /usr/bin/python3 bench/reproduction.py "$@"; }
 [[ ${1:-} == long ]] && { shift; [[ -x build/bin/afford ]] || scripts/setup.sh; exec /usr/bin/python3 bench/long_run.py "$@"; }
+[[ ${1:-} == goals-cost ]] && { shift; [[ -x build/bin/afford ]] || scripts/setup.sh;
+  exec /usr/bin/python3 bench/goals_cost.py "$@"; }
 [[ ${1:-} == full ]] && { shift; [[ -x build/bin/afford ]] || scripts/setup.sh;
   exec /usr/bin/python3 bench/full_machine.py "$@"; }
 [[ -x build/bin/afford-bench ]] || scripts/setup.sh

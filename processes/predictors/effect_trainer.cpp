@@ -13,10 +13,16 @@ EffectTrainer::~EffectTrainer() {
   thread_.join();
 }
 
-void EffectTrainer::push(std::vector<Memory::Ref> updates) {
+void EffectTrainer::push(std::vector<Memory::Ref> updates) { add(Job{std::move(updates), {}, {}}); }
+
+void EffectTrainer::ahead(std::vector<int> actions, std::vector<std::uint8_t> image) {
+  add(Job{{}, std::move(actions), std::move(image)});
+}
+
+void EffectTrainer::add(Job job) {
   {
     std::lock_guard<std::mutex> lock(mutex_);
-    queue_.push_back(std::move(updates));
+    queue_.push_back(std::move(job));
   }
   changed_.notify_all();
 }
@@ -31,11 +37,12 @@ void EffectTrainer::work() {
   for (;;) {
     changed_.wait(lock, [this] { return stop_ || !queue_.empty(); });
     if (queue_.empty()) return;  // stopping, nothing left
-    std::vector<Memory::Ref> updates = std::move(queue_.front());
+    Job job = std::move(queue_.front());
     queue_.pop_front();
     busy_ = true;
     lock.unlock();
-    core_.trainEffects(updates);
+    core_.trainEffects(job.updates);
+    for (int a : job.actions) (void)core_.whatEffect(a, job.image);
     lock.lock();
     busy_ = false;
     changed_.notify_all();

@@ -3,6 +3,9 @@
 // steps of the choreography. The affordance path never touches those models,
 // and drain() is called before anything reads them (weights checksum,
 // forward-model queries), so results are bit-identical to updating inline.
+// In the goals phase it also computes ahead, after the updates queued before,
+// the what-effect outputs a query is expected to ask for (Predictors keeps
+// each model's last output): the query then finds them made.
 #pragma once
 #include <condition_variable>
 #include <deque>
@@ -22,16 +25,24 @@ class EffectTrainer {
 
   // The forward-model updates of one executed action (TrainingReport::effect_updates).
   void push(std::vector<Memory::Ref> updates);
+  // The what-effect outputs of `actions` for `image`, once the updates queued before are made.
+  void ahead(std::vector<int> actions, std::vector<std::uint8_t> image);
   // Block until every queued update is applied.
   void drain();
 
  private:
+  struct Job {
+    std::vector<Memory::Ref> updates;
+    std::vector<int> actions;  // ahead(): the outputs to make for `image`
+    std::vector<std::uint8_t> image;
+  };
+  void add(Job job);
   void work();
 
   Predictors& core_;
   std::mutex mutex_;
   std::condition_variable changed_;
-  std::deque<std::vector<Memory::Ref>> queue_;
+  std::deque<Job> queue_;
   bool busy_ = false, stop_ = false;
   std::thread thread_;
 };

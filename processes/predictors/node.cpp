@@ -243,8 +243,18 @@ void PredictorsNode::onStop() {
 
 void PredictorsNode::handleFocus(const focus_t& m) {
   if (m.step % config().curve_interval == 0) publishTable(m.step);
-  publishPrediction(m);
+  const Prediction p = publishPrediction(m);
   trainPendingEffects();  // off the critical path: the next decision is under way
+  if (trainer_ && config().phase == Phase::Goals && m.kind == focus_t::SCENE_OBJECT) {
+    // The planner's next request is a query about this object for the actions it affords (planner.cpp,
+    // objectSeen): their outputs are made on the worker while the PREDICTION travels and the query comes back.
+    const PlannerConfig& planner = config().planner;
+    std::vector<int> actions;
+    for (int a = 0; a < kNumActions; ++a)
+      if (!planner.restrict_by_affordance || p.affordance[static_cast<std::size_t>(a)] > planner.affordance_threshold)
+        actions.push_back(a);
+    trainer_->ahead(std::move(actions), m.image);
+  }
   current_ = m.step;
   focus_ = m;
   outcome_ = Outcome::Unknown;
@@ -252,12 +262,13 @@ void PredictorsNode::handleFocus(const focus_t& m) {
   handled(m.step);
 }
 
-void PredictorsNode::publishPrediction(const focus_t& m) {
+Prediction PredictorsNode::publishPrediction(const focus_t& m) {
   // Intrinsic phase: the focus of step m.step, seen once (a memory remembers its look).
   const Prediction p = extrinsic() ? core_->predict(m.image) : core_->see(m.image, m.step);
   if (!extrinsic()) look_ = p.look;
   publish(ch::prediction, predictionMessage(runId(), m, p, pending_trained_));  // with the update since the last
   pending_trained_.reset();
+  return p;
 }
 
 void PredictorsNode::answer(const forward_query_t& q) {
@@ -319,6 +330,8 @@ void PredictorsNode::learn(const effect_t& m) {
   TrainingReport r = core_->trainAffordance(experienceOf(focus_, m), m.step, look_);
   pending_trained_ = trainedMessage(runId(), m.step, r);
   pending_effects_ = std::move(r.effect_updates);
+  // Goals phase: the next query waits for these updates; begun now, they are made while the next goal is set.
+  if (config().phase == Phase::Goals) trainPendingEffects();
   outcome_ = Outcome::Learned;
   saveActionsCheckpoint();
   if (m.step == config().steps - 1) finish();

@@ -56,7 +56,7 @@ class PredictorsNode : public NodeBase {
   void learn(const effect_t& m);             // intrinsic: its effect, learned from
   void takeQueries();  // the FORWARD_QUERY input of each phase (the constructor states the others)
   void answer(const forward_query_t& q);     // extrinsic: what actions would do
-  void publishPrediction(const focus_t& m);
+  Prediction publishPrediction(const focus_t& m);  // what it published
   bool extrinsic() const { return config().phase == Phase::Extrinsic; }
   void handleFocus(const focus_t& m);
   void publishTable(std::int64_t step);

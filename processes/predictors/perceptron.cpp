@@ -99,7 +99,10 @@ Eigen::VectorXd Layer::output(const SparseInput& x) const {
 }
 
 void Layer::train(const SparseInput& x, const Eigen::VectorXd& target, double learning_rate) {
-  const Eigen::VectorXd y = output(x);
+  train(x, output(x), target, learning_rate);
+}
+
+void Layer::train(const SparseInput& x, const Eigen::VectorXd& y, const Eigen::VectorXd& target, double learning_rate) {
   Eigen::VectorXd delta = target - y;
   if (sigmoid_) delta = delta.cwiseProduct(y.cwiseProduct(Eigen::VectorXd::Ones(y.size()) - y));
   delta *= learning_rate;

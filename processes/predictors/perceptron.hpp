@@ -47,6 +47,8 @@ class Layer {
   Layer(int outputs, int dim, bool sigmoid);
   Eigen::VectorXd output(const SparseInput& x) const;
   void train(const SparseInput& x, const Eigen::VectorXd& target, double learning_rate);
+  // The same step, given `y`, output(x) with the weights as they are.
+  void train(const SparseInput& x, const Eigen::VectorXd& y, const Eigen::VectorXd& target, double learning_rate);
   Eigen::MatrixXd& weights() { return w_; }
   const Eigen::MatrixXd& weights() const { return w_; }
 

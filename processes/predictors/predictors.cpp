@@ -131,7 +131,14 @@ void Predictors::trainEffects(const Experience& e) {
   const int a = e.action;
   Eigen::VectorXd target(input_size_);
   for (int i = 0; i < input_size_; ++i) target[i] = e.after_image[i] / 255.0;
-  what_[a].train(inputOf(e), target, config_.what_effect_learning_rate);
+  LastOutput& last = last_what_[static_cast<std::size_t>(a)];
+  if (last.valid && last.image == e.before_image) {
+    what_[a].train(inputOf(e), last.y, target, config_.what_effect_learning_rate);
+  } else {
+    what_[a].train(inputOf(e), target, config_.what_effect_learning_rate);
+    ++what_outputs_;
+  }
+  last.valid = false;
   where_[a].train(whereInput(a, e.before_x, e.before_y, e.target_x, e.target_y), Eigen::Vector2d(e.after_x, e.after_y),
                   config_.where_effect_learning_rate);
 }
@@ -143,8 +150,14 @@ std::vector<PerAction> Predictors::table(const std::vector<std::vector<std::uint
 }
 
 std::vector<double> Predictors::whatEffect(int action, const std::vector<std::uint8_t>& focus_image) const {
-  const Eigen::VectorXd y = what_[action].output(focusInput(focus_image));
-  return std::vector<double>(y.data(), y.data() + y.size());
+  LastOutput& last = last_what_[static_cast<std::size_t>(action)];
+  if (!last.valid || last.image != focus_image) {
+    last.y = what_[action].output(focusInput(focus_image));
+    last.image = focus_image;
+    last.valid = true;
+    ++what_outputs_;
+  }
+  return std::vector<double>(last.y.data(), last.y.data() + last.y.size());
 }
 
 std::array<double, 2> Predictors::whereEffect(int action, double x, double y, double tx, double ty) const {
@@ -435,6 +448,7 @@ void Predictors::load(const std::string& path) {
 }
 
 void Predictors::loadFrom(std::istream& in, const std::string& path) {
+  for (LastOutput& last : last_what_) last.valid = false;
   char magic[8];
   std::uint32_t header[2];
   in.read(magic, sizeof magic);

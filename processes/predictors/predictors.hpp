@@ -120,6 +120,8 @@ class Predictors {
   const Memory* memory() const { return memory_.get(); }
   std::int64_t replayedUpdates() const { return replayed_; }         // affordance updates replayed
   std::int64_t replayedEffectUpdates() const { return replayed_effects_; }  // forward-model updates replayed
+  // What-effect outputs computed (for a query or an update), not taken from the model's last output.
+  std::int64_t whatOutputs() const { return what_outputs_; }
   // The release that wrote the checkpoint last loaded ("0.1.0 or earlier" before format 4); "" if none was.
   const std::string& checkpointWrittenBy() const { return written_by_; }
 
@@ -139,6 +141,16 @@ class Predictors {
   int input_size_;
   std::unique_ptr<AffordanceComponent> affordance_;
   std::vector<Layer> what_, where_;
+  // Each what-effect model's last output and the image it was for, until that model learns or weights are
+  // loaded: a query asked again of an unchanged model is answered from it, and the update after an action the
+  // planner asked about starts from it (goals phase). The values are those the model would compute again.
+  struct LastOutput {
+    bool valid = false;
+    std::vector<std::uint8_t> image;
+    Eigen::VectorXd y;
+  };
+  mutable std::array<LastOutput, kNumActions> last_what_;
+  mutable std::int64_t what_outputs_ = 0;
   std::array<std::int64_t, kNumActions> executed_{}, successes_{};
   std::string written_by_;
   std::unique_ptr<Memory> memory_;

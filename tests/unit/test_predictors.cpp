@@ -12,6 +12,7 @@
 #include "afford/version.hpp"
 #include "environment/environment.hpp"
 #include "predictors/affordance.hpp"
+#include "predictors/effect_trainer.hpp"
 #include "predictors/predictors.hpp"
 #include "tests/support.hpp"
 
@@ -212,6 +213,78 @@ TEST_F(Fixture, SplitTrainingEqualsWholeTraining) {
   }
   EXPECT_EQ(whole.weightsChecksum(), split.weightsChecksum());
   EXPECT_NE(whole.weightsChecksum(), Predictors(imp).weightsChecksum());
+}
+
+// A what-effect output is computed once for a model as it stands (issue 57): a query asked again of an unchanged
+// model, and the update after an action on the image just asked about, take the model's last output; the
+// answers and the weights are those of predictors computing every output afresh.
+TEST_F(Fixture, AnUnchangedModelsLastOutputServesTheQueryAskedAgainAndTheUpdateAfterIt) {
+  Predictors asked(imp), plain(imp);  // the same updates; `plain` computes each output it is asked for afresh
+  const auto afresh = [&](int action, int probe) {
+    const std::int64_t computed = plain.whatOutputs();
+    auto out = plain.whatEffect(action, probes[static_cast<std::size_t>(probe)]);
+    EXPECT_EQ(plain.whatOutputs(), computed + 1);
+    return out;
+  };
+  const auto turn_green = asked.whatEffect(kTurnGreen, probes[0]);
+  const auto move = asked.whatEffect(kMove, probes[0]);
+  EXPECT_EQ(asked.whatOutputs(), 2);
+  EXPECT_EQ(asked.whatEffect(kTurnGreen, probes[0]), turn_green);  // asked again: the same model, the same image
+  EXPECT_EQ(asked.whatOutputs(), 2);
+  EXPECT_EQ(asked.whatEffect(kTurnGreen, probes[1]), afresh(kTurnGreen, 1));  // another image: computed
+  EXPECT_EQ(asked.whatOutputs(), 3);
+  EXPECT_EQ(asked.whatEffect(kTurnGreen, probes[0]), turn_green);
+  EXPECT_EQ(asked.whatOutputs(), 4);
+
+  const auto trainBoth = [&](const Experience& e) {
+    asked.train(e);
+    plain.train(e);
+    EXPECT_EQ(asked.weightsChecksum(), plain.weightsChecksum());
+  };
+  // The action asked about, on that image: its update starts from the query's output.
+  trainBoth(experience(kTurnGreen, true, 0));
+  EXPECT_EQ(asked.whatOutputs(), 4);
+  // That model learned: its output is computed again; the move model's is still its last.
+  EXPECT_NE(asked.whatEffect(kTurnGreen, probes[0]), turn_green);
+  EXPECT_EQ(asked.whatEffect(kTurnGreen, probes[0]), afresh(kTurnGreen, 0));
+  EXPECT_EQ(asked.whatEffect(kMove, probes[0]), move);
+  EXPECT_EQ(asked.whatOutputs(), 5);
+  // An update of an image other than the last asked computes its own output, as before.
+  trainBoth(experience(kMove, true, 3));
+  EXPECT_EQ(asked.whatOutputs(), 6);
+  EXPECT_EQ(asked.whatEffect(kMove, probes[0]), afresh(kMove, 0));
+
+  // Weights loaded: no earlier output stands for them.
+  const std::string dir = test::tempDir("last-output");
+  asked.save(dir + "/asked.ckpt");
+  Predictors other(imp);
+  for (int k = 0; k < 6; ++k) other.train(experience(k % 4, true, k % 9));
+  const auto before = other.whatEffect(kMove, probes[0]);
+  other.load(dir + "/asked.ckpt");
+  EXPECT_NE(other.whatEffect(kMove, probes[0]), before);
+  EXPECT_EQ(other.whatEffect(kMove, probes[0]), asked.whatEffect(kMove, probes[0]));
+}
+
+// The worker makes the outputs a query is expected to ask for after the updates queued before them: the query
+// finds them made, and they are those of the models as updated.
+TEST_F(Fixture, TheWorkerMakesTheOutputsAheadAfterTheUpdatesBeforeThem) {
+  Predictors ahead(imp), plain(imp);
+  plain.train(experience(kTurnRed, true, 2));
+  const auto turn_red = plain.whatEffect(kTurnRed, probes[2]), move = plain.whatEffect(kMove, probes[2]);
+  {
+    EffectTrainer worker(ahead);
+    TrainingReport r = ahead.trainAffordance(experience(kTurnRed, true, 2));
+    std::vector<Memory::Ref> updates = std::move(r.effect_updates);
+    ASSERT_EQ(updates.size(), 1u);
+    worker.push(std::move(updates));
+    worker.ahead({kTurnRed, kMove}, probes[2]);
+    worker.drain();
+  }
+  EXPECT_EQ(ahead.whatOutputs(), 3);  // the update's own, then the two ahead
+  EXPECT_EQ(ahead.whatEffect(kTurnRed, probes[2]), turn_red);
+  EXPECT_EQ(ahead.whatEffect(kMove, probes[2]), move);
+  EXPECT_EQ(ahead.whatOutputs(), 3);
+  EXPECT_EQ(ahead.weightsChecksum(), plain.weightsChecksum());
 }
 
 // ---- the memory of issue 11 (docs/model.md#memory, #replay) ----------------------------
