@@ -39,7 +39,11 @@ def test_without_out_it_writes_a_new_folder_in_the_temporary_directory_not_where
 
 def test_compare_draws_the_figure_of_docs_ppo_again(tmp_path):
     import shutil
-    import compare  # (examples/ppo, beside ppo.py)
+    import importlib.util  # examples/ppo/compare.py by its path: another example has a compare.py on sys.path too
+    where = Path(__file__).resolve().parents[2] / "examples" / "ppo" / "compare.py"
+    spec = importlib.util.spec_from_file_location("ppo_compare", where)
+    compare = importlib.util.module_from_spec(spec)
+    spec.loader.exec_module(compare)
     docs = Path(__file__).resolve().parents[2] / "docs" / "ppo"
     shutil.copytree(docs, tmp_path / "ppo")
     figure = tmp_path / "ppo" / "fig_ppo_vs_planner.png"
