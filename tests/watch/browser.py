@@ -6,7 +6,8 @@
                                  run's log (OUT/logs): its step advanced, each scene it showed is the log's
                                  scene of that step, it was never more than a second behind the run, its
                                  curves grew; in the goals phase its trace drew the modules' competence and
-                                 its goals table said what an exploration is; at the end (the page's last
+                                 its goals table said what an exploration is and its goal panel showed the
+                                 agent's own goal image; at the end (the page's last
                                  state) every run heard is done, the last test's goal image is shown, and
                                  shown again after another run without one; at 1280 px the curves have
                                  their axes' ticks and the legend beside them; screenshots
@@ -115,7 +116,10 @@ def goals_phase(d):
       const s = window.afford.state;
       return {phase: s ? s.run.phase : '', lines: Number(document.getElementById('trace').dataset.lines),
               title: document.getElementById('trace-title').textContent,
-              goals: document.getElementById('goals').innerText};""")
+              goals: document.getElementById('goals').innerText,
+              goal: s && s.sub_goal && s.goal_text !== '' && !s.goal
+                    && document.getElementById('goal').getAttribute('src') === s.sub_goal.png
+                    && document.getElementById('goal').naturalWidth > 0};""")
 
 
 def the_end(d, out):
@@ -183,6 +187,8 @@ def live(url, out):
                                  "window.goalsCurves = s.curves;")
                 goals_seen.append(g)
                 if not shot and s["step"] >= 1000:
+                    # The agent's own goal (no goal scene in this phase) is drawn in the goal panel.
+                    wait("the goals phase's goal image drawn", lambda: goals_phase(d)["goal"], 5)
                     d.save_screenshot(str(out / "watch-live.png"))
                     shot = True
             time.sleep(0.1)
