@@ -440,7 +440,13 @@ std::vector<CheckedRun> checkExperiment(const ExperimentRequest& request) {
 
 int runExperiment(const ExperimentRequest& request, spdlog::logger& log) {
   const auto began = std::chrono::steady_clock::now();
-  Experiment x = prepare(request);  // everything is checked before anything is written or started
+  Experiment x;
+  try {
+    x = prepare(request);  // everything is checked before anything is written or started
+  } catch (const NothingToResume& e) {
+    log.info("{}", e.what());
+    return 0;
+  }
   return runPrepared(x, began, log, Shared{});
 }
 

@@ -297,8 +297,9 @@ ExperimentState unfinishedState(const ExperimentRequest& given) {
                       statePath(given.write.out_dir).string() + "): is --out right?");
   ExperimentState state = readState(given.write.out_dir);
   if (state.state == "finished")
-    throw ConfigError("--resume: the experiment in " + given.write.out_dir + " (" + state.experiment +
-                      ") finished: its results are in " + (fs::path(given.write.out_dir) / "summary.json").string());
+    throw NothingToResume("--resume: nothing to resume: the experiment in " + given.write.out_dir + " (" +
+                          state.experiment + ") finished; its results are in " +
+                          (fs::path(given.write.out_dir) / "summary.json").string());
   return state;
 }
 

@@ -63,7 +63,11 @@ struct FollowedFolder {
 };
 FollowedFolder followMovedFolder(ExperimentState& state, const ExperimentRequest& given);
 ExperimentRequest resumedRequest(const ExperimentRequest& given, const ExperimentState& state);
-// The stored experiment of DIR, if it did not finish.
+// The stored experiment of DIR, if it did not finish; NothingToResume if it did (a resume again, of a
+// script or a requeued job, is no error: there is nothing left to do).
+struct NothingToResume : ConfigError {
+  using ConfigError::ConfigError;
+};
 ExperimentState unfinishedState(const ExperimentRequest& given);
 
 // With --resume, a plan option given again must say what the stored experiment

@@ -253,7 +253,9 @@ TEST(Interrupt, SigtermDuringTheExtrinsicTestsOverMemqKeepsThemAndResumeComplete
   expectSameResults(dir / "out", dir / "whole");
 }
 
-TEST(Interrupt, ResumeRefusesAFolderWithoutAnExperimentAFinishedOneAndAChangedPlan) {
+// A finished experiment resumed again (a script's rerun, a requeued job) has nothing left to do: it says so,
+// succeeds, and its folder stays as it was.
+TEST(Interrupt, ResumeRefusesAFolderWithoutAnExperimentAndAChangedPlanAndLeavesAFinishedOneAsItWas) {
   const fs::path dir = test::tempDir("interrupt-refuse");
   const std::string logs = " --log-root " + (dir / "logs").string();
 
@@ -266,9 +268,13 @@ TEST(Interrupt, ResumeRefusesAFolderWithoutAnExperimentAFinishedOneAndAChangedPl
                                                   " --transport memq --keep-logs none --run-prefix fin --out " +
                                                   (dir / "done").string() + logs));
   ASSERT_EQ(done.exit_code, 0) << done.output;
+  const std::string summary = slurp(dir / "done/summary.json");
+  const auto written = fs::last_write_time(dir / "done/summary.json");
   const auto again = test::runCommand(test::afford("experiment --resume --out " + (dir / "done").string()));
-  EXPECT_EQ(again.exit_code, 2) << again.output;
-  EXPECT_NE(again.output.find("finished"), std::string::npos) << again.output;
+  EXPECT_EQ(again.exit_code, 0) << again.output;
+  EXPECT_NE(again.output.find("nothing to resume"), std::string::npos) << again.output;
+  EXPECT_EQ(slurp(dir / "done/summary.json"), summary);
+  EXPECT_EQ(fs::last_write_time(dir / "done/summary.json"), written);
 
   // An interrupted one (runs far too long to finish).
   const std::string out = (dir / "cut").string();
