@@ -20,8 +20,8 @@ class Float:
     high: float
     log: bool = False
 
-    def spec(self) -> str:
-        return f"{'log' if self.log else 'float'}:{self.low!r}:{self.high!r}"
+    def spec(self) -> str:  # (float: Float(0.005, 1) and 'log:0.005:1' are one range, and say so alike)
+        return f"{'log' if self.log else 'float'}:{float(self.low)!r}:{float(self.high)!r}"
 
 
 class Int(Float):

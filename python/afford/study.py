@@ -385,6 +385,10 @@ def _open(folder: Path, d: dict[str, Any]):
         stored = folder / "study.json"
         if stored.is_file():
             old = _read_definition(stored)
+            try:  # each range as this release writes it (one stored as Float(0.005, 1) was 'log:0.005:1')
+                old["params"] = {k: parse_param(k, v).spec() for k, v in old.get("params", {}).items()}
+            except (ValueError, AttributeError):
+                pass
             differ = [k for k in KEPT if old.get(k) != d.get(k)]
             if differ:
                 said = "; ".join(f"{k}: {old.get(k)!r} there, {d.get(k)!r} here" for k in differ)

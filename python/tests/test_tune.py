@@ -553,3 +553,12 @@ def test_a_study_of_0_2_0_reads_its_extrinsic_reps_of_zero_as_the_experiments_co
         assert d["extrinsic_tests"] == read and "extrinsic_reps" not in d
     old.write_text(json.dumps({"experiment": "base", "extrinsic_tests": 0}))
     assert _read_definition(old)["extrinsic_tests"] == 0
+
+
+def test_a_range_given_in_python_and_on_the_command_line_is_one_study():
+    # afford.Float(0.005, 1, log=True) and `--param KEY=log:0.005:1` are one range: a worker started either way
+    # joins the other's study (the study's folder compares the specs).
+    from afford.search import parse_param
+    given = parse_param("k", afford.Float(0.005, 1, log=True)).spec()
+    assert given == parse_param("k", "log:0.005:1").spec() == parse_param("k", "log:0.005:1.0").spec()
+    assert afford.Int(1, 8).spec() == parse_param("k", "int:1:8").spec()
