@@ -401,5 +401,22 @@ TEST(Newcomer, ZeroExtrinsicRepsRunsNoTestsWhereTheExperimentAsksForThem) {
   EXPECT_FALSE(test::readJson(dir + "/design/experiment.json")["options"].contains("extrinsic_tests"));
 }
 
+// Without --out, each experiment writes a new folder out/NAME (a file's stem for an experiment file; out/NAME-2
+// if that is taken): a second one never meets the first's folder, as it did when both wrote out/.
+TEST(Newcomer, WithoutOutEachExperimentWritesAFolderOfItsOwnInOut) {
+  namespace fs = std::filesystem;
+  const std::string dir = test::tempDir("default-out");
+  spit(dir + "/mine.yaml", "extends: base\n");
+  const std::string common = " --system IMP --reps 1 --steps 30 --extrinsic-reps 0 --transport memq --quiet"
+                             " --keep-logs none --log-root logs";
+  for (const std::string what : {"base", "late1", "--config mine.yaml", "base"}) {
+    const auto r = test::runCommand("cd " + dir + " && " + test::afford("experiment " + what + common));
+    EXPECT_EQ(r.exit_code, 0) << what << ": " << r.output;
+  }
+  for (const char* name : {"base", "late1", "mine", "base-2"})
+    EXPECT_TRUE(fs::exists(dir + "/out/" + name + "/summary.json")) << name;
+  EXPECT_FALSE(fs::exists(dir + "/out/summary.json"));
+}
+
 }  // namespace
 }  // namespace afford

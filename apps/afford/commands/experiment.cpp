@@ -47,7 +47,9 @@ void addFirstOptions(CLI::App* exp, Args& a) {
   exp->add_option("--steps", a.steps, "intrinsic steps per run (default: the experiment's)");
   exp->add_option("--jobs,-j", o.host.jobs, "runs at a time")->capture_default_str();
   exp->add_option("--seed", o.plan.seed, "seed of the first repetition (then seed+1, ...)")->capture_default_str();
-  exp->add_option("--out", o.write.out_dir, "folder for summary.json and CSV files")->capture_default_str();
+  exp->add_option("--out", o.write.out_dir,
+                  "folder for summary.json and CSV files (default: a new folder out/NAME, the experiment's name, "
+                  "else out/NAME-2, ...; a queue's entries: OUT/NAME; with --resume: out)")->capture_default_str();
   exp->add_flag("--replace", o.write.replace,
                 "--out holds a finished experiment: remove its files and write this one in their place (without "
                 "it, such a folder is refused)");
@@ -210,6 +212,18 @@ std::vector<std::string> planEntries(const std::string& file) {
   return lines;
 }
 
+// `dir` if it does not exist or is empty; else the first of dir-2, dir-3, ... that does not.
+std::string freeFolder(const std::string& dir) {
+  namespace fs = std::filesystem;
+  const auto free = [](const fs::path& p) {
+    std::error_code ec;
+    return !fs::exists(p, ec) || (fs::is_directory(p, ec) && fs::is_empty(p, ec));
+  };
+  if (free(dir)) return dir;
+  for (int k = 2;; ++k)
+    if (free(dir + "-" + std::to_string(k))) return dir + "-" + std::to_string(k);
+}
+
 // The folder an entry writes when it gives no --out: <out>/<name> (a --config file: its stem).
 std::string entryFolder(const std::string& out, const std::string& name) {
   const std::filesystem::path p(name);
@@ -316,7 +330,11 @@ Command experimentCommand(CLI::App& app, const FrontDoor& door) {
             std::unique_ptr<LiveWatch> watch;
             if (a->watch) watch = servePage(*a, door, protocol);
             if (a->names.size() > 1 || !a->plan.empty()) return runQueueOf(*a, app, exp, door);
-            return runExperiment(requestOf(*a, app, exp, door), *door.log);
+            ExperimentRequest r = requestOf(*a, app, exp, door);
+            // Without --out, a new folder of the experiment's own, out/NAME (then out/NAME-2, ...): a second
+            // experiment never meets the files of one before it.
+            if (!r.given.count("--out") && !r.resume) r.write.out_dir = freeFolder(entryFolder(r.write.out_dir, r.plan.experiment));
+            return runExperiment(r, *door.log);
           }};
 }
 
