@@ -14,6 +14,7 @@ import os
 import re
 import shlex
 import subprocess
+import sys
 from pathlib import Path
 
 import pytest
@@ -23,32 +24,16 @@ import afford
 ROOT = Path(__file__).resolve().parents[2]
 BIN = Path(os.environ.get("AFFORD_BIN", ROOT / "build" / "bin"))
 DOCS = [ROOT / "README.md", *sorted((ROOT / "docs").glob("*.md"))]
-FENCE = re.compile(r"^```(\w*)\s*$")
-
-
-def blocks(path: Path):
-    """(language, first line number, text, section heading) of each fenced block."""
-    section, lang, start, body = "", None, 0, []
-    for n, line in enumerate(path.read_text().splitlines(), 1):
-        m = FENCE.match(line)
-        if lang is None:
-            if line.startswith("## "):
-                section = line[3:]
-            if m:
-                lang, start, body = m.group(1), n + 1, []
-        elif line.startswith("```"):
-            yield lang, start, "\n".join(body), section
-            lang = None
-        else:
-            body.append(line)
+sys.path.insert(0, str(ROOT / "tests" / "docs"))
+from mdblocks import blocks  # noqa: E402  (the blocks of a markdown file, shared with tests/docs/run_blocks.py)
 
 
 def python_sections():
     out = {}
     for path in DOCS:
-        for lang, start, text, section in blocks(path):
-            if lang == "python":
-                out.setdefault((path.relative_to(ROOT).as_posix(), section), []).append((start, text))
+        for b in blocks(path):
+            if b.lang == "python":
+                out.setdefault((path.relative_to(ROOT).as_posix(), b.section), []).append((b.start, b.text))
     return out
 
 
@@ -145,9 +130,10 @@ def test_the_checks_find_what_they_are_for():
 def command_lines():
     """(file, line, words) of each `afford ...` command of the shell blocks (continuations joined)."""
     for path in DOCS:
-        for lang, start, text, _ in blocks(path):
-            if lang not in ("sh", "bash", "console", "shell"):
+        for b in blocks(path):
+            if b.lang not in ("sh", "bash", "console", "shell"):
                 continue
+            start, text = b.start, b.text
             joined, first = "", None
             for k, line in enumerate(text.splitlines()):
                 first = start + k if not joined else first
@@ -223,3 +209,21 @@ def test_every_script_the_docs_run_from_the_checkout_exists():
             if not (ROOT / w).exists():
                 missing.append(f"{path}:{line}: {w}")
     assert not missing, "\n".join(missing)
+
+
+KNOWN = {"sh", "bash", "python", "yaml", "text"}  # what tests/docs/run_blocks.py runs, writes or shows
+
+
+def test_every_block_of_the_docs_runs_or_says_why_not():
+    # Each block has a language the runner takes (text: shown output), or a directive that says what to do
+    # with it (file, fragment), or `skip` with its reason.
+    unmarked = []
+    for path in DOCS:
+        for b in blocks(path):
+            said = dict(b.directives)
+            if "skip" in said:
+                if not said["skip"]:
+                    unmarked.append(f"{path.name}:{b.start - 1}: `skip` without a reason")
+            elif b.lang not in KNOWN or b.lang == "yaml" and not {"file", "fragment"} & said.keys():
+                unmarked.append(f"{path.name}:{b.start - 1}: language {b.lang or '(none)'!r}, no directive")
+    assert not unmarked, "\n".join(unmarked)

@@ -281,7 +281,7 @@ TEST(Docs, TheMapOfFilesNamesEveryFileOfTheFrontDoorAndTheEngine) {
   const std::filesystem::path root = AFFORD_SOURCE_DIR;
   std::ifstream doc(root / "docs" / "processes-and-channels.md");
   const std::string text((std::istreambuf_iterator<char>(doc)), std::istreambuf_iterator<char>());
-  const auto from = text.find("```\ncommon/ ");
+  const auto from = text.find("```text\ncommon/ ");
   ASSERT_NE(from, std::string::npos) << "no map of files (beginning with common/) in docs/processes-and-channels.md";
   ASSERT_NE(text.find("\napps/afford/ ", from), std::string::npos) << "the map of files has no apps/afford/";
   const std::string map = text.substr(from, text.find("```", from + 3) - from);
