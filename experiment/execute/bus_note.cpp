@@ -27,10 +27,11 @@ void writeBusNote(const std::filesystem::path& out_dir, const BusNote& note) {
 
 BusNote readBusNote(const std::filesystem::path& out_dir) {
   const auto file = busNotePath(out_dir);
-  std::ifstream in(file);
-  if (!in) throw std::runtime_error("no " + file.string() + ": no experiment has run its processes there yet");
-  try {
-    return fromJsonOf<BusNote>(nlohmann::json::parse(in), file.string());
+  std::error_code ec;
+  if (!std::filesystem::exists(file, ec))
+    throw std::runtime_error("no " + file.string() + ": no experiment has run its processes there yet");
+  try {  // (a FIFO or a huge file in its place is refused, not waited on or held)
+    return fromJsonOf<BusNote>(readJsonFile(file, 1u << 20), file.string());
   } catch (const std::exception& e) {
     throw std::runtime_error(file.string() + " does not read: " + e.what());
   }

@@ -4,6 +4,7 @@
 // to run is no result, and errors say what was wrong and where.
 #include <fcntl.h>
 #include <sys/file.h>
+#include <sys/stat.h>
 #include <unistd.h>
 
 #include <gtest/gtest.h>
@@ -416,6 +417,35 @@ TEST(Newcomer, WithoutOutEachExperimentWritesAFolderOfItsOwnInOut) {
   for (const char* name : {"base", "late1", "mine", "base-2"})
     EXPECT_TRUE(fs::exists(dir + "/out/" + name + "/summary.json")) << name;
   EXPECT_FALSE(fs::exists(dir + "/out/summary.json"));
+}
+
+// `afford watch` finding what runs reads files of the log root and the experiment's folder: a FIFO or a huge
+// file in their place is refused with the file named, never waited on (a FIFO's open waits for a writer).
+TEST(Newcomer, WatchFindingARunIsNotHeldByFilesInItsWay) {
+  namespace fs = std::filesystem;
+  const std::string dir = test::tempDir("watch-files");
+  fs::create_directories(dir + "/out");
+  const int lock = ::open((dir + "/out/.lock").c_str(), O_RDWR | O_CREAT | O_CLOEXEC, 0600);  // "it runs"
+  ASSERT_GE(lock, 0);
+  ASSERT_EQ(::flock(lock, LOCK_EX), 0);
+  ASSERT_EQ(::mkfifo((dir + "/out/bus.json").c_str(), 0600), 0);
+  const auto out = test::runCommand("timeout 20 " + test::afford("watch --out " + dir + "/out"));
+  EXPECT_NE(out.exit_code, 124) << "held by a FIFO: " << out.output;
+  EXPECT_NE(out.output.find("bus.json does not read"), std::string::npos) << out.output;
+  ::close(lock);
+
+  fs::create_directories(dir + "/logs/g");
+  ASSERT_EQ(::mkfifo((dir + "/logs/g/lcm-url").c_str(), 0600), 0);
+  const auto group = test::runCommand("timeout 20 " + test::afford("watch --group g --log-root " + dir + "/logs"));
+  EXPECT_NE(group.exit_code, 124) << "held by a FIFO: " << group.output;
+  EXPECT_NE(group.output.find("no scripts/procs.sh group 'g'"), std::string::npos) << group.output;
+  fs::remove(dir + "/logs/g/lcm-url");
+  spit(dir + "/logs/g/lcm-url", "udpm://239.255.76.67:7700?ttl=0\n");
+  ASSERT_EQ(::mkfifo((dir + "/logs/g/eye.pid").c_str(), 0600), 0);
+  spit(dir + "/logs/g/eye.started", "12345\n");
+  const auto pids = test::runCommand("timeout 20 " + test::afford("watch --group g --log-root " + dir + "/logs"));
+  EXPECT_NE(pids.exit_code, 124) << "held by a FIFO: " << pids.output;
+  EXPECT_NE(pids.output.find("no process of the group runs"), std::string::npos) << pids.output;
 }
 
 }  // namespace
