@@ -10,6 +10,7 @@
 #include <map>
 #include <tuple>
 
+#include "experiment/run/outcome.hpp"
 #include "afford/processes.hpp"
 #include "afford/protocol.hpp"
 #include "afford/decode.hpp"
@@ -461,9 +462,7 @@ bool holdsLcm(const fs::path& dir) {
 // The phase a log folder's manifest names ("" without a readable one): an
 // intrinsic run's log (tens of MB) need not be read to be skipped.
 std::string manifestPhase(const fs::path& dir) {
-  std::ifstream in(dir / "manifest.json");
-  if (!in) return "";
-  const json m = json::parse(in, nullptr, false);
+  const json m = readManifest(dir / "manifest.json");
   if (m.is_discarded() || !m.contains("config_yaml") || !m["config_yaml"].is_string()) return "";
   try {
     const YAML::Node c = YAML::Load(m["config_yaml"].get<std::string>());

@@ -4,6 +4,7 @@
 #include <fstream>
 #include <nlohmann/json.hpp>
 
+#include "experiment/run/outcome.hpp"
 #include "afford/decode.hpp"
 #include "afford/edge.hpp"
 #include "afford/protocol.hpp"
@@ -53,9 +54,7 @@ std::string n(std::int64_t v) { return std::to_string(v); }
 // another log's.
 void manifestSays(const fs::path& log, const std::vector<SegmentRead>& read, std::vector<std::string>& cut) {
   const fs::path file = (fs::is_directory(log) ? log : log.parent_path()) / "manifest.json";
-  std::ifstream in(file);
-  if (!in) return;
-  const nlohmann::json m = nlohmann::json::parse(in, nullptr, false);
+  const nlohmann::json m = readManifest(file);
   if (m.is_discarded() || !m.is_object() || !m.contains("segments") || !m["segments"].is_array() ||
       m["segments"].empty())
     return;

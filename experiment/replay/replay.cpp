@@ -12,6 +12,7 @@
 #include <fstream>
 #include <nlohmann/json.hpp>
 
+#include "experiment/run/outcome.hpp"
 #include "afford/affordance_table_t.hpp"
 #include "afford/bus.hpp"
 #include "afford/protocol.hpp"
@@ -363,8 +364,7 @@ std::vector<LogGap> recordingGaps(const std::vector<LogEvent>& events, const std
 std::string manifestIncomplete(const fs::path& log, std::vector<LogGap>& missing) {
   const fs::path manifest = (fs::is_directory(log) ? log : log.parent_path()) / "manifest.json";
   if (!fs::exists(manifest)) return "";
-  std::ifstream in(manifest);
-  const nlohmann::json m = nlohmann::json::parse(in, nullptr, false);
+  const nlohmann::json m = readManifest(manifest);
   if (m.is_discarded()) return "its manifest.json cannot be read";
   if (m.value("complete", true)) return "";
   if (m.contains("missing") && m["missing"].is_object())

@@ -96,6 +96,14 @@ std::optional<RunOutcome> keptOutcome(const fs::path& out, const RunSpec& spec) 
   }
 }
 
+json readManifest(const fs::path& file) {
+  try {
+    return readJsonFile(file, 16u << 20);
+  } catch (const std::exception&) {
+    return json(json::value_t::discarded);
+  }
+}
+
 json readJsonFile(const fs::path& file, std::uintmax_t max_bytes) {
   // Checked before it is opened: a FIFO would wait for a writer, a huge file hold the memory.
   std::error_code ec;

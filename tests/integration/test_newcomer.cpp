@@ -446,6 +446,20 @@ TEST(Newcomer, WatchFindingARunIsNotHeldByFilesInItsWay) {
   const auto pids = test::runCommand("timeout 20 " + test::afford("watch --group g --log-root " + dir + "/logs"));
   EXPECT_NE(pids.exit_code, 124) << "held by a FIFO: " << pids.output;
   EXPECT_NE(pids.output.find("no process of the group runs"), std::string::npos) << pids.output;
+
+  // A log folder whose manifest.json is a FIFO: afford explain of the log root goes on past it.
+  fs::create_directories(dir + "/logs/r-base-IMP-s1-scenario1-e0");
+  ASSERT_EQ(::mkfifo((dir + "/logs/r-base-IMP-s1-scenario1-e0/manifest.json").c_str(), 0600), 0);
+  spit(dir + "/logs/r-base-IMP-s1-scenario1-e0/log.00.lcm", "");
+  const auto explain = test::runCommand("timeout 20 " + test::afford("explain " + dir + "/logs"));
+  EXPECT_NE(explain.exit_code, 124) << "held by a FIFO: " << explain.output;
+
+  // A --token-file that is a FIFO is refused naming the option.
+  ASSERT_EQ(::mkfifo((dir + "/token").c_str(), 0600), 0);
+  const auto token = test::runCommand("timeout 20 " + test::afford("watch --lcm-url 'udpm://239.255.76.67:7700?ttl=0' "
+                                                                   "--port 0 --token-file " + dir + "/token"));
+  EXPECT_NE(token.exit_code, 124) << "held by a FIFO: " << token.output;
+  EXPECT_NE(token.output.find("--token-file"), std::string::npos) << token.output;
 }
 
 }  // namespace

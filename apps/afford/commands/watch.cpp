@@ -9,6 +9,7 @@
 #include <cerrno>
 #include <cstdio>
 #include <cstring>
+#include <filesystem>
 #include <fstream>
 #include <memory>
 #include <thread>
@@ -54,9 +55,11 @@ void moreFiles() {
 
 std::string tokenFor(const WatchArgs& a) {
   if (a.token_file.empty()) return isLoopback(a.server.bind) ? "" : newToken();
-  std::ifstream in(a.token_file);
+  std::error_code ec;  // (a FIFO would wait for a writer, a huge file hold the memory: neither is read)
+  const bool small = std::filesystem::is_regular_file(a.token_file, ec) && std::filesystem::file_size(a.token_file, ec) <= 4096;
+  std::ifstream in(small ? a.token_file : std::string());
   std::string token;
-  if (!in || !std::getline(in, token) || token.size() < 16 || token.size() > 256)
+  if (!small || !in || !std::getline(in, token) || token.size() < 16 || token.size() > 256)
     throw std::runtime_error("--token-file " + a.token_file + ": cannot read a token of 16 to 256 characters from it");
   return token;
 }
