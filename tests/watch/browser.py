@@ -119,7 +119,9 @@ def goals_phase(d):
               goals: document.getElementById('goals').innerText,
               goal: s && s.sub_goal && s.goal_text !== '' && !s.goal
                     && document.getElementById('goal').getAttribute('src') === s.sub_goal.png
-                    && document.getElementById('goal').naturalWidth > 0};""")
+                    && document.getElementById('goal').naturalWidth > 0,
+              oneRow: document.getElementById('bars').closest('.panel').getBoundingClientRect().top
+                      === document.getElementById('scene').closest('.panel').getBoundingClientRect().top};""")
 
 
 def the_end(d, out):
@@ -190,6 +192,7 @@ def live(url, out):
                     # The agent's own goal (no goal scene in this phase) is drawn in the goal panel.
                     wait("the goals phase's goal image drawn", lambda: goals_phase(d)["goal"], 5)
                     d.save_screenshot(str(out / "watch-live.png"))
+                    assert goals_phase(d)["oneRow"], "the goal panel pushed the affordance panel to another row"
                     shot = True
             time.sleep(0.1)
         runs, x_ticks = the_end(d, out)
