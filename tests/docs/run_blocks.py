@@ -62,27 +62,50 @@ BLOCK_SECONDS = 300
 # <run-id> in a shell block: the last run (not a test) whose log is in logs/ when the line runs.
 LAST_RUN = r"""last_run() {
   local d; d=$(ls -td logs/*/manifest.json 2>/dev/null | xargs -r -n1 dirname | xargs -r -n1 basename |
-               grep -v -E -- '-scenario|-e[0-9]+$' | head -n 1)
+               grep -v -E -- '-scenario|-e[0-9]+$' | head -n 1 || true)  # (pipefail: ls cut short by head)
   [[ -n $d ]] || { echo "<run-id>: no run's log in logs/ yet" >&2; return 1; }
   echo "$d"
 }
 """
 
 
+# Where no mount namespace can be made (a chroot, whose root is no mount point: `ip netns exec` cannot remount
+# it either), a file runs in a network namespace of its own only, and these stand in for what needs one:
+# a scripts/procs.sh group lives in that namespace (AFFORD_NETNS=none), and /opt is a folder of the file's.
+FLAT = [("ip netns exec afford ", ""), ("ip netns delete afford", "true"), ("/opt/afford", "opt/afford")]
+
+
 def sandboxed(doc: str, build: Path, work: Path) -> int:
     """Runs one file's blocks in network, mount and pid namespaces of their own (root): multicast routed over
     loopback, /run/netns (the namespaces `ip netns add` makes) and /opt (an install's prefix) empty and
-    private, and every process a block leaves behind ended with the file."""
-    return subprocess.run(["unshare", "--net", "--mount", "--propagation", "private", "--pid", "--fork",
-                           "--mount-proc", sys.executable, __file__, "--one", str(build), str(work), doc]).returncode
+    private; where mount namespaces cannot be made, in a network namespace only (FLAT)."""
+    mounts = not os.environ.get("AFFORD_DOCS_FLAT") and subprocess.run(  # (AFFORD_DOCS_FLAT=1: as in a chroot)
+        ["unshare", "--mount", "--propagation", "private", "true"], stderr=subprocess.DEVNULL).returncode == 0
+    spaces = ["--net", "--mount", "--propagation", "private", "--pid", "--fork", "--mount-proc"] if mounts else ["--net"]
+    env = dict(os.environ, AFFORD_DOCS_FLAT="" if mounts else "1")
+    return subprocess.run(["unshare", *spaces, sys.executable, __file__, "--one", str(build), str(work), doc],
+                          env=env).returncode
 
 
 def enter_sandbox():
     subprocess.run(["ip", "link", "set", "lo", "up", "multicast", "on"], check=True)
     subprocess.run(["ip", "route", "add", "224.0.0.0/4", "dev", "lo"], check=True)
+    if os.environ.get("AFFORD_DOCS_FLAT"):
+        return
     for folder in ("/run/netns", "/opt"):
         Path(folder).mkdir(parents=True, exist_ok=True)
         subprocess.run(["mount", "-t", "tmpfs", "tmpfs", folder], check=True)
+
+
+def end_left_behind(mark: str):
+    """Ends every process that carries this file's mark in its environment (what a block left running: a
+    group's processes, a job started with `&`); in a pid namespace of its own, its end does the same."""
+    for pid_dir in Path("/proc").glob("[0-9]*"):
+        try:
+            if f"AFFORD_DOCS_RUN={mark}".encode() in (pid_dir / "environ").read_bytes().split(b"\0"):
+                os.kill(int(pid_dir.name), signal.SIGKILL)
+        except (OSError, ValueError):
+            pass
 
 
 def workdir(build: Path, work: Path) -> Path:
@@ -170,6 +193,11 @@ class Doc:
                         PATH=f"{build / 'bin'}:{os.environ['PATH']}",
                         PYTHONPATH=":".join(p for p in (str(build / "python"), os.environ.get("PYTHONPATH")) if p))
         self.env.pop("AFFORD_LOGS", None)
+        self.mark = f"{os.getpid()}-{time.time_ns()}"
+        self.env["AFFORD_DOCS_RUN"] = self.mark
+        self.flat, self.flattened = bool(os.environ.get("AFFORD_DOCS_FLAT")), set()
+        if self.flat:
+            self.env["AFFORD_NETNS"] = "none"
         self.background, self.failures, self.ran, self.skipped = [], [], 0, []
         self.xvfb = None
         self.written = set()
@@ -189,6 +217,11 @@ class Doc:
             if name == "set":
                 key, _, value = arg.partition("=")
                 text = text.replace(key, value)
+        if self.flat and b.lang in ("sh", "bash"):
+            for written, here in FLAT:
+                if written in text:
+                    text = text.replace(written, here)
+                    self.flattened.add(written.strip())
         return text.replace("<run-id>", "$(last_run)") if b.lang in ("sh", "bash") else text
 
     def last_run(self, b) -> str | None:
@@ -340,6 +373,7 @@ class Doc:
         if self.xvfb:
             self.xvfb.terminate()
             self.xvfb.wait()
+        end_left_behind(self.mark)
 
 
 def main():
@@ -354,6 +388,9 @@ def main():
         d = Doc((ROOT / args[2]).resolve(), build, work).run()
         print(f"{d.name}: {d.ran} blocks run, {len(d.skipped)} not run, {len(d.failures)} failed "
               f"({time.time() - started:.0f} s)", flush=True)
+        if d.flattened:
+            print("  no mount namespace here: run in the file's network namespace in place of "
+                  + ", ".join(f"`{w}`" for w in sorted(d.flattened)))
         for seconds, where in sorted(d.times, reverse=True)[:3]:
             print(f"  slowest: {where} {seconds:.1f} s")
         for s in d.skipped:
