@@ -193,6 +193,8 @@ class Doc:
                         PATH=f"{build / 'bin'}:{os.environ['PATH']}",
                         PYTHONPATH=":".join(p for p in (str(build / "python"), os.environ.get("PYTHONPATH")) if p))
         self.env.pop("AFFORD_LOGS", None)
+        self.env["TMPDIR"] = str(self.work / "tmp")  # (afford.run's folders without `out`: the file's, not /tmp's)
+        (self.work / "tmp").mkdir()
         self.mark = f"{os.getpid()}-{time.time_ns()}"
         self.env["AFFORD_DOCS_RUN"] = self.mark
         self.flat, self.flattened = bool(os.environ.get("AFFORD_DOCS_FLAT")), set()
