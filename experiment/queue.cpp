@@ -21,16 +21,12 @@ int runQueue(const std::vector<ExperimentRequest>& requests, const std::string& 
   std::vector<Experiment> xs;
   std::map<std::string, std::string> folders;  // out dir -> the experiment writing there
   std::map<std::string, std::string> run_ids;  // run id -> the experiment running it (its log folder)
-  for (std::size_t entry = 1; entry <= requests.size(); ++entry) {
-    const ExperimentRequest& r = requests[entry - 1];
+  for (const ExperimentRequest& r : requests) {
     const std::string name = r.plan.experiment.empty() ? r.write.out_dir : r.plan.experiment;
     try {
       xs.push_back(prepare(r));
-    } catch (const NothingToResume& e) {
-      log.info("queue entry {} ({}): {}", entry, name, e.what());
-      continue;
     } catch (const ConfigError& e) {
-      throw ConfigError("queue entry " + std::to_string(entry) + " (" + name + "): " + e.what());
+      throw ConfigError("queue entry " + std::to_string(xs.size() + 1) + " (" + name + "): " + e.what());
     }
     const std::string dir = fs::weakly_canonical(fs::absolute(r.write.out_dir)).string();
     if (const auto [it, fresh] = folders.emplace(dir, name); !fresh)
@@ -41,7 +37,6 @@ int runQueue(const std::vector<ExperimentRequest>& requests, const std::string& 
         throw ConfigError("queue entries " + it->second + " and " + name + " both plan run '" + p.spec.run_id +
                           "' (one log folder for two runs): give them other --run-prefix values");
   }
-  if (xs.empty()) return 0;  // every entry finished already (each said so)
   const HostRequest& host = xs.front().o.host;
   Shared share;
   if (host.transport == "udpm") share.network = prepareNetwork(host.netns);

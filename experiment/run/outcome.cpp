@@ -96,6 +96,14 @@ std::optional<RunOutcome> keptOutcome(const fs::path& out, const RunSpec& spec) 
   }
 }
 
+std::optional<std::string> readSmallFile(const fs::path& file, std::uintmax_t max_bytes) {
+  std::error_code ec;
+  if (!fs::is_regular_file(file, ec) || fs::file_size(file, ec) > max_bytes || ec) return std::nullopt;
+  std::ifstream in(file);
+  if (!in) return std::nullopt;
+  return std::string(std::istreambuf_iterator<char>(in), {});
+}
+
 json readManifest(const fs::path& file) {
   try {
     return readJsonFile(file, 16u << 20);

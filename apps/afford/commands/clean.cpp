@@ -27,6 +27,7 @@
 #include <optional>
 #include <sstream>
 
+#include "experiment/run/outcome.hpp"
 #include "apps/afford/commands.hpp"
 #include "afford/config.hpp"
 #include "experiment/state.hpp"
@@ -51,11 +52,8 @@ struct Entry {
 
 // A small JSON file of the folder (run.json, manifest.json, outcome.json), if it reads.
 std::optional<nlohmann::json> smallJson(const fs::path& file) {
-  std::error_code ec;
-  if (!fs::is_regular_file(file, ec) || fs::file_size(file, ec) > (16u << 20)) return std::nullopt;
-  std::ifstream in(file);
   try {
-    return nlohmann::json::parse(in);
+    return readJsonFile(file, 16u << 20);
   } catch (const std::exception&) {
     return std::nullopt;  // an unreadable file says nothing about the folder; another one may
   }

@@ -15,23 +15,10 @@
 #include <stdexcept>
 
 #include "experiment/execute/bus_note.hpp"
+#include "experiment/run/outcome.hpp"
 
 namespace afford {
 namespace fs = std::filesystem;
-
-namespace {
-
-// A small file's text, read only if it is a regular file of at most max_bytes (a FIFO in a log root would wait
-// for a writer, a huge file hold the memory); nullopt otherwise.
-std::optional<std::string> smallFile(const fs::path& file, std::uintmax_t max_bytes) {
-  std::error_code ec;
-  if (!fs::is_regular_file(file, ec) || fs::file_size(file, ec) > max_bytes || ec) return std::nullopt;
-  std::ifstream in(file);
-  if (!in) return std::nullopt;
-  return std::string(std::istreambuf_iterator<char>(in), {});
-}
-
-}  // namespace
 
 bool lockHeld(const fs::path& path, bool exclusive) {
   const int fd = open(path.c_str(), O_RDONLY | O_CLOEXEC);
@@ -48,7 +35,7 @@ std::vector<GroupProcess> groupAlive(const fs::path& dir) {
   std::error_code ec;
   for (const auto& f : fs::directory_iterator(dir, ec)) {
     if (f.path().extension() != ".pid") continue;
-    const auto pid_text = smallFile(f.path(), 64), started_text = smallFile(fs::path(f.path()).replace_extension(".started"), 64);
+    const auto pid_text = readSmallFile(f.path(), 64), started_text = readSmallFile(fs::path(f.path()).replace_extension(".started"), 64);
     if (!pid_text || !started_text) continue;
     std::istringstream pid_in(*pid_text), started_in(*started_text);
     long pid = 0;
@@ -80,7 +67,7 @@ Watchable runningExperiment(const fs::path& out_dir) {
 
 Watchable runningGroup(const fs::path& log_root, const std::string& name) {
   const fs::path dir = log_root / name;
-  const auto url_text = smallFile(dir / "lcm-url", 4096);
+  const auto url_text = readSmallFile(dir / "lcm-url", 4096);
   std::istringstream url_in(url_text.value_or(""));
   std::string url;
   if (!std::getline(url_in, url) || url.empty())
@@ -105,10 +92,8 @@ std::string netnsOf(long pid) {
 
 // The experiment folder a run folder's run.json names ("" if none).
 std::string outDirOf(const fs::path& run_dir) {
-  const auto text = smallFile(run_dir / "run.json", 1u << 20);
-  if (!text) return "";
   try {
-    const nlohmann::json j = nlohmann::json::parse(*text);
+    const nlohmann::json j = readJsonFile(run_dir / "run.json", 1u << 20);
     return j.is_object() && j.contains("out_dir") && j["out_dir"].is_string() ? j["out_dir"].get<std::string>() : "";
   } catch (const std::exception&) {
     return "";

@@ -11,9 +11,11 @@
 #include <cstring>
 #include <filesystem>
 #include <fstream>
+#include <sstream>
 #include <memory>
 #include <thread>
 
+#include "experiment/run/outcome.hpp"
 #include "afford/process_main.hpp"
 #include "afford/protocol.hpp"
 #include "apps/afford/commands.hpp"
@@ -55,11 +57,10 @@ void moreFiles() {
 
 std::string tokenFor(const WatchArgs& a) {
   if (a.token_file.empty()) return isLoopback(a.server.bind) ? "" : newToken();
-  std::error_code ec;  // (a FIFO would wait for a writer, a huge file hold the memory: neither is read)
-  const bool small = std::filesystem::is_regular_file(a.token_file, ec) && std::filesystem::file_size(a.token_file, ec) <= 4096;
-  std::ifstream in(small ? a.token_file : std::string());
+  const auto text = readSmallFile(a.token_file, 4096);  // (a FIFO or a huge file is not read)
+  std::istringstream in(text.value_or(""));
   std::string token;
-  if (!small || !in || !std::getline(in, token) || token.size() < 16 || token.size() > 256)
+  if (!text || !std::getline(in, token) || token.size() < 16 || token.size() > 256)
     throw std::runtime_error("--token-file " + a.token_file + ": cannot read a token of 16 to 256 characters from it");
   return token;
 }
