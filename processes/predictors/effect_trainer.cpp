@@ -2,7 +2,9 @@
 
 namespace afford {
 
-EffectTrainer::EffectTrainer(Predictors& core) : core_(core), thread_([this] { work(); }) {}
+EffectTrainer::EffectTrainer(Predictors& core) : core_(core), thread_([this] { work(); }) {
+  core_.useSecondCore(&second_);
+}
 
 EffectTrainer::~EffectTrainer() {
   {
@@ -11,6 +13,7 @@ EffectTrainer::~EffectTrainer() {
   }
   changed_.notify_all();
   thread_.join();
+  core_.useSecondCore(nullptr);
 }
 
 void EffectTrainer::push(std::vector<Memory::Ref> updates) { add(Job{std::move(updates), {}, {}}); }

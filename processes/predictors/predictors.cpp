@@ -133,9 +133,9 @@ void Predictors::trainEffects(const Experience& e) {
   for (int i = 0; i < input_size_; ++i) target[i] = e.after_image[i] / 255.0;
   LastOutput& last = last_what_[static_cast<std::size_t>(a)];
   if (last.valid && last.image == e.before_image) {
-    what_[a].train(inputOf(e), last.y, target, config_.what_effect_learning_rate);
+    what_[a].train(inputOf(e), last.y, target, config_.what_effect_learning_rate, second_);
   } else {
-    what_[a].train(inputOf(e), target, config_.what_effect_learning_rate);
+    what_[a].train(inputOf(e), target, config_.what_effect_learning_rate, second_);
     ++what_outputs_;
   }
   last.valid = false;
@@ -152,7 +152,7 @@ std::vector<PerAction> Predictors::table(const std::vector<std::vector<std::uint
 std::vector<double> Predictors::whatEffect(int action, const std::vector<std::uint8_t>& focus_image) const {
   LastOutput& last = last_what_[static_cast<std::size_t>(action)];
   if (!last.valid || last.image != focus_image) {
-    last.y = what_[action].output(focusInput(focus_image));
+    last.y = what_[action].output(focusInput(focus_image), second_);
     last.image = focus_image;
     last.valid = true;
     ++what_outputs_;

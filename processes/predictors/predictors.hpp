@@ -122,6 +122,9 @@ class Predictors {
   std::int64_t replayedEffectUpdates() const { return replayed_effects_; }  // forward-model updates replayed
   // What-effect outputs computed (for a query or an update), not taken from the model's last output.
   std::int64_t whatOutputs() const { return what_outputs_; }
+  // Split the what-effect models' outputs and updates with `second` (not owned; nullptr: none). The values
+  // are the same; the caller makes sure no two threads use the models at once.
+  void useSecondCore(SecondCore* second) { second_ = second; }
   // The release that wrote the checkpoint last loaded ("0.1.0 or earlier" before format 4); "" if none was.
   const std::string& checkpointWrittenBy() const { return written_by_; }
 
@@ -151,6 +154,7 @@ class Predictors {
   };
   mutable std::array<LastOutput, kNumActions> last_what_;
   mutable std::int64_t what_outputs_ = 0;
+  SecondCore* second_ = nullptr;
   std::array<std::int64_t, kNumActions> executed_{}, successes_{};
   std::string written_by_;
   std::unique_ptr<Memory> memory_;

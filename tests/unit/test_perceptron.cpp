@@ -1,5 +1,7 @@
 #include <gtest/gtest.h>
 
+#include <cstring>
+
 #include "predictors/perceptron.hpp"
 
 namespace afford {
@@ -64,6 +66,37 @@ TEST(Perceptron, LayerTrainsEveryOutputTowardsItsTarget) {
   EXPECT_NEAR(y[2], 0.5, 1e-9);
   // The input that was zero kept its weights.
   EXPECT_EQ(l.weights().col(1).norm(), 0.0);
+}
+
+// A what-effect layer (1323 units of a 21 x 21 x 3 focus image) trained and
+// asked with its rows split between two threads holds and gives the very
+// bits it does on one thread.
+TEST(Perceptron, ALayerSplitWithASecondCoreComputesTheSameBits) {
+  constexpr int kUnits = 1323;
+  Layer one(kUnits, kUnits + 1, true), two(kUnits, kUnits + 1, true);
+  SecondCore second;
+  Eigen::VectorXd target(kUnits);
+  std::vector<std::uint8_t> image(kUnits);
+  for (int step = 0; step < 20; ++step) {
+    for (int i = 0; i < kUnits; ++i) {
+      image[static_cast<std::size_t>(i)] = (i * 7 + step * 13) % 5 == 0 ? static_cast<std::uint8_t>((i * 31 + step) % 256) : 0;
+      target[i] = ((i + step) % 3) / 2.0;
+    }
+    const SparseInput x = focusInput(image);
+    if (step % 2 == 0) {
+      one.train(x, target, 0.1);
+      two.train(x, target, 0.1, &second);
+    } else {  // from an output already made, as an update after a query does
+      one.train(x, one.output(x), target, 0.1);
+      two.train(x, two.output(x, &second), target, 0.1, &second);
+    }
+    const Eigen::VectorXd a = one.output(x), b = two.output(x, &second);
+    ASSERT_EQ(0, std::memcmp(a.data(), b.data(), sizeof(double) * kUnits)) << "outputs differ at step " << step;
+  }
+  EXPECT_EQ(0, std::memcmp(one.weights().data(), two.weights().data(),
+                           sizeof(double) * static_cast<std::size_t>(one.weights().size())));
+  EXPECT_GT(one.weights().cwiseAbs().sum(), 0.0);
+  EXPECT_EQ(second.splits(), 20 * 3);  // every output and update of the big layer was split
 }
 
 }  // namespace
