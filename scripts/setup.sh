@@ -30,7 +30,7 @@ packages=(
   build-essential cmake pkg-config git ca-certificates patch
   liblcm-bin libglib2.0-dev  # lcm-gen and the LCM tools; liblcm itself is built (below)
   libeigen3-dev libopencv-dev libspdlog-dev libfmt-dev
-  libcli11-dev libyaml-cpp-dev nlohmann-json3-dev zlib1g-dev libgsl-dev libsodium-dev
+  libcli11-dev libyaml-cpp-dev nlohmann-json3-dev zlib1g-dev libgsl-dev libsodium-dev libzstd-dev
   iproute2 util-linux procps
   ffmpeg              # afford render: video and GIF
 )
@@ -73,12 +73,15 @@ fi
 run scripts/fetch-lcm.sh
 run scripts/fetch-httplib.sh
 
-# The MCAP checker's reader (tools/mcapcheck: @mcap/core, pinned by its package-lock.json) from npm's
-# registry, unless the pinned version is installed already (so an offline machine keeps its copy).
+# The MCAP checker's packages (tools/mcapcheck: @mcap/core and fzstd, pinned by its package-lock.json) from
+# npm's registry, unless the pinned versions are installed already (so an offline machine keeps its copy).
 if ((!main)); then
-  pinned=$(sed -n 's/.*"@mcap\/core": "\(.*\)".*/\1/p' tools/mcapcheck/package.json)
-  have=$(sed -n 's/^  "version": "\(.*\)",$/\1/p' tools/mcapcheck/node_modules/@mcap/core/package.json 2>/dev/null || true)
-  if [[ $have != "$pinned" ]]; then
+  stale=0
+  while read -r name pinned; do
+    have=$(sed -n 's/^  "version": "\(.*\)",$/\1/p' "tools/mcapcheck/node_modules/$name/package.json" 2>/dev/null || true)
+    [[ $have == "$pinned" ]] || stale=1
+  done < <(sed -n 's/^    "\(.*\)": "\(.*\)",\{0,1\}$/\1 \2/p' tools/mcapcheck/package.json)
+  if ((stale)); then
     run npm ci --prefix tools/mcapcheck --no-audit --no-fund --loglevel=error
   fi
 fi

@@ -106,14 +106,17 @@ class Exporter {
         return;
       }
       std::string json;
-      try {
+      Picture picture;
+      try {  // (before anything of the message is written)
+        picture = pictureOf(m);
         json = image_fields::messageJson(m);
-      } catch (const std::runtime_error& ex) {  // an image that is not one (the edge refuses it: never)
+      } catch (const std::runtime_error& ex) {  // an image that is not one: a scene that does not decode
         skip(t, e, ex.what());
         return;
       }
       put(t, channel(e.channel, json_messages::Schema<Msg>::kName, image_fields::schemaText<Msg>()), time, json);
-      images(m, time, e);
+      if (!picture.png.empty()) image(picture.topic, picture.frame_id, time, picture.png);
+      marks(m, time);
     });
     if (!known) skip(topic(e.channel, ""), e, "not a channel of afford's protocol (afford/protocol.hpp)");
   }
@@ -149,26 +152,49 @@ class Exporter {
       log_.warn("{}: the {} event at offset {} is skipped: {}", source_, e.channel, e.offset, why);
   }
 
-  template <class Msg>
-  void images(const Msg&, std::uint64_t, const LogEvent&) {}  // no image in it
+  // The image a message puts on an image topic, made before the message is written: none for most types.
+  // Throws std::runtime_error when its pixels are not an image (the message is then skipped).
+  struct Picture {
+    const char* topic = nullptr;
+    const char* frame_id = nullptr;
+    std::vector<std::uint8_t> png;  // none: no image
+  };
 
-  void images(const scene_t& m, std::uint64_t time, const LogEvent& e) {
-    ExportedTopic& t = topic(kSceneImageTopic, foxglove::kCompressedImage);
-    if (m.encoding != scene_t::ENCODING_ZLIB_RGB8) {
-      skip(t, e, "the scene's encoding " + std::to_string(m.encoding) + " is not ENCODING_ZLIB_RGB8");
-      return;
+  template <class Msg>
+  static Picture pictureOf(const Msg&) {
+    return {};
+  }
+
+  // As PNG, lossless: a scene is a few flat shapes (about 1 kB, where its pixels are 67 kB).
+  static Picture pictureOf(const scene_t& m) {
+    if (m.encoding != scene_t::ENCODING_ZLIB_RGB8)
+      throw std::runtime_error("the scene's encoding " + std::to_string(m.encoding) + " is not ENCODING_ZLIB_RGB8");
+    const cv::Mat rgb = decodeScene(m.data, m.width, m.height);
+    return {kSceneImageTopic, "scene", image_fields::png(rgb.data, rgb.cols, rgb.rows)};
+  }
+
+  static Picture pictureOf(const focus_t& m) {
+    if (m.image.empty()) return {};
+    if (std::int64_t{m.side} * m.side * 3 != static_cast<std::int64_t>(m.image.size()))  // (the edge checks it)
+      throw std::runtime_error("field image: " + std::to_string(m.image.size()) + " bytes are not " +
+                               std::to_string(m.side) + " x " + std::to_string(m.side) + " RGB");
+    return {kFocusImageTopic, "focus", image_fields::png(m.image.data(), m.side, m.side)};
+  }
+
+  // The predicted images side by side, in the order of the message's actions.
+  static Picture pictureOf(const forward_prediction_t& m) {
+    if (m.what.empty()) return {};
+    const int side = image_fields::squareSide(m.size);  // (each row holds m.size values: the encoding's)
+    if (side <= 0)
+      throw std::runtime_error("field what: rows of " + std::to_string(m.size) + " values are not square RGB images");
+    std::vector<std::uint8_t> strip(m.what.size() * m.what.front().size());
+    for (std::size_t a = 0; a < m.what.size(); ++a) {
+      const std::vector<std::uint8_t> bytes = image_fields::bytesOf(m.what[a]);
+      for (int row = 0; row < side; ++row)
+        std::copy_n(bytes.begin() + row * side * 3, side * 3, strip.begin() + (row * m.what.size() + a) * side * 3);
     }
-    cv::Mat rgb;
-    try {
-      rgb = decodeScene(m.data, m.width, m.height);
-    } catch (const std::exception& ex) {
-      skip(t, e, ex.what());
-      return;
-    }
-    scene_width_ = m.width;
-    scene_height_ = m.height;
-    // As PNG, lossless: a scene is a few flat shapes (about 1 kB, where its pixels are 67 kB).
-    image(kSceneImageTopic, "scene", time, image_fields::png(rgb.data, rgb.cols, rgb.rows));
+    return {kPredictionImageTopic, "forward_prediction",
+            image_fields::png(strip.data(), side * static_cast<int>(m.what.size()), side)};
   }
 
   // A PNG on an image topic, as foxglove.CompressedImage.
@@ -178,33 +204,18 @@ class Exporter {
         foxglove::compressedImage(time, frame_id, "png", png));
   }
 
-  void images(const focus_t& m, std::uint64_t time, const LogEvent& e) {
-    if (std::int64_t{m.side} * m.side * 3 == static_cast<std::int64_t>(m.image.size()))  // (the edge checks it)
-      image(kFocusImageTopic, "focus", time, image_fields::png(m.image.data(), m.side, m.side));
-    else
-      skip(topic(kFocusImageTopic, foxglove::kCompressedImage), e,
-           "its image of " + std::to_string(m.image.size()) + " bytes is not " + std::to_string(m.side) + " x " +
-               std::to_string(m.side) + " RGB");
-    gaze(m.x, m.y, m.side, time, kFocusGaze);
+  // After a message is written: the scene's size from a SCENE, the gaze from a FOCUS and an EFFECT.
+  template <class Msg>
+  void marks(const Msg&, std::uint64_t) {}
+
+  void marks(const scene_t& m, std::uint64_t) {
+    scene_width_ = m.width;
+    scene_height_ = m.height;
   }
 
-  // The predicted images side by side, in the order of the message's actions.
-  void images(const forward_prediction_t& m, std::uint64_t time, const LogEvent&) {
-    const int side = image_fields::squareSide(m.size);  // (each row a square RGB image: messageJson checked it)
-    if (m.what.empty() || side <= 0) return;
-    std::vector<std::uint8_t> strip(m.what.size() * m.what.front().size());
-    for (std::size_t a = 0; a < m.what.size(); ++a) {
-      const std::vector<std::uint8_t> bytes = image_fields::bytesOf(m.what[a]);
-      for (int row = 0; row < side; ++row)
-        std::copy_n(bytes.begin() + row * side * 3, side * 3, strip.begin() + (row * m.what.size() + a) * side * 3);
-    }
-    image(kPredictionImageTopic, "forward_prediction", time,
-          image_fields::png(strip.data(), side * static_cast<int>(m.what.size()), side));
-  }
+  void marks(const focus_t& m, std::uint64_t time) { gaze(m.x, m.y, m.side, time, kFocusGaze); }
 
-  void images(const effect_t& m, std::uint64_t time, const LogEvent&) {
-    gaze(m.after_x, m.after_y, m.side, time, kEffectGaze);
-  }
+  void marks(const effect_t& m, std::uint64_t time) { gaze(m.after_x, m.after_y, m.side, time, kEffectGaze); }
 
   // The gaze's square: the eye's focus window around (x, y), scene units, in the
   // scene's pixels (as afford/image.hpp's windowCorner places it, per axis).
@@ -251,7 +262,7 @@ ExportResult exportMcap(const ExportOptions& o, spdlog::logger& log) {
   std::vector<LogGap> manifest_missing;
   result.incomplete = manifestIncomplete(o.log, manifest_missing);
   result.cut = in.cut();  // (warned of as the log was opened)
-  McapWriter mcap(o.mcap, McapOptions{"", std::string("afford ") + affordVersion(), o.chunk_bytes});
+  McapWriter mcap(o.mcap, McapOptions{"", std::string("afford ") + affordVersion(), o.chunk_bytes, o.compression});
   Exporter exporter(mcap, result, o.log, log);
   const RunSelector& select = in.selector();
   std::unique_ptr<RunConfig> config;
@@ -280,6 +291,8 @@ ExportResult exportMcap(const ExportOptions& o, spdlog::logger& log) {
   mcap.close();
   result.bytes = mcap.bytes();
   result.chunks = mcap.chunks();
+  result.compression = o.compression;
+  result.record_bytes = mcap.chunkRecordBytes();
   orderTopics(result);
   return result;
 }

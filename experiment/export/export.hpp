@@ -12,7 +12,8 @@
 // Every channel of the run becomes an MCAP channel of its own name, message
 // encoding "json", its schema the type's JSON Schema ("afford.<type>",
 // encoding "jsonschema"), generated from the .lcm files by afford-lcmwire
-// (afford/json_messages.hpp), its image fields as PNG (image_fields.hpp). A
+// (afford/json_messages.hpp), its image fields as PNG, each image once: a field
+// whose pixels are on an image topic names that topic (image_fields.hpp). A
 // message's log_time and publish_time are both its place in the run: the log's
 // time of the run's RUN_CONFIG, plus a millisecond a step and a microsecond for
 // each message of its step before it.
@@ -22,7 +23,8 @@
 // on /FORWARD_PREDICTION/what; and the eye's gaze on /SCENE/gaze
 // (foxglove.ImageAnnotations: the focus window's square over the scene, from
 // each FOCUS, and from each EFFECT's gaze after the action). A Metadata record "afford" holds the run's configuration
-// and afford's version. The file is written whole or not at all (mcap.hpp).
+// and afford's version. The chunks are compressed by zstd (or not, on request);
+// the file is written whole or not at all (mcap.hpp).
 #pragma once
 #include <spdlog/spdlog.h>
 
@@ -39,7 +41,8 @@ struct ExportOptions {
   std::string mcap;                     // the file to write: a new one
   std::string run_id;                   // the run to export in a log of several (default: the first)
   std::string bus_key;                  // key file: the log is a recording of a keyed bus (tags checked, taken off)
-  std::uint64_t chunk_bytes = 1 << 20;  // MCAP chunks of about this size
+  std::uint64_t chunk_bytes = 1 << 20;  // MCAP chunks of about this size (of records, uncompressed)
+  std::string compression = "zstd";     // the chunks' compression: "zstd" or "" (none; mcap.hpp)
 };
 
 // The image topics written beside the channels.
@@ -72,6 +75,8 @@ struct ExportResult {
   std::string incomplete;            // the manifest's reason, when it says the log is incomplete
   std::vector<std::string> cut;      // what the log lacks of the run, when it is cut short (replay/log_cut.hpp)
   std::uint64_t bytes = 0, chunks = 0;
+  std::string compression;         // the chunks' ("" none)
+  std::uint64_t record_bytes = 0;  // the chunks' records, uncompressed
 };
 
 // Throws std::runtime_error naming what is wrong (no log, no run in it, FILE

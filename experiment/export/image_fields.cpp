@@ -39,17 +39,6 @@ void appendPng(std::string& o, const std::vector<std::uint8_t>& png) {
   json_messages::base64(o, png, static_cast<std::int64_t>(png.size()));
 }
 
-// Rows of images as a JSON array of PNGs, each row's bytes given by bytes(row).
-template <class Rows, class Bytes>
-std::string pngList(const Rows& rows, const char* field, Bytes&& bytes) {
-  std::string o = "[";
-  for (std::size_t i = 0; i < rows.size(); ++i) {
-    if (i) o += ',';
-    appendPng(o, squarePng(bytes(rows[i]), field));
-  }
-  return o + ']';
-}
-
 }  // namespace
 
 int squareSide(std::int64_t bytes) {
@@ -110,23 +99,32 @@ std::vector<std::uint8_t> bytesOf(const std::vector<float>& values) {
   return out;
 }
 
-std::string schemaWithImages(const char* generated, const std::vector<std::string>& names) {
+std::string schemaWithImages(const char* generated, const std::vector<std::string>& images,
+                             const std::vector<MovedField>& moved) {
   Json schema = Json::parse(generated);
-  for (const std::string& name : names) {
+  for (const std::string& name : images) {
     Json& field = schema.at("properties").at(name);
     const std::string declared = field.at("description").get<std::string>();
-    const bool floats = declared.rfind("float", 0) == 0;
-    const std::string as = floats ? ", each row a PNG of round(255 v)" : ", as PNG";
-    // A byte array of one dimension is a string; of two, or floats of two, an array of rows.
+    // A byte array of one dimension is a string; of two, an array of rows.
     const bool rows = field.at("type") == "array";
-    Json image = pngSchema(rows ? "a square RGB image" : declared + as);
+    Json image = pngSchema(rows ? "a square RGB image" : declared + ", as PNG");
     if (!rows) {
       field = std::move(image);
       continue;
     }
-    Json list = {{"description", declared + as}, {"type", "array"}, {"items", std::move(image)}};
+    Json list = {{"description", declared + ", as PNG"}, {"type", "array"}, {"items", std::move(image)}};
     if (field.contains("minItems")) list["minItems"] = field["minItems"], list["maxItems"] = field["maxItems"];
     field = std::move(list);
+  }
+  for (const MovedField& m : moved) {
+    Json& field = schema.at("properties").at(m.name);
+    const std::string declared = field.at("description").get<std::string>();
+    const bool floats = declared.rfind("float", 0) == 0;
+    const std::string pixels = floats ? "its images as PNG of round(255 v), side by side in the order of actions,"
+                                      : "its pixels as PNG";
+    field = Json{{"description", declared + ": " + pixels + " on " + m.topic + " at this message's log time (\"\": none)"},
+                 {"type", "string"},
+                 {"enum", Json::array({m.topic, ""})}};
   }
   return schema.dump(-1, ' ', false, Json::error_handler_t::replace);
 }
@@ -147,11 +145,12 @@ std::string pngJson(const std::vector<std::uint8_t>& rgb, const char* field) {
 }
 
 std::string pngJson(const std::vector<std::vector<std::uint8_t>>& rows, const char* field) {
-  return pngList(rows, field, [](const std::vector<std::uint8_t>& row) -> const std::vector<std::uint8_t>& { return row; });
-}
-
-std::string pngJson(const std::vector<std::vector<float>>& rows, const char* field) {
-  return pngList(rows, field, bytesOf);
+  std::string o = "[";
+  for (std::size_t i = 0; i < rows.size(); ++i) {
+    if (i) o += ',';
+    appendPng(o, squarePng(rows[i], field));
+  }
+  return o + ']';
 }
 
 }  // namespace afford::image_fields

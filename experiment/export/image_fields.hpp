@@ -1,13 +1,16 @@
-// The image fields of afford's messages as `afford export` writes them (export.hpp): images, not numbers.
-// Each focus-sized image of the protocol, side x side RGB bytes (FOCUS.image and .diff_image, EFFECT.image,
-// FORWARD_QUERY.image, GOAL.image, PROBE.images), is written as a PNG in base64, the same pixels, in place
-// of its raw bytes in base64; FORWARD_PREDICTION.what, the predicted focus images as floats in [0, 1], as
-// PNGs of round(255 v) (the eye's own images are bytes) in place of JSON numbers. A message's JSON is the
-// generated one (afford/json_messages.hpp) with these fields so written; its JSON Schema is the generated
-// one with theirs a base64 string of contentMediaType image/png (an array of them for two dimensions).
+// The image fields of afford's messages as `afford export` writes them (export.hpp): images, not numbers, and
+// each image once. Each focus-sized image of the protocol, side x side RGB bytes (FOCUS.diff_image,
+// EFFECT.image, FORWARD_QUERY.image, GOAL.image, PROBE.images), is written as a PNG in base64, the same
+// pixels, in place of its raw bytes in base64. A field whose pixels the file holds on an image topic at the
+// message's log time (SCENE.data on /SCENE/image, FOCUS.image on /FOCUS/image, FORWARD_PREDICTION.what, as
+// PNGs of round(255 v), on /FORWARD_PREDICTION/what) holds that topic's name in place of a second copy. A
+// message's JSON is the generated one (afford/json_messages.hpp) with these fields so written; its JSON
+// Schema is the generated one with theirs a base64 string of contentMediaType image/png (an array of them
+// for two dimensions), or the one topic's name.
 #pragma once
 #include <cstdint>
 #include <string>
+#include <tuple>
 #include <type_traits>
 #include <utility>
 #include <vector>
@@ -19,6 +22,8 @@
 #include "afford/goal_t.hpp"
 #include "afford/json_messages.hpp"
 #include "afford/object_probe_t.hpp"
+#include "afford/scene_t.hpp"
+#include "experiment/export/export.hpp"
 
 namespace afford::image_fields {
 
@@ -36,39 +41,53 @@ std::vector<std::uint8_t> squarePng(const std::vector<std::uint8_t>& rgb, const 
 // A predicted image (floats in [0, 1]) as bytes: round(255 v), clamped.
 std::vector<std::uint8_t> bytesOf(const std::vector<float>& values);
 
-// The generated JSON Schema of a type with the fields `names` as PNG images.
-std::string schemaWithImages(const char* generated, const std::vector<std::string>& names);
+// A field whose pixels are on an image topic: its name and the topic's.
+struct MovedField {
+  std::string name, topic;
+};
 
-// Calls f(field, name) for each image field of a message (none in most types).
+// The generated JSON Schema of a type with the fields `images` as PNG images and the fields `moved` as the
+// name of their topic, or "" (no image).
+std::string schemaWithImages(const char* generated, const std::vector<std::string>& images,
+                             const std::vector<MovedField>& moved);
+
+// Calls f(field, name) for each image field written as PNG in the message (none in most types).
 template <class Msg, class F>
 void forImageFields(Msg& m, F&& f) {
   if constexpr (std::is_same_v<Msg, focus_t>) {
-    f(m.image, "image");
     f(m.diff_image, "diff_image");
   } else if constexpr (std::is_same_v<Msg, effect_t> || std::is_same_v<Msg, forward_query_t> ||
                        std::is_same_v<Msg, goal_t>) {
     f(m.image, "image");
   } else if constexpr (std::is_same_v<Msg, object_probe_t>) {
     f(m.images, "images");
-  } else if constexpr (std::is_same_v<Msg, forward_prediction_t>) {
-    f(m.what, "what");
   }
 }
 
-template <class Msg>
-std::vector<std::string> imageFieldNames() {
-  Msg m{};
-  std::vector<std::string> names;
-  forImageFields(m, [&](const auto&, const char* name) { names.emplace_back(name); });
-  return names;
+// Calls f(field, name, topic) for the field whose pixels are on an image topic (none in most types).
+template <class Msg, class F>
+void forMovedField(Msg& m, F&& f) {
+  if constexpr (std::is_same_v<Msg, scene_t>) {
+    f(m.data, "data", kSceneImageTopic);
+  } else if constexpr (std::is_same_v<Msg, focus_t>) {
+    f(m.image, "image", kFocusImageTopic);
+  } else if constexpr (std::is_same_v<Msg, forward_prediction_t>) {
+    f(m.what, "what", kPredictionImageTopic);
+  }
 }
 
 // A type's JSON Schema as the export writes it, made once.
 template <class Msg>
 const std::string& schemaText() {
-  static const std::string kText = imageFieldNames<Msg>().empty()
-                                       ? std::string(json_messages::Schema<Msg>::kText)
-                                       : schemaWithImages(json_messages::Schema<Msg>::kText, imageFieldNames<Msg>());
+  static const std::string kText = [] {
+    Msg m{};
+    std::vector<std::string> images;
+    std::vector<MovedField> moved;
+    forImageFields(m, [&](const auto&, const char* name) { images.emplace_back(name); });
+    forMovedField(m, [&](const auto&, const char* name, const char* topic) { moved.push_back({name, topic}); });
+    return images.empty() && moved.empty() ? std::string(json_messages::Schema<Msg>::kText)
+                                           : schemaWithImages(json_messages::Schema<Msg>::kText, images, moved);
+  }();
   return kText;
 }
 
@@ -79,19 +98,28 @@ void replaceField(std::string& json, const std::string& name, const char* blank,
 // One field's images as JSON: a base64 string of a PNG, or an array of them.
 std::string pngJson(const std::vector<std::uint8_t>& rgb, const char* field);
 std::string pngJson(const std::vector<std::vector<std::uint8_t>>& rows, const char* field);
-std::string pngJson(const std::vector<std::vector<float>>& rows, const char* field);
 
-// A message as JSON with its image fields as PNG. Throws std::runtime_error naming a field that does not hold
-// square RGB images.
+// An emptied field in the generated JSON: a byte array's "", another array's [].
+template <class Field>
+const char* blankOf(const Field&) {
+  return std::is_same_v<Field, std::vector<std::uint8_t>> ? "\"\"" : "[]";
+}
+
+// A message as JSON with its image fields as PNG and its moved field as its topic's name ("" when empty: no
+// image on the topic). Throws std::runtime_error naming a field that does not hold square RGB images.
 template <class Msg>
 std::string messageJson(Msg m) {
-  std::vector<std::pair<std::string, std::string>> images;  // name, JSON
+  std::vector<std::tuple<const char*, const char*, std::string>> values;  // name, blank, JSON
   forImageFields(m, [&](auto& field, const char* name) {
-    images.emplace_back(name, pngJson(field, name));
+    values.emplace_back(name, blankOf(field), pngJson(field, name));
     field.clear();  // emptied for the generated JSON
   });
+  forMovedField(m, [&](auto& field, const char* name, const char* topic) {
+    values.emplace_back(name, blankOf(field), field.empty() ? "\"\"" : "\"" + std::string(topic) + "\"");
+    field.clear();
+  });
   std::string json = json_messages::jsonText(m);
-  for (const auto& [name, value] : images) replaceField(json, name, value.front() == '[' ? "[]" : "\"\"", value);
+  for (const auto& [name, blank, value] : values) replaceField(json, name, blank, value);
   return json;
 }
 

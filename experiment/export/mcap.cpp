@@ -3,11 +3,13 @@
 #include <fcntl.h>
 #include <unistd.h>
 #include <zlib.h>
+#include <zstd.h>
 
 #include <algorithm>
 #include <cerrno>
 #include <cstdio>
 #include <cstring>
+#include <iterator>
 #include <stdexcept>
 
 namespace afford {
@@ -74,12 +76,26 @@ std::uint32_t crc(std::uint32_t so_far, const std::string& bytes) {
       crc32(so_far, reinterpret_cast<const Bytef*>(bytes.data()), static_cast<uInt>(bytes.size())));
 }
 
+// zstd's level for the chunks: its default, about 190 MB/s here (docs/performance.md, "Each image once, and
+// zstd chunks").
+constexpr int kZstdLevel = 3;
+
 }  // namespace
+
+void McapWriter::FreeZstd::operator()(ZSTD_CCtx_s* context) const { ZSTD_freeCCtx(context); }
 
 fs::path McapWriter::partialOf(const fs::path& file) { return fs::path(file.string() + ".partial"); }
 
 McapWriter::McapWriter(const fs::path& file, McapOptions options)
     : file_(file), partial_(partialOf(file)), options_(std::move(options)) {
+  if (std::find(std::begin(kMcapCompressions), std::end(kMcapCompressions), options_.compression) ==
+      std::end(kMcapCompressions))
+    throw std::invalid_argument("MCAP chunk compression '" + options_.compression + "' is not one of zstd, none");
+  if (options_.compression == "zstd") {
+    zstd_.reset(ZSTD_createCCtx());
+    if (!zstd_ || ZSTD_isError(ZSTD_CCtx_setParameter(zstd_.get(), ZSTD_c_compressionLevel, kZstdLevel)))
+      throw std::runtime_error("zstd cannot start a compression context");
+  }
   std::error_code ec;
   if (fs::exists(fs::symlink_status(file_, ec)))
     throw std::runtime_error(file_.string() + " exists: afford export writes a new file, never over one");
@@ -176,10 +192,21 @@ void McapWriter::flushChunk() {
   index.start_time = chunk_start_;
   index.end_time = chunk_end_;
   index.offset = offset_;
-  index.records = chunk_.size();
+  index.uncompressed = chunk_.size();
+  const std::string* records = &chunk_;
+  if (zstd_) {
+    compressed_.resize(ZSTD_compressBound(chunk_.size()));
+    const std::size_t n = ZSTD_compress2(zstd_.get(), compressed_.data(), compressed_.size(), chunk_.data(), chunk_.size());
+    if (ZSTD_isError(n)) throw std::runtime_error("zstd cannot compress a chunk of " + partial_.string() + ": " +
+                                                  ZSTD_getErrorName(n));
+    compressed_.resize(n);
+    records = &compressed_;
+  }
+  index.compressed = records->size();
+  chunk_record_bytes_ += chunk_.size();
   Bytes chunk;
-  chunk.u64(chunk_start_).u64(chunk_end_).u64(chunk_.size()).u32(crc(0, chunk_)).str("").u64(chunk_.size());
-  chunk.raw(chunk_);
+  chunk.u64(chunk_start_).u64(chunk_end_).u64(chunk_.size()).u32(crc(0, chunk_)).str(options_.compression);
+  chunk.u64(records->size()).raw(*records);
   const std::string r = record(kChunk, chunk);
   index.length = r.size();
   emit(r);
@@ -237,7 +264,7 @@ void McapWriter::writeSummary() {
     Bytes b, offsets;
     for (const auto& [channel, at] : c.index_offsets) offsets.u16(channel).u64(at);
     b.u64(c.start_time).u64(c.end_time).u64(c.offset).u64(c.length).u32(offsets.b.size()).raw(offsets.b);
-    b.u64(c.index_length).str("").u64(c.records).u64(c.records);
+    b.u64(c.index_length).str(options_.compression).u64(c.compressed).u64(c.uncompressed);
     records.push_back(record(kChunkIndex, b));
   }
   group(kChunkIndex, std::exchange(records, {}));

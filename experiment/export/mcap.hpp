@@ -1,8 +1,9 @@
 // An MCAP file (https://mcap.dev/spec, major version 0) written from start to
 // end, for `afford export` (export.hpp): the magic, the Header, then the data
 // section: the Metadata records, and the Schema, Channel and Message records in
-// uncompressed Chunks of about `chunk_bytes` each (a schema and a channel go
-// into the chunk of their first use), each Chunk with its CRC and followed by
+// Chunks of about `chunk_bytes` of records each (a schema and a channel go into
+// the chunk of their first use), compressed by zstd or not at all, each Chunk
+// with the CRC of its uncompressed records and followed by
 // one MessageIndex record per channel it holds; then DataEnd with the CRC of
 // the data section (every byte before DataEnd, the magic and the Header
 // included, as Foxglove's own writers count it). Then the summary section:
@@ -19,6 +20,7 @@
 #include <cstdint>
 #include <cstdio>
 #include <filesystem>
+#include <memory>
 #include <map>
 #include <string>
 #include <utility>
@@ -26,20 +28,27 @@
 
 #include "afford/file_lock.hpp"
 
+struct ZSTD_CCtx_s;  // zstd.h's compression context
+
 namespace afford {
 
 struct McapOptions {
   std::string profile;                       // the Header's profile ("": none of the well-known ones)
   std::string library;                       // the Header's library ("afford <version>")
   std::uint64_t chunk_bytes = 1 << 20;       // a chunk is closed once its records reach this many bytes
+  std::string compression = "zstd";          // the chunks' compression: "zstd" or "" (none)
 };
+
+// The chunk compressions McapWriter writes (McapOptions::compression).
+inline constexpr const char* kMcapCompressions[] = {"zstd", ""};
 
 // A Map<string, string> of the spec, in key order.
 using McapMap = std::map<std::string, std::string>;
 
 class McapWriter {
  public:
-  // Throws std::runtime_error naming the file when it exists, or when FILE.partial cannot be created.
+  // Throws std::runtime_error naming the file when it exists, or when FILE.partial cannot be created;
+  // std::invalid_argument naming a compression not in kMcapCompressions.
   McapWriter(const std::filesystem::path& file, McapOptions options);
   ~McapWriter();
   McapWriter(const McapWriter&) = delete;
@@ -62,6 +71,7 @@ class McapWriter {
   const std::filesystem::path& file() const { return file_; }
   std::uint64_t messages() const { return message_count_; }
   std::uint64_t chunks() const { return chunk_indexes_.size(); }
+  std::uint64_t chunkRecordBytes() const { return chunk_record_bytes_; }  // the chunks' records, uncompressed
   std::uint64_t bytes() const { return offset_; }  // written so far (all of it, once closed)
   static std::filesystem::path partialOf(const std::filesystem::path& file);
 
@@ -77,12 +87,17 @@ class McapWriter {
     std::uint64_t messages = 0;
   };
   struct ChunkIndex {
-    std::uint64_t start_time = 0, end_time = 0, offset = 0, length = 0, index_length = 0, records = 0;
+    std::uint64_t start_time = 0, end_time = 0, offset = 0, length = 0, index_length = 0;
+    std::uint64_t compressed = 0, uncompressed = 0;  // the records' bytes
     std::vector<std::pair<std::uint16_t, std::uint64_t>> index_offsets;  // channel -> its MessageIndex
   };
   struct MetadataIndex {
     std::uint64_t offset = 0, length = 0;
     std::string name;
+  };
+
+  struct FreeZstd {
+    void operator()(ZSTD_CCtx_s* context) const;
   };
 
   void emit(const std::string& bytes);  // to the file, counted in the open section's CRC
@@ -105,7 +120,9 @@ class McapWriter {
   std::map<std::uint16_t, std::vector<std::pair<std::uint64_t, std::uint64_t>>> chunk_entries_;
   std::vector<ChunkIndex> chunk_indexes_;
   std::vector<MetadataIndex> metadata_indexes_;
-  std::uint64_t message_count_ = 0, start_time_ = 0, end_time_ = 0;
+  std::uint64_t message_count_ = 0, start_time_ = 0, end_time_ = 0, chunk_record_bytes_ = 0;
+  std::unique_ptr<ZSTD_CCtx_s, FreeZstd> zstd_;  // the compression context, kept from chunk to chunk
+  std::string compressed_;            // a chunk's records compressed
 };
 
 }  // namespace afford

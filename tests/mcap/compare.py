@@ -3,9 +3,10 @@ against the run's log read by the Python package (afford.read_log), which decode
 on its own (python/afford/logs.py): the same messages per channel, in order, each at its place
 in the run (docs/watching.md: the time the log gives the run's RUN_CONFIG, a millisecond a step,
 a microsecond a message within its step), with the same field values, each image field's PNG
-the message's pixels (FORWARD_PREDICTION.what's as round(255 v)); the scene and focus images
-byte for byte, and each FORWARD_PREDICTION's predicted images side by side; a gaze box per FOCUS
-and EFFECT where the focus window is.
+the message's pixels; the scene and focus images byte for byte, and each FORWARD_PREDICTION's
+predicted images (as round(255 v)) side by side, on their image topics at their messages' times,
+where the messages' SCENE.data, FOCUS.image and FORWARD_PREDICTION.what name those topics (each
+image once in the file); a gaze box per FOCUS and EFFECT where the focus window is.
 
     compare.py LOG CHECKER_OUTPUT.jsonl AFFORD_BINARY
 """
@@ -64,9 +65,12 @@ def same(want, got, path):
         fail(f"{path}: {want!r} against {got!r}")
 
 
-# The image fields, written as PNG (experiment/export/image_fields.hpp); FORWARD_PREDICTION.what as bytes.
-IMAGE_FIELDS = {"FOCUS": ("image", "diff_image"), "EFFECT": ("image",), "FORWARD_QUERY": ("image",),
-                "GOAL": ("image",), "PROBE": ("images",), "FORWARD_PREDICTION": ("what",)}
+# The image fields, written as PNG (experiment/export/image_fields.hpp).
+IMAGE_FIELDS = {"FOCUS": ("diff_image",), "EFFECT": ("image",), "FORWARD_QUERY": ("image",), "GOAL": ("image",),
+                "PROBE": ("images",)}
+# The fields whose pixels are on an image topic, which they name ("" for none): check_images compares them.
+MOVED_FIELDS = {"SCENE": ("data", "/SCENE/image"), "FOCUS": ("image", "/FOCUS/image"),
+                "FORWARD_PREDICTION": ("what", "/FORWARD_PREDICTION/what")}
 
 
 def as_bytes(values):
@@ -77,8 +81,6 @@ def as_bytes(values):
 
 def same_images(want, got, path):
     """An image field (side x side x 3 arrays, one or a list of them) against its PNGs (base64, "" for none)."""
-    if want.dtype != np.uint8:
-        want = as_bytes(want)
     if want.size == 0:
         if got not in ("", []):
             fail(f"{path}: no image, but {got!r:.40}")
@@ -137,6 +139,10 @@ def main(log_path, lines_path, afford_bin):
             fields, got = dict(m.fields), dict(e["message"])
             if channel == "SCENE":
                 del fields["image"]  # the scene decoded: its PNG, below
+            if channel in MOVED_FIELDS:
+                name, topic = MOVED_FIELDS[channel]
+                if got.pop(name, None) != (topic if fields.pop(name).size else ""):
+                    fail(f"{channel}[{i}].{name} does not name {topic}")
             for name in IMAGE_FIELDS.get(channel, ()):
                 same_images(fields.pop(name), got.pop(name, None), f"{channel}[{i}].{name}")
             same(fields, got, f"{channel}[{i}]")

@@ -1,8 +1,9 @@
 #!/usr/bin/env bash
 # afford export, read by others: two stored extrinsic tests (tests/data/explain) and short runs
-# of IMP and GOALS (memq, recorded here) exported as MCAP files, each read with Foxglove's own
-# reader by tools/mcapcheck/check.mjs (every record, the index, the summary, the CRCs, each message
-# against its JSON Schema, each PNG by its signature), then every message compared with the run's
+# of IMP and GOALS (memq, recorded here) exported as MCAP files (zstd chunks; one also without
+# compression), each read with Foxglove's own reader by tools/mcapcheck/check.mjs (every record,
+# the index, the summary, the CRCs, each message against its JSON Schema, each PNG by its signature,
+# each image a message names on its topic), then every message compared with the run's
 # log as the Python package decodes it (tests/mcap/compare.py): the same messages per channel at
 # the same times with the same values, the images' pixels byte for byte. The same logs with their channels interleaved anew
 # (shuffle-log: each channel in its own order, up to 1,000 steps apart, in two segments) give the same
@@ -14,8 +15,8 @@ build=$(cd "$1" && pwd)
 rm -rf "$2" && mkdir -p "$2"
 out=$(cd "$2" && pwd)
 python_dir=${3:-}
-[[ -d $root/tools/mcapcheck/node_modules/@mcap/core ]] ||
-  { echo "no @mcap/core in tools/mcapcheck: run npm ci --prefix tools/mcapcheck (scripts/setup.sh does)"; exit 1; }
+[[ -d $root/tools/mcapcheck/node_modules/@mcap/core && -d $root/tools/mcapcheck/node_modules/fzstd ]] ||
+  { echo "no @mcap/core or fzstd in tools/mcapcheck: run npm ci --prefix tools/mcapcheck (scripts/setup.sh does)"; exit 1; }
 [[ -n $python_dir && -f $python_dir/afford/__init__.py ]] ||
   { echo "no Python package in '$python_dir': configure with -DAFFORD_EXTRAS=ON and build afford_python"; exit 1; }
 
@@ -38,6 +39,22 @@ for log in "${logs[@]}"; do
   tail -1 "$out/$name.jsonl"
   PYTHONPATH=$python_dir /usr/bin/python3 "$root/tests/mcap/compare.py" "$log" "$out/$name.jsonl" "$build/bin/afford"
 done
+
+# The goals run's chunks left uncompressed (--compression none): the same messages, a larger file.
+name=mcap-base-GOALS-s1
+"$build/bin/afford" export "${logs[3]}" --mcap "$out/$name.none.mcap" --compression none >"$out/$name.none.txt" 2>&1 ||
+  { cat "$out/$name.none.txt"; echo "afford export --compression none failed"; exit 1; }
+node "$root/tools/mcapcheck/check.mjs" "$out/$name.none.mcap" >"$out/$name.none.jsonl"
+cmp <(head -n -1 "$out/$name.jsonl") <(head -n -1 "$out/$name.none.jsonl") ||
+  { echo "the uncompressed file's messages are not the zstd file's"; exit 1; }
+/usr/bin/python3 - "$out/$name.jsonl" "$out/$name.none.jsonl" <<'EOF'
+import json, sys
+zstd, none = (json.loads(open(f).read().splitlines()[-1])["totals"] for f in sys.argv[1:])
+if (zstd["compression"], none["compression"]) != ("zstd", "") or not none["bytes"] > 2 * zstd["bytes"]:
+    sys.exit(f"compression {zstd['compression']!r} ({zstd['bytes']} bytes) against {none['compression']!r} "
+             f"({none['bytes']} bytes)")
+print(f"{sys.argv[2]}: the same messages uncompressed, {none['bytes']} bytes against zstd's {zstd['bytes']}")
+EOF
 
 # A log shuffled: the same file (exported from a folder of the same name, so that the log's path in the
 # file's metadata is the same too).

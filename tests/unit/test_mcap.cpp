@@ -21,6 +21,7 @@
 #include <fstream>
 #include <limits>
 #include <map>
+#include <set>
 #include <string>
 #include <vector>
 
@@ -28,13 +29,16 @@
 
 #include "afford/auth.hpp"
 #include "afford/decode.hpp"
+#include "afford/image.hpp"
 #include "afford/json_messages.hpp"
 #include "afford/logfile.hpp"
 #include "afford/protocol.hpp"
+#include "afford/seal.hpp"
 #include "experiment/export/export.hpp"
 #include "experiment/export/mcap.hpp"
 #include "experiment/replay/replay.hpp"
 #include "tests/logorder/shuffle.hpp"
+#include "tests/mcap/read_mcap.hpp"
 #include "tests/support.hpp"
 
 namespace afford {
@@ -47,117 +51,24 @@ spdlog::logger& quiet() {
   return *log;
 }
 
-std::string fileText(const fs::path& f) {
-  std::ifstream in(f, std::ios::binary);
-  return std::string(std::istreambuf_iterator<char>(in), {});
-}
+using testing::ReadMcap;
+using testing::ReadMessage;
+using testing::readMcap;
 
-// ---- a small reader of the spec's records --------------------------------------------------
-
-struct ReadMessage {
-  std::string topic;
-  std::uint64_t log_time = 0, publish_time = 0;
-  std::string data;
-};
-struct ReadMcap {
-  std::vector<ReadMessage> messages;  // in file order
-  std::map<std::string, std::int64_t> per_topic;
-  std::map<std::string, std::string> schema_of;  // topic: schema name
-  std::string library, metadata_yaml;
-  std::int64_t chunks = 0, indexed = 0, statistics_messages = -1;
-};
-
-std::uint64_t le(const std::string& b, std::size_t at, int n) {
-  std::uint64_t v = 0;
-  for (int i = n - 1; i >= 0; --i) v = (v << 8) | static_cast<std::uint8_t>(b.at(at + i));
-  return v;
-}
-std::string str(const std::string& b, std::size_t& at) {
-  const std::size_t n = le(b, at, 4);
-  std::string s = b.substr(at + 4, n);
-  at += 4 + n;
-  return s;
-}
-std::uint32_t crcOf(const std::string& b, std::size_t from, std::size_t to) {
-  return static_cast<std::uint32_t>(crc32(0, reinterpret_cast<const Bytef*>(b.data() + from), static_cast<uInt>(to - from)));
-}
-
-// The records of b[from, to): schemas, channels and messages (a chunk's too, its CRC checked).
-void readRecords(const std::string& b, std::size_t from, std::size_t to, ReadMcap& out,
-                 std::map<std::uint64_t, std::string>& schemas, std::map<std::uint64_t, std::string>& topics) {
-  for (std::size_t at = from; at < to;) {
-    const int op = static_cast<std::uint8_t>(b.at(at));
-    const std::size_t len = le(b, at + 1, 8), c = at + 9;
-    std::size_t p = c;
-    if (op == 0x03) {
-      const std::uint64_t id = le(b, p, 2);
-      p += 2;
-      schemas[id] = str(b, p);
-    } else if (op == 0x04) {
-      const std::uint64_t id = le(b, p, 2), schema = le(b, p + 2, 2);
-      p += 4;
-      topics[id] = str(b, p);
-      out.schema_of[topics[id]] = schemas.at(schema);
-    } else if (op == 0x05) {
-      ReadMessage m{topics.at(le(b, c, 2)), le(b, c + 6, 8), le(b, c + 14, 8), b.substr(c + 22, len - 22)};
-      ++out.per_topic[m.topic];
-      out.messages.push_back(std::move(m));
-    } else if (op == 0x06) {
-      p += 8 + 8;
-      const std::size_t size = le(b, p, 8);
-      const std::uint32_t crc = le(b, p + 8, 4);
-      p += 12;
-      EXPECT_EQ(str(b, p), "");  // no compression
-      EXPECT_EQ(le(b, p, 8), size);
-      EXPECT_EQ(crcOf(b, p + 8, p + 8 + size), crc) << "chunk CRC";
-      readRecords(b, p + 8, p + 8 + size, out, schemas, topics);
-      ++out.chunks;
-    } else if (op == 0x07) {
-      out.indexed += le(b, c + 2, 4) / 16;
-    } else if (op == 0x0C) {
-      EXPECT_EQ(str(b, p), "afford");
-      const std::size_t end = p + 4 + le(b, p, 4);
-      for (p += 4; p < end;) {
-        const std::string k = str(b, p), v = str(b, p);
-        if (k == "config_yaml") out.metadata_yaml = v;
-      }
-    } else if (op == 0x0B) {
-      out.statistics_messages = static_cast<std::int64_t>(le(b, c, 8));
-    } else if (op == 0x01) {
-      str(b, p);
-      out.library = str(b, p);
-    }
-    at = c + len;
-  }
-}
-
-ReadMcap readMcap(const fs::path& f) {
-  const std::string b = fileText(f);
-  const std::string magic("\x89MCAP0\r\n", 8);
-  EXPECT_EQ(b.substr(0, 8), magic);
-  EXPECT_EQ(b.substr(b.size() - 8), magic);
-  const std::size_t footer = b.size() - 8 - 29;
-  EXPECT_EQ(b.at(footer), '\x02');
-  const std::size_t summary = le(b, footer + 9, 8), data_end = summary - 13;
-  EXPECT_EQ(b.at(data_end), '\x0f');
-  EXPECT_EQ(crcOf(b, 0, data_end), le(b, data_end + 9, 4)) << "data section CRC";
-  EXPECT_EQ(crcOf(b, summary, footer + 25), le(b, footer + 25, 4)) << "summary CRC";
-  ReadMcap out;
-  std::map<std::uint64_t, std::string> schemas, topics;
-  readRecords(b, 8, data_end, out, schemas, topics);
-  std::map<std::uint64_t, std::string> summary_schemas, summary_topics;
-  ReadMcap summary_part;
-  readRecords(b, summary, footer, summary_part, summary_schemas, summary_topics);
-  out.statistics_messages = summary_part.statistics_messages;
-  EXPECT_EQ(summary_topics, topics);
-  return out;
-}
+std::string fileText(const fs::path& f) { return testing::fileBytes(f); }
 
 // ---- the image fields ----------------------------------------------------------------------
-// Written as PNG (base64): these fields of these channels; FORWARD_PREDICTION.what (floats) as round(255 v).
+// Written as PNG (base64): these fields of these channels.
 const std::map<std::string, std::vector<std::string>> kImageFields = {
-    {"FOCUS", {"image", "diff_image"}}, {"EFFECT", {"image"}}, {"FORWARD_QUERY", {"image"}},
-    {"GOAL", {"image"}}, {"PROBE", {"images"}}, {"FORWARD_PREDICTION", {"what"}}};
+    {"FOCUS", {"diff_image"}}, {"EFFECT", {"image"}}, {"FORWARD_QUERY", {"image"}}, {"GOAL", {"image"}},
+    {"PROBE", {"images"}}};
+// Written once, on an image topic at the message's time, which the field names: channel, field, topic.
+struct Moved {
+  std::string field, topic;
+};
+const std::map<std::string, Moved> kMovedFields = {{"SCENE", {"data", kSceneImageTopic}},
+                                                   {"FOCUS", {"image", kFocusImageTopic}},
+                                                   {"FORWARD_PREDICTION", {"what", kPredictionImageTopic}}};
 
 std::string base64Of(const std::vector<std::uint8_t>& bytes) {
   std::string out(sodium_base64_encoded_len(bytes.size(), sodium_base64_VARIANT_ORIGINAL), '\0');
@@ -166,15 +77,20 @@ std::string base64Of(const std::vector<std::uint8_t>& bytes) {
   return out;
 }
 
+std::vector<std::uint8_t> unbase64(const std::string& b64) {
+  std::vector<std::uint8_t> bytes(b64.size());
+  std::size_t n = 0;
+  EXPECT_EQ(sodium_base642bin(bytes.data(), bytes.size(), b64.data(), b64.size(), nullptr, &n, nullptr,
+                              sodium_base64_VARIANT_ORIGINAL), 0);
+  bytes.resize(n);
+  return bytes;
+}
+
 // A base64 PNG's pixels, RGB (empty for "").
 cv::Mat pngPixels(const std::string& b64) {
   if (b64.empty()) return {};
-  std::vector<std::uint8_t> png(b64.size());
-  std::size_t n = 0;
-  EXPECT_EQ(sodium_base642bin(png.data(), png.size(), b64.data(), b64.size(), nullptr, &n, nullptr,
-                              sodium_base64_VARIANT_ORIGINAL), 0);
-  png.resize(n);
-  EXPECT_TRUE(n > 8 && png[1] == 'P' && png[2] == 'N' && png[3] == 'G') << "not a PNG";
+  const std::vector<std::uint8_t> png = unbase64(b64);
+  EXPECT_TRUE(png.size() > 8 && png[1] == 'P' && png[2] == 'N' && png[3] == 'G') << "not a PNG";
   cv::Mat bgr = cv::imdecode(png, cv::IMREAD_UNCHANGED), rgb;
   if (bgr.empty()) return bgr;
   cv::cvtColor(bgr, rgb, cv::COLOR_BGR2RGB);
@@ -182,34 +98,60 @@ cv::Mat pngPixels(const std::string& b64) {
 }
 
 std::vector<std::uint8_t> bytesOf(const cv::Mat& rgb) {
-  return rgb.empty() ? std::vector<std::uint8_t>{} : std::vector<std::uint8_t>(rgb.data, rgb.data + rgb.total() * 3);
+  if (rgb.empty()) return {};
+  const cv::Mat whole = rgb.clone();  // (a column range of a strip is not continuous)
+  return std::vector<std::uint8_t>(whole.data, whole.data + whole.total() * 3);
 }
 
 // A predicted pixel as the export writes it.
 std::uint8_t predictedByte(double v) { return static_cast<std::uint8_t>(std::lround(static_cast<float>(v) * 255.0f)); }
 
-// A message of the file with its PNGs as base64 bytes, and a message as the generated JSON has it, with its
-// predictions (floats) as bytes in base64: the same JSON when the file holds the message's fields and pixels.
-nlohmann::json pixelsAsBase64(const std::string& channel, const std::string& text, bool from_file) {
-  nlohmann::json j = nlohmann::json::parse(text);
-  const auto fields = kImageFields.find(channel);
-  if (fields == kImageFields.end()) return j;
-  for (const std::string& name : fields->second) {
-    nlohmann::json& f = j.at(name);
-    auto one = [&](nlohmann::json& v) {
-      if (from_file) {
-        v = base64Of(bytesOf(pngPixels(v.get<std::string>())));
-      } else if (v.is_array()) {  // a row of predicted pixels
-        std::vector<std::uint8_t> bytes;
-        for (const auto& x : v) bytes.push_back(predictedByte(x.get<double>()));
-        v = base64Of(bytes);
-      }
-    };
-    if (f.is_array())
-      for (auto& v : f) one(v);
-    else
-      one(f);
+// A message of the file with its images as base64 of their pixels: its PNGs, and its moved field's image from
+// the image topic it names (FORWARD_PREDICTION.what's strip cut into one image per action).
+nlohmann::json filePixels(const ReadMcap& file, const ReadMessage& msg) {
+  nlohmann::json j = nlohmann::json::parse(msg.data);
+  if (const auto fields = kImageFields.find(msg.topic); fields != kImageFields.end())
+    for (const std::string& name : fields->second) {
+      auto one = [](nlohmann::json& v) { v = base64Of(bytesOf(pngPixels(v.get<std::string>()))); };
+      nlohmann::json& f = j.at(name);
+      if (f.is_array())
+        for (auto& v : f) one(v);
+      else
+        one(f);
+    }
+  if (const auto moved = kMovedFields.find(msg.topic); moved != kMovedFields.end()) {
+    nlohmann::json& f = j.at(moved->second.field);
+    if (f == "" && msg.topic == "FORWARD_PREDICTION") f = nlohmann::json::array();  // (no action: no image)
+    if (f != moved->second.topic) return j;
+    const ReadMessage* image = file.at(moved->second.topic, msg.log_time);
+    if (!image) return j;  // (left naming the topic: not the log's)
+    const cv::Mat pixels = pngPixels(nlohmann::json::parse(image->data).at("data").get<std::string>());
+    if (msg.topic != "FORWARD_PREDICTION") {
+      f = base64Of(bytesOf(pixels));
+      return j;
+    }
+    f = nlohmann::json::array();
+    for (int x = 0; x + pixels.rows <= pixels.cols; x += pixels.rows)
+      f.push_back(base64Of(bytesOf(pixels.colRange(x, x + pixels.rows))));
   }
+  return j;
+}
+
+// A message as the generated JSON has it with its images as base64 of their pixels: the scene's data decoded,
+// the predictions (floats) as the export's bytes. The same JSON as filePixels' when the file holds the
+// message's fields and pixels.
+nlohmann::json logPixels(const std::string& channel, const std::string& text) {
+  nlohmann::json j = nlohmann::json::parse(text);
+  if (channel == "SCENE") {
+    const cv::Mat rgb = decodeScene(unbase64(j.at("data").get<std::string>()), j.at("width"), j.at("height"));
+    j["data"] = base64Of(bytesOf(rgb));
+  }
+  if (channel == "FORWARD_PREDICTION")
+    for (auto& row : j.at("what")) {
+      std::vector<std::uint8_t> bytes;
+      for (const auto& x : row) bytes.push_back(predictedByte(x.get<double>()));
+      row = base64Of(bytes);
+    }
   return j;
 }
 
@@ -275,10 +217,10 @@ TEST_F(Export, AStoredLogHasOneMessagePerLogMessageTheEdgeTakesWithItsImagesAndG
   std::map<std::string, std::vector<nlohmann::json>> got, want;
   for (const ReadMessage& msg : m.messages) {
     EXPECT_EQ(msg.log_time, msg.publish_time);
-    if (msg.topic[0] != '/') got[msg.topic].push_back(pixelsAsBase64(msg.topic, msg.data, true));
+    if (msg.topic[0] != '/') got[msg.topic].push_back(filePixels(m, msg));
   }
   for (const auto& [channel, messages] : taken)
-    for (const std::string& text : messages) want[channel].push_back(pixelsAsBase64(channel, text, false));
+    for (const std::string& text : messages) want[channel].push_back(logPixels(channel, text));
   EXPECT_EQ(got, want);
   for (const auto& [channel, messages] : taken) {
     SCOPED_TRACE(channel);
@@ -305,22 +247,87 @@ TEST_F(Export, AStoredLogHasOneMessagePerLogMessageTheEdgeTakesWithItsImagesAndG
   EXPECT_EQ(m.schema_of.at(kSceneImageTopic), "foxglove.CompressedImage");
   EXPECT_EQ(m.schema_of.at(kGazeTopic), "foxglove.ImageAnnotations");
   for (const ReadMessage& msg : m.messages)
-    if (msg.topic == kSceneImageTopic) {
+    if (msg.topic == kSceneImageTopic) {  // (its pixels are the scene's: compared above)
       const auto image = nlohmann::json::parse(msg.data);
       EXPECT_EQ(image["format"], "png");
-      const std::string b64 = image["data"].get<std::string>();
-      std::vector<std::uint8_t> png(b64.size());
-      std::size_t n = 0;
-      ASSERT_EQ(sodium_base642bin(png.data(), png.size(), b64.data(), b64.size(), nullptr, &n, nullptr,
-                                  sodium_base64_VARIANT_ORIGINAL), 0);
-      png.resize(n);
-      const cv::Mat decoded = cv::imdecode(png, cv::IMREAD_COLOR);
-      EXPECT_EQ(decoded.cols, 150);  // the scene's pixels (tests/mcap compares them with the log's)
-      EXPECT_EQ(decoded.rows, 150);
       EXPECT_EQ(image["timestamp"]["sec"].get<std::uint64_t>() * 1000000000 + image["timestamp"]["nsec"].get<std::uint64_t>(),
                 msg.log_time);
       break;
     }
+}
+
+// Each image once: a message whose image is on an image topic (SCENE, FOCUS, FORWARD_PREDICTION) names that
+// topic, where an image of the same time is, in place of a copy of it (the scene's zlib stream, the focus
+// image's PNG and the predictions' PNGs were all written beside the topics' PNGs); the chunks are compressed
+// by zstd, and the file is a fraction of their records.
+TEST_F(Export, EachImageIsWrittenOnceAndTheChunksAreCompressed) {
+  const fs::path log = storedLog("multi-step-top-down-budget");
+  const ExportResult r = exportLog(log, "once.mcap");
+  const ReadMcap m = readMcap(dir_ / "once.mcap");
+  EXPECT_EQ(m.compressions, std::set<std::string>{"zstd"});
+  EXPECT_EQ(r.compression, "zstd");
+  EXPECT_EQ(r.record_bytes, m.record_bytes);
+  EXPECT_LT(r.bytes * 3, r.record_bytes);  // (this log: about a fifth)
+  const auto taken = takenMessages(log);
+  std::map<std::string, std::size_t> named, seen;
+  for (const ReadMessage& msg : m.messages) {
+    const auto moved = kMovedFields.find(msg.topic);
+    if (moved == kMovedFields.end()) continue;
+    SCOPED_TRACE(msg.topic + " " + std::to_string(seen[msg.topic]));
+    const auto logged = nlohmann::json::parse(taken.at(msg.topic).at(seen[msg.topic]++));
+    const nlohmann::json field = nlohmann::json::parse(msg.data).at(moved->second.field);
+    const ReadMessage* image = m.at(moved->second.topic, msg.log_time);
+    if (logged.at(moved->second.field).empty()) {  // (a prediction of no action: no image)
+      EXPECT_EQ(field, "");
+      EXPECT_EQ(image, nullptr);
+      continue;
+    }
+    EXPECT_EQ(field, moved->second.topic);
+    ASSERT_NE(image, nullptr);
+    if (msg.topic == "SCENE") {
+      EXPECT_EQ(msg.data.find(logged.at("data").get<std::string>()), std::string::npos) << "the zlib stream";
+    }
+    ++named[msg.topic];
+  }
+  EXPECT_GT(named["SCENE"], 0u);
+  EXPECT_GT(named["FOCUS"], 0u);
+  EXPECT_GT(named["FORWARD_PREDICTION"], 0u);
+  // The schemas say where the images are.
+  for (const auto& [channel, moved] : kMovedFields) {
+    const auto schema = nlohmann::json::parse(m.schema_text.at(m.schema_of.at(channel)));
+    EXPECT_EQ(schema["properties"][moved.field]["enum"], nlohmann::json::array({moved.topic, ""})) << channel;
+  }
+}
+
+// The chunks left uncompressed on request (--compression none): the same messages at the same times; a
+// compression the writer does not know is refused, naming it, before any file is made.
+TEST_F(Export, TheChunksAreCompressedByZstdOrNotAtAll) {
+  const fs::path log = storedLog("multi-step-top-down-budget");
+  const ExportResult zstd = exportLog(log, "zstd.mcap");
+  ExportOptions o;
+  o.log = log.string();
+  o.mcap = (dir_ / "none.mcap").string();
+  o.chunk_bytes = 64 << 10;
+  o.compression = "";
+  const ExportResult none = exportMcap(o, quiet());
+  const ReadMcap a = readMcap(dir_ / "zstd.mcap"), b = readMcap(dir_ / "none.mcap");
+  EXPECT_EQ(b.compressions, std::set<std::string>{""});
+  EXPECT_EQ(none.record_bytes, b.record_bytes);
+  EXPECT_EQ(zstd.record_bytes, none.record_bytes);
+  EXPECT_GT(none.bytes, none.record_bytes);
+  ASSERT_EQ(a.messages.size(), b.messages.size());
+  for (std::size_t i = 0; i < a.messages.size(); ++i) {
+    EXPECT_EQ(a.messages[i].topic, b.messages[i].topic) << i;
+    EXPECT_EQ(a.messages[i].log_time, b.messages[i].log_time) << i;
+    EXPECT_EQ(a.messages[i].data, b.messages[i].data) << i;
+  }
+  try {
+    McapWriter w(dir_ / "lz4.mcap", McapOptions{"", "afford test", 1 << 20, "lz4"});
+    ADD_FAILURE() << "an unknown compression was taken";
+  } catch (const std::invalid_argument& e) {
+    EXPECT_NE(std::string(e.what()).find("'lz4'"), std::string::npos) << e.what();
+  }
+  EXPECT_FALSE(fs::exists(dir_ / "lz4.mcap.partial"));
 }
 
 // The images of a test that imagines several steps ahead: every image field a PNG in its schema and in each
@@ -397,18 +404,27 @@ TEST_F(Export, AShuffledLogExportsTheSameMessagesEachAtItsStepsPlace) {
   }
 }
 
-// Events of the run changed or made up in the log: each is skipped and counted, the rest exported.
+// Events of the run changed or made up in the log: each is skipped and counted, the rest exported. A scene
+// whose pixels do not decode (its digest made anew: the edge takes it) is skipped whole: its message would
+// name an image that is not there.
 TEST_F(Export, ACorruptedOrForgedEventIsSkippedAndCounted) {
   const fs::path log = storedLog();
   const LogFileContents c = readLogFile(log, LogLimits{});
   const fs::path bad = dir_ / "bad.lcm";
-  int focus = 0;
+  int focus = 0, scenes = 0;
+  for (const LogEvent& e : c.events) scenes += e.channel == "SCENE";
   bool forged = false;
   {
     LogWriter w(bad);
     for (const LogEvent& e : c.events) {
       std::vector<std::uint8_t> data = e.data;
       if (e.channel == "FOCUS" && ++focus == 3) data[data.size() / 2] ^= 0x40;  // a changed byte: its digest fails
+      if (e.channel == "SCENE" && --scenes == 0) {  // the last scene: a zlib stream that does not inflate
+        scene_t s;
+        ASSERT_GT(s.decode(data.data(), 0, static_cast<int>(data.size())), 0);
+        std::fill(s.data.begin() + 2, s.data.end(), 0xff);
+        data = sealed(s);
+      }
       w.write(e.channel, data.data(), data.size(), e.utime);
       if (e.channel == "DECISION" && focus >= 3 && !forged) {  // a run message on a channel of no one's
         w.write("NOT_A_CHANNEL", e.data.data(), e.data.size(), e.utime);
@@ -422,13 +438,18 @@ TEST_F(Export, ACorruptedOrForgedEventIsSkippedAndCounted) {
   for (const ExportedTopic& x : r.topics) t[x.topic] = x;
   EXPECT_EQ(t.at("FOCUS").skipped, 1);
   EXPECT_NE(t.at("FOCUS").first_skipped.find("digest"), std::string::npos) << t.at("FOCUS").first_skipped;
+  EXPECT_EQ(t.at("SCENE").skipped, 1);
+  EXPECT_NE(t.at("SCENE").first_skipped.find("not a valid zlib stream"), std::string::npos)
+      << t.at("SCENE").first_skipped;
   EXPECT_EQ(t.at("NOT_A_CHANNEL").skipped, 1);
   EXPECT_EQ(t.at("NOT_A_CHANNEL").messages, 0);
-  EXPECT_EQ(r.skipped, 2);
+  EXPECT_EQ(r.skipped, 3);
   const ReadMcap m = readMcap(dir_ / "bad.mcap");
   const auto taken = takenMessages(log);
   EXPECT_EQ(m.per_topic.at("FOCUS"), static_cast<std::int64_t>(taken.at("FOCUS").size()) - 1);
   EXPECT_EQ(m.per_topic.at(kFocusImageTopic), static_cast<std::int64_t>(taken.at("FOCUS").size()) - 1);
+  EXPECT_EQ(m.per_topic.at("SCENE"), static_cast<std::int64_t>(taken.at("SCENE").size()) - 1);
+  EXPECT_EQ(m.per_topic.at(kSceneImageTopic), static_cast<std::int64_t>(taken.at("SCENE").size()) - 1);
   EXPECT_EQ(m.per_topic.count("NOT_A_CHANNEL"), 0u);
 }
 

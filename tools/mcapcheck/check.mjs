@@ -1,5 +1,6 @@
 // An independent check of an MCAP file that `afford export` wrote, with Foxglove's own
-// reader (@mcap/core, pinned in package.json; `npm ci --prefix tools/mcapcheck` installs it):
+// reader (@mcap/core) and a zstd decoder written in JavaScript (fzstd), both pinned in
+// package.json (`npm ci --prefix tools/mcapcheck` installs them):
 //
 //   node tools/mcapcheck/check.mjs FILE [--digest]
 //
@@ -7,14 +8,18 @@
 //    data section (Schemas, Channels and Messages only inside Chunks; each Chunk followed by one
 //    MessageIndex per channel it holds, whose entries point at its messages, each once), DataEnd,
 //    then a summary of Schemas, Channels, Statistics, MetadataIndexes, ChunkIndexes and
-//    SummaryOffsets, grouped by opcode, and the Footer. The chunks', the data section's and the
-//    summary's CRCs are computed here again (a CRC-32 of this file's own).
+//    SummaryOffsets, grouped by opcode, and the Footer. Each chunk's records are compressed by
+//    zstd or not at all, and decompress to the chunk's uncompressed_size. The chunks' (of their
+//    uncompressed records), the data section's and the summary's CRCs are computed here again
+//    (a CRC-32 of this file's own).
 // 2. McapIndexedReader reads the summary (its CRC checked): the Statistics must count what the
 //    stream held, every ChunkIndex and SummaryOffset must point at its records, the metadata
 //    must hold the run's configuration, and readMessages over everything must give the
 //    stream's messages, each once.
 // 3. Every message is UTF-8 JSON that its channel's JSON Schema ("jsonschema") accepts (a string
-//    of contentMediaType image/png: base64 of a PNG, by its signature, or "").
+//    of contentMediaType image/png: base64 of a PNG, by its signature, or ""; a string of an
+//    enum: one of its values), and a channel message's field that names an image topic (an enum
+//    of a topic's name) has a message on that topic at its log time.
 //
 // Prints one JSON line per message, in file order: topic, schema, channel_id, sequence,
 // log_time, publish_time (integers, exact) and the message as it is in the file (its JSON,
@@ -23,6 +28,7 @@
 import { createHash } from "node:crypto";
 import { readFileSync } from "node:fs";
 import { McapIndexedReader, McapStreamReader } from "@mcap/core";
+import { decompress as unzstd } from "fzstd";
 
 const [file, ...flags] = process.argv.slice(2);
 if (!file || flags.some((f) => f !== "--digest")) {
@@ -46,6 +52,20 @@ function crc32(data) {
   let c = 0xffffffff;
   for (let i = 0; i < data.length; i++) c = crcTable[(c ^ data[i]) & 0xff] ^ (c >>> 8);
   return (c ^ 0xffffffff) >>> 0;
+}
+
+// ---- the chunks' compressions: zstd (decoded by fzstd) and none -----------------------------
+const decompressHandlers = {
+  zstd: (data, size) => {
+    const out = unzstd(data);
+    check(BigInt(out.length) === size, `a zstd chunk of ${out.length} bytes, its uncompressed_size ${size}`);
+    return out;
+  },
+};
+function recordsOf(chunk) {
+  check(chunk.compression === "" || chunk.compression in decompressHandlers,
+        `chunk compression "${chunk.compression}" (the export writes zstd or none)`);
+  return chunk.compression === "" ? chunk.records : decompressHandlers[chunk.compression](chunk.records, chunk.uncompressedSize);
 }
 
 // ---- the records, as this file lays them out (opcode, uint64 length) ----------------------
@@ -73,7 +93,7 @@ function chunkRecords(records) {
 const DATA = new Set(["Schema", "Channel", "Message", "Chunk", "MessageIndex", "Metadata", "DataEnd"]);
 const SUMMARY = ["Schema", "Channel", "Statistics", "MetadataIndex", "ChunkIndex", "AttachmentIndex", "SummaryOffset"];
 function readStream() {
-  const reader = new McapStreamReader({ validateCrcs: true, includeChunks: true });
+  const reader = new McapStreamReader({ validateCrcs: true, includeChunks: true, decompressHandlers });
   reader.append(bytes);
   const s = { schemas: new Map(), channels: new Map(), messages: [], chunks: [], metadata: [], summary: [] };
   let inChunk = 0; // records of the open chunk still to come
@@ -96,13 +116,14 @@ function readStream() {
       }
       if (r.type === "Chunk") {
         check(chunk === undefined || chunk.unindexed.size === 0, "a chunk's messages are not all indexed");
-        check(r.compression === "", `chunk compression "${r.compression}" (the export writes none)`);
-        check(crc32(r.records) === r.uncompressedCrc, "chunk CRC");
-        check(BigInt(r.records.length) === r.uncompressedSize, "chunk uncompressed_size");
-        const records = chunkRecords(r.records);
+        const uncompressed = recordsOf(r);
+        check(crc32(uncompressed) === r.uncompressedCrc, "chunk CRC");
+        check(BigInt(uncompressed.length) === r.uncompressedSize, "chunk uncompressed_size");
+        const records = chunkRecords(uncompressed);
         chunk = { records, unindexed: new Set([...records].filter(([, rec]) => rec[0] === 5).map(([at]) => at)) };
         inChunk = records.size;
-        s.chunks.push({ start: r.messageStartTime, end: r.messageEndTime, messages: chunk.unindexed.size });
+        s.chunks.push({ start: r.messageStartTime, end: r.messageEndTime, messages: chunk.unindexed.size,
+                        compression: r.compression, compressed: BigInt(r.records.length), uncompressed: r.uncompressedSize });
       } else if (r.type === "MessageIndex") {
         check(chunk !== undefined && inChunk === 0, "a MessageIndex not after a chunk");
         for (const [logTime, offset] of r.records) {
@@ -192,6 +213,8 @@ function checkSummary(s, indexed) {
     const r = recordAt(Number(ci.chunkStartOffset));
     check(r.op === 0x06 && BigInt(r.end - r.at) === ci.chunkLength, `ChunkIndex ${i}: no chunk of its length there`);
     check(ci.messageStartTime === s.chunks[i].start && ci.messageEndTime === s.chunks[i].end, `ChunkIndex ${i}: times`);
+    check(ci.compression === s.chunks[i].compression && ci.compressedSize === s.chunks[i].compressed &&
+          ci.uncompressedSize === s.chunks[i].uncompressed, `ChunkIndex ${i}: compression or sizes`);
     let indexBytes = 0;
     for (const [channel, at] of ci.messageIndexOffsets) {
       const m = recordAt(Number(at));
@@ -213,7 +236,7 @@ function checkSummary(s, indexed) {
 }
 
 async function checkIndexed(s) {
-  const indexed = await McapIndexedReader.Initialize({ readable });
+  const indexed = await McapIndexedReader.Initialize({ readable, decompressHandlers });
   checkSummary(s, indexed);
   const metadata = [];
   for await (const m of indexed.readMetadata()) metadata.push(m);
@@ -243,9 +266,9 @@ async function checkIndexed(s) {
 // ---- 3. each message against its JSON Schema (the keywords the export's schemas use) -------------
 const BASE64 = /^(?:[A-Za-z0-9+/]{4})*(?:[A-Za-z0-9+/]{2}==|[A-Za-z0-9+/]{3}=)?$/;
 const KNOWN = new Set(["$schema", "title", "description", "type", "properties", "required", "additionalProperties",
-  "items", "minItems", "maxItems", "minimum", "maximum", "contentEncoding", "contentMediaType"]);
+  "items", "minItems", "maxItems", "minimum", "maximum", "contentEncoding", "contentMediaType", "enum"]);
 const PNG_SIGNATURE = Buffer.from([0x89, 0x50, 0x4e, 0x47, 0x0d, 0x0a, 0x1a, 0x0a]);
-function validate(schema, v, path) {
+function validate(schema, v, path, references) {
   for (const k of Object.keys(schema)) check(KNOWN.has(k), `${path}: schema keyword ${k} this checker does not know`);
   const types = { object: () => v !== null && typeof v === "object" && !Array.isArray(v), array: () => Array.isArray(v),
     string: () => typeof v === "string", number: () => typeof v === "number", boolean: () => typeof v === "boolean",
@@ -254,6 +277,10 @@ function validate(schema, v, path) {
   if (schema.minimum !== undefined) check(v >= schema.minimum, `${path}: below ${schema.minimum}`);
   if (schema.maximum !== undefined) check(v <= schema.maximum, `${path}: above ${schema.maximum}`);
   if (schema.contentEncoding === "base64") check(BASE64.test(v), `${path}: not base64`);
+  if (schema.enum !== undefined) {  // (the export's: an image topic's name, or "")
+    check(schema.enum.includes(v), `${path}: ${JSON.stringify(v)?.slice(0, 40)} is not one of ${schema.enum}`);
+    if (v !== "") references.push([v, path]);
+  }
   if (schema.contentMediaType !== undefined) {  // an image: none ("") or a PNG
     check(schema.contentMediaType === "image/png" && schema.contentEncoding === "base64",
       `${path}: contentMediaType ${schema.contentMediaType} this checker does not know`);
@@ -262,12 +289,12 @@ function validate(schema, v, path) {
   if (schema.type === "array") {
     if (schema.minItems !== undefined) check(v.length >= schema.minItems, `${path}: fewer than ${schema.minItems}`);
     if (schema.maxItems !== undefined) check(v.length <= schema.maxItems, `${path}: more than ${schema.maxItems}`);
-    v.forEach((e, i) => validate(schema.items, e, `${path}[${i}]`));
+    v.forEach((e, i) => validate(schema.items, e, `${path}[${i}]`, references));
   }
   if (schema.type === "object") {
     for (const r of schema.required ?? []) check(r in v, `${path}: no ${r}`);
     for (const [k, e] of Object.entries(v)) {
-      if (schema.properties?.[k]) validate(schema.properties[k], e, `${path}.${k}`);
+      if (schema.properties?.[k]) validate(schema.properties[k], e, `${path}.${k}`, references);
       else check(schema.additionalProperties !== false, `${path}: ${k} is not in the schema`);
     }
   }
@@ -282,11 +309,15 @@ try {
   const schemas = new Map([...s.schemas].map(([id, sc]) => [id, JSON.parse(utf8.decode(sc.data))]));
   const perTopic = {};
   const out = [];
+  const at = new Set(s.messages.map((m) => `${s.channels.get(m.channelId).topic}@${m.logTime}`));
   for (const m of s.messages) {
     const c = s.channels.get(m.channelId);
     const schema = s.schemas.get(c.schemaId);
     const text = utf8.decode(m.data);
-    validate(schemas.get(c.schemaId), JSON.parse(text), `${c.topic}#${m.sequence}`);
+    const references = [];  // [topic, field]: the field's pixels are on the topic at the message's time
+    validate(schemas.get(c.schemaId), JSON.parse(text), `${c.topic}#${m.sequence}`, references);
+    for (const [topic, path] of references)
+      check(topic.startsWith("/") && at.has(`${topic}@${m.logTime}`), `${path}: no message on ${topic} at its time`);
     perTopic[c.topic] = (perTopic[c.topic] ?? 0) + 1;
     const body = digestOnly ? `"sha256":"${createHash("sha256").update(m.data).digest("hex")}"`
                             : `"message":${/[\n\r]/.test(text) ? JSON.stringify(JSON.parse(text)) : text}`;
@@ -296,6 +327,8 @@ try {
   }
   if (out.length) process.stdout.write(out.join("\n") + "\n");
   const totals = { file, bytes: bytes.length, messages: s.messages.length, chunks: s.chunks.length,
+    compression: [...new Set(s.chunks.map((c) => c.compression))].join(","),
+    record_bytes: Number(s.chunks.reduce((n, c) => n + c.uncompressed, 0n)),
     schemas: s.schemas.size, channels: s.channels.size, per_topic: perTopic, ...info, ok: true };
   process.stdout.write(JSON.stringify({ totals }) + "\n");
 } catch (e) {

@@ -18,9 +18,10 @@ void printExport(const ExportResult& r) {
   if (!r.incomplete.empty()) std::printf("the log is incomplete: %s\n", r.incomplete.c_str());
   for (const std::string& c : r.cut) std::printf("the log is cut: %s\n", c.c_str());
   if (!r.cut.empty()) std::printf("so the file holds the run only as far as the log goes\n");
-  std::printf("wrote %s: %lld messages on %zu topics, %llu chunks, %llu bytes\n", r.file.c_str(),
-              static_cast<long long>(r.messages), r.topics.size(), static_cast<unsigned long long>(r.chunks),
-              static_cast<unsigned long long>(r.bytes));
+  std::printf("wrote %s: %lld messages on %zu topics, %llu chunks (%s, %llu bytes of records), %llu bytes\n",
+              r.file.c_str(), static_cast<long long>(r.messages), r.topics.size(),
+              static_cast<unsigned long long>(r.chunks), r.compression.empty() ? "uncompressed" : r.compression.c_str(),
+              static_cast<unsigned long long>(r.record_bytes), static_cast<unsigned long long>(r.bytes));
   for (const ExportedTopic& t : r.topics) {
     std::printf("  %-24s %-26s %8lld", t.topic.c_str(), t.schema.empty() ? "-" : t.schema.c_str(),
                 static_cast<long long>(t.messages));
@@ -49,7 +50,11 @@ Command exportCommand(CLI::App& app, const FrontDoor& door) {
   cmd->add_option("--bus-key", o->bus_key,
                   "the key of the bus the log was recorded on (an lcm-logger recording of a keyed bus): "
                   "only events with its tag are exported");
-  return {cmd, [o, &door] {
+  auto compression = std::make_shared<std::string>("zstd");
+  cmd->add_option("--compression", *compression, "the chunks' compression: zstd (the default) or none")
+      ->check(CLI::IsMember({"zstd", "none"}));
+  return {cmd, [o, compression, &door] {
+            o->compression = *compression == "none" ? "" : *compression;
             installStopHandlers();  // Ctrl-C: nothing half-written left
             printExport(exportMcap(*o, *door.log));
             return 0;
