@@ -1,11 +1,22 @@
 """Experiments made once per session with the build's `afford`, in one process (memq), small."""
 import os
 import subprocess
+import tempfile
 from pathlib import Path
 
 import pytest
 
 BIN = Path(os.environ.get("AFFORD_BIN", Path(__file__).resolve().parents[2] / "build" / "bin")).resolve()
+
+
+@pytest.fixture(autouse=True)
+def own_temporary_folder(tmp_path, monkeypatch):
+    """Each test's temporary folder (TMPDIR, for its processes too) is inside its own: what afford.run writes
+    without `out`, and an example without `--out`, stays under the test's folder, not in the machine's /tmp."""
+    folder = tmp_path / "tmp"
+    folder.mkdir()
+    monkeypatch.setenv("TMPDIR", str(folder))
+    monkeypatch.setattr(tempfile, "tempdir", str(folder))
 
 
 def afford(*args: str, cwd: Path) -> None:
