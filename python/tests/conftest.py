@@ -13,7 +13,7 @@ BIN = Path(os.environ.get("AFFORD_BIN", Path(__file__).resolve().parents[2] / "b
 def own_temporary_folder(tmp_path, monkeypatch):
     """Each test's temporary folder (TMPDIR, for its processes too) is inside its own: what afford.run writes
     without `out`, and an example without `--out`, stays under the test's folder, not in the machine's /tmp."""
-    folder = tmp_path / "tmp"
+    folder = tmp_path / "TMPDIR"
     folder.mkdir()
     monkeypatch.setenv("TMPDIR", str(folder))
     monkeypatch.setattr(tempfile, "tempdir", str(folder))
