@@ -97,11 +97,11 @@ std::optional<RunOutcome> keptOutcome(const fs::path& out, const RunSpec& spec) 
 }
 
 std::optional<std::string> readSmallFile(const fs::path& file, std::uintmax_t max_bytes) {
-  std::error_code ec;
-  if (!fs::is_regular_file(file, ec) || fs::file_size(file, ec) > max_bytes || ec) return std::nullopt;
-  std::ifstream in(file);
-  if (!in) return std::nullopt;
-  return std::string(std::istreambuf_iterator<char>(in), {});
+  try {
+    return smallFileText(file, max_bytes);
+  } catch (const std::runtime_error&) {
+    return std::nullopt;
+  }
 }
 
 json readManifest(const fs::path& file) {
@@ -112,7 +112,7 @@ json readManifest(const fs::path& file) {
   }
 }
 
-json readJsonFile(const fs::path& file, std::uintmax_t max_bytes) {
+std::string smallFileText(const fs::path& file, std::uintmax_t max_bytes) {
   // Checked before it is opened: a FIFO would wait for a writer, a huge file hold the memory.
   std::error_code ec;
   if (!fs::is_regular_file(file, ec)) throw std::runtime_error(file.string() + ": not a regular file");
@@ -123,8 +123,13 @@ json readJsonFile(const fs::path& file, std::uintmax_t max_bytes) {
                              std::to_string(max_bytes) + ")");
   std::ifstream in(file);
   if (!in) throw std::runtime_error(file.string() + ": cannot be read");
+  return std::string(std::istreambuf_iterator<char>(in), {});
+}
+
+json readJsonFile(const fs::path& file, std::uintmax_t max_bytes) {
+  const std::string text = smallFileText(file, max_bytes);
   try {
-    return json::parse(in);
+    return json::parse(text);
   } catch (const json::parse_error& e) {
     throw std::runtime_error(file.string() + ": not JSON (" + e.what() + ")");
   }

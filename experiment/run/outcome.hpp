@@ -44,8 +44,10 @@ RunOutcome outcomeFromJson(const nlohmann::json& j, const std::string& what = "o
 // A JSON file, read only if it is a regular file of at most max_bytes (a FIFO would wait for a writer, a huge
 // file hold the memory); throws std::runtime_error naming the file and what is wrong.
 nlohmann::json readJsonFile(const std::filesystem::path& file, std::uintmax_t max_bytes);
-// A small text file (a pid, a URL, a token) read whole, only if it is a regular file of at most max_bytes (a FIFO
-// would wait for a writer, a huge file hold the memory); nullopt otherwise.
+// A small file's text, read only if it is a regular file of at most max_bytes (a FIFO would wait for a writer, a
+// huge file hold the memory); throws std::runtime_error naming the file and what is wrong.
+std::string smallFileText(const std::filesystem::path& file, std::uintmax_t max_bytes);
+// The same for a small text file (a pid, a URL, a token) whose absence is no error: nullopt for any of those.
 std::optional<std::string> readSmallFile(const std::filesystem::path& file, std::uintmax_t max_bytes);
 // A log folder's manifest.json as readJsonFile reads it (at most 16 MiB, far above any logger's); a
 // discarded value if it is not there or does not read.

@@ -88,6 +88,11 @@ void prefetchColumn(const double* column, Eigen::Index rows) {
 // Below this many multiply-adds a split costs more than it saves (a
 // where-effect layer: 2 x 7).
 constexpr Eigen::Index kWorthSplitting = 16384;
+
+// `second`, where a pass of `rows` over x's columns is worth splitting; else nullptr.
+SecondCore* splitter(SecondCore* second, Eigen::Index rows, const SparseInput& x) {
+  return rows * static_cast<Eigen::Index>(x.index.size()) >= kWorthSplitting ? second : nullptr;
+}
 }  // namespace
 
 SecondCore::SecondCore() : thread_([this] { work(); }) {}
@@ -154,8 +159,8 @@ void Layer::trainRows(const SparseInput& x, const Eigen::VectorXd& delta, Eigen:
 Eigen::VectorXd Layer::output(const SparseInput& x, SecondCore* second) const {
   assert(x.dim == w_.cols());
   Eigen::VectorXd a = Eigen::VectorXd::Zero(w_.rows());
-  if (second && w_.rows() * static_cast<Eigen::Index>(x.index.size()) >= kWorthSplitting)
-    second->split(w_.rows(), [&](Eigen::Index from, Eigen::Index to) { outputRows(x, a, from, to); });
+  if (SecondCore* s = splitter(second, w_.rows(), x))
+    s->split(w_.rows(), [&](Eigen::Index from, Eigen::Index to) { outputRows(x, a, from, to); });
   else
     outputRows(x, a, 0, w_.rows());
   return a;
@@ -170,8 +175,8 @@ void Layer::train(const SparseInput& x, const Eigen::VectorXd& y, const Eigen::V
   Eigen::VectorXd delta = target - y;
   if (sigmoid_) delta = delta.cwiseProduct(y.cwiseProduct(Eigen::VectorXd::Ones(y.size()) - y));
   delta *= learning_rate;
-  if (second && w_.rows() * static_cast<Eigen::Index>(x.index.size()) >= kWorthSplitting)
-    second->split(w_.rows(), [&](Eigen::Index from, Eigen::Index to) { trainRows(x, delta, from, to); });
+  if (SecondCore* s = splitter(second, w_.rows(), x))
+    s->split(w_.rows(), [&](Eigen::Index from, Eigen::Index to) { trainRows(x, delta, from, to); });
   else
     trainRows(x, delta, 0, w_.rows());
 }
