@@ -203,10 +203,17 @@ grep -q "procs.sh: warning: group 'ga' (running) is on this same bus (239.255.76
   { cat "$out/start-gc.txt"; echo "procs.sh start did not warn of the group on the same bus"; exit 1; }
 for g in ga gb gc; do "$root/scripts/procs.sh" stop "$g" >/dev/null; done
 # A pid the groups had, reused by another program once they stopped, is left alone at the script's end.
-perl -e '$SIG{INT} = "DEFAULT"; sleep 600' &  # (a background job of a script ignores SIGINT; this one does not)
+# (It blocks until a signal ends it; a background job of a script ignores SIGINT, this one does not once it has
+# said so in a file.)
+perl -e '$SIG{INT} = "DEFAULT"; open(my $f, ">", $ARGV[0]) && close($f); select(undef, undef, undef, undef)' \
+  "$out/decoy-ready" &
 decoy=$!
+wait_until 10 test -e "$out/decoy-ready" || { echo "the stand-in program did not start"; exit 1; }
 echo "$decoy" >"$out/groups/ga/eye.pid"
 stop_groups
-kill -0 "$decoy" 2>/dev/null || { echo "stopping the stopped groups signalled a program their pid file names"; exit 1; }
+# (Alive, not a zombie: this script has not waited for it.)
+[[ $(ps -o stat= -p "$decoy" 2>/dev/null) == [^Z]* ]] ||
+  { echo "stopping the stopped groups signalled a program their pid file names"; exit 1; }
+kill "$decoy"
 fi
 echo "every hint said once, at once"
