@@ -59,6 +59,9 @@
 #     a GOALS step beside an IMP step (pairs of runs, udpm and memq: medians, GOALS / IMP, floor 0.5 over udpm), and
 #     --runs IMP runs at --jobs over udpm beside memq (median walls, udpm / memq, floor 0.61); several --afford
 #     builds measured in turn, side by side (bench/goals_cost.py; exit 1 below a floor).
+#   bench/run.sh goals-chain LOG [--first STEP] [--last STEP]
+#     a GOALS run's log (kept with --keep-logs all): the links of a step's chain of messages, DECISION to the
+#     next DECISION, as the logger heard them (medians, means, shares; bench/goals_chain.py).
 #   bench/run.sh reproduction [--reps R] [--ext-reps K] [--jobs J] [--transport memq|udpm] [--out DIR] [WHAT ...]
 #     the whole reproduction (scripts/reproduce.sh WHAT, default all, its report in DIR): wall time beside its
 #     critical path and the share of the time the cores were busy.
@@ -81,6 +84,8 @@ cd "$(dirname "$0")/.."
 [[ ${1:-} == long ]] && { shift; [[ -x build/bin/afford ]] || scripts/setup.sh; exec /usr/bin/python3 bench/long_run.py "$@"; }
 [[ ${1:-} == goals-cost ]] && { shift; [[ -x build/bin/afford ]] || scripts/setup.sh;
   exec /usr/bin/python3 bench/goals_cost.py "$@"; }
+[[ ${1:-} == goals-chain ]] && { shift; [[ -x build/bin/afford ]] || scripts/setup.sh;
+  exec /usr/bin/python3 bench/goals_chain.py "$@"; }
 [[ ${1:-} == full ]] && { shift; [[ -x build/bin/afford ]] || scripts/setup.sh;
   exec /usr/bin/python3 bench/full_machine.py "$@"; }
 [[ -x build/bin/afford-bench ]] || scripts/setup.sh
