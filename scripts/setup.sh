@@ -33,6 +33,9 @@ packages=(
   libcli11-dev libyaml-cpp-dev nlohmann-json3-dev zlib1g-dev libgsl-dev libsodium-dev libzstd-dev
   iproute2 util-linux procps
   ffmpeg              # afford render: video and GIF
+  # The table world (world.kind: table): MuJoCo, and an OpenGL context from EGL without a display (Mesa). Debian's
+  # MuJoCo CMake package names libqhull's headers, which libmujoco-dev does not pull in.
+  libmujoco-dev libqhull-dev libegl-dev libegl-mesa0 libgl1-mesa-dri
 )
 # ... and what the tests, the figures, lcm-spy, the cluster scripts and the Python package need.
 ((main)) || packages+=(

@@ -1,0 +1,232 @@
+// The table world's simulation and camera (processes/environment/table): the model built from its spec,
+// physics that the spec's numbers decide, a state that continues bit for bit, the hand moved by its
+// actuators, and a camera whose images are the same bytes for the same state and show each object where
+// the simulation has it.
+#include <gtest/gtest.h>
+
+#include <cmath>
+#include <cstring>
+#include <memory>
+
+#include "environment/table/camera.hpp"
+#include "environment/table/physics.hpp"
+
+namespace afford::table {
+namespace {
+
+// A small world for the tests (these are fixtures, not the experiments' values).
+TableSpec sampleSpec() {
+  TableSpec t;
+  t.half_x = 0.3;
+  t.half_y = 0.6;
+  t.friction = 0.8;
+  t.rgb = {0.15, 0.15, 0.15};
+  t.timestep = 0.002;
+  t.camera = {160, 120, 1.0, 45.0};
+  HandSpec& h = t.hand;
+  h.palm_half[0] = 0.02, h.palm_half[1] = 0.05, h.palm_half[2] = 0.01;
+  h.finger_half[0] = 0.01, h.finger_half[1] = 0.005, h.finger_half[2] = 0.03;
+  h.finger_travel = 0.045;
+  h.mass = 0.4;
+  h.friction = 1.5;
+  h.kp_move = 400;
+  h.kp_yaw = 20;
+  h.kp_finger = 200;
+  h.time_constant = 0.1;
+  h.rest_height = 0.3;
+  h.reach_x = 0.3;
+  h.reach_y = 0.6;
+  h.rgb = {0.9, 0.9, 0.9};
+  t.objects = {
+      {"cube", Shape::Box, {0.025, 0.025, 0.025}, false, 0.1, 0.8, 0.005, 0.0001, {0.9, 0.1, 0.1}},
+      {"ball", Shape::Sphere, {0.025}, false, 0.05, 0.8, 0.005, 0.0001, {0.1, 0.9, 0.1}},
+      {"log", Shape::Cylinder, {0.02, 0.05}, true, 0.08, 0.8, 0.005, 0.0001, {0.1, 0.1, 0.9}},
+      {"can", Shape::Cylinder, {0.025, 0.04}, false, 0.1, 0.8, 0.005, 0.0001, {0.9, 0.9, 0.1}},
+  };
+  return t;
+}
+
+double planarDistance(const Pose& a, double x, double y) { return std::hypot(a.pos[0] - x, a.pos[1] - y); }
+
+TEST(TableModel, EveryObjectOfTheSpecIsABodyOfTheModelWithItsShapeSizeMassAndFriction) {
+  TablePhysics sim(sampleSpec());
+  const mjModel* m = sim.model();
+  for (const ObjectSpec& o : sampleSpec().objects) {
+    const int body = mj_name2id(m, mjOBJ_BODY, o.name.c_str());
+    const int geom = mj_name2id(m, mjOBJ_GEOM, o.name.c_str());
+    ASSERT_GE(body, 0) << o.name;
+    ASSERT_GE(geom, 0) << o.name;
+    EXPECT_NEAR(m->body_mass[body], o.mass, 1e-12) << o.name;
+    EXPECT_DOUBLE_EQ(m->geom_friction[3 * geom], o.friction) << o.name;
+    const int type = o.shape == Shape::Box ? mjGEOM_BOX : o.shape == Shape::Sphere ? mjGEOM_SPHERE : mjGEOM_CYLINDER;
+    EXPECT_EQ(m->geom_type[geom], type) << o.name;
+    for (std::size_t k = 0; k < o.size.size(); ++k) EXPECT_DOUBLE_EQ(m->geom_size[3 * geom + k], o.size[k]) << o.name;
+  }
+  EXPECT_EQ(m->nu, 6) << "the hand's x, y, z, yaw and two fingers";
+}
+
+TEST(TableModel, AWrongSpecIsRefusedNamingTheObjectAndField) {
+  TableSpec t = sampleSpec();
+  t.objects[1].size = {0.02, 0.03};
+  try {
+    TablePhysics sim(t);
+    FAIL() << "a sphere with two sizes was taken";
+  } catch (const std::invalid_argument& e) {
+    EXPECT_NE(std::string(e.what()).find("table.objects[1] ('ball')"), std::string::npos) << e.what();
+    EXPECT_NE(std::string(e.what()).find("takes 1 size values, not 2"), std::string::npos) << e.what();
+  }
+  t = sampleSpec();
+  t.objects[2].name = "cube";
+  EXPECT_THROW(TablePhysics{t}, std::invalid_argument);
+  t = sampleSpec();
+  t.objects[0].lying = true;
+  EXPECT_THROW(TablePhysics{t}, std::invalid_argument);
+  t = sampleSpec();
+  t.objects[3].name = "bad\"name";  // would break the model's text
+  EXPECT_THROW(TablePhysics{t}, std::invalid_argument);
+  t = sampleSpec();
+  t.objects[0].mass = 0;
+  EXPECT_THROW(TablePhysics{t}, std::invalid_argument);
+}
+
+TEST(TablePhysics, ObjectsPlacedOnTheTableStayAtRestWhereTheyWerePut) {
+  TablePhysics sim(sampleSpec());
+  const double places[4][2] = {{0.1, -0.3}, {-0.1, -0.1}, {0.1, 0.15}, {-0.15, 0.4}};
+  for (int i = 0; i < 4; ++i) sim.placeObject(i, places[i][0], places[i][1], 0.3 * i);
+  sim.step(1000);  // 2 s
+  EXPECT_TRUE(sim.atRest(1e-3, 1e-2));
+  for (int i = 0; i < 4; ++i) {
+    const Pose p = sim.objectPose(i);
+    EXPECT_LT(planarDistance(p, places[i][0], places[i][1]), 2e-3) << sampleSpec().objects[i].name;
+    EXPECT_NEAR(p.pos[2], sampleSpec().objects[i].restingHeight(), 2e-3) << sampleSpec().objects[i].name;
+  }
+}
+
+// Physics decides, and the spec's numbers are its inputs: the same shove slides a box on a slippery table
+// further than on a rough one, and a ball rolls further than either.
+double travelAfterShove(TableSpec t, int object, double speed) {
+  TablePhysics sim(t);
+  sim.placeObject(object, 0, -0.3, 0);
+  auto* data = const_cast<mjData*>(sim.data());
+  const int joint = mj_name2id(sim.model(), mjOBJ_JOINT, t.objects[static_cast<std::size_t>(object)].name.c_str());
+  data->qvel[sim.model()->jnt_dofadr[joint] + 1] = speed;  // along +y
+  sim.step(1500);
+  return sim.objectPose(object).pos[1] + 0.3;
+}
+
+TEST(TablePhysics, FrictionFromTheSpecDecidesHowFarAShovedBoxSlides) {
+  TableSpec rough = sampleSpec(), slippery = sampleSpec();
+  rough.objects[0].friction = 1.0;
+  rough.friction = 1.0;
+  slippery.objects[0].friction = 0.1;
+  slippery.friction = 0.1;
+  const double far = travelAfterShove(slippery, 0, 0.8), near = travelAfterShove(rough, 0, 0.8);
+  EXPECT_GT(near, 0.005);
+  EXPECT_GT(far, 3 * near) << "slippery " << far << " m, rough " << near << " m";
+  const double rolled = travelAfterShove(rough, 1, 0.8);  // the ball, on the rough table
+  EXPECT_GT(rolled, 3 * near) << "the ball rolled " << rolled << " m, the box slid " << near << " m";
+}
+
+TEST(TablePhysics, AStateSetAgainContinuesBitForBit) {
+  TablePhysics a(sampleSpec());
+  for (int i = 0; i < 4; ++i) a.placeObject(i, 0.05 * i - 0.1, 0.25 * i - 0.4, 0.2 * i);
+  a.commandHand({0.05, -0.1, 0.08, 0.3, 0.2});
+  a.step(300);  // mid-motion: the hand on its way down, objects settling
+  const std::vector<double> saved = a.state();
+  a.step(400);
+  const std::vector<double> straight = a.state();
+
+  TablePhysics b(sampleSpec());
+  b.setState(saved);
+  b.step(400);
+  const std::vector<double> resumed = b.state();
+  ASSERT_EQ(straight.size(), resumed.size());
+  EXPECT_EQ(std::memcmp(straight.data(), resumed.data(), straight.size() * sizeof(double)), 0)
+      << "the run continued from its saved state is not the run that went on";
+
+  TableSpec other = sampleSpec();
+  other.objects.pop_back();
+  TablePhysics c(other);
+  EXPECT_THROW(c.setState(saved), std::invalid_argument);
+}
+
+TEST(TablePhysics, TheHandGoesWhereItIsCommandedByItsActuators) {
+  TablePhysics sim(sampleSpec());
+  const HandCommand goal{0.12, -0.25, 0.15, 0.5, 0.0};
+  sim.commandHand(goal);
+  sim.step(1500);
+  const HandCommand now = sim.handNow();
+  EXPECT_NEAR(now.x, goal.x, 5e-3);
+  EXPECT_NEAR(now.y, goal.y, 5e-3);
+  EXPECT_NEAR(now.z, goal.z, 5e-3);
+  EXPECT_NEAR(now.yaw, goal.yaw, 2e-2);
+  EXPECT_NEAR(now.opening, 0.0, 0.05);
+  EXPECT_TRUE(sim.atRest(2e-2, 5e-2));
+}
+
+class TableCameraTest : public ::testing::Test {
+ protected:
+  static void SetUpTestSuite() { gl_ = std::make_unique<GlContext>(); }
+  static void TearDownTestSuite() { gl_.reset(); }
+  static std::unique_ptr<GlContext> gl_;
+};
+std::unique_ptr<GlContext> TableCameraTest::gl_;
+
+TEST_F(TableCameraTest, TheSameStateGivesTheSameImageBytes) {
+  TablePhysics a(sampleSpec()), b(sampleSpec());
+  for (TablePhysics* s : {&a, &b}) {
+    for (int i = 0; i < 4; ++i) s->placeObject(i, 0.05 * i - 0.1, 0.25 * i - 0.4, 0.2 * i);
+    s->step(200);
+  }
+  TableCamera ca(a), cb(b);
+  const cv::Mat ia = ca.rgb(a), ib = cb.rgb(b);
+  ASSERT_EQ(ia.type(), CV_8UC3);
+  ASSERT_EQ(ia.cols, 160);
+  ASSERT_EQ(ia.rows, 120);
+  EXPECT_EQ(cv::norm(ia, ib, cv::NORM_INF), 0);
+  EXPECT_EQ(cv::norm(ia, ca.rgb(a), cv::NORM_INF), 0) << "the same camera drew the same state twice differently";
+  a.step(200);
+  a.placeObject(0, 0.2, 0.45, 0);
+  EXPECT_GT(cv::norm(ca.rgb(a), ib, cv::NORM_INF), 0) << "an object moved and the image stayed";
+}
+
+TEST_F(TableCameraTest, EachObjectIsSeenWhereTheSimulationHasItInItsOwnColour) {
+  TablePhysics sim(sampleSpec());
+  const double places[4][2] = {{0.15, -0.4}, {-0.12, -0.05}, {0.05, 0.2}, {-0.15, 0.45}};
+  for (int i = 0; i < 4; ++i) sim.placeObject(i, places[i][0], places[i][1], 0);
+  sim.step(50);
+  TableCamera camera(sim);
+  const cv::Mat ids = camera.objects(sim), image = camera.rgb(sim);
+  for (int i = 0; i < 4; ++i) {
+    const ObjectSpec& o = sampleSpec().objects[static_cast<std::size_t>(i)];
+    double su = 0, sv = 0, n = 0;
+    cv::Vec3d colour(0, 0, 0);
+    for (int v = 0; v < ids.rows; ++v)
+      for (int u = 0; u < ids.cols; ++u)
+        if (ids.at<int>(v, u) == i) {
+          su += u + 0.5, sv += v + 0.5, n += 1;
+          colour += cv::Vec3d(image.at<cv::Vec3b>(v, u));
+        }
+    ASSERT_GT(n, 10) << o.name << " is not seen";
+    const Pose p = sim.objectPose(i);
+    const cv::Point2d at = camera.pixelOf(p.pos[0], p.pos[1], p.pos[2]);
+    EXPECT_NEAR(su / n, at.x, 1.5) << o.name;
+    EXPECT_NEAR(sv / n, at.y, 1.5) << o.name;
+    // Lit from above, its pixels are brightest in its own colour's channel.
+    const cv::Vec3d mean = colour / n;
+    const int strongest = o.rgb[0] > 0.5 && o.rgb[1] > 0.5 ? -1 : o.rgb[0] > 0.5 ? 0 : o.rgb[1] > 0.5 ? 1 : 2;
+    if (strongest >= 0) {
+      for (int c = 0; c < 3; ++c) {
+        if (c == strongest) continue;
+        EXPECT_GT(mean[strongest], mean[c] + 40) << o.name;
+      }
+    }
+  }
+  // The table's point under a pixel and the pixel of a table point are one mapping.
+  const cv::Point2d q = camera.tableAt(37.5, 81.5), back = camera.pixelOf(q.x, q.y);
+  EXPECT_NEAR(back.x, 37.5, 1e-9);
+  EXPECT_NEAR(back.y, 81.5, 1e-9);
+}
+
+}  // namespace
+}  // namespace afford::table
