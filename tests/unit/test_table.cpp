@@ -10,6 +10,7 @@
 
 #include "environment/table/camera.hpp"
 #include "environment/table/physics.hpp"
+#include "environment/table/primitives.hpp"
 
 namespace afford::table {
 namespace {
@@ -19,6 +20,7 @@ TableSpec sampleSpec() {
   TableSpec t;
   t.half_x = 0.3;
   t.half_y = 0.6;
+  t.rim_height = 0.02;
   t.friction = 0.8;
   t.rgb = {0.15, 0.15, 0.15};
   t.timestep = 0.002;
@@ -29,11 +31,12 @@ TableSpec sampleSpec() {
   h.finger_travel = 0.045;
   h.mass = 0.4;
   h.friction = 1.5;
-  h.kp_move = 400;
-  h.kp_yaw = 20;
+  h.kp_move = 4000;
+  h.kp_yaw = 40;
   h.kp_finger = 200;
-  h.time_constant = 0.1;
+  h.time_constant = 0.025;
   h.rest_height = 0.3;
+  h.park[0] = 0.3, h.park[1] = 0.0, h.park[2] = 0.3;
   h.reach_x = 0.3;
   h.reach_y = 0.6;
   h.rgb = {0.9, 0.9, 0.9};
@@ -42,8 +45,42 @@ TableSpec sampleSpec() {
       {"ball", Shape::Sphere, {0.025}, false, 0.05, 0.8, 0.005, 0.0001, {0.1, 0.9, 0.1}},
       {"log", Shape::Cylinder, {0.02, 0.05}, true, 0.08, 0.8, 0.005, 0.0001, {0.1, 0.1, 0.9}},
       {"can", Shape::Cylinder, {0.025, 0.04}, false, 0.1, 0.8, 0.005, 0.0001, {0.9, 0.9, 0.1}},
+      {"bar", Shape::Box, {0.015, 0.015, 0.06}, false, 0.08, 0.8, 0.005, 0.0001, {0.9, 0.5, 0.1}},
   };
   return t;
+}
+
+PrimitiveSpec samplePrimitives() {
+  PrimitiveSpec p;
+  p.travel_speed = 1.0;
+  p.contact_speed = 0.15;
+  p.tap_speed = 0.5;
+  p.safe_height = 0.16;
+  p.clearance = 0.02;
+  p.push_height = 0.005;
+  p.push_gap = 0.6;
+  p.grasp_height = 0.3;
+  p.carry_height = 0.1;
+  p.topple_height = 0.7;
+  p.topple_drop = 0.25;
+  p.tap_stroke = 0.02;
+  p.roll_distance = 0.1;
+  p.success_radius = 0.03;
+  p.reach_tolerance = 0.005;
+  p.waypoint_bound_s = 3;
+  p.rest_speed = 0.002;
+  p.rest_hold_s = 0.1;
+  p.settle_bound_s = 3;
+  return p;  // no noise: the tests that want it set it
+}
+
+// Object `i` alone in the middle of the table (the others out of the way, at the far end).
+TablePhysics& aloneAt(TablePhysics& sim, int i, double x, double y, double yaw = 0) {
+  for (int k = 0; k < sim.objectCount(); ++k)
+    if (k != i) sim.placeObject(k, -0.25, -0.55 + 0.05 * k, 0);
+  sim.placeObject(i, x, y, yaw);
+  sim.step(100);
+  return sim;
 }
 
 double planarDistance(const Pose& a, double x, double y) { return std::hypot(a.pos[0] - x, a.pos[1] - y); }
@@ -106,7 +143,7 @@ TEST(TablePhysics, ObjectsPlacedOnTheTableStayAtRestWhereTheyWerePut) {
 // further than on a rough one, and a ball rolls further than either.
 double travelAfterShove(TableSpec t, int object, double speed) {
   TablePhysics sim(t);
-  sim.placeObject(object, 0, -0.3, 0);
+  aloneAt(sim, object, 0, -0.3, 0);
   auto* data = const_cast<mjData*>(sim.data());
   const int joint = mj_name2id(sim.model(), mjOBJ_JOINT, t.objects[static_cast<std::size_t>(object)].name.c_str());
   data->qvel[sim.model()->jnt_dofadr[joint] + 1] = speed;  // along +y
@@ -162,6 +199,57 @@ TEST(TablePhysics, TheHandGoesWhereItIsCommandedByItsActuators) {
   EXPECT_NEAR(now.yaw, goal.yaw, 2e-2);
   EXPECT_NEAR(now.opening, 0.0, 0.05);
   EXPECT_TRUE(sim.atRest(2e-2, 5e-2));
+}
+
+TEST(TablePrimitives, APushBringsACubeToThePlaceAndACarryBringsItBack) {
+  TablePhysics sim(sampleSpec());
+  aloneAt(sim, 0, 0.05, -0.1, 0.3);
+  const PrimitiveResult pushed = runPrimitive(sim, samplePrimitives(), 1, 0, kPush, 0, std::make_pair(0.1, 0.1));
+  EXPECT_TRUE(pushed.succeeded);
+  EXPECT_TRUE(pushed.settled);
+  EXPECT_LT(planarDistance(sim.objectPose(0), 0.1, 0.1), 0.03);
+  const PrimitiveResult carried = runPrimitive(sim, samplePrimitives(), 1, 1, kCarry, 0, std::make_pair(-0.1, -0.2));
+  EXPECT_TRUE(carried.succeeded);
+  EXPECT_LT(planarDistance(sim.objectPose(0), -0.1, -0.2), 0.03);
+  EXPECT_FALSE(toppled(sim, 0, 0.25));
+  EXPECT_GT(carried.physics_steps, pushed.physics_steps / 2);
+}
+
+TEST(TablePrimitives, ToppleFellsATallBarAndNotACube) {
+  TablePhysics bar(sampleSpec()), cube(sampleSpec());
+  aloneAt(bar, 4, 0.0, 0.0);
+  aloneAt(cube, 0, 0.0, 0.0);
+  EXPECT_TRUE(runPrimitive(bar, samplePrimitives(), 1, 0, kTopple, 4, std::nullopt).succeeded);
+  EXPECT_LT(bar.objectPose(4).pos[2], 0.03) << "the bar lies";
+  EXPECT_FALSE(runPrimitive(cube, samplePrimitives(), 1, 0, kTopple, 0, std::nullopt).succeeded);
+}
+
+TEST(TablePrimitives, ATapRollsABallOnAndNotACube) {
+  TablePhysics ball(sampleSpec()), cube(sampleSpec());
+  aloneAt(ball, 1, 0.0, 0.0);
+  aloneAt(cube, 0, 0.0, 0.0);
+  const PrimitiveResult rolled = runPrimitive(ball, samplePrimitives(), 1, 0, kRoll, 1, std::nullopt);
+  EXPECT_TRUE(rolled.succeeded) << "the ball is " << planarDistance(ball.objectPose(1), 0, 0) << " m away";
+  EXPECT_FALSE(runPrimitive(cube, samplePrimitives(), 1, 0, kRoll, 0, std::nullopt).succeeded)
+      << "the cube is " << planarDistance(cube.objectPose(0), 0, 0) << " m away";
+}
+
+TEST(TablePrimitives, TheNoiseIsKeyedBySeedAndStep) {
+  PrimitiveSpec noisy = samplePrimitives();
+  noisy.noise_position = 0.01;
+  noisy.noise_height = 0.005;
+  noisy.noise_direction = 0.2;
+  auto run = [&](std::int64_t seed, std::int64_t step) {
+    TablePhysics sim(sampleSpec());
+    aloneAt(sim, 0, 0.05, -0.1, 0.3);
+    runPrimitive(sim, noisy, seed, step, kPush, 0, std::make_pair(0.1, 0.1));
+    return sim.state();
+  };
+  const std::vector<double> a = run(7, 3), b = run(7, 3), c = run(7, 4), d = run(8, 3);
+  ASSERT_EQ(a.size(), b.size());
+  EXPECT_EQ(std::memcmp(a.data(), b.data(), a.size() * sizeof(double)), 0) << "the same draw gave two runs";
+  EXPECT_NE(a, c) << "another step drew the same noise";
+  EXPECT_NE(a, d) << "another seed drew the same noise";
 }
 
 class TableCameraTest : public ::testing::Test {

@@ -24,6 +24,7 @@ enum class Purpose : std::uint64_t {
   ScenarioGeneration = 11,  // experiments: a generated scenario (step = its index, sub-key = the attempt)
   Component = 12,         // a component of one's own (docs/writing-a-component.md): sub-key = its own constant
   GoalChoice = 13,        // motivation, goals phase: the module, the goal in it, an exploration (sub-key = goal id)
+  PrimitiveNoise = 14,    // environment, the table world: a motor primitive's noise (sub-key = the action)
 };
 
 constexpr std::uint64_t splitmix64(std::uint64_t x) {

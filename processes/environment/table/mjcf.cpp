@@ -59,6 +59,7 @@ void checkColour(const std::array<double, 3>& c, const std::string& where) {
 void validate(const TableSpec& t) {
   need(t.half_x > 0 && t.half_y > 0, "table: half_x and half_y must be above 0");
   need(t.friction > 0, "table: friction must be above 0");
+  need(t.rim_height > 0, "table: rim_height must be above 0");
   checkColour(t.rgb, "table.rgb");
   need(t.timestep > 0 && t.timestep <= 0.01, "table: timestep must be in (0, 0.01] s");
   need(t.camera.width >= 16 && t.camera.height >= 16 && t.camera.width <= 4096 && t.camera.height <= 4096,
@@ -76,6 +77,9 @@ void validate(const TableSpec& t) {
   need(h.time_constant > 0 && h.time_constant <= 10, "table.hand: time_constant must be in (0, 10] s");
   need(h.rest_height > h.palm_half[2] + 2 * h.finger_half[2], "table.hand: rest_height must hold the hand above the table");
   need(h.reach_x > 0 && h.reach_y > 0, "table.hand: reach_x and reach_y must be above 0");
+  need(std::abs(h.park[0]) <= h.reach_x && std::abs(h.park[1]) <= h.reach_y && h.park[2] > 0 &&
+           h.park[2] <= 2 * h.rest_height,
+       "table.hand: park must be within the hand's reach (reach_x, reach_y, up to twice rest_height)");
   checkColour(h.rgb, "table.hand.rgb");
   need(!t.objects.empty(), "table.objects: at least one object");
   std::set<std::string> names;
@@ -115,12 +119,21 @@ std::string tableMjcf(const TableSpec& t) {
     << "  <worldbody>\n"
     << "    <light name=\"top\" pos=\"0 0 " << 2 * t.camera.above << "\" dir=\"0 0 -1\" directional=\"true\""
     << " castshadow=\"false\" diffuse=\"0.8 0.8 0.8\" ambient=\"0.3 0.3 0.3\" specular=\"0 0 0\"/>\n"
-    // The table's top: a plane, drawn as far as the table goes (an object pushed beyond it stays on the plane;
-    // the world's rules say what an object off the table is). Analytic contacts with every shape.
+    // The table's top: a plane (analytic contacts with every shape), drawn as far as its rim.
     << "    <geom name=\"table\" type=\"plane\" size=\"" << t.half_x << ' ' << t.half_y << " 0.05\" friction=\""
-    << t.friction << " 0.005 0.0001\" rgba=\"" << rgba(t.rgb) << "\"/>\n"
-    // Straight down; the image's columns run along the table's y (right = -y), its rows along x (up = +x).
-    << "    <camera name=\"top\" pos=\"0 0 " << t.camera.above << "\" xyaxes=\"0 -1 0 1 0 0\" fovy=\""
+    << t.friction << " 0.005 0.0001\" rgba=\"" << rgba(t.rgb) << "\"/>\n";
+  // The rim: four walls just outside the top's edges.
+  const double wall = 0.005;
+  for (int side : {-1, 1}) {
+    x << "    <geom name=\"table_rim_x" << (side > 0 ? "+" : "-") << "\" type=\"box\" pos=\"" << side * (t.half_x + wall)
+      << " 0 " << t.rim_height / 2 << "\" size=\"" << wall << ' ' << t.half_y + 2 * wall << ' ' << t.rim_height / 2
+      << "\" friction=\"" << t.friction << " 0.005 0.0001\" rgba=\"" << rgba(t.rgb) << "\"/>\n";
+    x << "    <geom name=\"table_rim_y" << (side > 0 ? "+" : "-") << "\" type=\"box\" pos=\"0 " << side * (t.half_y + wall)
+      << ' ' << t.rim_height / 2 << "\" size=\"" << t.half_x << ' ' << wall << ' ' << t.rim_height / 2
+      << "\" friction=\"" << t.friction << " 0.005 0.0001\" rgba=\"" << rgba(t.rgb) << "\"/>\n";
+  }
+  // Straight down; the image's columns run along the table's y (right = -y), its rows along x (up = +x).
+  x << "    <camera name=\"top\" pos=\"0 0 " << t.camera.above << "\" xyaxes=\"0 -1 0 1 0 0\" fovy=\""
     << t.camera.fovy_deg << "\"/>\n";
   const double n = static_cast<double>(t.objects.size());
   for (std::size_t i = 0; i < t.objects.size(); ++i) {
@@ -176,6 +189,10 @@ std::string tableMjcf(const TableSpec& t) {
   for (const char* j : {"hand_finger_l", "hand_finger_r"})
     x << "    <position name=\"" << j << "\" joint=\"" << j << "\" kp=\"" << h.kp_finger << "\"/>\n";
   x << "  </actuator>\n"
+    // Closed, the fingers meet at their joints' limits; they do not push each other.
+    << "  <contact>\n"
+    << "    <exclude body1=\"hand_finger_l\" body2=\"hand_finger_r\"/>\n"
+    << "  </contact>\n"
     << "</mujoco>\n";
   return x.str();
 }

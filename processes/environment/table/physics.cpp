@@ -52,8 +52,12 @@ TablePhysics::TablePhysics(const TableSpec& spec) : spec_(spec) {
   for (std::size_t i = 0; i < actuator_.size(); ++i) actuator_[i] = idOf(model_, mjOBJ_ACTUATOR, actuators[i]);
   for (std::size_t i = 0; i < hand_qpos_.size(); ++i)
     hand_qpos_[i] = model_->jnt_qposadr[idOf(model_, mjOBJ_JOINT, actuators[i])];
-  // The hand waits over the table's centre, open.
-  commandHand(HandCommand{});
+  // The hand waits at its parking place, open.
+  const HandSpec& h = spec_.hand;
+  data_->qpos[hand_qpos_[0]] = h.park[0];
+  data_->qpos[hand_qpos_[1]] = h.park[1];
+  data_->qpos[hand_qpos_[2]] = h.park[2] - h.rest_height;
+  commandHand({h.park[0], h.park[1], h.park[2], 0, 1});
   mj_forward(model_, data_);
 }
 

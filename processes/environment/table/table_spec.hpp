@@ -48,13 +48,15 @@ struct HandSpec {
   double kp_yaw = 0;               // ... of the yaw hinge (N m / rad)
   double kp_finger = 0;            // ... of each finger's slide
   double time_constant = 0;        // every hand joint's damping is its gain times this (s): one settling time
-  double rest_height = 0;          // the palm's centre above the table when the hand waits
+  double rest_height = 0;          // the palm's centre above the table: the gantry's zero
+  double park[3] = {0, 0, 0};      // where the palm's centre waits between actions (out of the camera's view)
   double reach_x = 0, reach_y = 0; // the slides' half-ranges over the table
   std::array<double, 3> rgb{};
 };
 
 struct TableSpec {
-  double half_x = 0, half_y = 0;   // the table top's half-extents (the plane z = 0 holds what leaves them)
+  double half_x = 0, half_y = 0;   // the table top's half-extents, inside its rim
+  double rim_height = 0;           // a rim around the top keeps objects on it (its thickness is 1 cm)
   double friction = 0;             // the table top's sliding friction
   std::array<double, 3> rgb{};     // the table top's colour
   double timestep = 0;             // physics step (s)

@@ -1,0 +1,80 @@
+// The hand's motor primitives on the table: each action a sequence of set-points for the hand's actuators,
+// followed over many physics steps until the scene is at rest (or a bound), and a goal checked from the
+// simulation's state at the end (paper 2.1: an action is "successful" when its goal is reached). No object
+// is placed by code: the hand moves them, by contact and friction, or does not.
+//
+// The four actions, in the order of the agent's tables:
+//   push    (takes a place) the fingers, open as a fork narrower than the object, come down behind it and
+//           sweep it toward the place;
+//           goal: the object rests within success_radius of the place, in the pose it had (not toppled).
+//   carry   (takes a place) the open fingers come down around the object, close, lift it, carry it over
+//           the place, lower it and open; goal: as push's.
+//   topple  the closed fingers sweep through the object high up, in a drawn direction; goal: the object's
+//           centre rests at least topple_drop of its resting height lower than it stood (it fell over).
+//   roll    the closed fingers tap the object low down, in a drawn direction, and stop short; goal: the
+//           object rests at least roll_distance from where it was (it rolled on after the tap).
+// Noise in each primitive's parameters (where the hand comes down, its height, its direction) is drawn by
+// (seed, step, purpose) from primitive_noise.
+#pragma once
+#include <cstdint>
+#include <optional>
+#include <string>
+#include <utility>
+
+#include "environment/table/physics.hpp"
+
+namespace afford::table {
+
+enum TableAction : int { kPush = 0, kCarry = 1, kTopple = 2, kRoll = 3 };
+constexpr int kTableActions = 4;
+const char* tableActionName(int action);
+inline bool tableActionTakesPlace(int action) { return action == kPush || action == kCarry; }
+
+struct PrimitiveSpec {
+  double travel_speed = 0;       // the hand's set-point speed between places (m/s)
+  double contact_speed = 0;      // ... while it pushes, lowers or lifts an object (m/s)
+  double tap_speed = 0;          // ... of roll's tap (m/s)
+  double safe_height = 0;        // the fingers' tips above the table while the hand travels (m)
+  double clearance = 0;          // the gap left between fingers and object before contact (m)
+  double push_height = 0;        // the fingers' tips above the table while pushing (m)
+  double push_gap = 0;           // a push's fork: the gap between the fingers, a fraction of the object's width
+  double grasp_height = 0;       // ... while grasping, as a fraction of the object's height
+  double carry_height = 0;       // the fingers' tips above the table while carrying (m)
+  double topple_height = 0;      // where topple's fingers' tips hit, as a fraction of the object's height
+  double topple_drop = 0;        // topple's goal: the centre this fraction of its resting height lower
+  double tap_stroke = 0;         // how far roll's fingers go past the object's first contact (m)
+  double roll_distance = 0;      // roll's goal: the object rests this far from where it was (m)
+  double success_radius = 0;     // push's and carry's goal: this close to the place (m)
+  double reach_tolerance = 0;    // a set-point is reached when the hand is this close (m)
+  double waypoint_bound_s = 0;   // at most this long per set-point (s)
+  double rest_speed = 0;         // at rest: every body slower than this (m/s; rad/s for tenfold)
+  double rest_hold_s = 0;        // ... for this long (s)
+  double settle_bound_s = 0;     // at most this long waiting for rest at the end (s)
+  // The noise of the primitives' parameters (standard deviations).
+  double noise_position = 0;     // where the hand comes down, each of x and y (m)
+  double noise_height = 0;       // the fingers' height in a push, topple or tap (m)
+  double noise_direction = 0;    // the direction of a push, topple or tap (rad)
+  double noise_yaw = 0;          // the hand's yaw in a grasp (rad)
+};
+
+void validate(const PrimitiveSpec& p);
+
+struct PrimitiveResult {
+  bool succeeded = false;
+  int physics_steps = 0;           // steps the primitive took, its settling included
+  bool settled = false;            // the scene came to rest before settle_bound_s
+  double place_x = -1, place_y = -1;  // the place a push or carry aimed at (-1: none)
+};
+
+// Runs `action` of the hand on object `object` (its index), with `place` for push and carry, the noise
+// drawn by (seed, step). The hand starts where it waits (its park, unless a primitive was cut short) and ends
+// there, open.
+PrimitiveResult runPrimitive(TablePhysics& physics, const PrimitiveSpec& spec, std::int64_t seed, std::int64_t step,
+                             int action, int object, std::optional<std::pair<double, double>> place);
+
+// The object's resting height and its centre's height now: toppled when it is lower by topple_drop.
+bool toppled(const TablePhysics& physics, int object, double drop);
+// The yaw of an object about the vertical (for an object in its configured pose).
+double objectYaw(const Pose& p);
+
+}  // namespace afford::table
