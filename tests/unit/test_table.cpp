@@ -11,6 +11,7 @@
 #include "environment/table/camera.hpp"
 #include "environment/table/physics.hpp"
 #include "environment/table/primitives.hpp"
+#include "environment/table/truth.hpp"
 
 namespace afford::table {
 namespace {
@@ -250,6 +251,49 @@ TEST(TablePrimitives, TheNoiseIsKeyedBySeedAndStep) {
   EXPECT_EQ(std::memcmp(a.data(), b.data(), a.size() * sizeof(double)), 0) << "the same draw gave two runs";
   EXPECT_NE(a, c) << "another step drew the same noise";
   EXPECT_NE(a, d) << "another seed drew the same noise";
+}
+
+TruthSpec sampleTruth() {
+  TruthSpec t;
+  t.region_x = 0.15;
+  t.region_y = 0.4;
+  t.place_min = 0.08;
+  t.place_max = 0.2;
+  return t;
+}
+
+PrimitiveSpec noisyPrimitives() {
+  PrimitiveSpec p = samplePrimitives();
+  p.noise_position = 0.01;
+  p.noise_height = 0.005;
+  p.noise_direction = 0.15;
+  p.noise_yaw = 0.15;
+  return p;
+}
+
+// Physics decides: the same push and roll, with the same noise, work on a cube and a ball in opposite ways.
+TEST(TableTruth, TheSameActionsAffordDifferentlyByTheObjectsShape) {
+  const TruthTable t = estimateTruth(sampleSpec(), noisyPrimitives(), sampleTruth(), 11, 6, {0, 1});
+  ASSERT_EQ(t.objects.size(), 5u);
+  const TruthCell& cube_push = t.cells[0][kPush];
+  const TruthCell& ball_push = t.cells[1][kPush];
+  const TruthCell& cube_roll = t.cells[0][kRoll];
+  const TruthCell& ball_roll = t.cells[1][kRoll];
+  EXPECT_EQ(cube_push.trials, 6);
+  EXPECT_GE(cube_push.rate() - ball_push.rate(), 0.5) << cube_push.rate() << " against " << ball_push.rate();
+  EXPECT_GE(ball_roll.rate() - cube_roll.rate(), 0.5) << ball_roll.rate() << " against " << cube_roll.rate();
+  EXPECT_EQ(t.cells[2][kPush].trials, 0) << "an object not asked for was tried";
+  // Its interval holds its rate, and is narrower with more trials.
+  EXPECT_LE(cube_push.low(), cube_push.rate());
+  EXPECT_GE(cube_push.high(), cube_push.rate());
+  TruthCell more{10 * cube_push.successes, 10 * cube_push.trials};
+  EXPECT_LT(more.high() - more.low(), cube_push.high() - cube_push.low());
+}
+
+TEST(TableTruth, TheSameSeedGivesTheSameTable) {
+  const TruthTable a = estimateTruth(sampleSpec(), noisyPrimitives(), sampleTruth(), 5, 2, {3});
+  const TruthTable b = estimateTruth(sampleSpec(), noisyPrimitives(), sampleTruth(), 5, 2, {3});
+  for (int act = 0; act < kTableActions; ++act) EXPECT_EQ(a.cells[3][act].successes, b.cells[3][act].successes);
 }
 
 class TableCameraTest : public ::testing::Test {

@@ -25,6 +25,7 @@ enum class Purpose : std::uint64_t {
   Component = 12,         // a component of one's own (docs/writing-a-component.md): sub-key = its own constant
   GoalChoice = 13,        // motivation, goals phase: the module, the goal in it, an exploration (sub-key = goal id)
   PrimitiveNoise = 14,    // environment, the table world: a motor primitive's noise (sub-key = the action)
+  TableTruth = 15,        // the table world's truth: a trial's pose and place (step = object x actions + action)
 };
 
 constexpr std::uint64_t splitmix64(std::uint64_t x) {
