@@ -31,6 +31,7 @@ void printLogSkips(long long malformed, long long refused_configs, long long unt
 Command experimentCommand(CLI::App& app, const FrontDoor& door);
 Command experimentsCommand(CLI::App& app, const FrontDoor& door);
 Command configCommand(CLI::App& app, const FrontDoor& door);
+Command worldCommand(CLI::App& app, const FrontDoor& door);
 Command plotCommand(CLI::App& app, const FrontDoor& door);
 Command reportCommand(CLI::App& app, const FrontDoor& door);
 Command replayCommand(CLI::App& app, const FrontDoor& door);

@@ -27,7 +27,8 @@ int main(int argc, char** argv) {
       afford::explainCommand(app, door),    afford::statusCommand(app, door),      afford::scenarioCommand(app, door),
       afford::processesCommand(app, door),  afford::cleanCommand(app, door),      afford::mergeCommand(app, door),
       afford::busKeyCommand(app, door),     afford::renderCommand(app, door),
-      afford::exportCommand(app, door),     afford::watchCommand(app, door),      afford::tuneCommand(app, door)};
+      afford::exportCommand(app, door),     afford::watchCommand(app, door),      afford::tuneCommand(app, door),
+      afford::worldCommand(app, door)};
   CLI11_PARSE(app, argc, argv);
   cv::setNumThreads(0);  // small images: OpenCV's thread pool only adds wake-ups
   try {

@@ -21,6 +21,8 @@ namespace afford {
 namespace {
 // The keys the declaration cannot spell one by one (lists of maps), read by hand (below).
 void readObjects(ConfigReader& w, WorldConfig& world);
+void readTableObjects(ConfigReader& t, table::TableSpec& spec);
+void readTriple(ConfigReader& r, const char* key, double* out, double lo, double hi);
 void readScenario(ConfigReader& e, RunConfig& c);
 }  // namespace
 }  // namespace afford
@@ -148,7 +150,47 @@ void checkRunConfig(const RunConfig& c) {
 }
 
 // The world's objects (world.objects): a list of maps the declaration cannot spell key by key.
+void readTriple(ConfigReader& r, const char* key, double* out, double lo, double hi) {
+  const auto v = numberList(r, key, 3, lo, hi);
+  std::copy(v.begin(), v.end(), out);
+}
+
+// The table world's objects (table.objects): each a map of its kind's numbers.
+void readTableObjects(ConfigReader& t, table::TableSpec& spec) {
+  spec.objects.clear();
+  if (!t.has("objects")) return;  // a grid experiment's run; a table world without objects is refused where it is built
+  YAML::Node objs = t.raw("objects");
+  const std::string key = t.keyPath("objects");
+  if (!objs.IsSequence() || objs.size() == 0)
+    failKey(key, "expected a non-empty list of objects, got " + describeNode(objs));
+  for (std::size_t i = 0; i < objs.size(); ++i) {
+    ConfigReader r(objs[i], key + "[" + std::to_string(i) + "]");
+    r.expect({"name", "shape", "size", "lying", "mass", "friction", "torsional_friction", "rolling_friction", "colour"});
+    table::ObjectSpec o;
+    o.name = r.text("name");
+    o.shape = r.choice("shape", kTableShapeNames);
+    const std::size_t n = o.shape == table::Shape::Box ? 3 : o.shape == table::Shape::Cylinder ? 2 : 1;
+    o.size = numberList(r, "size", n, 0.001, 0.5);
+    o.lying = r.has("lying") && r.choice("lying", kBoolNames);
+    if (o.lying && o.shape != table::Shape::Cylinder) failKey(r.keyPath("lying"), "only a cylinder can be lying");
+    o.mass = r.number("mass", 0.001, 100.0);
+    o.friction = r.number("friction", 0.01, 10.0);
+    o.torsional_friction = r.number("torsional_friction", 0.0, 1.0);
+    o.rolling_friction = r.number("rolling_friction", 0.0, 1.0);
+    readTriple(r, "colour", o.rgb.data(), 0, 1);
+    r.finish();
+    for (const auto& before : spec.objects)
+      if (before.name == o.name) failKey(r.keyPath("name"), "'" + o.name + "' names an earlier object too");
+    spec.objects.push_back(std::move(o));
+  }
+}
+
 void readObjects(ConfigReader& w, WorldConfig& world) {
+  if (world.kind == WorldKind::Table) {
+    if (w.has("objects"))
+      failKey(w.keyPath("objects"), "is the paper's world's; the table world's objects are table.objects");
+    return;
+  }
   YAML::Node objs = w.raw("objects");
   if (!objs.IsSequence() || objs.size() == 0)
     failKey(w.keyPath("objects"), "expected a non-empty list of objects, got " + describeNode(objs));

@@ -115,6 +115,12 @@ template <class V>
 void declareWorld(V& v, RunConfig& c) {
   v.section("world", [&] {
     WorldConfig& w = c.world;
+    v.given("kind", [&] {  // the runs of older logs were all of the paper's world
+      v.choice("kind", w.kind, kWorldKindNames,
+               "`grid`: the paper's world of flat shapes and a configured affordance table; `table`: a physical "
+               "table simulated by MuJoCo, seen by a camera, acted on by a hand (the `table` section; "
+               "[model](model.md#a-physical-table))");
+    });
     v.integer("size_px", w.size_px, 32, 2048, "scene side in pixels (side = 1 unit)");
     v.number("object_size", w.object_size, 0.01, 0.3, "square side; circle and rectangle have the same area");
     v.interval("table", w.table_min, w.table_max, 0.0, 1.0, "range of object centres");
@@ -132,8 +138,96 @@ void declareWorld(V& v, RunConfig& c) {
     v.custom("objects", "a list of objects", [&](auto& r) { readObjects(r, w); },
              "name, shape, colour, position, `appears_at`, `affordance` [move, green, red, blue]. The objects "
              "present at step 0 may not overlap or touch, and objects of one look (shape and colour) have one "
-             "affordance row");
+             "affordance row (`grid` only: a table's are `table.objects`)");
     v.from(KeyInfo::Origin::Defaults);
+  });
+}
+
+// The physical table world (world.kind: table), its values in config/defaults.yaml with their sources.
+template <class V>
+void declareTable(V& v, RunConfig& c) {
+  v.given("table", [&] {  // the runs of older logs had no table world
+    v.section("table", [&] {
+      table::TableWorldConfig& t = c.table;
+      table::TableSpec& s = t.spec;
+      v.section("top", [&] {
+        v.number("half_x", s.half_x, 0.05, 2.0, "the table top's half-extent across (x, m), inside its rim");
+        v.number("half_y", s.half_y, 0.05, 2.0, "... along (y, m)");
+        v.number("rim_height", s.rim_height, 0.001, 0.5, "the rim that keeps objects on the table (m)");
+        v.number("friction", s.friction, 0.01, 10.0, "the top's sliding friction coefficient");
+        v.custom("colour", "three numbers in [0, 1]", [&](auto& r) { readTriple(r, "colour", s.rgb.data(), 0, 1); },
+                 "the top's colour (RGB)");
+      });
+      v.number("timestep", s.timestep, 0.0005, 0.01, "the physics step (s)");
+      v.section("camera", [&] {
+        v.integer("width", s.camera.width, 16, 4096, "the camera image's width (pixels)");
+        v.integer("height", s.camera.height, 16, 4096, "... its height");
+        v.number("above", s.camera.above, 0.1, 10.0, "the camera's height over the table's centre, looking down (m)");
+        v.number("fovy_deg", s.camera.fovy_deg, 1.0, 170.0, "its vertical field of view (degrees)");
+      });
+      v.section("hand", [&] {
+        table::HandSpec& h = s.hand;
+        v.custom("palm", "three numbers in [0.001, 0.5]", [&](auto& r) { readTriple(r, "palm", h.palm_half, 0.001, 0.5); },
+                 "the palm's half-extents (x, y, z; m)");
+        v.custom("finger", "three numbers in [0.001, 0.5]",
+                 [&](auto& r) { readTriple(r, "finger", h.finger_half, 0.001, 0.5); },
+                 "each finger's half-extents (x, y, z; m): the fingers close along the palm's y");
+        v.number("finger_travel", h.finger_travel, 0.002, 0.5, "each finger's centre from the palm's, open (m)");
+        v.number("mass", h.mass, 0.001, 100.0, "the palm's mass (kg); each finger's is a quarter of it");
+        v.number("friction", h.friction, 0.01, 10.0, "the fingers' sliding friction coefficient");
+        v.number("kp_move", h.kp_move, 1.0, 1e7, "the x, y, z slides' position gain (N/m)");
+        v.number("kp_yaw", h.kp_yaw, 0.01, 1e6, "the yaw hinge's position gain (N m/rad)");
+        v.number("kp_finger", h.kp_finger, 1.0, 1e6, "each finger's position gain (N/m)");
+        v.number("time_constant", h.time_constant, 0.001, 10.0,
+                 "each joint's damping is its gain times this (s): the hand's settling time");
+        v.number("rest_height", h.rest_height, 0.01, 5.0, "the palm's centre over the table at the gantry's zero (m)");
+        v.custom("park", "three numbers in [-5, 5]", [&](auto& r) { readTriple(r, "park", h.park, -5, 5); },
+                 "where the palm's centre waits between actions, out of the camera's view (x, y, z; m)");
+        v.pair("reach", h.reach_x, h.reach_y, 0.01, 5.0, "the slides' half-ranges (x, y; m)");
+        v.custom("colour", "three numbers in [0, 1]", [&](auto& r) { readTriple(r, "colour", h.rgb.data(), 0, 1); },
+                 "the hand's colour (RGB)");
+      });
+      v.section("primitives", [&] {
+        table::PrimitiveSpec& p = t.primitives;
+        v.number("travel_speed", p.travel_speed, 0.01, 10.0, "the hand's speed between places (m/s)");
+        v.number("contact_speed", p.contact_speed, 0.01, 10.0, "... while it pushes, lowers or lifts an object (m/s)");
+        v.number("tap_speed", p.tap_speed, 0.01, 10.0, "... in roll's tap (m/s)");
+        v.number("safe_height", p.safe_height, 0.01, 5.0, "the fingers' tips over the table while the hand travels (m)");
+        v.number("clearance", p.clearance, 0.0, 0.5, "the gap left behind an object before contact (m)");
+        v.number("push_height", p.push_height, 0.0, 0.5, "the fingers' tips over the table in a push or a tap (m)");
+        v.number("push_gap", p.push_gap, 0.0, 1.0, "a push's fork: the fingers' gap, a fraction of the object's width");
+        v.number("grasp_height", p.grasp_height, 0.0, 1.0, "carry: the fingers' tips, a fraction of the object's height");
+        v.number("carry_height", p.carry_height, 0.01, 5.0, "carry: the fingers' tips over the table while carrying (m)");
+        v.number("topple_height", p.topple_height, 0.0, 1.0, "topple: where the tips hit, a fraction of the height");
+        v.number("topple_drop", p.topple_drop, 0.01, 0.99,
+                 "topple's goal: the object's centre this fraction of its resting height lower");
+        v.number("tap_stroke", p.tap_stroke, 0.001, 0.5, "roll: how far the tap goes past the first contact (m)");
+        v.number("roll_distance", p.roll_distance, 0.001, 5.0, "roll's goal: the object rests this far away (m)");
+        v.number("success_radius", p.success_radius, 0.001, 1.0, "push's and carry's goal: this close to the place (m)");
+        v.number("reach_tolerance", p.reach_tolerance, 0.0001, 0.5, "a set-point is reached this close (m)");
+        v.number("waypoint_bound_s", p.waypoint_bound_s, 0.01, 60.0, "at most this long per set-point (s)");
+        v.number("rest_speed", p.rest_speed, 1e-5, 1.0, "at rest: every body slower than this (m/s; rad/s: tenfold)");
+        v.number("rest_hold_s", p.rest_hold_s, 0.0, 10.0, "... for this long (s)");
+        v.number("settle_bound_s", p.settle_bound_s, 0.01, 60.0, "at most this long waiting for rest (s)");
+        v.number("noise_position", p.noise_position, 0.0, 0.5, "where the hand comes down: sd of x and y (m)");
+        v.number("noise_height", p.noise_height, 0.0, 0.5, "the tips' height in a push, topple or tap: sd (m)");
+        v.number("noise_direction", p.noise_direction, 0.0, 3.2, "the direction of a push, topple or tap: sd (rad)");
+        v.number("noise_yaw", p.noise_yaw, 0.0, 3.2, "the hand's yaw in a grasp: sd (rad)");
+      });
+      v.section("truth", [&] {
+        v.pair("region", t.truth.region_x, t.truth.region_y, 0.01, 2.0,
+               "a trial's object is drawn in [-x, x] x [-y, y] (m)");
+        v.interval("places", t.truth.place_min, t.truth.place_max, 0.001, 4.0,
+                   "push and carry: the place drawn this far from the object (m)");
+        v.integer("trials", t.truth_trials, 1, 1'000'000, "trials of each (object, action) by `afford world truth`");
+      });
+      v.from(KeyInfo::Origin::Experiment);
+      v.custom("objects", "a list of objects", [&](auto& r) { readTableObjects(r, s); },
+               "a table experiment's objects: name, shape (`box`, `cylinder`, `sphere`), size (half-extents; "
+               "radius and half-length; radius), `lying` (a cylinder on its side), mass, friction, "
+               "torsional_friction, rolling_friction, colour");
+      v.from(KeyInfo::Origin::Defaults);
+    });
   });
 }
 
@@ -331,6 +425,7 @@ void declareRunConfig(V& v, RunConfig& c) {
              "a logger on the bus records the run; `afford experiment --keep-logs` sets it per run");
   });
   declareWorld(v, c);
+  declareTable(v, c);
   declareEye(v, c);
   declarePredictors(v, c);
   declareMotivation(v, c);

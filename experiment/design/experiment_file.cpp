@@ -436,6 +436,17 @@ YAML::Node effectiveConfig(const std::string& config_dir, const RunRequest& requ
     chain.back()[parts.back()] = value;
     sources[path] = "--set " + setting;
   }
+  // The `table` section is a table world's (world.kind: table). A run of the paper's world (grid, the default)
+  // carries neither it nor the kind: its configuration is as it was before there was a table world (its logs,
+  // plans and stored agents with it), and a table key given to it is refused rather than left unread.
+  if (root["world"].IsMap() && (!root["world"]["kind"].IsDefined() || root["world"]["kind"].Scalar() == "grid")) {
+    for (const auto& [key, where] : sources)
+      if (key == "table" || key.rfind("table.", 0) == 0)
+        throw ConfigError(where + ": config key '" + key + "': the table section is the physical table's "
+                          "(world.kind: table); experiment '" + e.name + "' is of the paper's world (grid)", key);
+    root["world"].remove("kind");
+    root.remove("table");
+  }
   try {
     parseRunConfig(root);  // validate now, before any process starts
   } catch (const ConfigError& e) {

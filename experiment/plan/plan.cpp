@@ -191,6 +191,11 @@ Plan planExperiment(const PlanRequest& o) {
   plan.protocol = loadProtocol(plan.config_dir);
   plan.reference.emplace(plan.config_dir);
   plan.seed = o.seed;
+  if (parseRunConfig(effectiveConfig(plan.config_dir, RunRequest{o.experiment, System::IMP, o.seed, o.steps, o.settings}))
+          .world.kind == WorldKind::Table)
+    throw ConfigError("experiment '" + plan.exp.name + "' is of the physical table (world.kind: table), which the "
+                      "agent's processes do not run yet: `afford world truth " + plan.exp.name +
+                      "` estimates its affordances (docs/model.md#a-physical-table)");
   plan.reps = o.reps.value_or(plan.exp.repetitions);
   if (plan.reps < 1) throw ConfigError("--reps must be at least 1");
   plan.systems = !o.systems.empty() ? o.systems

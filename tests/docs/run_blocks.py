@@ -23,7 +23,7 @@ Any other language must say why it is not run (`skip`).
 
 Directives (tests/docs/mdblocks.py), on the lines right above a fence:
   skip REASON          not run, for the reason given (a cluster, an hour of runs, an excerpt)
-  small --opt V ...    every `afford experiment`, `afford tune` and `procs.sh run` of the block (every entry of
+  small --opt V ...    every `afford experiment`, `afford tune`, `afford world truth` and `procs.sh run` of the block (every entry of
                        a plan file's block) takes these
                        options in place of its own (or beside them), and `afford.run`/`afford.tune` the same
                        as keywords (--extrinsic-reps 1 -> extrinsic_reps=1), where they take them: the size
@@ -57,7 +57,7 @@ ROOT = HERE.parents[1]
 sys.path.insert(0, str(HERE))
 from mdblocks import blocks  # noqa: E402
 
-SHRINKS = re.compile(r"(afford experiment|afford tune|procs\.sh run)\b")
+SHRINKS = re.compile(r"(afford experiment|afford tune|afford world truth|procs\.sh run)\b")
 BLOCK_SECONDS = 300
 # <run-id> in a shell block: the last run (not a test) whose log is in logs/ when the line runs.
 LAST_RUN = r"""last_run() {

@@ -12,6 +12,7 @@
 #include "environment/table/physics.hpp"
 #include "environment/table/primitives.hpp"
 #include "environment/table/truth.hpp"
+#include "tests/support.hpp"
 
 namespace afford::table {
 namespace {
@@ -362,3 +363,56 @@ TEST_F(TableCameraTest, EachObjectIsSeenWhereTheSimulationHasItInItsOwnColour) {
 
 }  // namespace
 }  // namespace afford::table
+
+namespace afford {
+namespace {
+
+TEST(WorldTruthCommand, ATableExperimentsTruthIsEstimatedOnceAndReadAfter) {
+  const std::string out = test::tempDir("world-truth");
+  const std::string args = "world truth table --trials 2 --object cube --object ball --out " + out;
+  const test::CommandResult first = test::runAfford(args);
+  ASSERT_EQ(first.exit_code, 0) << first.output;
+  EXPECT_NE(first.output.find("cube "), std::string::npos) << first.output;
+  EXPECT_NE(first.output.find("roll"), std::string::npos) << first.output;
+  EXPECT_EQ(first.output.find("log "), std::string::npos) << "an object not asked for is in the table\n" << first.output;
+  EXPECT_NE(first.output.find("wrote " + out + "/table-"), std::string::npos) << first.output;
+  const test::CommandResult again = test::runAfford(args);
+  ASSERT_EQ(again.exit_code, 0) << again.output;
+  EXPECT_NE(again.output.find("read from " + out + "/table-"), std::string::npos) << again.output;
+  EXPECT_EQ(again.output.find("estimating"), std::string::npos) << "the table was estimated again\n" << again.output;
+  // The same cells, read back.
+  EXPECT_EQ(first.output.substr(0, first.output.find("wrote")).substr(first.output.find("object ")),
+            again.output.substr(0, again.output.find("read from")));
+  // Another world's configuration is another table.
+  const test::CommandResult rough = test::runAfford(args + " --set table.top.friction=1.2");
+  ASSERT_EQ(rough.exit_code, 0) << rough.output;
+  EXPECT_NE(rough.output.find("wrote"), std::string::npos) << rough.output;
+}
+
+TEST(WorldTruthCommand, TheWrongExperimentOrObjectIsNamedWithTheFix) {
+  const test::CommandResult grid = test::runAfford("world truth base");
+  EXPECT_EQ(grid.exit_code, 2);
+  EXPECT_NE(grid.output.find("world.kind: grid"), std::string::npos) << grid.output;
+  const test::CommandResult typo = test::runAfford("world truth table --object cbe --out " + test::tempDir("truth-typo"));
+  EXPECT_EQ(typo.exit_code, 2);
+  EXPECT_NE(typo.output.find("did you mean 'cube'"), std::string::npos) << typo.output;
+  const test::CommandResult run = test::runAfford("experiment table --reps 1 --steps 10 --out " + test::tempDir("truth-run"));
+  EXPECT_EQ(run.exit_code, 2);
+  EXPECT_NE(run.output.find("do not run yet"), std::string::npos) << run.output;
+  // A run of the paper's world carries no table section, and takes no table key.
+  const test::CommandResult grid_config = test::runAfford("config base");
+  ASSERT_EQ(grid_config.exit_code, 0) << grid_config.output;
+  EXPECT_EQ(grid_config.output.find("\ntable:"), std::string::npos) << grid_config.output;
+  EXPECT_EQ(grid_config.output.find("kind: grid"), std::string::npos) << grid_config.output;
+  const test::CommandResult grid_set = test::runAfford("config base --set table.top.friction=1.2");
+  EXPECT_EQ(grid_set.exit_code, 2);
+  EXPECT_NE(grid_set.output.find("the table section is the physical table's"), std::string::npos) << grid_set.output;
+  const test::CommandResult bad =
+      test::runAfford("config table --set 'table.objects=[{name: cube, shape: sphere, size: [0.1, 0.2], mass: 1, "
+                      "friction: 1, torsional_friction: 0, rolling_friction: 0, colour: [1, 0, 0]}]'");
+  EXPECT_EQ(bad.exit_code, 2);
+  EXPECT_NE(bad.output.find("table.objects[0].size"), std::string::npos) << bad.output;
+}
+
+}  // namespace
+}  // namespace afford

@@ -16,6 +16,7 @@
 
 #include "afford/actions.hpp"
 #include "afford/phase.hpp"
+#include "afford/table_world.hpp"
 
 namespace afford {
 
@@ -37,6 +38,10 @@ enum class System { FIX, IGN, IMP, GOALS };
 enum class SaliencyOrder { SmoothThenNoise, NoiseThenSmooth };
 enum class ImpThresholdInput { Signal, ObservedChange };
 // How object centres become pixels (world.positions, docs/parameters.md).
+// Which world the environment simulates: the paper's (a 2D scene of flat shapes and an affordance table the
+// configuration gives) or a physical table (MuJoCo, a camera, a hand: affordances physics decides).
+enum class WorldKind { Grid, Table };
+
 enum class Positions {
   Continuous,  // real-valued centres and move targets, each shape rasterised from its centre (authors' code)
   Pixel,       // centres snapped to a pixel, one fixed footprint per shape (afford before issue 10)
@@ -61,6 +66,7 @@ struct ObjectSpec {
 // where each paper value is written down with its source); the initialisers
 // are neutral placeholders, never used: parseRunConfig requires every key.
 struct WorldConfig {
+  WorldKind kind = WorldKind::Grid;
   int size_px = 0;                       // scene side in pixels
   double object_size = 0;               // square side / reference size, scene units
   double table_min = 0, table_max = 0; // allowed object centres
@@ -233,6 +239,9 @@ inline constexpr std::array<Named<System>, 4> kSystemNames{
     {{"FIX", System::FIX}, {"IGN", System::IGN}, {"IMP", System::IMP}, {"GOALS", System::GOALS}}};
 inline constexpr std::array<Named<Phase>, kPhases> kPhaseNames{
     {{"intrinsic", Phase::Intrinsic}, {"extrinsic", Phase::Extrinsic}, {"goals", Phase::Goals}}};
+inline constexpr std::array<Named<WorldKind>, 2> kWorldKindNames{{{"grid", WorldKind::Grid}, {"table", WorldKind::Table}}};
+inline constexpr std::array<Named<table::Shape>, 3> kTableShapeNames{
+    {{"box", table::Shape::Box}, {"cylinder", table::Shape::Cylinder}, {"sphere", table::Shape::Sphere}}};
 inline constexpr std::array<Named<Positions>, 2> kPositionsNames{
     {{"continuous", Positions::Continuous}, {"pixel", Positions::Pixel}}};
 inline constexpr std::array<Named<SaliencyOrder>, 2> kSaliencyOrderNames{
@@ -329,6 +338,7 @@ struct RunConfig {
   std::int64_t checkpoint_after_actions = 0;
   bool record = true;  // a logger on the bus records this run (afford experiment --keep-logs decides)
   WorldConfig world;
+  table::TableWorldConfig table;  // world.kind: table (the `table` section)
   EyeConfig eye;
   PredictorsConfig predictors;
   MotivationConfig motivation;

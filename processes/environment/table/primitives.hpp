@@ -30,33 +30,6 @@ constexpr int kTableActions = 4;
 const char* tableActionName(int action);
 inline bool tableActionTakesPlace(int action) { return action == kPush || action == kCarry; }
 
-struct PrimitiveSpec {
-  double travel_speed = 0;       // the hand's set-point speed between places (m/s)
-  double contact_speed = 0;      // ... while it pushes, lowers or lifts an object (m/s)
-  double tap_speed = 0;          // ... of roll's tap (m/s)
-  double safe_height = 0;        // the fingers' tips above the table while the hand travels (m)
-  double clearance = 0;          // the gap left between fingers and object before contact (m)
-  double push_height = 0;        // the fingers' tips above the table while pushing (m)
-  double push_gap = 0;           // a push's fork: the gap between the fingers, a fraction of the object's width
-  double grasp_height = 0;       // ... while grasping, as a fraction of the object's height
-  double carry_height = 0;       // the fingers' tips above the table while carrying (m)
-  double topple_height = 0;      // where topple's fingers' tips hit, as a fraction of the object's height
-  double topple_drop = 0;        // topple's goal: the centre this fraction of its resting height lower
-  double tap_stroke = 0;         // how far roll's fingers go past the object's first contact (m)
-  double roll_distance = 0;      // roll's goal: the object rests this far from where it was (m)
-  double success_radius = 0;     // push's and carry's goal: this close to the place (m)
-  double reach_tolerance = 0;    // a set-point is reached when the hand is this close (m)
-  double waypoint_bound_s = 0;   // at most this long per set-point (s)
-  double rest_speed = 0;         // at rest: every body slower than this (m/s; rad/s for tenfold)
-  double rest_hold_s = 0;        // ... for this long (s)
-  double settle_bound_s = 0;     // at most this long waiting for rest at the end (s)
-  // The noise of the primitives' parameters (standard deviations).
-  double noise_position = 0;     // where the hand comes down, each of x and y (m)
-  double noise_height = 0;       // the fingers' height in a push, topple or tap (m)
-  double noise_direction = 0;    // the direction of a push, topple or tap (rad)
-  double noise_yaw = 0;          // the hand's yaw in a grasp (rad)
-};
-
 void validate(const PrimitiveSpec& p);
 
 struct PrimitiveResult {

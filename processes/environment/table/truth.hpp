@@ -13,12 +13,6 @@
 
 namespace afford::table {
 
-// Where a trial puts the object and the place it is taken to.
-struct TruthSpec {
-  double region_x = 0, region_y = 0;          // the object's centre drawn in [-region_x, region_x] x [-region_y, region_y]
-  double place_min = 0, place_max = 0;        // push and carry: the place this far from the object, in the region
-};
-
 void validate(const TruthSpec& t, const TableSpec& table);
 
 struct TruthCell {
