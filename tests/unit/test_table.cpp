@@ -5,6 +5,7 @@
 #include <gtest/gtest.h>
 
 #include <cmath>
+#include <fstream>
 #include <cstring>
 #include <memory>
 
@@ -383,6 +384,19 @@ TEST(WorldTruthCommand, ATableExperimentsTruthIsEstimatedOnceAndReadAfter) {
   // The same cells, read back.
   EXPECT_EQ(first.output.substr(0, first.output.find("wrote")).substr(first.output.find("object ")),
             again.output.substr(0, again.output.find("read from")));
+  // What is in its place and is not a table it wrote (too large, or not a table) is estimated again.
+  const std::size_t at = first.output.find("wrote ") + 6;
+  const std::string file = first.output.substr(at, first.output.find('\n', at) - at);
+  std::ofstream(file) << std::string(5u << 20, '[');
+  const test::CommandResult large = test::runAfford(args);
+  ASSERT_EQ(large.exit_code, 0) << large.output;
+  EXPECT_NE(large.output.find("more than a truth table holds"), std::string::npos) << large.output;
+  EXPECT_NE(large.output.find("wrote " + file), std::string::npos) << large.output;
+  std::ofstream(file) << "{\"table\": 7}";
+  const test::CommandResult broken = test::runAfford(args);
+  ASSERT_EQ(broken.exit_code, 0) << broken.output;
+  EXPECT_NE(broken.output.find("not a truth table"), std::string::npos) << broken.output;
+  EXPECT_NE(broken.output.find("wrote " + file), std::string::npos) << broken.output;
   // Another world's configuration is another table.
   const test::CommandResult rough = test::runAfford(args + " --set table.top.friction=1.2");
   ASSERT_EQ(rough.exit_code, 0) << rough.output;

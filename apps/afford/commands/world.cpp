@@ -4,6 +4,7 @@
 #include <mujoco/mujoco.h>
 #include <nlohmann/json.hpp>
 
+#include <cstdint>
 #include <cstdio>
 #include <filesystem>
 #include <fstream>
@@ -17,6 +18,7 @@
 #include "afford/yaml_reader.hpp"
 #include "apps/afford/commands.hpp"
 #include "environment/table/truth.hpp"
+#include "experiment/execute/agents.hpp"
 #include "experiment/design/experiment_file.hpp"
 
 namespace afford {
@@ -25,6 +27,9 @@ namespace fs = std::filesystem;
 using nlohmann::json;
 
 namespace {
+
+// A stored table is read only up to this size (one of a hundred objects is about 60 kB).
+constexpr std::uintmax_t kMostTableBytes = 4u << 20;
 
 struct TruthArgs {
   std::string experiment;
@@ -97,17 +102,22 @@ int runTruth(const TruthArgs& a, const FrontDoor& door) {
     for (std::size_t i = 0; i < tw.spec.objects.size(); ++i) objects.push_back(static_cast<int>(i));
 
   // The table is named by everything that decides it: the world's configuration, the seed, the trials, the
-  // objects asked for, and MuJoCo's release (the same configuration simulates the same on the same build).
+  // objects asked for, this build's programs (their primitives) and MuJoCo's release.
   Fnv1a h;
   const std::string key_text = emitYaml(node["table"]) + "\nseed " + std::to_string(a.seed) + "\ntrials " +
                                std::to_string(trials) + "\nobjects " + [&] {
                                  std::string s;
                                  for (int i : objects) s += std::to_string(i) + ",";
                                  return s;
-                               }() + "\nmujoco " + std::to_string(mj_version());
+                               }() + "\ncode " + codeFingerprint() + "\nmujoco " + std::to_string(mj_version());
   h.add(key_text.data(), key_text.size());
   const fs::path file = fs::path(a.out) / (a.experiment + "-" + h.hex() + ".json");
-  if (!a.fresh && fs::exists(file)) {
+  std::error_code size_error;
+  const auto size = fs::file_size(file, size_error);
+  if (!a.fresh && !size_error && size > kMostTableBytes)
+    door.log->warn("{}: {} bytes, more than a truth table holds ({}); estimating again", file.string(), size,
+                   kMostTableBytes);
+  if (!a.fresh && !size_error && size <= kMostTableBytes) {
     std::ifstream in(file);
     json stored;
     try {
