@@ -65,8 +65,14 @@
 #   bench/run.sh reproduction [--reps R] [--ext-reps K] [--jobs J] [--transport memq|udpm] [--out DIR] [WHAT ...]
 #     the whole reproduction (scripts/reproduce.sh WHAT, default all, its report in DIR): wall time beside its
 #     critical path and the share of the time the cores were busy.
+#   bench/run.sh table [--steps N] [--seed S] [--experiment E] [--set KEY=VALUE ...]
+#     the table world's cost a step in the environment process (bench/table_bench.cpp): a motor primitive's
+#     physics, the camera's frame and its segmentation, in ms; physics steps an action; and the eye's verdict
+#     on each action beside the simulation's, per action (JSON).
 set -euo pipefail
 cd "$(dirname "$0")/.."
+[[ ${1:-} == table ]] && { shift; [[ -x build/bin/afford-table-bench ]] || scripts/setup.sh;
+  exec build/bin/afford-table-bench "$@"; }
 [[ ${1:-} == loss ]] && { shift; exec bench/loss.sh "$@"; }
 [[ ${1:-} == logger-faults ]] && { shift; [[ -x build/bin/afford ]] || scripts/setup.sh;
   exec bench/logger_faults.sh build out/logger-faults "$@"; }

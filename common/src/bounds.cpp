@@ -40,7 +40,8 @@ Max objects(const BoundsContext& c) {
 // A zlib scene (image.hpp encodeScene) is at most zlib's bound for px x px x RGB.
 Max sceneBytes(const BoundsContext& c) {
   const auto px = static_cast<uLong>(c.run ? c.run->world.size_px : c.protocol->limits.scene_side);
-  return Max(static_cast<std::int64_t>(compressBound(3 * px * px)));
+  const auto rows = static_cast<uLong>(c.run ? c.run->world.rows() : c.protocol->limits.scene_side);
+  return Max(static_cast<std::int64_t>(compressBound(3 * px * rows)));
 }
 // Objects a scene lists (eye.fovea = true_centre): those of the world, or of
 // the run's scenario, whichever a run has more of.

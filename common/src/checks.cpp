@@ -78,10 +78,10 @@ std::string checkProbability(const std::string& field, double v) { return checkR
 }  // namespace
 
 std::string checkMessage(const scene_t& m, const BoundsContext& c) {
-  const int side = c.run ? c.run->world.size_px : 0;
+  const int side = c.run ? c.run->world.size_px : 0, height = c.run ? c.run->world.rows() : 0;
   const std::string why = first({checkStep(m.step, c), checkSerial(m.serial),
                 c.run ? checkSize("width", m.width, side) : checkInt("width", m.width, 1, c.protocol->limits.scene_side),
-                c.run ? checkSize("height", m.height, side) : checkInt("height", m.height, 1, c.protocol->limits.scene_side),
+                c.run ? checkSize("height", m.height, height) : checkInt("height", m.height, 1, c.protocol->limits.scene_side),
                 m.cause == scene_t::CAUSE_START || m.cause == scene_t::CAUSE_ACTION ||
                         m.cause == scene_t::CAUSE_OBJECTS_APPEARED || m.cause == scene_t::CAUSE_GOAL
                     ? ""

@@ -131,6 +131,24 @@ void checkProtocol(const ProtocolConfig& c, const std::string& path) {
                                            "): a RUN_CONFIG or STATUS at its limit must fit on the bus");
 }
 
+// A table world's run: the scene is the camera's image, the world's objects the table's (named, with the
+// truth they are measured against when the configuration gives it), the scene set up anew as table.scene says.
+void tableWorld(RunConfig& c) {
+  if (!c.table.spec.camera.width) failKey("table", "missing: world.kind table needs the table section");
+  if (c.table.spec.objects.empty()) failKey("table.objects", "missing: a table world needs objects");
+  WorldConfig& w = c.world;
+  w.size_px = c.table.spec.camera.width;
+  w.height_px = c.table.spec.camera.height;
+  w.reset_every = c.table.scene.reset_every;
+  w.objects.clear();
+  for (const table::ObjectSpec& t : c.table.spec.objects) {
+    ObjectSpec o;
+    o.name = t.name;
+    std::copy(t.affordance.begin(), t.affordance.end(), o.affordance.begin());
+    w.objects.push_back(o);
+  }
+}
+
 // What one key's range cannot say: how a run's keys bound each other.
 void checkRunConfig(const RunConfig& c) {
   if (c.eye.focus_side % 2 == 0) failKey("eye.focus_side", "must be odd (the gaze is the centre pixel)");
@@ -165,7 +183,8 @@ void readTableObjects(ConfigReader& t, table::TableSpec& spec) {
     failKey(key, "expected a non-empty list of objects, got " + describeNode(objs));
   for (std::size_t i = 0; i < objs.size(); ++i) {
     ConfigReader r(objs[i], key + "[" + std::to_string(i) + "]");
-    r.expect({"name", "shape", "size", "lying", "mass", "friction", "torsional_friction", "rolling_friction", "colour"});
+    r.expect({"name", "shape", "size", "lying", "mass", "friction", "torsional_friction", "rolling_friction", "colour",
+              "affordance"});
     table::ObjectSpec o;
     o.name = r.text("name");
     o.shape = r.choice("shape", kTableShapeNames);
@@ -178,6 +197,11 @@ void readTableObjects(ConfigReader& t, table::TableSpec& spec) {
     o.torsional_friction = r.number("torsional_friction", 0.0, 1.0);
     o.rolling_friction = r.number("rolling_friction", 0.0, 1.0);
     readTriple(r, "colour", o.rgb.data(), 0, 1);
+    if (r.has("affordance")) {
+      const auto a = numberList(r, "affordance", o.affordance.size(), 0.0, 1.0);
+      std::copy(a.begin(), a.end(), o.affordance.begin());
+      o.has_affordance = true;
+    }
     r.finish();
     for (const auto& before : spec.objects)
       if (before.name == o.name) failKey(r.keyPath("name"), "'" + o.name + "' names an earlier object too");
@@ -386,6 +410,8 @@ RunConfig parseRunConfig(const YAML::Node& given) {
   declareRunConfig(v, c);
   r.finish();
   c.planner.attention = c.eye.attention;  // the eye and the planner read one key
+  c.world.height_px = c.world.size_px;
+  if (c.world.kind == WorldKind::Table) tableWorld(c);
   checkRunConfig(c);
   return c;
 }

@@ -214,6 +214,16 @@ void declareTable(V& v, RunConfig& c) {
         v.number("noise_direction", p.noise_direction, 0.0, 3.2, "the direction of a push, topple or tap: sd (rad)");
         v.number("noise_yaw", p.noise_yaw, 0.0, 3.2, "the hand's yaw in a grasp: sd (rad)");
       });
+      v.section("scene", [&] {
+        v.integer("reset_every", t.scene.reset_every, 0, 1'000'000'000,
+                  "a run's scene is set up anew every this many steps (0: never): the objects at drawn free places "
+                  "of the truth's region, in their configured poses");
+        v.number("gap", t.scene.gap, 0.0, 1.0, "... at least this far apart, footprint to footprint (m)");
+      });
+      v.section("perception", [&] {
+        v.number("topple_area", t.perception.topple_area, 1.01, 100.0,
+                 "the eye sees a topple's effect when the object's silhouette grows by this factor at least");
+      });
       v.section("truth", [&] {
         v.pair("region", t.truth.region_x, t.truth.region_y, 0.01, 2.0,
                "a trial's object is drawn in [-x, x] x [-y, y] (m)");
@@ -225,7 +235,9 @@ void declareTable(V& v, RunConfig& c) {
       v.custom("objects", "a list of objects", [&](auto& r) { readTableObjects(r, s); },
                "a table experiment's objects: name, shape (`box`, `cylinder`, `sphere`), size (half-extents; "
                "radius and half-length; radius), `lying` (a cylinder on its side), mass, friction, "
-               "torsional_friction, rolling_friction, colour");
+               "torsional_friction, rolling_friction, colour, and optionally `affordance` [push, carry, topple, roll]: the "
+               "truth a run's learned table is measured against (`afford experiment` writes the estimate of `afford "
+               "world truth` there)");
       v.from(KeyInfo::Origin::Defaults);
     });
   });

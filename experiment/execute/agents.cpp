@@ -29,23 +29,6 @@ std::vector<fs::path> checkpointFiles(const std::string& checkpoint) {
   return out;
 }
 
-const std::string& codeFingerprint() {
-  static const std::string fingerprint = [] {
-    Fnv1a h;
-    const fs::path bin = executableDir();
-    std::vector<fs::path> files{bin / "afford"};  // the runner (the one running, unless another host set the folder)
-    for (const ProcessInfo& p : processRegistry()) files.push_back(bin / ("afford-" + std::string(p.name)));
-    std::vector<char> buf(1 << 20);
-    for (const auto& f : files) {
-      std::ifstream in(f, std::ios::binary);
-      while (in.read(buf.data(), static_cast<std::streamsize>(buf.size())) || in.gcount() > 0)
-        h.add(buf.data(), static_cast<std::size_t>(in.gcount()));
-    }
-    return h.hex();
-  }();
-  return fingerprint;
-}
-
 std::string agentKey(const std::string& config_yaml) {
   YAML::Node node = YAML::Load(config_yaml);
   node.remove("experiment");

@@ -29,9 +29,6 @@ namespace afford {
 // after an action count beside it (predictors.after-N-actions.ckpt), as they exist.
 std::vector<std::filesystem::path> checkpointFiles(const std::string& checkpoint);
 
-// FNV-1a of the executables (afford and every afford-<process>): another build is other code.
-const std::string& codeFingerprint();
-
 // FNV-1a (hex) of the afford version, the code's fingerprint and the run's configuration without what
 // does not change its intrinsic phase: the experiment's name, the planner's
 // section (only the extrinsic phase reads it), where the checkpoint goes,

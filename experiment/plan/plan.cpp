@@ -13,6 +13,9 @@
 #include "experiment/design/generate.hpp"
 #include "afford/processes.hpp"
 #include "experiment/design/experiment_file.hpp"
+#include "experiment/design/truth_store.hpp"
+#include "experiment/run/group.hpp"
+#include "environment/table/primitives.hpp"
 
 namespace afford {
 namespace fs = std::filesystem;
@@ -181,21 +184,47 @@ PlannedRun planRun(const Plan& plan, const PlanRequest& o, const std::string& pr
   return p;
 }
 
+// A table experiment's runs are measured against the table's truth (`afford world truth`, its defaults: seed 1,
+// table.truth.trials), read from <log-root>/truth or estimated there first; each run is given it as
+// table.objects[i].affordance, unless the configuration gives one already.
+PlanRequest withTableTruth(const PlanRequest& given) {
+  const std::string dir = given.config_dir.empty() ? defaultConfigDir() : given.config_dir;
+  const YAML::Node node = effectiveConfig(dir, RunRequest{given.experiment, System::IMP, given.seed, given.steps, given.settings});
+  const RunConfig c = parseRunConfig(node);
+  if (c.world.kind != WorldKind::Table) return given;
+  if (std::all_of(c.table.spec.objects.begin(), c.table.spec.objects.end(),
+                  [](const table::ObjectSpec& t) { return t.has_affordance; }))
+    return given;
+  const StoredTruth t = storedTruth(
+      node, c, TruthRequest{given.experiment, 1, 0, {}, (fs::path(given.log_root) / "truth").string(), false, codeFingerprint()},
+      [](const std::string& w) { spdlog::warn("{}", w); },
+      [&, told = false](int object, int action) mutable {
+        if (!told)
+          spdlog::info("estimating the table's truth: {} trials of each action on each object, alone (afford world "
+                       "truth {})", c.table.truth_trials, given.experiment);
+        told = true;
+        spdlog::debug("the table's truth: {}, {} estimated", c.table.spec.objects[static_cast<std::size_t>(object)].name,
+                      table::tableActionName(action));
+        if (stopRequested()) throw std::runtime_error("interrupted while estimating the table's truth: nothing written");
+      });
+  spdlog::info("the table's truth (what the learned affordances are measured against): {}{}", t.file,
+               t.estimated ? "" : " (estimated before)");
+  PlanRequest o = given;
+  o.settings.push_back(truthSetting(node, t.rows));
+  return o;
+}
+
 }  // namespace
 
-Plan planExperiment(const PlanRequest& o) {
-  checkPlanRequest(o);
+Plan planExperiment(const PlanRequest& given) {
+  checkPlanRequest(given);
+  const PlanRequest o = withTableTruth(given);
   Plan plan;
   plan.config_dir = o.config_dir.empty() ? defaultConfigDir() : o.config_dir;
   plan.exp = loadExperiment(plan.config_dir, o.experiment);
   plan.protocol = loadProtocol(plan.config_dir);
   plan.reference.emplace(plan.config_dir);
   plan.seed = o.seed;
-  if (parseRunConfig(effectiveConfig(plan.config_dir, RunRequest{o.experiment, System::IMP, o.seed, o.steps, o.settings}))
-          .world.kind == WorldKind::Table)
-    throw ConfigError("experiment '" + plan.exp.name + "' is of the physical table (world.kind: table), which the "
-                      "agent's processes do not run yet: `afford world truth " + plan.exp.name +
-                      "` estimates its affordances (docs/model.md#a-physical-table)");
   plan.reps = o.reps.value_or(plan.exp.repetitions);
   if (plan.reps < 1) throw ConfigError("--reps must be at least 1");
   plan.systems = !o.systems.empty() ? o.systems
@@ -203,6 +232,12 @@ Plan planExperiment(const PlanRequest& o) {
                                                      : std::vector<std::string>{"FIX", "IGN", "IMP"};
   if (plan.exp.extrinsic) plan.design = *plan.exp.extrinsic;
   plan.tests = o.extrinsic_reps ? *o.extrinsic_reps : plan.design.tests;  // (0 given: none)
+  if (plan.tests > 0 && parseRunConfig(effectiveConfig(plan.config_dir, RunRequest{o.experiment, System::IMP, o.seed,
+                                                                                    o.steps, o.settings}))
+                                .world.kind == WorldKind::Table)
+    throw ConfigError("--extrinsic-reps " + std::to_string(plan.tests) + ": experiment '" + plan.exp.name +
+                      "' is of the physical table, whose extrinsic tests (goals given as images of the table) are "
+                      "not built yet; its intrinsic runs need no option");
   if ((o.tables || o.table_seed) && !plan.exp.tables)
     throw ConfigError("--tables and --table-seed are for experiments on random tables (a 'tables:' section, e.g. "
                       "random-tables); " + plan.exp.name + " has none");

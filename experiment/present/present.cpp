@@ -87,15 +87,16 @@ void goalsText(std::ostringstream& t, const GoalsSummary& g) {
 void learnedTablesText(std::ostringstream& t, const Summary& summary, const Plan& plan) {
   const auto& object_names = summary.objects;
   t << "\nLearned affordances after " << summary.steps << " steps (mean of " << summary.repetitions
-    << " run(s)); in brackets the world's own table (the paper's, for its experiments)\n";
+    << " run(s)); in brackets the world's own table (the paper's, for its experiments; a physical table's truth)\n";
   for (const auto& sys : plan.systems) {
     const auto it = summary.systems.find(sys);
     if (it == summary.systems.end() || !it->second.affordance || !it->second.target) continue;
     const SystemSummary& js = it->second;
     std::size_t name_width = 17;
     for (const auto& n : object_names) name_width = std::max(name_width, n.size() + 1);
-    t << "\n" << std::left << std::setw(static_cast<int>(name_width) + 2) << sys
-      << "move        turn green  turn red    turn blue\n";
+    t << "\n" << std::left << std::setw(static_cast<int>(name_width) + 2) << sys;
+    for (const std::string& a : summary.actions) t << std::setw(12) << a;
+    t << "\n";
     for (std::size_t i = 0; i < object_names.size() && i < js.affordance->size(); ++i) {
       t << "  " << std::left << std::setw(static_cast<int>(name_width)) << object_names[i];
       for (std::size_t a = 0; a < (*js.affordance)[i].size(); ++a)

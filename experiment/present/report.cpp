@@ -358,7 +358,11 @@ void intrinsicSection(std::ostringstream& md, const std::vector<Folder>& folders
             for (const auto& sys : systemsOf(s)) names += (names.empty() ? "" : " / ") + sys;
             return names;
           }() << "; the paper's table in brackets):\n\n"
-       << "| object | move | turn green | turn red | turn blue |\n|---|---|---|---|---|\n";
+       << "| object |" << [&] {
+            std::string head;
+            for (const std::string& a : s.actions) head += " " + a + " |";
+            return head;
+          }() << "\n|---|---|---|---|---|\n";
     for (std::size_t i = 0; i < s.objects.size() && i < target.size(); ++i) {
       md << "| " << s.objects[i] << " |";
       for (std::size_t a = 0; a < 4 && a < target[i].size(); ++a) {

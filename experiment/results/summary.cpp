@@ -219,7 +219,7 @@ RunEntry runEntry(const Plan& plan, const PlannedRun& p, const RunOutcome& r, do
 // and affordance_<system>.csv.
 void summariseFinals(SystemSummary& js, const std::string& sys, const Table& target, const std::vector<Table>& finals,
                      const std::vector<double>& maes, const std::vector<std::string>& object_names,
-                     const std::string& out_dir) {
+                     const std::string& out_dir, WorldKind kind) {
   Table mean = target, mn = target, mx = target;
   for (std::size_t i = 0; i < target.size(); ++i)
     for (int a = 0; a < kNumActions; ++a) {
@@ -244,7 +244,7 @@ void summariseFinals(SystemSummary& js, const std::string& sys, const Table& tar
   csv << "system,object,action,target,mean,min,max\n";
   for (std::size_t i = 0; i < target.size(); ++i)
     for (int a = 0; a < kNumActions; ++a)
-      csv << sys << ",\"" << object_names[i] << "\"," << kActionNames[a] << "," << target[i][a] << "," << mean[i][a]
+      csv << sys << ",\"" << object_names[i] << "\"," << actionName(kind, a) << "," << target[i][a] << "," << mean[i][a]
           << "," << mn[i][a] << "," << mx[i][a] << "\n";
   writeWhole(fs::path(out_dir) / ("affordance_" + sys + ".csv"), csv.str());
 }
@@ -289,13 +289,13 @@ SystemSummary summariseSystem(const Plan& plan, const std::string& sys, const Ph
         for (int a = 0; a < kNumActions; ++a) {
           sum[i][a] += snap.affordance[i][a];
           *curves_csv << sys << "," << p.spec.run_id << "," << p.spec.seed << "," << snap.step << ",\""
-                      << object_names[i] << "\"," << kActionNames[a] << "," << snap.affordance[i][a] << "\n";
+                      << object_names[i] << "\"," << actionName(cfg.world.kind, a) << "," << snap.affordance[i][a] << "\n";
         }
       ++n;
     }
   }
   if (!finals.empty() && !plan.tables) {
-    summariseFinals(js, sys, target, finals, maes, object_names, out_dir);
+    summariseFinals(js, sys, target, finals, maes, object_names, out_dir, cfg.world.kind);
     Curves& curves = js.curves.emplace();
     for (auto& [step, sn] : curve_sum) {
       auto& [sum, n] = sn;
@@ -365,7 +365,8 @@ Summary summarise(const Plan& plan, const Hosting& hosting, const PhaseRuns& pha
   summary.transport = hosting.transport;
   summary.network = hosting.network;
   summary.afford_version = affordVersion();
-  summary.actions.assign(kActionNames.begin(), kActionNames.end());
+  for (int a = 0; a < kNumActions; ++a)
+    summary.actions.emplace_back(actionName(plan.configs.begin()->second.world.kind, a));
   if (!plan.exp.file.empty()) summary.experiment_file = plan.exp.file;
   if (!hosting.processes.empty()) summary.processes = hosting.processes;  // --process: the commands run in place of ours
   for (const auto& sys : plan.systems)

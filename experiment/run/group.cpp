@@ -1,4 +1,6 @@
 #include "experiment/run/group.hpp"
+#include "afford/checksum.hpp"
+#include "afford/processes.hpp"
 
 #include <fcntl.h>
 #include <signal.h>
@@ -13,6 +15,7 @@
 #include <fstream>
 #include <stdexcept>
 #include <thread>
+#include <vector>
 
 namespace afford {
 
@@ -165,6 +168,23 @@ void ProcessGroup::stop(int grace_ms) {
       std::this_thread::sleep_for(std::chrono::milliseconds(5));
     }
   }
+}
+
+const std::string& codeFingerprint() {
+  static const std::string fingerprint = [] {
+    Fnv1a h;
+    const std::filesystem::path bin = executableDir();
+    std::vector<std::filesystem::path> files{bin / "afford"};  // the runner (the one running, unless another host set the folder)
+    for (const ProcessInfo& p : processRegistry()) files.push_back(bin / ("afford-" + std::string(p.name)));
+    std::vector<char> buf(1 << 20);
+    for (const auto& f : files) {
+      std::ifstream in(f, std::ios::binary);
+      while (in.read(buf.data(), static_cast<std::streamsize>(buf.size())) || in.gcount() > 0)
+        h.add(buf.data(), static_cast<std::size_t>(in.gcount()));
+    }
+    return h.hex();
+  }();
+  return fingerprint;
 }
 
 }  // namespace afford

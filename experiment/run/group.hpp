@@ -58,6 +58,8 @@ long peakRssKb(pid_t pid);
 // the running executable's folder, or the one a host that is not the afford
 // executable (the Python package) set.
 std::string executableDir();
+// FNV-1a of the executables (afford and every afford-<process>): another build is other code.
+const std::string& codeFingerprint();
 void setExecutableDir(const std::string& dir);
 
 }  // namespace afford

@@ -73,6 +73,7 @@ void WatchState::onConfig(const run_config_t& m, const RunConfig& config) {
   phase_ = nameOf(kPhaseNames, config.phase);
   steps_ = config.steps;
   goal_window_ = config.goals.window;
+  world_ = config.world.kind;
   for (const ObjectSpec& o : config.world.objects) {
     object_names_.push_back(o.name);
     true_affordance_.push_back(o.affordance);
@@ -127,7 +128,7 @@ void WatchState::onDecision(std::int64_t step, bool acted, int action, double mo
   motivation_.push_back(motivation);
   threshold_.push_back(threshold);
   while (motivation_.size() > limits_.trace_length) motivation_.pop_front(), threshold_.pop_front();
-  decision_ = acted && action >= 0 && action < kNumActions ? "act: " + std::string(kActionNames[action]) : "pass";
+  decision_ = acted && validAction(action) ? "act: " + std::string(actionName(world_, action)) : "pass";
   if (step == focus_.step) seen_decision_ = decision_, seen_decision_step_ = step;
   stepTo(step);
   changed();

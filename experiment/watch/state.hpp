@@ -133,6 +133,7 @@ class WatchState : public RunView {
   // The goals phase's trace: after each goal of a module that has a goal image (not an exploration), each such
   // module's competence, the share of its last 2 x goals.window goals reached (-1: none yet).
   int goal_window_ = 0;
+  WorldKind world_ = WorldKind::Grid;  // names the actions
   std::map<std::string, std::deque<bool>> recent_goals_;
   std::deque<std::array<double, 3>> competence_;
   void endRun(const std::string& run_id, std::int64_t step);

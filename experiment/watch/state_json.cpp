@@ -80,6 +80,9 @@ std::string WatchState::snapshot(bool with_curves) const {
               {"goals", goals},
               {"competence", competence_},
               {"goal_window", goal_window_},
+              {"actions", world_ == WorldKind::Table
+                              ? json(std::vector<std::string>(kTableActionNames.begin(), kTableActionNames.end()))
+                              : json({"move", "green", "red", "blue"})},
               {"runs", runs}};
     if (playback_) c.head["playback"] = {{"playing", playing_}, {"speed", speed_}, {"last", last_}};
     c.scene = focus_.step >= 0 && seen_scene_.step >= 0 ? seen_scene_ : scene_;  // the picture of one step

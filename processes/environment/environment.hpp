@@ -42,7 +42,35 @@ struct EnvironmentParams {
       : world(c.world), focus_side(c.eye.focus_side), seed(c.seed) {}
 };
 
-class Environment {
+// A world the environment process simulates (world.kind): the paper's grid (Environment) or the physical
+// table (TableWorld). Positions are scene units: a pixel's column and row divided by the image's width.
+class SimWorld {
+ public:
+  virtual ~SimWorld() = default;
+  // The scene as it is now, and each configured object alone as the eye's focus would see it (their order).
+  virtual cv::Mat render() const = 0;
+  virtual std::vector<std::vector<std::uint8_t>> probeImages() const = 0;
+  virtual std::vector<std::string> probeNames() const = 0;
+  // Execute `action` at `step` on the object under the gaze (x, y). For an action that takes a place,
+  // `target` is the commanded one; without one (intrinsic phase) the world draws a place.
+  virtual ActionOutcome execute(std::int64_t step, int action, double x, double y,
+                                std::optional<std::pair<double, double>> target = std::nullopt) = 0;
+  // The world changes the scene at `step` (objects appear; the table set up anew); true if it did.
+  virtual bool introduceObjectsAt(std::int64_t step) = 0;
+  virtual bool objectsAppearAt(std::int64_t step) const = 0;
+  // The true centres of the objects in the scene (eye.fovea = true_centre), in the world's order.
+  virtual std::vector<cv::Point2d> centres() const = 0;
+  // Extrinsic phase: the goal scene, its objects' centres, the scene's distance from it and its utility.
+  virtual const cv::Mat& goalScene() const = 0;
+  virtual std::vector<cv::Point2d> goalCentres() const = 0;
+  virtual double goalDistance() const = 0;
+  virtual double goalUtility() const = 0;
+  // A snapshot's part (afford/snapshot.hpp): the world's state now.
+  virtual void save(SnapshotWriter& w) const = 0;
+  virtual void load(SnapshotReader& r) = 0;
+};
+
+class Environment : public SimWorld {
  public:
   explicit Environment(const EnvironmentParams& params);
   // Extrinsic phase: the scenario's objects in their initial states. Their
@@ -50,40 +78,40 @@ class Environment {
   Environment(const EnvironmentParams& params, const Scenario& scenario);
 
   // The goal configuration of the scenario (extrinsic phase).
-  const cv::Mat& goalScene() const;
+  const cv::Mat& goalScene() const override;
   // Distance of the scene from the goal image: ||scene - goal||_2 / (size^2 * 3),
   // values in [0, 1]; the test succeeds below planner.success_distance.
-  double goalDistance() const;
+  double goalDistance() const override;
   // The summed value of the scenario's objects that are in their goal state
   // (colour and place), the measure of the utility tests (paper 3.2.2).
-  double goalUtility() const;
+  double goalUtility() const override;
 
   // The scene as it is now.
-  cv::Mat render() const;
+  cv::Mat render() const override;
   // Each configured object alone, centred, as the eye's focus would see it (Table order).
-  std::vector<std::vector<std::uint8_t>> probeImages() const;
-  std::vector<std::string> probeNames() const;
+  std::vector<std::vector<std::uint8_t>> probeImages() const override;
+  std::vector<std::string> probeNames() const override;
 
   // Execute `action` at `step` on the object under the gaze (x, y). For move,
   // `target` is the commanded position; without one (intrinsic phase) the
   // routine draws a random free target.
   ActionOutcome execute(std::int64_t step, int action, double x, double y,
-                        std::optional<std::pair<double, double>> target = std::nullopt);
+                        std::optional<std::pair<double, double>> target = std::nullopt) override;
   // Put in the scene the objects that appear at `step`; true if any did.
-  bool introduceObjectsAt(std::int64_t step);
+  bool introduceObjectsAt(std::int64_t step) override;
   // True if objects are due to appear at `step`.
-  bool objectsAppearAt(std::int64_t step) const;
+  bool objectsAppearAt(std::int64_t step) const override;
 
   const std::vector<WorldObject>& objects() const { return objects_; }
   // A snapshot's part (afford/snapshot.hpp): the objects as they are now (the goal and the configuration
   // come from the run's configuration). load() refuses objects the configuration does not have.
-  void save(SnapshotWriter& w) const;
-  void load(SnapshotReader& r);
+  void save(SnapshotWriter& w) const override;
+  void load(SnapshotReader& r) override;
   // The true centres of the objects in the scene (render), or in the goal
   // (goalScene), in the environment's order: what a SCENE lists for the
   // eye's true_centre fovea (issue 28).
-  std::vector<cv::Point2d> centres() const;
-  std::vector<cv::Point2d> goalCentres() const;
+  std::vector<cv::Point2d> centres() const override;
+  std::vector<cv::Point2d> goalCentres() const override;
   // Index into objects() of the present object covering a pixel, or -1; where
   // objects overlap, the one drawn last (on top).
   int objectAt(Pixel p) const;

@@ -28,8 +28,12 @@ EnvironmentNode::EnvironmentNode(lcm::LCM& lcm, std::shared_ptr<spdlog::logger> 
 }
 
 void EnvironmentNode::onConfigured(const RunConfig& config) {
-  env_ = config.phase == Phase::Extrinsic ? std::make_unique<Environment>(config, *config.scenario)
-                                          : std::make_unique<Environment>(config);
+  if (config.world.kind == WorldKind::Table)
+    env_ = std::make_unique<TableWorld>(config);
+  else if (config.phase == Phase::Extrinsic)
+    env_ = std::make_unique<Environment>(config, *config.scenario);
+  else
+    env_ = std::make_unique<Environment>(config);
   next_decision_ = 0;
 }
 
@@ -69,7 +73,8 @@ void EnvironmentNode::publishScene(std::int64_t step, int8_t cause, bool scan, i
   s.action = static_cast<int8_t>(action);
   s.action_target_x = tx;
   s.action_target_y = ty;
-  s.width = s.height = config().world.size_px;
+  s.width = config().world.size_px;
+  s.height = config().world.rows();
   s.goal_distance = extrinsic() ? env_->goalDistance() : -1.0;
   s.goal_utility = extrinsic() ? env_->goalUtility() : -1.0;
   s.encoding = scene_t::ENCODING_ZLIB_RGB8;
@@ -93,7 +98,7 @@ void EnvironmentNode::publishScene(std::int64_t step, int8_t cause, bool scan, i
 void EnvironmentNode::act(const decision_t& d) {
   // The planner's steps are its iterations; it decides at most once in each.
   std::optional<std::pair<double, double>> target;
-  if (d.action == kMove) target = std::make_pair(d.target_x, d.target_y);
+  if (takesPlace(config().world.kind, d.action)) target = std::make_pair(d.target_x, d.target_y);
   const ActionOutcome out = env_->execute(d.step, d.action, d.x, d.y, target);
   next_decision_ = d.step + 1;
   handled(d.step);
@@ -107,7 +112,7 @@ void EnvironmentNode::decide(const decision_t& d) {
   handled(d.step);
   if (d.acted) {
     std::optional<std::pair<double, double>> target;
-    if (d.action == kMove && d.target_x >= 0.0 && d.target_y >= 0.0) target = std::make_pair(d.target_x, d.target_y);
+    if (takesPlace(config().world.kind, d.action) && d.target_x >= 0.0 && d.target_y >= 0.0) target = std::make_pair(d.target_x, d.target_y);
     const ActionOutcome out = env_->execute(d.step, d.action, d.x, d.y, target);
     log_->debug("step {}: action {} on object: {} succeeded: {} target ({}, {})", d.step, d.action, out.on_object,
                 out.succeeded, out.target_x, out.target_y);

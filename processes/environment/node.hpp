@@ -10,6 +10,7 @@
 #include "afford/decision_t.hpp"
 #include "afford/node.hpp"
 #include "environment/environment.hpp"
+#include "environment/table_world.hpp"
 
 namespace afford {
 
@@ -30,7 +31,7 @@ class EnvironmentNode : public NodeBase {
                     const cv::Mat* image = nullptr, const std::vector<cv::Point2d>* centres = nullptr);
   bool extrinsic() const { return config().phase == Phase::Extrinsic; }
 
-  std::unique_ptr<Environment> env_;
+  std::unique_ptr<SimWorld> env_;  // world.kind: the grid (Environment) or the table (TableWorld)
   std::int64_t next_decision_ = 0;  // the step whose decision is awaited
   // The last scene published and its compressed bytes: an action that changes
   // nothing (a third of a run's actions fail) shows that scene again, and its

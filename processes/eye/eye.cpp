@@ -91,6 +91,17 @@ int dominantChannel(const std::vector<std::uint8_t>& image) {
 
 }  // namespace
 
+EyeParams::EyeParams(const RunConfig& c)
+    : eye(c.eye), world{c.world.size_px, c.world.positions, c.world.kind, c.world.rows()}, seed(c.seed) {
+  if (c.world.kind == WorldKind::Table) {
+    // Scene units a metre of the table's top is: the camera's focal length in pixels over its height, per width.
+    const table::CameraSpec& cam = c.table.spec.camera;
+    const double per_metre = 0.5 * cam.height / std::tan(cam.fovy_deg * M_PI / 360.0) / cam.above / cam.width;
+    table = {c.table.primitives.success_radius * per_metre, c.table.primitives.roll_distance * per_metre,
+             c.table.perception.topple_area};
+  }
+}
+
 Eye::Eye(const EyeParams& params) : config_(params) {
   const Pixel start = toPixel(params.eye.initial_gaze_x, params.eye.initial_gaze_y, params.world.size_px);
   for (Retina* r : {&outer_, &inner_}) {
@@ -287,9 +298,37 @@ Focus Eye::peekScan(const Retina& r, std::int64_t step, int purpose) const {
   return chosen > 0 ? focusOnBlob(r, chosen) : refocus(r);
 }
 
-Effect Eye::scanEffect(std::int64_t step, cv::Mat after, int action, std::vector<cv::Point2d> objects) {
+int Eye::areaAtGaze(const Retina& r) {
+  const int label = labelAt(r, r.focus.gaze);
+  return label > 0 ? r.stats.at<int>(label, cv::CC_STAT_AREA) : 0;
+}
+
+bool Eye::tableEffect(const Effect& e, int action, int area_before, int area_after,
+                      std::optional<cv::Point2d> target) const {
+  if (area_before == 0 || area_after == 0) return false;  // no object was looked at, or none is seen now
+  const double grown = static_cast<double>(area_after) / area_before;
+  const double moved = std::hypot(e.after.x - e.before.x, e.after.y - e.before.y);
+  const double fell = config_.table.topple_area;
+  switch (action) {
+    case 0:  // push
+    case 1:  // carry: at the place, in the pose it had
+      return target && e.position_changed && grown < fell && grown > 1.0 / fell &&
+             std::hypot(e.after.x - target->x, e.after.y - target->y) <= config_.table.place_radius;
+    case 2:  // topple: it lies, where it stood
+      return grown >= fell;
+    case 3:  // roll: it went on
+      return moved >= config_.table.roll_distance;
+    default:
+      return false;
+  }
+}
+
+Effect Eye::scanEffect(std::int64_t step, cv::Mat after, int action, std::vector<cv::Point2d> objects,
+                       std::optional<cv::Point2d> target) {
   Effect e;
   e.before = outer_.focus;
+  const bool table = config_.world.kind == WorldKind::Table;
+  const int area_before = table ? areaAtGaze(outer_) : 0;
   cv::Mat change;
   double max_change = 0;
   if (!sameImage(outer_.rgb, after)) {  // else the action changed nothing: the retina stands as it is
@@ -314,7 +353,9 @@ Effect Eye::scanEffect(std::int64_t step, cv::Mat after, int action, std::vector
   e.position_changed = e.position_change > config_.eye.position_change_threshold;
   // The effect must be the performed action's own (paper 2.3.1): a displacement
   // for move; for a colour action, the same place with the focus now in that colour.
-  if (action == kMove)
+  if (table)
+    e.affordance = tableEffect(e, action, area_before, areaAtGaze(outer_), target);
+  else if (action == kMove)
     e.affordance = e.position_changed;
   else if (validAction(action))
     e.affordance = e.image_changed && !e.position_changed && dominantChannel(e.after.image) == kActionChannel[action];
@@ -339,8 +380,8 @@ void Eye::save(SnapshotWriter& w) const {
 }
 
 void Eye::load(SnapshotReader& r) {
-  const int side = config_.world.size_px;
-  const auto rows = static_cast<int>(r.within("scene rows", 0, side));
+  const int side = config_.world.size_px, height = config_.world.height_px ? config_.world.height_px : side;
+  const auto rows = static_cast<int>(r.within("scene rows", 0, height));
   const auto cols = static_cast<int>(r.within("scene columns", rows == 0 ? 0 : side, rows == 0 ? 0 : side));
   cv::Mat rgb(rows, cols, CV_8UC3);
   r.bytes("scene", rgb.data, rgb.total() * rgb.elemSize());

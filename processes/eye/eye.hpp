@@ -9,6 +9,7 @@
 #include <opencv2/core.hpp>
 
 #include <cstdint>
+#include <optional>
 #include <vector>
 
 #include "afford/config.hpp"
@@ -38,11 +39,18 @@ struct EyeParams {
   struct World {
     int size_px = 0;
     Positions positions = Positions::Continuous;
+    WorldKind kind = WorldKind::Grid;
+    int height_px = 0;
   } world;
+  // The table world's actions' effects as the eye sees them (scene units; docs/model.md#a-physical-table):
+  // push and carry, the object within place_radius of the place; roll, moved at least roll_distance; topple,
+  // the object's silhouette grown by topple_area.
+  struct TableEffects {
+    double place_radius = 0, roll_distance = 0, topple_area = 0;
+  } table;
   std::int64_t seed = 0;
   EyeParams() = default;
-  EyeParams(const RunConfig& c)  // NOLINT: the sections a run's configuration gives
-      : eye(c.eye), world{c.world.size_px, c.world.positions}, seed(c.seed) {}
+  EyeParams(const RunConfig& c);  // NOLINT: the sections a run's configuration gives
 };
 
 class Eye {
@@ -72,7 +80,9 @@ class Eye {
   // Affordance): looks at the changed object in `after` and compares it with
   // the focus before the action. The eye then looks at `after`.
   // `objects` as for setScene.
-  Effect scanEffect(std::int64_t step, cv::Mat after, int action, std::vector<cv::Point2d> objects = {});
+  // `target`: the place the action was given (scene units), for the table world's push and carry.
+  Effect scanEffect(std::int64_t step, cv::Mat after, int action, std::vector<cv::Point2d> objects = {},
+                    std::optional<cv::Point2d> target = std::nullopt);
   // The object blob label under a pixel of the scene (0 = background).
   int labelAt(Pixel p) const { return labelAt(outer_, p); }
   // A snapshot's part (afford/snapshot.hpp): the scene, its listed objects and the focus on it (the goal is
@@ -126,6 +136,10 @@ class Eye {
   // in the blob; of several, the nearest to the blob's centroid).
   void matchObjects(Retina& r) const;
   static int labelAt(const Retina& r, Pixel p);
+  // The pixels of the blob under the gaze (0: none).
+  static int areaAtGaze(const Retina& r);
+  // The table world's rule: whether the action's goal is seen reached.
+  bool tableEffect(const Effect& e, int action, int area_before, int area_after, std::optional<cv::Point2d> target) const;
   static Pixel blobCentre(const Retina& r, int label);
   Focus focusAt(const Retina& r, Pixel p) const;
   // The focus on a place (scene units). Continuous world: the window's corner

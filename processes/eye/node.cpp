@@ -231,7 +231,10 @@ void EyeNode::see(const scene_t& s) {
   std::optional<Effect> effect;
   try {  // a list of objects that does not fit the image (eye.fovea = true_centre) is refused, the eye unchanged
     if (is_action)
-      effect = eye_->scanEffect(s.step - 1, image, s.action, listedObjects(s));
+      effect = eye_->scanEffect(s.step - 1, image, s.action, listedObjects(s),
+                                s.action_target_x >= 0 && s.action_target_y >= 0
+                                    ? std::optional<cv::Point2d>(cv::Point2d(s.action_target_x, s.action_target_y))
+                                    : std::nullopt);
     else
       eye_->setScene(image, listedObjects(s));
   } catch (const std::invalid_argument& e) {

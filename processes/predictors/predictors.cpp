@@ -27,12 +27,13 @@ Predictors::Predictors(const PredictorsParams& params)
     : config_(params.component.predictors),
       focus_side_(params.component.focus_side),
       seed_(params.component.seed),
+      world_(params.world),
       input_size_(focus_side_ * focus_side_ * 3) {
   affordance_ = makeAffordance(params.component);
   const int dim = input_size_ + 1;
   for (int a = 0; a < kNumActions; ++a) {
     what_.emplace_back(input_size_, dim, true);
-    where_.emplace_back(2, a == kMove ? 5 : 3, false);
+    where_.emplace_back(2, takesPlace(world_, a) ? 5 : 3, false);
   }
   if (params.keeps_memory) memory_ = std::make_unique<Memory>(config_.memory, focus_side_);
 }
@@ -63,7 +64,7 @@ Prediction Predictors::predict(const std::vector<std::uint8_t>& focus_image) con
 }
 
 SparseInput Predictors::whereInput(int action, double x, double y, double tx, double ty) const {
-  return action == kMove ? denseInput({tx, ty, x, y}) : denseInput({x, y});
+  return takesPlace(world_, action) ? denseInput({tx, ty, x, y}) : denseInput({x, y});
 }
 
 TrainingReport Predictors::train(const Experience& e, std::int64_t step, int look) {

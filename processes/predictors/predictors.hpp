@@ -47,12 +47,14 @@ struct TrainingReport {
 
 // What the predictors are given of the run's configuration: their affordance component's (their section,
 // the focus image's side, the run's system and seed), and whether they keep a memory (RunConfig::keepsMemory,
-// which the motivation's section decides too).
+// which the motivation's section decides too), and the world (which actions are given a place).
 struct PredictorsParams {
   AffordanceParams component;
   bool keeps_memory = false;
+  WorldKind world = WorldKind::Grid;
   PredictorsParams() = default;
-  PredictorsParams(const RunConfig& c) : component(c), keeps_memory(c.keepsMemory()) {}  // NOLINT: its sections
+  PredictorsParams(const RunConfig& c)  // NOLINT: its sections
+      : component(c), keeps_memory(c.keepsMemory()), world(c.world.kind) {}
 };
 
 class Predictors {
@@ -141,6 +143,7 @@ class Predictors {
   PredictorsConfig config_;
   int focus_side_;
   std::int64_t seed_;
+  WorldKind world_ = WorldKind::Grid;
   int input_size_;
   std::unique_ptr<AffordanceComponent> affordance_;
   std::vector<Layer> what_, where_;

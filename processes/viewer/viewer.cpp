@@ -56,15 +56,28 @@ struct ViewerCanvas {
 namespace {
 
 // An RGB image enlarged (nearest neighbour) into a BGR panel of `out` at `where`; or, grey, `empty`.
+// The part of a panel an image fills with its own proportions (a scene of the table world is 4:3), centred.
+cv::Rect fitted(const cv::Mat& rgb, const cv::Rect& where) {
+  if (rgb.empty() || rgb.cols == rgb.rows) return where;
+  if (rgb.cols > rgb.rows) {
+    const int h = where.width * rgb.rows / rgb.cols;
+    return {where.x, where.y + (where.height - h) / 2, where.width, h};
+  }
+  const int w = where.height * rgb.cols / rgb.rows;
+  return {where.x + (where.width - w) / 2, where.y, w, where.height};
+}
+
 void panel(ViewerCanvas& c, const cv::Mat& rgb, const cv::Rect& where, const std::string& empty) {
   if (rgb.empty()) {
     c.out(where).setTo(cv::Scalar(70, 70, 70));
     c.label(empty, cv::Point(where.x + 10, where.y + where.height / 2), where.width - 20);
     return;
   }
+  const cv::Rect shown = fitted(rgb, where);
+  if (shown != where) c.out(where).setTo(cv::Scalar(70, 70, 70));
   cv::Mat bgr;
   cv::cvtColor(rgb, bgr, cv::COLOR_RGB2BGR);
-  cv::resize(bgr, c.out(where), where.size(), 0, 0, cv::INTER_NEAREST);
+  cv::resize(bgr, c.out(shown), shown.size(), 0, 0, cv::INTER_NEAREST);
 }
 
 void box(cv::Mat m, double x, double y, double side_units, const cv::Scalar& colour) {
@@ -111,11 +124,13 @@ void Viewer::onPrediction(std::int64_t step, const std::array<double, 4>& afford
   step_ = std::max(step_, step);
 }
 
+void Viewer::onConfig(const run_config_t&, const RunConfig& config) { world_ = config.world.kind; }
+
 void Viewer::onDecision(std::int64_t step, bool acted, int action, double motivation, double threshold) {
   motivation_.push_back(motivation);
   threshold_.push_back(threshold);
   while (motivation_.size() > trace_length_) motivation_.pop_front(), threshold_.pop_front();
-  last_decision_ = acted && action >= 0 && action < kNumActions ? "act: " + std::string(kActionNames[action]) : "pass";
+  last_decision_ = acted && validAction(action) ? "act: " + std::string(actionName(world_, action)) : "pass";
   step_ = std::max(step_, step);
 }
 
@@ -159,13 +174,14 @@ void Viewer::drawImages(ViewerCanvas& c) const {
   const double focus_units = static_cast<double>(side_) / std::max(1, scene_.empty() ? 150 : scene_.cols);
   const cv::Rect scene(10, kTop, kPanel, kPanel), goal(20 + kPanel, kTop, kPanel, kPanel);
   panel(c, scene_, scene, "no scene yet");
-  box(c.out(scene), gaze_x_, gaze_y_, focus_units, kGaze);
-  if (own_goal_x_ >= 0) box(c.out(scene), own_goal_x_, own_goal_y_, focus_units, kInner);
+  // Places are scene units (a column or row over the image's width): boxed on the image as drawn.
+  box(c.out(fitted(scene_, scene)), gaze_x_, gaze_y_, focus_units, kGaze);
+  if (own_goal_x_ >= 0) box(c.out(fitted(scene_, scene)), own_goal_x_, own_goal_y_, focus_units, kInner);
   c.label(own_goal_x_ >= 0 ? "scene (yellow: gaze, magenta: goal)" : "scene (yellow: gaze)",
           cv::Point(scene.x, scene.br().y + 18), kPanel);
   const bool extrinsic = phase_.rfind("extrinsic", 0) == 0, goals = phase_.rfind("goals", 0) == 0;
   panel(c, goal_, goal, extrinsic ? "no goal yet" : goals ? "its own goals: on the scene" : "no goal (intrinsic phase)");
-  box(c.out(goal), goal_x_, goal_y_, focus_units, kInner);
+  box(c.out(fitted(goal_, goal)), goal_x_, goal_y_, focus_units, kInner);
   c.label("goal (magenta: inner eye)", cv::Point(goal.x, goal.br().y + 18), kPanel);
   const cv::Rect focus(10, kTop + kPanel + 30, kSmall, kSmall), sub_goal(20 + kSmall, focus.y, kSmall, kSmall);
   panel(c, focus_, focus, "no focus");
@@ -181,13 +197,15 @@ void Viewer::drawBars(ViewerCanvas& c, int x) const {
   c.label("affordance of the focused object", cv::Point(x, kTop + bh + 18), kBars);
   const cv::Scalar colours[4] = {cv::Scalar(200, 200, 200), cv::Scalar(0, 200, 0), cv::Scalar(0, 0, 220),
                                  cv::Scalar(220, 0, 0)};
-  const char* names[4] = {"move", "green", "red", "blue"};
+  // The grid's colour actions by their colours' short names; the table's by their own.
+  const std::array<std::string_view, 4> names =
+      world_ == WorldKind::Table ? kTableActionNames : std::array<std::string_view, 4>{"move", "green", "red", "blue"};
   for (int a = 0; a < 4; ++a) {
     const int x0 = x + 15 + a * 72, top = kTop + 10, height = bh - 40;
     const int bar = have_affordance_ ? static_cast<int>(std::clamp(affordance_[a], 0.0, 1.0) * height) : 0;
     cv::rectangle(c.out, cv::Rect(x0, top + height - bar, 50, bar), colours[a], cv::FILLED);
     cv::line(c.out, cv::Point(x0 - 4, top + height / 2), cv::Point(x0 + 54, top + height / 2), cv::Scalar(120, 120, 120));
-    c.label(names[a], cv::Point(x0, top + height + 18), 66, 0.45);
+    c.label(std::string(names[static_cast<std::size_t>(a)]), cv::Point(x0, top + height + 18), 66, 0.45);
   }
 }
 

@@ -45,6 +45,8 @@ class Viewer : public RunView {
   void onFocus(std::int64_t step, const std::vector<std::uint8_t>& image, int side, double x, double y, bool goal) override;
   void onPrediction(std::int64_t step, const std::array<double, 4>& affordance) override;
   void onDecision(std::int64_t step, bool acted, int action, double motivation, double threshold) override;
+  // The run's world names its actions (the grid's move and colours, the table's push, carry, topple, roll).
+  void onConfig(const run_config_t& m, const RunConfig& config) override;
   // Goals phase: a goal the agent set itself (`module`: its name; image empty for an exploration), and its end.
   void onGoal(std::int64_t step, int id, const std::string& module, const std::vector<std::uint8_t>& image, int side,
               double x, double y) override;
@@ -69,6 +71,7 @@ class Viewer : public RunView {
   std::array<double, 4> affordance_{};
   bool have_affordance_ = false;
   std::string last_decision_;
+  WorldKind world_ = WorldKind::Grid;
   std::size_t trace_length_;
   std::deque<double> motivation_, threshold_;
   // Goals phase.

@@ -12,7 +12,9 @@
 #include <set>
 #include <thread>
 
+#include "afford/effect_t.hpp"
 #include "afford/protocol.hpp"
+#include "afford/scene_t.hpp"
 #include "experiment/design/tables.hpp"
 #include "tests/support.hpp"
 #include "experiment/design/experiment_file.hpp"
@@ -118,39 +120,95 @@ TEST(Processes, UdpmAndMemqRunsGiveByteIdenticalLogsAndWeights) {
   }
 }
 
+// `afford WHAT` (an experiment of one run) over a transport into a folder of its own and the log root `logs`
+// (its run named it-<experiment>-<system>-s<seed>): its summary.
+json runInto(const std::string& what, const std::string& name, const std::string& transport, int port,
+             const std::string& logs) {
+  const std::string dir = test::tempDir(name);
+  const auto r = test::runCommand(test::afford(what + " --quiet --run-prefix it --no-reuse-agents --transport " +
+                                               transport + " --out " + dir + " --log-root " + logs + " --base-port " +
+                                               std::to_string(port)));
+  EXPECT_EQ(r.exit_code, 0) << r.output;
+  return readJson(fs::path(dir) / "summary.json");
+}
+
+// `what` over udpm, then over memq (its run named `run` in the log root): both summaries, both logs' messages by
+// channel, and the udpm run's log folder.
+struct TwoRuns {
+  json udpm, memq;
+  std::map<std::string, std::vector<std::vector<std::uint8_t>>> udpm_channels, memq_channels;
+  std::string udpm_log;
+};
+TwoRuns overBoth(const std::string& what, const std::string& name, const std::string& run, int port) {
+  const std::string logs = test::tempDir(name + "-logs");
+  TwoRuns t;
+  t.udpm = runInto(what, name + "-udpm", "udpm", port, logs);
+  t.udpm_log = logs + "/udpm";
+  fs::rename(logs + "/" + run, t.udpm_log);
+  t.memq = runInto(what, name + "-memq", "memq", port + 10, logs);
+  t.udpm_channels = byChannel(test::readLog(t.udpm_log + "/log.00.lcm"));
+  t.memq_channels = byChannel(test::readLog(logs + "/" + run + "/log.00.lcm"));
+  EXPECT_EQ(t.udpm_channels.size(), t.memq_channels.size());
+  for (const auto& [channel, messages] : t.udpm_channels) {
+    EXPECT_TRUE(t.memq_channels.count(channel)) << channel;
+    if (t.memq_channels.count(channel)) EXPECT_EQ(messages, t.memq_channels.at(channel)) << channel;
+  }
+  return t;
+}
+
 // The goals phase (issue 41): a GOALS run over udpm and over memq is one run, channel by channel, and
 // replayed from its log into the planner, the goal chooser and the predictors it is the same again.
 TEST(Processes, AGoalsRunIsOneRunOverUdpmAndMemqAndReplayedFromItsLog) {
-  const std::string logs = test::tempDir("goals-logs");
-  const auto run = [&](const std::string& name, const std::string& transport, int port) {
-    const std::string dir = test::tempDir(name);
-    const auto r = test::runCommand(test::afford("experiment base --system GOALS --reps 1 --steps 300 --seed 11 --quiet"
-                                                 " --run-prefix it --no-reuse-agents --transport " + transport +
-                                                 " --out " + dir + " --log-root " + logs + " --base-port " +
-                                                 std::to_string(port)));
-    EXPECT_EQ(r.exit_code, 0) << r.output;
-    return readJson(fs::path(dir) / "summary.json");
-  };
-  const json sa = run("goals-udpm", "udpm", 7850);
-  fs::rename(logs + "/it-base-GOALS-s11", logs + "/udpm");
-  const json sb = run("goals-memq", "memq", 7860);
+  const TwoRuns t = overBoth("experiment base --system GOALS --reps 1 --steps 300 --seed 11", "goals", "it-base-GOALS-s11",
+                             7850);
+  const json &sa = t.udpm, &sb = t.memq;
+  const auto& ca = t.udpm_channels;
   const json& ra = sa["systems"]["GOALS"]["runs"][0];
   EXPECT_EQ(ra["weights_checksum"], sb["systems"]["GOALS"]["runs"][0]["weights_checksum"]);
   EXPECT_EQ(sa["systems"]["GOALS"]["goals"], sb["systems"]["GOALS"]["goals"]);
-  const auto ca = byChannel(test::readLog(logs + "/udpm/log.00.lcm"));
-  const auto cb = byChannel(test::readLog(logs + "/it-base-GOALS-s11/log.00.lcm"));
   ASSERT_TRUE(ca.count(ch::goal.name) && ca.count(ch::goalResult.name));
-  ASSERT_EQ(ca.size(), cb.size());
-  for (const auto& [channel, messages] : ca) {
-    ASSERT_TRUE(cb.count(channel)) << channel;
-    ASSERT_EQ(messages, cb.at(channel)) << channel;
-  }
-  const auto replayed = test::runAfford("replay " + logs + "/udpm");
+  const auto replayed = test::runAfford("replay " + t.udpm_log);
   EXPECT_EQ(replayed.exit_code, 0) << replayed.output;
   EXPECT_NE(replayed.output.find("weights_checksum: " + ra["weights_checksum"].get<std::string>()), std::string::npos)
       << replayed.output;
   const std::string goals = std::to_string(ca.at(ch::goal.name).size());
   EXPECT_NE(replayed.output.find("goals: " + goals + " replayed, " + goals + " recorded, 0 differing"), std::string::npos)
+      << replayed.output;
+  EXPECT_NE(replayed.output.find("replay equals the record"), std::string::npos) << replayed.output;
+}
+
+// The physical table (issue 58): an IMP run in the table world over udpm and over memq is one run, channel by
+// channel, its weights the same, and replayed from its log into the eye, the predictors and the motivation it is
+// the same again. The truth both are measured against is estimated once (4 trials a cell) in the log root.
+TEST(Processes, ATableRunIsOneRunOverUdpmAndMemqAndReplayedFromItsLog) {
+  const TwoRuns t = overBoth("experiment table --system IMP --reps 1 --steps 160 --seed 4 --set table.truth.trials=4",
+                             "table", "it-table-IMP-s4", 7870);
+  const json &sa = t.udpm, &sb = t.memq;
+  const auto& ca = t.udpm_channels;
+  const json& ra = sa["systems"]["IMP"]["runs"][0];
+  EXPECT_EQ(ra["weights_checksum"], sb["systems"]["IMP"]["runs"][0]["weights_checksum"]);
+  EXPECT_EQ(sa["actions"], json({"push", "carry", "topple", "roll"}));
+  // Measured against the table's truth, which physics decided: not a table of zeros.
+  double truth = 0;
+  for (const auto& row : sa["systems"]["IMP"]["target"])
+    for (double v : row) truth += v;
+  EXPECT_GT(truth, 1.0) << sa["systems"]["IMP"]["target"];
+  // The hand acted on objects, some actions had their effect, and the scene is the camera's 320 x 240.
+  ASSERT_TRUE(ca.count(ch::scene.name));
+  scene_t first;
+  first.decode(ca.at(ch::scene.name).front().data(), 0, static_cast<int>(ca.at(ch::scene.name).front().size()));
+  EXPECT_EQ(first.width, 320);
+  EXPECT_EQ(first.height, 240);
+  int seen = 0;
+  for (const auto& m : ca.at(ch::effect.name)) {
+    effect_t e;
+    e.decode(m.data(), 0, static_cast<int>(m.size()));
+    seen += e.affordance ? 1 : 0;
+  }
+  EXPECT_GT(seen, 0);
+  const auto replayed = test::runAfford("replay " + t.udpm_log);
+  EXPECT_EQ(replayed.exit_code, 0) << replayed.output;
+  EXPECT_NE(replayed.output.find("weights_checksum: " + ra["weights_checksum"].get<std::string>()), std::string::npos)
       << replayed.output;
   EXPECT_NE(replayed.output.find("replay equals the record"), std::string::npos) << replayed.output;
 }

@@ -13,6 +13,8 @@
 # AFFORD_RESTART_SYSTEM=GOALS runs the goals agent instead of IMP: every process,
 # the planner too, is killed during its intrinsic run, in the middle of a goal
 # (the step is random; a goal lasts up to goals.budget steps).
+# AFFORD_RESTART_EXPERIMENT=table runs the physical table (world.kind: table) instead of the paper's world, IMP, no
+# extrinsic test: the environment spends most of a step in a motor primitive's physics, so it is killed mid-primitive.
 # AFFORD_RESTART_PREDICTORS="python3 -m afford.process predictors FILE:CLASS" with
 # AFFORD_RESTART_KIND=KIND: the predictors are that affordance predictor written in
 # Python (intrinsic run only); the uninterrupted run starts the same command over
@@ -43,6 +45,9 @@ snapshot=500
 # the goals agent about 200.
 cycle=1500
 [[ $system == GOALS ]] && cycle=300
+world=${AFFORD_RESTART_EXPERIMENT:-base}
+# The table world steps about 40 times a second: a short run, snapshots every 100 steps.
+[[ $world == table ]] && { steps=500; snapshot=100; cycle=150; }
 ((${#victims[@]} > 1)) && steps=$((steps + cycle * ${#victims[@]}))
 victim=${victims[0]}
 if ((${#victims[@]} > 1)); then
@@ -64,9 +69,11 @@ for p in "${processes[@]}"; do start "$p"; done
   --seconds 30 >/dev/null || { echo "the processes did not all come up"; exit 1; }
 
 # A snapshot every $snapshot steps: a kill before the first restarts from the run's start, a later one from a snapshot.
-experiment=(experiment base --system "$system" --reps 1 --steps "$steps" --seed "$seed" --quiet --scenarios scenario1
-  --scenarios scenario2 --set protocol.recovery.snapshot_steps="$snapshot")
-extrinsic=(--extrinsic-reps 3)
+experiment=(experiment "$world" --system "$system" --reps 1 --steps "$steps" --seed "$seed" --quiet
+  --set protocol.recovery.snapshot_steps="$snapshot")
+extrinsic=(--extrinsic-reps 3 --scenarios scenario1 --scenarios scenario2)
+# The table's truth from 4 trials a cell (its runs are measured against it; estimated in each log root).
+[[ $world == table ]] && { experiment+=(--set table.truth.trials=4); extrinsic=(); }
 [[ -n $own ]] && { experiment+=(--set "predictors.affordance.kind=$AFFORD_RESTART_KIND"); extrinsic=(--extrinsic-reps 0); }
 # The planner's tests run their whole budget (no scene is close enough to end
 # one early), so there is time to kill it in the middle of one.
@@ -81,7 +88,7 @@ runner=$!
 # into the second test. The others: a random step of the intrinsic run, read
 # from the STATUS heartbeats (a time would land after the run on a fast
 # machine, or between runs on a slow one).
-run_id="restart-base-$system-s$seed"
+run_id="restart-$world-$system-s$seed"
 # step_of PROCESS: the run's step (the furthest process's), printed once PROCESS is in the run ("" before).
 step_of() {
   "$build/bin/afford" status --lcm-url "$url" --seconds 0.55 |
@@ -159,7 +166,7 @@ sum=$(grep -o '"weights_checksum": "[0-9a-f]*"' "$out/attached/summary.json" | h
 echo "weights_checksum $sum, equal to the uninterrupted run's; summary and CSV files equal"
 
 # The intrinsic run's log, all its segments, replays to the same weights.
-log=$(ls -d "$out"/logs/restart-base-"$system"-s"$seed")
+log=$(ls -d "$out"/logs/restart-"$world"-"$system"-s"$seed")
 if [[ -n $own ]]; then  # replayed in Python, with the class (afford replay cannot rebuild it)
   target=${own##* }
   /usr/bin/python3 -c "import sys, afford; from afford.process import load_class

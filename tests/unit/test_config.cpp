@@ -48,9 +48,13 @@ TEST(Config, EveryShippedExperimentParsesForEverySystem) {
   for (const auto& name : listExperiments(kConfigDir))
     for (System s : {System::FIX, System::IGN, System::IMP}) {
       const RunConfig c = test::shippedConfig(name, s);
-      if (c.world.kind == WorldKind::Table) {  // a physical table's objects are its own
-        EXPECT_TRUE(c.world.objects.empty()) << name;
+      if (c.world.kind == WorldKind::Table) {  // a physical table's objects are its own, named in the world's
         EXPECT_GE(c.table.spec.objects.size(), 5u) << name;
+        ASSERT_EQ(c.world.objects.size(), c.table.spec.objects.size()) << name;
+        for (std::size_t i = 0; i < c.world.objects.size(); ++i)
+          EXPECT_EQ(c.world.objects[i].name, c.table.spec.objects[i].name) << name;
+        EXPECT_EQ(c.world.size_px, c.table.spec.camera.width) << name;
+        EXPECT_EQ(c.world.rows(), c.table.spec.camera.height) << name;
         continue;
       }
       const bool large = name == "large-world" || name == "world-size";

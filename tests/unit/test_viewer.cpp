@@ -46,6 +46,39 @@ TEST(Viewer, DrawsWhatItIsFed) {
   EXPECT_GT(cv::countNonZero(diff.reshape(1)), 1000);
 }
 
+// A scene of the table world is 320 x 240: drawn in its proportions, the gaze boxed where the object is (places are
+// a column or row over the width), and the actions named as that world names them.
+TEST(Viewer, AWideSceneKeepsItsProportionsAndTheGazeBoxIsOnTheObject) {
+  Viewer v(50);
+  cv::Mat scene(240, 320, CV_8UC3, cv::Scalar(0, 0, 0));
+  const cv::Point object(80, 200);  // near the bottom: a square panel's rows would put the box above it
+  cv::rectangle(scene, cv::Rect(object.x - 6, object.y - 6, 13, 13), cv::Scalar(0, 255, 0), cv::FILLED);
+  v.onRun("r1", "intrinsic table IMP");
+  RunConfig c = test::shippedConfig("table");
+  v.onConfig(run_config_t{}, c);
+  v.onScene(1, scene, false);
+  v.onFocus(1, cropFocus(scene, {object.x, object.y}, 21), 21, object.x / 320.0, object.y / 320.0, false);
+  std::vector<DrawnText> texts;
+  const cv::Mat out = v.render(&texts);
+  // The green object drawn, and the gaze's yellow (BGR 0, 255, 255) box around it: yellow pixels above, below,
+  // left and right of the object's drawn centre, within the box's half-side.
+  const cv::Mat panel = out(cv::Rect(0, 0, 315, 370));  // the scene's panel, above the focus's
+  cv::Mat green, yellow;
+  cv::inRange(panel, cv::Scalar(0, 200, 0), cv::Scalar(60, 255, 60), green);
+  cv::inRange(panel, cv::Scalar(0, 200, 200), cv::Scalar(60, 255, 255), yellow);
+  ASSERT_GT(cv::countNonZero(green), 20);
+  const cv::Rect g = cv::boundingRect(green);
+  const cv::Point at(g.x + g.width / 2, g.y + g.height / 2);
+  EXPECT_NEAR(static_cast<double>(g.width) / g.height, 1.0, 0.2) << "a square object stays square";
+  const cv::Rect y = cv::boundingRect(yellow);
+  EXPECT_TRUE(y.contains(at)) << "the box " << y << " is around the object at " << at;
+  EXPECT_LT(std::abs(y.x + y.width / 2 - at.x), 4);
+  EXPECT_LT(std::abs(y.y + y.height / 2 - at.y), 4);
+  bool named = false;
+  for (const DrawnText& t : texts) named = named || t.text == "topple";
+  EXPECT_TRUE(named) << "the table world's actions name the bars";
+}
+
 // The goals phase: the agent's own goal boxed on the scene, its image as the sub-goal, its goals counted.
 TEST(Viewer, ShowsTheAgentsOwnGoalAndTheGoalsReached) {
   const RunConfig c = test::shippedConfig();

@@ -1,25 +1,22 @@
 // afford world truth EXPERIMENT: the physical table's affordances, each (object, action) estimated by trials
 // of the hand's primitive on the object alone (processes/environment/table/truth.hpp), with its 95% interval;
 // kept per world configuration in --out, so that a second call reads what the first estimated.
-#include <mujoco/mujoco.h>
 #include <nlohmann/json.hpp>
 
 #include <cstdint>
 #include <cstdio>
 #include <filesystem>
-#include <fstream>
 #include <memory>
 #include <stdexcept>
 
-#include "afford/checksum.hpp"
 #include "afford/config.hpp"
 #include "afford/process_main.hpp"
-#include "afford/version.hpp"
 #include "afford/yaml_reader.hpp"
 #include "apps/afford/commands.hpp"
 #include "environment/table/truth.hpp"
-#include "experiment/execute/agents.hpp"
 #include "experiment/design/experiment_file.hpp"
+#include "experiment/design/truth_store.hpp"
+#include "experiment/run/group.hpp"
 
 namespace afford {
 
@@ -28,31 +25,14 @@ using nlohmann::json;
 
 namespace {
 
-// A stored table is read only up to this size (one of a hundred objects is about 60 kB).
-constexpr std::uintmax_t kMostTableBytes = 4u << 20;
-
 struct TruthArgs {
   std::string experiment;
   int trials = 0;
   std::int64_t seed = 1;
   std::vector<std::string> objects, settings;
-  std::string out = "out/truth";
+  std::string out = "logs/truth";
   bool fresh = false;
 };
-
-json tableJson(const table::TruthTable& t, const std::vector<int>& objects) {
-  json rows = json::array();
-  for (int i : objects) {
-    json row{{"object", t.objects[static_cast<std::size_t>(i)]}};
-    for (int a = 0; a < table::kTableActions; ++a) {
-      const table::TruthCell& c = t.cells[static_cast<std::size_t>(i)][static_cast<std::size_t>(a)];
-      row[table::tableActionName(a)] = {{"successes", c.successes}, {"trials", c.trials}, {"rate", c.rate()},
-                                        {"low", c.low()}, {"high", c.high()}};
-    }
-    rows.push_back(row);
-  }
-  return rows;
-}
 
 void printTable(const json& rows) {
   std::printf("%-12s", "object");
@@ -79,7 +59,6 @@ int runTruth(const TruthArgs& a, const FrontDoor& door) {
                       "affordances its file gives (world.objects); `afford world truth` estimates a physical "
                       "table's (world.kind: table, e.g. `afford world truth table`)");
   const table::TableWorldConfig& tw = cfg.table;
-  const int trials = a.trials > 0 ? a.trials : tw.truth_trials;
   std::vector<int> objects;
   for (const std::string& name : a.objects) {
     int found = -1;
@@ -101,56 +80,26 @@ int runTruth(const TruthArgs& a, const FrontDoor& door) {
   if (objects.empty())
     for (std::size_t i = 0; i < tw.spec.objects.size(); ++i) objects.push_back(static_cast<int>(i));
 
-  // The table is named by everything that decides it: the world's configuration, the seed, the trials, the
-  // objects asked for, this build's programs (their primitives) and MuJoCo's release.
-  Fnv1a h;
-  const std::string key_text = emitYaml(node["table"]) + "\nseed " + std::to_string(a.seed) + "\ntrials " +
-                               std::to_string(trials) + "\nobjects " + [&] {
-                                 std::string s;
-                                 for (int i : objects) s += std::to_string(i) + ",";
-                                 return s;
-                               }() + "\ncode " + codeFingerprint() + "\nmujoco " + std::to_string(mj_version());
-  h.add(key_text.data(), key_text.size());
-  const fs::path file = fs::path(a.out) / (a.experiment + "-" + h.hex() + ".json");
-  std::error_code size_error;
-  const auto size = fs::file_size(file, size_error);
-  if (!a.fresh && !size_error && size > kMostTableBytes)
-    door.log->warn("{}: {} bytes, more than a truth table holds ({}); estimating again", file.string(), size,
-                   kMostTableBytes);
-  if (!a.fresh && !size_error && size <= kMostTableBytes) {
-    std::ifstream in(file);
-    json stored;
-    try {
-      stored = json::parse(in);
-      printTable(stored.at("table"));
-      std::printf("read from %s (estimated before: --fresh estimates again)\n", file.string().c_str());
-      return 0;
-    } catch (const std::exception& e) {
-      door.log->warn("{}: not a truth table ({}); estimating again", file.string(), e.what());
-    }
-  }
   installStopHandlers();  // Ctrl-C: stop between cells, nothing half-written left
-  std::fprintf(stderr, "estimating %zu object(s) x %d actions, %d trials each (seed %lld)\n", objects.size(),
-               table::kTableActions, trials, static_cast<long long>(a.seed));
-  const table::TruthTable t =
-      table::estimateTruth(tw.spec, tw.primitives, tw.truth, a.seed, trials, objects, [&](int object, int action) {
+  bool told = false;
+  const StoredTruth t = storedTruth(
+      node, cfg, TruthRequest{a.experiment, a.seed, a.trials, objects, a.out, a.fresh, codeFingerprint()},
+      [&](const std::string& w) { door.log->warn("{}", w); },
+      [&](int object, int action) {
+        if (!told) {
+          std::fprintf(stderr, "estimating %zu object(s) x %d actions, %d trials each (seed %lld)\n", objects.size(),
+                       table::kTableActions, a.trials > 0 ? a.trials : tw.truth_trials, static_cast<long long>(a.seed));
+          told = true;
+        }
         std::fprintf(stderr, "  %s, %s\n", tw.spec.objects[static_cast<std::size_t>(object)].name.c_str(),
                      table::tableActionName(action));
         if (stopRequested()) throw std::runtime_error("interrupted: nothing written");
       });
-  const json rows = tableJson(t, objects);
-  printTable(rows);
-  const json out{{"experiment", a.experiment}, {"seed", a.seed}, {"trials", trials}, {"afford", affordVersion()},
-                 {"mujoco", mj_version()}, {"key", h.hex()}, {"table", rows}};
-  fs::create_directories(file.parent_path());
-  const fs::path tmp = file.string() + ".part";
-  {
-    std::ofstream f(tmp);
-    f << out.dump(2) << "\n";
-    if (!f) throw std::runtime_error("cannot write " + tmp.string());
-  }
-  fs::rename(tmp, file);
-  std::printf("wrote %s\n", file.string().c_str());
+  printTable(t.rows);
+  if (t.estimated)
+    std::printf("wrote %s\n", t.file.c_str());
+  else
+    std::printf("read from %s (estimated before: --fresh estimates again)\n", t.file.c_str());
   return 0;
 }
 

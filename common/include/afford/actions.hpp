@@ -15,4 +15,7 @@ constexpr std::array<int, kNumActions> kActionChannel = {-1, 1, 0, 2};
 
 inline bool validAction(int a) { return a >= 0 && a < kNumActions; }
 
+// The physical table's actions (world.kind: table; docs/model.md#a-physical-table), in the same four places.
+constexpr std::array<std::string_view, kNumActions> kTableActionNames = {"push", "carry", "topple", "roll"};
+
 }  // namespace afford

@@ -41,6 +41,13 @@ enum class ImpThresholdInput { Signal, ObservedChange };
 // Which world the environment simulates: the paper's (a 2D scene of flat shapes and an affordance table the
 // configuration gives) or a physical table (MuJoCo, a camera, a hand: affordances physics decides).
 enum class WorldKind { Grid, Table };
+// Whether an action is given a place (a move target): the grid's move; the table's push and carry.
+inline bool takesPlace(WorldKind k, int action) { return k == WorldKind::Table ? action == 0 || action == 1 : action == kMove; }
+// An action's name in a world (kActionNames, kTableActionNames).
+inline std::string_view actionName(WorldKind k, int action) {
+  return validAction(action) ? (k == WorldKind::Table ? kTableActionNames : kActionNames)[static_cast<std::size_t>(action)]
+                             : std::string_view("none");
+}
 
 enum class Positions {
   Continuous,  // real-valued centres and move targets, each shape rasterised from its centre (authors' code)
@@ -67,7 +74,10 @@ struct ObjectSpec {
 // are neutral placeholders, never used: parseRunConfig requires every key.
 struct WorldConfig {
   WorldKind kind = WorldKind::Grid;
-  int size_px = 0;                       // scene side in pixels
+  int size_px = 0;                       // scene width in pixels (side = 1 unit; table world: the camera's width)
+  int height_px = 0;                     // scene height in pixels (grid: size_px; table world: the camera's)
+  // Steps at which the scene is set up anew (table world: table.scene.reset_every; 0: never).
+  std::int64_t reset_every = 0;
   double object_size = 0;               // square side / reference size, scene units
   double table_min = 0, table_max = 0; // allowed object centres
   int max_target_draws = 0;             // intrinsic move: redraws for a free target
@@ -77,8 +87,13 @@ struct WorldConfig {
   bool late_overlap = true;
   std::vector<ObjectSpec> objects;         // in the order of the paper's tables
 
-  // Whether late objects enter the scene at `step` (those present from the start have appears_at 0).
+  // The scene's rows (a configuration built in code may leave height_px 0: a square scene).
+  int rows() const { return height_px > 0 ? height_px : size_px; }
+
+  // Whether the world changes the scene at `step`: late objects enter it (those present from the start have
+  // appears_at 0), or the table world sets it up anew.
   bool lateObjectsAt(std::int64_t step) const {
+    if (reset_every > 0) return step > 0 && step % reset_every == 0;
     return step > 0 && std::any_of(objects.begin(), objects.end(), [&](const ObjectSpec& o) { return o.appears_at == step; });
   }
 };

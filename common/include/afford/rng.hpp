@@ -26,6 +26,8 @@ enum class Purpose : std::uint64_t {
   GoalChoice = 13,        // motivation, goals phase: the module, the goal in it, an exploration (sub-key = goal id)
   PrimitiveNoise = 14,    // environment, the table world: a motor primitive's noise (sub-key = the action)
   TableTruth = 15,        // the table world's truth: a trial's pose and place (step = object x actions + action)
+  TableScene = 16,        // environment, the table world: the scene's set-up (the objects' places and turns)
+  TablePlace = 17,        // environment, the table world: the place of an intrinsic push or carry
 };
 
 constexpr std::uint64_t splitmix64(std::uint64_t x) {

@@ -5,6 +5,7 @@
 // radians. Frame: the table's top is the plane z = 0, its centre the origin; x across the table (its short
 // side), y along it, z up.
 #pragma once
+#include <cstdint>
 #include <array>
 #include <string>
 #include <vector>
@@ -26,6 +27,10 @@ struct ObjectSpec {
   double torsional_friction = 0;    // MuJoCo's second friction value (spin about the contact normal)
   double rolling_friction = 0;      // MuJoCo's third friction value (rolling)
   std::array<double, 3> rgb{};      // colour, each in [0, 1]
+  // The truth a run's learned affordances are measured against (push, carry, topple, roll), when the
+  // configuration gives it: `afford experiment` writes the estimate of `afford world truth` there.
+  std::array<double, 4> affordance{};
+  bool has_affordance = false;
 
   // The height of the object's centre above the table when it rests in its configured pose.
   double restingHeight() const;
@@ -99,11 +104,25 @@ struct TruthSpec {
   double place_min = 0, place_max = 0;        // push and carry: the place this far from the object, in the region
 };
 
+// A run's scene: the objects drawn at free places of the truth's region, in their configured poses, at the
+// start and again every reset_every steps (0: never), keyed by (seed, step).
+struct SceneSpec {
+  std::int64_t reset_every = 0;
+  double gap = 0;  // the least distance between two objects' footprints when the scene is set up (m)
+};
+
+// What the eye counts as each action's effect in this world (the goals' counterparts, seen in the image).
+struct PerceptionSpec {
+  double topple_area = 0;  // topple: the object's silhouette grows by this factor at least (a tall object lying)
+};
+
 // The whole `table` section.
 struct TableWorldConfig {
   TableSpec spec;
   PrimitiveSpec primitives;
   TruthSpec truth;
+  SceneSpec scene;
+  PerceptionSpec perception;
   int truth_trials = 0;  // trials of each (object, action) cell that `afford world truth` makes
 };
 

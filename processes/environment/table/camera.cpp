@@ -39,21 +39,13 @@ GlContext::GlContext() {
   EGLConfig config = nullptr;
   EGLint found = 0;
   if (!eglChooseConfig(display, attributes, &config, 1, &found) || found < 1) {
-    eglTerminate(display);
     throw std::runtime_error(eglFailure("a configuration of 8-bit RGBA with depth and stencil"));
   }
-  if (!eglBindAPI(EGL_OPENGL_API)) {
-    eglTerminate(display);
-    throw std::runtime_error(eglFailure("binding desktop OpenGL"));
-  }
+  if (!eglBindAPI(EGL_OPENGL_API)) throw std::runtime_error(eglFailure("binding desktop OpenGL"));
   EGLContext context = eglCreateContext(display, config, EGL_NO_CONTEXT, nullptr);
-  if (context == EGL_NO_CONTEXT) {
-    eglTerminate(display);
-    throw std::runtime_error(eglFailure("eglCreateContext"));
-  }
+  if (context == EGL_NO_CONTEXT) throw std::runtime_error(eglFailure("eglCreateContext"));
   if (!eglMakeCurrent(display, EGL_NO_SURFACE, EGL_NO_SURFACE, context)) {
     eglDestroyContext(display, context);
-    eglTerminate(display);
     throw std::runtime_error(eglFailure("making the context current without a surface"));
   }
   display_ = display;
@@ -61,9 +53,14 @@ GlContext::GlContext() {
 }
 
 GlContext::~GlContext() {
+  // The display is one for the whole process, other threads' contexts on it: it is never terminated.
   eglMakeCurrent(display_, EGL_NO_SURFACE, EGL_NO_SURFACE, EGL_NO_CONTEXT);
   eglDestroyContext(display_, context_);
-  eglTerminate(display_);
+}
+
+void GlContext::onThisThread() {
+  thread_local std::unique_ptr<GlContext> context;
+  if (!context) context = std::make_unique<GlContext>();
 }
 
 TableCamera::TableCamera(const TablePhysics& physics)
@@ -78,6 +75,7 @@ TableCamera::TableCamera(const TablePhysics& physics)
   mjv_defaultScene(scene_.get());
   mjv_defaultCamera(camera_.get());
   mjv_defaultOption(option_.get());
+  option_->geomgroup[kHandGroup] = 0;  // the hand is not in the agent's image: its blobs are the objects
   mjr_defaultContext(context_.get());
   mjv_makeScene(physics.model(), scene_.get(), 1000);
   mjr_makeContext(physics.model(), context_.get(), mjFONTSCALE_100);

@@ -19,6 +19,8 @@ class GlContext {
   ~GlContext();
   GlContext(const GlContext&) = delete;
   GlContext& operator=(const GlContext&) = delete;
+  // Makes one for the calling thread unless it has one (kept until the thread ends).
+  static void onThisThread();
 
  private:
   void* display_ = nullptr;

@@ -111,10 +111,12 @@ std::string tableMjcf(const TableSpec& t) {
   x << std::setprecision(17);
   x << "<mujoco model=\"afford-table\">\n"
     << "  <compiler angle=\"radian\" autolimits=\"true\"/>\n"
-    << "  <option timestep=\"" << t.timestep << "\" gravity=\"0 0 -9.81\" cone=\"elliptic\"/>\n"
+    << "  <option timestep=\"" << t.timestep << "\" gravity=\"0 0 -9.81\" cone=\"elliptic\" jacobian=\"sparse\"/>\n"
     << "  <visual>\n"
     << "    <global offwidth=\"" << t.camera.width << "\" offheight=\"" << t.camera.height << "\"/>\n"
     << "    <quality shadowsize=\"0\"/>\n"
+    // No light of the scene has a specular part, so a black top is drawn black (the eye's background).
+    << "    <headlight specular=\"0 0 0\"/>\n"
     << "  </visual>\n"
     << "  <worldbody>\n"
     << "    <light name=\"top\" pos=\"0 0 " << 2 * t.camera.above << "\" dir=\"0 0 -1\" directional=\"true\""
@@ -165,7 +167,7 @@ std::string tableMjcf(const TableSpec& t) {
     << "      <joint name=\"hand_yaw\" type=\"hinge\" axis=\"0 0 1\" range=\"-3.1415926535897931 3.1415926535897931\""
     << " damping=\"" << h.kp_yaw * h.time_constant << "\"/>\n"
     << "      <geom name=\"hand_palm\" type=\"box\" size=\"" << h.palm_half[0] << ' ' << h.palm_half[1] << ' '
-    << h.palm_half[2] << "\" mass=\"" << h.mass << "\" rgba=\"" << rgba(h.rgb) << "\"/>\n";
+    << h.palm_half[2] << "\" mass=\"" << h.mass << "\" group=\"" << kHandGroup << "\" rgba=\"" << rgba(h.rgb) << "\"/>\n";
   for (int side : {1, -1}) {
     const char* name = side > 0 ? "hand_finger_l" : "hand_finger_r";
     x << "      <body name=\"" << name << "\" pos=\"0 " << side * h.finger_travel << ' ' << finger_z << "\">\n"
@@ -173,7 +175,7 @@ std::string tableMjcf(const TableSpec& t) {
       << -(h.finger_travel - h.finger_half[1]) << " 0\" damping=\"" << h.kp_finger * h.time_constant << "\"/>\n"
       << "        <geom name=\"" << name << "\" type=\"box\" size=\"" << h.finger_half[0] << ' ' << h.finger_half[1]
       << ' ' << h.finger_half[2] << "\" mass=\"" << h.mass / 4 << "\" friction=\"" << h.friction
-      << " 0.005 0.0001\" condim=\"4\" rgba=\"" << rgba(h.rgb) << "\"/>\n"
+      << " 0.005 0.0001\" condim=\"4\" group=\"" << kHandGroup << "\" rgba=\"" << rgba(h.rgb) << "\"/>\n"
       << "      </body>\n";
   }
   x << "    </body>\n"

@@ -91,7 +91,7 @@ void TablePhysics::placeObject(int i, double x, double y, double yaw) {
   q[6] = std::sin(yaw / 2);
   mjtNum* v = data_->qvel + object_dof_[static_cast<std::size_t>(i)];
   for (int k = 0; k < 6; ++k) v[k] = 0;
-  mj_forward(model_, data_);
+  forward();
 }
 
 void TablePhysics::commandHand(const HandCommand& c) {
@@ -160,10 +160,20 @@ void TablePhysics::setState(const std::vector<double>& s) {
   std::copy(p, p + m->nv, data_->qvel), p += m->nv;
   std::copy(p, p + m->na, data_->act), p += m->na;
   std::copy(p, p + m->nu, data_->ctrl), p += m->nu;
-  // The positions of bodies and geoms, for a camera, are computed again; MuJoCo's forward pass also writes the
-  // solver's warm start, which is put back, so that the next step is the one the saved run took.
-  mj_forward(model_, data_);
   std::copy(p, p + m->nv, data_->qacc_warmstart);
+  forward();
+}
+
+void TablePhysics::forward() {
+  // MuJoCo's forward pass also writes the solver's warm start and normalises the free bodies' quaternions in
+  // place (a quaternion normalised twice can differ in its last bit from one normalised once): both are put
+  // back, so that the next step is the one it would have been without the pass, and a state saved after it and
+  // set again goes on bit for bit.
+  const std::vector<double> warm(data_->qacc_warmstart, data_->qacc_warmstart + model_->nv);
+  const std::vector<double> qpos(data_->qpos, data_->qpos + model_->nq);
+  mj_forward(model_, data_);
+  std::copy(warm.begin(), warm.end(), data_->qacc_warmstart);
+  std::copy(qpos.begin(), qpos.end(), data_->qpos);
 }
 
 }  // namespace afford::table

@@ -56,6 +56,9 @@ class TablePhysics {
 
   // The whole state: time, positions, velocities, actuator states, controls and the solver's warm start.
   std::vector<double> state() const;
+  // The bodies' and geoms' places computed for the positions as they are now (a step leaves them as they were
+  // before it), for a camera; the next step is the same as without it.
+  void forward();
   // Sets a state() of the same spec; throws std::invalid_argument naming the sizes when it is of another.
   void setState(const std::vector<double>& s);
 

@@ -42,9 +42,9 @@ double objectYaw(const Pose& p) {
   return std::atan2(2 * (q[0] * q[3] + q[1] * q[2]), 1 - 2 * (q[2] * q[2] + q[3] * q[3]));
 }
 
-bool toppled(const TablePhysics& physics, int object, double drop) {
+bool toppled(const TablePhysics& physics, int object, double drop, double from) {
   const ObjectSpec& o = physics.spec().objects.at(static_cast<std::size_t>(object));
-  return physics.objectPose(object).pos[2] < (1 - drop) * o.restingHeight();
+  return physics.objectPose(object).pos[2] < from - drop * o.restingHeight();
 }
 
 namespace {
@@ -240,18 +240,17 @@ PrimitiveResult runPrimitive(TablePhysics& physics, const PrimitiveSpec& spec, s
       break;
     }
   }
-  m.go({hand.park[0], hand.park[1], hand.park[2], 0, 1}, spec.travel_speed);
-  r.settled = m.settle();
+  r.settled = m.settle();  // the hand waits where it left, at the safe height (the camera does not draw it)
   r.physics_steps = m.steps();
   const Pose end = physics.objectPose(object);
   switch (action) {
     case kPush:
     case kCarry:
       r.succeeded = std::hypot(end.pos[0] - place->first, end.pos[1] - place->second) <= spec.success_radius &&
-                    !toppled(physics, object, spec.topple_drop);
+                    !toppled(physics, object, spec.topple_drop, start.pos[2]);
       break;
-    case kTopple:
-      r.succeeded = toppled(physics, object, spec.topple_drop);
+    case kTopple:  // from the height it had: an object lying already does not topple again
+      r.succeeded = toppled(physics, object, spec.topple_drop, start.pos[2]);
       break;
     case kRoll:
       r.succeeded = std::hypot(end.pos[0] - start.pos[0], end.pos[1] - start.pos[1]) >= spec.roll_distance;

@@ -10,7 +10,7 @@
 //   carry   (takes a place) the open fingers come down around the object, close, lift it, carry it over
 //           the place, lower it and open; goal: as push's.
 //   topple  the closed fingers sweep through the object high up, in a drawn direction; goal: the object's
-//           centre rests at least topple_drop of its resting height lower than it stood (it fell over).
+//           centre rests at least topple_drop of its resting height lower than before the action (it fell over).
 //   roll    the closed fingers tap the object low down, in a drawn direction, and stop short; goal: the
 //           object rests at least roll_distance from where it was (it rolled on after the tap).
 // Noise in each primitive's parameters (where the hand comes down, its height, its direction) is drawn by
@@ -45,8 +45,9 @@ struct PrimitiveResult {
 PrimitiveResult runPrimitive(TablePhysics& physics, const PrimitiveSpec& spec, std::int64_t seed, std::int64_t step,
                              int action, int object, std::optional<std::pair<double, double>> place);
 
-// The object's resting height and its centre's height now: toppled when it is lower by topple_drop.
-bool toppled(const TablePhysics& physics, int object, double drop);
+// Whether the object's centre is now lower than `from` (its height before the action) by `drop` of its resting
+// height in its configured pose: it fell over.
+bool toppled(const TablePhysics& physics, int object, double drop, double from);
 // The yaw of an object about the vertical (for an object in its configured pose).
 double objectYaw(const Pose& p);
 

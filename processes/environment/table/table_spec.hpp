@@ -19,4 +19,7 @@ std::string tableMjcf(const TableSpec& spec);
 
 const char* shapeName(Shape s);
 
+// The hand's geoms are of this group, which the agent's camera does not draw (camera.hpp).
+constexpr int kHandGroup = 1;
+
 }  // namespace afford::table

@@ -1,0 +1,111 @@
+#include "experiment/design/truth_store.hpp"
+
+#include <mujoco/mujoco.h>
+
+#include <filesystem>
+#include <fstream>
+#include <stdexcept>
+
+#include "afford/checksum.hpp"
+#include "afford/version.hpp"
+#include "afford/yaml_reader.hpp"
+#include "environment/table/truth.hpp"
+
+namespace afford {
+
+namespace fs = std::filesystem;
+using nlohmann::json;
+
+namespace {
+
+// A stored table is read only up to this size (one of a hundred objects is about 60 kB).
+constexpr std::uintmax_t kMostTableBytes = 4u << 20;
+
+json tableJson(const table::TruthTable& t, const std::vector<int>& objects) {
+  json rows = json::array();
+  for (int i : objects) {
+    json row{{"object", t.objects[static_cast<std::size_t>(i)]}};
+    for (int a = 0; a < table::kTableActions; ++a) {
+      const table::TruthCell& c = t.cells[static_cast<std::size_t>(i)][static_cast<std::size_t>(a)];
+      row[table::tableActionName(a)] = {{"successes", c.successes}, {"trials", c.trials}, {"rate", c.rate()},
+                                        {"low", c.low()}, {"high", c.high()}};
+    }
+    rows.push_back(row);
+  }
+  return rows;
+}
+
+}  // namespace
+
+StoredTruth storedTruth(const YAML::Node& node, const RunConfig& cfg, const TruthRequest& a,
+                        const std::function<void(const std::string&)>& log_warning,
+                        const std::function<void(int, int)>& progress) {
+  const table::TableWorldConfig& tw = cfg.table;
+  const int trials = a.trials > 0 ? a.trials : tw.truth_trials;
+  std::vector<int> objects = a.objects;
+  if (objects.empty())
+    for (std::size_t i = 0; i < tw.spec.objects.size(); ++i) objects.push_back(static_cast<int>(i));
+  // The table's section without the truth a run is given (table.objects[i].affordance): the same world.
+  YAML::Node table = YAML::Clone(node["table"]);
+  if (table["objects"].IsSequence())
+    for (YAML::Node o : table["objects"]) o.remove("affordance");
+  Fnv1a h;
+  std::string key_text = emitYaml(table) + "\nseed " + std::to_string(a.seed) + "\ntrials " + std::to_string(trials) +
+                         "\nobjects ";
+  for (int i : objects) key_text += std::to_string(i) + ",";
+  key_text += "\ncode " + a.code + "\nmujoco " + std::to_string(mj_version());
+  h.add(key_text.data(), key_text.size());
+  StoredTruth out;
+  const fs::path file = fs::path(a.out) / (a.experiment + "-" + h.hex() + ".json");
+  out.file = file.string();
+  std::error_code size_error;
+  const auto size = fs::file_size(file, size_error);
+  if (!a.fresh && !size_error && size > kMostTableBytes)
+    log_warning(file.string() + ": " + std::to_string(size) + " bytes, more than a truth table holds (" +
+                std::to_string(kMostTableBytes) + "); estimating again");
+  if (!a.fresh && !size_error && size <= kMostTableBytes) {
+    std::ifstream in(file);
+    try {
+      const json stored = json::parse(in);
+      out.rows = stored.at("table");
+      if (!out.rows.is_array() || out.rows.size() != objects.size()) throw std::runtime_error("not one row an object");
+      return out;
+    } catch (const std::exception& e) {
+      log_warning(file.string() + ": not a truth table (" + e.what() + "); estimating again");
+    }
+  }
+  const table::TruthTable t = table::estimateTruth(tw.spec, tw.primitives, tw.truth, a.seed, trials, objects, progress);
+  out.rows = tableJson(t, objects);
+  out.estimated = true;
+  const json stored{{"experiment", a.experiment}, {"seed", a.seed}, {"trials", trials}, {"afford", affordVersion()},
+                    {"mujoco", mj_version()}, {"key", h.hex()}, {"table", out.rows}};
+  fs::create_directories(file.parent_path());
+  const fs::path tmp = file.string() + ".part";
+  {
+    std::ofstream f(tmp);
+    f << stored.dump(2) << "\n";
+    if (!f) throw std::runtime_error("cannot write " + tmp.string());
+  }
+  fs::rename(tmp, file);
+  return out;
+}
+
+std::string truthSetting(const YAML::Node& node, const json& rows) {
+  YAML::Node objects = YAML::Clone(node["table"]["objects"]);
+  if (!objects.IsSequence() || objects.size() != rows.size())
+    throw std::invalid_argument("the truth has " + std::to_string(rows.size()) + " rows for the table's objects");
+  for (std::size_t i = 0; i < rows.size(); ++i) {
+    YAML::Node affordance(YAML::NodeType::Sequence);
+    for (int a = 0; a < table::kTableActions; ++a) affordance.push_back(rows[i].at(table::tableActionName(a)).at("rate").get<double>());
+    affordance.SetStyle(YAML::EmitterStyle::Flow);
+    objects[i]["affordance"] = affordance;
+  }
+  YAML::Emitter e;
+  e.SetMapFormat(YAML::Flow);
+  e.SetSeqFormat(YAML::Flow);
+  e.SetDoublePrecision(17);
+  e << objects;
+  return std::string("table.objects=") + e.c_str();
+}
+
+}  // namespace afford

@@ -1,0 +1,172 @@
+// The table world as the environment process runs it (processes/environment/table_world.hpp) and as the eye
+// sees it: the camera's image is the scene, the objects are the blobs on its black top, the gaze's pixel
+// names the object the hand acts on, a place in scene units is the point of the top the pixel shows, the
+// scene set up by (seed, step), and a state saved and loaded continues as the run would have.
+#include <gtest/gtest.h>
+
+#include <cstdlib>
+
+#include <opencv2/imgcodecs.hpp>
+#include <opencv2/imgproc.hpp>
+
+#include "afford/snapshot.hpp"
+#include "environment/table_world.hpp"
+#include "eye/eye.hpp"
+#include "tests/support.hpp"
+
+namespace afford {
+namespace {
+using test::shippedConfig;
+
+const RunConfig& tableConfig() {
+  static const RunConfig c = shippedConfig("table", System::IMP, 1);
+  return c;
+}
+
+// The eye's blobs of an image: (count, centroids in scene units).
+std::vector<cv::Point2d> blobs(const cv::Mat& rgb) {
+  cv::Mat gray;
+  cv::cvtColor(rgb, gray, cv::COLOR_RGB2GRAY);
+  cv::Mat mask = gray > 0, labels, stats, centroids;
+  const int n = cv::connectedComponentsWithStats(mask, labels, stats, centroids, 8, CV_32S);
+  std::vector<cv::Point2d> out;
+  for (int i = 1; i < n; ++i)
+    out.emplace_back(centroids.at<double>(i, 0) / rgb.cols, centroids.at<double>(i, 1) / rgb.cols);
+  return out;
+}
+
+TEST(TableWorld, TheSceneIsTheCameraImageWithEachObjectABlobOnTheBlackTop) {
+  const RunConfig& c = tableConfig();
+  ASSERT_EQ(c.world.size_px, c.table.spec.camera.width);
+  ASSERT_EQ(c.world.rows(), c.table.spec.camera.height);
+  TableWorld w(c);
+  const cv::Mat scene = w.render();
+  ASSERT_EQ(scene.cols, c.table.spec.camera.width);
+  ASSERT_EQ(scene.rows, c.table.spec.camera.height);
+  if (const char* dir = std::getenv("AFFORD_TEST_IMAGES")) {  // for a look at it
+    cv::Mat bgr;
+    cv::cvtColor(scene, bgr, cv::COLOR_RGB2BGR);
+    cv::imwrite(std::string(dir) + "/table_world_scene.png", bgr);
+  }
+  const std::vector<cv::Point2d> seen = blobs(scene);
+  const std::vector<cv::Point2d> centres = w.centres();
+  ASSERT_EQ(seen.size(), centres.size()) << "every object a blob of its own, the top black";
+  // Each object's listed centre is within a few pixels of a blob's centroid, and the object under it is it.
+  for (std::size_t i = 0; i < centres.size(); ++i) {
+    double nearest = 1e9;
+    for (const cv::Point2d& b : seen) nearest = std::min(nearest, std::hypot(b.x - centres[i].x, b.y - centres[i].y));
+    EXPECT_LT(nearest * scene.cols, 4.0) << c.table.spec.objects[i].name;
+    EXPECT_EQ(w.objectAt(centres[i].x, centres[i].y), static_cast<int>(i)) << c.table.spec.objects[i].name;
+  }
+  EXPECT_EQ(w.objectAt(0.0, 0.0), -1) << "the image's corner is the table";
+}
+
+TEST(TableWorld, APlaceInSceneUnitsIsThePointOfTheTopItsPixelShows) {
+  TableWorld w(tableConfig());
+  for (const cv::Point2d& p : {cv::Point2d(0, 0), cv::Point2d(0.15, -0.4), cv::Point2d(-0.2, 0.5)}) {
+    const cv::Point2d s = w.toScene(p.x, p.y);
+    EXPECT_GE(s.x, 0.0);
+    EXPECT_LE(s.x, 1.0);
+    EXPECT_GE(s.y, 0.0);
+    EXPECT_LE(s.y, 0.75) << "scene units are columns / width: the rows reach height / width";
+    const cv::Point2d back = w.toTable(s.x, s.y);
+    EXPECT_NEAR(back.x, p.x, 1e-12);
+    EXPECT_NEAR(back.y, p.y, 1e-12);
+  }
+}
+
+TEST(TableWorld, TheSceneIsSetUpAgainEveryResetStepsByTheSeed) {
+  const RunConfig& c = tableConfig();
+  const std::int64_t k = c.table.scene.reset_every;
+  ASSERT_GT(k, 0);
+  TableWorld a(c), b(c);
+  RunConfig other = c;
+  other.seed = c.seed + 1;
+  TableWorld d(other);
+  EXPECT_FALSE(a.objectsAppearAt(k - 1));
+  EXPECT_TRUE(a.objectsAppearAt(k));
+  EXPECT_TRUE(c.world.lateObjectsAt(k)) << "the eye and the planner know the steps from the configuration";
+  EXPECT_NE(a.centres(), d.centres()) << "another seed, another scene";
+  const std::vector<cv::Point2d> start = a.centres();
+  a.execute(0, 0, start[0].x, start[0].y);  // a push moves the first object
+  EXPECT_TRUE(a.introduceObjectsAt(k));
+  EXPECT_TRUE(b.introduceObjectsAt(k));
+  EXPECT_EQ(a.centres(), b.centres()) << "set up by (seed, step), whatever came before";
+  EXPECT_NE(a.centres(), start);
+  EXPECT_TRUE(sameImage(a.render(), b.render()));
+}
+
+TEST(TableWorld, AStateSavedAndLoadedGoesOnAsTheRunWould) {
+  // Saved at several steps (a scene set up anew among them), set in a world just built, and both worlds driven
+  // on by the same actions: the same state, bit for bit, and the same images, at every step. MuJoCo's forward
+  // pass normalises the free bodies' quaternions in place: a state normalised once more on loading went on a
+  // bit off within a step or two.
+  RunConfig c = tableConfig();
+  c.table.scene.reset_every = 10;
+  c.world.reset_every = 10;
+  const std::string dir = test::tempDir("table-world-snapshot");
+  TableWorld a(c);
+  std::vector<std::unique_ptr<TableWorld>> loaded;
+  for (std::int64_t s = 0; s < 24; ++s) {
+    if (s == 2 || s == 10 || s == 17) {
+      const std::string path = dir + "/at-" + std::to_string(s) + ".snapshot";
+      {
+        SnapshotWriter w(path);
+        a.save(w);
+        w.commit();
+      }
+      loaded.push_back(std::make_unique<TableWorld>(c));
+      SnapshotReader r(path, 1 << 20);
+      loaded.back()->load(r);
+    }
+    const std::vector<cv::Point2d> all = a.centres();
+    const cv::Point2d at = all[static_cast<std::size_t>(s) % all.size()];
+    const int action = static_cast<int>(s % kNumActions);
+    const ActionOutcome x = a.execute(s, action, at.x, at.y);
+    const cv::Mat image = a.render();
+    a.introduceObjectsAt(s + 1);
+    for (auto& b : loaded) {
+      const ActionOutcome y = b->execute(s, action, at.x, at.y);
+      EXPECT_EQ(x.succeeded, y.succeeded);
+      EXPECT_EQ(x.target_x, y.target_x);
+      EXPECT_TRUE(sameImage(image, b->render())) << "step " << s;
+      b->introduceObjectsAt(s + 1);
+      ASSERT_EQ(a.physics().state(), b->physics().state()) << "step " << s;
+    }
+  }
+}
+
+// The eye judges an action by what it sees (eye.hpp, the table world's rules), the primitive by the simulation's
+// state: over actions on every object, the two agree on most, and both see successes and failures.
+TEST(TableWorld, TheEyeSeesAnActionsEffectMostlyAsPhysicsDecidedIt) {
+  const RunConfig& c = tableConfig();
+  TableWorld w(c);
+  Eye eye(c);
+  int agree = 0, n = 0, physics_yes = 0, eye_yes = 0;
+  for (std::int64_t s = 0; s < 48; ++s) {
+    if (w.introduceObjectsAt(s)) {}
+    eye.setScene(w.render(), {});
+    const std::vector<cv::Point2d> at = w.centres();
+    const cv::Point2d o = at[static_cast<std::size_t>(s / kNumActions) % at.size()];
+    const Focus f = eye.attend(o.x, o.y);
+    const int action = static_cast<int>(s % kNumActions);
+    const ActionOutcome out = w.execute(s, action, f.x, f.y);
+    if (!out.on_object) continue;  // two objects touching are one blob, whose centroid may be on neither
+    const std::optional<cv::Point2d> target =
+        out.target_x >= 0 ? std::optional<cv::Point2d>(cv::Point2d(out.target_x, out.target_y)) : std::nullopt;
+    const Effect e = eye.scanEffect(s, w.render(), action, {}, target);
+    agree += e.affordance == out.succeeded;
+    physics_yes += out.succeeded;
+    eye_yes += e.affordance;
+    ++n;
+  }
+  EXPECT_GE(n, 40) << "the window is on the object it was put on";
+  EXPECT_GE(agree, n * 8 / 10) << agree << " of " << n;
+  EXPECT_GT(physics_yes, 0);
+  EXPECT_LT(physics_yes, n);
+  EXPECT_GT(eye_yes, 0);
+  EXPECT_LT(eye_yes, n);
+}
+
+}  // namespace
+}  // namespace afford
