@@ -292,6 +292,13 @@ TEST(TableTruth, TheSameActionsAffordDifferentlyByTheObjectsShape) {
   EXPECT_GE(cube_push.high(), cube_push.rate());
   TruthCell more{10 * cube_push.successes, 10 * cube_push.trials};
   EXPECT_LT(more.high() - more.low(), cube_push.high() - cube_push.low());
+  // At the edges a rate is inside its own interval: no success starts it at 0, all successes end it at 1.
+  for (int n : {1, 7, 200, 1000}) {
+    EXPECT_EQ((TruthCell{0, n}.low()), 0.0) << n;
+    EXPECT_EQ((TruthCell{n, n}.high()), 1.0) << n;
+    EXPECT_GT((TruthCell{0, n}.high()), 0.0) << n;
+    EXPECT_LT((TruthCell{n, n}.low()), 1.0) << n;
+  }
 }
 
 TEST(TableTruth, TheSameSeedGivesTheSameTable) {

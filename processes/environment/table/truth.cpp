@@ -22,8 +22,10 @@ double wilson(const TruthCell& c, double sign) {
 }
 }  // namespace
 
-double TruthCell::low() const { return wilson(*this, -1); }
-double TruthCell::high() const { return wilson(*this, +1); }
+// At no success the interval starts at 0, at all successes it ends at 1, exactly (the formula's rounding left
+// them a hair inside, and a rate of 0 then fell outside its own interval).
+double TruthCell::low() const { return successes == 0 ? 0.0 : wilson(*this, -1); }
+double TruthCell::high() const { return successes == trials ? 1.0 : wilson(*this, +1); }
 
 void validate(const TruthSpec& t, const TableSpec& table) {
   if (!(t.region_x > 0 && t.region_y > 0 && t.region_x <= table.half_x && t.region_y <= table.half_y))
