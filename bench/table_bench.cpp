@@ -123,6 +123,7 @@ int main(int argc, char** argv) {
                      {"physics_steps_per_action", static_cast<double>(physics_steps) / steps},
                      {"us_per_physics_step", physics_steps ? 1000.0 * physics / physics_steps : 0.0},
                      {"on_object", on_object},
+                     {"instabilities", world.physics().instabilities()},
                      {"eye_verdicts", eyeVerdicts(verdicts)},
                      {"per_action", perAction(per_action)},
                      {"succeeded", succeeded}};

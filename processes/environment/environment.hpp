@@ -29,6 +29,9 @@ struct ActionOutcome {
   bool succeeded = false;     // the action's effect happened
   double target_x = -1.0;     // move target (scene units), -1 for colour actions
   double target_y = -1.0;
+  // The table world: the simulation became unstable in the action (MuJoCo set its data back); the action
+  // failed and the scene was set up anew.
+  bool unstable = false;
 };
 
 // What the environment is given of the run's configuration: the world (its objects and their table), the

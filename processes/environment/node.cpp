@@ -116,6 +116,9 @@ void EnvironmentNode::decide(const decision_t& d) {
     const ActionOutcome out = env_->execute(d.step, d.action, d.x, d.y, target);
     log_->debug("step {}: action {} on object: {} succeeded: {} target ({}, {})", d.step, d.action, out.on_object,
                 out.succeeded, out.target_x, out.target_y);
+    if (out.unstable)
+      log_->warn("step {}: the simulation became unstable in the action's primitive (MuJoCo set it back): the action "
+                 "failed and the scene is set up anew; a smaller table.timestep makes this rarer", d.step);
     const bool appear = more && env_->objectsAppearAt(next);
     // The action's own scene first, so the eye sees its effect without the newcomers.
     publishScene(next, scene_t::CAUSE_ACTION, more && !appear, d.action, out.target_x, out.target_y);

@@ -155,9 +155,19 @@ ActionOutcome TableWorld::execute(std::int64_t step, int action, double x, doubl
     out.target_x = s.x;
     out.target_y = s.y;
   }
+  const std::vector<double> before = physics_.state();
+  const int instabilities = physics_.instabilities();
   last_ = table::runPrimitive(physics_, table_.primitives, seed_, step, action, object, place);
   physics_.forward();  // the camera draws where the bodies are after the primitive's last step
   out.succeeded = last_.succeeded;
+  if (physics_.instabilities() != instabilities) {
+    // MuJoCo found a bad acceleration and set its data back to the model's initial state in the middle of the
+    // primitive: what it ended with is no scene. The action failed; the scene is set up anew (by seed and step).
+    physics_.setState(before);
+    setUp(step);
+    out.succeeded = false;
+    out.unstable = true;
+  }
   segments_.release();
   return out;
 }

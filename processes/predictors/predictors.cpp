@@ -57,7 +57,7 @@ Prediction Predictors::predict(const std::vector<std::uint8_t>& focus_image) con
   for (int a = 0; a < kNumActions; ++a)
     for (const auto& [name, v] : {std::pair{"affordance", p.affordance[a]}, {"learning progress", p.learning_progress[a]}})
       if (!std::isfinite(v))
-        throw std::runtime_error(std::string("the ") + name + " prediction of " + std::string(kActionNames[a]) +
+        throw std::runtime_error(std::string("the ") + name + " prediction of " + std::string(actionName(world_, a)) +
                                  " is not finite (" + std::to_string(v) + "): its predictor diverged; is its "
                                  "learning rate (predictors.*.learning_rate) too large?");
   return p;

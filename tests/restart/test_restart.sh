@@ -46,8 +46,8 @@ snapshot=500
 cycle=1500
 [[ $system == GOALS ]] && cycle=300
 world=${AFFORD_RESTART_EXPERIMENT:-base}
-# The table world steps about 40 times a second: a short run, snapshots every 100 steps.
-[[ $world == table ]] && { steps=500; snapshot=100; cycle=150; }
+# The table world steps about 40 times a second: a short run, snapshots every 50 steps.
+[[ $world == table ]] && { steps=300; snapshot=50; cycle=100; }
 ((${#victims[@]} > 1)) && steps=$((steps + cycle * ${#victims[@]}))
 victim=${victims[0]}
 if ((${#victims[@]} > 1)); then

@@ -168,5 +168,35 @@ TEST(TableWorld, TheEyeSeesAnActionsEffectMostlyAsPhysicsDecidedIt) {
   EXPECT_LT(eye_yes, n);
 }
 
+// A world made unstable on purpose (a stiff hand at a long step): MuJoCo sets its data back to the model's
+// start in the middle of a primitive. The action fails, says so, and the scene is set up anew where the run
+// was: the simulation's clock goes on, every object rests in the region in its configured pose.
+TEST(TableWorld, AnActionInWhichTheSimulationBecameUnstableFailsAndTheSceneIsSetUpAnew) {
+  RunConfig c = tableConfig();
+  c.table.spec.timestep = 0.01;
+  c.table.spec.hand.kp_move = 1e6;
+  TableWorld w(c);
+  bool seen = false;
+  for (std::int64_t s = 0; s < 60 && !seen; ++s) {
+    const int before = w.physics().instabilities();
+    const double clock = w.physics().time();
+    const std::vector<cv::Point2d> all = w.centres();
+    const cv::Point2d at = all[static_cast<std::size_t>(s) % all.size()];
+    const ActionOutcome out = w.execute(s, static_cast<int>(s % kNumActions), at.x, at.y);
+    EXPECT_EQ(out.unstable, w.physics().instabilities() != before) << "step " << s;
+    if (!out.unstable) continue;
+    seen = true;
+    EXPECT_FALSE(out.succeeded);
+    EXPECT_GE(w.physics().time(), clock) << "the clock went back: the simulation's reset was kept";
+    for (int i = 0; i < w.physics().objectCount(); ++i) {
+      const table::Pose p = w.physics().objectPose(i);
+      EXPECT_LE(std::abs(p.pos[0]), c.table.truth.region_x) << i;
+      EXPECT_LE(std::abs(p.pos[1]), c.table.truth.region_y) << i;
+      EXPECT_NEAR(p.pos[2], c.table.spec.objects[static_cast<std::size_t>(i)].restingHeight(), 1e-9) << i;
+    }
+  }
+  EXPECT_TRUE(seen) << "no instability in 60 actions: the test needs a world that has one";
+}
+
 }  // namespace
 }  // namespace afford

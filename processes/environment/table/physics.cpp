@@ -105,6 +105,8 @@ void TablePhysics::commandHand(const HandCommand& c) {
   data_->ctrl[actuator_[4]] = data_->ctrl[actuator_[5]] = (1 - open) * closed;
 }
 
+int TablePhysics::instabilities() const { return data_->warning[mjWARN_BADQACC].number; }
+
 HandCommand TablePhysics::handNow() const {
   HandCommand h;
   h.x = data_->qpos[hand_qpos_[0]];

@@ -49,6 +49,9 @@ class TablePhysics {
   void commandHand(const HandCommand& c);
   // The palm's centre and yaw as the simulation has them now.
   HandCommand handNow() const;
+  // How many times the simulation became unstable (MuJoCo found a bad acceleration and set its data back to
+  // the model's initial state), since it was built.
+  int instabilities() const;
   // Every object and the hand moving slower than these (m/s, rad/s).
   bool atRest(double linear, double angular) const;
   // The index of the object a simulation geom belongs to, or -1 (table, floor, hand).
