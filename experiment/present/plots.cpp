@@ -34,9 +34,15 @@ const char* kSystemColour(const std::string& s) {
   return s == "FIX" ? "#e69f00" : s == "IGN" ? "#56b4e9" : s == "GOALS" ? "#cc79a7" : "#009e73";
 }
 
-// gnuplot colour and point type for an object name like "green circle".
-std::string objectStyle(const std::string& name) {
-  const std::string colour = name.find("red") != std::string::npos     ? "#d62728"
+// gnuplot colour and point type for an object name like "green circle"; an object whose name has no colour
+// of the paper's world (the physical table's "cube", "ball") takes the `index`-th of a palette.
+std::string objectStyle(const std::string& name, std::size_t index) {
+  static const char* const palette[] = {"#1f77b4", "#ff7f0e", "#2ca02c", "#d62728", "#9467bd", "#8c564b",
+                                        "#e377c2", "#7f7f7f", "#bcbd22", "#17becf"};
+  const bool named = name.find("red") != std::string::npos || name.find("green") != std::string::npos ||
+                     name.find("blue") != std::string::npos;
+  const std::string colour = !named                                    ? palette[index % 10]
+                             : name.find("red") != std::string::npos   ? "#d62728"
                              : name.find("green") != std::string::npos ? "#2ca02c"
                                                                        : "#1f77b4";
   // The colour is the object's; its shape gives the line's dashes and the marker, so that the three objects of a
@@ -335,7 +341,7 @@ void plotCurves(Figures& f) {
       g << "set title " << quoted(actions[a]) << "\nplot ";
       for (std::size_t i = 0; i < objects.size(); ++i)
         g << (i ? ", " : "") << quoted(csv.string()) << " using 1:" << 2 + a * objects.size() + i
-          << " with linespoints pi " << marker_every << " " << objectStyle(objects[i]) << " title " << quoted(objects[i]);
+          << " with linespoints pi " << marker_every << " " << objectStyle(objects[i], i) << " title " << quoted(objects[i]);
       g << "\n";
     }
     g << "unset multiplot\n";

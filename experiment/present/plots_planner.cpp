@@ -54,7 +54,9 @@ void plotStochastic(Figures& f) {
           << " ? $4 : NaN):6:7:8 with yerrorbars pt 7 ps 1.1 lc rgb '" << kSystemColour(systems[k]) << "' title "
           << quoted(systems[k]);
       g << ", " << quoted(csv.string()) << " using ($2==" << a << " && strcol(1) eq " << quoted(systems.front())
-        << " ? $4 : NaN):5 with points pt 6 ps 2 lc rgb 'black' title 'true probability (Table 7)'\n";
+        << " ? $4 : NaN):5 with points pt 6 ps 2 lc rgb 'black' title "
+        << quoted(f.s.experiment == "stochastic" ? "true probability (Table 7)" : "true probability (the world's table)")
+        << "\n";
     }
     g << "unset multiplot\n";
     g.close();
