@@ -58,7 +58,13 @@ void runGnuplot(const fs::path& script) {
   if (std::system(cmd.c_str()) != 0) throw std::runtime_error("gnuplot failed on " + script.string());
 }
 
-std::string quoted(const std::string& s) { return "'" + s + "'"; }
+// A gnuplot string in single quotes, in which a single quote is written twice (an object named "bob's cube",
+// a title "the world's table").
+std::string quoted(const std::string& s) {
+  std::string out = "'";
+  for (char c : s) out += c == '\'' ? std::string("''") : std::string(1, c);
+  return out + "'";
+}
 
 std::string pText(const Nullable<double>& p) {
   if (!p) return "p: -";

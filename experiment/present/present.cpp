@@ -87,7 +87,10 @@ void goalsText(std::ostringstream& t, const GoalsSummary& g) {
 void learnedTablesText(std::ostringstream& t, const Summary& summary, const Plan& plan) {
   const auto& object_names = summary.objects;
   t << "\nLearned affordances after " << summary.steps << " steps (mean of " << summary.repetitions
-    << " run(s)); in brackets the world's own table (the paper's, for its experiments; a physical table's truth)\n";
+    << " run(s)); in brackets the world's own table ("
+    << (summary.actions.empty() || summary.actions.front() == "move" ? "the paper's, for its experiments"
+                                                                     : "its truth, which physics decided")
+    << ")\n";
   for (const auto& sys : plan.systems) {
     const auto it = summary.systems.find(sys);
     if (it == summary.systems.end() || !it->second.affordance || !it->second.target) continue;
@@ -95,7 +98,8 @@ void learnedTablesText(std::ostringstream& t, const Summary& summary, const Plan
     std::size_t name_width = 17;
     for (const auto& n : object_names) name_width = std::max(name_width, n.size() + 1);
     t << "\n" << std::left << std::setw(static_cast<int>(name_width) + 2) << sys;
-    for (const std::string& a : summary.actions) t << std::setw(12) << a;
+    for (std::size_t a = 0; a < summary.actions.size(); ++a)
+      t << std::setw(a + 1 < summary.actions.size() ? 12 : 0) << summary.actions[a];
     t << "\n";
     for (std::size_t i = 0; i < object_names.size() && i < js.affordance->size(); ++i) {
       t << "  " << std::left << std::setw(static_cast<int>(name_width)) << object_names[i];

@@ -14,6 +14,7 @@
 #include "experiment/present/report.hpp"
 #include "experiment/stored/state_file.hpp"
 #include "experiment/schema/summary.hpp"
+#include "experiment/present/plots_parts.hpp"
 #include "tests/support.hpp"
 #include "experiment/design/experiment_file.hpp"
 
@@ -397,6 +398,18 @@ TEST(Console, AGoalsAgentsModulesShowTheirGoalsAndCompetence) {
         << name << "\n" << text;
   }
   EXPECT_NE(text.find(fixed(*g.modules.at("colour").first_tenth, 2) + " / -", goals), std::string::npos) << text;
+}
+
+
+// A name or title with a single quote (an object "bob's cube", "the world's table") is one gnuplot string: gnuplot
+// reads it back whole (an apostrophe ended the string, and the plot failed).
+TEST(Plots, AStringWithAQuoteIsOneGnuplotString) {
+  const std::string dir = test::tempDir("gnuplot-quote");
+  const std::string script = dir + "/print.gp";
+  std::ofstream(script) << "print " << plots::quoted("bob's cube, the world's table") << "\n";
+  const test::CommandResult r = test::runCommand("gnuplot " + script);
+  EXPECT_EQ(r.exit_code, 0) << r.output;
+  EXPECT_NE(r.output.find("bob's cube, the world's table"), std::string::npos) << r.output;
 }
 
 }  // namespace
