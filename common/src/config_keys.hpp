@@ -160,8 +160,8 @@ void declareTable(V& v, RunConfig& c) {
       });
       v.number("timestep", s.timestep, 0.0005, 0.01, "the physics step (s)");
       v.section("camera", [&] {
-        v.integer("width", s.camera.width, 16, 4096, "the camera image's width (pixels)");
-        v.integer("height", s.camera.height, 16, 4096, "... its height");
+        v.integer("width", s.camera.width, 16, 2048, "the camera image's width (pixels; the scene a SCENE carries, as world.size_px)");
+        v.integer("height", s.camera.height, 16, 2048, "... its height");
         v.number("above", s.camera.above, 0.1, 10.0, "the camera's height over the table's centre, looking down (m)");
         v.number("fovy_deg", s.camera.fovy_deg, 1.0, 170.0, "its vertical field of view (degrees)");
       });

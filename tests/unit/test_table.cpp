@@ -432,6 +432,10 @@ TEST(WorldTruthCommand, TheWrongExperimentOrObjectIsNamedWithTheFix) {
                       "friction: 1, torsional_friction: 0, rolling_friction: 0, colour: [1, 0, 0]}]'");
   EXPECT_EQ(bad.exit_code, 2);
   EXPECT_NE(bad.output.find("table.objects[0].size"), std::string::npos) << bad.output;
+  // The camera's image is the scene a SCENE carries: no wider than the paper's world's largest scene.
+  const test::CommandResult wide = test::runAfford("config table --set table.camera.width=4000");
+  EXPECT_EQ(wide.exit_code, 2);
+  EXPECT_NE(wide.output.find("table.camera.width"), std::string::npos) << wide.output;
 }
 
 }  // namespace
