@@ -9,6 +9,9 @@ build=${1:-$root/build}
 doc=$root/docs/configuration.md
 tables=$(mktemp)
 trap 'rm -f "$tables"' EXIT
+# The tables come from the declaration compiled in: build it first, or a binary
+# older than the sources writes the keys as they were.
+cmake --build "$build" --target afford >/dev/null
 "$build/bin/afford" --config-dir "$root/config" config --keys >"$tables"
 /usr/bin/python3 - "$doc" "$tables" <<'PY'
 import sys
