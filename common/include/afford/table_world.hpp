@@ -42,6 +42,16 @@ struct CameraSpec {
   int width = 0, height = 0;       // pixels
   double above = 0;                // the camera's height above the table's centre, looking straight down
   double fovy_deg = 0;             // vertical field of view (the image's rows span the table's x)
+
+  // The pinhole's focal length in pixels.
+  double focalPx() const;
+  // Where the image shows a point of the table at height z: its pixel (column, row; pixel centres at .5),
+  // and the same in scene units (a pixel's column and row over the width, centres at 0).
+  std::array<double, 2> pixelOf(double x, double y, double z = 0) const;
+  std::array<double, 2> sceneOf(double x, double y, double z = 0) const;
+  // The point of the table's top (z = 0) a pixel (u, v) shows, and the one a scene point (sx, sy) shows.
+  std::array<double, 2> tableAtPixel(double u, double v) const;
+  std::array<double, 2> tableAt(double sx, double sy) const;
 };
 
 struct HandSpec {

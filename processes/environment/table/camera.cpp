@@ -66,8 +66,7 @@ void GlContext::onThisThread() {
 TableCamera::TableCamera(const TablePhysics& physics)
     : width_(physics.spec().camera.width),
       height_(physics.spec().camera.height),
-      above_(physics.spec().camera.above),
-      focal_px_(0.5 * physics.spec().camera.height / std::tan(physics.spec().camera.fovy_deg * M_PI / 360)),
+      spec_(physics.spec().camera),
       scene_(std::make_unique<mjvScene>()),
       camera_(std::make_unique<mjvCamera>()),
       option_(std::make_unique<mjvOption>()),
@@ -144,12 +143,13 @@ cv::Mat TableCamera::objects(const TablePhysics& physics) {
 }
 
 cv::Point2d TableCamera::tableAt(double u, double v) const {
-  return {(0.5 * height_ - v) * above_ / focal_px_, -(u - 0.5 * width_) * above_ / focal_px_};
+  const auto [x, y] = spec_.tableAtPixel(u, v);
+  return {x, y};
 }
 
 cv::Point2d TableCamera::pixelOf(double x, double y, double z) const {
-  const double depth = above_ - z;
-  return {0.5 * width_ - focal_px_ * y / depth, 0.5 * height_ - focal_px_ * x / depth};
+  const auto [u, v] = spec_.pixelOf(x, y, z);
+  return {u, v};
 }
 
 }  // namespace afford::table

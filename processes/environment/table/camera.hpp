@@ -51,7 +51,7 @@ class TableCamera {
   void draw(const TablePhysics& physics, bool segments, unsigned char* out);
 
   int width_ = 0, height_ = 0;
-  double above_ = 0, focal_px_ = 0;  // the focal length in pixels
+  CameraSpec spec_;  // its pinhole (afford/table_world.hpp)
   std::unique_ptr<mjvScene> scene_;
   std::unique_ptr<mjvCamera> camera_;
   std::unique_ptr<mjvOption> option_;

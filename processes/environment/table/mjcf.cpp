@@ -18,24 +18,6 @@ const char* shapeName(Shape s) {
   return "?";
 }
 
-double ObjectSpec::restingHeight() const {
-  switch (shape) {
-    case Shape::Box: return size.at(2);
-    case Shape::Cylinder: return lying ? size.at(0) : size.at(1);
-    case Shape::Sphere: return size.at(0);
-  }
-  return 0;
-}
-
-double ObjectSpec::footprintRadius() const {
-  switch (shape) {
-    case Shape::Box: return std::hypot(size.at(0), size.at(1));
-    case Shape::Cylinder: return lying ? std::hypot(size.at(0), size.at(1)) : size.at(0);
-    case Shape::Sphere: return size.at(0);
-  }
-  return 0;
-}
-
 namespace {
 
 void need(bool ok, const std::string& what) {
