@@ -119,6 +119,49 @@ const SystemExtrinsic* extrinsicOf(const Summary& summary, const std::string& sy
   return it == summary.systems.end() || !it->second.extrinsic ? nullptr : &*it->second.extrinsic;
 }
 
+// Tests under the planner conditions a design compares (extrinsic.vary): each condition's share of tests solved
+// and mean utility, per scenario when they are few and named, else per number of sub-goals (generated ones).
+void conditionsText(std::ostringstream& t, const Summary& summary, const Plan& plan) {
+  bool header = false;
+  for (const auto& sys : plan.systems) {
+    const SystemExtrinsic* ex = extrinsicOf(summary, sys);
+    if (!ex || !ex->conditions || ex->conditions->empty()) continue;
+    const bool by_scenario = ex->scenarios.size() <= 6;
+    std::vector<std::string> columns;
+    if (by_scenario) {
+      columns = ex->scenarios;
+    } else {
+      for (const DesignPoint& p : ex->conditions->front().points) columns.push_back(std::to_string(p.sub_goals) + " sub-goals");
+    }
+    std::size_t cw = 12;
+    for (const PlannerCondition& c : *ex->conditions) cw = std::max(cw, c.label.size() + 2);
+    if (!header) {
+      t << "\nExtrinsic tests by condition (" << ex->tests_per_scenario
+        << " per scenario and trained agent): share of tests solved" << (by_scenario ? ", mean utility in brackets" : "")
+        << "\n";
+      header = true;
+    }
+    t << "\n  " << std::left << std::setw(5) << sys << std::setw(static_cast<int>(cw)) << "" << std::right;
+    for (const auto& c : columns) t << std::setw(14) << c;
+    t << "\n";
+    for (const PlannerCondition& c : *ex->conditions) {
+      t << "  " << std::setw(5) << "" << std::left << std::setw(static_cast<int>(cw)) << c.label << std::right;
+      if (by_scenario) {
+        for (const auto& name : columns) {
+          const auto it = c.scenarios.find(name);
+          t << std::setw(14)
+            << (it == c.scenarios.end() || it->second.tests_completed == 0
+                    ? std::string("-")
+                    : fixed(it->second.success_rate, 2) + " (" + fixed(it->second.utility.mean, 1) + ")");
+        }
+      } else {
+        for (const DesignPoint& p : c.points) t << std::setw(14) << (p.tests_completed ? fixed(p.success_rate, 2) : std::string("-"));
+      }
+      t << "\n";
+    }
+  }
+}
+
 // The extrinsic tests: the table metric and share solved per scenario, the completion steps and their fit.
 void extrinsicText(std::ostringstream& t, const Summary& summary, const Plan& plan) {
   bool header = false;
@@ -156,6 +199,7 @@ void extrinsicText(std::ostringstream& t, const Summary& summary, const Plan& pl
     for (const auto& name : ex->scenarios) t << std::setw(14) << at(*ex->success_rate, name);
     t << "\n";
   }
+  conditionsText(t, summary, plan);
   for (const auto& sys : plan.systems)  // a test that failed to run is no result: "-" where none ran
     if (const SystemExtrinsic* ex = extrinsicOf(summary, sys); ex && ex->failed_tests && !ex->failed_tests->empty())
       t << "  " << sys << ": " << ex->failed_tests->size() << " test(s) failed to run and are not counted (summary.json: "

@@ -414,3 +414,46 @@ TEST(Plots, AStringWithAQuoteIsOneGnuplotString) {
 
 }  // namespace
 }  // namespace afford
+
+namespace afford {
+namespace {
+
+TEST(Console, TestsUnderPlannerConditionsShowEachConditionsShareSolved) {
+  // An experiment that varies a planner setting (extrinsic.vary) printed no extrinsic table at all: its tests
+  // ran and the console said nothing of them. Each condition now has its row.
+  Summary summary;
+  SystemExtrinsic ex;
+  ex.scenarios = {"table1", "table2"};
+  ex.tests_per_scenario = 1;
+  std::vector<PlannerCondition> conditions(2);
+  conditions[0].label = "eye.attention=bottom_up";
+  conditions[1].label = "eye.attention=top_down";
+  const double solved[2][2] = {{1.0, 0.0}, {1.0, 0.75}};
+  for (int c = 0; c < 2; ++c)
+    for (int k = 0; k < 2; ++k) {
+      ConditionScenario s;
+      s.tests = s.tests_completed = 4;
+      s.success_rate = solved[c][k];
+      s.utility.mean = 1.0 + k * c;
+      conditions[static_cast<std::size_t>(c)].scenarios[ex.scenarios[static_cast<std::size_t>(k)]] = s;
+    }
+  ex.conditions = conditions;
+  summary.systems["IMP"].extrinsic = ex;
+  Plan plan;
+  plan.systems = {"IMP"};
+  const std::string text = tablesText(summary, plan, "");
+  const auto at = text.find("Extrinsic tests by condition");
+  ASSERT_NE(at, std::string::npos) << text;
+  const auto row = [&](const std::string& label) {
+    const auto from = text.find(label, at);
+    return from == std::string::npos ? std::string() : text.substr(from, text.find('\n', from) - from);
+  };
+  const std::string bottom = row("eye.attention=bottom_up"), top = row("eye.attention=top_down");
+  EXPECT_NE(bottom.find("1.00 (1.0)"), std::string::npos) << text;
+  EXPECT_NE(bottom.find("0.00 (1.0)"), std::string::npos) << text;
+  EXPECT_NE(top.find("0.75 (2.0)"), std::string::npos) << text;
+  EXPECT_LT(bottom.find("1.00"), bottom.find("0.00")) << "table1's column before table2's\n" << text;
+}
+
+}  // namespace
+}  // namespace afford
