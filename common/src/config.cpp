@@ -106,6 +106,22 @@ ObjectState parseState(ConfigReader& parent, const std::string& key, const World
   return s;
 }
 
+// A table scenario's place of an object: where the camera's image shows it, in scene units (a pixel's column
+// and row over the image's width; the table's region is checked with the table section, validateScenario).
+ObjectState parseTablePlace(ConfigReader& parent, const std::string& key, const WorldConfig& w) {
+  ConfigReader r = parent.map(key);
+  ObjectState s;
+  const auto pos = numberList(r, "position", 2, 0.0, 1.0);
+  s.x = pos[0];
+  s.y = pos[1];
+  const double rows = static_cast<double>(w.rows()) / w.size_px;
+  if (s.y > rows)
+    failKey(r.keyPath("position"), "y " + std::to_string(s.y) + " is below the image (its rows end at " +
+                                       std::to_string(rows) + " of its width)");
+  r.finish();
+  return s;
+}
+
 // What one key's range cannot say: how protocol keys bound each other.
 void checkProtocol(const ProtocolConfig& c, const std::string& path) {
   const auto key = [&](const std::string& k) { return joinKey(path, k); };
@@ -225,8 +241,8 @@ void readObjects(ConfigReader& w, WorldConfig& world) {
 
 // An extrinsic test's scenario (extrinsic.scenario), of the run's world.
 void readScenario(ConfigReader& e, RunConfig& c) {
+  if (c.world.kind == WorldKind::Table) tableWorld(c);  // its objects' names (the table section is read by now)
   c.scenario = parseScenario(e.raw("scenario"), e.keyPath("scenario"), c.world);
-  validateScenario(*c.scenario, c.world);
 }
 
 // Reads a YAML tree through the declaration (config_keys.hpp): each key's
@@ -341,12 +357,36 @@ Scenario parseScenario(const YAML::Node& node, const std::string& path, const Wo
   Scenario s;
   s.name = r.text("name");
   if (r.has("description")) s.description = r.text("description");
+  if (r.has("world")) s.world = r.choice("world", kWorldKindNames);
+  if (s.world != world.kind)
+    failKey(r.keyPath("world"), std::string("the scenario is of the ") + nameOf(kWorldKindNames, s.world) +
+                                    " world" + (r.has("world") ? "" : " (it says no `world:`)") +
+                                    ", and this run's world is " + nameOf(kWorldKindNames, world.kind) +
+                                    ": a scenario names the world its objects are in");
   YAML::Node objs = r.raw("objects");
   const std::string key = r.keyPath("objects");
   if (!objs.IsSequence() || objs.size() == 0) failKey(key, "expected a non-empty list of objects, got " + describeNode(objs));
   for (std::size_t i = 0; i < objs.size(); ++i) {
     ConfigReader o(objs[i], key + "[" + std::to_string(i) + "]");
     ScenarioObject so;
+    if (world.kind == WorldKind::Table) {
+      so.object = o.text("object");
+      std::string names;
+      for (std::size_t k = 0; k < world.objects.size(); ++k) {
+        if (world.objects[k].name == so.object) so.object_index = static_cast<int>(k);
+        names += (k ? ", " : "") + world.objects[k].name;
+      }
+      if (so.object_index < 0) failKey(o.keyPath("object"), "'" + so.object + "' is none of table.objects (" + names + ")");
+      for (std::size_t k = 0; k < s.objects.size(); ++k)
+        if (s.objects[k].object_index == so.object_index)
+          failKey(o.keyPath("object"), "'" + so.object + "' is objects[" + std::to_string(k) + "] already");
+      so.initial = parseTablePlace(o, "initial", world);
+      so.goal = parseTablePlace(o, "goal", world);
+      so.value = o.has("value") ? o.number("value", 0.0, 1e6) : 1.0;
+      o.finish();
+      s.objects.push_back(so);
+      continue;
+    }
     so.shape = o.choice("shape", kShapeNames);
     so.initial = parseState(o, "initial", world);
     so.goal = parseState(o, "goal", world);
@@ -410,8 +450,10 @@ RunConfig parseRunConfig(const YAML::Node& given) {
   declareRunConfig(v, c);
   r.finish();
   c.planner.attention = c.eye.attention;  // the eye and the planner read one key
+  c.planner.world = c.world.kind;
   c.world.height_px = c.world.size_px;
   if (c.world.kind == WorldKind::Table) tableWorld(c);
+  if (c.scenario) validateScenario(*c.scenario, c);  // the table's geometry needs the table section
   checkRunConfig(c);
   return c;
 }

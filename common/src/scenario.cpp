@@ -1,5 +1,7 @@
 // Geometric checks of extrinsic scenarios (config.hpp: validateScenario).
 #include <algorithm>
+#include <cmath>
+#include <cstdio>
 #include <cstdlib>
 
 #include "afford/config.hpp"
@@ -57,6 +59,42 @@ void validateScenario(const Scenario& s, const WorldConfig& w) {
       if (overlap(a.shape, px(a.goal), s.objects[j].shape, px(s.objects[j].initial), w, half))
         throw ConfigError("config key '" + key(i, "goal.position") + "': no action can get there: objects[" +
                           std::to_string(j) + "] starts there");
+    }
+  }
+}
+
+void validateScenario(const Scenario& s, const RunConfig& run) {
+  if (run.world.kind != WorldKind::Table) return validateScenario(s, run.world);
+  // The table: each place a point of the region objects are set up in, and the objects' footprints apart.
+  const table::TableWorldConfig& t = run.table;
+  struct Place {
+    double x, y, radius;
+  };
+  const auto placeOf = [&](std::size_t i, const ObjectState& st, const char* which) {
+    const ScenarioObject& o = s.objects[i];
+    const double radius = t.spec.objects.at(static_cast<std::size_t>(o.object_index)).footprintRadius();
+    const auto [x, y] = t.spec.camera.tableAt(st.x, st.y);
+    const double rx = std::max(0.0, t.truth.region_x - radius), ry = std::max(0.0, t.truth.region_y - radius);
+    if (std::abs(x) > rx + 1e-9 || std::abs(y) > ry + 1e-9) {
+      char where[160];
+      std::snprintf(where, sizeof where, "shows the table's point (%.3f, %.3f) m, outside the region '%s' may rest in "
+                    "(|x| <= %.3f, |y| <= %.3f: table.truth.region less its footprint)", x, y, o.object.c_str(), rx, ry);
+      throw ConfigError("config key '" + key(i, which) + "': " + where, key(i, which));
+    }
+    return Place{x, y, radius};
+  };
+  for (const char* which : {"initial.position", "goal.position"}) {
+    const bool goal = which[0] == 'g';
+    std::vector<Place> placed;
+    for (std::size_t i = 0; i < s.objects.size(); ++i) {
+      const Place p = placeOf(i, goal ? s.objects[i].goal : s.objects[i].initial, which);
+      for (std::size_t j = 0; j < placed.size(); ++j)
+        if (std::hypot(p.x - placed[j].x, p.y - placed[j].y) < p.radius + placed[j].radius + t.scene.gap)
+          throw ConfigError("config key '" + key(i, which) + "': '" + s.objects[i].object + "' is within table.scene.gap (" +
+                                std::to_string(t.scene.gap) + " m) of objects[" + std::to_string(j) + "] ('" +
+                                s.objects[j].object + "') in the " + (goal ? "goal" : "initial") + " scene",
+                            key(i, which));
+      placed.push_back(p);
     }
   }
 }

@@ -46,7 +46,21 @@ std::vector<std::string> parseSystems(const std::vector<std::string>& given, con
   return out;
 }
 
-std::vector<std::string> listScenarios(const std::string& config_dir) { return yamlNames(config_dir, "scenarios"); }
+std::vector<std::string> listScenarios(const std::string& config_dir, WorldKind world) {
+  std::vector<std::string> out;
+  for (const std::string& name : yamlNames(config_dir, "scenarios")) {
+    WorldKind of = WorldKind::Grid;  // a file that does not read is listed: loading it says what is wrong
+    try {
+      const YAML::Node n = YAML::LoadFile((std::filesystem::path(config_dir) / "scenarios" / (name + ".yaml")).string());
+      if (n.IsMap() && n["world"] && n["world"].IsScalar())
+        for (const auto& k : kWorldKindNames)
+          if (n["world"].Scalar() == k.name) of = k.value;
+    } catch (const YAML::Exception&) {
+    }
+    if (of == world) out.push_back(name);
+  }
+  return out;
+}
 
 
 void mergeInto(YAML::Node base, const YAML::Node& over) {
@@ -112,10 +126,10 @@ std::filesystem::path namedFile(const std::string& config_dir, const char* folde
 }
 }  // namespace
 
-Scenario loadScenario(const std::string& config_dir, const std::string& name, const WorldConfig& world) {
+Scenario loadScenario(const std::string& config_dir, const std::string& name, const RunConfig& run) {
   const auto file = namedFile(config_dir, "scenarios", "scenario", name);
-  Scenario s = parseScenario(loadFile(file), "", world);
-  validateScenario(s, world);
+  Scenario s = parseScenario(loadFile(file), "", run.world);
+  validateScenario(s, run);
   return s;
 }
 
@@ -467,7 +481,7 @@ YAML::Node extrinsicConfig(const std::string& config_dir, const RunRequest& requ
                            const std::string& scenario) {
   YAML::Node root = effectiveConfig(config_dir, request);
   const RunConfig base = parseRunConfig(root);
-  loadScenario(config_dir, scenario, base.world);  // names the scenario's problem, if any
+  loadScenario(config_dir, scenario, base);  // names the scenario's problem, if any
   root["phase"] = "extrinsic";
   root["run"]["steps"] = base.planner.budget;
   root["extrinsic"]["checkpoint"] = checkpoint;

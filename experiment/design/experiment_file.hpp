@@ -24,8 +24,9 @@ namespace afford {
 std::vector<std::string> parseSystems(const std::vector<std::string>& given, const std::string& option);
 
 // config/scenarios/<name>.yaml, parsed and validated.
-Scenario loadScenario(const std::string& config_dir, const std::string& name, const WorldConfig& world);
-std::vector<std::string> listScenarios(const std::string& config_dir);
+Scenario loadScenario(const std::string& config_dir, const std::string& name, const RunConfig& run);
+// The scenarios of config/scenarios of one world (a file's `world:`, the grid if it says none).
+std::vector<std::string> listScenarios(const std::string& config_dir, WorldKind world = WorldKind::Grid);
 
 // Experiment files (config/experiments/<name>.yaml): the effective config of one
 // run is defaults.yaml, overlaid by the experiment's keys, overlaid by

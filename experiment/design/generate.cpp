@@ -238,6 +238,9 @@ GeneratedScenario generateScenario(const RunConfig& config, const ScenarioSpec& 
     throw std::invalid_argument("multi_step = " + std::to_string(spec.multi_step) + ": from 0 to sub_goals (" +
                                 std::to_string(spec.sub_goals) + ")");
   const WorldConfig& w = config.world;
+  if (w.kind != WorldKind::Grid)
+    throw std::invalid_argument("scenarios are generated in the paper's world (shapes and colours) only; the table "
+                                "world's scenarios are files of config/scenarios with `world: table`");
   const std::vector<Look> looks = looksOf(w);
   SubGoalLooks can;
   for (const Look& l : looks) {

@@ -125,7 +125,7 @@ DiskNeed diskNeed(const std::vector<PlannedRun>& runs, int jobs) {
     }
     // The predictors' state: their forward models, the same whatever the affordance component (one's own is
     // not run for an estimate).
-    const std::uint64_t weights = Predictors::forwardModelBytes(c.eye.focus_side);
+    const std::uint64_t weights = Predictors::forwardModelBytes(c.eye.focus_side, c.world.kind);
     if (!c.checkpoint.empty() && r.keep_checkpoint) need.checkpoints += weights;
     // Snapshots, once the run is past its first: every process's state (the predictors' weights), and what
     // each holds of what it published since its readers' latest (a snapshot's worth of steps, twice).

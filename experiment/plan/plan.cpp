@@ -80,9 +80,9 @@ void planScenarios(Plan& plan, const PlanRequest& o) {
   const RunConfig any = parseRunConfig(effectiveConfig(plan.config_dir, RunRequest{o.experiment, System::IMP, o.seed, o.steps, o.settings}));
   plan.scenarios = !o.scenarios.empty() ? o.scenarios
                    : !plan.design.scenarios.empty() || plan.design.generate ? plan.design.scenarios
-                                                                            : listScenarios(plan.config_dir);
+                                                                            : listScenarios(plan.config_dir, any.world.kind);
   for (const auto& name : plan.scenarios)
-    plan.sub_goals[name] = static_cast<int>(loadScenario(plan.config_dir, name, any.world).objects.size());
+    plan.sub_goals[name] = static_cast<int>(loadScenario(plan.config_dir, name, any).objects.size());
   if (o.scenarios.empty() && plan.design.generate) {  // drawn here, kept in the plan: nothing is written to config/
     const GenerateDesign& gen = *plan.design.generate;
     for (const ScenarioSpec& spec : designPoints(gen))
@@ -232,12 +232,6 @@ Plan planExperiment(const PlanRequest& given) {
                                                      : std::vector<std::string>{"FIX", "IGN", "IMP"};
   if (plan.exp.extrinsic) plan.design = *plan.exp.extrinsic;
   plan.tests = o.extrinsic_reps ? *o.extrinsic_reps : plan.design.tests;  // (0 given: none)
-  if (plan.tests > 0 && parseRunConfig(effectiveConfig(plan.config_dir, RunRequest{o.experiment, System::IMP, o.seed,
-                                                                                    o.steps, o.settings}))
-                                .world.kind == WorldKind::Table)
-    throw ConfigError("--extrinsic-reps " + std::to_string(plan.tests) + ": experiment '" + plan.exp.name +
-                      "' is of the physical table, whose extrinsic tests (goals given as images of the table) are "
-                      "not built yet; its intrinsic runs need no option");
   if ((o.tables || o.table_seed) && !plan.exp.tables)
     throw ConfigError("--tables and --table-seed are for experiments on random tables (a 'tables:' section, e.g. "
                       "random-tables); " + plan.exp.name + " has none");

@@ -14,7 +14,11 @@ using nlohmann::json;
 
 namespace {
 
-std::string actionName(int a) { return validAction(a) ? std::string(kActionNames[a]) : "action " + std::to_string(a); }
+std::string nameOfAction(WorldKind world, int a) {
+  return validAction(a) ? std::string(actionName(world, a)) : "action " + std::to_string(a);
+}
+// The world of a folder's tests (their actions' names): the first's.
+WorldKind worldOf(const ExplainSummary& s) { return s.tests.empty() ? WorldKind::Grid : s.tests.front().world; }
 const char* kindName(PlannerKind k) { return nameOf(kPlannerKindNames, k); }
 const char* metricName(PositionMetric m) { return nameOf(kPositionMetricNames, m); }
 
@@ -61,13 +65,13 @@ std::string subGoalText(const Explanation& e, std::size_t i) {
                 g.actions_checked, g.actions_taken, how.c_str());
 }
 
-std::string closestText(const ExplainedSubGoal& g, const PlannerConfig& p) {
+std::string closestText(const ExplainedSubGoal& g, const PlannerConfig& p, WorldKind world) {
   if (!g.closest) return "no action was checked";
   const ExplainedCheck& c = *g.closest;
   // An action that passed both thresholds is no miss: the sub-goal was lost
   // after it (the action failed, or the utility planner did not take it).
   return sprintf("%s: %s at iteration %lld, what %.5f (%s %.5f), where %.4f (%s %.4f)",
-                c.passes() ? "passed" : "closest", actionName(c.action).c_str(),
+                c.passes() ? "passed" : "closest", nameOfAction(world, c.action).c_str(),
                 static_cast<long long>(g.closest_step), c.what_distance, c.what_ok ? "<" : "not <", p.image_match,
                 c.where_distance, c.where_ok ? "<=" : "not <=", p.position_match);
 }
@@ -92,10 +96,10 @@ std::string explanationText(const Explanation& e) {
   out += sprintf("sub-goals (%zu):\n", e.sub_goals.size());
   for (std::size_t i = 0; i < e.sub_goals.size(); ++i) {
     out += subGoalText(e, i) + "\n";
-    if (!e.sub_goals[i].reached) out += "      " + closestText(e.sub_goals[i], p) + "\n";
+    if (!e.sub_goals[i].reached) out += "      " + closestText(e.sub_goals[i], p, e.world) + "\n";
     const ExplainedSubGoal& g = e.sub_goals[i];
     if (g.place_affordance && g.colour_action >= 0)
-      out += sprintf("      the object at its place: %s afforded %.3f%s\n", actionName(g.colour_action).c_str(),
+      out += sprintf("      the object at its place: %s afforded %.3f%s\n", nameOfAction(e.world, g.colour_action).c_str(),
                     (*g.place_affordance)[static_cast<std::size_t>(g.colour_action)],
                     g.colourActionBlocked(p) ? sprintf(" (not above %.3g: never asked about)", p.affordance_threshold).c_str()
                                               : "");
@@ -121,19 +125,19 @@ std::string explanationText(const Explanation& e) {
       if (it.affordance) {
         out += ", affordances:";
         for (int a = 0; a < kNumActions; ++a)
-          out += sprintf("%s %s %.3f", a ? "," : "", actionName(a).c_str(), (*it.affordance)[static_cast<std::size_t>(a)]);
+          out += sprintf("%s %s %.3f", a ? "," : "", nameOfAction(e.world, a).c_str(), (*it.affordance)[static_cast<std::size_t>(a)]);
       }
       out += "\n";
       if (it.candidates.empty()) out += "      no action afforded: nothing checked\n";
     }
     for (const ExplainedCheck& c : it.checks)
-      out += sprintf("      %-10s what %.5f %s %.5g %s, where %.4f %s %.5g %s%s\n", actionName(c.action).c_str(),
+      out += sprintf("      %-10s what %.5f %s %.5g %s, where %.4f %s %.5g %s%s\n", nameOfAction(e.world, c.action).c_str(),
                     c.what_distance, c.what_ok ? "<" : ">=", p.image_match, c.what_ok ? "ok" : "no", c.where_distance,
                     c.where_ok ? "<=" : ">", p.position_match, c.where_ok ? "ok" : "no",
                     !c.checked ? "  (not compared: an earlier action passed)" : c.passes() ? "  <- passes" : "");
     if (it.executed >= 0) {
-      out += sprintf("      executed: %s", actionName(it.executed).c_str());
-      if (it.executed == kMove) out += sprintf(" to (%.4f, %.4f)", it.target_x, it.target_y);
+      out += sprintf("      executed: %s", nameOfAction(e.world, it.executed).c_str());
+      if (takesPlace(e.world, it.executed)) out += sprintf(" to (%.4f, %.4f)", it.target_x, it.target_y);
       out += sprintf("; goal distance after: %.3g\n", it.goal_distance_after);
     } else if (std::any_of(it.checks.begin(), it.checks.end(), [](const ExplainedCheck& c) { return c.passes(); })) {
       out += "      nothing executed (Algorithm 3 weighed the action's utility)\n";
@@ -147,8 +151,8 @@ std::string explanationText(const Explanation& e) {
 
 json explanationJson(const Explanation& e, bool with_steps) {
   const PlannerConfig& p = e.planner;
-  auto check = [](const ExplainedCheck& c) {
-    return json{{"action", c.action},         {"action_name", actionName(c.action)}, {"what_distance", c.what_distance},
+  auto check = [&e](const ExplainedCheck& c) {
+    return json{{"action", c.action},         {"action_name", nameOfAction(e.world, c.action)}, {"what_distance", c.what_distance},
                 {"what_ok", c.what_ok},       {"where_distance", c.where_distance},   {"where_ok", c.where_ok},
                 {"checked", c.checked},       {"passes", c.passes()}};
   };
@@ -199,7 +203,7 @@ json explanationJson(const Explanation& e, bool with_steps) {
       s["closest"]["step"] = g.closest_step;
     }
     s["place_affordance"] = g.place_affordance ? json(*g.place_affordance) : json(nullptr);
-    s["colour_action"] = g.colour_action >= 0 ? json(actionName(g.colour_action)) : json(nullptr);
+    s["colour_action"] = g.colour_action >= 0 ? json(nameOfAction(e.world, g.colour_action)) : json(nullptr);
     s["colour_action_blocked"] = g.colourActionBlocked(p);
     j["sub_goals"].push_back(s);
   }
@@ -218,7 +222,7 @@ json explanationJson(const Explanation& e, bool with_steps) {
     for (const ExplainedCheck& c : it.checks) s["checks"].push_back(check(c));
     if (it.executed >= 0)
       s["executed"] = {{"action", it.executed},
-                       {"action_name", actionName(it.executed)},
+                       {"action_name", nameOfAction(e.world, it.executed)},
                        {"target_x", it.target_x},
                        {"target_y", it.target_y},
                        {"goal_distance_after", it.goal_distance_after}};
@@ -290,7 +294,7 @@ std::string summaryText(const ExplainSummary& s) {
       if (g.reached) continue;
       ++missed;
       out += sprintf("  %s #%zu at (%.4f, %.4f), %s: %s\n", t.run_id.c_str(), i, g.x, g.y, g.ended.c_str(),
-                    closestText(g, t.planner).c_str());
+                    closestText(g, t.planner, t.world).c_str());
     }
     if (missed == 0)
       out += sprintf("  %s: every sub-goal it picked was reached; it ended by %s before it picked another\n",
@@ -358,13 +362,13 @@ std::string byAgentText(const ExplainSummary& s) {
   for (const AgentSubGoal& a : agents) {
     std::string colour = "-";
     if (a.place_affordance && a.colour_action >= 0)
-      colour = sprintf("%s %.3f%s", actionName(a.colour_action).c_str(),
+      colour = sprintf("%s %.3f%s", nameOfAction(worldOf(s), a.colour_action).c_str(),
                       (*a.place_affordance)[static_cast<std::size_t>(a.colour_action)],
                       a.colour_blocked ? sprintf(" blocked in %d", a.colour_blocked).c_str() : "");
     out += sprintf("%-16s %-6s %-12s %-16s %-40s %3d/%-3d %-15s %-11s %9s %8s %s\n", a.experiment.c_str(), a.system.c_str(),
                   a.scenario.c_str(), placeText(a.x, a.y).c_str(), a.agent.c_str(), a.reached, a.tests,
                   sprintf("%d/%d/%d/%d", a.not_checked, a.what_miss, a.where_miss, a.passed).c_str(),
-                  a.closest ? actionName(a.closest->action).c_str() : "-",
+                  a.closest ? nameOfAction(worldOf(s), a.closest->action).c_str() : "-",
                   a.closest ? sprintf("%.5f", a.closest->what_distance).c_str() : "-",
                   a.closest ? sprintf("%.4f", a.closest->where_distance).c_str() : "-", colour.c_str());
   }
@@ -393,7 +397,7 @@ nlohmann::json byAgentJson(const ExplainSummary& s) {
   for (const AgentSubGoal& a : agents) {
     json c = nullptr;
     if (a.closest)
-      c = {{"action", actionName(a.closest->action)},
+      c = {{"action", nameOfAction(worldOf(s), a.closest->action)},
            {"what_distance", a.closest->what_distance},
            {"what_ok", a.closest->what_ok},
            {"where_distance", a.closest->where_distance},
@@ -413,7 +417,7 @@ nlohmann::json byAgentJson(const ExplainSummary& s) {
                              {"closest", c},
                              {"closest_what_max", a.closest ? json(a.closest_what_max) : json(nullptr)},
                              {"place_affordance", a.place_affordance ? json(*a.place_affordance) : json(nullptr)},
-                             {"colour_action", a.colour_action >= 0 ? json(actionName(a.colour_action)) : json(nullptr)},
+                             {"colour_action", a.colour_action >= 0 ? json(nameOfAction(worldOf(s), a.colour_action)) : json(nullptr)},
                              {"colour_blocked", a.colour_blocked}});
   }
   for (const auto& [dir, why] : s.errors) j["errors"].push_back({{"log", dir}, {"error", why}});

@@ -390,6 +390,7 @@ Explanation explainRunEvents(const RunEvents& run, const std::string& where, std
                              "explain reads the log of one extrinsic test");
   ex.scenario = config.scenario->name;
   ex.planner = config.planner;
+  ex.world = config.world.kind;
   const PlannerConfig& p = config.planner;
   const BoundsContext ctx{&config.protocol, &config};
   std::vector<std::string>& warn = ex.warnings;

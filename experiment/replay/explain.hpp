@@ -96,6 +96,7 @@ struct Explanation {
   std::string agent;  // the trained agent: the folder of its checkpoint (its intrinsic run's id)
   std::int64_t seed = 0;
   PlannerConfig planner;  // the run's: thresholds, budget, action limit
+  WorldKind world = WorldKind::Grid;  // the run's world (its actions' names)
   bool success = false;
   int completion = 0;  // EXTRINSIC_RESULT: the iteration, counted from 1, at which it was solved
   int attempts = 0;    // actions executed

@@ -55,7 +55,8 @@ class SimWorld {
   virtual std::vector<std::vector<std::uint8_t>> probeImages() const = 0;
   virtual std::vector<std::string> probeNames() const = 0;
   // Execute `action` at `step` on the object under the gaze (x, y). For an action that takes a place,
-  // `target` is the commanded one; without one (intrinsic phase) the world draws a place.
+  // `target` is the commanded one (the table: the nearest point of table.truth.region); without one (intrinsic
+  // phase) the world draws a place.
   virtual ActionOutcome execute(std::int64_t step, int action, double x, double y,
                                 std::optional<std::pair<double, double>> target = std::nullopt) = 0;
   // The world changes the scene at `step` (objects appear; the table set up anew); true if it did.

@@ -97,8 +97,10 @@ void EnvironmentNode::publishScene(std::int64_t step, int8_t cause, bool scan, i
 
 void EnvironmentNode::act(const decision_t& d) {
   // The planner's steps are its iterations; it decides at most once in each.
+  // A place the decision does not give (-1) is drawn by the world, as in the intrinsic phase.
   std::optional<std::pair<double, double>> target;
-  if (takesPlace(config().world.kind, d.action)) target = std::make_pair(d.target_x, d.target_y);
+  if (takesPlace(config().world.kind, d.action) && d.target_x >= 0.0 && d.target_y >= 0.0)
+    target = std::make_pair(d.target_x, d.target_y);
   const ActionOutcome out = env_->execute(d.step, d.action, d.x, d.y, target);
   next_decision_ = d.step + 1;
   handled(d.step);

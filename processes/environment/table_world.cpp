@@ -41,13 +41,48 @@ TableWorld::TableWorld(const RunConfig& config)
       seed_(config.seed),
       steps_(config.steps),
       physics_(config.table.spec) {
-  if (config.phase == Phase::Extrinsic)
-    throw ConfigError("world.kind: the table world's extrinsic phase is not built yet (table-extrinsic)", "world.kind");
   table::validate(table_.primitives);
   table::validate(table_.truth, table_.spec);
   table::GlContext::onThisThread();
   camera_ = std::make_unique<table::TableCamera>(physics_);
-  setUp(0);
+  present_.assign(static_cast<std::size_t>(physics_.objectCount()), true);
+  if (config.phase != Phase::Extrinsic) {
+    setUp(0);
+    return;
+  }
+  if (!config.scenario) throw ConfigError("extrinsic.scenario: missing (an extrinsic run needs a scenario)", "extrinsic.scenario");
+  scenario_ = *config.scenario;
+  setUpScenario(true);  // the goal image: what the scene looks like with every object at its goal place
+  goal_ = render();
+  for (const ScenarioObject& o : scenario_->objects) {
+    const table::Pose p = physics_.objectPose(o.object_index);
+    goal_centres_.push_back(toScene(p.pos[0], p.pos[1], p.pos[2]));
+  }
+  setUpScenario(false);
+}
+
+void TableWorld::setUpScenario(bool goal) {
+  std::fill(present_.begin(), present_.end(), false);
+  for (const ScenarioObject& o : scenario_->objects) {
+    const ObjectState& at = goal ? o.goal : o.initial;
+    const cv::Point2d p = toTable(at.x, at.y);
+    physics_.placeObject(o.object_index, p.x, p.y, 0);
+    present_[static_cast<std::size_t>(o.object_index)] = true;
+  }
+  // Parked: in a row on the floor's plane beyond the rim, further than the camera sees.
+  const table::CameraSpec& c = table_.spec.camera;
+  const double seen = c.above * std::tan(c.fovy_deg * kPi / 360) * c.width / c.height;  // the view's larger half-extent
+  const double park = std::max({seen, table_.spec.half_x, table_.spec.half_y}) + 0.5;
+  for (int i = 0, parked = 0; i < physics_.objectCount(); ++i)
+    if (!present_[static_cast<std::size_t>(i)]) physics_.placeObject(i, park + 0.3 * parked++, 0, 0);
+  physics_.forward();
+  segments_.release();
+}
+
+double TableWorld::fromGoal(const ScenarioObject& o) const {
+  const table::Pose p = physics_.objectPose(o.object_index);
+  const cv::Point2d g = toTable(o.goal.x, o.goal.y);
+  return std::hypot(p.pos[0] - g.x, p.pos[1] - g.y);
 }
 
 void TableWorld::setUp(std::int64_t step) {
@@ -145,9 +180,10 @@ ActionOutcome TableWorld::execute(std::int64_t step, int action, double x, doubl
   out.on_object = true;
   std::optional<std::pair<double, double>> place;
   if (table::tableActionTakesPlace(action)) {
-    if (target) {
+    if (target) {  // the hand takes an object no further than the region objects are set up in
       const cv::Point2d p = toTable(target->first, target->second);
-      place = std::make_pair(p.x, p.y);
+      const table::TruthSpec& t = table_.truth;
+      place = std::make_pair(std::clamp(p.x, -t.region_x, t.region_x), std::clamp(p.y, -t.region_y, t.region_y));
     } else {
       place = drawPlace(step, object);
     }
@@ -162,9 +198,10 @@ ActionOutcome TableWorld::execute(std::int64_t step, int action, double x, doubl
   out.succeeded = last_.succeeded;
   if (physics_.instabilities() != instabilities) {
     // MuJoCo found a bad acceleration and set its data back to the model's initial state in the middle of the
-    // primitive: what it ended with is no scene. The action failed; the scene is set up anew (by seed and step).
+    // primitive: what it ended with is no scene. The action failed; the scene is set up anew (by seed and step),
+    // or, in a test of a scenario, is as it was before the action.
     physics_.setState(before);
-    setUp(step);
+    if (!scenario_) setUp(step);
     out.succeeded = false;
     out.unstable = true;
   }
@@ -173,7 +210,7 @@ ActionOutcome TableWorld::execute(std::int64_t step, int action, double x, doubl
 }
 
 bool TableWorld::objectsAppearAt(std::int64_t step) const {
-  return step > 0 && step < steps_ && table_.scene.reset_every > 0 && step % table_.scene.reset_every == 0;
+  return !scenario_ && step > 0 && step < steps_ && table_.scene.reset_every > 0 && step % table_.scene.reset_every == 0;
 }
 
 bool TableWorld::introduceObjectsAt(std::int64_t step) {
@@ -185,6 +222,7 @@ bool TableWorld::introduceObjectsAt(std::int64_t step) {
 std::vector<cv::Point2d> TableWorld::centres() const {
   std::vector<cv::Point2d> out;
   for (int i = 0; i < physics_.objectCount(); ++i) {
+    if (!present_[static_cast<std::size_t>(i)]) continue;
     const table::Pose p = physics_.objectPose(i);
     out.push_back(toScene(p.pos[0], p.pos[1], p.pos[2]));
   }
@@ -192,11 +230,26 @@ std::vector<cv::Point2d> TableWorld::centres() const {
 }
 
 const cv::Mat& TableWorld::goalScene() const {
-  throw std::logic_error("the table world has no goal scene yet");
+  if (!scenario_) throw std::logic_error("TableWorld: no scenario, so no goal");
+  return goal_;
 }
-std::vector<cv::Point2d> TableWorld::goalCentres() const { return {}; }
-double TableWorld::goalDistance() const { return -1.0; }
-double TableWorld::goalUtility() const { return -1.0; }
+std::vector<cv::Point2d> TableWorld::goalCentres() const { return goal_centres_; }
+
+double TableWorld::goalDistance() const {
+  if (!scenario_) return -1.0;
+  const table::TruthSpec& t = table_.truth;
+  double beyond = 0;
+  for (const ScenarioObject& o : scenario_->objects) beyond += std::max(0.0, fromGoal(o) - table_.primitives.success_radius);
+  return std::min(1.0, beyond / static_cast<double>(scenario_->objects.size()) / std::hypot(2 * t.region_x, 2 * t.region_y));
+}
+
+double TableWorld::goalUtility() const {
+  if (!scenario_) return -1.0;
+  double sum = 0;
+  for (const ScenarioObject& o : scenario_->objects)
+    if (fromGoal(o) <= table_.primitives.success_radius) sum += o.value;
+  return sum;
+}
 
 void TableWorld::save(SnapshotWriter& w) const { w.doubles(physics_.state()); }
 

@@ -17,8 +17,10 @@ namespace afford {
 
 class TableWorld : public SimWorld {
  public:
-  // The run's table, its objects set up as table.scene says (drawn by (seed, 0)). Needs an OpenGL
-  // context: one is made for the calling thread, which must be the one that uses the world.
+  // The run's table, its objects set up as table.scene says (drawn by (seed, 0)); in the extrinsic phase, the
+  // scenario's objects at their initial places (the others off the table, out of the camera's view), and the
+  // goal image drawn with them at their goal places. Needs an OpenGL context: one is made for the calling
+  // thread, which must be the one that uses the world.
   // Throws ConfigError naming the key when the objects do not fit the region, std::runtime_error when there
   // is no OpenGL to be had.
   explicit TableWorld(const RunConfig& config);
@@ -31,6 +33,9 @@ class TableWorld : public SimWorld {
   bool introduceObjectsAt(std::int64_t step) override;
   bool objectsAppearAt(std::int64_t step) const override;
   std::vector<cv::Point2d> centres() const override;
+  // Extrinsic phase: the goal image; the scenario's objects' goal places; the goal distance: the mean, over
+  // the scenario's objects, of how much further than table.primitives.success_radius each rests from its goal
+  // place, over the region's diagonal (0: every object at its goal), and the summed value of those within it.
   const cv::Mat& goalScene() const override;
   std::vector<cv::Point2d> goalCentres() const override;
   double goalDistance() const override;
@@ -51,6 +56,10 @@ class TableWorld : public SimWorld {
  private:
   // Every object at a drawn free place of the region, in its configured pose turned by a drawn yaw.
   void setUp(std::int64_t step);
+  // The scenario's objects at their initial (or goal) places, unturned; the others parked off the table.
+  void setUpScenario(bool goal);
+  // How far an object of the scenario rests from its goal place (m).
+  double fromGoal(const ScenarioObject& o) const;
   // A place for a push or a carry of `object`: drawn by (seed, step) as the truth's trials draw theirs.
   std::pair<double, double> drawPlace(std::int64_t step, int object) const;
 
@@ -60,6 +69,10 @@ class TableWorld : public SimWorld {
   table::TablePhysics physics_;
   std::unique_ptr<table::TableCamera> camera_;
   table::PrimitiveResult last_;
+  std::optional<Scenario> scenario_;   // extrinsic phase
+  cv::Mat goal_;
+  std::vector<cv::Point2d> goal_centres_;
+  std::vector<bool> present_;          // the objects in the scene (the others are parked off the table)
   mutable cv::Mat segments_;  // the camera's objects at the state it was drawn for (empty: to draw)
   mutable std::vector<std::vector<std::uint8_t>> probes_;
 };

@@ -248,7 +248,7 @@ PlannerRequest Planner::viewed(const View& v) {
     case Wait::SceneAfterAction:
       reach(true);
       // Goals phase: a move that was carried out left the object at the goal place (its silhouette is there).
-      if (pursuing_ && active_ && last_action_ == kMove && !continue_at_ &&
+      if (pursuing_ && active_ && takesPlace(config_.world, last_action_) && !continue_at_ &&
           silhouetteDistance(v.image, object_.image) == 0)
         goal_object_ = View{{}, sub_goal_.x, sub_goal_.y};
       if (!active_) {
@@ -321,7 +321,7 @@ PlannerRequest Planner::predicted(const std::vector<ForwardPrediction>& predicti
     if (observer_) checks.push_back(c);
     // Goals phase, the best guess: nearest the goal, each distance in units of its threshold; not a move onto
     // the place the object stands on (it changes nothing).
-    const bool stays = p.action == kMove &&
+    const bool stays = takesPlace(config_.world, p.action) &&
                        positionDistance(object_.x, object_.y, sub_goal_.x, sub_goal_.y, config_.position_metric) <=
                            config_.position_match;
     if (pursuing_ && !imagined && !stays) {
@@ -368,8 +368,8 @@ PlannerRequest Planner::actOnPlan(const ForwardPrediction& first, std::size_t le
 }
 
 PlannerRequest Planner::act(const ForwardPrediction& p) {
-  PlannerRequest r = request(PlannerRequest::Act, p.action == kMove ? sub_goal_.x : -1.0,
-                             p.action == kMove ? sub_goal_.y : -1.0);
+  const bool place = takesPlace(config_.world, p.action);
+  PlannerRequest r = request(PlannerRequest::Act, place ? sub_goal_.x : -1.0, place ? sub_goal_.y : -1.0);
   r.action = p.action;
   r.object_x = object_.x;
   r.object_y = object_.y;

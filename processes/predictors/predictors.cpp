@@ -368,10 +368,10 @@ void Predictors::save(SnapshotWriter& w) const {
   writePlain(out, sum, memory);
 }
 
-std::uint64_t Predictors::forwardModelBytes(int focus_side) {
+std::uint64_t Predictors::forwardModelBytes(int focus_side, WorldKind world) {
   const std::uint64_t input = 3ull * static_cast<std::uint64_t>(focus_side) * static_cast<std::uint64_t>(focus_side);
   std::uint64_t doubles = 0;
-  for (int a = 0; a < kNumActions; ++a) doubles += input * (input + 1) + 2ull * (a == kMove ? 5 : 3);  // what_, where_
+  for (int a = 0; a < kNumActions; ++a) doubles += input * (input + 1) + 2ull * (takesPlace(world, a) ? 5 : 3);  // what_, where_
   return doubles * sizeof(double);
 }
 

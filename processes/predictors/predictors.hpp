@@ -115,7 +115,7 @@ class Predictors {
   void load(SnapshotReader& r);
   // The bytes of the forward models' weights for focus images of `focus_side`, without building them: most
   // of a snapshot's or a plain checkpoint's content (the affordance component and the memory are small).
-  static std::uint64_t forwardModelBytes(int focus_side);
+  static std::uint64_t forwardModelBytes(int focus_side, WorldKind world);
   const std::array<std::int64_t, kNumActions>& executed() const { return executed_; }
   const std::array<std::int64_t, kNumActions>& successes() const { return successes_; }
   // The memory, if the configuration keeps one (RunConfig::keepsMemory).

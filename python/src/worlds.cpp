@@ -87,7 +87,7 @@ class WorldCore {
             const std::vector<std::string>& settings, const std::string& scenario)
       : config_(parseRunConfig(effectiveConfig(
             defaultConfigDir(), RunRequest{experiment, parseSystem(system), seed, std::nullopt, settings}))) {
-    if (!scenario.empty()) scenario_ = loadScenario(defaultConfigDir(), scenario, config_.world);
+    if (!scenario.empty()) scenario_ = loadScenario(defaultConfigDir(), scenario, config_);
     reset();
   }
 

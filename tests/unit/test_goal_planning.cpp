@@ -19,7 +19,7 @@ TEST(GoalPlanning, TrainedAgentSolvesTheFirstFourScenarios) {
   const Predictors trained = test::runIntrinsic(c);
   int solved = 0, tests = 0;
   for (int k = 1; k <= 4; ++k) {
-    const Scenario s = loadScenario(kConfigDir, "scenario" + std::to_string(k), c.world);
+    const Scenario s = loadScenario(kConfigDir, "scenario" + std::to_string(k), c);
     for (int rep = 0; rep < 4; ++rep) {
       c.seed = 1000 * k + rep;
       const test::GoalTestOutcome o = test::runGoalTest(c, s, trained);

@@ -91,6 +91,31 @@ TEST_F(PlannerTest, AMoveIsSentToTheSubGoalPosition) {
   EXPECT_DOUBLE_EQ(r.object_x, 0.5);
 }
 
+// The table's push and carry take a place as the grid's move does (takesPlace): each is sent to the sub-goal's,
+// and topple and roll to none.
+TEST_F(PlannerTest, EachActionOfTheWorldThatTakesAPlaceIsSentToTheSubGoalPosition) {
+  const RunConfig table = test::shippedConfig("table");
+  ASSERT_EQ(table.planner.world, WorldKind::Table);
+  for (int action = 0; action < kNumActions; ++action) {
+    PlannerConfig c = config;
+    c.world = WorldKind::Table;
+    Planner p{c};
+    ASSERT_EQ(p.startIteration().kind, Kind::LookAtGoal);
+    ASSERT_EQ(p.onView(goal).kind, Kind::LookAtSceneAt);
+    ASSERT_EQ(p.onView(scene_differs).kind, Kind::ScanScene);
+    p.onObject(view(0, 0.5, 0.8), A{0.9, 0.9, 0.9, 0.9});
+    std::vector<ForwardPrediction> predicted;
+    for (int a = 0; a < kNumActions; ++a)  // the action's prediction meets the sub-goal; the others' miss it
+      predicted.push_back(prediction(a, a == action ? 1.0 : 0.0, a == action ? 0.2 : 0.9, a == action ? 0.5 : 0.1));
+    const PlannerRequest r = p.onForward(predicted);
+    ASSERT_EQ(r.kind, Kind::Act) << action;
+    EXPECT_EQ(r.action, action);
+    const bool place = action == 0 || action == 1;  // push, carry
+    EXPECT_DOUBLE_EQ(r.x, place ? 0.2 : -1.0) << actionName(WorldKind::Table, action);
+    EXPECT_DOUBLE_EQ(r.y, place ? 0.5 : -1.0) << actionName(WorldKind::Table, action);
+  }
+}
+
 TEST_F(PlannerTest, PredictionsThatMissTheImageOrThePlaceAreNotTaken) {
   reachScan();
   planner.onObject(view(0, 0.5, 0.8), A{0.9, 0.9, 0.9, 0.9});

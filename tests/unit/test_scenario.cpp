@@ -15,7 +15,8 @@ namespace afford {
 namespace {
 
 const std::string kConfigDir = std::string(AFFORD_SOURCE_DIR) + "/config";
-const WorldConfig kWorld = test::shippedConfig().world;
+const RunConfig kRun = test::shippedConfig();
+const WorldConfig kWorld = kRun.world;
 
 // The error of parsing and validating a scenario written as YAML, or "".
 std::string errorOf(const std::string& yaml) {
@@ -36,16 +37,16 @@ TEST(Scenario, TheFiveScenariosOfFigure4Load) {
             (std::vector<std::string>{"scenario1", "scenario2", "scenario3", "scenario4", "scenario5", "utility",
                                       "utility-authors"}));
   for (int k = 1; k <= 5; ++k) {
-    const Scenario s = loadScenario(kConfigDir, "scenario" + std::to_string(k), kWorld);
+    const Scenario s = loadScenario(kConfigDir, "scenario" + std::to_string(k), kRun);
     EXPECT_EQ(s.objects.size(), static_cast<std::size_t>(k));
   }
-  const Scenario s5 = loadScenario(kConfigDir, "scenario5", kWorld);
+  const Scenario s5 = loadScenario(kConfigDir, "scenario5", kRun);
   EXPECT_EQ(s5.objects[0].initial.colour, Colour::Blue);
   EXPECT_EQ(s5.objects[0].goal.colour, Colour::Green);
   EXPECT_DOUBLE_EQ(s5.objects[4].goal.y, 0.2);  // the red circle moves to (0.5, 0.2)
   EXPECT_DOUBLE_EQ(s5.objects[4].value, 1.0);
   // The authors' utility test: scenario 4's objects, with values.
-  const Scenario ua = loadScenario(kConfigDir, "utility-authors", kWorld), s4 = loadScenario(kConfigDir, "scenario4", kWorld);
+  const Scenario ua = loadScenario(kConfigDir, "utility-authors", kRun), s4 = loadScenario(kConfigDir, "scenario4", kRun);
   ASSERT_EQ(ua.objects.size(), s4.objects.size());
   const double values[] = {1, 2, 4, 1};
   for (std::size_t i = 0; i < ua.objects.size(); ++i) {
@@ -57,7 +58,7 @@ TEST(Scenario, TheFiveScenariosOfFigure4Load) {
 }
 
 TEST(Scenario, TheUtilityTestHasTheValuesOfTable8) {
-  const Scenario u = loadScenario(kConfigDir, "utility", kWorld);
+  const Scenario u = loadScenario(kConfigDir, "utility", kRun);
   ASSERT_EQ(u.objects.size(), 4u);
   std::vector<double> values;
   for (const auto& o : u.objects) values.push_back(o.value);
@@ -196,7 +197,7 @@ TEST(Scenario, AGoalWhereAnotherObjectStartsIsRefused) {
 
 TEST(Scenario, UnknownScenarioIsRefusedWithTheKnownOnes) {
   try {
-    loadScenario(kConfigDir, "scenario9", kWorld);
+    loadScenario(kConfigDir, "scenario9", kRun);
     FAIL();
   } catch (const ConfigError& e) {
     EXPECT_NE(std::string(e.what()).find("scenario1, scenario2"), std::string::npos) << e.what();

@@ -200,3 +200,120 @@ TEST(TableWorld, AnActionInWhichTheSimulationBecameUnstableFailsAndTheSceneIsSet
 
 }  // namespace
 }  // namespace afford
+
+namespace afford {
+namespace {
+
+// A table run's extrinsic test of `scenario` (YAML of a scenario file), as the runner configures one.
+RunConfig tableTest(const std::string& scenario) {
+  RunConfig c = test::shippedConfig("table", System::IMP, 1);
+  c.phase = Phase::Extrinsic;
+  c.scenario = parseScenario(YAML::Load(scenario), "extrinsic.scenario", c.world);
+  validateScenario(*c.scenario, c);
+  return c;
+}
+
+const char* kTwoObjects = R"(
+name: two
+world: table
+objects:
+  - {object: cube, initial: {position: [0.2974, 0.3734]}, goal: {position: [0.418, 0.3734]}}
+  - {object: disc, initial: {position: [0.6593, 0.293]}, goal: {position: [0.6593, 0.293]}}
+)";
+
+TEST(TableWorld, ATestShowsTheScenariosObjectsAloneAndItsGoalImageWithThemAtTheirGoals) {
+  const RunConfig c = tableTest(kTwoObjects);
+  TableWorld w(c);
+  const auto near = [](const std::vector<cv::Point2d>& seen, double x, double y) {
+    double best = 1e9;
+    for (const cv::Point2d& b : seen) best = std::min(best, std::hypot(b.x - x, b.y - y));
+    return best;
+  };
+  const std::vector<cv::Point2d> now = blobs(w.render()), goal = blobs(w.goalScene());
+  ASSERT_EQ(now.size(), 2u) << "the scenario's two objects, the other four out of the camera's view";
+  ASSERT_EQ(goal.size(), 2u);
+  ASSERT_EQ(w.centres().size(), 2u);
+  ASSERT_EQ(w.goalCentres().size(), 2u);
+  const int width = c.table.spec.camera.width;
+  for (const ScenarioObject& o : c.scenario->objects) {
+    EXPECT_LT(near(now, o.initial.x, o.initial.y) * width, 4.0) << o.object << " starts where the scenario says";
+    EXPECT_LT(near(goal, o.goal.x, o.goal.y) * width, 4.0) << o.object << " is where its goal is in the goal image";
+  }
+  EXPECT_FALSE(w.objectsAppearAt(c.table.scene.reset_every)) << "a test's scene is not set up anew";
+}
+
+TEST(TableWorld, ATestsGoalDistanceIsZeroWhenEveryObjectRestsWithinTheSuccessRadiusOfItsGoal) {
+  const RunConfig c = tableTest(kTwoObjects);
+  TableWorld w(c);
+  const ScenarioObject& cube = c.scenario->objects[0];
+  const cv::Point2d from = w.toTable(cube.initial.x, cube.initial.y), to = w.toTable(cube.goal.x, cube.goal.y);
+  const double diagonal = std::hypot(2 * c.table.truth.region_x, 2 * c.table.truth.region_y);
+  const double radius = c.table.primitives.success_radius;
+  // The cube 15 cm from its goal, the disc at its own: half of (15 cm less the radius) over the diagonal.
+  EXPECT_NEAR(w.goalDistance(), (std::hypot(to.x - from.x, to.y - from.y) - radius) / 2 / diagonal, 1e-3);
+  EXPECT_DOUBLE_EQ(w.goalUtility(), 1.0) << "the disc is at its goal";
+  // Carried to its goal by the hand (carry: 1), given the goal's place as a planner gives it.
+  const ActionOutcome out = w.execute(0, 1, cube.initial.x, cube.initial.y, std::make_pair(cube.goal.x, cube.goal.y));
+  ASSERT_TRUE(out.on_object);
+  ASSERT_TRUE(out.succeeded) << "the cube is carried (0.99 of carries succeed)";
+  EXPECT_NEAR(out.target_x, cube.goal.x, 1e-9);
+  EXPECT_NEAR(out.target_y, cube.goal.y, 1e-9);
+  EXPECT_EQ(w.goalDistance(), 0.0);
+  EXPECT_DOUBLE_EQ(w.goalUtility(), 2.0);
+  EXPECT_EQ(blobs(w.render()).size(), 2u) << "the hand is not in the image; no object came into view";
+}
+
+TEST(TableWorld, APlaceOffTheTableIsTakenAsTheNearestPointOfTheRegion) {
+  const RunConfig c = tableTest(kTwoObjects);
+  TableWorld w(c);
+  const ScenarioObject& cube = c.scenario->objects[0];
+  // Carried toward the image's top-left corner, off the region: it rests within reach of the region's corner.
+  const ActionOutcome out = w.execute(0, 1, cube.initial.x, cube.initial.y, std::make_pair(0.0, 0.0));
+  ASSERT_TRUE(out.on_object);
+  const table::Pose p = w.physics().objectPose(cube.object_index);
+  const double r = c.table.primitives.success_radius;
+  EXPECT_LE(std::abs(p.pos[0]), c.table.truth.region_x + r);
+  EXPECT_LE(std::abs(p.pos[1]), c.table.truth.region_y + r);
+  EXPECT_EQ(blobs(w.render()).size(), 2u) << "the cube is still in view";
+}
+
+TEST(TableWorld, ATableScenarioIsRefusedNamingWhatIsWrong) {
+  const auto refusal = [](const std::string& yaml) -> std::string {
+    try {
+      tableTest(yaml);
+    } catch (const ConfigError& e) {
+      return e.what();
+    }
+    return "";
+  };
+  const std::string one = "name: t\nworld: table\nobjects:\n  - ";
+  EXPECT_NE(refusal(one + "{object: teapot, initial: {position: [0.3, 0.37]}, goal: {position: [0.4, 0.37]}}")
+                .find("'teapot' is none of table.objects (cube, ball, log, can, bar, disc)"),
+            std::string::npos);
+  EXPECT_NE(refusal(one + "{object: cube, initial: {position: [0.02, 0.37]}, goal: {position: [0.4, 0.37]}}")
+                .find("objects[0].initial.position': shows the table's point"),
+            std::string::npos);
+  EXPECT_NE(refusal(one + "{object: cube, initial: {position: [0.3, 0.37]}, goal: {position: [0.4, 0.9]}}")
+                .find("goal.position"),
+            std::string::npos);
+  EXPECT_NE(refusal(one + "{object: cube, initial: {position: [0.3, 0.37]}, goal: {position: [0.4, 0.37]}}\n"
+                          "  - {object: disc, initial: {position: [0.32, 0.37]}, goal: {position: [0.6, 0.37]}}")
+                .find("objects[1].initial.position': 'disc' is within table.scene.gap"),
+            std::string::npos);
+  EXPECT_NE(refusal("name: t\nobjects:\n  - {object: cube, initial: {position: [0.3, 0.37]}, goal: {position: [0.4, 0.37]}}")
+                .find("the scenario is of the grid world (it says no `world:`), and this run's world is table"),
+            std::string::npos);
+  // And a table scenario given to the paper's world.
+  RunConfig grid = test::shippedConfig();
+  try {
+    parseScenario(YAML::Load(one + "{object: cube, initial: {position: [0.3, 0.37]}, goal: {position: [0.4, 0.37]}}"), "",
+                  grid.world);
+    ADD_FAILURE() << "a table scenario was taken by the grid";
+  } catch (const ConfigError& e) {
+    EXPECT_NE(std::string(e.what()).find("the scenario is of the table world, and this run's world is grid"), std::string::npos)
+        << e.what();
+  }
+}
+
+}  // namespace
+}  // namespace afford

@@ -42,7 +42,7 @@ Command scenarioCommand(CLI::App& app, const FrontDoor& door) {
               std::printf("%s", emitYaml(scenarioNode(s)).c_str());
             } else {
               if (a->name.empty()) throw ConfigError("afford scenario: name a scenario, or --generate K M N");
-              s = loadScenario(door.config_dir, a->name, world);
+              s = loadScenario(door.config_dir, a->name, run);
               std::printf("%s: %zu object(s), valid. %s\n", s.name.c_str(), s.objects.size(), s.description.c_str());
             }
             if (!a->png.empty() && !cv::imwrite(a->png, scenarioPicture(s, world)))

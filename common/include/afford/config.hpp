@@ -205,10 +205,14 @@ struct ScenarioObject {
   ObjectState initial, goal;
   double value = 0;  // utility of reaching this object's goal (utility planner)
   int actions = 1;   // actions its goal needs: 1, or 2 and more for a goal that changes colour and place (issue 12)
+  // The table world: which of table.objects (its name, and its index there); shape and colour are the grid's.
+  std::string object;
+  int object_index = -1;
 };
 struct Scenario {
   std::string name;
   std::string description;
+  WorldKind world = WorldKind::Grid;  // the world it is of (`world:` in its file; the grid if not given)
   std::vector<ScenarioObject> objects;
 };
 
@@ -229,6 +233,7 @@ struct PlannerConfig {
   double success_distance = 0;      // whole scene matches the goal image (authors' code)
   PlannerKind kind = PlannerKind::Goal;  // Algorithm 2 or Algorithm 3
   Attention attention = Attention::BottomUp;  // eye.attention: the eye and the planner read one key
+  WorldKind world = WorldKind::Grid;          // world.kind: which actions are given a place (takesPlace)
   // Multi-step search (issue 12): plans of up to max_depth actions through the
   // forward models, at most max_queries forward queries per iteration.
   int max_depth = 1;                 // 1: the paper's one-step planner
@@ -381,6 +386,10 @@ Scenario parseScenario(const YAML::Node& node, const std::string& path, const Wo
 // must be one action away: the same state, a colour change in place, or a move
 // to a place no other object starts or ends in. Throws ConfigError naming the field.
 void validateScenario(const Scenario& s, const WorldConfig& world);
+// The same for a run's world, the table's included: there each object's places must lie in the table's region
+// (table.truth.region, seen through the camera) and the objects' footprints apart by table.scene.gap, in the
+// initial scene and in the goal's.
+void validateScenario(const Scenario& s, const RunConfig& run);
 
 // The file of a checkpoint taken after `actions` executed actions, beside `checkpoint`.
 std::string actionsCheckpoint(const std::string& checkpoint, std::int64_t actions);
