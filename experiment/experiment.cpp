@@ -441,6 +441,7 @@ std::vector<CheckedRun> checkExperiment(const ExperimentRequest& request) {
 int runExperiment(const ExperimentRequest& request, spdlog::logger& log) {
   const auto began = std::chrono::steady_clock::now();
   Experiment x;
+  installInterruptHandlers("");  // planning may take a while (a table's truth is estimated): a signal stops it too
   try {
     x = prepare(request);  // everything is checked before anything is written or started
   } catch (const NothingToResume& e) {

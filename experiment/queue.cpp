@@ -17,7 +17,9 @@ namespace fs = std::filesystem;
 int runQueue(const std::vector<ExperimentRequest>& requests, const std::string& resume, spdlog::logger& log) {
   const auto began = std::chrono::steady_clock::now();
   if (requests.empty()) throw ConfigError("the queue is empty: give experiment names, or a --plan file with entries");
-  // Every experiment is checked and planned before any is written or started.
+  // Every experiment is checked and planned before any is written or started; a signal stops that too (a table's
+  // truth may be estimated while planning).
+  installInterruptHandlers("");
   std::vector<Experiment> xs;
   std::map<std::string, std::string> folders;  // out dir -> the experiment writing there
   std::map<std::string, std::string> run_ids;  // run id -> the experiment running it (its log folder)

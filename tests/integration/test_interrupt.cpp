@@ -253,6 +253,28 @@ TEST(Interrupt, SigtermDuringTheExtrinsicTestsOverMemqKeepsThemAndResumeComplete
   expectSameResults(dir / "out", dir / "whole");
 }
 
+// Planning a table experiment may estimate the table's truth first (a minute): a signal then stops it between
+// two of its cells, says so, and leaves no truth, no output folder and no run behind.
+TEST(Interrupt, SigtermWhileATablesTruthIsEstimatedStopsItWritingNothing) {
+  const fs::path dir = test::tempDir("interrupt-truth");
+  Job job("experiment table --system IMP --reps 1 --steps 20 --set table.truth.trials=20 --quiet --transport memq --out " +
+              (dir / "out").string() +
+              " --log-root " + (dir / "logs").string(),
+          (dir / "first.txt").string());
+  ASSERT_TRUE(waitFor([&] { return job.output().find("estimating the table's truth") != std::string::npos || !job.running(); },
+                      60))
+      << job.output();
+  ASSERT_TRUE(job.running()) << job.output();
+  job.signal(SIGTERM);
+  const int status = job.wait(60);  // after the cell under way (20 trials, a fraction of a second)
+  EXPECT_NE(status, 0) << job.output();
+  EXPECT_NE(status, -1) << "still running a minute after SIGTERM\n" << job.output();
+  EXPECT_NE(job.output().find("interrupted while estimating the table's truth: nothing written"), std::string::npos)
+      << job.output();
+  EXPECT_TRUE(!fs::exists(dir / "logs/truth") || fs::is_empty(dir / "logs/truth")) << "a truth was written";
+  EXPECT_FALSE(fs::exists(dir / "out")) << "an output folder was made";
+}
+
 // A finished experiment resumed again (a script's rerun, a requeued job) has nothing left to do: it says so,
 // succeeds, and its folder stays as it was.
 TEST(Interrupt, ResumeRefusesAFolderWithoutAnExperimentAndAChangedPlanAndLeavesAFinishedOneAsItWas) {
