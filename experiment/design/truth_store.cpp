@@ -58,22 +58,40 @@ StoredTruth storedTruth(const YAML::Node& node, const RunConfig& cfg, const Trut
   StoredTruth out;
   const fs::path file = fs::path(a.out) / (a.experiment + "-" + h.hex() + ".json");
   out.file = file.string();
-  std::error_code size_error;
-  const auto size = fs::file_size(file, size_error);
-  if (!a.fresh && !size_error && size > kMostTableBytes)
-    log_warning(file.string() + ": " + std::to_string(size) + " bytes, more than a truth table holds (" +
-                std::to_string(kMostTableBytes) + "); estimating again");
-  if (!a.fresh && !size_error && size <= kMostTableBytes) {
-    std::ifstream in(file);
+  // A stored table: `path`'s, if it holds one of a row an object (else why not, when `say`).
+  const auto read = [&](const fs::path& path, bool say) {
+    std::error_code size_error;
+    const auto size = fs::file_size(path, size_error);
+    if (size_error) return false;
+    if (size > kMostTableBytes) {
+      if (say)
+        log_warning(path.string() + ": " + std::to_string(size) + " bytes, more than a truth table holds (" +
+                    std::to_string(kMostTableBytes) + "); estimating again");
+      return false;
+    }
+    std::ifstream in(path);
     try {
       const json stored = json::parse(in);
+      if (stored.at("key").get<std::string>() != h.hex()) throw std::runtime_error("its key is another world's");
       out.rows = stored.at("table");
       if (!out.rows.is_array() || out.rows.size() != objects.size()) throw std::runtime_error("not one row an object");
-      return out;
+      out.file = path.string();
+      return true;
     } catch (const std::exception& e) {
-      log_warning(file.string() + ": not a truth table (" + e.what() + "); estimating again");
+      if (say) log_warning(path.string() + ": not a truth table (" + e.what() + "); estimating again");
+      return false;
     }
-  }
+  };
+  if (!a.fresh && read(file, true)) return out;
+  // The same world estimated under another experiment's name (table-extrinsic extends table): the digest says so.
+  std::error_code listing;
+  if (!a.fresh)
+    for (const auto& e : fs::directory_iterator(a.out, listing)) {
+      const std::string name = e.path().filename().string(), tail = "-" + h.hex() + ".json";
+      if (e.path() != file && name.size() > tail.size() && name.compare(name.size() - tail.size(), tail.size(), tail) == 0 &&
+          read(e.path(), false))
+        return out;
+    }
   const table::TruthTable t = table::estimateTruth(tw.spec, tw.primitives, tw.truth, a.seed, trials, objects, progress);
   out.rows = tableJson(t, objects);
   out.estimated = true;

@@ -393,6 +393,13 @@ TEST(WorldTruthCommand, ATableExperimentsTruthIsEstimatedOnceAndReadAfter) {
   // The same cells, read back.
   EXPECT_EQ(first.output.substr(0, first.output.find("wrote")).substr(first.output.find("object ")),
             again.output.substr(0, again.output.find("read from")));
+  // An experiment of the same table under another name (table-extrinsic extends table) reads the same file.
+  const test::CommandResult same_world =
+      test::runAfford("world truth table-extrinsic --trials 2 --object cube --object ball --out " + out);
+  ASSERT_EQ(same_world.exit_code, 0) << same_world.output;
+  EXPECT_NE(same_world.output.find("read from " + out + "/table-"), std::string::npos) << same_world.output;
+  EXPECT_EQ(same_world.output.find("estimating"), std::string::npos) << "the same world was estimated again\n"
+                                                                      << same_world.output;
   // What is in its place and is not a table it wrote (too large, or not a table) is estimated again.
   const std::size_t at = first.output.find("wrote ") + 6;
   const std::string file = first.output.substr(at, first.output.find('\n', at) - at);
