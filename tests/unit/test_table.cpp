@@ -439,6 +439,20 @@ TEST(WorldTruthCommand, TheWrongExperimentOrObjectIsNamedWithTheFix) {
                       "friction: 1, torsional_friction: 0, rolling_friction: 0, colour: [1, 0, 0]}]'");
   EXPECT_EQ(bad.exit_code, 2);
   EXPECT_NE(bad.output.find("table.objects[0].size"), std::string::npos) << bad.output;
+  // A table scenario checked against the paper's world is refused naming the way to its own; it has no grid picture.
+  const test::CommandResult scenario = test::runAfford("scenario table1");
+  EXPECT_EQ(scenario.exit_code, 2);
+  EXPECT_NE(scenario.output.find("the scenario is of the table world, and this run's world is grid"), std::string::npos)
+      << scenario.output;
+  EXPECT_NE(scenario.output.find("e.g. table"), std::string::npos) << scenario.output;
+  const test::CommandResult own = test::runAfford("scenario table1 --experiment table");
+  EXPECT_EQ(own.exit_code, 0) << own.output;
+  EXPECT_NE(own.output.find("table1: 1 object(s), valid"), std::string::npos) << own.output;
+  const std::string png = test::tempDir("table-scenario-png") + "/t.png";
+  const test::CommandResult picture = test::runAfford("scenario table1 --experiment table --png " + png);
+  EXPECT_EQ(picture.exit_code, 2);
+  EXPECT_NE(picture.output.find("--png draws the paper's world's scenarios"), std::string::npos) << picture.output;
+  EXPECT_FALSE(std::filesystem::exists(png));
   // The camera's image is the scene a SCENE carries: no wider than the paper's world's largest scene.
   const test::CommandResult wide = test::runAfford("config table --set table.camera.width=4000");
   EXPECT_EQ(wide.exit_code, 2);

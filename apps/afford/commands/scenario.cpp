@@ -42,9 +42,20 @@ Command scenarioCommand(CLI::App& app, const FrontDoor& door) {
               std::printf("%s", emitYaml(scenarioNode(s)).c_str());
             } else {
               if (a->name.empty()) throw ConfigError("afford scenario: name a scenario, or --generate K M N");
-              s = loadScenario(door.config_dir, a->name, run);
+              try {
+                s = loadScenario(door.config_dir, a->name, run);
+              } catch (const ConfigError& e) {
+                if (e.key() != "world") throw;
+                throw ConfigError(std::string(e.what()) + " (--experiment names an experiment of its world, e.g. " +
+                                      (world.kind == WorldKind::Grid ? "table" : "base") + ")",
+                                  e.key());
+              }
               std::printf("%s: %zu object(s), valid. %s\n", s.name.c_str(), s.objects.size(), s.description.c_str());
             }
+            if (!a->png.empty() && world.kind != WorldKind::Grid)
+              throw ConfigError("--png draws the paper's world's scenarios; a table scenario's scenes are the camera's, "
+                                "drawn by the environment (afford render of a test's log shows its goal image)",
+                                "--png");
             if (!a->png.empty() && !cv::imwrite(a->png, scenarioPicture(s, world)))
               throw std::runtime_error("cannot write " + a->png);
             return 0;
