@@ -125,7 +125,7 @@ void conditionsText(std::ostringstream& t, const Summary& summary, const Plan& p
   bool header = false;
   for (const auto& sys : plan.systems) {
     const SystemExtrinsic* ex = extrinsicOf(summary, sys);
-    if (!ex || !ex->conditions || ex->conditions->empty()) continue;
+    if (!ex || !ex->conditions || ex->conditions->size() < 2) continue;  // one condition: the table above is it
     const bool by_scenario = ex->scenarios.size() <= 6;
     std::vector<std::string> columns;
     if (by_scenario) {

@@ -453,6 +453,11 @@ TEST(Console, TestsUnderPlannerConditionsShowEachConditionsShareSolved) {
   EXPECT_NE(bottom.find("0.00 (1.0)"), std::string::npos) << text;
   EXPECT_NE(top.find("0.75 (2.0)"), std::string::npos) << text;
   EXPECT_LT(bottom.find("1.00"), bottom.find("0.00")) << "table1's column before table2's\n" << text;
+  // A design without conditions has one, unnamed: the table of scenarios is it, and nothing more is printed.
+  summary.systems["IMP"].extrinsic->conditions->resize(1);
+  summary.systems["IMP"].extrinsic->conditions->front().label.clear();
+  const std::string one = tablesText(summary, plan, "");
+  EXPECT_EQ(one.find("Extrinsic tests by condition"), std::string::npos) << one;
 }
 
 }  // namespace
