@@ -70,9 +70,8 @@ void TableWorld::setUpScenario(bool goal) {
     present_[static_cast<std::size_t>(o.object_index)] = true;
   }
   // Parked: in a row on the floor's plane beyond the rim, further than the camera sees.
-  const table::CameraSpec& c = table_.spec.camera;
-  const double seen = c.above * std::tan(c.fovy_deg * kPi / 360) * c.width / c.height;  // the view's larger half-extent
-  const double park = std::max({seen, table_.spec.half_x, table_.spec.half_y}) + 0.5;
+  const auto corner = table_.spec.camera.tableAtPixel(0, 0);  // the view's half-extents on the table
+  const double park = std::max({std::abs(corner[0]), std::abs(corner[1]), table_.spec.half_x, table_.spec.half_y}) + 0.5;
   for (int i = 0, parked = 0; i < physics_.objectCount(); ++i)
     if (!present_[static_cast<std::size_t>(i)]) physics_.placeObject(i, park + 0.3 * parked++, 0, 0);
   physics_.forward();
