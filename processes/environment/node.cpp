@@ -28,12 +28,7 @@ EnvironmentNode::EnvironmentNode(lcm::LCM& lcm, std::shared_ptr<spdlog::logger> 
 }
 
 void EnvironmentNode::onConfigured(const RunConfig& config) {
-  if (config.world.kind == WorldKind::Table)
-    env_ = std::make_unique<TableWorld>(config);
-  else if (config.phase == Phase::Extrinsic)
-    env_ = std::make_unique<Environment>(config, *config.scenario);
-  else
-    env_ = std::make_unique<Environment>(config);
+  env_ = makeWorld(config);
   next_decision_ = 0;
 }
 

@@ -10,7 +10,7 @@
 #include "afford/decision_t.hpp"
 #include "afford/node.hpp"
 #include "environment/environment.hpp"
-#include "environment/table_world.hpp"
+#include "environment/world.hpp"
 
 namespace afford {
 

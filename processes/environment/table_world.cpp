@@ -115,6 +115,14 @@ void TableWorld::setUp(std::int64_t step) {
 
 cv::Mat TableWorld::render() const { return camera_->rgb(physics_); }
 
+void TableWorld::observe(std::function<void(const table::TablePhysics&)> f, int every) {
+  if (!f) return physics_.observe(nullptr, every);
+  physics_.observe([this, f = std::move(f)] {
+    physics_.forward();
+    f(physics_);
+  }, every);
+}
+
 std::vector<std::string> TableWorld::probeNames() const {
   std::vector<std::string> out;
   for (const table::ObjectSpec& o : table_.spec.objects) out.push_back(o.name);

@@ -6,6 +6,7 @@
 // width. The object an action is for is the one the camera shows at the gaze's pixel (the renderer's
 // segmentation); a place in scene units is the point of the table's top that pixel shows. No LCM here.
 #pragma once
+#include <functional>
 #include <memory>
 
 #include "environment/environment.hpp"
@@ -45,6 +46,9 @@ class TableWorld : public SimWorld {
   void load(SnapshotReader& r) override;
 
   const table::TablePhysics& physics() const { return physics_; }
+  // `f` with the simulation after every `every`-th physics step of the actions from now on, its bodies' places
+  // computed for a camera (the run goes on as without it); an empty `f` stops it (afford render --primitive).
+  void observe(std::function<void(const table::TablePhysics&)> f, int every);
   // The last action's primitive: its physics steps, whether the scene came to rest.
   const table::PrimitiveResult& lastPrimitive() const { return last_; }
   // The object the camera shows at a place (scene units), or -1.

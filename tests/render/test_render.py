@@ -165,8 +165,42 @@ def main():
     intrinsic = OUT / "logs" / "render-base-IMP-s1"
     for log, every, window in ((intrinsic, 10, 20), (intrinsic, 10, 1000), (OUT / "multi-step-top-down-budget.lcm", 3, 50)):
         same_frames_shuffled(log, every, window)
+    primitives = table_primitives()
     print(f"render: {checked} files checked; an existing file refused; a failed encoder left nothing; a cut log: "
-          f"{frames} of {full} frames; shuffled logs give the same frames")
+          f"{frames} of {full} frames; shuffled logs give the same frames; {primitives}")
+
+
+def table_primitives():
+    """--primitive on a short table run: the action of a step that acted, simulated again up to it from the log
+    (the command refuses unless its end is the scene the run published), drawn a frame every 1/fps s of physics
+    with half a second before and a second after; a step that did not act, one the run never reached and a grid
+    run's log are refused, each saying why, and nothing is written."""
+    run = subprocess.run([str(AFFORD), "experiment", "table", "--system", "IMP", "--reps", "1", "--steps", "60",
+                          "--set", "table.truth.trials=2", "--transport", "memq", "--quiet", "--run-prefix", "render",
+                          "--out", str(OUT / "table"), "--log-root", str(OUT / "logs")], capture_output=True, text=True)
+    assert run.returncode == 0, run.stdout + run.stderr
+    log = OUT / "logs" / "render-table-IMP-s1"
+    acted = [m["step"] for m in afford.read_log(log) if m.channel == "DECISION" and m["acted"]]
+    idle = [m["step"] for m in afford.read_log(log) if m.channel == "DECISION" and not m["acted"]]
+    assert len(acted) >= 2 and idle, f"the table run acted at {acted}, passed at {idle}"
+    step = acted[-1]  # every action of the run before it simulated again
+    video = OUT / "primitive.mp4"
+    r = render(log, video, "--primitive", str(step), "--fps", "50")
+    frames, w, h = said(r.stdout)
+    assert probe(video) == (frames, w, h), f"ffprobe reads {probe(video)}, the command says {(frames, w, h)}"
+    physics = int(r.stdout.split(" (")[1].split(" physics steps")[0])
+    # table.timestep of the shipped table experiment, 4 ms: a frame every 1 / (50 x 0.004) = 5 physics steps
+    assert frames == 25 + physics // 5 + 50, f"{frames} frames for {physics} physics steps"
+    assert w == 2 * 2 * 320 and h == 2 * 240 + 36, f"{w}x{h}"
+    assert f"at step {step}" in r.stdout and f"the run's {len(acted) - 1} earlier actions" in r.stdout, r.stdout
+    for args, why in (((str(idle[-1]),), "the agent did not act"), (("100000",), "no DECISION of step 100000")):
+        out = OUT / f"refused-{args[0]}.mp4"
+        r = render(log, out, "--primitive", *args, check=False)
+        assert r.returncode != 0 and why in r.stderr and "steps that acted near it: " in r.stderr, r.stderr
+        assert not out.exists() and not Path(str(out) + ".partial").exists(), f"{out} written"
+    r = render(OUT / "base-scenario3.lcm", OUT / "grid.mp4", "--primitive", "1", check=False)
+    assert r.returncode != 0 and "world.kind: grid" in r.stderr, r.stderr
+    return f"a table run's primitive at step {step}: {frames} frames of {w}x{h} ({physics} physics steps)"
 
 
 if __name__ == "__main__":

@@ -8,6 +8,7 @@
 #include <fstream>
 #include <cstring>
 #include <memory>
+#include <thread>
 
 #include "environment/table/camera.hpp"
 #include "environment/table/physics.hpp"
@@ -331,6 +332,36 @@ TEST_F(TableCameraTest, TheSameStateGivesTheSameImageBytes) {
   a.step(200);
   a.placeObject(0, 0.2, 0.45, 0);
   EXPECT_GT(cv::norm(ca.rgb(a), ib, cv::NORM_INF), 0) << "an object moved and the image stayed";
+}
+
+// Its buffers live in the OpenGL context of the thread that made it: another thread's draw is refused, saying so
+// (afford.env's worlds are each made and stepped on one thread of their own).
+TEST_F(TableCameraTest, ACameraDrawsOnTheThreadThatMadeItAlone) {
+  TablePhysics sim(sampleSpec());
+  TableCamera camera(sim);
+  std::string refused;
+  std::thread other([&] {
+    try {
+      camera.rgb(sim);
+    } catch (const std::logic_error& e) {
+      refused = e.what();
+    }
+  });
+  other.join();
+  EXPECT_NE(refused.find("the thread that made it"), std::string::npos) << refused;
+  EXPECT_EQ(camera.rgb(sim).cols, 160);
+}
+
+// A person's view draws the hand, which the agent's leaves out; the oblique one looks at the table from its side.
+TEST_F(TableCameraTest, APersonsViewDrawsTheHandTheAgentsLeavesOut) {
+  TablePhysics sim(sampleSpec());
+  sim.commandHand({0.0, 0.0, 0.05, 0.0, 1.0});
+  sim.step(500);
+  sim.forward();
+  TableCamera agent(sim), person(sim, {true, false}), side(sim, {true, true});
+  const cv::Mat a = agent.rgb(sim), p = person.rgb(sim), o = side.rgb(sim);
+  EXPECT_GT(cv::countNonZero(cv::Mat(cv::abs(p - a)).reshape(1)), 50) << "the hand over the centre is not drawn";
+  EXPECT_GT(cv::norm(o, p, cv::NORM_INF), 0) << "the side view is the top camera's";
 }
 
 TEST_F(TableCameraTest, EachObjectIsSeenWhereTheSimulationHasItInItsOwnColour) {

@@ -3,6 +3,7 @@
 #include <EGL/egl.h>
 #include <EGL/eglext.h>
 
+#include <algorithm>
 #include <cmath>
 #include <cstdio>
 #include <stdexcept>
@@ -63,9 +64,10 @@ void GlContext::onThisThread() {
   if (!context) context = std::make_unique<GlContext>();
 }
 
-TableCamera::TableCamera(const TablePhysics& physics)
+TableCamera::TableCamera(const TablePhysics& physics, CameraView view)
     : width_(physics.spec().camera.width),
       height_(physics.spec().camera.height),
+      owner_(std::this_thread::get_id()),
       spec_(physics.spec().camera),
       scene_(std::make_unique<mjvScene>()),
       camera_(std::make_unique<mjvCamera>()),
@@ -74,7 +76,7 @@ TableCamera::TableCamera(const TablePhysics& physics)
   mjv_defaultScene(scene_.get());
   mjv_defaultCamera(camera_.get());
   mjv_defaultOption(option_.get());
-  option_->geomgroup[kHandGroup] = 0;  // the hand is not in the agent's image: its blobs are the objects
+  option_->geomgroup[kHandGroup] = view.hand ? 1 : 0;  // the hand is not in the agent's image: its blobs are the objects
   mjr_defaultContext(context_.get());
   mjv_makeScene(physics.model(), scene_.get(), 1000);
   mjr_makeContext(physics.model(), context_.get(), mjFONTSCALE_100);
@@ -86,6 +88,14 @@ TableCamera::TableCamera(const TablePhysics& physics)
   mjr_setBuffer(mjFB_OFFSCREEN, context_.get());
   camera_->type = mjCAMERA_FIXED;
   camera_->fixedcamid = mj_name2id(physics.model(), mjOBJ_CAMERA, "top");
+  if (view.oblique) {  // from beyond the table's near long side, looking down at its centre
+    const TableSpec& t = physics.spec();
+    camera_->type = mjCAMERA_FREE;
+    camera_->lookat[0] = camera_->lookat[1] = camera_->lookat[2] = 0;
+    camera_->distance = 0.8 * std::max(t.half_x, t.half_y) / std::tan(t.camera.fovy_deg * M_PI / 360.0);
+    camera_->azimuth = 0;   // looking along +x, the table's long side (y) across the image
+    camera_->elevation = -45;
+  }
   // What a plain camera sees: no reflections, shadows or sky.
   scene_->flags[mjRND_SHADOW] = 0;
   scene_->flags[mjRND_REFLECTION] = 0;
@@ -98,6 +108,9 @@ TableCamera::~TableCamera() {
 }
 
 void TableCamera::draw(const TablePhysics& physics, bool segments, unsigned char* out) {
+  if (std::this_thread::get_id() != owner_)
+    throw std::logic_error("the table's camera draws on the thread that made it alone (its OpenGL context is that "
+                           "thread's): make the world on the thread that uses it");
   scene_->flags[mjRND_SEGMENT] = segments;
   scene_->flags[mjRND_IDCOLOR] = segments;
   mjv_updateScene(physics.model(), const_cast<mjData*>(physics.data()), option_.get(), nullptr, camera_.get(),

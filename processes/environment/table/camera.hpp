@@ -6,6 +6,7 @@
 #include <opencv2/core.hpp>
 
 #include <memory>
+#include <thread>
 
 #include "environment/table/physics.hpp"
 
@@ -27,10 +28,18 @@ class GlContext {
   void* context_ = nullptr;
 };
 
+// What a camera shows: the agent's (the fixed top camera, the hand left out: its blobs are the objects), or
+// a person's (the hand drawn too; from the top camera, or from the side of the table looking down at it).
+struct CameraView {
+  bool hand = false;
+  bool oblique = false;
+};
+
 class TableCamera {
  public:
-  // Needs a GlContext current on this thread, for as long as the camera is used.
-  explicit TableCamera(const TablePhysics& physics);
+  // Needs a GlContext current on this thread, for as long as the camera is used: it draws on this thread alone
+  // (another thread's draw throws std::logic_error saying so).
+  explicit TableCamera(const TablePhysics& physics, CameraView view = {});
   ~TableCamera();
   TableCamera(const TableCamera&) = delete;
   TableCamera& operator=(const TableCamera&) = delete;
@@ -51,6 +60,7 @@ class TableCamera {
   void draw(const TablePhysics& physics, bool segments, unsigned char* out);
 
   int width_ = 0, height_ = 0;
+  std::thread::id owner_;  // the thread whose OpenGL context holds this camera's buffers
   CameraSpec spec_;  // its pinhole (afford/table_world.hpp)
   std::unique_ptr<mjvScene> scene_;
   std::unique_ptr<mjvCamera> camera_;

@@ -2,6 +2,7 @@
 
 #include <cmath>
 #include <cstring>
+#include <string>
 #include <stdexcept>
 
 namespace afford::table {
@@ -67,7 +68,17 @@ TablePhysics::~TablePhysics() {
 }
 
 void TablePhysics::step(int n) {
-  for (int i = 0; i < n; ++i) mj_step(model_, data_);
+  for (int i = 0; i < n; ++i) {
+    mj_step(model_, data_);
+    if (observer_ && ++observed_ % observe_every_ == 0) observer_();
+  }
+}
+
+void TablePhysics::observe(std::function<void()> f, int every) {
+  if (every < 1) throw std::invalid_argument("TablePhysics::observe: every " + std::to_string(every) + " (at least 1)");
+  observer_ = std::move(f);
+  observe_every_ = every;
+  observed_ = 0;
 }
 
 Pose TablePhysics::objectPose(int i) const {

@@ -5,6 +5,7 @@
 #include <mujoco/mujoco.h>
 
 #include <array>
+#include <functional>
 #include <memory>
 #include <string>
 #include <vector>
@@ -39,6 +40,9 @@ class TablePhysics {
 
   void step(int n = 1);
   double time() const { return data_->time; }
+  // `f` called after every `every`-th physics step from now on (a person's video of a primitive); it must leave
+  // the simulation as it was (forward() does). An empty `f` stops it.
+  void observe(std::function<void()> f, int every = 1);
 
   int objectCount() const { return static_cast<int>(spec_.objects.size()); }
   Pose objectPose(int i) const;
@@ -72,6 +76,9 @@ class TablePhysics {
   std::vector<int> object_body_, object_qpos_, object_dof_;  // per object
   std::vector<int> geom_object_;                              // per geom: object index or -1
   int hand_body_ = -1;
+  std::function<void()> observer_;
+  int observe_every_ = 1;
+  long long observed_ = 0;  // physics steps since observe()
   std::array<int, 6> actuator_{};  // hand_x, hand_y, hand_z, hand_yaw, finger_l, finger_r
   std::array<int, 4> hand_qpos_{};  // hand_x, hand_y, hand_z, hand_yaw
 };
