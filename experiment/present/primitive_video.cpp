@@ -140,7 +140,7 @@ PrimitiveVideoResult renderPrimitive(const PrimitiveVideoOptions& o, spdlog::log
 
   const int object = table.objectAt(chosen.x, chosen.y);
   r.object = object >= 0 ? config.table.spec.objects[static_cast<std::size_t>(object)].name : "none";
-  r.action = table::tableActionName(chosen.action);
+  r.action = std::string(actionName(config.world.kind, chosen.action));
   const std::string what = "step " + std::to_string(o.step) + ": " + r.action + " " + r.object;
   table::TableCamera top(table.physics(), {true, false}), side(table.physics(), {true, true});
   const int every = std::max(1, static_cast<int>(std::lround(1.0 / (o.fps * config.table.spec.timestep))));

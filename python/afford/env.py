@@ -306,10 +306,11 @@ GAZE_COLOUR = (255, 255, 0)  # yellow, as afford-viewer's gaze box
 
 def gaze_box(scene: np.ndarray, gaze, side: int) -> np.ndarray:
     """A copy of `scene` (H x W x 3) with a one-pixel frame around the side x side window centred at
-    `gaze` ((x, y) in [0, 1], y down the rows), drawn just outside the window; clipped at the edges."""
+    `gaze` ((x, y) in scene units: a pixel's column and row over the width, y down the rows), drawn just
+    outside the window; clipped at the edges."""
     out = np.array(scene, copy=True)
     height, width = out.shape[:2]
-    cx, cy = int(round(float(gaze[0]) * width)), int(round(float(gaze[1]) * height))
+    cx, cy = int(round(float(gaze[0]) * width)), int(round(float(gaze[1]) * width))
     left, top = cx - side // 2 - 1, cy - side // 2 - 1
     right, bottom = left + side + 1, top + side + 1
     rows, cols = slice(max(top, 0), min(bottom, height - 1) + 1), slice(max(left, 0), min(right, width - 1) + 1)
@@ -336,9 +337,13 @@ class AffordEnv(gymnasium.Env if gymnasium else object):
     planner.success_distance), or a function of the step's info.
 
     Observation: {"scene": H x W x 3 uint8, "focus": side x side x 3 uint8,
-    "gaze": (x, y) in [0, 1]}. Action: {"act": 0-3 (move, turn green, turn
-    red, turn blue) or 4 (pass), "look": (x, y) in [0, 1] to look there
-    first, or negative to act on what the scan found}. An episode is
+    "gaze": (x, y) in scene units (a pixel's column and row over the width)}.
+    Action: {"act": 0-3 (the world's actions, `action_names`: move, turn
+    green, turn red, turn blue in the paper's world; push, carry, topple,
+    roll on the physical table) or 4 (pass), "look": (x, y) to look there
+    first, or negative to act on what the scan found}. A table world
+    (world.kind: table) is used on the thread that made it (its camera's
+    OpenGL context). An episode is
     truncated after the experiment's run.steps steps. Its last step's info
     has "episode": {"r": its return, "l": its length, "t": seconds since its
     reset}, as Gymnasium's RecordEpisodeStatistics (1.0) reports them.
@@ -361,9 +366,10 @@ class AffordEnv(gymnasium.Env if gymnasium else object):
         self.render_mode = render_mode
         self._seed = seed
         self._world = _afford.World(world, system, seed, self._args[2], self._args[3])
-        size, side = self._world.scene_size, self._world.focus_side
+        height, width, side = self._world.scene_height, self._world.scene_width, self._world.focus_side
+        self.action_names = tuple(self._world.action_names)
         self.observation_space = _dict({
-            "scene": _box(0, 255, (size, size, 3), np.uint8),
+            "scene": _box(0, 255, (height, width, 3), np.uint8),
             "focus": _box(0, 255, (side, side, 3), np.uint8),
             "gaze": _box(0.0, 1.0, (2,), np.float64),
         })
@@ -425,13 +431,15 @@ class AffordEnv(gymnasium.Env if gymnasium else object):
         pass
 
 
-def flat_action(action: int, grid: int) -> tuple[int, float, float]:
+def flat_action(action: int, grid: int, rows: float = 1.0) -> tuple[int, float, float]:
     """FlatAffordEnv's action `action` as (act, x, y): 0-4 act on what the scan found (x = y = -1); then, for
     each place of a grid x grid grid over the scene (row by row) and each act 0-3, look at the place's centre
-    and act. An action not in Discrete(5 + 4 grid^2) raises TypeError or ValueError naming the space."""
+    and act. Places are in scene units (over the scene's width): `rows` is the scene's height over its width
+    (1 in the paper's world, 0.75 on the table's 320 x 240 camera). An action not in Discrete(5 + 4 grid^2)
+    raises TypeError or ValueError naming the space."""
     _check_grid(grid)
     check_in(Discrete(PASS + 1 + 4 * int(grid) ** 2), action)
-    return _afford.flat_action(int(action), int(grid))
+    return _afford.flat_action(int(action), int(grid), float(rows))
 
 
 def flat_observation(scene: np.ndarray, gaze, side: int, goal: np.ndarray | None) -> np.ndarray:
@@ -459,8 +467,8 @@ class FlatAffordEnv(AffordEnv):
         super().__init__(world=world, seed=seed, system=system, set=set, scenario=scenario, reward=reward,
                          render_mode=render_mode)
         self.grid = int(grid)
-        size = self._world.scene_size
-        self.observation_space = _box(0, 255, (size, size, 7 if scenario else 4), np.uint8)
+        self.observation_space = _box(0, 255, (self._world.scene_height, self._world.scene_width, 7 if scenario else 4),
+                                      np.uint8)
         self.action_space = _discrete(PASS + 1 + 4 * self.grid * self.grid)
 
     def reset(self, *, seed: int | None = None, options: dict[str, Any] | None = None):
@@ -469,7 +477,7 @@ class FlatAffordEnv(AffordEnv):
 
     def step(self, action: int):
         check_in(self.action_space, action)
-        return self._step(*_afford.flat_action(int(action), self.grid))
+        return self._step(*_afford.flat_action(int(action), self.grid, self._world.rows))
 
     def _observe(self):
         return self._world.flat_observation()
@@ -509,8 +517,9 @@ class AffordVectorEnv:
         self._threads, self._copy = int(threads), bool(copy)
         self._seed = seed
         self._make(seed)
-        size = self._worlds.scene_size
-        self.single_observation_space = _box(0, 255, (size, size, 7 if scenario else 4), np.uint8)
+        self.action_names = tuple(self._worlds.action_names)
+        self.single_observation_space = _box(0, 255, (self._worlds.scene_height, self._worlds.scene_width,
+                                                      7 if scenario else 4), np.uint8)
         self.single_action_space = _discrete(PASS + 1 + 4 * self.grid * self.grid)
         self.observation_space = _box(0, 255, (self.num_envs,) + self.single_observation_space.shape, np.uint8)
         self.action_space = _multi_discrete([self.single_action_space.n] * self.num_envs)

@@ -5,8 +5,12 @@
 
 #include <algorithm>
 #include <cmath>
+#include <condition_variable>
 #include <cstring>
+#include <exception>
+#include <functional>
 #include <memory>
+#include <mutex>
 #include <optional>
 #include <stdexcept>
 #include <string>
@@ -16,6 +20,7 @@
 #include "afford/config.hpp"
 #include "afford/process_main.hpp"
 #include "environment/environment.hpp"
+#include "environment/world.hpp"
 #include "experiment/design/experiment_file.hpp"
 #include "eye/eye.hpp"
 
@@ -37,19 +42,29 @@ int focusSideOf(const Focus& f) {
   return side;
 }
 
-void checkAction(int act) {
-  if (act < 0 || act > kNumActions)
-    throw std::invalid_argument("action " + std::to_string(act) + ": 0-3 (move, turn green, turn red, turn blue) "
-                                "or 4 (pass)");
+// The world's actions by name, in the order of its tables: the grid's (move, turn green, ...) or the table's.
+std::vector<std::string> actionNames(WorldKind kind) {
+  std::vector<std::string> out;
+  for (int a = 0; a < kNumActions; ++a)
+    out.emplace_back(actionName(kind, a));
+  return out;
 }
 
-// FlatAffordEnv's action `a` on a grid x grid grid: 0-4 act on what the scan found (x = y = -1); then, per
-// place of the grid (row by row) and act 0-3, look at the place's centre and act.
+void checkAction(int act, WorldKind kind) {
+  if (act >= 0 && act <= kNumActions) return;
+  std::string names;
+  for (const std::string& n : actionNames(kind)) names += (names.empty() ? "" : ", ") + n;
+  throw std::invalid_argument("action " + std::to_string(act) + ": 0-3 (" + names + ") or 4 (pass)");
+}
+
+// FlatAffordEnv's action `a` on a grid x grid grid over the scene: 0-4 act on what the scan found (x = y = -1);
+// then, per place of the grid (row by row) and act 0-3, look at the place's centre and act. Scene units are a
+// pixel's column and row over the width: a scene `rows` (its height over its width; the table's 0.75) high.
 struct FlatAction {
   int act;
   double x, y;
 };
-FlatAction flatAction(std::int64_t a, int grid) {
+FlatAction flatAction(std::int64_t a, int grid, double rows = 1.0) {
   const std::int64_t n = kNumActions + 1 + std::int64_t{kNumActions} * grid * grid;
   if (a < 0 || a >= n)
     throw std::invalid_argument("action " + std::to_string(a) + ": 0 to " + std::to_string(n - 1) +
@@ -58,15 +73,16 @@ FlatAction flatAction(std::int64_t a, int grid) {
   if (a <= kNumActions) return {static_cast<int>(a), -1.0, -1.0};
   const std::int64_t cell = (a - kNumActions - 1) / kNumActions, act = (a - kNumActions - 1) % kNumActions;
   const std::int64_t row = cell / grid, col = cell % grid;
-  return {static_cast<int>(act), (static_cast<double>(col) + 0.5) / grid, (static_cast<double>(row) + 0.5) / grid};
+  return {static_cast<int>(act), (static_cast<double>(col) + 0.5) / grid, rows * (static_cast<double>(row) + 0.5) / grid};
 }
 
 // FlatAffordEnv's observation into `out` (H x W x C, C = 4, or 7 with a goal): the scene's RGB, the eye's
-// side x side window around the gaze as a mask channel (255 inside, clipped at the edges), the goal's RGB.
+// side x side window around the gaze (scene units: over the width) as a mask channel (255 inside, clipped at the
+// edges), the goal's RGB.
 void writeFlat(const std::uint8_t* scene, int height, int width, double gx, double gy, int side,
                const std::uint8_t* goal, std::uint8_t* out) {
   const int channels = goal ? 7 : 4;
-  const int cx = static_cast<int>(std::lround(gx * width)), cy = static_cast<int>(std::lround(gy * height));
+  const int cx = static_cast<int>(std::lround(gx * width)), cy = static_cast<int>(std::lround(gy * width));
   const int top = cy - side / 2, left = cx - side / 2;
   for (int r = 0; r < height; ++r)
     for (int c = 0; c < width; ++c) {
@@ -92,7 +108,9 @@ class WorldCore {
   }
 
   void reset() {
-    env_ = scenario_ ? std::make_unique<Environment>(config_, *scenario_) : std::make_unique<Environment>(config_);
+    RunConfig world = config_;  // the environment process's world: an extrinsic one starts in the scenario
+    if (scenario_) world.phase = Phase::Extrinsic, world.scenario = scenario_;
+    env_ = makeWorld(world);
     eye_ = std::make_unique<Eye>(config_);
     step_ = 0;
     eye_->setScene(env_->render(), env_->centres());
@@ -102,8 +120,8 @@ class WorldCore {
 
   // Look at (x, y) first when both are >= 0 (else at what the scan found), then do `act` (0-3; 4 passes).
   StepOutcome step(int act, double x, double y) {
-    checkAction(act);
-    if (x >= 0 && y >= 0) eye_->lookAt(std::min(x, 1.0), std::min(y, 1.0));
+    checkAction(act, config_.world.kind);
+    if (x >= 0 && y >= 0) eye_->lookAt(std::min(x, 1.0), std::min(y, rows()));
     const Focus f = eye_->focus();
     StepOutcome out;
     out.step = step_;
@@ -123,7 +141,7 @@ class WorldCore {
     return out;
   }
 
-  // The observation into caller's buffers: the scene (size x size x 3), the focus (side x side x 3), the gaze.
+  // The observation into caller's buffers: the scene (height x width x 3), the focus (side x side x 3), the gaze.
   void observe(std::uint8_t* scene, std::uint8_t* focus, double* gaze) const {
     const cv::Mat& s = eye_->scene();
     std::memcpy(scene, s.data, s.total() * 3);
@@ -143,7 +161,11 @@ class WorldCore {
 
   std::int64_t stepCount() const { return step_; }
   std::int64_t steps() const { return config_.steps; }
-  int sceneSize() const { return config_.world.size_px; }
+  int sceneWidth() const { return config_.world.size_px; }
+  int sceneHeight() const { return config_.world.rows(); }
+  WorldKind kind() const { return config_.world.kind; }
+  // The scene's height in scene units (over its width): 1 in the grid.
+  double rows() const { return static_cast<double>(sceneHeight()) / sceneWidth(); }
   int focusSide() const { return focusSideOf(eye_->focus()); }
   double successDistance() const { return config_.planner.success_distance; }
   bool hasScenario() const { return scenario_.has_value(); }
@@ -155,7 +177,7 @@ class WorldCore {
  private:
   RunConfig config_;
   std::optional<Scenario> scenario_;
-  std::unique_ptr<Environment> env_;
+  std::unique_ptr<SimWorld> env_;  // world.kind: the grid or the table
   std::unique_ptr<Eye> eye_;
   std::int64_t step_ = 0;
 };
@@ -187,8 +209,8 @@ class World {
       : core_(experiment, system, seed, settings, scenario) {}
   void reset() { core_.reset(); }
   py::dict observation() const {
-    const int size = core_.sceneSize(), side = core_.focusSide();
-    py::array_t<std::uint8_t> scene({size, size, 3}), focus({side, side, 3});
+    const int w = core_.sceneWidth(), h = core_.sceneHeight(), side = core_.focusSide();
+    py::array_t<std::uint8_t> scene({h, w, 3}), focus({side, side, 3});
     py::array_t<double> gaze(2);
     core_.observe(scene.mutable_data(), focus.mutable_data(), gaze.mutable_data());
     py::dict o;
@@ -197,8 +219,7 @@ class World {
   }
   py::dict step(int act, double x, double y) { return infoOf(core_.step(act, x, y)); }
   py::array_t<std::uint8_t> flatObservation() const {
-    const int size = core_.sceneSize();
-    py::array_t<std::uint8_t> out({size, size, core_.flatChannels()});
+    py::array_t<std::uint8_t> out({core_.sceneHeight(), core_.sceneWidth(), core_.flatChannels()});
     core_.observeFlat(out.mutable_data());
     return out;
   }
@@ -208,6 +229,77 @@ class World {
   WorldCore core_;
 };
 
+// Threads that each keep their worlds for the worlds' whole life: a table world's camera draws only on the thread
+// that made it (its OpenGL context), so each world is made, stepped, reset and destroyed on its lane's thread.
+// One lane is the caller's own thread.
+class Lanes {
+ public:
+  explicit Lanes(std::size_t n) {
+    for (std::size_t i = 1; i < n; ++i) threads_.emplace_back([this, i] { work(i); });
+  }
+  ~Lanes() {
+    {
+      std::lock_guard<std::mutex> l(m_);
+      stop_ = true;
+    }
+    go_.notify_all();
+    for (auto& t : threads_) t.join();
+  }
+  Lanes(const Lanes&) = delete;
+  Lanes& operator=(const Lanes&) = delete;
+  std::size_t size() const { return threads_.size() + 1; }
+  // f(lane) on every lane at once (lane 0 on this thread); returns when all have, rethrowing the first exception.
+  void each(const std::function<void(std::size_t)>& f) {
+    {
+      std::lock_guard<std::mutex> l(m_);
+      job_ = &f, pending_ = threads_.size(), error_ = nullptr, ++generation_;
+    }
+    go_.notify_all();
+    std::exception_ptr mine;
+    try {
+      f(0);
+    } catch (...) {
+      mine = std::current_exception();
+    }
+    std::unique_lock<std::mutex> l(m_);
+    done_.wait(l, [&] { return pending_ == 0; });
+    job_ = nullptr;
+    if (mine) std::rethrow_exception(mine);
+    if (error_) std::rethrow_exception(error_);
+  }
+
+ private:
+  void work(std::size_t lane) {
+    std::uint64_t seen = 0;
+    std::unique_lock<std::mutex> l(m_);
+    for (;;) {
+      go_.wait(l, [&] { return stop_ || generation_ != seen; });
+      if (stop_) return;
+      seen = generation_;
+      const auto* f = job_;
+      l.unlock();
+      std::exception_ptr e;
+      try {
+        (*f)(lane);
+      } catch (...) {
+        e = std::current_exception();
+      }
+      l.lock();
+      if (e && !error_) error_ = e;
+      if (--pending_ == 0) done_.notify_all();
+    }
+  }
+
+  std::vector<std::thread> threads_;
+  std::mutex m_;
+  std::condition_variable go_, done_;
+  const std::function<void(std::size_t)>* job_ = nullptr;
+  std::uint64_t generation_ = 0;
+  std::size_t pending_ = 0;
+  std::exception_ptr error_;
+  bool stop_ = false;
+};
+
 // Many worlds of one experiment, each with its seed, stepped together: stepFlat() takes a FlatAffordEnv
 // action for each and steps them with the GIL released (on `threads` threads), writing their observations
 // into one array of (worlds, H, W, C). Each world goes exactly as a World of its seed.
@@ -215,22 +307,38 @@ class Worlds {
  public:
   Worlds(const std::string& experiment, const std::string& system, const std::vector<std::int64_t>& seeds,
          const std::vector<std::string>& settings, const std::string& scenario, int threads)
-      : threads_(std::max(1, threads)) {
+      : lanes_(std::min<std::size_t>(static_cast<std::size_t>(std::max(1, threads)), std::max<std::size_t>(1, seeds.size()))) {
     if (seeds.empty()) throw std::invalid_argument("Worlds: no seeds (one world per seed)");
-    for (const std::int64_t seed : seeds) worlds_.emplace_back(experiment, system, seed, settings, scenario);
+    worlds_.resize(seeds.size());
+    try {
+      forEach([&](std::size_t i) {
+        worlds_[i] = std::make_unique<WorldCore>(experiment, system, seeds[i], settings, scenario);
+      });
+    } catch (...) {
+      destroy();
+      throw;
+    }
   }
+  ~Worlds() { destroy(); }
+  Worlds(const Worlds&) = delete;
+  Worlds& operator=(const Worlds&) = delete;
 
   std::size_t size() const { return worlds_.size(); }
-  const WorldCore& front() const { return worlds_.front(); }
+  const WorldCore& front() const { return *worlds_.front(); }
   const WorldCore& world(std::size_t i) const { return const_cast<Worlds*>(this)->at(i); }
 
-  // World `i` back at its start.
-  void reset(std::size_t i) { at(i).reset(); }
+  // World `i` back at its start (on its lane).
+  void reset(std::size_t i) {
+    WorldCore& w = at(i);
+    lanes_.each([&](std::size_t lane) {
+      if (lane == laneOf(i)) w.reset();
+    });
+  }
 
   // Every world's FlatAffordEnv observation, (worlds, H, W, C).
   py::array_t<std::uint8_t> flatObservation() const {
     py::array_t<std::uint8_t> out = flatBuffer();
-    for (std::size_t i = 0; i < worlds_.size(); ++i) worlds_[i].observeFlat(flatAt(out, i));
+    for (std::size_t i = 0; i < worlds_.size(); ++i) worlds_[i]->observeFlat(flatAt(out, i));
     return out;
   }
 
@@ -247,7 +355,7 @@ class Worlds {
       throw std::invalid_argument("actions: one per world (" + std::to_string(n) + "), not shape " +
                                   shapeText(actions));
     std::vector<FlatAction> decoded;
-    for (py::ssize_t i = 0; i < n; ++i) decoded.push_back(flatAction(actions.at(i), grid));
+    for (py::ssize_t i = 0; i < n; ++i) decoded.push_back(flatAction(actions.at(i), grid, front().rows()));
     std::vector<StepOutcome> out(worlds_.size());
     std::vector<char> terminated(worlds_.size()), truncated(worlds_.size());
     if (flat_.size() == 0) flat_ = flatBuffer();  // written in place every step (the caller copies it)
@@ -256,9 +364,9 @@ class Worlds {
     std::vector<std::string> errors(worlds_.size());
     {
       py::gil_scoped_release free;
-      parallel([&](std::size_t i) {
+      forEach([&](std::size_t i) {
         try {
-          WorldCore& w = worlds_[i];
+          WorldCore& w = *worlds_[i];
           out[i] = w.step(decoded[i].act, decoded[i].x, decoded[i].y);
           terminated[i] = goal_reward && w.goalReached();
           truncated[i] = w.stepCount() >= w.steps();
@@ -296,20 +404,21 @@ class Worlds {
   }
 
  private:
-  // f(i) for every world, on up to `threads_` threads (the caller has released the GIL).
-  template <class F>
-  void parallel(F f) {
-    const std::size_t t = std::min<std::size_t>(static_cast<std::size_t>(threads_), worlds_.size());
-    auto run = [&](std::size_t from, std::size_t to) {
-      for (std::size_t i = from; i < to; ++i) f(i);
-    };
-    if (t <= 1) return run(0, worlds_.size());
-    std::vector<std::thread> pool;
-    const std::size_t chunk = (worlds_.size() + t - 1) / t;
-    for (std::size_t from = chunk; from < worlds_.size(); from += chunk)
-      pool.emplace_back(run, from, std::min(worlds_.size(), from + chunk));
-    run(0, std::min(worlds_.size(), chunk));
-    for (auto& th : pool) th.join();
+  // World i's lane: the worlds are dealt to the lanes in turn.
+  std::size_t laneOf(std::size_t i) const { return i % lanes_.size(); }
+  // f(i) for every world, each on its lane's thread.
+  void forEach(const std::function<void(std::size_t)>& f) {
+    lanes_.each([&](std::size_t lane) {
+      for (std::size_t i = lane; i < worlds_.size(); i += lanes_.size()) f(i);
+    });
+  }
+  // Every world destroyed on its lane (a table world's camera frees its buffers in its thread's OpenGL context).
+  void destroy() {
+    try {
+      forEach([&](std::size_t i) { worlds_[i].reset(); });
+    } catch (...) {  // (a destructor does not throw)
+    }
+    worlds_.clear();
   }
   static py::dict infoArrays(const std::vector<StepOutcome>& out) {
     const auto n = static_cast<py::ssize_t>(out.size());
@@ -330,8 +439,9 @@ class Worlds {
     return info;
   }
   py::array_t<std::uint8_t> flatBuffer() const {
-    const auto size = static_cast<py::ssize_t>(front().sceneSize());
-    return py::array_t<std::uint8_t>({static_cast<py::ssize_t>(worlds_.size()), size, size,
+    return py::array_t<std::uint8_t>({static_cast<py::ssize_t>(worlds_.size()),
+                                      static_cast<py::ssize_t>(front().sceneHeight()),
+                                      static_cast<py::ssize_t>(front().sceneWidth()),
                                       static_cast<py::ssize_t>(front().flatChannels())});
   }
   static std::uint8_t* flatAt(py::array_t<std::uint8_t>& a, std::size_t i) {
@@ -340,7 +450,7 @@ class Worlds {
   WorldCore& at(std::size_t i) {
     if (i >= worlds_.size())
       throw py::index_error("world " + std::to_string(i) + " of " + std::to_string(worlds_.size()));
-    return worlds_[i];
+    return *worlds_[i];
   }
   template <class A>
   static std::string shapeText(const A& a) {
@@ -349,18 +459,20 @@ class Worlds {
     return s + ")";
   }
 
-  std::vector<WorldCore> worlds_;
-  int threads_;
+  Lanes lanes_;
+  std::vector<std::unique_ptr<WorldCore>> worlds_;
   py::array_t<std::uint8_t> flat_;  // stepFlat's observations, written in place
 };
 
 }  // namespace
 
 void defineWorlds(py::module_& m) {
-  m.def("flat_action", [](std::int64_t a, int grid) {
-        const FlatAction f = flatAction(a, grid);
+  m.def("flat_action", [](std::int64_t a, int grid, double rows) {
+        if (!(rows > 0 && rows <= 16)) throw std::invalid_argument("rows " + std::to_string(rows) + ": the scene's height over its width, in (0, 16]");
+        const FlatAction f = flatAction(a, grid, rows);
         return py::make_tuple(f.act, f.x, f.y);
-      }, py::arg("action"), py::arg("grid"), "FlatAffordEnv's action as (act, x, y) (afford.env.flat_action).");
+      }, py::arg("action"), py::arg("grid"), py::arg("rows") = 1.0,
+      "FlatAffordEnv's action as (act, x, y) (afford.env.flat_action); rows: the scene's height over its width.");
   m.def("flat_observation",
         [](py::array_t<std::uint8_t, py::array::c_style | py::array::forcecast> scene, std::pair<double, double> gaze,
            int side, std::optional<py::array_t<std::uint8_t, py::array::c_style | py::array::forcecast>> goal) {
@@ -385,7 +497,10 @@ void defineWorlds(py::module_& m) {
       .def("step", &World::step, py::arg("act"), py::arg("x") = -1.0, py::arg("y") = -1.0)
       .def_property_readonly("step_count", [](const World& w) { return w.core().stepCount(); })
       .def_property_readonly("steps", [](const World& w) { return w.core().steps(); })
-      .def_property_readonly("scene_size", [](const World& w) { return w.core().sceneSize(); })
+      .def_property_readonly("scene_width", [](const World& w) { return w.core().sceneWidth(); })
+      .def_property_readonly("scene_height", [](const World& w) { return w.core().sceneHeight(); })
+      .def_property_readonly("action_names", [](const World& w) { return actionNames(w.core().kind()); })
+      .def_property_readonly("rows", [](const World& w) { return w.core().rows(); })
       .def_property_readonly("focus_side", [](const World& w) { return w.core().focusSide(); })
       .def_property_readonly("success_distance", [](const World& w) { return w.core().successDistance(); })
       .def("goal", [](const World& w) { return image(w.core().goalScene()); })
@@ -403,7 +518,9 @@ void defineWorlds(py::module_& m) {
       .def("flat_observation", &Worlds::flatObservation)
       .def("step_flat", &Worlds::stepFlat, py::arg("actions"), py::arg("grid"), py::arg("goal_reward"))
       .def_property_readonly("steps", [](const Worlds& w) { return w.front().steps(); })
-      .def_property_readonly("scene_size", [](const Worlds& w) { return w.front().sceneSize(); })
+      .def_property_readonly("scene_width", [](const Worlds& w) { return w.front().sceneWidth(); })
+      .def_property_readonly("scene_height", [](const Worlds& w) { return w.front().sceneHeight(); })
+      .def_property_readonly("action_names", [](const Worlds& w) { return actionNames(w.front().kind()); })
       .def_property_readonly("focus_side", [](const Worlds& w) { return w.front().focusSide(); })
       .def_property_readonly("success_distance", [](const Worlds& w) { return w.front().successDistance(); })
       .def("goal", [](const Worlds& w, std::size_t i) { return image(w.world(i).goalScene()); }, py::arg("index"));

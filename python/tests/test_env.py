@@ -315,3 +315,91 @@ def test_constructors_refuse_what_they_do_not_take():
                                                                       "9223372036854775806")]:
         with pytest.raises(error, match=f"^{says}"):
             make_it()
+
+
+# ---- the physical table (world.kind: table): MuJoCo, the camera, the hand ---------------------------------------
+
+def test_the_table_world_goes_as_the_processes_table_run(tmp_path):
+    """world="table": fed a table run's decisions, the environment and the eye of afford.env see what the run's
+    eye saw at every step (the camera's 320 x 240 image, the gaze, the focus window), and its actions succeed as
+    often as the run's did: one world, whichever runs it."""
+    from conftest import afford as run_afford
+    steps = 40
+    run_afford("experiment", "table", "--system", "IMP", "--reps", "1", "--steps", str(steps), "--set",
+               "table.truth.trials=2", "--run-prefix", "py", "--out", str(tmp_path / "out"), "--log-root",
+               str(tmp_path / "logs"), cwd=tmp_path)
+    log = afford.read_log(tmp_path / "logs" / "py-table-IMP-s1", channels=["FOCUS", "DECISION", "EFFECT"])
+    focus = {m["step"]: m for m in log.channel("FOCUS")}
+    decisions = {m["step"]: m for m in log.channel("DECISION")}
+    env = AffordEnv(world="table", seed=1, set={"run.steps": steps})
+    assert env.action_names == ("push", "carry", "topple", "roll")
+    assert env.observation_space["scene"].shape == (240, 320, 3)
+    obs, _ = env.reset(seed=1)
+    acted = 0
+    for t in range(steps):
+        assert np.allclose(obs["gaze"], [focus[t]["x"], focus[t]["y"]]), t
+        assert np.array_equal(obs["focus"], focus[t]["image"]), t
+        d = decisions[t]
+        acted += int(d["acted"])
+        obs, reward, _, truncated, info = env.step({"act": int(d["action"]) if d["acted"] else PASS, "look": None})
+        assert env.observation_space.contains(obs)
+    assert truncated and acted > 5
+
+
+def test_table_worlds_batched_on_threads_go_as_single_worlds():
+    """A table world's camera draws only on the thread that made it (its OpenGL context): the batched worlds
+    keep each on a thread of its own, and on 1 or 3 threads they go as FlatAffordEnv of the same seeds; a world
+    stepped from another thread is refused, saying why."""
+    import threading
+    n, seed, steps = 4, 7, 6
+    settings = {"run.steps": steps}
+    singles = [FlatAffordEnv(world="table", seed=seed + i, set=settings, grid=3) for i in range(n)]
+    single_obs = [e.reset(seed=seed + i)[0] for i, e in enumerate(singles)]
+    assert single_obs[0].shape == (240, 320, 4)
+    rng = np.random.default_rng(5)
+    actions = [rng.integers(0, singles[0].action_space.n, n) for _ in range(steps + 2)]
+    expected = [[e.step(int(a[i]))[:2] for i, e in enumerate(singles)] for a in actions[:steps]]
+    for threads in (1, 3):
+        vec = AffordVectorEnv(n, world="table", seed=seed, set=settings, grid=3, threads=threads)
+        obs, _ = vec.reset(seed=seed)
+        assert vec.action_names == ("push", "carry", "topple", "roll") and obs.shape == (n, 240, 320, 4)
+        assert all(np.array_equal(obs[i], single_obs[i]) for i in range(n)), threads
+        for t in range(steps):
+            obs, reward, terminated, truncated, info = vec.step(actions[t])
+            for i in range(n):
+                o, r = expected[t][i]
+                assert r == reward[i] and np.array_equal(obs[i] if not truncated[i] else info["final_observation"][i],
+                                                         o), (threads, t, i)
+        assert truncated.all()
+    env = AffordEnv(world="table", seed=1)
+    env.reset()
+    said = []
+    other = threading.Thread(target=lambda: said.append(_error_of(lambda: env.step({"act": 0, "look": None}))))
+    other.start()
+    other.join()
+    assert "the thread that made it" in said[0], said
+
+
+def _error_of(f):
+    try:
+        f()
+    except Exception as e:  # noqa: BLE001 - the message is what is tested
+        return str(e)
+    return "no error"
+
+
+def test_a_table_flat_action_looks_at_a_place_of_the_wider_than_high_scene():
+    """Places are scene units, a pixel's column and row over the width: the table's 320 x 240 image is 0.75 high,
+    so the grid's places span that, and the eye's window is drawn where its gaze is."""
+    assert flat_action(5 + 4 * 8, 3, rows=0.75) == (0, 5 / 6, 0.75 * 5 / 6)
+    env = FlatAffordEnv(world="table", seed=2, grid=3)
+    env.reset(seed=2)
+    obs, *_ = env.step(5 + 4 * 8 + 2)  # look at the last place (bottom right), topple
+    plain = AffordEnv(world="table", seed=2)
+    plain.reset(seed=2)
+    expected, *_ = plain.step({"act": 2, "look": [5 / 6, 0.75 * 5 / 6]})
+    assert np.array_equal(obs, flat_observation(expected["scene"], expected["gaze"], 21, None))
+    rows, cols = np.nonzero(obs[:, :, 3])  # the window around the next scan's gaze, both coordinates over the width
+    gx, gy = expected["gaze"]
+    assert abs((rows.min() + rows.max()) / 2 - gy * 320) <= 1 and abs((cols.min() + cols.max()) / 2 - gx * 320) <= 1
+    assert 0 < gy * 320 < 240 and gy * 320 - gy * 240 > 12, expected["gaze"]  # (a window placed by the height is off)
