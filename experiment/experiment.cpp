@@ -432,7 +432,9 @@ int runPrepared(Experiment& x, const std::chrono::steady_clock::time_point began
 std::vector<CheckedRun> checkExperiment(const ExperimentRequest& request) {
   if (request.plan.run_prefix.empty() && !request.resume)
     throw ConfigError("checking an experiment needs a run prefix: none is reserved by a check");
-  const Experiment x = prepare(request);
+  ExperimentRequest checked = request;
+  checked.plan.with_truth = false;  // runs nothing, so measures nothing: a table's truth is not estimated for it
+  const Experiment x = prepare(checked);
   std::vector<CheckedRun> runs;
   for (const PlannedRun& r : x.runs) runs.push_back({r.spec.run_id, r.system, r.spec.steps});
   return runs;

@@ -25,6 +25,21 @@ bool HeldFile::tryHold(const std::string& path, Mode mode, int open_flags) {
   return true;
 }
 
+bool HeldFile::hold(const std::string& path, Mode mode, int open_flags) {
+  release();
+  const int fd = ::open(path.c_str(), open_flags | O_CLOEXEC, 0644);
+  if (fd < 0) return false;
+  while (::flock(fd, mode == Mode::Exclusive ? LOCK_EX : LOCK_SH) != 0) {
+    if (errno == EINTR) continue;
+    const int err = errno;
+    ::close(fd);
+    errno = err;
+    return false;
+  }
+  fd_ = fd;
+  return true;
+}
+
 void HeldFile::release() {
   if (fd_ >= 0) ::close(fd_);  // (which lets go of the lock)
   fd_ = -1;

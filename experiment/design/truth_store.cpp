@@ -2,11 +2,16 @@
 
 #include <mujoco/mujoco.h>
 
+#include <fcntl.h>
+
+#include <cerrno>
+#include <cstring>
 #include <filesystem>
 #include <fstream>
 #include <stdexcept>
 
 #include "afford/checksum.hpp"
+#include "afford/file_lock.hpp"
 #include "afford/version.hpp"
 #include "afford/yaml_reader.hpp"
 #include "environment/table/truth.hpp"
@@ -92,13 +97,24 @@ StoredTruth storedTruth(const YAML::Node& node, const RunConfig& cfg, const Trut
           read(e.path(), false))
         return out;
     }
+  // One estimate of a world at a time in a folder (the workers of a study share one): a second process waits for
+  // the first's lock, then reads what it wrote.
+  fs::create_directories(file.parent_path());
+  HeldFile estimating;
+  const std::string lock = file.string() + ".lock";
+  if (!estimating.tryHold(lock, HeldFile::Mode::Exclusive, O_RDWR | O_CREAT)) {
+    if (errno != EWOULDBLOCK) throw std::runtime_error("cannot create " + lock + ": " + std::strerror(errno));
+    log_warning("another process is estimating this truth (it holds " + lock + "): waiting for it");
+    if (!estimating.hold(lock, HeldFile::Mode::Exclusive, O_RDWR | O_CREAT))
+      throw std::runtime_error("cannot lock " + lock + ": " + std::strerror(errno));
+  }
+  if (!a.fresh && read(file, false)) return out;  // written by a process that held the lock meanwhile
   const table::TruthTable t = table::estimateTruth(tw.spec, tw.primitives, tw.truth, a.seed, trials, objects, progress);
   out.rows = tableJson(t, objects);
   out.estimated = true;
   const json stored{{"experiment", a.experiment}, {"seed", a.seed}, {"trials", trials}, {"afford", affordVersion()},
                     {"mujoco", mj_version()}, {"key", h.hex()}, {"table", out.rows}};
-  fs::create_directories(file.parent_path());
-  const fs::path tmp = file.string() + ".part";
+  const fs::path tmp = file.string() + ".part";  // (written under the lock: no other writer of it)
   {
     std::ofstream f(tmp);
     f << stored.dump(2) << "\n";

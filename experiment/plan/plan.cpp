@@ -185,9 +185,10 @@ PlannedRun planRun(const Plan& plan, const PlanRequest& o, const std::string& pr
 }
 
 // A table experiment's runs are measured against the table's truth (`afford world truth`, its defaults: seed 1,
-// table.truth.trials), read from <log-root>/truth or estimated there first; each run is given it as
-// table.objects[i].affordance, unless the configuration gives one already.
+// table.truth.trials), read from the request's truth_dir (default <log-root>/truth) or estimated there first;
+// each run is given it as table.objects[i].affordance, unless the configuration gives one already.
 PlanRequest withTableTruth(const PlanRequest& given) {
+  if (!given.with_truth) return given;
   const std::string dir = given.config_dir.empty() ? defaultConfigDir() : given.config_dir;
   const YAML::Node node = effectiveConfig(dir, RunRequest{given.experiment, System::IMP, given.seed, given.steps, given.settings});
   const RunConfig c = parseRunConfig(node);
@@ -196,7 +197,10 @@ PlanRequest withTableTruth(const PlanRequest& given) {
                   [](const table::ObjectSpec& t) { return t.has_affordance; }))
     return given;
   const StoredTruth t = storedTruth(
-      node, c, TruthRequest{given.experiment, 1, 0, {}, (fs::path(given.log_root) / "truth").string(), false, codeFingerprint()},
+      node, c,
+      TruthRequest{given.experiment, 1, 0, {},
+                   given.truth_dir.empty() ? (fs::path(given.log_root) / "truth").string() : given.truth_dir, false,
+                   codeFingerprint()},
       [](const std::string& w) { spdlog::warn("{}", w); },
       [&, told = false](int object, int action) mutable {
         if (!told)

@@ -30,6 +30,9 @@ struct PlanRequest {
   std::string keep_logs = "all";           // all | first | none: which runs are recorded
   std::string keep_checkpoints = "all";    // all | first | none: the intrinsic runs' checkpoints kept at the end
   std::string log_root = "logs";           // each run's folder (its log and checkpoints) is log_root/<run-id>
+  std::string truth_dir;                   // a table world's truth is kept there (default: log_root/truth)
+  bool with_truth = true;                  // false: planned without a table's truth, none estimated (a check
+                                           // of the request, which runs nothing; not kept)
   // What an experiment keeps of it (DIR/experiment.json, experiment/state.hpp).
   template <class V>
   void visit(V& v) {
@@ -50,6 +53,7 @@ struct PlanRequest {
     v("scenarios", scenarios);
     visitNullable(v, "tables", tables);
     visitNullable(v, "table_seed", table_seed);
+    v.since("truth_dir", truth_dir, std::string());  // (before issue 58: log_root/truth, or no table)
   }
 };
 

@@ -78,7 +78,7 @@ def _request(experiment: str, system: Any, reps: int | None, steps: int | None, 
              extrinsic_reps: int | None, scenarios: Iterable[str], keep_logs: str, run_prefix: str, reuse_agents: bool,
              progress: str, log_level: str, motivation: Any, affordance: Any, goals: Any,
              processes: dict[str, str] | None, tables: int | None, table_seed: int | None,
-             replace: bool) -> tuple[dict[str, Any], Path]:
+             replace: bool, truth_dir: str | Path | None = None) -> tuple[dict[str, Any], Path]:
     """afford.run's request to the C++ runner, checked as far as Python checks it, and its folder."""
     _count("reps", reps)
     _count("steps", steps)
@@ -106,6 +106,7 @@ def _request(experiment: str, system: Any, reps: int | None, steps: int | None, 
         "extrinsic_reps": extrinsic_reps, "scenarios": list(scenarios), "run_prefix": run_prefix,
         "progress": progress, "reuse_agents": reuse_agents, "log_level": log_level,
         "tables": tables, "table_seed": table_seed, "replace": bool(replace),
+        "truth_dir": None if truth_dir is None else str(truth_dir),
     }
     return request, out
 
@@ -118,6 +119,7 @@ def run(experiment: str, system: str | Iterable[str] | None = None, reps: int | 
         log_level: str = "info", motivation: Any = None, affordance: Any = None, goals: Any = None,
         processes: dict[str, str] | None = None,
         tables: int | None = None, table_seed: int | None = None, replace: bool = False,
+        truth_dir: str | Path | None = None,
         on_curve: Callable[[CurvePoint], str | None] | None = None,
         say: Callable[[str], None] | None = _to_stderr) -> Experiment:
     """Run an experiment as `afford experiment` does and return what afford.load returns.
@@ -147,6 +149,8 @@ def run(experiment: str, system: str | Iterable[str] | None = None, reps: int | 
     the place of the paper's affordance and learning-progress predictors, in
     this process (memq); predictors.affordance.kind is set to its kind.
     `tables`, `table_seed`: random tables (--tables, --table-seed).
+    `truth_dir`: where a table world's truth is read, or estimated first
+    (--truth-dir; default `log_root`/truth).
     `replace`: `out` holds a finished experiment: remove its files and
     write this one in their place (without it, such a folder raises
     ConfigError; an experiment never mixes with another's files).
@@ -171,7 +175,7 @@ def run(experiment: str, system: str | Iterable[str] | None = None, reps: int | 
     """
     request, out = _request(experiment, system, reps, steps, set, transport, out, log_root, seed, jobs,
                             extrinsic_reps, scenarios, keep_logs, run_prefix, reuse_agents, progress, log_level,
-                            motivation, affordance, goals, processes, tables, table_seed, replace)
+                            motivation, affordance, goals, processes, tables, table_seed, replace, truth_dir)
     if on_curve is not None:
         if not callable(on_curve):
             raise TypeError(f"afford.run(on_curve={on_curve!r}): a function of a CurvePoint")

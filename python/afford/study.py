@@ -450,7 +450,8 @@ def tune(out: str | Path, experiment: str = "base", params: dict[str, Any] | Non
     string ("log:0.001:0.1"). `objective`: affordance_mae (default), curve_mae, success, "FILE.py:FUNCTION" or a
     function of the afford.load result; `direction` defaults to the named objective's. Every trial runs
     `experiment` for `system` with the same `seed` (its runs differ only in the parameters), `reps` runs of
-    `steps` steps, `set` fixed, in this process (memq), into out/trials/NNNN. `prune` (default: for the error
+    `steps` steps, `set` fixed, in this process (memq), into out/trials/NNNN; a table world's truth is estimated
+    once per world into out/truth, which every trial and worker reads. `prune` (default: for the error
     objectives) stops a trial whose curve's error falls behind the other trials': `pruner` "halving" (successive
     halving, from `prune_warmup` of the first run's steps on) or "median" (Optuna's median pruner, once
     `prune_startup` trials have finished); see _pruner.
@@ -544,6 +545,7 @@ def _run_trial(study, trial, d, folder: Path, offsets: list[int], total: int, va
         e = run(d["experiment"], system=d["system"], reps=d["reps"], steps=d["steps"], set={**d["set"], **trial.params},
                 seed=d["seed"], extrinsic_reps=d["extrinsic_tests"], scenarios=d["scenarios"],
                 keep_logs=d["keep_logs"], out=where, run_prefix=f"trial{trial.number:04d}", log_level=log_level,
+                truth_dir=folder / "truth",
                 progress="none", on_curve=on_curve)
     except ExperimentStopped as x:
         if x.reason == "pruned":

@@ -132,6 +132,7 @@ ExperimentRequest requestFrom(const py::dict& request) {
   o.host.jobs = request["jobs"].cast<int>();
   o.write.out_dir = request["out"].cast<std::string>();
   o.plan.log_root = request["log_root"].cast<std::string>();
+  if (request.contains("truth_dir") && !request["truth_dir"].is_none()) o.plan.truth_dir = request["truth_dir"].cast<std::string>();
   o.host.transport = request["transport"].cast<std::string>();
   o.plan.keep_logs = request["keep_logs"].cast<std::string>();
   o.plan.settings = request["settings"].cast<std::vector<std::string>>();

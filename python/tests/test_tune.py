@@ -562,3 +562,18 @@ def test_a_range_given_in_python_and_on_the_command_line_is_one_study():
     given = parse_param("k", afford.Float(0.005, 1, log=True)).spec()
     assert given == parse_param("k", "log:0.005:1").spec() == parse_param("k", "log:0.005:1.0").spec()
     assert afford.Int(1, 8).spec() == parse_param("k", "int:1:8").spec()
+
+
+def test_a_table_study_estimates_the_truth_once_for_every_trial(tmp_path, capfd):
+    """A table world's trials are measured against its truth, estimated once into the study's folder (out/truth)
+    and read by every trial after; checking the study's keys estimates none. A study varying the table's own
+    physics (a key of the table section) has a truth per world it tries."""
+    s = afford.tune(tmp_path / "s", "table", params={"motivation.leak": "float:0.1:0.5"}, trials=2, steps=40,
+                    set={"table.truth.trials": 2}, keep_logs="none", say=None, log_level="info")
+    assert s.trials["state"].tolist() == ["COMPLETE", "COMPLETE"]
+    stored = sorted((tmp_path / "s" / "truth").glob("table-*.json"))
+    assert len(stored) == 1, stored
+    assert not list((tmp_path / "s" / "trials").glob("*/logs/truth")), "a trial estimated its own truth"
+    said = "".join(capfd.readouterr())
+    assert said.count("estimating the table's truth") == 1, said
+    assert said.count("(estimated before)") == 1, said

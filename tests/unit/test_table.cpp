@@ -6,6 +6,7 @@
 
 #include <cmath>
 #include <fstream>
+#include <future>
 #include <cstring>
 #include <memory>
 #include <thread>
@@ -448,6 +449,26 @@ TEST(WorldTruthCommand, ATableExperimentsTruthIsEstimatedOnceAndReadAfter) {
   const test::CommandResult rough = test::runAfford(args + " --set table.top.friction=1.2");
   ASSERT_EQ(rough.exit_code, 0) << rough.output;
   EXPECT_NE(rough.output.find("wrote"), std::string::npos) << rough.output;
+}
+
+// Two processes asked for the same truth at once (a study's workers, sharing its truth folder): one estimates it,
+// the other waits for its lock and reads what it wrote; both print the same cells.
+TEST(WorldTruthCommand, TwoProcessesAskingForOneTruthEstimateItOnce) {
+  const std::string out = test::tempDir("world-truth-twice");
+  const std::string args = "world truth table --trials 8 --object cube --object ball --out " + out;
+  auto a = std::async(std::launch::async, [&] { return test::runAfford(args); });
+  auto b = std::async(std::launch::async, [&] { return test::runAfford(args); });
+  const test::CommandResult ra = a.get(), rb = b.get();
+  ASSERT_EQ(ra.exit_code, 0) << ra.output;
+  ASSERT_EQ(rb.exit_code, 0) << rb.output;
+  const bool a_wrote = ra.output.find("wrote " + out) != std::string::npos,
+             b_wrote = rb.output.find("wrote " + out) != std::string::npos;
+  EXPECT_NE(a_wrote, b_wrote) << "estimated " << (a_wrote && b_wrote ? "twice" : "by neither") << "\n"
+                              << ra.output << "\n" << rb.output;
+  const test::CommandResult& reader = a_wrote ? rb : ra;
+  EXPECT_NE(reader.output.find("read from " + out), std::string::npos) << reader.output;
+  const auto cells = [](const std::string& o) { return o.substr(o.find("object "), o.find("cube ") + 200 - o.find("object ")); };
+  EXPECT_EQ(cells(ra.output), cells(rb.output));
 }
 
 TEST(WorldTruthCommand, TheWrongExperimentOrObjectIsNamedWithTheFix) {

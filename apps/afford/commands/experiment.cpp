@@ -64,6 +64,9 @@ void addFirstOptions(CLI::App* exp, Args& a) {
   exp->add_option("--config", a.file,
                   "an experiment file anywhere, instead of NAME (it may extend a shipped one: extends: base)");
   exp->add_option("--log-root", o.plan.log_root, "folder of the run logs (<log-root>/<run-id>/)")->capture_default_str();
+  exp->add_option("--truth-dir", o.plan.truth_dir,
+                  "a table world's truth, read there or estimated there first (default: <log-root>/truth; "
+                  "afford tune's trials share their study's)");
   exp->add_option("--run-prefix", o.plan.run_prefix, "first part of every run id (default: date-time)");
   exp->add_option("--set", o.plan.settings,
                   "override a config value, e.g. --set motivation.leak=0.2 (repeatable); several values sweep it: "

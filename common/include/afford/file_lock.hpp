@@ -21,6 +21,8 @@ class HeldFile {
   // Opens `path` with `open_flags` (O_CREAT with mode 0644 if given) and takes its lock without waiting:
   // false if another holder has it (or the file cannot be opened: errno says which).
   bool tryHold(const std::string& path, Mode mode, int open_flags);
+  // The same, waiting for the lock until the holder lets go (or dies): false only if the file cannot be opened.
+  bool hold(const std::string& path, Mode mode, int open_flags);
   int fd() const { return fd_; }  // the descriptor holding it (-1: none)
   void release();
 
