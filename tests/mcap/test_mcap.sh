@@ -1,6 +1,6 @@
 #!/usr/bin/env bash
 # afford export, read by others: two stored extrinsic tests (tests/data/explain) and short runs
-# of IMP and GOALS (memq, recorded here) exported as MCAP files (zstd chunks; one also without
+# of IMP and GOALS and of IMP on the physical table (memq, recorded here) exported as MCAP files (zstd chunks; one also without
 # compression), each read with Foxglove's own reader by tools/mcapcheck/check.mjs (every record,
 # the index, the summary, the CRCs, each message against its JSON Schema, each PNG by its signature,
 # each image a message names on its topic), then every message compared with the run's
@@ -29,6 +29,11 @@ done
   --run-prefix mcap --out "$out/intrinsic" --log-root "$out/logs" >"$out/intrinsic.txt" 2>&1 ||
   { cat "$out/intrinsic.txt"; echo "the intrinsic and goals runs failed"; exit 1; }
 logs+=("$out/logs/mcap-base-IMP-s1" "$out/logs/mcap-base-GOALS-s1")
+# A run of the physical table (world.kind: table): the camera's 320 x 240 images, the table's actions.
+"$build/bin/afford" experiment table --system IMP --reps 1 --steps 60 --set table.truth.trials=2 --transport memq --quiet \
+  --keep-logs all --run-prefix mcap --out "$out/table" --log-root "$out/logs" >"$out/table.txt" 2>&1 ||
+  { cat "$out/table.txt"; echo "the table run failed"; exit 1; }
+logs+=("$out/logs/mcap-table-IMP-s1")
 
 for log in "${logs[@]}"; do
   name=$(basename "$log" .lcm)

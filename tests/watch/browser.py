@@ -15,6 +15,8 @@
   browser.py playback URL OUT [IDLE_URL]  the controls of a log's playback: step, seek, play, pause, speed;
                                  then IDLE_URL, a page with no run: it says so, and shows no step
                                  (OUT/watch-idle.png)
+  browser.py table URL OUT LOG    a table run's log played: its scene as the run published it, its actions named
+                                 (OUT/watch-table.png)
   browser.py hold URL FILE READY once the page follows, touch READY; keep it open until FILE exists
                                  (bench/watch.sh); print the states it took
   browser.py stream URL FILE READY  the same without a browser: a client reading the page's event stream
@@ -271,6 +273,29 @@ def playback(url, out, idle_url=None):
             idle(d, idle_url, out)
 
 
+def table(url, out, log):
+    """A table run's log played (world.kind: table): the scene the page shows at a step is the camera's image the
+    run published, 240 x 320, pixel for pixel; the affordance bars and the curves are named by the table's
+    actions. Screenshot OUT/watch-table.png."""
+    scenes, _ = scenes_of(log)
+    with Browser() as d:
+        d.get(url)
+        wait("the first step", lambda: shown(d)["scene"] and shown(d)["step"] >= 0)
+        d.execute_script("const s = document.getElementById('seek'); s.value = 30;"
+                         "s.dispatchEvent(new Event('change'));")
+        wait("the seek", lambda: shown(d)["step"] == 30)
+        at = int(shown(d)["scene_step"])
+        seen = pixels(shown(d)["scene"])
+        assert seen.shape == (240, 320, 3), f"the page's scene is {seen.shape}"
+        assert np.array_equal(seen, scenes[at]), f"the page's scene of step {at} is not the run's"
+        text = d.find_element("tag name", "body").text
+        for name in ("push", "carry", "topple", "roll"):
+            assert name in text, f"'{name}' is not on the page:\n{text[:600]}"
+        assert "turn green" not in text, "the page names the paper's actions for a table run"
+        d.save_screenshot(str(Path(out) / "watch-table.png"))
+        print(f"table: the scene of step {at}, 320 x 240, as the run published it; its actions named")
+
+
 def hold(url, until, ready):
     with Browser() as d:
         d.get(url)
@@ -321,6 +346,8 @@ if __name__ == "__main__":
         playback(sys.argv[2], sys.argv[3], sys.argv[4] if len(sys.argv) > 4 else None)
     elif mode == "stream":
         stream(sys.argv[2], sys.argv[3], sys.argv[4])
+    elif mode == "table":
+        table(sys.argv[2], sys.argv[3], sys.argv[4])
     elif mode == "hold":
         hold(sys.argv[2], sys.argv[3], sys.argv[4])
     else:

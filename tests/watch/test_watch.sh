@@ -6,7 +6,7 @@
 # which prints addresses that open and refuses every request without its token; a second watcher on a port in
 # use, refused; a keyed bus. The run watched gives the results of the same run unwatched (in one process); run
 # again with its agent stored, --watch says the page will not see it learn and names --no-reuse-agents.
-# Screenshots stay as artefacts: watch-live.png, watch-end.png, watch-playback.png, watch-idle.png.
+# Screenshots stay as artefacts: watch-live.png, watch-end.png, watch-playback.png, watch-idle.png, watch-table.png.
 #   tests/watch/test_watch.sh BUILD_DIR ARTEFACT_DIR
 set -euo pipefail
 root=$(cd "$(dirname "$0")/../.." && pwd)
@@ -77,6 +77,12 @@ wait_until 30 grep -qs "the page:" "$out/watch-log.log" || { cat "$out/watch-log
 wait_until 30 grep -qs "the page:" "$out/watch-keyed.log" || { cat "$out/watch-keyed.log"; exit 1; }
 wait_until 30 grep -qs "the page:" "$out/watch-keyless.log" || { cat "$out/watch-keyless.log"; exit 1; }
 /usr/bin/python3 "$root/tests/watch/browser.py" playback http://127.0.0.1:8091/ "$out" http://127.0.0.1:8094/
+# A run of the physical table played: the camera's image and the table's actions.
+"$build/bin/afford" experiment table --system IMP --reps 1 --steps 60 --set table.truth.trials=2 --transport memq --quiet \
+  --run-prefix watch --out "$out/table" --log-root "$out/logs" >"$out/table.log" 2>&1 || { cat "$out/table.log"; exit 1; }
+"$build/bin/afford" watch --log "$out/logs/watch-table-IMP-s1" --port 8096 --paused >"$out/watch-table.log" 2>&1 &
+wait_until 30 grep -qs "the page:" "$out/watch-table.log" || { cat "$out/watch-table.log"; exit 1; }
+/usr/bin/python3 "$root/tests/watch/browser.py" table http://127.0.0.1:8096/ "$out" "$out/logs/watch-table-IMP-s1"
 
 # Off loopback: the addresses printed open (this namespace has loopback alone), and the token.
 "$build/bin/afford" watch --lcm-url "$url" --bind 0.0.0.0 --port 8092 >"$out/watch-bound.log" 2>&1 &
@@ -115,4 +121,4 @@ for p in 8093 8095; do
 done
 [[ $(state http://127.0.0.1:8094) == " -1" ]] || { echo "a watcher without the key shows '$(state http://127.0.0.1:8094)'"; exit 1; }
 echo "keyed: the watchers with the key (one found as the group's) followed the run to step 300, the one without it showed nothing"
-echo "screenshots: $out/watch-live.png $out/watch-end.png $out/watch-playback.png $out/watch-idle.png"
+echo "screenshots: $out/watch-live.png $out/watch-end.png $out/watch-playback.png $out/watch-idle.png $out/watch-table.png"
