@@ -61,6 +61,27 @@ TEST(TableWorld, TheSceneIsTheCameraImageWithEachObjectABlobOnTheBlackTop) {
   EXPECT_EQ(w.objectAt(0.0, 0.0), -1) << "the image's corner is the table";
 }
 
+// The paper's bottom-up scan (saliency: the image's brightness, noise +-0.05) visits every object of the table:
+// the camera draws flat colours and the objects' colours are of one brightness, as the paper's shapes are. (With
+// shaded objects of different brightness, scans went to the two brightest, and agents acted on the disc in nine
+// actions of ten.)
+TEST(TableWorld, ThePapersScansVisitEveryObjectOfTheTable) {
+  const RunConfig& c = tableConfig();
+  TableWorld w(c);
+  Eye eye(c);
+  eye.setScene(w.render(), {});
+  const int n = static_cast<int>(c.table.spec.objects.size()), scans = 600;
+  std::vector<int> seen(static_cast<std::size_t>(n), 0);
+  for (int s = 0; s < scans; ++s) {
+    const Focus& f = eye.scan(s);
+    const int o = w.objectAt(f.x, f.y);
+    ASSERT_GE(o, 0) << "scan " << s << " looked at the top";
+    ++seen[static_cast<std::size_t>(o)];
+  }
+  for (int o = 0; o < n; ++o)  // an even share is 100 of 600; a share by area gives the smallest about 60
+    EXPECT_GT(seen[static_cast<std::size_t>(o)], scans / n / 3) << c.table.spec.objects[static_cast<std::size_t>(o)].name;
+}
+
 TEST(TableWorld, APlaceInSceneUnitsIsThePointOfTheTopItsPixelShows) {
   TableWorld w(tableConfig());
   for (const cv::Point2d& p : {cv::Point2d(0, 0), cv::Point2d(0.15, -0.4), cv::Point2d(-0.2, 0.5)}) {

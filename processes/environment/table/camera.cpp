@@ -68,6 +68,7 @@ TableCamera::TableCamera(const TablePhysics& physics, CameraView view)
     : width_(physics.spec().camera.width),
       height_(physics.spec().camera.height),
       owner_(std::this_thread::get_id()),
+      shaded_(view.hand),
       spec_(physics.spec().camera),
       scene_(std::make_unique<mjvScene>()),
       camera_(std::make_unique<mjvCamera>()),
@@ -115,6 +116,10 @@ void TableCamera::draw(const TablePhysics& physics, bool segments, unsigned char
   scene_->flags[mjRND_IDCOLOR] = segments;
   mjv_updateScene(physics.model(), const_cast<mjData*>(physics.data()), option_.get(), nullptr, camera_.get(),
                   mjCAT_ALL, scene_.get());
+  if (shaded_)  // a person's view: the model's flat light turned into a light from above that shades the shapes
+    for (int i = 0; i < scene_->nlight; ++i) {
+      for (int k = 0; k < 3; ++k) scene_->lights[i].ambient[k] *= 0.35f, scene_->lights[i].diffuse[k] = 0.75f;
+    }
   const mjrRect viewport = {0, 0, width_, height_};
   mjr_setBuffer(mjFB_OFFSCREEN, context_.get());  // this camera's buffer: another camera may have bound its own
   mjr_render(viewport, scene_.get(), context_.get());

@@ -28,8 +28,9 @@ class GlContext {
   void* context_ = nullptr;
 };
 
-// What a camera shows: the agent's (the fixed top camera, the hand left out: its blobs are the objects), or
-// a person's (the hand drawn too; from the top camera, or from the side of the table looking down at it).
+// What a camera shows: the agent's (the fixed top camera, the hand left out: its blobs are the objects, each
+// pixel of an object its colour under the model's flat light), or a person's (the hand drawn too, the shapes
+// shaded by a light from above; from the top camera, or from the side of the table looking down at it).
 struct CameraView {
   bool hand = false;
   bool oblique = false;
@@ -61,6 +62,7 @@ class TableCamera {
 
   int width_ = 0, height_ = 0;
   std::thread::id owner_;  // the thread whose OpenGL context holds this camera's buffers
+  bool shaded_ = false;    // a person's view: the shapes shaded by a light from above
   CameraSpec spec_;  // its pinhole (afford/table_world.hpp)
   std::unique_ptr<mjvScene> scene_;
   std::unique_ptr<mjvCamera> camera_;

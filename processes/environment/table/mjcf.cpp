@@ -97,12 +97,15 @@ std::string tableMjcf(const TableSpec& t) {
     << "  <visual>\n"
     << "    <global offwidth=\"" << t.camera.width << "\" offheight=\"" << t.camera.height << "\"/>\n"
     << "    <quality shadowsize=\"0\"/>\n"
-    // No light of the scene has a specular part, so a black top is drawn black (the eye's background).
-    << "    <headlight specular=\"0 0 0\"/>\n"
+    // The agent's camera sees flat colours, as the paper's eye sees its shapes: one ambient light, no diffuse or
+    // specular part (a black top is drawn black, the eye's background), so every pixel of an object is its colour
+    // and objects of equal RGB mean are equally salient to the paper's brightness saliency, whatever their shape.
+    // (A person's view shades them: table/camera.hpp.)
+    << "    <headlight ambient=\"0 0 0\" diffuse=\"0 0 0\" specular=\"0 0 0\"/>\n"
     << "  </visual>\n"
     << "  <worldbody>\n"
     << "    <light name=\"top\" pos=\"0 0 " << 2 * t.camera.above << "\" dir=\"0 0 -1\" directional=\"true\""
-    << " castshadow=\"false\" diffuse=\"0.8 0.8 0.8\" ambient=\"0.3 0.3 0.3\" specular=\"0 0 0\"/>\n"
+    << " castshadow=\"false\" diffuse=\"0 0 0\" ambient=\"1 1 1\" specular=\"0 0 0\"/>\n"
     // The table's top: a plane (analytic contacts with every shape), drawn as far as its rim.
     << "    <geom name=\"table\" type=\"plane\" size=\"" << t.half_x << ' ' << t.half_y << " 0.05\" friction=\""
     << t.friction << " 0.005 0.0001\" rgba=\"" << rgba(t.rgb) << "\"/>\n";
