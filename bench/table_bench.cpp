@@ -74,6 +74,8 @@ int main(int argc, char** argv) {
     // The eye's verdict on each action (what the agent learns) against the simulation's (the truth's): per action,
     // both yes, eye only, physics only, both no.
     std::array<std::array<int, 4>, kNumActions> verdicts{};
+    // ... and by object: (actions, the eye's yes, the simulation's yes) per object and action.
+    std::vector<std::array<std::array<int, 3>, kNumActions>> by_object(c.table.spec.objects.size());
     const auto wall = Clock::now();
     for (std::int64_t s = 0; s < steps; ++s) {
       if (world.objectsAppearAt(s)) {
@@ -87,7 +89,7 @@ int main(int argc, char** argv) {
       eye.setScene(world.render(), {});
       const Focus f = eye.attend(gaze.x, gaze.y);
       t0 = Clock::now();
-      world.objectAt(f.x, f.y);  // the segmentation, drawn once a state
+      const int object = world.objectAt(f.x, f.y);  // the segmentation, drawn once a state
       segment += msSince(t0);
       const double before = world.physics().time();
       t0 = Clock::now();
@@ -108,9 +110,21 @@ int main(int argc, char** argv) {
             out.target_x >= 0 ? std::optional<cv::Point2d>(cv::Point2d(out.target_x, out.target_y)) : std::nullopt;
         const bool seen = eye.scanEffect(s, after, a, {}, target).affordance;
         ++verdicts[static_cast<std::size_t>(a)][seen ? (out.succeeded ? 0 : 1) : (out.succeeded ? 2 : 3)];
+        if (object >= 0) {
+          auto& cell = by_object[static_cast<std::size_t>(object)][static_cast<std::size_t>(a)];
+          ++cell[0], cell[1] += seen, cell[2] += out.succeeded;
+        }
       }
     }
     const double wall_s = msSince(wall) / 1000.0;
+    nlohmann::json objects;  // each object's actions in these scenes: how often the eye saw the goal, and physics
+    for (std::size_t o = 0; o < by_object.size(); ++o)
+      for (int a = 0; a < kNumActions; ++a) {
+        const auto& cell = by_object[o][static_cast<std::size_t>(a)];
+        objects[c.table.spec.objects[o].name][std::string(kTableActionNames[static_cast<std::size_t>(a)])] = {
+            {"actions", cell[0]}, {"eye", cell[0] ? static_cast<double>(cell[1]) / cell[0] : 0.0},
+            {"physics", cell[0] ? static_cast<double>(cell[2]) / cell[0] : 0.0}};
+      }
     nlohmann::json j{{"experiment", experiment},
                      {"steps", steps},
                      {"objects", c.table.spec.objects.size()},
@@ -125,6 +139,7 @@ int main(int argc, char** argv) {
                      {"on_object", on_object},
                      {"instabilities", world.physics().instabilities()},
                      {"eye_verdicts", eyeVerdicts(verdicts)},
+                     {"by_object", objects},
                      {"per_action", perAction(per_action)},
                      {"succeeded", succeeded}};
     std::cout << j.dump(2) << "\n";

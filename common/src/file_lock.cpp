@@ -11,11 +11,13 @@
 
 namespace afford {
 
-bool HeldFile::tryHold(const std::string& path, Mode mode, int open_flags) {
+bool HeldFile::take(const std::string& path, Mode mode, int open_flags, bool wait) {
   release();
   const int fd = ::open(path.c_str(), open_flags | O_CLOEXEC, 0644);
   if (fd < 0) return false;
-  if (::flock(fd, (mode == Mode::Exclusive ? LOCK_EX : LOCK_SH) | LOCK_NB) != 0) {
+  const int op = (mode == Mode::Exclusive ? LOCK_EX : LOCK_SH) | (wait ? 0 : LOCK_NB);
+  while (::flock(fd, op) != 0) {
+    if (wait && errno == EINTR) continue;
     const int err = errno;
     ::close(fd);
     errno = err;
@@ -25,20 +27,8 @@ bool HeldFile::tryHold(const std::string& path, Mode mode, int open_flags) {
   return true;
 }
 
-bool HeldFile::hold(const std::string& path, Mode mode, int open_flags) {
-  release();
-  const int fd = ::open(path.c_str(), open_flags | O_CLOEXEC, 0644);
-  if (fd < 0) return false;
-  while (::flock(fd, mode == Mode::Exclusive ? LOCK_EX : LOCK_SH) != 0) {
-    if (errno == EINTR) continue;
-    const int err = errno;
-    ::close(fd);
-    errno = err;
-    return false;
-  }
-  fd_ = fd;
-  return true;
-}
+bool HeldFile::tryHold(const std::string& path, Mode mode, int open_flags) { return take(path, mode, open_flags, false); }
+bool HeldFile::hold(const std::string& path, Mode mode, int open_flags) { return take(path, mode, open_flags, true); }
 
 void HeldFile::release() {
   if (fd_ >= 0) ::close(fd_);  // (which lets go of the lock)

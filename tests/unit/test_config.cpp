@@ -260,7 +260,7 @@ TEST(Config, AScenarioNodeReadsBackEqual) {
   const RunConfig c = test::shippedConfig();
   Scenario s;
   s.name = "round-trip";
-  s.objects.push_back({Shape::Circle, {Colour::Blue, 0.31234567890123, 0.7}, {Colour::Green, 0.55, 0.25}, 1, 2});
+  s.objects.push_back({Shape::Circle, {Colour::Blue, 0.31234567890123, 0.7}, {Colour::Green, 0.55, 0.25}, 1, 2, "", -1});
   const Scenario back = parseScenario(scenarioNode(s), "", c.world);
   ASSERT_EQ(back.objects.size(), 1u);
   EXPECT_EQ(back.name, "round-trip");

@@ -325,9 +325,9 @@ namespace {
 TEST(EyeDifferences, ListTheChangedAndMovedObjectsAndNotTheDistractor) {
   const RunConfig c = test::shippedConfig();
   Scenario s;
-  s.objects.push_back({Shape::Square, {Colour::Red, 0.3, 0.3}, {Colour::Green, 0.3, 0.3}, 1, 1});     // colour
-  s.objects.push_back({Shape::Circle, {Colour::Blue, 0.7, 0.3}, {Colour::Blue, 0.5, 0.7}, 1, 1});     // move
-  s.objects.push_back({Shape::Rectangle, {Colour::Green, 0.3, 0.7}, {Colour::Green, 0.3, 0.7}, 1, 1});  // stays
+  s.objects.push_back({Shape::Square, {Colour::Red, 0.3, 0.3}, {Colour::Green, 0.3, 0.3}, 1, 1, "", -1});     // colour
+  s.objects.push_back({Shape::Circle, {Colour::Blue, 0.7, 0.3}, {Colour::Blue, 0.5, 0.7}, 1, 1, "", -1});     // move
+  s.objects.push_back({Shape::Rectangle, {Colour::Green, 0.3, 0.7}, {Colour::Green, 0.3, 0.7}, 1, 1, "", -1});  // stays
   const Environment env(c, s);
   Eye eye(c);
   eye.setGoal(env.goalScene());
@@ -364,7 +364,7 @@ TEST(EyeDifferences, ListTheChangedAndMovedObjectsAndNotTheDistractor) {
 TEST(EyeDifferences, NoneWhenTheSceneIsTheGoal) {
   const RunConfig c = test::shippedConfig();
   Scenario s;
-  s.objects.push_back({Shape::Square, {Colour::Red, 0.3, 0.3}, {Colour::Red, 0.3, 0.3}, 1, 1});
+  s.objects.push_back({Shape::Square, {Colour::Red, 0.3, 0.3}, {Colour::Red, 0.3, 0.3}, 1, 1, "", -1});
   const Environment env(c, s);
   Eye eye(c);
   eye.setGoal(env.goalScene());

@@ -27,6 +27,7 @@ class HeldFile {
   void release();
 
  private:
+  bool take(const std::string& path, Mode mode, int open_flags, bool wait);
   int fd_ = -1;
 };
 
