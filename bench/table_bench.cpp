@@ -46,6 +46,18 @@ nlohmann::json eyeVerdicts(const std::array<std::array<int, 4>, kNumActions>& ve
   }
   return p;
 }
+// Each object's actions in the run's scenes: how often the eye saw the goal reached, and the simulation reached it.
+nlohmann::json byObject(const afford::RunConfig& c, const std::vector<std::array<std::array<int, 3>, kNumActions>>& by_object) {
+  nlohmann::json objects;
+  for (std::size_t o = 0; o < by_object.size(); ++o)
+    for (int a = 0; a < kNumActions; ++a) {
+      const auto& cell = by_object[o][static_cast<std::size_t>(a)];
+      objects[c.table.spec.objects[o].name][std::string(kTableActionNames[static_cast<std::size_t>(a)])] = {
+          {"actions", cell[0]}, {"eye", cell[0] ? static_cast<double>(cell[1]) / cell[0] : 0.0},
+          {"physics", cell[0] ? static_cast<double>(cell[2]) / cell[0] : 0.0}};
+    }
+  return objects;
+}
 }  // namespace
 
 int main(int argc, char** argv) {
@@ -117,14 +129,6 @@ int main(int argc, char** argv) {
       }
     }
     const double wall_s = msSince(wall) / 1000.0;
-    nlohmann::json objects;  // each object's actions in these scenes: how often the eye saw the goal, and physics
-    for (std::size_t o = 0; o < by_object.size(); ++o)
-      for (int a = 0; a < kNumActions; ++a) {
-        const auto& cell = by_object[o][static_cast<std::size_t>(a)];
-        objects[c.table.spec.objects[o].name][std::string(kTableActionNames[static_cast<std::size_t>(a)])] = {
-            {"actions", cell[0]}, {"eye", cell[0] ? static_cast<double>(cell[1]) / cell[0] : 0.0},
-            {"physics", cell[0] ? static_cast<double>(cell[2]) / cell[0] : 0.0}};
-      }
     nlohmann::json j{{"experiment", experiment},
                      {"steps", steps},
                      {"objects", c.table.spec.objects.size()},
@@ -139,7 +143,7 @@ int main(int argc, char** argv) {
                      {"on_object", on_object},
                      {"instabilities", world.physics().instabilities()},
                      {"eye_verdicts", eyeVerdicts(verdicts)},
-                     {"by_object", objects},
+                     {"by_object", byObject(c, by_object)},
                      {"per_action", perAction(per_action)},
                      {"succeeded", succeeded}};
     std::cout << j.dump(2) << "\n";
