@@ -3,6 +3,7 @@
 #include <mujoco/mujoco.h>
 
 #include <fcntl.h>
+#include <sys/stat.h>
 
 #include <cerrno>
 #include <cstring>
@@ -22,6 +23,35 @@ namespace fs = std::filesystem;
 using nlohmann::json;
 
 namespace {
+
+// Holds the lock file `path` (made if missing) once the file held is the one the path names: a holder removes it
+// as it lets go, so one that waited may hold a file no longer there, and takes the new one.
+bool holdCurrent(HeldFile& held, const std::string& path, bool wait) {
+  for (;;) {
+    if (!(wait ? held.hold(path, HeldFile::Mode::Exclusive, O_RDWR | O_CREAT)
+               : held.tryHold(path, HeldFile::Mode::Exclusive, O_RDWR | O_CREAT)))
+      return false;
+    struct stat mine {}, named {};
+    if (::fstat(held.fd(), &mine) == 0 && ::stat(path.c_str(), &named) == 0 && mine.st_ino == named.st_ino &&
+        mine.st_dev == named.st_dev)
+      return true;
+    held.release();
+  }
+}
+
+// The lock file removed while still held (declared after the HeldFile, so it goes first), and the folder made for
+// the estimate if it holds nothing.
+struct LockRemoval {
+  std::string lock;
+  std::filesystem::path made;
+  LockRemoval(const LockRemoval&) = delete;
+  LockRemoval& operator=(const LockRemoval&) = delete;
+  ~LockRemoval() {
+    std::error_code ec;
+    std::filesystem::remove(lock, ec);
+    if (!made.empty() && std::filesystem::is_empty(made, ec)) std::filesystem::remove(made, ec);
+  }
+};
 
 // A stored table is read only up to this size (one of a hundred objects is about 60 kB).
 constexpr std::uintmax_t kMostTableBytes = 4u << 20;
@@ -98,16 +128,19 @@ StoredTruth storedTruth(const YAML::Node& node, const RunConfig& cfg, const Trut
         return out;
     }
   // One estimate of a world at a time in a folder (the workers of a study share one): a second process waits for
-  // the first's lock, then reads what it wrote.
-  fs::create_directories(file.parent_path());
+  // the first's lock, then reads what it wrote. The lock file is removed when the estimate ends, however it ends,
+  // and a folder made for it removed again unless a table was written: an interrupted estimate leaves nothing.
+  const fs::path dir = file.parent_path();
+  const bool made = !fs::exists(dir);
+  fs::create_directories(dir);
   HeldFile estimating;
   const std::string lock = file.string() + ".lock";
-  if (!estimating.tryHold(lock, HeldFile::Mode::Exclusive, O_RDWR | O_CREAT)) {
+  if (!holdCurrent(estimating, lock, false)) {
     if (errno != EWOULDBLOCK) throw std::runtime_error("cannot create " + lock + ": " + std::strerror(errno));
     log_warning("another process is estimating this truth (it holds " + lock + "): waiting for it");
-    if (!estimating.hold(lock, HeldFile::Mode::Exclusive, O_RDWR | O_CREAT))
-      throw std::runtime_error("cannot lock " + lock + ": " + std::strerror(errno));
+    if (!holdCurrent(estimating, lock, true)) throw std::runtime_error("cannot lock " + lock + ": " + std::strerror(errno));
   }
+  const LockRemoval removal{lock, made ? dir : fs::path()};
   if (!a.fresh && read(file, false)) return out;  // written by a process that held the lock meanwhile
   const table::TruthTable t = table::estimateTruth(tw.spec, tw.primitives, tw.truth, a.seed, trials, objects, progress);
   out.rows = tableJson(t, objects);
