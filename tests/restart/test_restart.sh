@@ -46,8 +46,10 @@ snapshot=500
 cycle=1500
 [[ $system == GOALS ]] && cycle=300
 world=${AFFORD_RESTART_EXPERIMENT:-base}
-# The table world steps about 40 times a second: a short run, snapshots every 50 steps.
-[[ $world == table ]] && { steps=300; snapshot=50; cycle=100; }
+# The table world steps about 40 times a second: a short run, snapshots every 50 steps, the first kill after
+# the first snapshot.
+from=200  # the first kill's earliest step; each later one's is after the one before has caught up
+[[ $world == table ]] && { steps=150; snapshot=50; cycle=100; from=60; }
 ((${#victims[@]} > 1)) && steps=$((steps + cycle * ${#victims[@]}))
 victim=${victims[0]}
 if ((${#victims[@]} > 1)); then
@@ -96,7 +98,6 @@ step_of() {
       $1 == p && ($3 == "running" || $3 == "done") && $5 == r {in_run = 1; mine = $4} END {if (in_run) print max + 0, mine + 0}'
 }
 : >"$out/kill.txt"
-from=200  # the first kill's earliest step; each later one's is after the one before has caught up
 for victim in "${victims[@]}"; do
   if [[ $victim == planner && $system == IMP ]]; then
     wait_until 60 grep -q "configured for run '.*-e1'" "$out/planner.log" ||
