@@ -2,6 +2,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <map>
 
 #include "afford/components.hpp"
 #include "afford/image.hpp"
@@ -48,7 +49,43 @@ bool centredObject(const std::vector<std::uint8_t>& image, int side) {
   return std::max(std::abs(sum_col / n - middle), std::abs(sum_row / n - middle)) <= side / 4.0;
 }
 
+// The colour most of an object's pixels have (the table's camera draws each object in its flat colour; the
+// table is black): its key, 0 for a look with no object.
+std::uint32_t mainColour(const std::vector<std::uint8_t>& image) {
+  std::map<std::uint32_t, int> count;
+  for (std::size_t i = 0; i + 2 < image.size(); i += 3) {
+    const std::uint32_t key = (std::uint32_t{image[i]} << 16) | (std::uint32_t{image[i + 1]} << 8) | image[i + 2];
+    if (key != 0) ++count[key];
+  }
+  const auto most = std::max_element(count.begin(), count.end(),
+                                     [](const auto& a, const auto& b) { return a.second < b.second; });
+  return most == count.end() ? 0 : most->first;
+}
+
+// Metres at height z above the table, in scene units (the camera's width is one unit).
+double sceneUnits(const table::CameraSpec& camera, double metres, double z) {
+  return metres * camera.focalPx() / (camera.above - z) / std::max(1, camera.width);
+}
+
 }  // namespace
+
+ObjectGeometry objectGeometry(const RunConfig& c) {
+  if (c.world.kind != WorldKind::Table) return {0.75 * c.world.object_size, 0.5 * c.world.object_size};
+  // Any object may lie or stand after an action: its reach is the sphere holding it, seen at the height of the
+  // tallest top; two touching objects' centres are at least their narrowest half-extents apart, seen on the table.
+  double reach = 0, narrowest = 0;
+  for (const table::ObjectSpec& o : c.table.spec.objects) {
+    double squares = 0;
+    for (double h : o.size) squares += h * h;
+    if (o.shape == table::Shape::Box) reach = std::max(reach, std::sqrt(squares));
+    else if (o.shape == table::Shape::Cylinder) reach = std::max(reach, std::hypot(o.size.at(0), o.size.at(1)));
+    else reach = std::max(reach, o.size.at(0));
+    const double least = *std::min_element(o.size.begin(), o.size.end());
+    narrowest = narrowest == 0 ? least : std::min(narrowest, least);
+  }
+  const table::CameraSpec& camera = c.table.spec.camera;
+  return {sceneUnits(camera, reach, 2 * reach), sceneUnits(camera, 2 * narrowest, 0)};
+}
 
 Goal explorationGoal(std::int64_t seed, std::int64_t step, int id) {
   const KeyedRng rng(seed, step, Purpose::GoalChoice, static_cast<std::uint64_t>(id));
@@ -120,9 +157,10 @@ void Competence::load(SnapshotReader& r) {
 
 ImgepChooser::ImgepChooser(const GoalParams& params)
     : params_(params),
-      // The longest shape reaches 0.75 object sizes from its centre (a rectangle is 1.5 sizes long: afford/image.hpp),
-      // a focus window half its side; and one pixel more, as the environment's windows are whole pixels.
-      clear_(0.75 * params.world.object_size +
+      table_(params.world.kind == WorldKind::Table),
+      // The longest object's reach from its centre (the grid's rectangle, 1.5 sizes long: 0.75), a focus window
+      // half its side; and one pixel more, as the environment's windows are whole pixels.
+      clear_((params.geometry.reach > 0 ? params.geometry.reach : 0.75 * params.world.object_size) +
              (static_cast<double>(params.focus_side) / 2 + 1) / std::max(1, params.world.size_px)),
       competence_(params.goals.window) {}
 
@@ -153,15 +191,60 @@ void ImgepChooser::sawObject(std::int64_t, const Seen& object) {
   // An object here: one remembered closer than half an object's size has left unseen (every shape holds a disc
   // of a third of the size round its centre, so two objects never stand that close; late objects placed over
   // one another, world.late_overlap, the eye sees as one).
-  const double apart = 0.5 * params_.world.object_size;
+  const double apart = params_.geometry.apart > 0 ? params_.geometry.apart : 0.5 * params_.world.object_size;
   objects_.erase(std::remove_if(objects_.begin(), objects_.end(),
                                 [&](const Seen& o) { return std::hypot(o.x - object.x, o.y - object.y) < apart; }),
                  objects_.end());
   remember(objects_, object);
 }
 
+void ImgepChooser::rememberPlace(double x, double y) {
+  const bool known = std::any_of(places_.begin(), places_.end(), [&](const Seen& p) { return samePlace(p.x, p.y, x, y); });
+  if (!known) remember(places_, Seen{{}, x, y});
+}
+
+void ImgepChooser::sawTableEffect(const SeenEffect& e) {
+  if (auto it = objectAt(e.before.x, e.before.y); it != objects_.end()) objects_.erase(it);
+  const bool placed = takesPlace(WorldKind::Table, e.action) && e.target_x >= 0 && e.target_y >= 0;
+  if (placed) {  // at its place, as it looked
+    sawObject(e.step, Seen{e.before.image, e.target_x, e.target_y});
+    rememberPlace(e.target_x, e.target_y);
+    rememberPlace(e.before.x, e.before.y);
+    return;
+  }
+  // Toppled or rolled: as it looks now, where the scan found it; the place it left is free.
+  sawObject(e.step, e.after);
+  rememberPlace(e.before.x, e.before.y);
+  // A new look (a rolled ball looks as it did): kept with the change of its centre, the goal of a look on another
+  // object of its colour.
+  if (!centredObject(e.after.image, params_.focus_side) ||
+      imageDistance(e.before.image, e.after.image) < params_.planner.subgoal_match)
+    return;
+  const bool known = std::any_of(colours_.begin(), colours_.end(), [&](const Seen& c) {
+    return imageDistance(c.image, e.after.image) < params_.planner.subgoal_match;
+  });
+  if (!known) remember(colours_, Seen{e.after.image, e.after.x - e.before.x, e.after.y - e.before.y});
+}
+
+bool ImgepChooser::fits(const Seen& o, const Seen& c) const {
+  if (imageDistance(o.image, c.image) < params_.planner.subgoal_match) return false;  // the look it has
+  if (!table_) return silhouetteDistance(o.image, c.image) == 0;
+  // On the table: a look of an object of its colour, seen inside the scene.
+  const Seen at = lookPlace(o, c);
+  const double rows = static_cast<double>(params_.world.rows()) / std::max(1, params_.world.size_px);
+  return mainColour(o.image) == mainColour(c.image) && at.x >= 0 && at.x <= 1 && at.y >= 0 && at.y <= rows;
+}
+
+Seen ImgepChooser::lookPlace(const Seen& o, const Seen& c) const {
+  return table_ ? Seen{{}, o.x + c.x, o.y + c.y} : Seen{{}, o.x, o.y};
+}
+
 void ImgepChooser::sawEffect(const SeenEffect& e) {
   if (!e.affordance) return;  // nothing changed: the object is as it was seen
+  if (table_) {
+    sawTableEffect(e);
+    return;
+  }
   if (auto it = objectAt(e.before.x, e.before.y); it != objects_.end()) objects_.erase(it);
   // A move takes the object, as it looked, to its target; a colour change leaves it in place in its new colour.
   // (The change-driven scan's gaze may rest where the change was largest, the place a moved object left.)
@@ -180,6 +263,9 @@ void ImgepChooser::sawEffect(const SeenEffect& e) {
 }
 
 void ImgepChooser::imagined(const Imagined& o) {
+  // On the table the looks are those seen: a topple's direction is drawn, and its predicted window is an average
+  // of the looks it left.
+  if (table_) return;
   // A colour outcome: the object's silhouette in another colour (a prediction that is not one is left out).
   if (o.action == kMove || o.image.empty() || silhouetteDistance(o.object, o.image) != 0 ||
       imageDistance(o.object, o.image) < params_.planner.subgoal_match)
@@ -214,8 +300,7 @@ Goal ImgepChooser::next(std::int64_t step, int id) {
   std::vector<std::pair<const Seen*, const Seen*>> colour;  // object, colour outcome
   for (const Seen& o : objects_)
     for (const Seen& c : colours_)
-      if (silhouetteDistance(o.image, c.image) == 0 && imageDistance(o.image, c.image) >= params_.planner.subgoal_match)
-        colour.emplace_back(&o, &c);
+      if (fits(o, c)) colour.emplace_back(&o, &c);
   std::vector<std::pair<const Seen*, const Seen*>> move;  // object, place
   for (const Seen& o : objects_)
     for (const Seen& p : places_)
@@ -244,7 +329,7 @@ Goal ImgepChooser::next(std::int64_t step, int id) {
       return explore();
     case GoalModule::Colour: {
       const auto& [o, c] = colour[index(colour.size())];
-      return aim(*o, *o, c->image);
+      return aim(*o, lookPlace(*o, *c), c->image);
     }
     case GoalModule::Move: {
       const auto& [o, p] = move[index(move.size())];

@@ -76,11 +76,22 @@ struct GoalAttempt {
   int actions = 0;
 };
 
+// How far an object reaches from its centre, and how close two objects' centres can stand, in scene units:
+// the grid's shapes by world.object_size (a rectangle reaches 0.75 sizes; every shape holds a disc of a third of
+// the size), the table's objects by their sizes as the camera sees their tops (any of them may lie: its longest
+// half-extent; two touch: their narrowest half-widths). Computed from the run's configuration.
+struct ObjectGeometry {
+  double reach = 0;
+  double apart = 0;
+};
+ObjectGeometry objectGeometry(const RunConfig& c);
+
 // What a chooser is given of the run's configuration.
 struct GoalParams {
   GoalsConfig goals;
   PlannerConfig planner;
   WorldConfig world;
+  ObjectGeometry geometry;
   int focus_side = 0;
   std::int64_t seed = 0;
   std::int64_t steps = 0;
@@ -89,7 +100,7 @@ struct GoalParams {
   std::string config_text;  // the run's configuration, YAML (for a chooser that reads it whole)
   GoalParams() = default;
   GoalParams(const RunConfig& c)  // NOLINT: the sections a run's configuration gives
-      : goals(c.goals), planner(c.planner), world(c.world), focus_side(c.eye.focus_side), seed(c.seed),
+      : goals(c.goals), planner(c.planner), world(c.world), geometry(objectGeometry(c)), focus_side(c.eye.focus_side), seed(c.seed),
         steps(c.steps), experiment(c.experiment), system(c.system), config_text(c.text) {}
 };
 
@@ -161,6 +172,13 @@ class ImgepChooser : public GoalChooser {
   std::size_t places() const { return places_.size(); }
 
  private:
+  // The table world's effects (world.kind: table): push and carry take an object to a place; a topple (or a
+  // roll that turned it) leaves it in a new look where the change-driven scan found it.
+  void sawTableEffect(const SeenEffect& e);
+  void rememberPlace(double x, double y);
+  // A look (a colour outcome) that fits an object, and the place it would be seen at.
+  bool fits(const Seen& object, const Seen& look) const;
+  Seen lookPlace(const Seen& object, const Seen& look) const;
   // The object seen last near (x, y), if any.
   std::deque<Seen>::iterator objectAt(double x, double y);
   void remember(std::deque<Seen>& where, Seen s);
@@ -169,12 +187,15 @@ class ImgepChooser : public GoalChooser {
   bool freeAt(double x, double y, const Seen* except) const;
 
   GoalParams params_;
+  bool table_;  // the physical table's objects and actions (world.kind: table)
   // Centres at least this far apart on either axis: an object's focus window does not show the other, and a move
   // there is carried out (the environment moves an object only to a place whose window is free).
   double clear_;
   Competence competence_;
   std::deque<Seen> objects_;  // the objects as last seen (one per place)
-  std::deque<Seen> colours_;  // colour outcomes: images objects took after a colour change (seen or imagined)
+  // Colour outcomes: images objects took after a colour change (seen or imagined); on the table, looks objects
+  // took where they stood (seen), each with the change of its centre as its x, y.
+  std::deque<Seen> colours_;
   std::deque<Seen> places_;   // places objects were moved to, or left
   double last_x_ = -1, last_y_ = -1;  // the place of the last goal set
 };

@@ -320,6 +320,77 @@ TEST(GoalChooser, AnObjectSeenNearWhereAnotherWasRememberedTakesItsPlace) {
   EXPECT_EQ(chooser.objects(), 3U);
 }
 
+// On the physical table (world.kind: table) a push or carry is a move; a topple leaves the object in a new look
+// where it stands, a goal for another object of its colour, at the place the change would put it.
+TEST(GoalChooser, OnTheTableAToppledObjectsLookIsAGoalOfAnotherOfItsColour) {
+  GoalParams p(test::shippedConfig("table", System::GOALS));
+  p.goals.bootstrap = 0;
+  p.goals.explore_share = 0;
+  ASSERT_EQ(p.world.kind, WorldKind::Table);
+  const int side = p.focus_side;
+  ImgepChooser chooser(p);
+  const std::array<std::uint8_t, 3> orange{217, 89, 0}, green{38, 230, 38};
+  const auto standing = look(side, orange, 2), lying = look(side, orange, 6);  // 5 x 5 pixels; 13 x 13
+  SeenEffect topple;
+  topple.step = 3;
+  topple.action = 2;  // topple
+  topple.before = Seen{standing, 0.30, 0.30};
+  topple.after = Seen{lying, 0.33, 0.30};
+  topple.affordance = true;
+  chooser.sawEffect(topple);
+  EXPECT_EQ(chooser.objects(), 1U);  // the bar, lying where the scan found it
+  EXPECT_EQ(chooser.colours(), 1U);  // its new look
+  EXPECT_EQ(chooser.places(), 1U);   // the place it left
+  chooser.sawObject(4, Seen{look(side, green, 3), 0.30, 0.55});   // another colour: no look of its own
+  chooser.sawObject(5, Seen{standing, 0.60, 0.40});                // another of the bar's colour
+  chooser.imagined(Imagined{6, 2, standing, look(side, orange, 5), 0.6, 0.4});  // predicted looks are not goals
+  EXPECT_EQ(chooser.colours(), 1U);
+  // The place the first bar left is not free (it lies beside it): no move. Every goal is a look, the second
+  // bar's (the green object's colour has none), at its place moved as the first bar's centre moved.
+  int looks = 0;
+  for (int id = 0; id < 40; ++id) {
+    const Goal g = chooser.next(7, id);
+    ASSERT_EQ(g.module, GoalModule::Colour) << "goal " << id;
+    ++looks;
+    EXPECT_DOUBLE_EQ(g.object_x, 0.60);
+    EXPECT_DOUBLE_EQ(g.object_y, 0.40);
+    EXPECT_NEAR(g.x, 0.63, 1e-12);
+    EXPECT_NEAR(g.y, 0.40, 1e-12);
+    EXPECT_EQ(g.image, lying);
+  }
+  EXPECT_EQ(looks, 40);
+  // A push that reached its place: the object as it looked, at its target.
+  SeenEffect push;
+  push.step = 8;
+  push.action = 0;
+  push.before = Seen{look(side, green, 3), 0.30, 0.55};
+  push.after = Seen{look(side, green, 3), 0.45, 0.56};
+  push.target_x = 0.45;
+  push.target_y = 0.55;
+  push.affordance = true;
+  chooser.sawEffect(push);
+  EXPECT_EQ(chooser.colours(), 1U);
+  EXPECT_EQ(chooser.places(), 3U);
+}
+
+// Objects' reach and nearness: the grid's by its object size, the table's by its objects as the camera sees them.
+TEST(GoalChooser, ObjectGeometryIsTheWorlds) {
+  const RunConfig grid = test::shippedConfig("goals", System::GOALS);
+  EXPECT_DOUBLE_EQ(objectGeometry(grid).reach, 0.75 * grid.world.object_size);
+  EXPECT_DOUBLE_EQ(objectGeometry(grid).apart, 0.5 * grid.world.object_size);
+  RunConfig table = test::shippedConfig("table", System::GOALS);
+  const ObjectGeometry g = objectGeometry(table);
+  // The bar (half-extents 1.5, 1.5, 6 cm) reaches farthest, 6.7 cm lying or tipped: about 17 of 320 pixels seen
+  // from 1 m at its height; the disc (7.5 mm half-height) is the narrowest.
+  EXPECT_GT(g.reach, 0.05);
+  EXPECT_LT(g.reach, 0.07);
+  EXPECT_GT(g.apart, 0.010);
+  EXPECT_LT(g.apart, 0.014);
+  table.table.spec.objects.resize(1);  // the cube alone: 2.5 cm half-extents
+  EXPECT_LT(objectGeometry(table).reach, g.reach);
+  EXPECT_GT(objectGeometry(table).apart, g.apart);
+}
+
 TEST(GoalChooser, AGoalFoundReachedWhenSetSaysNothingOfCompetence) {
   ImgepChooser chooser(goalParams());
   chooser.attempted(GoalAttempt{1, GoalModule::Move, true, 0.0, 0});
