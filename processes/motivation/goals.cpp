@@ -220,19 +220,23 @@ void ImgepChooser::sawTableEffect(const SeenEffect& e) {
   if (!centredObject(e.after.image, params_.focus_side) ||
       imageDistance(e.before.image, e.after.image) < params_.planner.subgoal_match)
     return;
+  rememberLook(Seen{e.after.image, e.after.x - e.before.x, e.after.y - e.before.y});
+}
+
+void ImgepChooser::rememberLook(Seen look) {
   const bool known = std::any_of(colours_.begin(), colours_.end(), [&](const Seen& c) {
-    return imageDistance(c.image, e.after.image) < params_.planner.subgoal_match;
+    return imageDistance(c.image, look.image) < params_.planner.subgoal_match;
   });
-  if (!known) remember(colours_, Seen{e.after.image, e.after.x - e.before.x, e.after.y - e.before.y});
+  if (!known) remember(colours_, std::move(look));
 }
 
 bool ImgepChooser::fits(const Seen& o, const Seen& c) const {
   if (imageDistance(o.image, c.image) < params_.planner.subgoal_match) return false;  // the look it has
   if (!table_) return silhouetteDistance(o.image, c.image) == 0;
-  // On the table: a look of an object of its colour, seen inside the scene.
+  // On the table (a look of an object of its colour: next() compares their colours), seen inside the scene.
   const Seen at = lookPlace(o, c);
   const double rows = static_cast<double>(params_.world.rows()) / std::max(1, params_.world.size_px);
-  return mainColour(o.image) == mainColour(c.image) && at.x >= 0 && at.x <= 1 && at.y >= 0 && at.y <= rows;
+  return at.x >= 0 && at.x <= 1 && at.y >= 0 && at.y <= rows;
 }
 
 Seen ImgepChooser::lookPlace(const Seen& o, const Seen& c) const {
@@ -251,12 +255,8 @@ void ImgepChooser::sawEffect(const SeenEffect& e) {
   const bool moved = e.action == kMove && e.target_x >= 0 && e.target_y >= 0;
   sawObject(e.step, moved ? Seen{e.before.image, e.target_x, e.target_y} : Seen{e.after.image, e.before.x, e.before.y});
   if (e.action == kMove) {  // where it went, and where it stood: places an object can be moved to
-    const double x = e.target_x >= 0 ? e.target_x : e.after.x, y = e.target_y >= 0 ? e.target_y : e.after.y;
-    for (const auto& [px, py] : {std::make_pair(x, y), std::make_pair(e.before.x, e.before.y)}) {
-      const bool known =
-          std::any_of(places_.begin(), places_.end(), [&](const Seen& p) { return samePlace(p.x, p.y, px, py); });
-      if (!known) remember(places_, Seen{{}, px, py});
-    }
+    rememberPlace(e.target_x >= 0 ? e.target_x : e.after.x, e.target_y >= 0 ? e.target_y : e.after.y);
+    rememberPlace(e.before.x, e.before.y);
     return;
   }
   imagined(Imagined{e.step, e.action, e.before.image, e.after.image, e.after.x, e.after.y});
@@ -270,10 +270,7 @@ void ImgepChooser::imagined(const Imagined& o) {
   if (o.action == kMove || o.image.empty() || silhouetteDistance(o.object, o.image) != 0 ||
       imageDistance(o.object, o.image) < params_.planner.subgoal_match)
     return;
-  const bool known = std::any_of(colours_.begin(), colours_.end(), [&](const Seen& c) {
-    return imageDistance(c.image, o.image) < params_.planner.subgoal_match;
-  });
-  if (!known) remember(colours_, Seen{o.image, o.x, o.y});
+  rememberLook(Seen{o.image, o.x, o.y});
 }
 
 void ImgepChooser::attempted(const GoalAttempt& a) {
@@ -298,9 +295,16 @@ Goal ImgepChooser::next(std::int64_t step, int id) {
   // object's silhouette took after a change (not the one it has), a free place
   // it is not at, or both.
   std::vector<std::pair<const Seen*, const Seen*>> colour;  // object, colour outcome
-  for (const Seen& o : objects_)
-    for (const Seen& c : colours_)
-      if (fits(o, c)) colour.emplace_back(&o, &c);
+  const auto mains = [&](const std::deque<Seen>& seen) {  // (the table's looks fit by colour)
+    std::vector<std::uint32_t> out;
+    for (const Seen& x : seen) out.push_back(table_ ? mainColour(x.image) : 0);
+    return out;
+  };
+  const std::vector<std::uint32_t> object_colours = mains(objects_), look_colours = mains(colours_);
+  for (std::size_t i = 0; i < objects_.size(); ++i)
+    for (std::size_t j = 0; j < colours_.size(); ++j)
+      if (object_colours[i] == look_colours[j] && fits(objects_[i], colours_[j]))
+        colour.emplace_back(&objects_[i], &colours_[j]);
   std::vector<std::pair<const Seen*, const Seen*>> move;  // object, place
   for (const Seen& o : objects_)
     for (const Seen& p : places_)

@@ -176,7 +176,9 @@ class ImgepChooser : public GoalChooser {
   // roll that turned it) leaves it in a new look where the change-driven scan found it.
   void sawTableEffect(const SeenEffect& e);
   void rememberPlace(double x, double y);
-  // A look (a colour outcome) that fits an object, and the place it would be seen at.
+  void rememberLook(Seen look);  // a colour outcome (a look), unless one as near is known
+  // A look (a colour outcome) that fits an object (on the table, one of its colour: next() checks the colours),
+  // and the place it would be seen at.
   bool fits(const Seen& object, const Seen& look) const;
   Seen lookPlace(const Seen& object, const Seen& look) const;
   // The object seen last near (x, y), if any.
